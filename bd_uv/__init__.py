@@ -1,0 +1,18 @@
+"""bd_uv: certified bounded-distortion UV parameterization (Lipman 2012), without Blender.
+
+>>> import bd_uv
+>>> res = bd_uv.unwrap(V, F, bound=5.0)          # doctest: +SKIP
+>>> res.corner_uv, [r.max_distortion for r in res.islands]   # doctest: +SKIP
+"""
+from .colors import distortion_colors
+from .errors import (BDError, CancelledError, ClosedIslandError, DegenerateFacesError,
+                     DuplicateFacesError, InfeasibleError, InvalidMeshError, IslandError,
+                     NonFiniteError, NonManifoldError, OrientationError, SolverError,
+                     TopologyError)
+from .metrics import (certify, conformal_distortion, face_jacobians, flipped_faces,
+                      mean_distortion, signed_uv_areas)
+from .mesh import Island, islands
+from .meshio import Mesh, load_mesh, write_obj
+from .unwrap import IslandResult, UnwrapResult, unwrap
+
+__version__ = "0.1.0"

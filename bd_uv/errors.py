@@ -1,0 +1,68 @@
+"""Typed errors. Every error bd_uv raises or records derives from :class:`BDError`, so a caller
+(the Blender operator, the batch tool) can catch precisely and show ``str(error)`` to the user: each
+message names the problem and what to do about it."""
+
+
+class BDError(Exception):
+    """Base class of every bd_uv error."""
+
+
+class InvalidMeshError(BDError):
+    """The mesh as a whole cannot be read: empty, wrong shapes, face indices out of range."""
+
+
+class CancelledError(BDError):
+    """The solve was cancelled; nothing partial is returned."""
+
+
+class IslandError(BDError):
+    """A problem confined to one island; the other islands are still solved.
+
+    Attributes
+    ----------
+    island : int or None
+        Index of the island the problem belongs to.
+    faces : (k,) int array or None
+        The input faces concerned (for example the zero-area ones).
+    """
+
+    def __init__(self, message, island=None, faces=None):
+        super().__init__(message)
+        self.island = island
+        self.faces = faces
+
+
+class ClosedIslandError(IslandError):
+    """The island has no boundary: it needs seams before it can be flattened."""
+
+
+class NonManifoldError(IslandError):
+    """An edge shared by three or more faces, or faces that meet only at a vertex (bow-tie)."""
+
+
+class DegenerateFacesError(IslandError):
+    """Zero-area faces (collinear or coincident vertices)."""
+
+
+class NonFiniteError(IslandError):
+    """NaN or infinite vertex coordinates."""
+
+
+class TopologyError(IslandError):
+    """The island is not a disk with holes (genus >= 1): it needs more seams."""
+
+
+class OrientationError(IslandError):
+    """Neighbouring faces are oriented inconsistently."""
+
+
+class DuplicateFacesError(IslandError):
+    """Two or more faces use the same three vertices."""
+
+
+class InfeasibleError(IslandError):
+    """No certified map exists within the bound limit (for example pins that force a flip)."""
+
+
+class SolverError(IslandError):
+    """The solver failed or its result could not be certified."""

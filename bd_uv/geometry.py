@@ -1,0 +1,72 @@
+"""Per-face local geometry: each triangle isometrically laid in the plane.
+
+The canonical local frame of face j has its origin at the first corner, e1 along the first edge and
+e2 = n x e1 (Lipman 2012, eq. 4.1 with the frame's rotation kept separately, see ``frames``)."""
+import numpy as np
+
+
+def face_areas(V, F):
+    """Area of each triangle.
+
+    Parameters
+    ----------
+    V : (n,3) float array
+    F : (m,3) int array
+
+    Returns
+    -------
+    A : (m,) float64
+    """
+    P = V[F]
+    return 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+
+
+def local_coordinates(V, F):
+    """2D coordinates of each triangle's corners in its canonical local frame.
+
+    Parameters
+    ----------
+    V : (n,3) float array
+    F : (m,3) int array
+
+    Returns
+    -------
+    Z : (m,3) complex128
+        Corner 0 at 0, corner 1 on the positive real axis, corner 2 in the upper half plane (for a
+        non-degenerate face).
+    """
+    P = np.asarray(V, dtype=np.float64)[F]
+    e01 = P[:, 1] - P[:, 0]
+    e02 = P[:, 2] - P[:, 0]
+    l01 = np.linalg.norm(e01, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        e1 = e01 / l01[:, None]
+        x2 = np.einsum("ij,ij->i", e02, e1)
+        y2 = np.linalg.norm(np.cross(e1, e02), axis=1)
+    Z = np.zeros((len(F), 3), dtype=np.complex128)
+    Z[:, 1] = l01
+    Z[:, 2] = x2 + 1j * y2
+    return Z
+
+
+def gradient_operators(Z):
+    """Per-face gradient of a linear function in the local frame.
+
+    For values ``s`` at the three corners, ``grad = G[j] @ s`` with ``G[j]`` 2x3.
+
+    Parameters
+    ----------
+    Z : (m,3) complex array of local corner coordinates
+
+    Returns
+    -------
+    G : (m,2,3) float64
+    """
+    d1 = Z[:, 1] - Z[:, 0]
+    d2 = Z[:, 2] - Z[:, 0]
+    a, b, c, d = d1.real, d1.imag, d2.real, d2.imag  # rows of the edge matrix E = [[a,b],[c,d]]
+    det = a * d - b * c
+    with np.errstate(invalid="ignore", divide="ignore"):
+        inv = np.stack([np.stack([d, -b], 1), np.stack([-c, a], 1)], 1) / det[:, None, None]
+    D = np.array([[-1.0, 1.0, 0.0], [-1.0, 0.0, 1.0]])
+    return inv @ D

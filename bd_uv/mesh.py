@@ -1,0 +1,248 @@
+"""Mesh preparation: validate, cut along seams, split into islands.
+
+An island is a set of faces connected across manifold, non-seam edges. Each island gets its own cut
+vertices: corners of one input vertex share an island vertex only when they are connected around
+that vertex without crossing a seam, so a seam through an island opens it up.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components, depth_first_order
+
+from .errors import (ClosedIslandError, DegenerateFacesError, DuplicateFacesError,
+                     InvalidMeshError, NonFiniteError, NonManifoldError, OrientationError,
+                     TopologyError)
+from .geometry import face_areas
+
+# A face is degenerate when twice its area is below this fraction of its longest edge squared.
+DEGENERATE_RATIO = 1e-12
+
+
+@dataclass(frozen=True)
+class Island:
+    """One connected piece of the cut mesh.
+
+    Attributes
+    ----------
+    index : int
+    faces : (k,) int64, indices into the input F
+    vertices : (nk,) int64, input vertex id of each island vertex
+    tris : (k,3) int64, the island's triangles in island vertex ids
+    loops : tuple of (b,) int64 arrays, boundary loops in island vertex ids, longest first
+    error : IslandError or None, why the island cannot be parameterized
+    """
+    index: int
+    faces: np.ndarray
+    vertices: np.ndarray
+    tris: np.ndarray
+    loops: tuple
+    error: Exception = None
+
+
+def check_arrays(V, F):
+    """Validate shapes and indices; return float64 V and int64 F.
+
+    Raises
+    ------
+    InvalidMeshError
+    """
+    V = np.asarray(V)
+    F = np.asarray(F)
+    if V.ndim != 2 or V.shape[1] != 3:
+        raise InvalidMeshError(f"vertices must be an (n,3) array, got shape {V.shape}")
+    if F.size == 0:
+        raise InvalidMeshError("the mesh has no faces: nothing to unwrap")
+    if F.ndim != 2 or F.shape[1] != 3:
+        raise InvalidMeshError(f"faces must be an (m,3) array of triangles, got shape {F.shape}; "
+                               "triangulate n-gons first")
+    if not np.issubdtype(F.dtype, np.integer):
+        if not np.all(np.isfinite(F)) or np.any(F != np.round(F)):
+            raise InvalidMeshError("face indices must be integers")
+    F = F.astype(np.int64)
+    bad = np.flatnonzero(np.any((F < 0) | (F >= len(V)), axis=1))
+    if len(bad):
+        raise InvalidMeshError(f"{len(bad)} face(s) use vertex indices outside 0..{len(V) - 1} "
+                               f"(faces {_some(bad)}); fix the face list")
+    return V.astype(np.float64), F
+
+
+def _some(idx, k=8):
+    idx = np.asarray(idx)
+    s = ", ".join(str(int(i)) for i in idx[:k])
+    return s + (f", ... ({len(idx)} in all)" if len(idx) > k else "")
+
+
+def _edge_keys(a, b, n):
+    return np.minimum(a, b) * n + np.maximum(a, b)
+
+
+def islands(V, F, seams=None):
+    """Cut the mesh along seams and split it into validated islands.
+
+    Parameters
+    ----------
+    V : (n,3) float array
+    F : (m,3) int array
+    seams : (s,2) int array, optional
+        Vertex pairs of the edges to cut along. Pairs that are not mesh edges are ignored.
+
+    Returns
+    -------
+    list of Island, ordered by their smallest face index.
+    """
+    V, F = check_arrays(V, F)
+    n, m = len(V), len(F)
+    # Half-edges: corner (f, k) starts the directed edge F[f,k] -> F[f,k+1].
+    src = F.ravel()
+    dst = np.roll(F, -1, axis=1).ravel()
+    key = _edge_keys(src, dst, n)
+    uniq, inv, count = np.unique(key, return_inverse=True, return_counts=True)
+    he_count = count[inv]
+    if seams is not None and len(seams):
+        S = np.asarray(seams, dtype=np.int64).reshape(-1, 2)
+        is_seam = np.isin(key, _edge_keys(S[:, 0], S[:, 1], n))
+    else:
+        is_seam = np.zeros(len(key), dtype=bool)
+
+    # Pair the two half-edges of each edge used by exactly two faces.
+    order = np.argsort(inv, kind="stable")
+    first = np.searchsorted(inv[order], np.arange(len(uniq)))
+    two = np.flatnonzero(count == 2)
+    h1, h2 = order[first[two]], order[first[two] + 1]
+    join = ~is_seam[h1]
+    h1, h2 = h1[join], h2[join]
+    f1, f2 = h1 // 3, h2 // 3
+    consistent = src[h1] == dst[h2]
+
+    # Islands: faces connected across the joined edges.
+    adj = sp.coo_array((np.ones(len(f1)), (f1, f2)), shape=(m, m))
+    n_isl, face_isl = connected_components(adj, directed=False)
+
+    # Cut vertices: corners glued across joined edges. Corner of src[h] is h; of dst[h] is next(h).
+    nxt = lambda h: (h // 3) * 3 + (h % 3 + 1) % 3
+    ca = np.where(consistent, nxt(h2), h2)
+    cb = np.where(consistent, h2, nxt(h2))
+    rows = np.concatenate([h1, nxt(h1)])
+    cols = np.concatenate([ca, cb])
+    cadj = sp.coo_array((np.ones(len(rows)), (rows, cols)), shape=(3 * m, 3 * m))
+    _, corner_vertex = connected_components(cadj, directed=False)
+
+    # Non-manifold vertices: several corner fans of one vertex, ignoring seams, in one island.
+    g1, g2 = order[first[two]], order[first[two] + 1]
+    gcons = src[g1] == dst[g2]
+    rows = np.concatenate([g1, nxt(g1)])
+    cols = np.concatenate([np.where(gcons, nxt(g2), g2), np.where(gcons, g2, nxt(g2))])
+    fan_adj = sp.coo_array((np.ones(len(rows)), (rows, cols)), shape=(3 * m, 3 * m))
+    _, fan = connected_components(fan_adj, directed=False)
+    corner_isl = np.repeat(face_isl, 3)
+    fan_keys = np.unique(np.stack([src, corner_isl, fan], 1), axis=0)
+    vi_pairs, vi_count = np.unique(fan_keys[:, :2], axis=0, return_counts=True)
+    bowtie = vi_pairs[vi_count > 1]
+
+    A = face_areas(V, F)
+    P = V[F]
+    lmax2 = np.max(np.sum((P - np.roll(P, -1, axis=1)) ** 2, axis=2), axis=1)
+    with np.errstate(invalid="ignore"):
+        degenerate = ~(2 * A > DEGENERATE_RATIO * lmax2)
+    nonfinite_face = ~np.all(np.isfinite(P), axis=(1, 2))
+    sorted_tri = np.sort(F, axis=1)
+    _, tri_inv, tri_count = np.unique(sorted_tri, axis=0, return_inverse=True, return_counts=True)
+    duplicate = tri_count[tri_inv.ravel()] > 1
+    nonmanifold_face = np.zeros(m, dtype=bool)
+    nonmanifold_face[np.flatnonzero(he_count >= 3) // 3] = True
+    inconsistent_face = np.zeros(m, dtype=bool)
+    inconsistent_face[f1[~consistent]] = True
+    inconsistent_face[f2[~consistent]] = True
+
+    # Group faces by island, ordered by smallest face index.
+    isl_order = np.argsort(face_isl, kind="stable")
+    bounds = np.searchsorted(face_isl[isl_order], np.arange(n_isl + 1))
+    groups = [isl_order[bounds[i]:bounds[i + 1]] for i in range(n_isl)]
+    groups.sort(key=lambda g: g[0])
+    first_corner = np.empty(corner_vertex.max() + 1, dtype=np.int64)
+    first_corner[corner_vertex[::-1]] = np.arange(3 * m)[::-1]
+    vertex_of_cut = src[first_corner]
+    out = []
+    for idx, faces in enumerate(groups):
+        cv = corner_vertex.reshape(m, 3)[faces]
+        ids, tris = np.unique(cv, return_inverse=True)
+        tris = tris.reshape(-1, 3).astype(np.int64)
+        vertices = vertex_of_cut[ids]
+        err = _validate(idx, faces, tris, vertices, V, degenerate, nonfinite_face, duplicate,
+                        nonmanifold_face, inconsistent_face, bowtie, face_isl[faces[0]])
+        loops = ()
+        if err is None:
+            loops, err = _boundary_loops(idx, faces, tris, len(ids))
+        out.append(Island(idx, faces.astype(np.int64), vertices, tris, loops, err))
+    return out
+
+
+def _validate(idx, faces, tris, vertices, V, degenerate, nonfinite, duplicate, nonmanifold,
+              inconsistent, bowtie, label):
+    name = f"island {idx}"
+    bad = faces[nonfinite[faces]]
+    if len(bad):
+        return NonFiniteError(f"{name}: {len(bad)} face(s) have NaN or infinite vertex coordinates "
+                              f"(faces {_some(bad)}); fix or delete those vertices", idx, bad)
+    bad = faces[duplicate[faces]]
+    if len(bad):
+        return DuplicateFacesError(f"{name}: {len(bad)} faces repeat the same three vertices "
+                                   f"(faces {_some(bad)}); merge or delete the duplicates",
+                                   idx, bad)
+    bad = faces[nonmanifold[faces]]
+    if len(bad):
+        return NonManifoldError(f"{name}: non-manifold edges (shared by 3 or more faces) at faces "
+                                f"{_some(bad)}; split those edges or mark them as seams", idx, bad)
+    bv = bowtie[bowtie[:, 1] == label, 0] if len(bowtie) else np.zeros(0, np.int64)
+    if len(bv):
+        bad = faces[np.isin(vertices[tris], bv).any(axis=1)]
+        return NonManifoldError(f"{name}: non-manifold vertex (faces meet only at a point) at "
+                                f"vertices {_some(bv)}; split the vertex (Mesh > Split) or "
+                                "separate the parts", idx, bad)
+    bad = faces[inconsistent[faces]]
+    if len(bad):
+        return OrientationError(f"{name}: {len(bad)} faces are oriented against their neighbours "
+                                f"(faces {_some(bad)}); recalculate normals (Mesh > Normals > "
+                                "Recalculate Outside)", idx, bad)
+    bad = faces[degenerate[faces]]
+    if len(bad):
+        return DegenerateFacesError(f"{name}: {len(bad)} zero-area face(s) (faces {_some(bad)}); "
+                                    "dissolve degenerate geometry (Mesh > Clean Up > Degenerate "
+                                    "Dissolve)", idx, bad)
+    return None
+
+
+def _boundary_loops(idx, faces, tris, nv):
+    """Boundary loops of a validated island, or the topology error that forbids flattening it."""
+    k = len(tris)
+    a = tris.ravel()
+    b = np.roll(tris, -1, axis=1).ravel()
+    fwd = a * nv + b
+    rev = b * nv + a
+    boundary = ~np.isin(fwd, rev)
+    n_edges = (3 * k + int(boundary.sum())) // 2
+    name = f"island {idx}"
+    if not boundary.any():
+        return (), ClosedIslandError(f"{name} ({k} faces) is closed: it has no boundary and cannot "
+                                     "be flattened; mark seams that cut it open", idx, faces)
+    ba, bb = a[boundary], b[boundary]
+    g = sp.coo_array((np.ones(len(ba)), (ba, bb)), shape=(nv, nv)).tocsr()
+    n_comp, comp = connected_components(g, directed=False)
+    on_boundary = np.zeros(nv, dtype=bool)
+    on_boundary[ba] = True
+    loop_labels = np.unique(comp[ba])
+    n_loops = len(loop_labels)
+    euler = nv - n_edges + k
+    genus2 = 2 - n_loops - euler
+    if genus2 != 0:
+        return (), TopologyError(f"{name} ({k} faces) has genus {genus2 / 2:g} (handles or "
+                                 "tunnels); mark seams across each handle so it becomes a disk "
+                                 "(possibly with holes)", idx, faces)
+    loops = []
+    for lab in loop_labels:
+        start = int(ba[np.argmax(comp[ba] == lab)])
+        loop = depth_first_order(g, start, directed=True, return_predecessors=False)
+        loops.append(loop.astype(np.int64))
+    loops.sort(key=len, reverse=True)
+    return tuple(loops), None

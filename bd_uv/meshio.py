@@ -1,0 +1,152 @@
+"""Reading and writing mesh files.
+
+OBJ is read by position index (``v`` records) so vertex order and topology are the file's own;
+loaders that split vertices at UV seams would change the topology. OFF and PLY go through trimesh
+with ``process=False`` (vertex order kept).
+"""
+import os
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import InvalidMeshError
+
+
+@dataclass(frozen=True)
+class Mesh:
+    """A loaded triangle mesh.
+
+    Attributes
+    ----------
+    V : (n,3) float64
+    F : (m,3) int64 (polygons fan-triangulated)
+    corner_uv : (m,3,2) float64 or None, the file's UVs per face corner (OBJ ``vt``)
+    name : str
+    """
+    V: np.ndarray
+    F: np.ndarray
+    corner_uv: np.ndarray = None
+    name: str = ""
+
+    def uv_seams(self):
+        """Edges where the file's UVs are discontinuous, (s,2) vertex pairs; None without UVs."""
+        if self.corner_uv is None:
+            return None
+        return uv_seams(self.F, self.corner_uv)
+
+
+def load_mesh(path):
+    """Load an OBJ, OFF or PLY file.
+
+    Returns
+    -------
+    Mesh
+
+    Raises
+    ------
+    InvalidMeshError when the file cannot be read or holds no faces.
+    """
+    ext = os.path.splitext(path)[1].lower()
+    name = os.path.splitext(os.path.basename(path))[0]
+    try:
+        if ext == ".obj":
+            V, F, cuv = _read_obj(path)
+        elif ext in (".off", ".ply"):
+            import trimesh
+            m = trimesh.load(path, process=False, force="mesh")
+            V = np.asarray(m.vertices, dtype=np.float64)
+            F = np.asarray(m.faces, dtype=np.int64)
+            cuv = None
+        else:
+            raise InvalidMeshError(f"{path}: unsupported format {ext!r}; use .obj, .off or .ply")
+    except InvalidMeshError:
+        raise
+    except (OSError, ValueError, IndexError, KeyError, AttributeError) as exc:
+        raise InvalidMeshError(f"{path}: cannot read the mesh ({exc})") from exc
+    if len(F) == 0:
+        raise InvalidMeshError(f"{path}: the file holds no faces")
+    return Mesh(V, F.reshape(-1, 3), cuv, name)
+
+
+def _read_obj(path):
+    vs, vts, faces, tfaces = [], [], [], []
+    with open(path, "r", encoding="utf-8", errors="replace") as fh:
+        for line in fh:
+            if line.startswith("v "):
+                vs.append(line.split()[1:4])
+            elif line.startswith("vt "):
+                vts.append(line.split()[1:3])
+            elif line.startswith("f "):
+                items = [it.split("/") for it in line.split()[1:]]
+                if len(items) < 3:
+                    continue
+                vi = [int(it[0]) for it in items]
+                ti = [int(it[1]) if len(it) > 1 and it[1] else 0 for it in items]
+                for j in range(1, len(vi) - 1):  # fan-triangulate polygons
+                    faces.append((vi[0], vi[j], vi[j + 1]))
+                    tfaces.append((ti[0], ti[j], ti[j + 1]))
+    V = np.asarray(vs, dtype=np.float64).reshape(-1, 3)
+    F = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    F = np.where(F < 0, F + len(V), F - 1)  # OBJ is 1-based; negative indices count back
+    T = np.asarray(tfaces, dtype=np.int64).reshape(-1, 3)
+    cuv = None
+    if len(vts) and len(T) and np.all(T != 0):
+        VT = np.asarray(vts, dtype=np.float64).reshape(-1, 2)
+        T = np.where(T < 0, T + len(VT), T - 1)
+        cuv = VT[T]
+    return V, F, cuv
+
+
+def uv_seams(F, corner_uv):
+    """Edges whose two faces disagree on the UV of either end, as (s,2) vertex pairs."""
+    F = np.asarray(F, dtype=np.int64)
+    m = len(F)
+    n = int(F.max()) + 1
+    a = F.ravel()
+    b = np.roll(F, -1, axis=1).ravel()
+    ua = corner_uv.reshape(-1, 2)
+    ub = np.roll(corner_uv, -1, axis=1).reshape(-1, 2)
+    key = np.minimum(a, b) * n + np.maximum(a, b)
+    order = np.argsort(key, kind="stable")
+    k = key[order]
+    pair = np.flatnonzero(k[1:] == k[:-1])
+    h1, h2 = order[pair], order[pair + 1]
+    # Align: the end of h2 at vertex a[h1].
+    same = a[h1] == a[h2]
+    u2a = np.where(same[:, None], ua[h2], ub[h2])
+    u2b = np.where(same[:, None], ub[h2], ua[h2])
+    cut = np.any(ua[h1] != u2a, axis=1) | np.any(ub[h1] != u2b, axis=1)
+    return np.stack([a[h1[cut]], b[h1[cut]]], axis=1)
+
+
+def write_obj(path, V, F, uv=None, F_uv=None):
+    """Write an OBJ with the input's vertices and faces in order, and ``f v/vt`` faces.
+
+    Parameters
+    ----------
+    V : (n,3) float array
+    F : (m,3) int array
+    uv : (k,2) float array, optional, one ``vt`` per island vertex
+    F_uv : (m,3) int array, optional, the ``vt`` of each face corner; -1 on faces without UVs
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    d = os.path.dirname(os.path.abspath(path))
+    os.makedirs(d, exist_ok=True)
+    with open(path, "w", encoding="utf-8") as fh:
+        fh.write("# written by bd-uv\n")
+        np.savetxt(fh, V, fmt="v %.17g %.17g %.17g")
+        if uv is not None and len(uv):
+            np.savetxt(fh, np.asarray(uv, dtype=np.float64), fmt="vt %.17g %.17g")
+        if F_uv is None:
+            np.savetxt(fh, F + 1, fmt="f %d %d %d")
+            return
+        F_uv = np.asarray(F_uv, dtype=np.int64)
+        has = np.all(F_uv >= 0, axis=1)
+        lines = np.empty(len(F), dtype=object)
+        fv, ft = F + 1, F_uv + 1
+        lines[has] = [f"f {a}/{p} {b}/{q} {c}/{r}" for (a, b, c), (p, q, r)
+                      in zip(fv[has].tolist(), ft[has].tolist())]
+        lines[~has] = [f"f {a} {b} {c}" for a, b, c in fv[~has].tolist()]
+        fh.write("\n".join(lines.tolist()))
+        fh.write("\n")

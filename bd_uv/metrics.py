@@ -1,0 +1,96 @@
+"""Distortion metrics that certify a result from its final UVs alone (Lipman 2012, eqs. 4.6-4.9)."""
+import numpy as np
+
+from .geometry import face_areas, gradient_operators, local_coordinates
+
+
+def face_jacobians(V, F, corner_uv):
+    """Similarity and anti-similarity parts of each face's affine map (eq. 4.6).
+
+    Parameters
+    ----------
+    V : (n,3) float array
+    F : (m,3) int array
+    corner_uv : (m,3,2) float array, UV of each face corner
+
+    Returns
+    -------
+    alpha, beta : (m,) complex128
+        The map is ``z -> alpha z + beta conj(z) + delta`` in each face's canonical local frame.
+    """
+    G = gradient_operators(local_coordinates(V, F))
+    uv = np.asarray(corner_uv, dtype=np.float64)
+    gx = np.einsum("mkc,mc->mk", G, uv[:, :, 0])  # (du/dx, du/dy)
+    gy = np.einsum("mkc,mc->mk", G, uv[:, :, 1])  # (dv/dx, dv/dy)
+    alpha = 0.5 * ((gx[:, 0] + gy[:, 1]) + 1j * (gy[:, 0] - gx[:, 1]))
+    beta = 0.5 * ((gx[:, 0] - gy[:, 1]) + 1j * (gy[:, 0] + gx[:, 1]))
+    return alpha, beta
+
+
+def signed_uv_areas(corner_uv):
+    """Signed area of each UV triangle (positive when counter-clockwise).
+
+    Parameters
+    ----------
+    corner_uv : (m,3,2) float array
+
+    Returns
+    -------
+    (m,) float64
+    """
+    uv = np.asarray(corner_uv, dtype=np.float64)
+    e1 = uv[:, 1] - uv[:, 0]
+    e2 = uv[:, 2] - uv[:, 0]
+    return 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+
+
+def flipped_faces(V, F, corner_uv):
+    """Faces whose UV triangle is flipped or collapsed (signed UV area <= 0, or non-finite).
+
+    Returns
+    -------
+    (m,) bool
+    """
+    A = signed_uv_areas(corner_uv)
+    return ~(A > 0)
+
+
+def conformal_distortion(V, F, corner_uv):
+    """Conformal distortion ``D = (|alpha|+|beta|) / (|alpha|-|beta|)`` of each face (eq. 4.9).
+
+    Returns
+    -------
+    D : (m,) float64
+        ``inf`` for flipped, collapsed or degenerate faces.
+    """
+    alpha, beta = face_jacobians(V, F, corner_uv)
+    a, b = np.abs(alpha), np.abs(beta)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        D = (a + b) / (a - b)
+    bad = ~(a > b) | ~np.isfinite(D) | flipped_faces(V, F, corner_uv)
+    D[bad] = np.inf
+    return D
+
+
+def certify(V, F, corner_uv, bound, rtol=1e-6):
+    """Check a map: no flipped face and every face's distortion within ``bound``.
+
+    Returns
+    -------
+    ok : bool
+    D : (m,) float64 distortion per face
+    n_flipped : int
+    """
+    D = conformal_distortion(V, F, corner_uv)
+    n_flipped = int(flipped_faces(V, F, corner_uv).sum())
+    ok = n_flipped == 0 and bool(np.all(D <= bound * (1.0 + rtol)))
+    return ok, D, n_flipped
+
+
+def mean_distortion(V, F, D):
+    """Area-weighted mean of the finite distortions."""
+    A = face_areas(V, F)
+    finite = np.isfinite(D)
+    if not finite.any():
+        return float("inf")
+    return float(np.sum(A[finite] * D[finite]) / np.sum(A[finite]))
