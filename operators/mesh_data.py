@@ -25,6 +25,9 @@ __all__ = [
     "loop_uvs",
     "uv_selection",
     "face_mask_of_polygons",
+    "selection",
+    "set_selection",
+    "select_polygons",
 ]
 
 
@@ -279,3 +282,42 @@ def write_corner_uvs(mesh, uv_name, tri_loops, corner_uv, face_mask):
     layer.uv.foreach_set("vector", uv.ravel())
     mesh.update()
     return layer.name
+
+
+def selection(mesh):
+    """Selection flags of ``mesh`` (Object Mode).
+
+    Returns
+    -------
+    vert : (n,) bool, edge : (e,) bool, poly : (P,) bool
+    """
+    _require_object_mode(mesh)
+    return (_get(mesh.vertices, "select", bool, len(mesh.vertices)),
+            _get(mesh.edges, "select", bool, len(mesh.edges)),
+            _get(mesh.polygons, "select", bool, len(mesh.polygons)))
+
+
+def set_selection(mesh, vert, edge, poly):
+    """Set the selection flags of ``mesh`` (Object Mode), as returned by :func:`selection`."""
+    _require_object_mode(mesh)
+    mesh.vertices.foreach_set("select", np.asarray(vert, dtype=bool))
+    mesh.edges.foreach_set("select", np.asarray(edge, dtype=bool))
+    mesh.polygons.foreach_set("select", np.asarray(poly, dtype=bool))
+    mesh.update()
+
+
+def select_polygons(mesh, poly_mask):
+    """Select exactly the polygons in the (P,) bool ``poly_mask``, with their edges and vertices.
+
+    In vertex select mode Blender's Edit Mode also selects any other face whose vertices are all
+    selected, as its own selection tools do.
+    """
+    _require_object_mode(mesh)
+    poly_mask = np.asarray(poly_mask, dtype=bool)
+    total = _get(mesh.polygons, "loop_total", np.int32, len(mesh.polygons))
+    loop_selected = np.repeat(poly_mask, total)
+    vert = np.zeros(len(mesh.vertices), dtype=bool)
+    vert[_get(mesh.loops, "vertex_index", np.int32, len(mesh.loops))[loop_selected]] = True
+    edge = np.zeros(len(mesh.edges), dtype=bool)
+    edge[_get(mesh.loops, "edge_index", np.int32, len(mesh.loops))[loop_selected]] = True
+    set_selection(mesh, vert, edge, poly_mask)

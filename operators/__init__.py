@@ -1,0 +1,23 @@
+"""Blender operators over the ``bd_uv`` core.
+
+``mesh_data`` is the only module converting between ``bpy`` and numpy; ``worker`` runs the
+solve in a background thread without ``bpy``; ``session`` is one unwrap (gather, write back,
+pack, report) shared by the operator's synchronous and background paths.
+"""
+import bpy
+
+from . import display, properties, unwrap
+
+classes = (*properties.classes, *unwrap.classes, *display.classes)
+
+
+def register():
+    for cls in classes:
+        bpy.utils.register_class(cls)
+    properties.register()
+
+
+def unregister():
+    properties.unregister()
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)

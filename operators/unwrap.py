@@ -1,0 +1,192 @@
+"""``uv.bd_unwrap``: Bounded Distortion unwrap of the selected faces of every mesh in Edit Mode.
+
+``execute()`` solves synchronously (scripts, the redo panel, tests); ``invoke()`` solves in a
+background :class:`~.worker.UnwrapJob`, polls it from a modal timer, shows progress in the status
+bar, and Esc cancels leaving mesh and UVs exactly as they were. Both end in ``_finish`` (write
+back, pack, colour, report) so they cannot drift apart.
+"""
+import time
+
+import bpy
+from bpy.props import BoolProperty, EnumProperty, FloatProperty
+
+from .. import bd_uv
+from . import session
+from .editmode import edit_mesh_objects, object_mode
+from .worker import Failed, UnwrapJob
+
+_METHODS = (
+    ('lscm', "BD-LSCM", "Conformal energy (Lipman 2012, section 5): closest to Blender's "
+     "Conformal, with a certified distortion bound"),
+    ('arap', "BD-ARAP", "As-rigid-as-possible energy: keeps areas and lengths too, within the "
+     "same certified bound"),
+)
+_FRAMES = (
+    ('auto', "Auto", "Frames from a flip-free initial map chosen by bd-uv"),
+    ('input-uv', "From Current UVs", "Frames from the UVs the faces have now (Lipman 2012, "
+     "eq. 4.21); keeps the layout close to them"),
+)
+
+
+class UV_OT_bd_unwrap(bpy.types.Operator):
+    """Unwrap the selected faces with a certified bound on conformal distortion and no flipped
+    faces (Bounded Distortion Mapping Spaces, Lipman 2012)"""
+
+    bl_idname = "uv.bd_unwrap"
+    bl_label = "Bounded Distortion"
+    bl_options = {'REGISTER', 'UNDO'}
+
+    method: EnumProperty(name="Method", items=_METHODS, default='lscm')
+    bound: FloatProperty(name="Bound C", default=5.0, min=1.0001, soft_min=1.05, soft_max=50.0,
+                         description="Largest conformal distortion allowed on any face")
+    minimise: BoolProperty(name="Minimise", default=False,
+                           description="Find the smallest certified bound instead (optimal "
+                           "quasi-conformal map; slower)")
+    raise_bound: BoolProperty(name="Raise C Automatically", default=True,
+                              description="When no map within C exists, raise C up to the limit")
+    bound_limit: FloatProperty(name="Limit", default=100.0, min=1.0001, soft_max=1000.0,
+                               description="Largest bound tried when raising C")
+    frames: EnumProperty(name="Frames", items=_FRAMES, default='auto')
+    margin: FloatProperty(name="Margin", default=0.001, min=0.0, max=1.0,
+                          description="Space between islands when packing")
+    pack: BoolProperty(name="Pack Islands", default=True,
+                       description="Pack the unwrapped islands with Blender's Pack Islands; "
+                       "islands with pinned UVs stay where they are")
+    show_distortion: BoolProperty(name="Colour by Distortion", default=False,
+                                  description="Colour faces by their distortion afterwards")
+    use_object_scale: BoolProperty(name="Use Object Scale", default=True,
+                                   description="Unwrap the object as scaled in the scene (Blender's "
+                                   "own unwrap ignores a non-uniform scale)")
+
+    @classmethod
+    def poll(cls, context):
+        return bool(edit_mesh_objects(context))
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.prop(self, "method")
+        layout.prop(self, "minimise")
+        row = layout.row()
+        row.active = not self.minimise
+        row.prop(self, "bound")
+        layout.prop(self, "raise_bound")
+        row = layout.row()
+        row.active = self.raise_bound and not self.minimise
+        row.prop(self, "bound_limit")
+        layout.prop(self, "frames")
+        layout.prop(self, "use_object_scale")
+        layout.prop(self, "pack")
+        row = layout.row()
+        row.active = self.pack
+        row.prop(self, "margin")
+        layout.prop(self, "show_distortion")
+
+    # -- shared --------------------------------------------------------------------------------
+    def _prepare(self, context):
+        """Gather the batch and the core's arguments, or report why not (returns None)."""
+        space = context.space_data
+        pin_unselected = (space is not None and space.type == 'IMAGE_EDITOR'
+                          and not context.scene.tool_settings.use_uv_select_sync)
+        try:
+            with object_mode(context) as objects:
+                batch = session.gather(objects, pin_unselected_uvs=pin_unselected,
+                                       use_object_scale=self.use_object_scale,
+                                       need_uvs=self.frames == 'input-uv')
+        except session.UserError as error:
+            self.report({'WARNING'}, str(error))
+            return None
+        args, kwargs = session.unwrap_arguments(
+            batch, method=self.method, bound=self.bound, minimise=self.minimise,
+            raise_bound=self.raise_bound, bound_limit=self.bound_limit, frames=self.frames)
+        return batch, args, kwargs
+
+    def _failed(self, error):
+        """Report an exception from the core; nothing has been written."""
+        if isinstance(error, bd_uv.CancelledError):
+            self.report({'WARNING'}, "Unwrap cancelled: mesh and UVs unchanged")
+        elif isinstance(error, (bd_uv.BDError, ValueError)):
+            self.report({'ERROR'}, str(error))
+        else:
+            raise error
+        return {'CANCELLED'}
+
+    def _finish(self, context, batch, result, seconds):
+        with object_mode(context):
+            written = session.write_back(batch, result)
+        summary = session.summarise(batch, result, written, seconds)
+        if summary.written:
+            if self.pack:
+                session.pack(context, written, self.margin)
+            if self.show_distortion:
+                bound = summary.bound_certified if summary.bound_certified > 1 else self.bound
+                session.show_distortion(context, written, bound)
+        session.store(context.window_manager, summary, batch.face_count)
+        self.report({summary.level}, summary.message)
+        return {'FINISHED'} if summary.written else {'CANCELLED'}
+
+    # -- synchronous ---------------------------------------------------------------------------
+    def execute(self, context):
+        prepared = self._prepare(context)
+        if prepared is None:
+            return {'CANCELLED'}
+        batch, args, kwargs = prepared
+        start = time.perf_counter()
+        try:
+            result = bd_uv.unwrap(*args, **kwargs)
+        except (bd_uv.BDError, ValueError) as error:
+            return self._failed(error)
+        return self._finish(context, batch, result, time.perf_counter() - start)
+
+    # -- background ----------------------------------------------------------------------------
+    def invoke(self, context, event):
+        if context.window is None:  # no event loop (background mode): solve here and now
+            return self.execute(context)
+        prepared = self._prepare(context)
+        if prepared is None:
+            return {'CANCELLED'}
+        self._batch, args, kwargs = prepared
+        self._job = UnwrapJob(bd_uv.unwrap, *args, **kwargs).start()
+        wm = context.window_manager
+        self._timer = wm.event_timer_add(0.1, window=context.window)
+        wm.progress_begin(0, 100)
+        self._status(context, "starting")
+        wm.modal_handler_add(self)
+        return {'RUNNING_MODAL'}
+
+    def _status(self, context, message):
+        text = (f"Bounded Distortion unwrap: {self._job.fraction * 100:.0f}% {message}"
+                "  (Esc to cancel)")
+        if context.workspace is not None:
+            context.workspace.status_text_set(text)
+        context.window_manager.progress_update(int(self._job.fraction * 100))
+
+    def _end_modal(self, context):
+        wm = context.window_manager
+        wm.event_timer_remove(self._timer)
+        wm.progress_end()
+        if context.workspace is not None:
+            context.workspace.status_text_set(None)
+
+    def modal(self, context, event):
+        if event.type == 'ESC' and event.value == 'PRESS':
+            self._job.cancel()  # the thread stops at its next checkpoint; its result is dropped
+            self._end_modal(context)
+            self.report({'WARNING'}, "Unwrap cancelled: mesh and UVs unchanged")
+            return {'CANCELLED'}
+        if event.type != 'TIMER':
+            return {'PASS_THROUGH'}
+        outcome = self._job.poll()
+        if outcome is None:
+            self._status(context, self._job.status)
+            return {'PASS_THROUGH'}
+        self._end_modal(context)
+        if isinstance(outcome, Failed):
+            return self._failed(outcome.error)
+        if not edit_mesh_objects(context):
+            self.report({'WARNING'}, "Left Edit Mode while solving: nothing written")
+            return {'CANCELLED'}
+        return self._finish(context, self._batch, outcome.result, outcome.seconds)
+
+
+classes = (UV_OT_bd_unwrap,)

@@ -1,0 +1,48 @@
+"""Menu entries: UV > Unwrap beside Blender's own methods.
+
+``IMAGE_MT_uvs_unwrap`` is the UV editor's UV > Unwrap menu, which the 3D View's U menu embeds
+since Blender 4.3; before that the 3D View uses ``VIEW3D_MT_uv_map``.
+"""
+import bpy
+
+from ..operators.display import UV_OT_bd_select_distorted, UV_OT_bd_show_distortion
+from ..operators.unwrap import UV_OT_bd_unwrap
+
+
+def draw_unwrap_entry(self, context):
+    layout = self.layout
+    layout.separator()
+    layout.operator_context = 'INVOKE_DEFAULT'
+    layout.operator(UV_OT_bd_unwrap.bl_idname, text="Bounded Distortion")
+
+
+def draw_distortion_entries(self, context):
+    layout = self.layout
+    layout.separator()
+    layout.operator(UV_OT_bd_show_distortion.bl_idname)
+    layout.operator(UV_OT_bd_select_distorted.bl_idname)
+
+
+def _menus():
+    """(menu class, draw function) pairs for this Blender version."""
+    unwrap_menu = getattr(bpy.types, "IMAGE_MT_uvs_unwrap", None)
+    if unwrap_menu is None:
+        unwrap_menu = bpy.types.VIEW3D_MT_uv_map
+    pairs = [(unwrap_menu, draw_unwrap_entry)]
+    uvs_menu = getattr(bpy.types, "IMAGE_MT_uvs", None)
+    if uvs_menu is not None:
+        pairs.append((uvs_menu, draw_distortion_entries))
+    return pairs
+
+
+classes = ()
+
+
+def register():
+    for menu, draw in _menus():
+        menu.append(draw)
+
+
+def unregister():
+    for menu, draw in _menus():
+        menu.remove(draw)

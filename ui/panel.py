@@ -1,0 +1,45 @@
+"""UV editor sidebar (N panel), "BD-UV" tab: the last unwrap's result and the distortion tools."""
+import bpy
+
+from ..operators.display import UV_OT_bd_select_distorted, UV_OT_bd_show_distortion
+from ..operators.unwrap import UV_OT_bd_unwrap
+
+
+class IMAGE_PT_bd_uv_result(bpy.types.Panel):
+    bl_space_type = 'IMAGE_EDITOR'
+    bl_region_type = 'UI'
+    bl_category = "BD-UV"
+    bl_label = "Bounded Distortion"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.operator(UV_OT_bd_unwrap.bl_idname, text="Unwrap")
+        last = context.window_manager.bd_uv_last_result
+        box = layout.box()
+        if not last.valid:
+            box.label(text="No result yet")
+        else:
+            col = box.column(align=True)
+            col.label(text=f"{last.method}: {last.islands} islands"
+                      + (f", {last.failed} failed" if last.failed else ""))
+            col.label(text=f"Max distortion {last.max_distortion:.3f}")
+            col.label(text=f"Mean distortion {last.mean_distortion:.3f}")
+            col.label(text=f"Certified C {last.bound_certified:.3g}")
+            col.label(text=f"Flipped {last.flipped}")
+            col.label(text=f"Time {last.seconds:.2f} s")
+        col = layout.column(align=True)
+        col.operator(UV_OT_bd_show_distortion.bl_idname)
+        col.operator(UV_OT_bd_select_distorted.bl_idname)
+
+
+classes = (IMAGE_PT_bd_uv_result,)
+
+
+def register():
+    for cls in classes:
+        bpy.utils.register_class(cls)
+
+
+def unregister():
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)
