@@ -1,0 +1,201 @@
+"""The extension manifest, the wheel list and build.py's checks, run through Blender's own validator.
+
+Blender's validator and builder (``blender_ext.py``) ship inside the ``bpy`` module; ``build.py``
+finds and runs them without importing ``bpy``.
+"""
+import importlib.util
+import os
+import pathlib
+import shutil
+import sys
+import tomllib
+import zipfile
+
+import pytest
+
+REPO_ROOT = pathlib.Path(__file__).resolve().parents[2]
+
+
+def load_build():
+    if "bd_uv_build" in sys.modules:
+        return sys.modules["bd_uv_build"]
+    spec = importlib.util.spec_from_file_location("bd_uv_build", REPO_ROOT / "build.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["bd_uv_build"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+build = load_build()
+MANIFEST = tomllib.loads((REPO_ROOT / "blender_manifest.toml").read_text())
+
+
+def committed_wheels():
+    return [build.Wheel(pathlib.Path(w)) for w in MANIFEST["wheels"]]
+
+
+def test_repo_manifest_passes_blenders_validator():
+    out = build.validate(REPO_ROOT)
+    assert "Success parsing TOML" in out
+
+
+def test_validator_rejects_a_broken_manifest(tmp_path):
+    # The validator really checks: a 65-character tagline and an unknown license are refused.
+    (tmp_path / "__init__.py").write_text("")
+    text = (REPO_ROOT / "blender_manifest.toml").read_text()
+    bad = text.replace(f'tagline = "{MANIFEST["tagline"]}"', 'tagline = "' + "x" * 65 + '"')
+    assert bad != text
+    (tmp_path / "blender_manifest.toml").write_text(bad)
+    with pytest.raises(build.BuildError, match="tagline"):
+        build.validate(tmp_path)
+
+
+def test_manifest_identity_fields():
+    assert MANIFEST["schema_version"] == "1.0.0"
+    assert MANIFEST["id"] == "bd_uv"
+    assert MANIFEST["version"] == "0.1.0"
+    assert MANIFEST["name"] == "Bounded Distortion UV"
+    assert 0 < len(MANIFEST["tagline"]) <= 64
+    assert MANIFEST["maintainer"] == "bd-uv developers"
+    assert MANIFEST["type"] == "add-on"
+    assert MANIFEST["blender_version_min"] == "4.2.0"
+    assert MANIFEST["license"] == ["SPDX:GPL-3.0-or-later"]
+    assert MANIFEST["tags"] == ["UV"]
+    assert set(MANIFEST["platforms"]) == {"linux-x64", "windows-x64", "macos-arm64", "macos-x64"}
+
+
+def test_build_exclusions_keep_development_files_out():
+    matcher = build.blender_ext().PathPatternMatch(MANIFEST["build"]["paths_exclude_pattern"])
+    for path in ["tests/", "benchmarks/", "docs/", ".ci/", ".git/", ".gitignore", "build.py",
+                 "requirements.txt", "requirements-dev.txt", ".wheel-cache/", "dist/", "out/",
+                 "wheels/", "bd_uv/__pycache__/", "bd_uv/mesh.pyc", "BENCHMARKS.md"]:
+        assert matcher.test_path(path), path
+    for path in ["__init__.py", "bd_uv/", "bd_uv/mesh.py", "operators/", "ui/", "scripts/",
+                 "README.md", "blender_manifest.toml"]:
+        assert not matcher.test_path(path), path
+
+
+def test_committed_wheel_list_matches_the_pins():
+    pins = build.bundled_pins(build.read_pins())
+    wheels = committed_wheels()
+    assert wheels, "blender_manifest.toml lists no wheels: run python build.py"
+    # Only pinned, bundled packages at their pinned versions; never numpy.
+    for wheel in wheels:
+        assert wheel.name in pins, wheel.path.name
+        assert wheel.version == pins[wheel.name], wheel.path.name
+        assert wheel.name != "numpy"
+    for platform in build.PLATFORM_TAGS:
+        for python in build.PYTHONS:
+            serving = {w.name for w in wheels
+                       if platform in w.platforms() and w.serves_python(python)}
+            if python == "3.11":
+                assert serving == set(pins), (platform, python, set(pins) - serving)
+            else:
+                # 3.13 support is all or nothing: a partial set would break Blender 5.1+.
+                assert serving in (set(pins), set()), (platform, python, set(pins) - serving)
+    # scipy is the one binary package pinned per Python: it must have both 3.11 and 3.13 wheels.
+    scipy = [w for w in wheels if w.name == "scipy"]
+    assert {w.parts[-3] for w in scipy} == {"cp311", "cp313"}
+    assert len(scipy) == 2 * len(build.PLATFORM_TAGS)
+
+
+def test_runtime_pins_match_what_the_zips_bundle():
+    pins = build.read_pins()
+    assert pins["numpy"] == "1.26.4"  # test / CLI environment only; never bundled
+    for name in build.BUNDLED:
+        assert build.normalize(name) in pins, name
+    assert "numpy" not in map(build.normalize, build.BUNDLED)
+
+
+def fake_wheel(directory, filename, requires):
+    """A minimal wheel file whose METADATA declares ``requires``."""
+    name, version = filename.split("-")[:2]
+    path = directory / filename
+    with zipfile.ZipFile(path, "w") as zf:
+        meta = f"Metadata-Version: 2.1\nName: {name}\nVersion: {version}\n"
+        meta += "".join(f"Requires-Dist: {r}\n" for r in requires)
+        zf.writestr(f"{name}-{version}.dist-info/METADATA", meta)
+        zf.writestr(f"{name}/__init__.py", "")
+    return build.Wheel(path)
+
+
+def test_dependency_check_flags_what_blender_cannot_satisfy(tmp_path):
+    ok = fake_wheel(tmp_path, "alpha-1.0-py3-none-any.whl",
+                    ["numpy>=1.23.5,<2.5", "beta>=2", "gamma; extra == 'all'",
+                     "delta; sys_platform == 'win32'"])
+    beta = fake_wheel(tmp_path, "beta-2.1-py3-none-any.whl", [])
+    assert build.dependency_problems([ok, beta], "linux-x64", "3.11") == []
+    # delta is needed on Windows only, and is not bundled.
+    problems = build.dependency_problems([ok, beta], "windows-x64", "3.11")
+    assert len(problems) == 1 and "delta" in problems[0]
+    # A numpy floor above Blender 4.2's numpy 1.24.3 is refused; the missing beta too.
+    new = fake_wheel(tmp_path, "alpha-2.0-py3-none-any.whl", ["numpy>=1.25", "beta>=3"])
+    problems = build.dependency_problems([new, beta], "linux-x64", "3.11")
+    assert any("1.24.3" in p for p in problems)
+    assert any("beta 2.1 is pinned" in p for p in problems)
+
+
+def test_real_pinned_wheels_need_nothing_blender_lacks():
+    # The cached wheels of the pins (present once build.py or the zip fixture has run).
+    pins = build.bundled_pins(build.read_pins())
+    directory = load_cache_dir("linux-x64", "3.11")
+    wheels = [build.cached_wheel(directory, n, v) for n, v in pins.items()]
+    if not all(wheels):
+        pytest.skip(f"no cached wheels in {directory}")
+    wheels = [build.Wheel(w) for w in wheels]
+    assert build.dependency_problems(wheels, "linux-x64", "3.11") == []
+    # scipy's own numpy requirement, read from its metadata, admits Blender 4.2's numpy.
+    scipy = next(w for w in wheels if w.name == "scipy")
+    from pip._vendor.packaging.requirements import Requirement
+    numpy_req = [Requirement(r) for r in scipy.requirements()]
+    numpy_req = [r for r in numpy_req if r.name == "numpy" and r.marker is None]
+    assert len(numpy_req) == 1
+    spec = numpy_req[0].specifier
+    assert spec.contains("1.24.3") and spec.contains("1.26.4") and not spec.contains("1.23.4")
+
+
+def load_cache_dir(platform, python):
+    cache = pathlib.Path(os.environ.get("BD_UV_WHEEL_CACHE", REPO_ROOT / ".wheel-cache"))
+    return cache / platform / f"py{python}"
+
+
+def test_with_wheels_rewrites_only_the_wheel_block():
+    text = (REPO_ROOT / "blender_manifest.toml").read_text()
+    new = build.with_wheels(text, ["b-1-py3-none-any.whl", "a-1-py3-none-any.whl"])
+    data = tomllib.loads(new)
+    assert data["wheels"] == ["./wheels/a-1-py3-none-any.whl", "./wheels/b-1-py3-none-any.whl"]
+    assert {k: v for k, v in data.items() if k != "wheels"} == \
+        {k: v for k, v in MANIFEST.items() if k != "wheels"}
+    assert build.with_wheels(new, [w.path.name for w in committed_wheels()]) == text
+
+
+def test_built_zip_passes_validator_and_checks(linux_extension_zip):
+    out = build.validate(linux_extension_zip)
+    assert "Success parsing TOML" in out
+    with zipfile.ZipFile(linux_extension_zip) as zf:
+        names = zf.namelist()
+        manifest = tomllib.loads(zf.read("blender_manifest.toml").decode())
+    assert manifest["build"]["generated"]["platforms"] == ["linux-x64"]
+    wheels = sorted(n.split("/", 1)[1] for n in names if n.startswith("wheels/"))
+    assert wheels == sorted(w.rsplit("/", 1)[1] for w in manifest["wheels"])
+    # Exactly the committed list's linux-x64 wheels: cp311 and cp313 scipy, nothing for Windows/Mac.
+    expected = sorted(w.path.name for w in committed_wheels() if "linux-x64" in w.platforms())
+    assert wheels == expected
+    assert not [n for n in names if "numpy" in n.lower()]
+    assert not [n for n in names if n.split("/", 1)[0] in ("tests", "benchmarks", "docs", ".ci",
+                                                            "build.py", "requirements.txt")]
+    assert "__init__.py" in names and "bd_uv/__init__.py" in names
+    assert linux_extension_zip.stat().st_size <= 90e6
+
+
+def test_check_zip_catches_numpy_and_strays(tmp_path, linux_extension_zip):
+    # build.py's zip check is not vacuous: a zip with numpy and a stray file fails it.
+    bad = tmp_path / "bad.zip"
+    shutil.copy(linux_extension_zip, bad)
+    with zipfile.ZipFile(bad, "a") as zf:
+        zf.writestr("wheels/numpy-1.26.4-cp311-cp311-manylinux_2_17_x86_64.whl", b"")
+        zf.writestr("notes.txt", "stray")
+    problems = build.check_zip(bad, "linux-x64", {}, 90.0)
+    assert any("numpy" in p for p in problems)
+    assert any("notes.txt" in p for p in problems)
+    assert build.check_zip(linux_extension_zip, "linux-x64", {}, 90.0) == []

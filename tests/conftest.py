@@ -1,0 +1,41 @@
+"""Fixtures shared by the whole suite.
+
+``linux_extension_zip`` is the linux-x64 extension zip built by ``build.py`` once per session. Its
+wheels come from the cache in ``$BD_UV_WHEEL_CACHE`` (default ``.wheel-cache`` in the repo) and are
+downloaded from PyPI when missing there (about 78 MB).
+"""
+import importlib.util
+import os
+import pathlib
+import platform
+import subprocess
+import sys
+import tomllib
+
+import pytest
+
+REPO_ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+def wheel_cache():
+    return pathlib.Path(os.environ.get("BD_UV_WHEEL_CACHE", REPO_ROOT / ".wheel-cache"))
+
+
+@pytest.fixture(scope="session")
+def linux_extension_zip(tmp_path_factory):
+    """Path of ``bd_uv-<version>-linux_x64.zip`` built by ``build.py --platform linux-x64``."""
+    if importlib.util.find_spec("bpy") is None:
+        pytest.skip("the bpy module (which ships Blender's extension builder) is not installed")
+    out = tmp_path_factory.mktemp("dist")
+    cmd = [sys.executable, str(REPO_ROOT / "build.py"), "--platform", "linux-x64",
+           "--cache", str(wheel_cache()), "--out", str(out), "--no-write-manifest"]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    assert proc.returncode == 0, f"{' '.join(cmd)} failed:\n{proc.stdout}\n{proc.stderr}"
+    version = tomllib.loads((REPO_ROOT / "blender_manifest.toml").read_text())["version"]
+    path = out / f"bd_uv-{version}-linux_x64.zip"
+    assert path.is_file(), proc.stdout
+    return path
+
+
+def on_linux_x64():
+    return sys.platform.startswith("linux") and platform.machine() in ("x86_64", "AMD64")
