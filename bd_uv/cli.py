@@ -13,7 +13,7 @@ import numpy as np
 
 from .errors import BDError
 from .meshio import load_mesh, write_obj
-from .unwrap import FRAMES, METHODS, unwrap
+from .pipeline import FRAMES, METHODS, unwrap
 
 
 def bound_arg(text):

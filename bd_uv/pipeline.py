@@ -23,7 +23,7 @@ from .frames import frames_from_map, harmonic_map, lscm_map, planar_map
 from .geometry import face_areas, local_coordinates
 from .mesh import check_arrays, islands as split_islands
 from .metrics import certify, mean_distortion
-from .solve import solve_conic
+from . import solve as conic
 from .spaces import bounded_distortion_space
 
 METHODS = ("lscm", "arap", "dirichlet")
@@ -313,7 +313,7 @@ class _Problem:
         Af = A[:, fr]
         bf = b - A[:, fx] @ self.xfix
         self.timings["setup"] += time.perf_counter() - t
-        sol = solve_conic(Pff, qf, Af, bf, cones, cancel=self.cancel)
+        sol = conic.solve_conic(Pff, qf, Af, bf, cones, cancel=self.cancel)
         self.timings["solve"] += sol.seconds
         self.solves += 1
         self.iterations += sol.iterations
