@@ -7,7 +7,6 @@ downloaded from PyPI when missing there (about 78 MB).
 import importlib.util
 import os
 import pathlib
-import platform
 import subprocess
 import sys
 import tomllib
@@ -35,7 +34,3 @@ def linux_extension_zip(tmp_path_factory):
     path = out / f"bd_uv-{version}-linux_x64.zip"
     assert path.is_file(), proc.stdout
     return path
-
-
-def on_linux_x64():
-    return sys.platform.startswith("linux") and platform.machine() in ("x86_64", "AMD64")

@@ -1,0 +1,182 @@
+"""The built linux-x64 zip installs into a fresh Blender, loads its bundled wheels and unwraps a mesh.
+
+What a user does with Edit > Preferences > Get Extensions > Install from Disk, done headless through
+the ``bpy`` module in a child process:
+
+- ``BLENDER_USER_RESOURCES`` points at an empty directory, so Blender starts with a fresh user
+  config and extension repositories, and nothing leaks into this test session.
+- The child sees an environment like Blender's own Python: numpy yes, but none of the packages the
+  zip bundles (scipy, clarabel, cffi, pycparser, trimesh): they are hidden from its ``sys.path``.
+  So the add-on can only work if Blender installed the zip's wheels into the extensions'
+  ``.local/lib/python3.11/site-packages`` and the add-on imported them from there, which the child
+  checks module by module.
+- ``bpy.ops.extensions.package_install_files`` installs and enables the zip, then
+  ``bpy.ops.uv.bd_unwrap('EXEC_DEFAULT')`` unwraps a bent grid in Edit Mode. The written UVs are
+  read back and their conformal distortion recomputed here from first principles.
+"""
+import json
+import os
+import pathlib
+import platform
+import subprocess
+import sys
+import zipfile
+
+import numpy as np
+import pytest
+
+from conftest import triangle_distortion
+
+pytestmark = pytest.mark.skipif(
+    not (sys.platform.startswith("linux") and platform.machine() == "x86_64"),
+    reason="the zip under test is linux-x64")
+
+CHILD = r'''
+import json, os, sys
+
+# An environment like Blender's own Python: hide the bundled packages from sys.path by replacing
+# each site-packages directory with a directory of links to everything else in it.
+blocked = set(json.loads(os.environ["BD_UV_HIDE"]))
+shim = os.environ["BD_UV_SHIM"]
+os.makedirs(shim)
+site_dirs = [p for p in sys.path if os.path.basename(p.rstrip(os.sep)) == "site-packages"]
+def stem(name):
+    return name.split(".")[0].split("-")[0].lower().replace("-", "_")
+for site_dir in site_dirs:
+    for name in os.listdir(site_dir):
+        link = os.path.join(shim, name)
+        if stem(name) not in blocked and not os.path.lexists(link):
+            os.symlink(os.path.join(site_dir, name), link)
+sys.path[:] = [p for p in sys.path if p not in site_dirs] + [shim]
+for name in blocked:
+    try:
+        __import__(name)
+    except ImportError:
+        pass
+    else:
+        raise SystemExit(f"{name} is still importable before the install")
+
+import bpy
+import numpy as np
+
+out = {"numpy": np.__file__}
+result = bpy.ops.extensions.package_install_files(
+    filepath=os.environ["BD_UV_ZIP"], repo="user_default", enable_on_install=True)
+out["install"] = sorted(result)
+out["addons"] = [a.module for a in bpy.context.preferences.addons]
+out["site_packages"] = os.path.join(
+    bpy.utils.user_resource("EXTENSIONS"), ".local", "lib",
+    "python{}.{}".format(*sys.version_info[:2]), "site-packages")
+out["modules"] = {}
+for name in sorted(blocked):
+    module = __import__(name)
+    out["modules"][name] = [module.__file__, getattr(module, "__version__", None)]
+out["operator"] = "bd_unwrap" in dir(bpy.ops.uv)
+
+# A bent 7 x 6 grid (an open disk) with Blender's default UV map, all faces selected, Edit Mode.
+for obj in list(bpy.data.objects):
+    bpy.data.objects.remove(obj)
+bpy.ops.mesh.primitive_grid_add(x_subdivisions=7, y_subdivisions=6, size=2.0)
+obj = bpy.context.active_object
+mesh = obj.data
+co = np.empty(len(mesh.vertices) * 3, np.float32)
+mesh.vertices.foreach_get("co", co)
+co = co.reshape(-1, 3)
+co[:, 2] = 0.3 * np.sin(1.7 * co[:, 0]) * np.cos(1.3 * co[:, 1])
+mesh.vertices.foreach_set("co", co.ravel())
+mesh.update()
+def loop_uvs():
+    uv = np.empty(len(mesh.loops) * 2, np.float32)
+    mesh.uv_layers.active.uv.foreach_get("vector", uv)
+    return uv.reshape(-1, 2)
+before = loop_uvs()
+bpy.ops.object.mode_set(mode="EDIT")
+bpy.ops.mesh.select_all(action="SELECT")
+out["unwrap"] = sorted(bpy.ops.uv.bd_unwrap("EXEC_DEFAULT", bound=3.0, pack=False))
+bpy.ops.object.mode_set(mode="OBJECT")
+after = loop_uvs()
+mesh.calc_loop_triangles()
+tri_loops = np.empty(len(mesh.loop_triangles) * 3, np.int32)
+mesh.loop_triangles.foreach_get("loops", tri_loops)
+tri_verts = np.empty(len(mesh.loop_triangles) * 3, np.int32)
+mesh.loop_triangles.foreach_get("vertices", tri_verts)
+co = np.empty(len(mesh.vertices) * 3, np.float32)
+mesh.vertices.foreach_get("co", co)
+last = bpy.context.window_manager.bd_uv_last_result
+out["last"] = {k: getattr(last, k) for k in
+               ("valid", "islands", "failed", "faces", "max_distortion", "flipped",
+                "bound_certified")}
+out["V"] = co.reshape(-1, 3).tolist()
+out["tris"] = tri_verts.reshape(-1, 3).tolist()
+out["tri_loops"] = tri_loops.reshape(-1, 3).tolist()
+out["before"] = before.tolist()
+out["after"] = after.tolist()
+print("BD_UV_RESULT " + json.dumps(out))
+'''
+
+
+def hidden_packages(zip_path):
+    """Import names of the packages inside the zip's wheels (scipy, clarabel, cffi, ...)."""
+    names = set()
+    with zipfile.ZipFile(zip_path) as outer:
+        for wheel in (n for n in outer.namelist() if n.startswith("wheels/")):
+            dist = wheel.split("/", 1)[1].split("-", 1)[0].lower()
+            names.add(dist)
+    return sorted(names)
+
+
+@pytest.fixture(scope="module")
+def installed(linux_extension_zip, tmp_path_factory):
+    """Output of the child process that installs the zip and runs the operator."""
+    tmp = tmp_path_factory.mktemp("blender_user")
+    env = dict(os.environ)
+    env.update(BLENDER_USER_RESOURCES=str(tmp / "user"), BD_UV_ZIP=str(linux_extension_zip),
+               BD_UV_SHIM=str(tmp / "site"), BD_UV_HIDE=json.dumps(hidden_packages(
+                   linux_extension_zip)), PYTHONNOUSERSITE="1")
+    env.pop("PYTHONPATH", None)
+    proc = subprocess.run([sys.executable, "-c", CHILD], env=env, capture_output=True, text=True,
+                          cwd=tmp)
+    lines = [l for l in proc.stdout.splitlines() if l.startswith("BD_UV_RESULT ")]
+    assert proc.returncode == 0 and lines, f"child failed:\n{proc.stdout[-4000:]}\n{proc.stderr[-4000:]}"
+    return json.loads(lines[-1][len("BD_UV_RESULT "):])
+
+
+def test_zip_installs_and_enables(installed):
+    assert installed["install"] == ["FINISHED"]
+    assert "bl_ext.user_default.bd_uv" in installed["addons"]
+    assert installed["operator"]
+
+
+def test_bundled_wheels_are_the_ones_imported(installed, linux_extension_zip):
+    site = pathlib.Path(installed["site_packages"])
+    assert set(installed["modules"]) == {"scipy", "clarabel", "cffi", "pycparser", "trimesh"}
+    for name, (path, _version) in installed["modules"].items():
+        assert pathlib.Path(path).is_relative_to(site), (name, path)
+    # The cp311 scipy of the zip, not its cp313 twin; numpy is Blender's (here: the environment's).
+    assert installed["modules"]["scipy"][1] == "1.15.3"
+    assert list((site / "scipy" / "_lib").glob("*.cpython-311-*.so"))
+    assert not list((site / "scipy" / "_lib").glob("*.cpython-313-*.so"))
+    assert not (site / "numpy").exists()
+    assert not pathlib.Path(installed["numpy"]).is_relative_to(site)
+
+
+def test_operator_from_the_zip_writes_certified_uvs(installed):
+    assert installed["unwrap"] == ["FINISHED"]
+    V = np.array(installed["V"])
+    tris = np.array(installed["tris"])
+    tri_loops = np.array(installed["tri_loops"])
+    before = np.array(installed["before"])
+    after = np.array(installed["after"])
+    assert tris.shape == (2 * 7 * 6, 3)
+    assert np.isfinite(after).all()
+    # The UVs changed from Blender's default grid UVs.
+    assert np.abs(after - before).max() > 1e-3
+    D, det = triangle_distortion(V, tris, after[tri_loops])
+    assert (det > 0).all(), "flipped faces"
+    last = installed["last"]
+    assert last["valid"] and last["islands"] == 1 and last["failed"] == 0 and last["flipped"] == 0
+    assert last["faces"] == 2 * 7 * 6
+    assert 1.0 <= D.max() <= 3.0 * (1 + 1e-4)
+    assert D.max() <= last["bound_certified"] * (1 + 1e-4)
+    # The float32 UVs Blender stores reproduce the add-on's own max distortion figure.
+    assert D.max() == pytest.approx(last["max_distortion"], rel=1e-3)
