@@ -15,6 +15,16 @@ from . import session
 from .editmode import edit_mesh_objects, object_mode
 from .worker import Failed, UnwrapJob
 
+# The background job's solve function (tests substitute a gated one to control timing).
+SOLVE = bd_uv.unwrap
+
+
+
+def has_event_loop(context):
+    """Whether modal timers will fire (not so in background mode or without a window)."""
+    return context.window is not None and not bpy.app.background
+
+
 _METHODS = (
     ('lscm', "BD-LSCM", "Conformal energy (Lipman 2012, section 5): closest to Blender's "
      "Conformal, with a certified distortion bound"),
@@ -140,13 +150,13 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
 
     # -- background ----------------------------------------------------------------------------
     def invoke(self, context, event):
-        if context.window is None:  # no event loop (background mode): solve here and now
+        if not has_event_loop(context):  # timers would never fire: solve here and now
             return self.execute(context)
         prepared = self._prepare(context)
         if prepared is None:
             return {'CANCELLED'}
         self._batch, args, kwargs = prepared
-        self._job = UnwrapJob(bd_uv.unwrap, *args, **kwargs).start()
+        self._job = UnwrapJob(SOLVE, *args, **kwargs).start()
         wm = context.window_manager
         self._timer = wm.event_timer_add(0.1, window=context.window)
         wm.progress_begin(0, 100)
