@@ -1,0 +1,50 @@
+"""Independent reference computations and small meshes for the core tests.
+
+Nothing here calls bd_uv's metrics: distortion is recomputed from singular values of the 2x2 map
+between each triangle's own 2D shape and its UV triangle.
+"""
+import os
+
+import numpy as np
+
+DATA = os.path.join(os.path.dirname(os.path.dirname(__file__)), "data")
+
+
+def reference_distortion(V, F, corner_uv):
+    """(D, flipped): D = s_max / s_min of each face's Jacobian (numpy SVD), flipped = det <= 0."""
+    P = np.asarray(V, float)[np.asarray(F)]
+    e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
+    x = e1 / np.linalg.norm(e1, axis=1)[:, None]
+    n = np.cross(e1, e2)
+    y = np.cross(n / np.linalg.norm(n, axis=1)[:, None], x)
+    S = np.stack([np.stack([np.einsum("ij,ij->i", e1, x), np.einsum("ij,ij->i", e1, y)], 1),
+                  np.stack([np.einsum("ij,ij->i", e2, x), np.einsum("ij,ij->i", e2, y)], 1)], 2)
+    uv = np.asarray(corner_uv, float)
+    T = np.stack([uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]], 2)  # columns: UV edges
+    J = T @ np.linalg.inv(S)
+    s = np.linalg.svd(J, compute_uv=False)
+    det = np.linalg.det(J)
+    with np.errstate(divide="ignore"):
+        D = s[:, 0] / s[:, 1]
+    return D, det <= 0
+
+
+def grid(nx=6, ny=5, z=None):
+    """A planar (or height-field) triangulated grid, (V, F)."""
+    xs, ys = np.meshgrid(np.linspace(0, 1, nx), np.linspace(0, 0.8, ny))
+    zs = np.zeros_like(xs) if z is None else z(xs, ys)
+    V = np.stack([xs.ravel(), ys.ravel(), zs.ravel()], 1)
+    i = np.arange(nx * ny).reshape(ny, nx)
+    a, b, c, d = i[:-1, :-1].ravel(), i[:-1, 1:].ravel(), i[1:, :-1].ravel(), i[1:, 1:].ravel()
+    F = np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
+    return V, F
+
+
+def load_off(name):
+    with open(os.path.join(DATA, name)) as fh:
+        tok = fh.read().split()
+    assert tok[0] == "OFF"
+    nv, nf = int(tok[1]), int(tok[2])
+    V = np.array(tok[4:4 + 3 * nv], float).reshape(nv, 3)
+    rest = np.array(tok[4 + 3 * nv:4 + 3 * nv + 4 * nf], int).reshape(nf, 4)
+    return V, rest[:, 1:]
