@@ -133,8 +133,8 @@ def test_worker_imports_neither_bpy_nor_the_core():
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
-@pytest.mark.parametrize("after_steps", [0, 2])
-def test_real_core_unwrap_is_cancelled(after_steps):
+@pytest.mark.parametrize("when", ["before_start", "at_first_report"])
+def test_real_core_unwrap_is_cancelled(when):
     """With the real ``bd_uv.unwrap``: a set cancel event ends the job with CancelledError."""
     bd_uv = pytest.importorskip("bd_uv")
     if not hasattr(bd_uv, "unwrap"):
@@ -151,12 +151,11 @@ def test_real_core_unwrap_is_cancelled(after_steps):
     def solve(V, F, progress, cancel, **kw):
         def progress_then_cancel(fraction, message):
             calls.append(fraction)
-            if len(calls) > after_steps:
-                cancel.set()
+            cancel.set()  # as if Esc was pressed while the first step ran
             progress(fraction, message)
         return bd_uv.unwrap(V, F, progress=progress_then_cancel, cancel=cancel, **kw)
 
-    if after_steps == 0:
+    if when == "before_start":
         job = worker.UnwrapJob(bd_uv.unwrap, V, F)
         job.cancel()  # cancelled before it even starts
     else:
@@ -164,3 +163,4 @@ def test_real_core_unwrap_is_cancelled(after_steps):
     outcome = job.start().wait()
     assert isinstance(outcome, worker.Failed), outcome
     assert isinstance(outcome.error, bd_uv.CancelledError)
+    assert calls and max(calls) < 1.0  # stopped before the end, at a later checkpoint
