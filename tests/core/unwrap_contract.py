@@ -1,0 +1,146 @@
+"""Independent checks of the ``bd_uv.unwrap`` contract, shared by the bad-input and fuzz tests.
+
+Nothing here calls ``bd_uv.metrics``: each face's Jacobian is rebuilt from its own orthonormal 3D
+frame and the singular values come from ``numpy.linalg.svd``, so a certified island is re-verified
+by code that shares no line with the certifier it checks.
+"""
+import pathlib
+
+import numpy as np
+
+import bd_uv
+
+DATA = pathlib.Path(__file__).resolve().parents[1] / "data"
+
+# bd_uv certifies with a relative tolerance of 1e-6 (metrics.certify); the independent recomputation
+# may differ from it by rounding, hence a little more headroom here.
+RTOL = 2e-6
+
+ISLAND_ERRORS = (bd_uv.ClosedIslandError, bd_uv.NonManifoldError, bd_uv.DegenerateFacesError,
+                 bd_uv.NonFiniteError, bd_uv.TopologyError, bd_uv.OrientationError,
+                 bd_uv.DuplicateFacesError, bd_uv.InfeasibleError, bd_uv.SolverError)
+
+
+def read_off(path):
+    """Vertices (n,3) float64 and triangles (m,3) int64 of an OFF file (own reader, no trimesh)."""
+    words = []
+    for line in pathlib.Path(path).read_text().splitlines():
+        words += line.split("#", 1)[0].split()
+    assert words[0] == "OFF", path
+    n, m = int(words[1]), int(words[2])
+    vals = words[4:]
+    V = np.array(vals[:3 * n], dtype=np.float64).reshape(n, 3)
+    rows = np.array(vals[3 * n:3 * n + 4 * m], dtype=np.int64).reshape(m, 4)
+    assert np.all(rows[:, 0] == 3), "triangles only"
+    return V, rows[:, 1:].copy()
+
+
+def face_jacobians_2x2(V, F, corner_uv):
+    """Jacobian (m,2,2) of each face's affine map from its own 2D frame to UV.
+
+    The frame of face (p0, p1, p2): x along p1 - p0, y in the face plane towards p2, so corner 2
+    always has a positive y and a positive det(J) means the UV triangle keeps the orientation.
+    """
+    P = np.asarray(V, dtype=np.float64)[F]
+    e1 = P[:, 1] - P[:, 0]
+    e2 = P[:, 2] - P[:, 0]
+    x = e1 / np.linalg.norm(e1, axis=1, keepdims=True)
+    n = np.cross(e1, e2)
+    y = np.cross(n, e1)
+    y /= np.linalg.norm(y, axis=1, keepdims=True)
+    X = np.empty((len(F), 2, 2))                    # columns: the two edges in the face frame
+    X[:, 0, 0] = np.linalg.norm(e1, axis=1)
+    X[:, 1, 0] = 0.0
+    X[:, 0, 1] = np.einsum("ij,ij->i", e2, x)
+    X[:, 1, 1] = np.einsum("ij,ij->i", e2, y)
+    uv = np.asarray(corner_uv, dtype=np.float64)
+    U = np.stack([uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]], axis=2)   # columns: UV edges
+    return U @ np.linalg.inv(X)
+
+
+def distortion_and_flips(V, F, corner_uv):
+    """Conformal distortion sigma_max / sigma_min per face (inf when flipped) and the flip mask."""
+    J = face_jacobians_2x2(V, F, corner_uv)
+    s = np.linalg.svd(J, compute_uv=False)
+    flipped = ~(np.linalg.det(J) > 0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        D = s[:, 0] / s[:, 1]
+    D[flipped | ~np.isfinite(D)] = np.inf
+    return D, flipped
+
+
+def snapshot(*arrays):
+    """Byte-exact copies of the inputs (None passes through)."""
+    return [None if a is None else (np.asarray(a).dtype, np.asarray(a).shape,
+                                    np.asarray(a).tobytes()) for a in arrays]
+
+
+def assert_unchanged(before, *arrays):
+    """Every input array is byte-for-byte what it was before the call."""
+    after = snapshot(*arrays)
+    for i, (b, a) in enumerate(zip(before, after)):
+        assert b == a, f"input argument {i} was modified by unwrap"
+
+
+def assert_contract(res, V, F, pin_corners=None, pin_uv=None):
+    """Check an UnwrapResult against the contract; return the island statuses in island order.
+
+    - the islands partition the faces and ``face_island`` agrees with them;
+    - a failed island has a typed IslandError naming it, NaN corner UVs and no UV, no bound;
+    - a certified island's UVs are finite, match ``corner_uv``, keep every pin exactly, and,
+      recomputed independently, have no flipped face and max distortion <= ``bound_certified``.
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    m = len(F)
+    assert res.corner_uv.shape == (m, 3, 2) and res.corner_uv.dtype == np.float64
+    assert res.face_island.shape == (m,)
+    seen = np.zeros(m, dtype=int)
+    statuses = []
+    for i, isl in enumerate(res.islands):
+        assert isl.index == i
+        seen[isl.faces] += 1
+        assert np.all(res.face_island[isl.faces] == i)
+        assert np.array_equal(np.asarray(isl.vertices)[isl.tris], F[isl.faces]), \
+            "island triangles do not map back to the input faces"
+        statuses.append(isl.status)
+        if isl.status == "failed":
+            assert isinstance(isl.error, ISLAND_ERRORS), repr(isl.error)
+            assert isl.error.island == i
+            assert isl.message == str(isl.error) and f"island {i}" in isl.message
+            assert isl.uv is None and isl.bound_certified is None
+            assert np.all(np.isnan(res.corner_uv[isl.faces])), "a failed island has UVs"
+            continue
+        assert isl.status == "certified", isl.status
+        assert isl.error is None
+        assert isl.uv is not None and np.all(np.isfinite(isl.uv))
+        cuv = res.corner_uv[isl.faces]
+        assert np.array_equal(cuv, isl.uv[isl.tris])
+        D, flipped = distortion_and_flips(V, F[isl.faces], cuv)
+        assert not flipped.any(), f"island {i}: {int(flipped.sum())} flipped faces certified"
+        C = isl.bound_certified
+        assert C is not None and np.isfinite(C) and C >= 1.0
+        assert D.max() <= C * (1 + RTOL), f"island {i}: max distortion {D.max()} > bound {C}"
+        assert np.isclose(isl.max_distortion, D.max(), rtol=1e-5), (isl.max_distortion, D.max())
+        assert isl.flipped == 0
+    assert np.all(seen == 1), "islands do not partition the faces"
+    assert res.certified == all(s == "certified" for s in statuses)
+    if pin_corners is not None and len(pin_corners):
+        pc = np.asarray(pin_corners, dtype=np.int64)
+        face = pc // 3
+        ok = np.isin(res.face_island[face], [i for i, s in enumerate(statuses) if s == "certified"])
+        got = res.corner_uv.reshape(-1, 2)[pc[ok]]
+        assert np.array_equal(got, np.asarray(pin_uv, dtype=np.float64)[ok]), "pins moved"
+    return statuses
+
+
+def unwrap_checked(V, F, **kw):
+    """``bd_uv.unwrap`` with the input-unchanged and result-contract checks around it."""
+    args = (V, F, kw.get("seams"), kw.get("pin_corners"), kw.get("pin_uv"), kw.get("initial_uv"))
+    before = snapshot(*args)
+    try:
+        res = bd_uv.unwrap(V, F, **kw)
+    finally:
+        assert_unchanged(before, *args)
+    assert_contract(res, V, F, kw.get("pin_corners"), kw.get("pin_uv"))
+    return res
