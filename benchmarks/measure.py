@@ -40,9 +40,10 @@ class UVStats:
 def load_mesh_by_index(path: str) -> tuple[np.ndarray, np.ndarray]:
     """Load a triangle mesh keeping the file's vertex and face order.
 
-    OBJ files are read from their ``v`` and ``f`` lines only (texture and normal indices after a
-    slash are ignored, so ``vt`` never splits a vertex); polygons with more than three corners are
-    fan-triangulated. OFF and PLY go through ``trimesh.load(path, process=False)``, which keeps the
+    OBJ files go through ``bd_uv.load_mesh`` (which reads them by position index) when bd_uv is
+    importable; otherwise they are read here from their ``v`` and ``f`` lines only (texture and
+    normal indices after a slash are ignored, so ``vt`` never splits a vertex), polygons with more
+    than three corners fan-triangulated. OFF and PLY go through ``trimesh.load(path, process=False)``, which keeps the
     order.
 
     Returns
@@ -52,6 +53,13 @@ def load_mesh_by_index(path: str) -> tuple[np.ndarray, np.ndarray]:
     """
     ext = os.path.splitext(path)[1].lower()
     if ext == ".obj":
+        try:
+            from bd_uv import load_mesh
+        except ImportError:
+            load_mesh = None
+        if load_mesh is not None:
+            mesh = load_mesh(path)
+            return np.asarray(mesh.V, dtype=np.float64), np.asarray(mesh.F, dtype=np.int64)
         verts, faces = [], []
         with open(path, "r", encoding="utf-8", errors="replace") as fh:
             for line in fh:
