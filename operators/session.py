@@ -7,6 +7,7 @@ checks it did not change meanwhile and writes the certified islands, ``pack`` ru
 """
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 import bpy
@@ -68,7 +69,8 @@ def gather(objects, *, pin_unselected_uvs=False, use_object_scale=True, need_uvs
     parts, offset_v, offset_f = [], 0, 0
     Vs, Fs, seams, pins, pin_uv, uvs = [], [], [], [], [], []
     for ob in objects:
-        scale = tuple(ob.scale) if use_object_scale else (1.0, 1.0, 1.0)
+        # Magnitudes only: a negative (mirroring) scale must not flip the UVs of the mesh data.
+        scale = tuple(abs(c) for c in ob.scale) if use_object_scale else (1.0, 1.0, 1.0)
         arrays = mesh_data.mesh_arrays(ob, selected_only=True, scale=scale,
                                        pin_unselected_uvs=pin_unselected_uvs)
         m = len(arrays.F)
@@ -182,7 +184,12 @@ def pack(context, written, margin):
         tool.use_uv_select_sync = True
         tool.mesh_select_mode = (False, False, True)
     try:
-        bpy.ops.uv.pack_islands(margin=margin, pin=True, pin_method='LOCKED')
+        if bpy.ops.uv.pack_islands.poll():
+            bpy.ops.uv.pack_islands(margin=margin, pin=True, pin_method='LOCKED')
+        else:
+            # E.g. an Image Editor in View mode: pack_islands polls for a UV editor or none.
+            with context.temp_override(area=None, region=None, space_data=None):
+                bpy.ops.uv.pack_islands(margin=margin, pin=True, pin_method='LOCKED')
     finally:
         with object_mode(context) as objects:
             for ob in objects:
@@ -242,8 +249,9 @@ def summarise(batch, result, written, seconds):
     else:
         parts.append(f"{label}: nothing unwrapped")
     for r in failed:
+        message = re.sub(rf"^island {r.index}:\s*", "", r.message)  # the core's own prefix
         parts.append(f"island {r.index} of {names.get(r.index, '?')} ({len(r.faces)} faces) "
-                     f"left as it was: {r.message}")
+                     f"left as it was: {message}")
     for w in written:
         if w.skipped:
             parts.append(f"{w.object_name} not written: {w.skipped}")
