@@ -23,12 +23,18 @@ def draw_distortion_entries(self, context):
     layout.operator(UV_OT_bd_select_distorted.bl_idname)
 
 
+# From 4.3 the 3D View's U menu (VIEW3D_MT_uv_map) draws IMAGE_MT_uvs_unwrap's contents.
+U_MENU_EMBEDS_UNWRAP = (4, 3, 0)
+
+
 def _menus():
     """(menu class, draw function) pairs for this Blender version."""
+    pairs = []
     unwrap_menu = getattr(bpy.types, "IMAGE_MT_uvs_unwrap", None)
-    if unwrap_menu is None:
-        unwrap_menu = bpy.types.VIEW3D_MT_uv_map
-    pairs = [(unwrap_menu, draw_unwrap_entry)]
+    if unwrap_menu is not None:
+        pairs.append((unwrap_menu, draw_unwrap_entry))
+    if unwrap_menu is None or bpy.app.version < U_MENU_EMBEDS_UNWRAP:
+        pairs.append((bpy.types.VIEW3D_MT_uv_map, draw_unwrap_entry))
     uvs_menu = getattr(bpy.types, "IMAGE_MT_uvs", None)
     if uvs_menu is not None:
         pairs.append((uvs_menu, draw_distortion_entries))

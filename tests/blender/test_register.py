@@ -1,4 +1,6 @@
 """Registration: everything the add-on adds is there after register() and gone after unregister()."""
+import inspect
+
 import numpy as np
 
 from conftest import bpy, load_addon, load_submodule
@@ -70,6 +72,10 @@ def test_menu_entry_is_in_uv_unwrap(addon):
     menus.draw_unwrap_entry(fake, bpy.context)
     assert fake.layout.calls == [("operator", "uv.bd_unwrap", "Bounded Distortion")]
     assert fake.layout.operator_context == 'INVOKE_DEFAULT'  # the menu runs the background path
+    # In 5.0 the 3D View's U menu shows it through IMAGE_MT_uvs_unwrap, so it is not added twice.
+    assert menus.draw_unwrap_entry not in bpy.types.VIEW3D_MT_uv_map._dyn_ui_initialize()
+    u_menu_draw = bpy.types.VIEW3D_MT_uv_map._dyn_ui_initialize()[0]  # Blender's own draw()
+    assert 'menu_contents("IMAGE_MT_uvs_unwrap")' in inspect.getsource(u_menu_draw)
 
 
 def test_panel_shows_the_last_result(addon):
