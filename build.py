@@ -1,28 +1,40 @@
 #!/usr/bin/env python3
-"""Build the bd-uv extension: one zip per platform, each carrying the wheels the add-on needs.
+"""Build the bd-uv extension: one zip per platform and Python, each carrying the wheels it needs.
 
 Usage::
 
     python build.py [--platform linux-x64 ...] [--python 3.11,3.13] [--offline]
                     [--cache .wheel-cache] [--out dist]
 
-Steps, for each platform:
+Blender 4.2 LTS to 5.0 run Python 3.11; Blender 5.1 and later run Python 3.13. Blender 4.2 (at least
+its first releases) installs every wheel of its platform listed in a manifest, whatever its Python
+tag (the per-Python filter came later), and of two wheels of the same package and version Blender's
+wheel manager keeps the one whose filename sorts last (cp313): a zip holding both scipy wheels would
+break on Blender 4.2. So each Python gets its own zip,
+restricted to its Blender versions through the manifest:
+
+- ``bd_uv-<version>-<platform>.zip``: cp311 wheels, ``blender_version_min = "4.2.0"``,
+  ``blender_version_max = "5.1.0"`` (the first version it does not support);
+- ``bd_uv-<version>-py313-<platform>.zip``: cp313 wheels, ``blender_version_min = "5.1.0"``.
+
+Steps, for each platform and Python:
 
 1. Download (``pip download --only-binary=:all: --no-deps``) the pinned wheels of every bundled
-   package (``BUNDLED``, versions from requirements.txt) for each Python Blender uses: 3.11 for
-   Blender 4.2-5.0, 3.13 for Blender 5.1+ (skipped, with a warning, where a package has no 3.13
-   wheel for that platform). numpy is never bundled: Blender ships it, and a bundled copy would
-   shadow Blender's for every add-on. Downloads go to ``<cache>/<platform>/py<version>/``;
-   ``--offline`` reuses that cache and never touches the network.
+   package (``BUNDLED``, versions from requirements.txt) into ``<cache>/<platform>/py<version>/``;
+   ``--offline`` reuses that cache and never touches the network. A Python for which some package
+   has no wheel on that platform is skipped with a warning (3.11 never is). numpy is never bundled:
+   Blender ships it, and a bundled copy would shadow Blender's for every add-on.
 2. Check every bundled wheel's ``Requires-Dist`` is met inside the zip, or by the numpy Blender
    ships (``BLENDER_NUMPY``).
-3. Write the wheel list into ``blender_manifest.toml`` (all platforms, when all four are built) and
-   into a staging copy of the extension (that platform's wheels only), the copy holding the repo's
-   files minus the manifest's ``[build] paths_exclude_pattern`` (matched by Blender's own code).
+3. Write the wheel list (all platforms and Pythons) into ``blender_manifest.toml`` when every
+   platform and Python is built, and stage a copy of the extension: the repo's files minus the
+   manifest's ``[build] paths_exclude_pattern`` (matched by Blender's own code), that platform's and
+   Python's wheels, and a manifest listing just those and the Blender versions above.
 4. Build the zip with Blender's extension builder (``blender_ext.py build --split-platforms``,
    shipped inside the ``bpy`` module) and run its validator on the zip.
-5. Check the zip: its platform's binary wheels are present for each Python, no numpy anywhere,
-   only the add-on's own top-level entries, size <= ``--max-mb``.
+5. Check the zip: each bundled package has a wheel for its platform and Python, no wheel for
+   another platform or Python, no numpy anywhere, only the add-on's own top-level entries, the
+   Blender version range, and the size (<= ``--max-mb``).
 
 Prints a table of the zips and their sizes; exits non-zero when any check fails.
 """
@@ -55,6 +67,9 @@ PROVIDED_BY_BLENDER = ("numpy",)
 BLENDER_NUMPY = {"3.11": ("1.24.3", "1.26.4")}
 
 PYTHONS = ("3.11", "3.13")
+# Blender versions per Python: (blender_version_min, blender_version_max or None), and the zip name.
+BLENDER_RANGE = {"3.11": ("4.2.0", "5.1.0"), "3.13": ("5.1.0", None)}
+ZIP_NAME = {"3.11": "{id}-{version}-{platform}.zip", "3.13": "{id}-{version}-py313-{platform}.zip"}
 # pip --platform tags per Blender platform. Blender itself ignores the glibc / macOS version in a
 # tag; scipy 1.15.3 needs macOS 12 on both Mac platforms.
 PLATFORM_TAGS = {
@@ -331,6 +346,19 @@ def with_platforms(manifest_text: str, platforms: list[str]) -> str:
     return PLATFORMS_LINE.sub(lambda _: line, manifest_text, count=1)
 
 
+def with_blender_range(manifest_text: str, python: str) -> str:
+    """``manifest_text`` restricted to the Blender versions that run ``python``."""
+    low, high = BLENDER_RANGE[python]
+    line = f'blender_version_min = "{low}"\n'
+    if high is not None:
+        line += f'blender_version_max = "{high}"\n'
+    text, n = re.subn(r'^blender_version_min = .*\n(blender_version_max = .*\n)?', line,
+                      manifest_text, count=1, flags=re.MULTILINE)
+    if n != 1:
+        raise BuildError("blender_manifest.toml has no blender_version_min line")
+    return text
+
+
 def manifest_data(text: str) -> dict:
     return tomllib.loads(text)
 
@@ -369,9 +397,9 @@ def stage(stage_dir: Path, manifest_text: str, wheels: list[Wheel], skip: tuple[
         shutil.copy2(wheel.path, stage_dir / "wheels" / wheel.path.name)
 
 
-def check_zip(zip_path: Path, platform: str, wheels_by_python: dict[str, list[Wheel]],
+def check_zip(zip_path: Path, platform: str, python: str, pins: dict[str, str],
               max_mb: float) -> list[str]:
-    """Problems with a built zip (empty when it is good)."""
+    """Problems with a zip built for ``platform`` and ``python`` (empty when it is good)."""
     problems = []
     with zipfile.ZipFile(zip_path) as zf:
         names = zf.namelist()
@@ -379,38 +407,43 @@ def check_zip(zip_path: Path, platform: str, wheels_by_python: dict[str, list[Wh
     generated = manifest.get("build", {}).get("generated", {})
     if generated.get("platforms") != [platform]:
         problems.append(f"manifest [build.generated] platforms is {generated.get('platforms')}")
+    low, high = BLENDER_RANGE[python]
+    if (manifest.get("blender_version_min"), manifest.get("blender_version_max")) != (low, high):
+        problems.append(f"manifest Blender range is {manifest.get('blender_version_min')} to "
+                        f"{manifest.get('blender_version_max')}, not {low} to {high}")
     top = {n.split("/", 1)[0] for n in names}
     if top - ZIP_TOP_LEVEL:
         problems.append(f"unexpected top-level entries {sorted(top - ZIP_TOP_LEVEL)}: "
                         f"exclude them in [build] paths_exclude_pattern")
-    if "__init__.py" not in names or not any(n.startswith("bd_uv/") for n in names):
+    if "__init__.py" not in names or "bd_uv/__init__.py" not in names:
         problems.append("the add-on's __init__.py or the bd_uv core is missing")
-    zipped_wheels = {n.split("/", 1)[1] for n in names if n.startswith("wheels/")}
+    zipped = {n.split("/", 1)[1] for n in names if n.startswith("wheels/") and n != "wheels/"}
     listed = {w.rsplit("/", 1)[1] for w in manifest.get("wheels", [])}
-    if zipped_wheels != listed:
-        problems.append(f"wheels in zip {sorted(zipped_wheels)} differ from manifest {sorted(listed)}")
-    for python, wheels in wheels_by_python.items():
-        for wheel in wheels:
-            if wheel.path.name not in zipped_wheels:
-                problems.append(f"{wheel.path.name} (Python {python}) is missing")
-        for wheel in (w for w in wheels if w.is_binary):
-            if platform not in wheel.platforms():
-                problems.append(f"{wheel.path.name} is not a {platform} wheel")
-    for name in zipped_wheels:
-        if platform not in Wheel(Path(name)).platforms():
-            problems.append(f"{name} is for another platform")
-    # No numpy: no numpy wheel, no numpy directory, no numpy packed inside another wheel.
+    if zipped != listed:
+        problems.append(f"wheels in zip {sorted(zipped)} differ from manifest {sorted(listed)}")
+    wheels = [Wheel(Path(n)) for n in sorted(zipped)]
+    for wheel in wheels:
+        if platform not in wheel.platforms():
+            problems.append(f"{wheel.path.name} is for another platform")
+        if not wheel.serves_python(python):
+            problems.append(f"{wheel.path.name} is for another Python")
+    for name, version in pins.items():
+        if not any(w.name == name and w.version == version for w in wheels):
+            problems.append(f"no {name} {version} wheel for {platform} / Python {python}")
+    # No numpy: no numpy wheel, no numpy directory, no numpy packed inside a wheel.
     blocked = {normalize(n) for n in PROVIDED_BY_BLENDER}
     for name in names:
         parts = name.split("/")
         if blocked & {normalize(p) for p in parts[:-1]} or (
                 name.startswith("wheels/") and normalize(parts[-1].split("-")[0]) in blocked):
             problems.append(f"{name}: numpy must never be bundled")
-    for python, wheels in wheels_by_python.items():
-        for wheel in wheels:
-            inner = {normalize(n) for n in wheel.top_level_names()}
-            if inner & blocked:
-                problems.append(f"{wheel.path.name} carries numpy")
+    if wheels and not problems:
+        with zipfile.ZipFile(zip_path) as zf:
+            for wheel in wheels:
+                with zf.open(f"wheels/{wheel.path.name}") as fh, zipfile.ZipFile(fh) as inner:
+                    if blocked & {normalize(n.split("/", 1)[0].split("-")[0].split(".")[0])
+                                  for n in inner.namelist()}:
+                        problems.append(f"{wheel.path.name} carries numpy")
     size_mb = zip_path.stat().st_size / 1e6
     if size_mb > max_mb:
         problems.append(f"{size_mb:.1f} MB is over the {max_mb:.0f} MB limit")
@@ -422,21 +455,25 @@ def check_zip(zip_path: Path, platform: str, wheels_by_python: dict[str, list[Wh
 @dataclass
 class Built:
     platform: str
+    python: str
     zip_path: Path
-    pythons: list[str]
     wheels: list[str] = field(default_factory=list)
 
     @property
     def megabytes(self) -> float:
         return self.zip_path.stat().st_size / 1e6
 
+    @property
+    def blender(self) -> str:
+        low, high = BLENDER_RANGE[self.python]
+        return f"{low} to <{high}" if high else f"{low} and later"
+
 
 def build(platforms: list[str], pythons: list[str], cache: Path, out: Path, offline: bool,
           max_mb: float, write_manifest: bool) -> list[Built]:
     pins = bundled_pins(read_pins())
-    wheels: dict[str, dict[str, list[Wheel]]] = {}
+    wheels: dict[tuple[str, str], list[Wheel]] = {}
     for platform in platforms:
-        wheels[platform] = {}
         for python in pythons:
             found = fetch_wheels(platform, python, pins, cache, offline)
             if found is None:
@@ -444,12 +481,11 @@ def build(platforms: list[str], pythons: list[str], cache: Path, out: Path, offl
             problems = dependency_problems(found, platform, python)
             if problems:
                 raise BuildError("unmet wheel requirements:\n  " + "\n  ".join(problems))
-            wheels[platform][python] = found
+            wheels[platform, python] = found
 
     manifest_text = MANIFEST.read_text()
-    all_names = sorted({w.path.name for by_py in wheels.values() for ws in by_py.values()
-                        for w in ws})
-    if write_manifest and set(platforms) == set(PLATFORM_TAGS):
+    if write_manifest and set(platforms) == set(PLATFORM_TAGS) and set(pythons) == set(PYTHONS):
+        all_names = sorted({w.path.name for ws in wheels.values() for w in ws})
         updated = with_wheels(manifest_text, all_names)
         if updated != manifest_text:
             MANIFEST.write_text(updated)
@@ -457,29 +493,33 @@ def build(platforms: list[str], pythons: list[str], cache: Path, out: Path, offl
         manifest_text = updated
     validate(ROOT)
 
+    data = manifest_data(manifest_text)
     out.mkdir(parents=True, exist_ok=True)
     results = []
     failures = []
-    for platform in platforms:
-        by_python = wheels[platform]
-        unique = {w.path.name: w for ws in by_python.values() for w in ws}
-        staged_text = with_platforms(with_wheels(manifest_text, list(unique)), [platform])
-        stage_dir = out / ".stage" / platform
-        stage(stage_dir, staged_text, list(unique.values()), skip=(out, cache, stage_dir))
+    for (platform, python), found in wheels.items():
+        staged_text = with_blender_range(
+            with_platforms(with_wheels(manifest_text, [w.path.name for w in found]), [platform]),
+            python)
+        stage_dir = out / ".stage" / f"{platform}-py{python}"
+        stage(stage_dir, staged_text, found, skip=(out, cache, stage_dir))
         validate(stage_dir)
-        version = manifest_data(manifest_text)["version"]
-        zip_path = out / f"bd_uv-{version}-{platform.replace('-', '_')}.zip"
+        name = ZIP_NAME[python].format(id=data["id"], version=data["version"],
+                                       platform=platform.replace("-", "_"))
+        zip_path = out / name
         if zip_path.exists():
             zip_path.unlink()
-        run_blender_ext("build", "--source-dir", str(stage_dir), "--output-dir", str(out),
-                        "--split-platforms")
+        # The builder names a split zip "<output-filepath stem>-<platform>.zip".
+        stem = name[:-len(f"-{platform.replace('-', '_')}.zip")] + ".zip"
+        run_blender_ext("build", "--source-dir", str(stage_dir),
+                        "--output-filepath", str(out / stem), "--split-platforms")
         shutil.rmtree(stage_dir)
         if not zip_path.is_file():
             raise BuildError(f"the builder did not write {zip_path}")
         validate(zip_path)
-        problems = check_zip(zip_path, platform, by_python, max_mb)
+        problems = check_zip(zip_path, platform, python, pins, max_mb)
         failures += [f"{zip_path.name}: {p}" for p in problems]
-        results.append(Built(platform, zip_path, sorted(by_python), sorted(unique)))
+        results.append(Built(platform, python, zip_path, sorted(w.path.name for w in found)))
     stage_root = out / ".stage"
     if stage_root.is_dir() and not any(stage_root.iterdir()):
         stage_root.rmdir()
@@ -490,12 +530,12 @@ def build(platforms: list[str], pythons: list[str], cache: Path, out: Path, offl
 
 
 def print_table(results: list[Built]) -> None:
-    rows = [("platform", "zip", "MB", "wheels", "Python")]
-    rows += [(r.platform, str(r.zip_path), f"{r.megabytes:.1f}", str(len(r.wheels)),
-              ", ".join(r.pythons)) for r in results]
+    rows = [("platform", "Python", "Blender", "zip", "MB", "wheels")]
+    rows += [(r.platform, r.python, r.blender, r.zip_path.name, f"{r.megabytes:.1f}",
+              str(len(r.wheels))) for r in results]
     widths = [max(len(row[i]) for row in rows) for i in range(len(rows[0]))]
     for i, row in enumerate(rows):
-        print("  ".join(cell.rjust(w) if j in (2, 3) else cell.ljust(w)
+        print("  ".join(cell.rjust(w) if j in (4, 5) else cell.ljust(w)
                         for j, (cell, w) in enumerate(zip(row, widths))).rstrip())
         if i == 0:
             print("  ".join("-" * w for w in widths))
@@ -506,8 +546,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--platform", action="append", choices=sorted(PLATFORM_TAGS),
                         help="build only this platform (repeatable); default: all four")
     parser.add_argument("--python", default=",".join(PYTHONS),
-                        help="comma-separated Python versions to bundle wheels for "
-                             f"(default {','.join(PYTHONS)}; 3.11 is always needed)")
+                        help="comma-separated Pythons to build zips for: 3.11 (Blender 4.2 to "
+                             f"5.0), 3.13 (Blender 5.1+); default {','.join(PYTHONS)}")
     parser.add_argument("--offline", action="store_true",
                         help="use only the wheel cache; never run pip download")
     parser.add_argument("--cache", type=Path, default=ROOT / ".wheel-cache",
@@ -520,8 +560,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                         help="do not update the wheel list in blender_manifest.toml")
     args = parser.parse_args(argv)
     args.python = [p.strip() for p in args.python.split(",") if p.strip()]
-    if PYTHONS[0] not in args.python:
-        parser.error(f"--python must include {PYTHONS[0]} (Blender 4.2-5.0)")
+    unknown = set(args.python) - set(PYTHONS)
+    if unknown or not args.python:
+        parser.error(f"--python takes some of {','.join(PYTHONS)}")
     return args
 
 

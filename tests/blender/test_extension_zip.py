@@ -115,6 +115,32 @@ print("BD_UV_RESULT " + json.dumps(out))
 '''
 
 
+REFUSE_CHILD = r'''
+import json, os, sys
+import bpy
+result = bpy.ops.extensions.package_install_files(
+    filepath=os.environ["BD_UV_ZIP"], repo="user_default", enable_on_install=True)
+repo = os.path.join(bpy.utils.user_resource("EXTENSIONS"), "user_default")
+print("BD_UV_RESULT " + json.dumps({
+    "addons": [a.module for a in bpy.context.preferences.addons],
+    "installed": sorted(n for n in os.listdir(repo) if not n.startswith(".")) if os.path.isdir(repo) else [],
+    "site_packages": os.path.isdir(os.path.join(bpy.utils.user_resource("EXTENSIONS"), ".local")),
+}))
+'''
+
+
+def run_child(script, env_extra, tmp):
+    env = dict(os.environ)
+    env.update(BLENDER_USER_RESOURCES=str(tmp / "user"), PYTHONNOUSERSITE="1", **env_extra)
+    env.pop("PYTHONPATH", None)
+    proc = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True,
+                          cwd=tmp)
+    lines = [l for l in proc.stdout.splitlines() if l.startswith("BD_UV_RESULT ")]
+    assert proc.returncode == 0 and lines, \
+        f"child failed:\n{proc.stdout[-4000:]}\n{proc.stderr[-4000:]}"
+    return json.loads(lines[-1][len("BD_UV_RESULT "):]), proc.stdout + proc.stderr
+
+
 def hidden_packages(zip_path):
     """Import names of the packages inside the zip's wheels (scipy, clarabel, cffi, ...)."""
     names = set()
@@ -129,16 +155,10 @@ def hidden_packages(zip_path):
 def installed(linux_extension_zip, tmp_path_factory):
     """Output of the child process that installs the zip and runs the operator."""
     tmp = tmp_path_factory.mktemp("blender_user")
-    env = dict(os.environ)
-    env.update(BLENDER_USER_RESOURCES=str(tmp / "user"), BD_UV_ZIP=str(linux_extension_zip),
-               BD_UV_SHIM=str(tmp / "site"), BD_UV_HIDE=json.dumps(hidden_packages(
-                   linux_extension_zip)), PYTHONNOUSERSITE="1")
-    env.pop("PYTHONPATH", None)
-    proc = subprocess.run([sys.executable, "-c", CHILD], env=env, capture_output=True, text=True,
-                          cwd=tmp)
-    lines = [l for l in proc.stdout.splitlines() if l.startswith("BD_UV_RESULT ")]
-    assert proc.returncode == 0 and lines, f"child failed:\n{proc.stdout[-4000:]}\n{proc.stderr[-4000:]}"
-    return json.loads(lines[-1][len("BD_UV_RESULT "):])
+    result, _ = run_child(CHILD, {
+        "BD_UV_ZIP": str(linux_extension_zip), "BD_UV_SHIM": str(tmp / "site"),
+        "BD_UV_HIDE": json.dumps(hidden_packages(linux_extension_zip))}, tmp)
+    return result
 
 
 def test_zip_installs_and_enables(installed):
@@ -180,3 +200,14 @@ def test_operator_from_the_zip_writes_certified_uvs(installed):
     assert D.max() <= last["bound_certified"] * (1 + 1e-4)
     # The float32 UVs Blender stores reproduce the add-on's own max distortion figure.
     assert D.max() == pytest.approx(last["max_distortion"], rel=1e-3)
+
+
+def test_zip_for_blender_5_1_is_refused_by_blender_5_0(linux_extension_zips, tmp_path):
+    # The Python 3.13 zip says blender_version_min = "5.1.0": Blender 5.0 (Python 3.11) must refuse
+    # it rather than install cp313 wheels it cannot load.
+    result, log = run_child(REFUSE_CHILD, {"BD_UV_ZIP": str(linux_extension_zips["3.13"])},
+                            tmp_path)
+    assert "doesn't meet the minimum supported version (5.1.0)" in log
+    assert result["installed"] == []
+    assert "bl_ext.user_default.bd_uv" not in result["addons"]
+    assert not result["site_packages"]

@@ -169,33 +169,63 @@ def test_with_wheels_rewrites_only_the_wheel_block():
     assert build.with_wheels(new, [w.path.name for w in committed_wheels()]) == text
 
 
-def test_built_zip_passes_validator_and_checks(linux_extension_zip):
-    out = build.validate(linux_extension_zip)
+@pytest.mark.parametrize("python", ["3.11", "3.13"])
+def test_built_zip_passes_validator_and_checks(linux_extension_zips, python):
+    path = linux_extension_zips[python]
+    out = build.validate(path)
     assert "Success parsing TOML" in out
-    with zipfile.ZipFile(linux_extension_zip) as zf:
+    with zipfile.ZipFile(path) as zf:
         names = zf.namelist()
         manifest = tomllib.loads(zf.read("blender_manifest.toml").decode())
     assert manifest["build"]["generated"]["platforms"] == ["linux-x64"]
+    low, high = {"3.11": ("4.2.0", "5.1.0"), "3.13": ("5.1.0", None)}[python]
+    assert manifest["blender_version_min"] == low
+    assert manifest.get("blender_version_max") == high
     wheels = sorted(n.split("/", 1)[1] for n in names if n.startswith("wheels/"))
     assert wheels == sorted(w.rsplit("/", 1)[1] for w in manifest["wheels"])
-    # Exactly the committed list's linux-x64 wheels: cp311 and cp313 scipy, nothing for Windows/Mac.
-    expected = sorted(w.path.name for w in committed_wheels() if "linux-x64" in w.platforms())
+    # Exactly the committed list's wheels that Blender would install on linux-x64 / this Python:
+    # one scipy, of this Python only.
+    expected = sorted(w.path.name for w in committed_wheels()
+                      if "linux-x64" in w.platforms() and w.serves_python(python))
     assert wheels == expected
+    tag = "cp" + python.replace(".", "")
+    assert [w for w in wheels if w.startswith("scipy-")] == [
+        f"scipy-1.15.3-{tag}-{tag}-manylinux_2_17_x86_64.manylinux2014_x86_64.whl"]
     assert not [n for n in names if "numpy" in n.lower()]
-    assert not [n for n in names if n.split("/", 1)[0] in ("tests", "benchmarks", "docs", ".ci",
-                                                            "build.py", "requirements.txt")]
+    assert {n.split("/", 1)[0] for n in names} <= {
+        "__init__.py", "blender_manifest.toml", "README.md", "LICENSE", "bd_uv", "operators", "ui",
+        "scripts", "wheels"}
     assert "__init__.py" in names and "bd_uv/__init__.py" in names
-    assert linux_extension_zip.stat().st_size <= 90e6
+    assert path.stat().st_size <= 90e6
+    assert build.check_zip(path, "linux-x64", python, build.bundled_pins(build.read_pins()),
+                           90.0) == []
 
 
-def test_check_zip_catches_numpy_and_strays(tmp_path, linux_extension_zip):
-    # build.py's zip check is not vacuous: a zip with numpy and a stray file fails it.
+def test_check_zip_catches_what_must_not_ship(tmp_path, linux_extension_zip):
+    # build.py's zip check is not vacuous: numpy, a stray file, a wheel for another Python or
+    # platform, a missing package and an oversize zip are each reported.
+    pins = build.bundled_pins(build.read_pins())
     bad = tmp_path / "bad.zip"
-    shutil.copy(linux_extension_zip, bad)
-    with zipfile.ZipFile(bad, "a") as zf:
-        zf.writestr("wheels/numpy-1.26.4-cp311-cp311-manylinux_2_17_x86_64.whl", b"")
-        zf.writestr("notes.txt", "stray")
-    problems = build.check_zip(bad, "linux-x64", {}, 90.0)
-    assert any("numpy" in p for p in problems)
-    assert any("notes.txt" in p for p in problems)
-    assert build.check_zip(linux_extension_zip, "linux-x64", {}, 90.0) == []
+    with zipfile.ZipFile(linux_extension_zip) as src, zipfile.ZipFile(bad, "w") as dst:
+        for item in src.infolist():
+            if item.filename.startswith("wheels/trimesh-"):
+                continue
+            data = src.read(item)
+            if item.filename == "blender_manifest.toml":
+                text = data.decode()
+                extra = ["numpy-1.26.4-cp311-cp311-manylinux_2_17_x86_64.whl",
+                         "cffi-2.0.0-cp313-cp313-win_amd64.whl"]
+                text = text.replace("wheels = [", "wheels = [" + "".join(
+                    f'"./wheels/{e}", ' for e in extra), 1)
+                data = text.encode()
+            dst.writestr(item, data)
+        dst.writestr("wheels/numpy-1.26.4-cp311-cp311-manylinux_2_17_x86_64.whl", b"")
+        dst.writestr("wheels/cffi-2.0.0-cp313-cp313-win_amd64.whl", b"")
+        dst.writestr("notes.txt", "stray")
+    problems = "\n".join(build.check_zip(bad, "linux-x64", "3.11", pins, 1.0))
+    assert "numpy must never be bundled" in problems
+    assert "notes.txt" in problems
+    assert "cffi-2.0.0-cp313-cp313-win_amd64.whl is for another platform" in problems
+    assert "cffi-2.0.0-cp313-cp313-win_amd64.whl is for another Python" in problems
+    assert "no trimesh 4.8.3 wheel" in problems
+    assert "over the 1 MB limit" in problems
