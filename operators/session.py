@@ -161,8 +161,11 @@ def write_back(batch, result):
     return written
 
 
-def pack(context, written, margin):
+def pack(context, written, margin, shape='AABB'):
     """Blender's ``uv.pack_islands`` on the written islands; islands with pins stay put.
+
+    ``shape`` is its ``shape_method``: 'AABB' (default) packs 15k faces in ~2 ms, as fast as
+    Blender's own Unwrap; 'CONCAVE' took 1-2.5 s on the same mesh (bpy 5.0.1, 2 cores).
 
     Needs the objects in Edit Mode. The mesh selection is temporarily set to the polygons to pack
     (in face select mode, with UV sync selection, so exactly those islands are packed) and
@@ -175,6 +178,7 @@ def pack(context, written, margin):
     saved_sync, saved_mode = tool.use_uv_select_sync, tuple(tool.mesh_select_mode)
     saved = {}
     from .editmode import object_mode
+    options = dict(margin=margin, shape_method=shape, pin=True, pin_method='LOCKED')
     with object_mode(context) as objects:
         for ob in objects:
             saved[ob.name] = mesh_data.selection(ob.data)
@@ -185,11 +189,11 @@ def pack(context, written, margin):
         tool.mesh_select_mode = (False, False, True)
     try:
         if bpy.ops.uv.pack_islands.poll():
-            bpy.ops.uv.pack_islands(margin=margin, pin=True, pin_method='LOCKED')
+            bpy.ops.uv.pack_islands(**options)
         else:
             # E.g. an Image Editor in View mode: pack_islands polls for a UV editor or none.
             with context.temp_override(area=None, region=None, space_data=None):
-                bpy.ops.uv.pack_islands(margin=margin, pin=True, pin_method='LOCKED')
+                bpy.ops.uv.pack_islands(**options)
     finally:
         with object_mode(context) as objects:
             for ob in objects:

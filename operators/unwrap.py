@@ -62,6 +62,12 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
     pack: BoolProperty(name="Pack Islands", default=True,
                        description="Pack the unwrapped islands with Blender's Pack Islands; "
                        "islands with pinned UVs stay where they are")
+    pack_shape: EnumProperty(
+        name="Pack Shape", default='AABB',
+        items=(('AABB', "Bounding Box", "Fast, like Blender's own Unwrap"),
+               ('CONVEX', "Convex Hull", "Tighter, slower"),
+               ('CONCAVE', "Exact Shape", "Tightest, slowest (seconds for thousands of faces)")),
+        description="Island shape Pack Islands works with")
     show_distortion: BoolProperty(name="Colour by Distortion", default=False,
                                   description="Colour faces by their distortion afterwards")
     use_object_scale: BoolProperty(name="Use Object Scale", default=True,
@@ -90,6 +96,9 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
         row = layout.row()
         row.active = self.pack
         row.prop(self, "margin")
+        row = layout.row()
+        row.active = self.pack
+        row.prop(self, "pack_shape")
         layout.prop(self, "show_distortion")
 
     # -- shared --------------------------------------------------------------------------------
@@ -127,7 +136,7 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
         summary = session.summarise(batch, result, written, seconds)
         if summary.written:
             if self.pack:
-                session.pack(context, written, self.margin)
+                session.pack(context, written, self.margin, self.pack_shape)
             if self.show_distortion:
                 bound = summary.bound_certified if summary.bound_certified > 1 else self.bound
                 session.show_distortion(context, written, bound)
