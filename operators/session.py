@@ -34,7 +34,7 @@ class Part:
     scale: tuple
     pin_unselected_uvs: bool
     pinned_faces: np.ndarray          # (m_i,) bool: triangles holding a pinned corner
-    blender_pinned_faces: np.ndarray  # (m_i,) bool: ... a corner pinned in Blender (not merely unselected)
+    blender_pinned_faces: np.ndarray  # (m_i,) bool: ... pinned in Blender, not merely unselected
 
 
 @dataclass

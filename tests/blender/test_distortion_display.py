@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from conftest import (add_suzanne_with_seams, bpy, load_addon, loop_uv_array, set_mode,
-                      triangle_distortion)
+from conftest import (add_suzanne_with_seams, bpy, load_addon, loop_uv_array, select_polygons,
+                      set_mode, triangle_distortion)
 
 
 def _three_quads():
@@ -97,6 +97,11 @@ def test_select_distorted(addon):
     bpy.ops.uv.bd_select_distorted('EXEC_DEFAULT', threshold=50.0, flipped=True)
     set_mode(obj, 'OBJECT')
     assert [p.select for p in obj.data.polygons] == [False, True, False]
+    select_polygons(obj, [True, False, False])
+    set_mode(obj, 'EDIT')
+    bpy.ops.uv.bd_select_distorted('EXEC_DEFAULT', threshold=10.0, flipped=False, extend=True)
+    set_mode(obj, 'OBJECT')
+    assert [p.select for p in obj.data.polygons] == [True, False, True]
 
 
 def test_colour_after_unwrap(addon):
