@@ -97,7 +97,7 @@ def show_colors_in_viewports(screen):
         if area.type == 'VIEW_3D':
             for space in area.spaces:
                 if space.type == 'VIEW_3D':
-                    space.shading.color_type = 'ATTRIBUTE'
+                    space.shading.color_type = 'VERTEX'  # shown as "Attribute"
 
 
 def _target_objects(context):
