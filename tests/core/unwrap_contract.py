@@ -69,6 +69,39 @@ def distortion_and_flips(V, F, corner_uv):
     return D, flipped
 
 
+def assert_disk_with_holes(tris, label="island"):
+    """The triangles (k,3) form one connected, consistently oriented manifold of genus 0 with at
+    least one boundary loop: the only kind of surface that can be flattened without cutting."""
+    from scipy.sparse import coo_array
+    from scipy.sparse.csgraph import connected_components
+    tris = np.asarray(tris, dtype=np.int64)
+    nv = int(tris.max()) + 1
+    assert len(np.unique(tris)) == nv, f"{label}: unused island vertices"
+    assert np.all(tris[:, 0] != tris[:, 1]) and np.all(tris[:, 1] != tris[:, 2]) \
+        and np.all(tris[:, 2] != tris[:, 0]), f"{label}: a triangle repeats a vertex"
+    assert len(np.unique(np.sort(tris, axis=1), axis=0)) == len(tris), f"{label}: duplicate faces"
+    a = tris.ravel()
+    b = np.roll(tris, -1, axis=1).ravel()
+    directed = np.stack([a, b], 1)
+    assert len(np.unique(directed, axis=0)) == len(directed), \
+        f"{label}: an edge is used twice in the same direction (orientation flip or non-manifold)"
+    undirected, count = np.unique(np.sort(directed, axis=1), axis=0, return_counts=True)
+    assert count.max() <= 2, f"{label}: non-manifold edge"
+    key = a * nv + b
+    boundary = ~np.isin(key, b * nv + a)
+    assert boundary.any(), f"{label}: closed"
+    deg = np.bincount(a[boundary], minlength=nv) + np.bincount(b[boundary], minlength=nv)
+    assert np.all((deg == 0) | (deg == 2)), f"{label}: boundary is not a set of simple loops"
+    n_faces_conn, _ = connected_components(coo_array(
+        (np.ones(len(a)), (a, b)), shape=(nv, nv)), directed=False)
+    assert n_faces_conn == 1, f"{label}: not connected"
+    bg = coo_array((np.ones(int(boundary.sum())), (a[boundary], b[boundary])), shape=(nv, nv))
+    n_comp, comp = connected_components(bg, directed=False)
+    loops = len(np.unique(comp[deg > 0]))
+    euler = nv - len(undirected) + len(tris)
+    assert euler == 2 - loops, f"{label}: genus {(2 - loops - euler) / 2} with {loops} loops"
+
+
 def snapshot(*arrays):
     """Byte-exact copies of the inputs (None passes through)."""
     return [None if a is None else (np.asarray(a).dtype, np.asarray(a).shape,
@@ -88,7 +121,8 @@ def assert_contract(res, V, F, pin_corners=None, pin_uv=None):
     - the islands partition the faces and ``face_island`` agrees with them;
     - a failed island has a typed IslandError naming it, NaN corner UVs and no UV, no bound;
     - a certified island's UVs are finite, match ``corner_uv``, keep every pin exactly, and,
-      recomputed independently, have no flipped face and max distortion <= ``bound_certified``.
+      recomputed independently, have no flipped face and max distortion <= ``bound_certified``;
+      its triangles are a consistently oriented disk with holes (so nothing invalid got through).
     """
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
@@ -123,6 +157,8 @@ def assert_contract(res, V, F, pin_corners=None, pin_uv=None):
         assert D.max() <= C * (1 + RTOL), f"island {i}: max distortion {D.max()} > bound {C}"
         assert np.isclose(isl.max_distortion, D.max(), rtol=1e-5), (isl.max_distortion, D.max())
         assert isl.flipped == 0
+        assert_disk_with_holes(isl.tris, f"certified island {i}")
+        assert np.all(np.isfinite(V[F[isl.faces]])), f"island {i}: non-finite vertex certified"
     assert np.all(seen == 1), "islands do not partition the faces"
     assert res.certified == all(s == "certified" for s in statuses)
     if pin_corners is not None and len(pin_corners):
