@@ -562,6 +562,35 @@ def test_cancel_at_the_second_island_returns_nothing_of_the_first():
     assert done_first and done_first[0] >= 0.5
 
 
+def progress_calls(V, F, **kw):
+    calls = []
+    bd_uv.unwrap(V, F, progress=lambda f, msg: calls.append(msg), **kw)
+    return calls
+
+
+@pytest.mark.parametrize("bound", [5.0, "auto"])
+def test_cancel_at_every_progress_report(bound):
+    """Cancel at the k-th progress report, for every k: CancelledError each time, except at the
+    final "done" report, after which the complete, certified result comes back."""
+    V, F = combine(grid(), grid())
+    messages = progress_calls(V, F, bound=bound)
+    assert messages[-1] == "done" and len(messages) >= 4
+    for k in range(len(messages)):
+        ev = threading.Event()
+        seen = []
+
+        def progress(fraction, message):
+            seen.append(message)
+            if len(seen) == k + 1:
+                ev.set()
+        if k < len(messages) - 1:
+            raises_unchanged(bd_uv.CancelledError, V, F, bound=bound, cancel=ev, progress=progress)
+            assert "done" not in seen
+        else:
+            res = unwrap_checked(V, F, bound=bound, cancel=ev, progress=progress)
+            assert res.certified
+
+
 class CancelAfter:
     """``is_set()`` turns True after ``k`` checks: with k = 1 the check at the start of the first
     solve passes and Clarabel's termination callback stops the solve at its first iteration."""
@@ -729,3 +758,46 @@ def test_zero_time_budget_with_pins_names_the_budget_or_solves_once():
         assert_message(isl.message, "time budget")
     else:
         assert "time_budget_exhausted" in isl.flags
+
+
+# ---------------------------------------------------------------------------------------------
+# Existing UV maps as input, and inputs as Blender hands them over
+# ---------------------------------------------------------------------------------------------
+
+def test_input_uv_frames_with_an_island_missing_uvs():
+    """frames="input-uv": an island whose faces have no UVs (NaN) fails and says what to do; the
+    island with UVs is certified; the UV map passed in is not modified."""
+    V, F = combine(grid(), grid())
+    first = unwrap_checked(V, F)
+    initial = first.corner_uv.copy()
+    initial[32:] = np.nan                                   # the second grid has no UVs
+    res = unwrap_checked(V, F, frames="input-uv", initial_uv=initial)
+    good, bad = res.islands
+    assert good.status == "certified" and good.frames == "input-uv"
+    assert type(bad.error) is bd_uv.InfeasibleError
+    assert_message(bad.message, "island 1", "UVs", "unwrap it first")
+
+
+def test_read_only_inputs_are_accepted_and_untouched():
+    """Inputs flagged read-only: any attempt to write into them would raise."""
+    V, F = nefertiti()
+    first = unwrap_checked(V, F)
+    corners = np.array([0, 7, 100])
+    pins = first.corner_uv.reshape(-1, 2)[corners]
+    seams = F[200:203, :2].copy()
+    initial = first.corner_uv.copy()
+    for a in (V, F, corners, pins, seams, initial):
+        a.setflags(write=False)
+    res = unwrap_checked(V, F, seams=seams, pin_corners=corners, pin_uv=pins,
+                         frames="input-uv", initial_uv=initial)
+    assert res.certified
+
+
+def test_blender_dtypes_int32_faces_float32_vertices():
+    """Blender's foreach_get hands over int32 indices and float32 coordinates."""
+    V, F = nefertiti()
+    V32, F32 = V.astype(np.float32), F.astype(np.int32)
+    res = unwrap_checked(V32, F32)
+    assert res.certified and res.corner_uv.dtype == np.float64
+    ref = unwrap_checked(V32.astype(np.float64), F)
+    assert np.array_equal(res.corner_uv, ref.corner_uv)
