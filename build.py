@@ -6,11 +6,11 @@ Usage::
     python build.py [--platform linux-x64 ...] [--python 3.11,3.13] [--offline]
                     [--cache .wheel-cache] [--out dist]
 
-Blender 4.2 LTS to 5.0 run Python 3.11; Blender 5.1 and later run Python 3.13. Blender 4.2 (at least
-its first releases) installs every wheel of its platform listed in a manifest, whatever its Python
-tag (the per-Python filter came later), and of two wheels of the same package and version Blender's
-wheel manager keeps the one whose filename sorts last (cp313): a zip holding both scipy wheels would
-break on Blender 4.2. So each Python gets its own zip,
+Blender 4.2 LTS to 5.0 run Python 3.11; Blender 5.1 and later run Python 3.13. Blender 4.2.0
+installs every wheel of its platform listed in a manifest, whatever its Python tag (its wheel filter
+has "TODO: Match Python & ABI tags"; the per-Python filter came later), and of two wheels of the same
+package and version it keeps the cp313 one: a zip holding both scipy wheels installs in bpy 4.2.0
+and then fails with "The `scipy` install you are using seems to be broken". So each Python gets its own zip,
 restricted to its Blender versions through the manifest:
 
 - ``bd_uv-<version>-<platform>.zip``: cp311 wheels, ``blender_version_min = "4.2.0"``,
@@ -61,10 +61,10 @@ REQUIREMENTS = ROOT / "requirements.txt"
 BUNDLED = ("scipy", "clarabel", "cffi", "pycparser", "trimesh")
 # Provided by Blender itself: never bundled, and no file of it may appear in a zip.
 PROVIDED_BY_BLENDER = ("numpy",)
-# The numpy versions Blender ships per Python (4.2 ... 5.0 all use Python 3.11). A bundled wheel's
-# numpy requirement must accept every one of them. Blender 5.1+ (3.13) is not listed: its numpy is
-# not pinned down here, so only the other requirements are checked for 3.13.
-BLENDER_NUMPY = {"3.11": ("1.24.3", "1.26.4")}
+# The numpy versions Blender ships per Python: 1.24.3 (4.2) to 1.26.4 (5.0) with Python 3.11, 2.3.4
+# with Python 3.13 (5.1; bpy 5.1.2 asks for numpy>=2.2,<3). A bundled wheel's numpy requirement must
+# accept every one of them.
+BLENDER_NUMPY = {"3.11": ("1.24.3", "1.26.4"), "3.13": ("2.3.4",)}
 
 PYTHONS = ("3.11", "3.13")
 # Blender versions per Python: (blender_version_min, blender_version_max or None), and the zip name.

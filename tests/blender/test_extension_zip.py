@@ -13,6 +13,13 @@ the ``bpy`` module in a child process:
 - ``bpy.ops.extensions.package_install_files`` installs and enables the zip, then
   ``bpy.ops.uv.bd_unwrap('EXEC_DEFAULT')`` unwraps a bent grid in Edit Mode. The written UVs are
   read back and their conformal distortion recomputed here from first principles.
+
+The child runs this test's Python (bpy 5.0.1: Python 3.11, the zip for Blender 4.2 to 5.0). Other
+Blender modules can be added through ``BD_UV_BPY_PYTHONS``, a ``os.pathsep``-separated list of Python
+interpreters that each have a ``bpy`` (and numpy) installed, e.g. a Python 3.11 venv with
+``bpy==4.2.0 numpy==1.24.3`` (the oldest supported Blender) or a Python 3.13 venv with
+``bpy==5.1.2 numpy==2.3.4`` (which gets the py313 zip). Each runs the same checks with the zip for
+its Python, and checks that the other Python's zip is refused.
 """
 import json
 import os
@@ -129,11 +136,12 @@ print("BD_UV_RESULT " + json.dumps({
 '''
 
 
-def run_child(script, env_extra, tmp):
+def run_child(interpreter, script, env_extra, tmp):
     env = dict(os.environ)
     env.update(BLENDER_USER_RESOURCES=str(tmp / "user"), PYTHONNOUSERSITE="1", **env_extra)
     env.pop("PYTHONPATH", None)
-    proc = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True,
+    env.pop("PYENV_VERSION", None)
+    proc = subprocess.run([interpreter, "-c", script], env=env, capture_output=True, text=True,
                           cwd=tmp)
     lines = [l for l in proc.stdout.splitlines() if l.startswith("BD_UV_RESULT ")]
     assert proc.returncode == 0 and lines, \
@@ -154,13 +162,34 @@ def hidden_packages(zip_path):
     return sorted(names)
 
 
+def interpreters():
+    """This test's Python, then those in ``BD_UV_BPY_PYTHONS``."""
+    extra = [p for p in os.environ.get("BD_UV_BPY_PYTHONS", "").split(os.pathsep) if p]
+    return [sys.executable] + extra
+
+
+def python_version(interpreter):
+    out = subprocess.run([interpreter, "-c", "import sys; print('%d.%d' % sys.version_info[:2])"],
+                         capture_output=True, text=True, check=True)
+    return out.stdout.strip()
+
+
+@pytest.fixture(scope="module", params=interpreters(),
+                ids=lambda p: "this-python" if p == sys.executable else p)
+def interpreter(request):
+    return request.param
+
+
 @pytest.fixture(scope="module")
-def installed(linux_extension_zip, tmp_path_factory):
+def installed(interpreter, linux_extension_zips, tmp_path_factory):
     """Output of the child process that installs the zip and runs the operator."""
+    python = python_version(interpreter)
+    zip_path = linux_extension_zips[python]
     tmp = tmp_path_factory.mktemp("blender_user")
-    result, _ = run_child(CHILD, {
-        "BD_UV_ZIP": str(linux_extension_zip), "BD_UV_SHIM": str(tmp / "site"),
-        "BD_UV_HIDE": json.dumps(hidden_packages(linux_extension_zip))}, tmp)
+    result, _ = run_child(interpreter, CHILD, {
+        "BD_UV_ZIP": str(zip_path), "BD_UV_SHIM": str(tmp / "site"),
+        "BD_UV_HIDE": json.dumps(hidden_packages(zip_path))}, tmp)
+    result["python"] = python
     return result
 
 
@@ -170,16 +199,18 @@ def test_zip_installs_and_enables(installed):
     assert installed["operator"]
 
 
-def test_bundled_wheels_are_the_ones_imported(installed, linux_extension_zip):
+def test_bundled_wheels_are_the_ones_imported(installed):
     site = pathlib.Path(installed["site_packages"])
     assert set(installed["modules"]) == {"scipy", "clarabel", "cffi", "_cffi_backend", "pycparser",
                                          "trimesh"}
     for name, (path, _version) in installed["modules"].items():
         assert pathlib.Path(path).is_relative_to(site), (name, path)
-    # The cp311 scipy of the zip, not its cp313 twin; numpy is Blender's (here: the environment's).
+    # scipy built for this Python; numpy is Blender's (here: the environment's).
     assert installed["modules"]["scipy"][1] == "1.15.3"
-    assert list((site / "scipy" / "_lib").glob("*.cpython-311-*.so"))
-    assert not list((site / "scipy" / "_lib").glob("*.cpython-313-*.so"))
+    tag = installed["python"].replace(".", "")
+    assert site.parts[-2] == f"python{installed['python']}"
+    assert list((site / "scipy" / "_lib").glob(f"*.cpython-{tag}-*.so"))
+    assert [p for p in (site / "scipy" / "_lib").glob("*.so") if f"cpython-{tag}-" not in p.name] == []
     assert not (site / "numpy").exists()
     assert not pathlib.Path(installed["numpy"]).is_relative_to(site)
 
@@ -206,12 +237,17 @@ def test_operator_from_the_zip_writes_certified_uvs(installed):
     assert D.max() == pytest.approx(last["max_distortion"], rel=1e-3)
 
 
-def test_zip_for_blender_5_1_is_refused_by_blender_5_0(linux_extension_zips, tmp_path):
-    # The Python 3.13 zip says blender_version_min = "5.1.0": Blender 5.0 (Python 3.11) must refuse
-    # it rather than install cp313 wheels it cannot load.
-    result, log = run_child(REFUSE_CHILD, {"BD_UV_ZIP": str(linux_extension_zips["3.13"])},
-                            tmp_path)
-    assert "doesn't meet the minimum supported version (5.1.0)" in log
+def test_zip_for_the_other_python_is_refused(interpreter, linux_extension_zips, tmp_path):
+    # Each zip names the Blender versions that run its Python: Blender 5.0 (Python 3.11) refuses
+    # the Blender 5.1+ zip (blender_version_min = "5.1.0"), Blender 5.1 the 4.2-5.0 one
+    # (blender_version_max = "5.1.0"), rather than install wheels it cannot load.
+    python = python_version(interpreter)
+    other = {"3.11": "3.13", "3.13": "3.11"}[python]
+    result, log = run_child(interpreter, REFUSE_CHILD,
+                            {"BD_UV_ZIP": str(linux_extension_zips[other])}, tmp_path)
+    expected = {"3.11": "doesn't meet the minimum supported version (5.1.0)",
+                "3.13": "must be less than the maximum version (5.1.0)"}[python]
+    assert expected in log
     assert result["installed"] == []
     assert "bl_ext.user_default.bd_uv" not in result["addons"]
     assert not result["site_packages"]
