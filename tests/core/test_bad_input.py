@@ -448,6 +448,58 @@ def test_huge_and_tiny_coordinates_are_certified(transform, bound):
     assert isl.max_distortion == pytest.approx(ref.islands[0].max_distortion, rel=1e-3)
 
 
+@pytest.mark.parametrize("scale", [1e150, 1e-150, 1e300, 1e-300])
+def test_absurd_scales_end_in_a_certificate_or_a_typed_error(scale):
+    """Far outside the 1e-8..1e8 range that must work: squared lengths overflow or underflow.
+    Whatever happens must still be a certified island or a typed island error."""
+    V, F = grid()
+    with np.errstate(all="ignore"):
+        unwrap_checked(V * scale, F)
+
+
+# ---------------------------------------------------------------------------------------------
+# Seams and options
+# ---------------------------------------------------------------------------------------------
+
+@pytest.mark.xfail(strict=True, reason="seam vertex indices are not range-checked: the edge key "
+                   "min*n + max of the pair (0, n+6) equals that of mesh edge (1, 6), which is "
+                   "silently cut")
+def test_out_of_range_seam_is_rejected_or_ignored():
+    V, F = grid()
+    n = len(V)
+    assert np.any(np.isin(F, 1).any(axis=1) & np.isin(F, 6).any(axis=1))   # (1, 6) is an edge
+    seams = np.array([[0, n + 6]])
+    before = snapshot(V, F, seams)
+    try:
+        res = bd_uv.unwrap(V, F, seams=seams)
+    except bd_uv.InvalidMeshError as exc:
+        assert_message(str(exc), "seam")
+        return
+    finally:
+        assert_unchanged(before, V, F, seams)
+    (isl,) = res.islands
+    assert len(isl.vertices) == n, "a mesh edge was cut by a seam that names no mesh edge"
+
+
+def test_seams_that_are_not_mesh_edges_are_ignored():
+    V, F = grid()
+    res = unwrap_checked(V, F, seams=np.array([[0, 24], [-1, 5], [3, 3]]))
+    (isl,) = res.islands
+    assert isl.status == "certified" and len(isl.vertices) == len(V)
+
+
+@pytest.mark.xfail(strict=True, reason="bound=inf passes the 'number >= 1' check and the solve "
+                   "then dies with ZeroDivisionError")
+def test_infinite_bound_is_a_value_error_or_certified():
+    V, F = grid()
+    try:
+        res = unwrap_checked(V, F, bound=float("inf"))
+    except ValueError as exc:
+        assert_message(str(exc), "bound")
+        return
+    assert res.certified
+
+
 # ---------------------------------------------------------------------------------------------
 # Pins
 # ---------------------------------------------------------------------------------------------
