@@ -135,15 +135,13 @@ def test_dependency_check_flags_what_blender_cannot_satisfy(tmp_path):
     assert any("beta 2.1 is pinned" in p for p in problems)
 
 
-def test_real_pinned_wheels_need_nothing_blender_lacks():
-    # The cached wheels of the pins (present once build.py or the zip fixture has run).
+@pytest.mark.parametrize("python", ["3.11", "3.13"])
+def test_real_pinned_wheels_need_nothing_blender_lacks(linux_extension_zips, python):
+    # The cached wheels of the pins, downloaded by the zip fixture's build.
     pins = build.bundled_pins(build.read_pins())
-    directory = load_cache_dir("linux-x64", "3.11")
-    wheels = [build.cached_wheel(directory, n, v) for n, v in pins.items()]
-    if not all(wheels):
-        pytest.skip(f"no cached wheels in {directory}")
-    wheels = [build.Wheel(w) for w in wheels]
-    assert build.dependency_problems(wheels, "linux-x64", "3.11") == []
+    directory = load_cache_dir("linux-x64", python)
+    wheels = [build.Wheel(build.cached_wheel(directory, n, v)) for n, v in pins.items()]
+    assert build.dependency_problems(wheels, "linux-x64", python) == []
     # scipy's own numpy requirement, read from its metadata, admits Blender 4.2's numpy.
     scipy = next(w for w in wheels if w.name == "scipy")
     from pip._vendor.packaging.requirements import Requirement
@@ -151,7 +149,9 @@ def test_real_pinned_wheels_need_nothing_blender_lacks():
     numpy_req = [r for r in numpy_req if r.name == "numpy" and r.marker is None]
     assert len(numpy_req) == 1
     spec = numpy_req[0].specifier
-    assert spec.contains("1.24.3") and spec.contains("1.26.4") and not spec.contains("1.23.4")
+    # Blender 4.2's 1.24.3, 5.0's 1.26.4 and 5.1's 2.3.4 all satisfy it.
+    assert all(spec.contains(v) for v in ("1.24.3", "1.26.4", "2.3.4"))
+    assert not spec.contains("1.23.4") and not spec.contains("2.5.0")
 
 
 def load_cache_dir(platform, python):
