@@ -218,10 +218,6 @@ class Wheel:
             msg = email.parser.BytesParser().parsebytes(zf.read(meta))
         return msg.get_all("Requires-Dist") or []
 
-    def top_level_names(self) -> set[str]:
-        with zipfile.ZipFile(self.path) as zf:
-            return {n.split("/", 1)[0] for n in zf.namelist()}
-
 
 def read_pins(path: Path = REQUIREMENTS) -> dict[str, str]:
     """``{normalized name: version}`` of every ``name==version`` line of a requirements file."""
@@ -266,7 +262,8 @@ def fetch_wheels(platform: str, python: str, pins: dict[str, str], cache: Path,
                  offline: bool) -> list[Wheel] | None:
     """The bundled wheels for ``platform`` and ``python``, downloading what the cache lacks.
 
-    Returns None when some package has no wheel for this Python (only allowed for non-3.11).
+    Returns None (after a warning) when some package has no wheel for this Python; for Python 3.11
+    (Blender 4.2 to 5.0) that is an error instead.
     """
     directory = cache / platform / f"py{python}"
     missing = [n for n, v in pins.items() if cached_wheel(directory, n, v) is None]
@@ -274,6 +271,9 @@ def fetch_wheels(platform: str, python: str, pins: dict[str, str], cache: Path,
         if python == PYTHONS[0]:
             raise BuildError(f"--offline: {platform} py{python} wheels of {', '.join(missing)} "
                              f"are not in {directory}; run once without --offline")
+        print(f"warning: --offline and no {platform} py{python} wheels of {', '.join(missing)} in "
+              f"{directory}: no zip for Blender with Python {python} on {platform}",
+              file=sys.stderr)
         return None
     if missing:
         directory.mkdir(parents=True, exist_ok=True)
@@ -285,7 +285,7 @@ def fetch_wheels(platform: str, python: str, pins: dict[str, str], cache: Path,
             if python == PYTHONS[0] or not absent:
                 raise BuildError(f"pip download failed for {platform} py{python}:\n{out}")
             print(f"warning: no {platform} wheel for Python {python} of {', '.join(absent)}: "
-                  f"this zip will not support Blender with Python {python}", file=sys.stderr)
+                  f"no zip for Blender with Python {python} on {platform}", file=sys.stderr)
             return None
     wheels = [Wheel(cached_wheel(directory, n, v)) for n, v in pins.items()]
     for wheel in wheels:
@@ -482,6 +482,8 @@ def build(platforms: list[str], pythons: list[str], cache: Path, out: Path, offl
             if problems:
                 raise BuildError("unmet wheel requirements:\n  " + "\n  ".join(problems))
             wheels[platform, python] = found
+    if not wheels:
+        raise BuildError("no wheels for any platform and Python asked for: nothing to build")
 
     manifest_text = MANIFEST.read_text()
     if write_manifest and set(platforms) == set(PLATFORM_TAGS) and set(pythons) == set(PYTHONS):
