@@ -76,6 +76,11 @@ def gather(objects, *, pin_unselected_uvs=False, use_object_scale=True, need_uvs
         m = len(arrays.F)
         if m == 0:
             continue
+        if not all(np.isfinite(c) and c > 0 for c in scale):
+            # Otherwise the core blames "zero-area faces" on a mesh that has none.
+            raise UserError(f"{ob.name} has scale ({', '.join(f'{c:g}' for c in ob.scale)}), "
+                            "which flattens it: give it a non-zero scale or turn off "
+                            "Use Object Scale")
         if need_uvs and arrays.corner_uv is None:
             raise UserError(f"{ob.name} has no UV map to take frames from")
         blender_pins = (mesh_data.mesh_arrays(ob, selected_only=True, scale=scale)
@@ -91,7 +96,7 @@ def gather(objects, *, pin_unselected_uvs=False, use_object_scale=True, need_uvs
         offset_v += len(arrays.V)
         offset_f += m
     if not parts:
-        raise UserError("No faces selected")
+        raise UserError("No faces selected: select the faces to unwrap in Edit Mode")
     V, F = np.concatenate(Vs), np.concatenate(Fs)
     P = V[F]
     areas = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)

@@ -76,7 +76,12 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
 
     @classmethod
     def poll(cls, context):
-        return bool(edit_mesh_objects(context))
+        if edit_mesh_objects(context):
+            return True
+        # Shown in the disabled menu entry's tooltip and in the error of a scripted call.
+        cls.poll_message_set("Needs a mesh in Edit Mode: select a mesh object, press Tab and "
+                             "select the faces to unwrap")
+        return False
 
     def draw(self, context):
         layout = self.layout
