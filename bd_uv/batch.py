@@ -1,0 +1,478 @@
+"""Batch unwrapping: many meshes, one JSON report, a picture per mesh.
+
+Shared by both entry points: ``python -m bd_uv batch`` (folders of OBJ/OFF/PLY/.blend files, one
+worker process per file) and ``scripts/bd_uv_batch.py`` (the mesh objects of one .blend, inside
+Blender or through the ``bpy`` module). Each mesh is a :class:`Job` of plain arrays; ``unwrap_job``
+solves it with :func:`bd_uv.unwrap` and returns its report entry, so the report has the same shape
+whichever way the arrays were gathered.
+
+The unit of parallel work is a file, not an island: a file is read, solved and written by one worker
+(no mesh or UV arrays travel between processes, only the small report entry), the split into islands
+stays the core's own, and an asset folder has more files than a machine has cores. Files are handed
+out largest first so one big mesh does not end up last.
+"""
+import argparse
+import concurrent.futures as cf
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+import traceback
+from dataclasses import dataclass
+
+import numpy as np
+
+from .cli import add_solver_options, solver_kwargs
+from .errors import BDError
+from .geometry import face_areas
+from .meshio import load_mesh, write_obj
+from .pipeline import unwrap
+
+MESH_SUFFIXES = (".obj", ".off", ".ply")
+BLEND_SUFFIX = ".blend"
+SCRIPT = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts",
+                      "bd_uv_batch.py")
+
+
+@dataclass(frozen=True)
+class Job:
+    """One mesh to unwrap.
+
+    Attributes
+    ----------
+    name : str, the object or file name (report entry, PNG caption)
+    V : (n,3) float64
+    F : (m,3) int64
+    seams : (s,2) int64 vertex pairs, or None
+    pin_corners : (p,) int64 flat corner indices (face * 3 + corner), or None
+    pin_uv : (p,2) float64, or None
+    corner_uv : (m,3,2) float64 current UVs (for ``frames="input-uv"``), or None
+    """
+    name: str
+    V: np.ndarray
+    F: np.ndarray
+    seams: np.ndarray = None
+    pin_corners: np.ndarray = None
+    pin_uv: np.ndarray = None
+    corner_uv: np.ndarray = None
+
+
+@dataclass(frozen=True)
+class JobResult:
+    """The outcome of one job.
+
+    Attributes
+    ----------
+    entry : dict, the job's JSON report entry
+    corner_uv : (m,3,2) float64, NaN on faces not certified
+    result : UnwrapResult, or None when ``unwrap`` raised (the entry says why)
+    """
+    entry: dict
+    corner_uv: np.ndarray
+    result: object = None
+
+
+def _num(x):
+    return None if x is None or not np.isfinite(x) else float(x)
+
+
+def unwrap_job(job, options, png=None):
+    """Unwrap one job; never raises for a bad mesh (the error goes into the entry).
+
+    Parameters
+    ----------
+    job : Job
+    options : dict, keyword arguments of :func:`bd_uv.unwrap` (``solver_kwargs``)
+    png : str, optional, where to draw the UV layout (:func:`bd_uv.render.uv_layout_png`)
+
+    Returns
+    -------
+    JobResult
+        ``entry`` holds: name, status ("certified" | "partial" | "failed"), faces, islands
+        (per-island entries of ``UnwrapResult.report``), bound_certified (the largest over the
+        certified islands), max_distortion, mean_distortion (area-weighted over certified
+        faces), flipped, seconds, error (exception type) and message.
+    """
+    t0 = time.perf_counter()
+    m = int(len(job.F))
+    entry = {"name": job.name, "status": "failed", "faces": m, "islands": [],
+             "bound_certified": None, "max_distortion": None, "mean_distortion": None,
+             "flipped": None, "seconds": 0.0, "error": None, "message": ""}
+    kwargs = dict(options)
+    if kwargs.get("frames") == "input-uv":
+        kwargs["initial_uv"] = job.corner_uv
+    if job.pin_corners is not None and len(job.pin_corners):
+        kwargs.update(pin_corners=job.pin_corners, pin_uv=job.pin_uv)
+    try:
+        if kwargs.get("frames") == "input-uv" and job.corner_uv is None:
+            raise ValueError(f"{job.name} has no UVs to take frames from (--frames input-uv)")
+        res = unwrap(job.V, job.F, seams=job.seams, **kwargs)
+    except (BDError, ValueError) as exc:
+        entry.update(error=type(exc).__name__, message=str(exc),
+                     seconds=round(time.perf_counter() - t0, 4))
+        return JobResult(entry, np.full((m, 3, 2), np.nan), None)
+    ok = [r for r in res.islands if r.status == "certified"]
+    bad = [r for r in res.islands if r.status != "certified"]
+    D = np.full(m, np.nan)
+    for r in ok:
+        D[r.faces] = r.distortion
+    entry["islands"] = res.report()["islands"]
+    entry["status"] = "certified" if not bad else ("partial" if ok else "failed")
+    if ok:
+        faces = np.concatenate([r.faces for r in ok])
+        area = face_areas(np.asarray(job.V, dtype=np.float64), np.asarray(job.F)[faces])
+        entry.update(bound_certified=max(r.bound_certified for r in ok),
+                     max_distortion=float(D[faces].max()),
+                     mean_distortion=_num(float(np.sum(area * D[faces]) / np.sum(area))),
+                     flipped=int(sum(r.flipped for r in ok)))
+    if bad:
+        entry["error"] = type(bad[0].error).__name__ if bad[0].error else "IslandError"
+        more = f" (and {len(bad) - 1} more failed island(s))" if len(bad) > 1 else ""
+        entry["message"] = bad[0].message + more
+    entry["seconds"] = round(res.seconds, 4)
+    if png:
+        from .render import uv_layout_png
+        entry["png"] = os.path.abspath(png)
+        uv_layout_png(png, res.corner_uv, D, entry["bound_certified"], caption(entry, options))
+    return JobResult(entry, res.corner_uv, res)
+
+
+def caption(entry, options):
+    """The figures under a PNG: what was asked, what was certified, how long it took."""
+    bound = options.get("bound")
+    ask = "bound auto" if bound == "auto" else f"bound {bound:g}"
+    head = (f"{entry['name']}: BD-{options.get('method', 'lscm').upper()}, {ask}, "
+            f"{entry['faces']} faces, {len(entry['islands'])} island(s)")
+    if entry["bound_certified"] is None:
+        return f"{head}\nnothing certified: {entry['message']}"[:400]
+    n_ok = sum(i["status"] == "certified" for i in entry["islands"])
+    lines = [head, f"certified C = {entry['bound_certified']:.4g} on {n_ok} island(s): max "
+             f"distortion {entry['max_distortion']:.4f}, mean {entry['mean_distortion']:.4f}, "
+             f"{entry['flipped']} flipped, {entry['seconds']:.2f} s"]
+    if entry["status"] != "certified":
+        lines.append(f"not certified: {entry['message']}"[:160])
+    return "\n".join(lines)
+
+
+# ---- folder mode -------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class FileTask:
+    """One input file and where its outputs go."""
+    path: str
+    output: str
+    png: str = None
+
+
+def _unwrap_file(task, options, seams_mode):
+    """Worker: read ``task.path``, unwrap, write the OBJ (and PNG). Returns the report entries."""
+    t0 = time.perf_counter()
+    base = {"input": os.path.abspath(task.path), "object": None, "output": None}
+    try:
+        if task.path.lower().endswith(BLEND_SUFFIX):
+            return _unwrap_blend(task, options, base)
+        mesh = load_mesh(task.path)
+        seams = None
+        if seams_mode == "uv" or (seams_mode is None and mesh.corner_uv is not None):
+            if mesh.corner_uv is None:
+                raise BDError(f"{task.path} has no UVs, so --seams uv has nothing to cut along")
+            seams = mesh.uv_seams()
+        job = Job(mesh.name, mesh.V, mesh.F, seams=seams, corner_uv=mesh.corner_uv)
+        result = unwrap_job(job, options, png=task.png)
+        entry = {**base, **result.entry}
+        if entry["status"] != "failed":
+            uv, F_uv = result.result.vertex_uv()
+            write_obj(task.output, mesh.V, mesh.F, uv, F_uv)
+            entry["output"] = os.path.abspath(task.output)
+        return [entry]
+    except Exception as exc:  # one bad file never stops the rest: everything goes in its entry
+        name = os.path.splitext(os.path.basename(task.path))[0]
+        entry = {**base, "name": name, "status": "failed", "faces": None, "islands": [],
+                 "bound_certified": None, "max_distortion": None, "mean_distortion": None,
+                 "flipped": None, "seconds": round(time.perf_counter() - t0, 4),
+                 "error": type(exc).__name__, "message": str(exc)}
+        if not isinstance(exc, (BDError, OSError)):
+            entry["traceback"] = traceback.format_exc()
+        return [entry]
+
+
+def _unwrap_blend(task, options, base):
+    """A .blend goes through the Blender script in a child process (it needs ``bpy``)."""
+    if importlib.util.find_spec("bpy") is None:
+        raise BDError(f"{task.path}: reading .blend files needs the bpy module "
+                      "(pip install bpy) or Blender itself: blender -b FILE --python "
+                      "scripts/bd_uv_batch.py -- ...")
+    with tempfile.TemporaryDirectory() as tmp:
+        report = os.path.join(tmp, "report.json")
+        cmd = [sys.executable, SCRIPT, task.path, "--", "--output", task.output,
+               "--report", report, *_script_options(options)]
+        if task.png:
+            cmd += ["--png", os.path.dirname(task.png), "--png-prefix",
+                    os.path.splitext(os.path.basename(task.png))[0] + "-"]
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+        if not os.path.exists(report):
+            tail = (proc.stderr or proc.stdout).strip().splitlines()[-5:]
+            raise BDError(f"{task.path}: the Blender script failed (exit {proc.returncode}): "
+                          + " | ".join(tail))
+        with open(report, encoding="utf-8") as fh:
+            items = json.load(fh)["items"]
+    if not items:
+        raise BDError(f"{task.path} holds no mesh object with faces")
+    return [{**base, **item, "input": base["input"]} for item in items]
+
+
+def _script_options(options):
+    """``options`` (unwrap keyword arguments) as the Blender script's command-line flags."""
+    out = ["--method", options["method"], "--bound", str(options["bound"]),
+           "--frames", options["frames"], "--bound-limit", str(options["bound_limit"]),
+           "--cone", options["cone"]]
+    if not options["raise_bound"]:
+        out.append("--no-raise")
+    if options.get("time_budget") is not None:
+        out += ["--time-budget", str(options["time_budget"])]
+    return out
+
+
+def input_files(paths):
+    """Expand folders (not recursively) into their OBJ/OFF/PLY/.blend files, sorted by name.
+
+    Files named explicitly are kept whatever their suffix (they fail in the report if unreadable).
+    """
+    suffixes = MESH_SUFFIXES + (BLEND_SUFFIX,)
+    files = []
+    for p in paths:
+        if os.path.isdir(p):
+            files += sorted(os.path.join(p, f) for f in os.listdir(p)
+                            if f.lower().endswith(suffixes) and os.path.isfile(os.path.join(p, f)))
+        else:
+            files.append(p)
+    return files
+
+
+def plan(files, out_dir, png_dir=None):
+    """A :class:`FileTask` per file; two inputs never share an output name."""
+    tasks, used = [], set()
+    for path in files:
+        stem, ext = os.path.splitext(os.path.basename(path))
+        out_ext = BLEND_SUFFIX if ext.lower() == BLEND_SUFFIX else ".obj"
+        name, k = stem, 1
+        while name.lower() in used:
+            name = f"{stem}_{ext.lstrip('.').lower()}" if k == 1 else f"{stem}-{k}"
+            k += 1
+        used.add(name.lower())
+        tasks.append(FileTask(path, os.path.join(out_dir, name + out_ext),
+                              os.path.join(png_dir, name + ".png") if png_dir else None))
+    return tasks
+
+
+def run_tasks(tasks, options, seams_mode=None, jobs=1, on_done=None):
+    """Run every task, in ``jobs`` worker processes (in this process when 1).
+
+    A worker that dies (crash, out of memory) breaks the pool; the tasks it took down are run
+    again one per fresh process, so only the file that kills its worker fails.
+
+    Returns
+    -------
+    entries : list of list of dict, per task (in task order)
+    """
+    results = [None] * len(tasks)
+
+    def done(i, entries):
+        results[i] = entries
+        if on_done is not None:
+            on_done(i, entries)
+
+    if jobs <= 1:
+        for i, t in enumerate(tasks):
+            done(i, _unwrap_file(t, options, seams_mode))
+        return results
+    order = sorted(range(len(tasks)), key=lambda i: -_size(tasks[i].path))
+    retry = _run_pool(tasks, order, options, seams_mode, jobs, done)
+    for i in retry:  # isolate: one process per task, so a crash takes down only its own file
+        if _run_pool(tasks, [i], options, seams_mode, 1, done):
+            done(i, [_crashed_entry(tasks[i])])
+    return results
+
+
+def _run_pool(tasks, order, options, seams_mode, jobs, done):
+    """Submit ``order`` to a pool of ``jobs`` processes; returns the indices lost to a crash."""
+    lost = []
+    with cf.ProcessPoolExecutor(max_workers=min(jobs, len(order))) as pool:
+        futures = {pool.submit(_unwrap_file, tasks[i], options, seams_mode): i for i in order}
+        try:
+            for fut in cf.as_completed(futures):
+                i = futures[fut]
+                try:
+                    done(i, fut.result())
+                except cf.process.BrokenProcessPool:
+                    lost.append(i)
+        except BaseException:
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+    return sorted(lost)
+
+
+def _size(path):
+    try:
+        return os.path.getsize(path)
+    except OSError:
+        return 0
+
+
+def _crashed_entry(task):
+    return {"input": os.path.abspath(task.path), "object": None, "output": None,
+            "name": os.path.splitext(os.path.basename(task.path))[0], "status": "failed",
+            "faces": None, "islands": [], "bound_certified": None, "max_distortion": None,
+            "mean_distortion": None, "flipped": None, "seconds": None,
+            "error": "WorkerCrashed", "message": f"{task.path}: the worker process died while "
+            "unwrapping it (a crash, or killed for running out of memory)"}
+
+
+# ---- command line ------------------------------------------------------------------------------
+
+def add_batch_parser(subparsers):
+    """Add ``batch`` to ``python -m bd_uv``'s subcommands."""
+    p = subparsers.add_parser(
+        "batch", help="unwrap every OBJ/OFF/PLY (and .blend) file of folders, in parallel",
+        description="Unwrap many files: one output per input (OBJ with UVs; .blend with the UV "
+                    "maps written), a JSON report, optional PNGs. Exit 0 only if every mesh was "
+                    "certified; a file that fails never stops the others.")
+    p.add_argument("inputs", nargs="+", metavar="INPUT",
+                   help="mesh files or folders (their .obj/.off/.ply/.blend files, not recursive)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT_DIR", help="output folder")
+    add_solver_options(p)
+    p.add_argument("--seams", choices=("uv", "none"), default=None,
+                   help="uv: cut where an OBJ's UVs are discontinuous (default when it has vt); "
+                        "none: islands are the mesh's components")
+    p.add_argument("--jobs", type=_positive_int, default=os.cpu_count() or 1,
+                   help="worker processes, one file each (default: the number of cores)")
+    p.add_argument("--report", help="JSON report path (default OUT_DIR/report.json)")
+    p.add_argument("--png", metavar="DIR", help="write a picture of each UV layout into DIR")
+    p.set_defaults(func=run_batch)
+    return p
+
+
+def _positive_int(text):
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a whole number >= 1, not {text!r}")
+    return value
+
+
+def run_batch(args):
+    """``python -m bd_uv batch``: returns the exit code (0: all certified, 1: some failed)."""
+    files = input_files(args.inputs)
+    if not files:
+        print(f"error: no .obj/.off/.ply/.blend files in {' '.join(args.inputs)}",
+              file=sys.stderr)
+        return 2
+    os.makedirs(args.output, exist_ok=True)
+    if args.png:
+        os.makedirs(args.png, exist_ok=True)
+    tasks = plan(files, args.output, args.png)
+    options = solver_kwargs(args)
+    report_path = args.report or os.path.join(args.output, "report.json")
+    progress = Progress(len(tasks))
+    collisions = [t for t in tasks if os.path.abspath(t.output) == os.path.abspath(t.path)]
+    if collisions:
+        print(f"error: {collisions[0].output} would overwrite its input; choose another -o",
+              file=sys.stderr)
+        return 2
+
+    results = [None] * len(tasks)
+
+    def on_done(i, entries):
+        results[i] = entries
+        progress.advance("\n".join(item_line(e) for e in entries))
+
+    t0 = time.perf_counter()
+    interrupted = False
+    try:
+        run_tasks(tasks, options, args.seams, jobs=args.jobs, on_done=on_done)
+    except KeyboardInterrupt:  # keep what is done: its outputs are written, the report says so
+        interrupted = True
+    wall = time.perf_counter() - t0
+    items = [e for entries in results if entries for e in entries]
+    report = batch_report(items, options, wall, jobs=args.jobs, files=files,
+                          interrupted=interrupted)
+    os.makedirs(os.path.dirname(os.path.abspath(report_path)), exist_ok=True)
+    with open(report_path, "w", encoding="utf-8") as fh:
+        json.dump(report, fh, indent=2)
+    progress.close()
+    s = report["summary"]
+    print(f"{s['files']} file(s), {s['meshes']} mesh(es): {s['certified']} certified, "
+          f"{s['partial']} partial, {s['failed']} failed"
+          + (f", {s['not_run']} not run (interrupted)" if interrupted else "")
+          + f"; {wall:.1f} s with {args.jobs} job(s); report: {report_path}")
+    if interrupted:
+        return 130
+    return 0 if s["certified"] == s["meshes"] and s["meshes"] > 0 else 1
+
+
+def batch_report(items, options, wall, jobs, files, interrupted=False):
+    """The JSON report: options, a summary and one entry per mesh (file or .blend object)."""
+    from . import __version__
+    count = {k: sum(e["status"] == k for e in items) for k in ("certified", "partial", "failed")}
+    seen = {e["input"] for e in items}
+    return {"tool": "bd_uv batch", "version": __version__, "options": options,
+            "summary": {"files": len(files), "meshes": len(items), **count,
+                        "not_run": sum(os.path.abspath(f) not in seen for f in files),
+                        "seconds": round(wall, 3), "jobs": jobs, "interrupted": interrupted},
+            "items": items}
+
+
+def item_line(e):
+    """One line per mesh: status, name, size, the figures or the error."""
+    name = os.path.basename(e["input"]) if e.get("input") else e["name"]
+    if e.get("object"):
+        name += f":{e['object']}"
+    head = f"{e['status']:<9} {name}"
+    if e["faces"] is not None:
+        head += f": {e['faces']} faces, {len(e['islands'])} island(s)"
+    if e["bound_certified"] is not None:
+        head += (f", C = {e['bound_certified']:.4g}, max {e['max_distortion']:.3f}, mean "
+                 f"{e['mean_distortion']:.3f}, {e['flipped']} flipped")
+    if e["seconds"] is not None:
+        head += f", {e['seconds']:.2f} s"
+    if e["status"] != "certified":
+        head += f" -- {e['error']}: {e['message']}"
+    return head
+
+
+class Progress:
+    """Per-mesh lines on stdout and, when stderr is a terminal, a progress bar below them."""
+
+    def __init__(self, total, out=sys.stdout, err=sys.stderr, bar=None):
+        self.total, self.done, self.out, self.err = total, 0, out, err
+        self.bar = err.isatty() if bar is None else bar
+        self.t0 = time.perf_counter()
+        self._draw()
+
+    def advance(self, lines):
+        self.done += 1
+        self._clear()
+        width = len(str(self.total))
+        for line in lines.splitlines():
+            print(f"[{self.done:>{width}}/{self.total}] {line}", file=self.out, flush=True)
+        self._draw()
+
+    def close(self):
+        self._clear()
+
+    def _clear(self):
+        if self.bar:
+            self.err.write("\r\033[K")
+            self.err.flush()
+
+    def _draw(self):
+        if self.bar:
+            n = int(30 * self.done / max(self.total, 1))
+            self.err.write(f"[{'#' * n}{'.' * (30 - n)}] {self.done}/{self.total} files, "
+                           f"{time.perf_counter() - self.t0:.0f} s")
+            self.err.flush()
