@@ -35,6 +35,7 @@ class Part:
     pin_unselected_uvs: bool
     pinned_faces: np.ndarray          # (m_i,) bool: triangles holding a pinned corner
     blender_pinned_faces: np.ndarray  # (m_i,) bool: ... pinned in Blender, not merely unselected
+    use_object_scale: bool = True
 
 
 @dataclass
@@ -59,6 +60,12 @@ def _pinned_faces(arrays):
     return faces
 
 
+def _unwrap_scale(ob, use_object_scale):
+    """The scale the positions are unwrapped at: magnitudes only, as a negative (mirroring)
+    scale must not flip the UVs of the mesh data."""
+    return tuple(abs(c) for c in ob.scale) if use_object_scale else (1.0, 1.0, 1.0)
+
+
 def gather(objects, *, pin_unselected_uvs=False, use_object_scale=True, need_uvs=False):
     """Copy the selected faces of ``objects`` (Object Mode) into one problem.
 
@@ -69,8 +76,7 @@ def gather(objects, *, pin_unselected_uvs=False, use_object_scale=True, need_uvs
     parts, offset_v, offset_f = [], 0, 0
     Vs, Fs, seams, pins, pin_uv, uvs = [], [], [], [], [], []
     for ob in objects:
-        # Magnitudes only: a negative (mirroring) scale must not flip the UVs of the mesh data.
-        scale = tuple(abs(c) for c in ob.scale) if use_object_scale else (1.0, 1.0, 1.0)
+        scale = _unwrap_scale(ob, use_object_scale)
         arrays = mesh_data.mesh_arrays(ob, selected_only=True, scale=scale,
                                        pin_unselected_uvs=pin_unselected_uvs)
         m = len(arrays.F)
@@ -86,7 +92,8 @@ def gather(objects, *, pin_unselected_uvs=False, use_object_scale=True, need_uvs
         blender_pins = (mesh_data.mesh_arrays(ob, selected_only=True, scale=scale)
                         if pin_unselected_uvs else arrays)
         parts.append(Part(ob.name, arrays, slice(offset_f, offset_f + m), scale,
-                          pin_unselected_uvs, _pinned_faces(arrays), _pinned_faces(blender_pins)))
+                          pin_unselected_uvs, _pinned_faces(arrays), _pinned_faces(blender_pins),
+                          use_object_scale))
         Vs.append(arrays.V)
         Fs.append(arrays.F + offset_v)
         seams.append(arrays.seams + offset_v)
@@ -129,8 +136,9 @@ class Written:
 def write_back(batch, result):
     """Write the certified islands of ``result`` into each object's active UV map (Object Mode).
 
-    Each object is looked up again by name and re-read: an object that was deleted or whose mesh,
-    selection, UVs or pins changed since ``gather`` is skipped, not written.
+    Each object is looked up again by name and re-read: an object that was deleted or renamed, or
+    whose mesh, selection, UVs, pins or object scale changed since ``gather`` is skipped, not
+    written (the result is certified for the shape it was solved for only).
     """
     good = np.isfinite(result.corner_uv).all(axis=(1, 2))
     island_of_face = result.face_island
@@ -148,10 +156,11 @@ def write_back(batch, result):
         ob = bpy.data.objects.get(part.object_name)
         if ob is None or ob.type != 'MESH':
             written.append(Written(part.object_name, np.zeros(0, bool), np.zeros(0, bool),
-                                   "deleted while solving"))
+                                   "deleted or renamed while solving"))
             continue
         now = mesh_data.mesh_arrays(ob, selected_only=True, uv_name=part.arrays.uv_name,
-                                    scale=part.scale, pin_unselected_uvs=part.pin_unselected_uvs)
+                                    scale=_unwrap_scale(ob, part.use_object_scale),
+                                    pin_unselected_uvs=part.pin_unselected_uvs)
         if now.topology_key != part.arrays.topology_key:
             written.append(Written(part.object_name, np.zeros(0, bool), np.zeros(0, bool),
                                    "changed while solving"))

@@ -481,11 +481,14 @@ def _two_grids_in_edit_mode():
     return a, b
 
 
-@pytest.mark.parametrize("edit", ["move vertex", "move uv", "select", "add uv map"])
+@pytest.mark.parametrize("edit", ["move vertex", "move uv", "select", "scale", "rename",
+                                  "add uv map"])
 def test_edited_while_solving_is_not_written(addon, gated, edit):
     """The user changes the mesh in Edit Mode while the solve runs (test_operator_background.py
     moves a vertex in Object Mode and checks the active map only): nothing is written to it, all
-    its maps stay as they are, the untouched object is written."""
+    its maps stay as they are, the untouched object is written. A new object scale counts as a
+    change (the result is certified for the scale it was solved at); a renamed object is not
+    written either (objects are found again by name)."""
     import bmesh
 
     a, b = _two_grids_in_edit_mode()
@@ -503,6 +506,11 @@ def test_edited_while_solving_is_not_written(addon, gated, edit):
         bm.verts.ensure_lookup_table()
         bm.verts[0].select_set(False)  # a corner vertex: its face is deselected too
         bm.select_flush_mode()
+    elif edit == "scale":
+        b.scale = (1.0, 3.0, 1.0)
+    elif edit == "rename":
+        b_name = b.name
+        b.name = "Renamed"
     else:
         bm.loops.layers.uv.new("Late")  # a new map, not active: the active one is unchanged
     bmesh.update_edit_mesh(b.data)
@@ -519,7 +527,11 @@ def test_edited_while_solving_is_not_written(addon, gated, edit):
     assert op.modal(context, _event('TIMER')) == {'FINISHED'}
     assert op.reports[-1][0] == {'WARNING'}
     assert op.reports[-1][1].startswith("BD-LSCM: 2 islands, max distortion ")
-    assert op.reports[-1][1].endswith(f"; {b.name} not written: changed while solving")
+    if edit == "rename":
+        assert op.reports[-1][1].endswith(
+            f"; {b_name} not written: deleted or renamed while solving")
+    else:
+        assert op.reports[-1][1].endswith(f"; {b.name} not written: changed while solving")
     assert {o.name for o in bpy.context.objects_in_mode} == {a.name, b.name}
     bpy.ops.object.mode_set(mode='OBJECT')
     assert_unchanged(before_b, snapshot(b.data))
@@ -542,7 +554,7 @@ def test_deleted_while_solving(addon, gated):
     op._job.wait()
     assert op.modal(context, _event('TIMER')) == {'FINISHED'}
     assert op.reports[-1][0] == {'WARNING'}
-    assert op.reports[-1][1].endswith(f"; {b_name} not written: deleted while solving")
+    assert op.reports[-1][1].endswith(f"; {b_name} not written: deleted or renamed while solving")
     bpy.ops.object.mode_set(mode='OBJECT')
     certified(a, 2.0)
 
@@ -565,7 +577,7 @@ def test_deleted_while_solving(addon, gated):
     op._job.wait()
     assert op.modal(context, _event('TIMER')) == {'CANCELLED'}
     assert op.reports[-1] == ({'ERROR'}, op.reports[-1][1])
-    assert op.reports[-1][1].endswith(f"; {a_name} not written: deleted while solving")
+    assert op.reports[-1][1].endswith(f"; {a_name} not written: deleted or renamed while solving")
     set_mode(c, 'OBJECT')
     assert_unchanged(before_c, snapshot(c.data))
 
