@@ -223,12 +223,20 @@ def test_no_mesh_or_active_object_not_a_mesh(addon, capsys):
 
 # -- no faces / mixed selection ------------------------------------------------------------------
 
-def test_no_faces_selected(addon, capsys):
+def test_no_faces_selected(addon, capsys, request):
     obj = grid_in_edit_mode()
     bpy.ops.mesh.select_all(action='DESELECT')
     before = snap_object(obj)
-    assert run(capsys) == ({'CANCELLED'}, [
-        ('WARNING', "No faces selected: select the faces to unwrap in Edit Mode")])
+    for mode in ('EXEC_DEFAULT', 'INVOKE_DEFAULT'):  # headless INVOKE runs execute()
+        assert run(capsys, mode) == ({'CANCELLED'}, [
+            ('WARNING', "No faces selected: select the faces to unwrap in Edit Mode")])
+    # The modal path (an event loop faked by ``gated``) refuses before starting a job.
+    request.getfixturevalue("gated")
+    op, context = _operator(), Context()
+    assert op.invoke(context, _event('LEFTMOUSE', 'PRESS')) == {'CANCELLED'}
+    assert op.reports == [({'WARNING'}, "No faces selected: select the faces to unwrap in "
+                           "Edit Mode")]
+    assert not hasattr(op, "_job") and context.window_manager.calls == []
     # Vertices and edges selected, but no whole face.
     set_mode(obj, 'OBJECT')
     obj.data.vertices[0].select = obj.data.vertices[1].select = True
@@ -281,6 +289,32 @@ def test_mixed_selection_across_objects(addon, capsys):
         assert np.array_equal(new[~loop_sel], old[~loop_sel])
         assert (new[loop_sel] != old[loop_sel]).any(axis=1).mean() > 0.9
         certified(ob, 2.0, "UVMap", poly_mask=sel)
+
+
+def test_object_that_cannot_be_solved_keeps_every_map(addon, capsys):
+    """A grid and a closed cube (no seams) in Edit Mode together: the grid is written and
+    certified, the cube named in a WARNING and left byte-for-byte as it was, all three maps."""
+    grid = add_grid(5, 4)
+    bpy.ops.mesh.primitive_cube_add(location=(5, 0, 0))
+    cube = bpy.context.active_object
+    for ob in (grid, cube):
+        add_uv_maps(ob, 2, seed=len(ob.data.loops))
+        pin_some(ob, "Extra0")
+        select_polygons(ob, np.ones(len(ob.data.polygons), bool))
+    before = snapshot(cube.data)
+    grid.select_set(True)
+    cube.select_set(True)
+    bpy.context.view_layer.objects.active = grid
+    bpy.ops.object.mode_set(mode='EDIT')
+    result, reports = run(capsys, bound=2.0)
+    assert result == {'FINISHED'} and len(reports) == 1 and reports[0][0] == 'WARNING'
+    message = reports[0][1]
+    assert message.startswith("BD-LSCM: 1 island, max distortion ")
+    assert re.search(r"; island \d+ of Cube \(12 faces\) left as it was: .*seam", message,
+                     re.I), message
+    bpy.ops.object.mode_set(mode='OBJECT')
+    assert_unchanged(before, snapshot(cube.data))
+    certified(grid, 2.0)
 
 
 # -- modifiers, scale, linked duplicates ---------------------------------------------------------
@@ -615,6 +649,21 @@ def test_escape_leaves_every_uv_map_untouched(addon, gated, when):
 
 
 # -- undo ----------------------------------------------------------------------------------------
+
+def test_undo_restores_every_object(addon, capsys):
+    """Two objects in Edit Mode, one unwrap, one undo: both meshes back byte-for-byte."""
+    a, b = _two_grids_in_edit_mode()
+    before = {ob.name: snap_object(ob) for ob in (a, b)}
+    bpy.ops.ed.undo_push(message="before bd_unwrap")
+    result, reports = run(capsys, 'EXEC_DEFAULT', True, bound=2.0)
+    assert result == {'FINISHED'} and reports[0][0] == 'INFO'
+    assert reports[0][1].startswith("BD-LSCM: 2 islands, ")
+    bpy.ops.ed.undo()
+    assert {o.name for o in bpy.context.objects_in_mode} == set(before)
+    bpy.ops.object.mode_set(mode='OBJECT')
+    for name, snap in before.items():
+        assert_unchanged(snap, snapshot(bpy.data.objects[name].data))
+
 
 def test_undo_restores_every_uv_map_and_attribute(addon, capsys):
     """Undo right after an unwrap that also packed and added distortion attributes: every map,
