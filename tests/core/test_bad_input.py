@@ -112,10 +112,6 @@ def raises_unchanged(exc_type, V, F, **kw):
     return info.value
 
 
-def island_of_face(res, face):
-    return res.islands[int(res.face_island[face])]
-
-
 # ---------------------------------------------------------------------------------------------
 # Mesh-level problems: InvalidMeshError, nothing computed
 # ---------------------------------------------------------------------------------------------

@@ -43,10 +43,9 @@ def face_neighbours(F):
 THREE_PEAKS_NB = face_neighbours(THREE_PEAKS[1])
 
 
-def patch(V, F, nb, seed_face, size):
-    """The first ``size`` faces reached breadth-first from ``seed_face``, with their vertices
-    renumbered: a connected piece of a real mesh."""
-    seen = np.zeros(len(F), dtype=bool)
+def blob(nb, seed_face, size):
+    """The first ``size`` faces reached breadth-first from ``seed_face`` (face indices)."""
+    seen = np.zeros(len(nb), dtype=bool)
     seen[seed_face] = True
     order, front = [seed_face], [seed_face]
     while front and len(order) < size:
@@ -58,8 +57,12 @@ def patch(V, F, nb, seed_face, size):
                     order.append(g)
                     nxt.append(g)
         front = nxt
-    faces = F[np.array(order[:size])]
-    used, Fp = np.unique(faces, return_inverse=True)
+    return np.array(order[:size], dtype=np.int64)
+
+
+def patch(V, F, nb, seed_face, size):
+    """A connected piece of a real mesh: a blob of faces, vertices renumbered."""
+    used, Fp = np.unique(F[blob(nb, seed_face, size)], return_inverse=True)
     return V[used], Fp.reshape(-1, 3).astype(np.int64)
 
 
@@ -76,6 +79,7 @@ def scenarios(draw):
         seed=draw(st.integers(0, 2**32 - 1)),
         noise=draw(st.sampled_from([0.0, 1e-3, 1e-2, 0.1, 0.3])),
         delete=draw(st.sampled_from([0.0, 0.0, 0.02, 0.1, 0.3])),
+        delete_kind=draw(st.sampled_from(["scattered faces", "blobs"])),
         seams=draw(st.sampled_from([0, 0, 5, 30, 150])),
         pins=draw(st.sampled_from([0, 0, 1, 2, 4, 20])),
         pin_kind=draw(st.sampled_from(["from a certified map", "random"])),
@@ -98,10 +102,17 @@ def build(sc):
                      sc["patch_size"])
     h = mean_edge(V, F)
     V = V + rng.normal(scale=sc["noise"] * h, size=V.shape)
-    if sc["delete"]:
+    if sc["delete"] and sc["delete_kind"] == "scattered faces":   # holes, bow-ties, crumbs
         keep = rng.random(len(F)) >= sc["delete"]
         keep[rng.integers(len(F))] = True                       # never empty
         F = F[keep]
+    elif sc["delete"]:                                           # a few round holes or bites
+        nb = face_neighbours(F)
+        gone = np.zeros(len(F), dtype=bool)
+        for start in rng.choice(len(F), size=min(3, len(F)), replace=False):
+            gone[blob(nb, start, max(1, int(sc["delete"] * len(F) / 3)))] = True
+        gone[rng.integers(len(F))] = False                     # never empty
+        F = F[~gone]
     defect = sc["defect"]
     f = int(rng.integers(len(F)))
     if defect == "nan vertex":
