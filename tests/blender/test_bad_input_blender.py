@@ -25,7 +25,7 @@ import re
 import numpy as np
 import pytest
 
-from conftest import add_grid, bpy, load_submodule, loop_uv_array, select_polygons, set_mode
+from conftest import add_grid, bpy, loop_uv_array, select_polygons, set_mode
 from conftest import triangle_distortion
 from test_operator_background import Context, _event, _operator, gated  # noqa: F401 (fixture)
 
@@ -406,6 +406,7 @@ def test_linked_duplicates_share_one_unwrap(addon, capsys):
         set_mode(active, 'OBJECT')
         other.select_set(True)
         bpy.ops.object.mode_set(mode='EDIT')
+        assert (active.mode, other.mode) == ('EDIT', 'OBJECT')  # Blender edits the mesh once
         bpy.ops.mesh.select_all(action='SELECT')
         result, reports = run(capsys, bound=1.5, pack=False)
         assert result == {'FINISHED'} and reports[0][0] == 'INFO'
