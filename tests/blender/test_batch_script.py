@@ -1,0 +1,196 @@
+"""scripts/bd_uv_batch.py run through the bpy module, as ``python bd_uv_batch.py FILE -- ...``.
+
+The .blend is built here: a bent grid (non-uniform object scale, one pinned UV) and an open tube
+whose one seam makes it a disk. The saved file's UVs are checked independently of bd_uv (SVD of
+each triangle's Jacobian, ``conftest.triangle_distortion``), and the report's figures against that.
+"""
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from matplotlib.image import imread
+
+from conftest import REPO_ROOT, add_grid, loop_uv_array, triangle_distortion
+
+bpy = pytest.importorskip("bpy")
+
+SCRIPT = REPO_ROOT / "scripts" / "bd_uv_batch.py"
+# ``python -m bd_uv batch ...`` through bd_uv.batch's own entry points (the parser and run_batch the
+# CLI wires in), so this test does not depend on the rest of cli.py.
+BATCH = ("import argparse, sys; from bd_uv.batch import add_batch_parser; "
+         "p = argparse.ArgumentParser(); add_batch_parser(p.add_subparsers()); "
+         "a = p.parse_args(['batch', *sys.argv[1:]]); sys.exit(a.func(a))")
+PINNED_LOOP = 7
+PINNED_UV = (0.3125, 0.6875)
+GRID_SCALE = (1.0, 1.5, 1.0)
+
+
+def run_script(blend, *options):
+    return subprocess.run([sys.executable, str(SCRIPT), str(blend), "--", *options],
+                          capture_output=True, text=True)
+
+
+@pytest.fixture
+def scene_blend(tmp_path, empty_scene):
+    """Path of a saved .blend with "Grid" (pinned loop, scaled) and "Tube" (one seam)."""
+    grid = add_grid()
+    grid.name = "Grid"
+    grid.scale = GRID_SCALE
+    layer = grid.data.uv_layers.active
+    uv = loop_uv_array(grid.data)
+    uv[PINNED_LOOP] = PINNED_UV
+    layer.uv.foreach_set("vector", uv.ravel())
+    layer.pin_ensure()
+    pins = np.zeros(len(grid.data.loops), bool)
+    pins[PINNED_LOOP] = True
+    layer.pin.foreach_set("value", pins)
+
+    bpy.ops.mesh.primitive_cylinder_add(vertices=16, end_fill_type='NOTHING', location=(4, 0, 0))
+    tube = bpy.context.active_object
+    tube.name = "Tube"
+    ev = np.empty(len(tube.data.edges) * 2, np.int32)
+    tube.data.edges.foreach_get("vertices", ev)
+    co = np.empty(len(tube.data.vertices) * 3, np.float32)
+    tube.data.vertices.foreach_get("co", co)
+    co, ev = co.reshape(-1, 3), ev.reshape(-1, 2)
+    # The vertical edge at angle 0 (x = 1, y = 0): cut there, the open tube is a disk.
+    seam = np.all((np.abs(co[ev, 1]) < 1e-5) & (co[ev, 0] > 0.5), axis=1)
+    assert seam.sum() == 1
+    tube.data.edges.foreach_set("use_seam", seam)
+    path = tmp_path / "scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(path))
+    return path
+
+
+def loop_tris(mesh):
+    mesh.calc_loop_triangles()
+    n = len(mesh.loop_triangles)
+    verts = np.empty(3 * n, np.int32)
+    loops = np.empty(3 * n, np.int32)
+    mesh.loop_triangles.foreach_get("vertices", verts)
+    mesh.loop_triangles.foreach_get("loops", loops)
+    return verts.reshape(-1, 3), loops.reshape(-1, 3)
+
+
+def measured(obj, uv_name=None):
+    """Independent figures of ``obj``'s UV map: (D, det, areas) per loop triangle, loop UVs."""
+    mesh = obj.data
+    co = np.empty(len(mesh.vertices) * 3, np.float32)
+    mesh.vertices.foreach_get("co", co)
+    V = co.reshape(-1, 3).astype(np.float64) * np.abs(np.array(obj.scale))
+    tris, loops = loop_tris(mesh)
+    uv = loop_uv_array(mesh, uv_name)
+    D, det = triangle_distortion(V, tris, uv[loops].astype(np.float64))
+    P = V[tris]
+    areas = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+    return D, det, areas, uv
+
+
+def test_script_writes_certified_uvs_keeps_pins_and_reports_them(scene_blend, tmp_path):
+    out, report, png = tmp_path / "out" / "done.blend", tmp_path / "r.json", tmp_path / "png"
+    bpy.ops.wm.open_mainfile(filepath=str(scene_blend))
+    before = {name: loop_uv_array(bpy.data.objects[name].data) for name in ("Grid", "Tube")}
+
+    proc = run_script(scene_blend, "--bound", "3", "--output", str(out), "--report", str(report),
+                      "--png", str(png))
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    rep = json.loads(report.read_text())
+    assert rep["summary"]["certified"] == 2 and rep["summary"]["failed"] == 0
+    assert rep["output"] == str(out)
+    items = {e["object"]: e for e in rep["items"]}
+    assert set(items) == {"Grid", "Tube"}
+
+    bpy.ops.wm.open_mainfile(filepath=str(out))
+    for name, e in items.items():
+        obj = bpy.data.objects[name]
+        D, det, areas, uv = measured(obj)
+        assert not np.array_equal(uv, before[name]), f"{name}: UVs were not written"
+        assert np.all(det > 0), f"{name}: flipped faces in the saved UVs"
+        assert D.max() <= 3.0 * (1 + 1e-5)
+        # The report's figures are those of the saved map (float32 UVs: small tolerance).
+        assert e["status"] == "certified" and e["error"] is None
+        assert e["faces"] == len(D) and e["flipped"] == 0
+        assert e["bound_certified"] == pytest.approx(3.0) and D.max() <= e["bound_certified"] + 1e-5
+        assert e["max_distortion"] == pytest.approx(D.max(), rel=1e-4)
+        assert e["mean_distortion"] == pytest.approx(np.sum(areas * D) / areas.sum(), rel=1e-4)
+        assert e["uv_map"] == obj.data.uv_layers.active.name and e["output"] == str(out)
+        assert imread(png / f"{name}.png").shape == (1024, 1024, 4)
+        assert e["png"] == str(png / f"{name}.png")
+
+    # The pinned loop (and the loops sharing its island vertex) are exactly where they were.
+    grid_uv = loop_uv_array(bpy.data.objects["Grid"].data)
+    assert grid_uv[PINNED_LOOP].tobytes() == np.array(PINNED_UV, np.float32).tobytes()
+    # The tube was cut along its one seam: a single island, unrolled nearly isometrically.
+    assert len(items["Tube"]["islands"]) == 1
+    assert items["Tube"]["max_distortion"] < 1.05
+    # The grid was unwrapped at its object scale (1.5 along y), not as the raw mesh data.
+    D_raw, _ = triangle_distortion(*_raw(bpy.data.objects["Grid"]))
+    assert D_raw.max() > 1.2
+
+
+def _raw(obj):
+    mesh = obj.data
+    co = np.empty(len(mesh.vertices) * 3, np.float32)
+    mesh.vertices.foreach_get("co", co)
+    tris, loops = loop_tris(mesh)
+    return co.reshape(-1, 3).astype(np.float64), tris, loop_uv_array(mesh)[loops]
+
+
+def test_script_named_objects_new_uv_map_saved_in_place(scene_blend, tmp_path):
+    """--objects: only those change; --uv-map: a new map, the old one untouched; a name that is
+    not an object is an error in the report (exit 1) that does not stop the others."""
+    blend = tmp_path / "copy.blend"
+    shutil.copy(scene_blend, blend)
+    bpy.ops.wm.open_mainfile(filepath=str(blend))
+    before = {o.name: loop_uv_array(o.data).copy() for o in bpy.data.objects}
+    old_map = bpy.data.objects["Tube"].data.uv_layers.active.name
+
+    report = tmp_path / "r.json"
+    proc = run_script(blend, "--objects", "Tube", "Nothing", "--uv-map", "BD",
+                      "--method", "arap", "--bound", "2", "--report", str(report))
+    assert proc.returncode == 1, proc.stdout + proc.stderr
+    rep = json.loads(report.read_text())
+    items = {e["object"]: e for e in rep["items"]}
+    assert items["Nothing"]["status"] == "failed" and "Nothing" in items["Nothing"]["message"]
+    assert items["Tube"]["status"] == "certified" and items["Tube"]["uv_map"] == "BD"
+    assert rep["options"]["method"] == "arap" and rep["options"]["bound"] == 2.0
+    assert all(i["bound_requested"] == 2.0 for i in items["Tube"]["islands"])
+
+    bpy.ops.wm.open_mainfile(filepath=str(blend))  # saved in place
+    tube, grid = bpy.data.objects["Tube"], bpy.data.objects["Grid"]
+    assert loop_uv_array(grid.data).tobytes() == before["Grid"].tobytes()
+    assert loop_uv_array(tube.data, old_map).tobytes() == before["Tube"].tobytes()
+    D, det, _, _ = measured(tube, "BD")
+    assert np.all(det > 0) and D.max() <= 2.0 * (1 + 1e-5)
+    assert items["Tube"]["max_distortion"] == pytest.approx(D.max(), rel=1e-4)
+
+
+def test_folder_batch_reads_blend_files_through_the_script(scene_blend, tmp_path):
+    """``python -m bd_uv batch`` on a folder with a .blend (through the script) and an OFF."""
+    src = tmp_path / "in"
+    src.mkdir()
+    shutil.copy(scene_blend, src / "scene.blend")
+    shutil.copy(REPO_ROOT / "tests" / "data" / "nefertiti.off", src / "nefertiti.off")
+    out = tmp_path / "out"
+    proc = subprocess.run([sys.executable, "-c", BATCH, str(src), "-o", str(out),
+                           "--jobs", "2", "--bound", "3", "--png", str(out / "png")],
+                          capture_output=True, text=True, cwd=REPO_ROOT)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    rep = json.loads((out / "report.json").read_text())
+    got = {(os.path.basename(e["input"]), e["object"]): e for e in rep["items"]}
+    assert set(got) == {("scene.blend", "Grid"), ("scene.blend", "Tube"),
+                        ("nefertiti.off", None)}
+    assert all(e["status"] == "certified" for e in got.values())
+    assert got[("scene.blend", "Tube")]["output"] == str(out / "scene.blend")
+    assert (out / "nefertiti.obj").is_file()
+    assert imread(out / "png" / "scene-Tube.png").shape == (1024, 1024, 4)
+
+    bpy.ops.wm.open_mainfile(filepath=str(out / "scene.blend"))
+    D, det, _, uv = measured(bpy.data.objects["Grid"])
+    assert np.all(det > 0) and D.max() <= 3.0 * (1 + 1e-5)
+    assert uv[PINNED_LOOP].tobytes() == np.array(PINNED_UV, np.float32).tobytes()
+    assert got[("scene.blend", "Grid")]["max_distortion"] == pytest.approx(D.max(), rel=1e-4)
