@@ -1,7 +1,8 @@
 """Fuzzing the unwrap contract (issue 6) on real meshes from tests/data/.
 
 Hypothesis draws a scenario (which mesh or patch, vertex noise, face deletions, a random seam set,
-random pins, one optional injected defect, bound and method); numpy draws the details from a seed
+random pins, one optional injected defect, bound, method, frames, cone, and a solver that fails
+some or all of its solves with a non-solved status or a garbage iterate); numpy draws the details from a seed
 that Hypothesis also chooses, so every failure is reproducible from the printed example. The
 contract asserted for every example: the call returns (or raises a typed ``bd_uv.BDError``), the
 input arrays are byte-identical afterwards, every certified island is re-verified independently
@@ -13,12 +14,16 @@ CI-friendly: 25 examples, no deadline; see the statistics with
 runs a deeper search locally.
 """
 import os
+import types
+from unittest import mock
 
+import clarabel
 import numpy as np
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 import bd_uv
+import bd_uv.solve
 from unwrap_contract import DATA, assert_contract, assert_unchanged, read_off, snapshot
 
 NEFERTITI = read_off(DATA / "nefertiti.off")
@@ -89,6 +94,7 @@ def scenarios(draw):
         method=draw(st.sampled_from(["lscm", "lscm", "dirichlet", "arap"])),
         frames=draw(st.sampled_from(["auto", "auto", "harmonic", "conformal", "constant"])),
         cone=draw(st.sampled_from(["soc", "soc", "linf"])),
+        solver_faults=draw(st.sampled_from([0.0, 0.0, 0.0, 0.3, 1.0])),
     )
 
 
@@ -147,6 +153,43 @@ def pins_for(sc, rng, V, F, seams):
     return (corners[ok], uv[ok]) if ok.any() else (None, None)
 
 
+REAL_SOLVER = clarabel.DefaultSolver
+# (status reported, what comes back as x)
+FAULTS = [("NumericalError", "nan"), ("MaxIterations", "random"), ("InsufficientProgress", "zeros"),
+          ("Solved", "random"), ("AlmostSolved", "perturbed"), ("PrimalInfeasible", "real"),
+          ("MaxIterations", "real")]
+
+
+def flaky_solver(p, rng):
+    """clarabel.DefaultSolver that, with probability p per solve, reports a fault status and
+    returns NaN, zeros, random numbers, a perturbed or the true iterate."""
+    class Flaky:
+        def __init__(self, *args):
+            self.args, self.callback = args, None
+
+        def set_termination_callback(self, callback):
+            self.callback = callback
+
+        def solve(self):
+            real = REAL_SOLVER(*self.args)
+            if self.callback is not None:
+                real.set_termination_callback(self.callback)
+            if rng.random() >= p:
+                return real.solve()
+            status, mode = FAULTS[rng.integers(len(FAULTS))]
+            n = self.args[0].shape[0]
+            if mode in ("real", "perturbed"):
+                x = np.asarray(real.solve().x, dtype=np.float64)
+                if mode == "perturbed":
+                    x = x + rng.normal(scale=1e-2 * (np.abs(x).max() + 1e-12), size=n)
+            else:
+                x = {"nan": np.full(n, np.nan), "zeros": np.zeros(n),
+                     "random": rng.normal(size=n)}[mode]
+            return types.SimpleNamespace(status=getattr(clarabel.SolverStatus, status),
+                                         x=list(x), iterations=1, obj_val=0.0)
+    return Flaky
+
+
 # BD_UV_FUZZ_EXAMPLES=500 for a deeper local run; CI keeps the default.
 EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "25"))
 
@@ -158,10 +201,13 @@ def test_unwrap_contract_on_perturbed_real_meshes(sc):
     pin_corners, pin_uv = pins_for(sc, rng, V, F, seams)
     args = (V, F, seams, pin_corners, pin_uv)
     before = snapshot(*args)
+    solver = flaky_solver(sc["solver_faults"], rng) if sc["solver_faults"] else REAL_SOLVER
+    event(f"solver faults: {sc['solver_faults']:.0%} of solves")
     try:
-        res = bd_uv.unwrap(V, F, seams=seams, pin_corners=pin_corners, pin_uv=pin_uv,
-                           bound=sc["bound"], method=sc["method"], frames=sc["frames"],
-                           cone=sc["cone"])
+        with mock.patch.object(bd_uv.solve.clarabel, "DefaultSolver", solver):
+            res = bd_uv.unwrap(V, F, seams=seams, pin_corners=pin_corners, pin_uv=pin_uv,
+                               bound=sc["bound"], method=sc["method"], frames=sc["frames"],
+                               cone=sc["cone"])
     except bd_uv.BDError as exc:
         assert not isinstance(exc, bd_uv.CancelledError)
         event(f"raised {type(exc).__name__}")
