@@ -448,9 +448,10 @@ def item_line(e):
 class Progress:
     """Per-mesh lines on stdout and, when stderr is a terminal, a progress bar below them."""
 
-    def __init__(self, total, out=sys.stdout, err=sys.stderr, bar=None):
-        self.total, self.done, self.out, self.err = total, 0, out, err
-        self.bar = err.isatty() if bar is None else bar
+    def __init__(self, total, out=None, err=None, bar=None):
+        self.total, self.done = total, 0
+        self.out, self.err = out or sys.stdout, err or sys.stderr
+        self.bar = self.err.isatty() if bar is None else bar
         self.t0 = time.perf_counter()
         self._draw()
 

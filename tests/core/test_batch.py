@@ -1,0 +1,196 @@
+"""bd_uv.batch: folders of meshes in worker processes, one bad file never stops the rest.
+
+Outputs are read back with a reader written here and checked by an independent distortion
+(``helpers.reference_distortion``: numpy SVD of each face's Jacobian).
+"""
+import argparse
+import io
+import json
+import os
+import shutil
+
+import numpy as np
+import pytest
+from matplotlib.image import imread
+
+from bd_uv import batch
+from helpers import DATA, grid, reference_distortion
+
+
+def run(*argv):
+    parser = argparse.ArgumentParser()
+    batch.add_batch_parser(parser.add_subparsers())
+    args = parser.parse_args(["batch", *map(str, argv)])
+    return args.func(args)
+
+
+def read_obj(path):
+    """(V, F, corner_uv) of an OBJ with ``f v/vt`` faces (NaN UVs on faces without vt)."""
+    v, vt, fv, ft = [], [], [], []
+    for line in open(path):
+        p = line.split()
+        if p and p[0] == "v":
+            v.append([float(t) for t in p[1:4]])
+        elif p and p[0] == "vt":
+            vt.append([float(t) for t in p[1:3]])
+        elif p and p[0] == "f":
+            fv.append([int(t.split("/")[0]) - 1 for t in p[1:]])
+            ft.append([int(t.split("/")[1]) - 1 if "/" in t else -1 for t in p[1:]])
+    vt = np.array(vt + [[np.nan, np.nan]])
+    return np.array(v), np.array(fv), vt[np.array(ft)]
+
+
+def write_grid_obj(path):
+    V, F = grid(12, 10, z=lambda x, y: 0.2 * np.sin(3 * x) * np.cos(2 * y))
+    with open(path, "w") as fh:
+        fh.writelines(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V)
+        fh.writelines(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F)
+    return V, F
+
+
+@pytest.fixture
+def folder(tmp_path):
+    """Two good meshes, a closed one, an unreadable one, and a file that is not a mesh."""
+    src = tmp_path / "in"
+    src.mkdir()
+    shutil.copy(os.path.join(DATA, "nefertiti.off"), src / "nefertiti.off")
+    write_grid_obj(src / "bump.obj")
+    (src / "tetra.off").write_text("OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
+                                   "3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n")
+    (src / "broken.ply").write_text("ply\nformat ascii 1.0\nelement vertex 3\nend_header\n0 0\n")
+    (src / "notes.txt").write_text("not a mesh")
+    return src
+
+
+def test_folder_good_files_written_bad_ones_reported_exit_1(folder, tmp_path, capsys):
+    out, png = tmp_path / "out", tmp_path / "png"
+    code = run(folder, "-o", out, "--jobs", "2", "--bound", "3", "--png", png)
+    assert code == 1  # tetra and broken failed
+    rep = json.loads((out / "report.json").read_text())
+    items = {os.path.basename(e["input"]): e for e in rep["items"]}
+    assert set(items) == {"nefertiti.off", "bump.obj", "tetra.off", "broken.ply"}
+    assert rep["summary"] | {"seconds": 0} == {
+        "files": 4, "meshes": 4, "certified": 2, "partial": 0, "failed": 2, "not_run": 0,
+        "seconds": 0, "jobs": 2, "interrupted": False}
+
+    for name, stem in (("nefertiti.off", "nefertiti"), ("bump.obj", "bump")):
+        e = items[name]
+        assert e["status"] == "certified" and e["output"] == str(out / f"{stem}.obj")
+        V, F, uv = read_obj(out / f"{stem}.obj")
+        D, flipped = reference_distortion(V, F, uv)
+        P = V[F]
+        area = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+        assert not flipped.any() and D.max() <= 3.0 * (1 + 1e-9)
+        assert e["faces"] == len(F) and e["flipped"] == 0 and e["bound_certified"] == 3.0
+        assert e["max_distortion"] == pytest.approx(D.max(), rel=1e-9)
+        assert e["mean_distortion"] == pytest.approx(np.sum(area * D) / area.sum(), rel=1e-9)
+        assert [i["status"] for i in e["islands"]] == ["certified"]
+        assert imread(png / f"{stem}.png").shape == (1024, 1024, 4)
+
+    bad = items["broken.ply"]
+    assert bad["status"] == "failed" and bad["output"] is None and bad["message"]
+    assert bad["error"] == "InvalidMeshError"
+    closed = items["tetra.off"]
+    assert closed["status"] == "failed" and closed["error"] == "ClosedIslandError"
+    assert "seam" in closed["message"] and not (out / "tetra.obj").exists()
+
+    lines = capsys.readouterr().out.splitlines()
+    assert sum(line.startswith("[") for line in lines) == 4          # one line per file
+    assert any("tetra.off" in line and "ClosedIslandError" in line for line in lines)
+    assert lines[-1].startswith("4 file(s), 4 mesh(es): 2 certified, 0 partial, 2 failed")
+
+
+_REAL_UNWRAP_FILE = batch._unwrap_file
+
+
+def _crashing(task, options, seams_mode):
+    if task.path.endswith("crash.off"):
+        os._exit(3)
+    return _REAL_UNWRAP_FILE(task, options, seams_mode)
+
+
+def test_a_worker_that_dies_takes_only_its_own_file(folder, tmp_path, monkeypatch):
+    """A crash (here os._exit in the worker) breaks the pool; the rest are run again."""
+    monkeypatch.setattr(batch, "_unwrap_file", _crashing)
+    src = tmp_path / "few"
+    src.mkdir()
+    for name in ("a.off", "crash.off", "b.off"):
+        shutil.copy(os.path.join(DATA, "nefertiti.off"), src / name)
+    out = tmp_path / "out"
+    assert run(src, "-o", out, "--jobs", "2", "--report", tmp_path / "r.json") == 1
+    items = {os.path.basename(e["input"]): e for e in
+             json.loads((tmp_path / "r.json").read_text())["items"]}
+    assert items["crash.off"]["status"] == "failed"
+    assert items["crash.off"]["error"] == "WorkerCrashed"
+    assert items["a.off"]["status"] == items["b.off"]["status"] == "certified"
+    assert (out / "a.obj").is_file() and (out / "b.obj").is_file()
+
+
+def test_one_process_and_explicit_files_give_the_same_uvs(folder, tmp_path):
+    """--jobs 1 runs in this process; the UVs equal those of a worker process."""
+    a, b = tmp_path / "a", tmp_path / "b"
+    files = [folder / "nefertiti.off", folder / "bump.obj"]
+    assert run(*files, "-o", a, "--jobs", "1") == 0
+    assert run(*files, "-o", b, "--jobs", "2") == 0
+    for stem in ("nefertiti", "bump"):
+        assert np.array_equal(read_obj(a / f"{stem}.obj")[2], read_obj(b / f"{stem}.obj")[2])
+
+
+def test_output_names_never_collide(tmp_path):
+    tasks = batch.plan(["x/a.off", "x/a.obj", "y/a.off", "z/a.off", "x/s.blend"],
+                       str(tmp_path / "o"), str(tmp_path / "png"))
+    outputs = [os.path.basename(t.output) for t in tasks]
+    assert outputs == ["a.obj", "a_obj.obj", "a_off.obj", "a-2.obj", "s.blend"]
+    assert [os.path.basename(t.png) for t in tasks] == [
+        "a.png", "a_obj.png", "a_off.png", "a-2.png", "s.png"]
+
+
+def test_refuses_to_overwrite_an_input(folder, capsys):
+    assert run(folder / "bump.obj", "-o", folder) == 2
+    assert "overwrite" in capsys.readouterr().err
+
+
+def test_no_input_files_is_a_usage_error(tmp_path, capsys):
+    assert run(tmp_path, "-o", tmp_path / "out") == 2
+    assert "no .obj/.off/.ply/.blend files" in capsys.readouterr().err
+
+
+def test_blend_without_bpy_is_a_failed_entry(tmp_path, monkeypatch):
+    real = batch.importlib.util.find_spec
+    monkeypatch.setattr(batch.importlib.util, "find_spec",
+                        lambda name, *a: None if name == "bpy" else real(name, *a))
+    (tmp_path / "s.blend").write_bytes(b"BLENDER")
+    shutil.copy(os.path.join(DATA, "nefertiti.off"), tmp_path / "n.off")
+    assert run(tmp_path, "-o", tmp_path / "out", "--jobs", "1") == 1
+    items = json.loads((tmp_path / "out" / "report.json").read_text())["items"]
+    e = {os.path.basename(i["input"]): i for i in items}
+    assert e["n.off"]["status"] == "certified"
+    assert e["s.blend"]["status"] == "failed" and "bpy" in e["s.blend"]["message"]
+
+
+def test_unwrap_job_keeps_pins_and_reports_island_errors():
+    """A job with a pinned corner keeps it to the bit; a bad option fails the job, not the run."""
+    V, F = grid(7, 6, z=lambda x, y: 0.3 * x * y)
+    pin_uv = np.array([[0.123456789, -2.5]])
+    job = batch.Job("g", V, F, pin_corners=np.array([5]), pin_uv=pin_uv)
+    options = dict(method="arap", bound=4.0, frames="auto")
+    res = batch.unwrap_job(job, options)
+    assert res.entry["status"] == "certified"
+    assert res.corner_uv.reshape(-1, 2)[5].tobytes() == pin_uv[0].tobytes()
+    D, flipped = reference_distortion(V, F, res.corner_uv)
+    assert not flipped.any() and res.entry["max_distortion"] == pytest.approx(D.max(), rel=1e-9)
+
+    failed = batch.unwrap_job(job, dict(options, frames="input-uv"))   # the job has no UVs
+    assert failed.entry["status"] == "failed" and failed.entry["error"] == "ValueError"
+    assert np.isnan(failed.corner_uv).all() and failed.result is None
+
+
+def test_progress_bar_on_stderr_lines_on_stdout():
+    out, err = io.StringIO(), io.StringIO()
+    progress = batch.Progress(3, out=out, err=err, bar=True)
+    progress.advance("certified a")
+    progress.advance("failed b")
+    progress.close()
+    assert out.getvalue().splitlines() == ["[1/3] certified a", "[2/3] failed b"]
+    assert "[" + "#" * 20 + "." * 10 + "] 2/3 files" in err.getvalue()
+    assert err.getvalue().endswith("\r\033[K")
