@@ -85,7 +85,8 @@ def islands(V, F, seams=None):
     V : (n,3) float array
     F : (m,3) int array
     seams : (s,2) int array, optional
-        Vertex pairs of the edges to cut along. Pairs that are not mesh edges are ignored.
+        Vertex pairs of the edges to cut along. Pairs that are not mesh edges (including indices
+        outside 0..n-1) are ignored.
 
     Returns
     -------
@@ -101,6 +102,7 @@ def islands(V, F, seams=None):
     he_count = count[inv]
     if seams is not None and len(seams):
         S = np.asarray(seams, dtype=np.int64).reshape(-1, 2)
+        S = S[np.all((S >= 0) & (S < n), axis=1)]  # pairs naming no mesh vertex name no edge
         is_seam = np.isin(key, _edge_keys(S[:, 0], S[:, 1], n))
     else:
         is_seam = np.zeros(len(key), dtype=bool)

@@ -157,8 +157,10 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
     if frames not in FRAMES:
         raise ValueError(f"frames must be one of {FRAMES}, got {frames!r}")
-    if bound != "auto" and not (isinstance(bound, (int, float)) and bound >= 1.0):
-        raise ValueError(f"bound must be a number >= 1 or 'auto', got {bound!r}")
+    if bound != "auto" and not (isinstance(bound, (int, float)) and 1.0 <= bound < np.inf):
+        raise ValueError(f"bound must be a finite number >= 1 or 'auto', got {bound!r}")
+    if not 1.0 <= bound_limit < np.inf:
+        raise ValueError(f"bound_limit must be a finite number >= 1, got {bound_limit!r}")
     if cone not in ("soc", "linf"):
         raise ValueError(f"cone must be 'soc' or 'linf', got {cone!r}")
     V, F = check_arrays(V, F)
@@ -241,6 +243,8 @@ class _Problem:
         self.scale = 1.0
         self.solves = 0
         self.iterations = 0
+        self.outcomes = []
+        self.last_status = None
         self.timings = {"setup": 0.0, "solve": 0.0, "certify": 0.0}
 
     def _island_pins(self, pins):
@@ -304,6 +308,14 @@ class _Problem:
         e0 = 0.5 * x @ (P @ x) + q @ x + const
         self.scale = 1.0 / max(abs(e0), 1e-6)
 
+    def solver_failure(self):
+        """A SolverError when no solve ever gave an answer (no certificate either way)."""
+        if self.outcomes and not ({"solved", "infeasible"} & set(self.outcomes)):
+            return SolverError(f"island {self.island.index}: the solver failed on every attempt "
+                               f"(last status: {self.last_status}); try another --frames or "
+                               "--cone option, or report the mesh", self.island.index)
+        return None
+
     def solve(self, w, C):
         """Minimise the energy over F_C with frames w. Returns (u or None, outcome)."""
         if self.cancel is not None and self.cancel.is_set():
@@ -329,6 +341,8 @@ class _Problem:
         self.timings["solve"] += sol.seconds
         self.solves += 1
         self.iterations += sol.iterations
+        self.outcomes.append(sol.outcome)
+        self.last_status = sol.status
         if sol.outcome == "cancelled" and self.cancel is not None and self.cancel.is_set():
             raise _Cancelled
         if sol.x is None:
@@ -459,6 +473,9 @@ def _bounded(prob, w0, D0, u0, C, raise_bound, limit, flags, report):
             retried = True
             w = frames_from_map(prob.alpha(u))
             continue
+        failure = prob.solver_failure()
+        if failure is not None and (not raise_bound or C * RAISE_FACTOR > limit):
+            raise failure
         if not raise_bound:
             raise InfeasibleError(f"island {isl.index}: no map within distortion {C:g} was found "
                                   f"({outcome}); allow raising the bound or use a larger C",
@@ -492,7 +509,7 @@ def _auto(prob, w0, D0, u0, limit, budget, flags, report, t0):
     w = w0
     C = 5.0 if not np.isfinite(D0) else min(5.0, _guaranteed_bound(D0))
     while prob.solves < AUTO_MAX_SOLVES:
-        if budget is not None and time.perf_counter() - t0 > budget:
+        if prob.solves and budget is not None and time.perf_counter() - t0 > budget:
             flags.append("time_budget_exhausted")
             break
         frac = 0.1 + 0.8 * prob.solves / AUTO_MAX_SOLVES
@@ -519,9 +536,15 @@ def _auto(prob, w0, D0, u0, limit, budget, flags, report, t0):
         if np.isfinite(D0) and D0 <= limit and prob.check(u0, D0 * (1 + 1e-9))[0]:
             flags.append("initial_map")
             return u0, D0
+        failure = prob.solver_failure()
+        if failure is not None:
+            raise failure
+        spent = ("; the time budget ran out after "
+                 f"{prob.solves} solve(s): allow more time" if "time_budget_exhausted" in flags
+                 else "")
         raise InfeasibleError(f"island {isl.index}: no certified map found up to C = "
-                              f"{min(limit, 2 * lo):g}; add seams, move pins, or raise the limit",
-                              isl.index)
+                              f"{min(limit, 2 * lo):g}{spent}; add seams, move pins, or raise "
+                              "the limit", isl.index)
     return best
 
 

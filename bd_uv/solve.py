@@ -24,7 +24,7 @@ class ConicSolution:
     Attributes
     ----------
     x : (n,) float64 or None, the last iterate (may be inexact or infeasible; certify it)
-    outcome : "solved" | "infeasible" | "inexact" | "cancelled"
+    outcome : "solved" | "infeasible" | "inexact" | "cancelled" | "error" (the solver raised)
     status : str, Clarabel's own status name
     iterations : int
     seconds : float
@@ -82,11 +82,17 @@ def solve_conic(P, q, A, b, cones, cancel=None, max_iter=MAX_ITER):
     Pu.sort_indices()
     Ac.sort_indices()
     t0 = time.perf_counter()
-    solver = clarabel.DefaultSolver(Pu, np.asarray(q, np.float64), Ac, np.asarray(b, np.float64),
-                                    ccones, settings)
-    if cancel is not None:
-        solver.set_termination_callback(lambda info: bool(cancel.is_set()))
-    sol = solver.solve()
+    try:
+        solver = clarabel.DefaultSolver(Pu, np.asarray(q, np.float64), Ac,
+                                        np.asarray(b, np.float64), ccones, settings)
+        if cancel is not None:
+            solver.set_termination_callback(lambda info: bool(cancel.is_set()))
+        sol = solver.solve()
+    except (KeyboardInterrupt, SystemExit):
+        raise
+    except BaseException as exc:  # a Rust panic arrives as pyo3's PanicException (BaseException)
+        return ConicSolution(None, "error", f"{type(exc).__name__}: {exc}", 0,
+                             time.perf_counter() - t0, float("nan"))
     seconds = time.perf_counter() - t0
     status = str(sol.status).split(".")[-1]
     outcome = _OUTCOME.get(status, "inexact")
