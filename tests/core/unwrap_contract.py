@@ -4,6 +4,7 @@ Nothing here calls ``bd_uv.metrics``: each face's Jacobian is rebuilt from its o
 frame and the singular values come from ``numpy.linalg.svd``, so a certified island is re-verified
 by code that shares no line with the certifier it checks.
 """
+import json
 import pathlib
 
 import numpy as np
@@ -161,6 +162,9 @@ def assert_contract(res, V, F, pin_corners=None, pin_uv=None):
         assert np.all(np.isfinite(V[F[isl.faces]])), f"island {i}: non-finite vertex certified"
     assert np.all(seen == 1), "islands do not partition the faces"
     assert res.certified == all(s == "certified" for s in statuses)
+    # The JSON report (CLI, batch tool) must be strict JSON: no NaN or inf, whatever failed.
+    report = json.loads(json.dumps(res.report(), allow_nan=False))
+    assert [r["status"] for r in report["islands"]] == statuses
     if pin_corners is not None and len(pin_corners):
         pc = np.asarray(pin_corners, dtype=np.int64)
         face = pc // 3
