@@ -481,6 +481,20 @@ def test_seams_that_are_not_mesh_edges_are_ignored():
     assert isl.status == "certified" and len(isl.vertices) == len(V)
 
 
+@pytest.mark.parametrize("option, value", [
+    ("bound", float("nan")), ("bound", 0.5), ("bound", -3.0), ("bound", "tight"),
+    ("bound_limit", float("nan")), ("bound_limit", float("inf")), ("bound_limit", 0.5),
+    ("method", "abf"), ("frames", "uv"), ("cone", "sdp")])
+def test_bad_options_raise_value_error_naming_the_option(option, value):
+    V, F = grid()
+    before = snapshot(V, F)
+    with pytest.raises(ValueError) as info:
+        bd_uv.unwrap(V, F, **{option: value})
+    assert not isinstance(info.value, bd_uv.BDError)
+    assert_message(str(info.value), option)
+    assert_unchanged(before, V, F)
+
+
 def test_infinite_bound_is_a_value_error_or_certified():
     V, F = grid()
     try:
