@@ -38,8 +38,8 @@ def add_solver_options(p):
     p.add_argument("--frames", choices=FRAMES, default="auto",
                    help="frame field: auto (conformal map if flip-free, else harmonic), harmonic, "
                         "conformal, input-uv (the file's UVs, eq. 4.21), constant (planar meshes)")
-    p.add_argument("--bound-limit", type=float, default=100.0,
-                   help="raise C up to this limit when infeasible (default 100)")
+    p.add_argument("--bound-limit", type=float, default=1000.0,
+                   help="raise C up to this limit when infeasible (default 1000)")
     p.add_argument("--no-raise", action="store_true", help="fail instead of raising C")
     p.add_argument("--cone", choices=("soc", "linf"), default="soc",
                    help="space: F_C with second-order cones (default) or F_C^inf (eq. 4.22)")
@@ -157,6 +157,8 @@ def build_parser():
     p.add_argument("--report", help="write the JSON report here")
     p.add_argument("--png", help="write a picture of the UV layout coloured by distortion")
     p.set_defaults(func=run_unwrap)
+    from .batch import add_batch_parser  # batch builds on this module's options
+    add_batch_parser(sub)
     return parser
 
 

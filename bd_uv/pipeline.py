@@ -36,6 +36,7 @@ IMPROVEMENT = 0.01      # keep resetting frames while the energy drops by more t
 # 99th percentile, after removing the common rotation): below it the next space is nearly the same
 # and the re-solve changed the energy by < 0.5 % on nefertiti, hemisphere, mushroom and lion-head.
 FRAME_TOLERANCE = 0.1
+HIGH_DISTORTION = 50.0  # certified bounds above this get a "high_distortion" flag and a hint
 AUTO_TOLERANCE = 0.01   # bisection stops when C_right - C_left <= this * C_right
 AUTO_MAX_SOLVES = 24
 
@@ -121,7 +122,7 @@ class _Cancelled(Exception):
 
 
 def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound=5.0,
-           frames="auto", initial_uv=None, raise_bound=True, bound_limit=100.0, cone="soc",
+           frames="auto", initial_uv=None, raise_bound=True, bound_limit=1000.0, cone="soc",
            time_budget=None, progress=None, cancel=None):
     """Map a triangle mesh to the plane with no flipped face and conformal distortion <= C.
 
@@ -469,7 +470,7 @@ def _bounded(prob, w0, D0, u0, C, raise_bound, limit, flags, report):
             continue
         if best is not None:  # a later frame reset did not certify: keep the last certified map
             return best
-        if u is not None and not retried and outcome != "cancelled":
+        if u is not None and not retried and outcome == "inexact":  # an infeasible x is a certificate
             retried = True
             w = frames_from_map(prob.alpha(u))
             continue
@@ -481,10 +482,11 @@ def _bounded(prob, w0, D0, u0, C, raise_bound, limit, flags, report):
                                   f"({outcome}); allow raising the bound or use a larger C",
                                   isl.index)
         newC = C * RAISE_FACTOR
-        if np.isfinite(D0) and newC >= D0:
-            newC, w = max(_guaranteed_bound(D0), C * 1.0001), w0
-        else:
-            w = w0
+        if np.isfinite(D0):  # approach the bound known to be feasible geometrically
+            newC = max(newC, np.sqrt(C * D0))
+            if newC * RAISE_FACTOR >= D0:
+                newC = max(_guaranteed_bound(D0), C * 1.0001)
+        w = w0
         if newC > limit:
             raise InfeasibleError(f"island {isl.index}: infeasible up to the bound limit "
                                   f"{limit:g}" + (" (the pins force a flip or a larger distortion)"
@@ -617,6 +619,11 @@ def _finish(prob, u, C, bound, frames_name, flags, t0):
     certified_C = maxD if bound == "auto" else C
     msg = (f"island {isl.index}: {len(isl.faces)} faces, max distortion {maxD:.3f} <= "
            f"{certified_C:.3g}, 0 flipped")
+    if certified_C > HIGH_DISTORTION:
+        flags = list(flags) + ["high_distortion"]
+        common["flags"] = tuple(flags)
+        msg += (f"; C above {HIGH_DISTORTION:g} means the island is nearly closed or badly cut: "
+                "mark seams for a lower bound")
     return IslandResult(isl.index, isl.faces, isl.vertices, isl.tris, uv=uv, status="certified",
                         message=msg, bound_certified=float(certified_C), energy=prob.energy_of(u, frames_from_map(prob.alpha(u))),
                         **common)
