@@ -549,7 +549,8 @@ def test_every_vertex_pinned_to_an_impossible_map_is_infeasible(pins_kind, bound
     V, F = grid()
     factor = [-1.0, 1.0] if pins_kind == "mirrored" else [300.0, 1.0]
     pins = V[F.ravel(), :2] * factor
-    res = unwrap_checked(V, F, pin_corners=all_corners(F), pin_uv=pins, bound=bound)
+    res = unwrap_checked(V, F, pin_corners=all_corners(F), pin_uv=pins, bound=bound,
+                         bound_limit=100.0)
     (isl,) = res.islands
     assert type(isl.error) is bd_uv.InfeasibleError
     assert_message(isl.message, "island 0", "100", "raise the limit")
