@@ -134,10 +134,18 @@ def unwrap_job(job, options, png=None):
         entry["message"] = bad[0].message + more
     entry["seconds"] = round(res.seconds, 4)
     if png:
-        from .render import uv_layout_png
-        entry["png"] = os.path.abspath(png)
-        uv_layout_png(png, res.corner_uv, D, entry["bound_certified"], caption(entry, options))
+        entry_png(png, entry, res.corner_uv, D, options)
     return JobResult(entry, res.corner_uv, res)
+
+
+def entry_png(path, entry, corner_uv, distortion, options):
+    """Draw a job's UV layout with its report figures as the caption; records ``entry["png"]``.
+
+    ``corner_uv`` (m,3,2) and ``distortion`` (m,) are NaN on faces that are not certified.
+    """
+    from .render import uv_layout_png
+    entry["png"] = os.path.abspath(path)
+    uv_layout_png(path, corner_uv, distortion, entry["bound_certified"], caption(entry, options))
 
 
 def caption(entry, options):

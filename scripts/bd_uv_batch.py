@@ -3,14 +3,17 @@
 Inside Blender (installed extension or not)::
 
     blender -b scene.blend --python bd_uv_batch.py -- [--objects NAME...] [--method lscm|arap]
-        [--bound C|auto] [--uv-map NAME] [--output out.blend] [--report report.json] [--png DIR]
+        [--bound C|auto] [--uv-map NAME] [--pack] [--output out.blend] [--report report.json]
+        [--png DIR]
 
 With the ``bpy`` module (``pip install bpy``)::
 
     python bd_uv_batch.py scene.blend -- [same options]
 
 Each object is unwrapped along its seams, keeping its pinned UVs exactly, with the object's scale
-applied like the ``uv.bd_unwrap`` operator. Arrays come from the add-on's ``operators/mesh_data.py``
+applied like the ``uv.bd_unwrap`` operator, and with ``--pack`` the islands are packed by Blender's
+Pack Islands as the operator does. The report's figures and the PNG are recomputed from the UV map
+as saved (float32, packed or not). Arrays come from the add-on's ``operators/mesh_data.py``
 and are solved by ``bd_uv.batch.unwrap_job``, the code ``python -m bd_uv batch`` runs. Islands
 that are not certified keep their old UVs. Exit code 0 only if every object was certified.
 
@@ -31,34 +34,33 @@ import numpy as np
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
-def _load(name, path, package_dir=None):
-    """Import the module at ``path`` as ``name`` (a package when ``package_dir`` is given)."""
-    if name in sys.modules:
-        return sys.modules[name]
-    spec = importlib.util.spec_from_file_location(
-        name, path, submodule_search_locations=[package_dir] if package_dir else None)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    try:
-        spec.loader.exec_module(module)
-    except BaseException:
-        del sys.modules[name]
-        raise
-    return module
-
-
-def _import_addon():
-    """``bd_uv.batch`` and the add-on's ``mesh_data``, from this extension's root."""
+def _extension_package():
+    """This extension's root package: the one Blender loaded when the extension is enabled,
+    otherwise the root imported here under the name ``bd_uv_ext``."""
+    init = os.path.join(ROOT, "__init__.py")
+    for module in list(sys.modules.values()):
+        if os.path.abspath(getattr(module, "__file__", None) or "") == init:
+            return module
     # Blender puts the extensions' wheels (scipy, clarabel) on sys.path at start-up; add them here
     # too in case this extension is installed but not enabled.
     site = os.path.join(os.path.dirname(os.path.dirname(ROOT)), ".local", "lib",
                         "python{}.{}".format(*sys.version_info[:2]), "site-packages")
     if os.path.isdir(site) and site not in sys.path:
         sys.path.append(site)
-    _load("bd_uv", os.path.join(ROOT, "bd_uv", "__init__.py"), os.path.join(ROOT, "bd_uv"))
-    from bd_uv import batch, cli
-    mesh_data = _load("bd_uv_addon_mesh_data", os.path.join(ROOT, "operators", "mesh_data.py"))
-    return batch, cli, mesh_data
+    spec = importlib.util.spec_from_file_location("bd_uv_ext", init,
+                                                  submodule_search_locations=[ROOT])
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["bd_uv_ext"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def _import_addon():
+    """The modules used here, from this extension: bd_uv's batch and cli, and the add-on's
+    mesh_data (bpy <-> numpy) and session (packing)."""
+    pkg = _extension_package().__name__
+    return tuple(importlib.import_module(f"{pkg}.{name}") for name in
+                 ("bd_uv", "bd_uv.batch", "bd_uv.cli", "operators.mesh_data", "operators.session"))
 
 
 def split_argv(argv):
@@ -82,6 +84,13 @@ def build_parser(cli):
                         "when missing)")
     p.add_argument("--no-object-scale", action="store_true",
                    help="unwrap the mesh data as is, ignoring the objects' scale")
+    p.add_argument("--pack", action="store_true",
+                   help="pack the unwrapped islands with Blender's Pack Islands, like the "
+                        "operator (islands with pinned UVs stay where they are)")
+    p.add_argument("--margin", type=float, default=0.001, help="space between packed islands")
+    p.add_argument("--pack-shape", choices=("AABB", "CONVEX", "CONCAVE"), default="AABB",
+                   help="island shape for packing: bounding box (fast, default), convex hull, "
+                        "exact shape (slowest)")
     p.add_argument("--output", metavar="OUT.blend",
                    help="save here (default: save the opened file in place)")
     p.add_argument("--report", metavar="REPORT.json", help="write the JSON report here")
@@ -132,26 +141,77 @@ def _file_name(text):
 
 
 def unwrap_objects(objects, args, batch, options, mesh_data, source):
-    """Unwrap each object and write its UV map. Returns the report entries."""
-    items = []
+    """Unwrap each object and write its certified islands into its UV map.
+
+    Returns
+    -------
+    items : list of report entries, one per object
+    written : list of (entry, object, MeshArrays, (m,) bool certified triangles)
+    """
+    items, written = [], []
     for ob in objects:
         scale = (1.0, 1.0, 1.0) if args.no_object_scale else tuple(abs(c) for c in ob.scale)
         arrays = mesh_data.mesh_arrays(ob, uv_name=args.uv_map, scale=scale)
         job = batch.Job(ob.name, arrays.V, arrays.F, seams=arrays.seams,
                         pin_corners=arrays.pin_corners, pin_uv=arrays.pin_uv,
                         corner_uv=arrays.corner_uv)
-        png = (os.path.join(args.png, args.png_prefix + _file_name(ob.name) + ".png")
-               if args.png else None)
-        result = batch.unwrap_job(job, options, png=png)
+        result = batch.unwrap_job(job, options)
         entry = {"input": source, "object": ob.name, "output": None, "uv_map": None,
                  **result.entry}
-        if entry["status"] != "failed":
-            entry["uv_map"] = mesh_data.write_corner_uvs(
-                ob.data, args.uv_map or arrays.uv_name, arrays.tri_loops, result.corner_uv,
-                np.ones(len(arrays.F), dtype=bool))
         items.append(entry)
-        print(batch.item_line(entry), flush=True)
-    return items
+        ok = np.isfinite(result.corner_uv).all(axis=(1, 2))
+        if ok.any():
+            entry["uv_map"] = mesh_data.write_corner_uvs(
+                ob.data, args.uv_map or arrays.uv_name, arrays.tri_loops, result.corner_uv, ok)
+            written.append((entry, ob, arrays, ok))
+    return items, written
+
+
+def pack(written, session, margin, shape):
+    """Blender's Pack Islands on the written islands, as the operator does (pinned ones stay)."""
+    bpy.ops.object.select_all(action='DESELECT')
+    todo, active_maps = [], {}
+    for entry, ob, arrays, ok in written:
+        polygons = np.zeros(len(ob.data.polygons), dtype=bool)
+        polygons[arrays.tri_poly[ok]] = True
+        todo.append(session.Written(ob.name, ok, polygons))
+        ob.select_set(True)
+        # Pack Islands works on the active UV map: make it the one written, for the moment.
+        layers = ob.data.uv_layers
+        active_maps[ob.name] = layers.active.name
+        layers.active = layers[entry["uv_map"]]
+    bpy.context.view_layer.objects.active = written[0][1]
+    bpy.ops.object.mode_set(mode='EDIT')
+    try:
+        session.pack(bpy.context, todo, margin, shape)
+    finally:
+        bpy.ops.object.mode_set(mode='OBJECT')
+        for entry, ob, *_ in written:
+            ob.data.uv_layers.active = ob.data.uv_layers[active_maps[ob.name]]
+
+
+def measure_saved(written, core, batch, mesh_data, options, args):
+    """Report the UVs as saved (float32, packed or not), re-checked, and draw them.
+
+    The per-island figures stay those of the solve; the object's figures are recomputed here from
+    its UV map, and an object whose saved map breaks the certificate is marked failed.
+    """
+    for entry, ob, arrays, ok in written:
+        uv = mesh_data.loop_uvs(ob.data, entry["uv_map"])[arrays.tri_loops].astype(np.float64)
+        uv[~ok] = np.nan
+        D = np.full(len(arrays.F), np.nan)
+        D[ok] = core.conformal_distortion(arrays.V, arrays.F[ok], uv[ok])
+        flipped = int(core.flipped_faces(arrays.V, arrays.F[ok], uv[ok]).sum())
+        entry.update(max_distortion=float(D[ok].max()), flipped=flipped,
+                     mean_distortion=float(core.mean_distortion(arrays.V, arrays.F[ok], D[ok])))
+        if flipped or not D[ok].max() <= entry["bound_certified"] * (1 + 1e-5):
+            entry.update(status="failed", error="CertificationError",
+                         message=f"the saved UV map of {ob.name} has {flipped} flipped faces "
+                                 f"and max distortion {D[ok].max():.6g} > C = "
+                                 f"{entry['bound_certified']:.6g} (float32 rounding or packing)")
+        if args.png:
+            png = os.path.join(args.png, args.png_prefix + _file_name(ob.name) + ".png")
+            batch.entry_png(png, entry, uv, D, options)
 
 
 def _failed(source, name, message):
@@ -163,7 +223,7 @@ def _failed(source, name, message):
 
 def main(argv):
     blends, rest = split_argv(argv)
-    batch, cli, mesh_data = _import_addon()
+    core, batch, cli, mesh_data, session = _import_addon()
     args = build_parser(cli).parse_args(rest)
     options = cli.solver_kwargs(args)
     if len(blends) > 1:
@@ -187,12 +247,17 @@ def main(argv):
     items = [_failed(source, name, message) for name, message in missing]
     for e in items:
         print(batch.item_line(e), flush=True)
-    items += unwrap_objects(objects, args, batch, options, mesh_data, source)
-    written = [e for e in items if e["uv_map"] is not None]
+    done, written = unwrap_objects(objects, args, batch, options, mesh_data, source)
+    if written and args.pack:
+        pack(written, session, args.margin, args.pack_shape)
+    measure_saved(written, core, batch, mesh_data, options, args)
+    items += done
+    for e in done:
+        print(batch.item_line(e), flush=True)
     if written or args.output:
         bpy.ops.wm.save_as_mainfile(filepath=output)
-        for e in written:
-            e["output"] = output
+        for entry, *_ in written:
+            entry["output"] = output
     wall = time.perf_counter() - t0
 
     report = batch.batch_report(items, options, wall, jobs=1,
