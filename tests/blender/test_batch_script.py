@@ -19,11 +19,6 @@ from conftest import REPO_ROOT, add_grid, loop_uv_array, triangle_distortion
 bpy = pytest.importorskip("bpy")
 
 SCRIPT = REPO_ROOT / "scripts" / "bd_uv_batch.py"
-# ``python -m bd_uv batch ...`` through bd_uv.batch's own entry points (the parser and run_batch the
-# CLI wires in), so this test does not depend on the rest of cli.py.
-BATCH = ("import argparse, sys; from bd_uv.batch import add_batch_parser; "
-         "p = argparse.ArgumentParser(); add_batch_parser(p.add_subparsers()); "
-         "a = p.parse_args(['batch', *sys.argv[1:]]); sys.exit(a.func(a))")
 PINNED_LOOP = 7
 PINNED_UV = (0.3125, 0.6875)
 GRID_SCALE = (1.0, 1.5, 1.0)
@@ -180,7 +175,7 @@ def test_folder_batch_reads_blend_files_through_the_script(scene_blend, tmp_path
     shutil.copy(scene_blend, src / "scene.blend")
     shutil.copy(REPO_ROOT / "tests" / "data" / "nefertiti.off", src / "nefertiti.off")
     out = tmp_path / "out"
-    proc = subprocess.run([sys.executable, "-c", BATCH, str(src), "-o", str(out),
+    proc = subprocess.run([sys.executable, "-m", "bd_uv", "batch", str(src), "-o", str(out),
                            "--jobs", "2", "--bound", "3", "--png", str(out / "png")],
                           capture_output=True, text=True, cwd=REPO_ROOT)
     assert proc.returncode == 0, proc.stdout + proc.stderr
