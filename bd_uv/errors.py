@@ -37,7 +37,9 @@ class ClosedIslandError(IslandError):
 
 
 class NonManifoldError(IslandError):
-    """An edge shared by three or more faces, or faces that meet only at a vertex (bow-tie)."""
+    """An edge shared by three or more faces, or, within one island, faces that meet only at a
+    vertex (bow-tie). Parts that touch only at a vertex and are otherwise separate become separate
+    islands, which is not an error."""
 
 
 class DegenerateFacesError(IslandError):

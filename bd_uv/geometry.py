@@ -18,7 +18,8 @@ def face_areas(V, F):
     A : (m,) float64
     """
     P = V[F]
-    return 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+    with np.errstate(invalid="ignore", over="ignore"):  # non-finite input is reported, not warned
+        return 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
 
 
 def local_coordinates(V, F):

@@ -313,8 +313,8 @@ class _Problem:
         """A SolverError when no solve ever gave an answer (no certificate either way)."""
         if self.outcomes and not ({"solved", "infeasible"} & set(self.outcomes)):
             return SolverError(f"island {self.island.index}: the solver failed on every attempt "
-                               f"(last status: {self.last_status}); try another --frames or "
-                               "--cone option, or report the mesh", self.island.index)
+                               f"(last status: {self.last_status}); try other frames or the "
+                               "L-infinity space, or report the mesh", self.island.index)
         return None
 
     def solve(self, w, C):
@@ -451,6 +451,11 @@ def _guaranteed_bound(D0):
     return 1.0 + (D0 - 1.0) / (1.0 - SOLVE_MARGIN) * (1 + 1e-9) + 1e-12
 
 
+_WHY = {"infeasible": "the space is empty for these frames",
+        "inexact": "the solver did not converge", "error": "the solver failed",
+        "solved": "the solver's map did not pass certification"}
+
+
 def _bounded(prob, w0, D0, u0, C, raise_bound, limit, flags, report):
     """Solve at C with frame resets; raise C when infeasible. Returns (u, certified C)."""
     isl = prob.island
@@ -474,12 +479,15 @@ def _bounded(prob, w0, D0, u0, C, raise_bound, limit, flags, report):
             retried = True
             w = frames_from_map(prob.alpha(u))
             continue
+        if np.isfinite(D0) and prob.check(u0, C)[0]:
+            flags.append("initial_map")  # the solver failed where the initial map already fits
+            return u0, C
         failure = prob.solver_failure()
         if failure is not None and (not raise_bound or C * RAISE_FACTOR > limit):
             raise failure
         if not raise_bound:
             raise InfeasibleError(f"island {isl.index}: no map within distortion {C:g} was found "
-                                  f"({outcome}); allow raising the bound or use a larger C",
+                                  f"({_WHY.get(outcome, outcome)}); allow raising the bound or use a larger C",
                                   isl.index)
         newC = C * RAISE_FACTOR
         if np.isfinite(D0):  # approach the bound known to be feasible geometrically
