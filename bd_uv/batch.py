@@ -80,7 +80,7 @@ def _num(x):
 
 
 def unwrap_job(job, options, png=None):
-    """Unwrap one job; never raises for a bad mesh (the error goes into the entry).
+    """Unwrap one job; never raises (a failure goes into the entry, with a traceback if a bug).
 
     Parameters
     ----------
@@ -110,9 +110,11 @@ def unwrap_job(job, options, png=None):
         if kwargs.get("frames") == "input-uv" and job.corner_uv is None:
             raise ValueError(f"{job.name} has no UVs to take frames from (--frames input-uv)")
         res = unwrap(job.V, job.F, seams=job.seams, **kwargs)
-    except (BDError, ValueError) as exc:
+    except Exception as exc:  # a bad mesh, or a bug: either way it stays this job's failure
         entry.update(error=type(exc).__name__, message=str(exc),
                      seconds=round(time.perf_counter() - t0, 4))
+        if not isinstance(exc, (BDError, ValueError)):
+            entry["traceback"] = traceback.format_exc()
         return JobResult(entry, np.full((m, 3, 2), np.nan), None)
     ok = [r for r in res.islands if r.status == "certified"]
     bad = [r for r in res.islands if r.status != "certified"]

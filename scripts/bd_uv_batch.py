@@ -150,20 +150,24 @@ def unwrap_objects(objects, args, batch, options, mesh_data, source):
     """
     items, written = [], []
     for ob in objects:
-        scale = (1.0, 1.0, 1.0) if args.no_object_scale else tuple(abs(c) for c in ob.scale)
-        arrays = mesh_data.mesh_arrays(ob, uv_name=args.uv_map, scale=scale)
-        job = batch.Job(ob.name, arrays.V, arrays.F, seams=arrays.seams,
-                        pin_corners=arrays.pin_corners, pin_uv=arrays.pin_uv,
-                        corner_uv=arrays.corner_uv)
-        result = batch.unwrap_job(job, options)
-        entry = {"input": source, "object": ob.name, "output": None, "uv_map": None,
-                 **result.entry}
+        try:
+            scale = (1.0, 1.0, 1.0) if args.no_object_scale else tuple(abs(c) for c in ob.scale)
+            arrays = mesh_data.mesh_arrays(ob, uv_name=args.uv_map, scale=scale)
+            job = batch.Job(ob.name, arrays.V, arrays.F, seams=arrays.seams,
+                            pin_corners=arrays.pin_corners, pin_uv=arrays.pin_uv,
+                            corner_uv=arrays.corner_uv)
+            result = batch.unwrap_job(job, options)
+            entry = {"input": source, "object": ob.name, "output": None, "uv_map": None,
+                     **result.entry}
+            ok = np.isfinite(result.corner_uv).all(axis=(1, 2))
+            if ok.any():
+                entry["uv_map"] = mesh_data.write_corner_uvs(
+                    ob.data, args.uv_map or arrays.uv_name, arrays.tri_loops, result.corner_uv,
+                    ok)
+                written.append((entry, ob, arrays, ok))
+        except Exception as exc:  # one object never stops the others
+            entry = _failed(source, ob.name, f"{ob.name}: {exc}", type(exc).__name__)
         items.append(entry)
-        ok = np.isfinite(result.corner_uv).all(axis=(1, 2))
-        if ok.any():
-            entry["uv_map"] = mesh_data.write_corner_uvs(
-                ob.data, args.uv_map or arrays.uv_name, arrays.tri_loops, result.corner_uv, ok)
-            written.append((entry, ob, arrays, ok))
     return items, written
 
 
@@ -214,11 +218,11 @@ def measure_saved(written, core, batch, mesh_data, options, args):
             batch.entry_png(png, entry, uv, D, options)
 
 
-def _failed(source, name, message):
+def _failed(source, name, message, error="ObjectError"):
     return {"input": source, "object": name, "output": None, "uv_map": None, "name": name,
             "status": "failed", "faces": None, "islands": [], "bound_certified": None,
             "max_distortion": None, "mean_distortion": None, "flipped": None, "seconds": None,
-            "error": "ObjectError", "message": message}
+            "error": error, "message": message}
 
 
 def main(argv):
@@ -230,7 +234,11 @@ def main(argv):
         print("error: give one .blend file before '--'", file=sys.stderr)
         return 2
     if blends:
-        bpy.ops.wm.open_mainfile(filepath=os.path.abspath(blends[0]))
+        try:
+            bpy.ops.wm.open_mainfile(filepath=os.path.abspath(blends[0]))
+        except RuntimeError as exc:
+            print(f"error: cannot open {blends[0]}: {exc}", file=sys.stderr)
+            return 2
     source = bpy.data.filepath or None
     output = os.path.abspath(args.output) if args.output else source
     if output is None:
