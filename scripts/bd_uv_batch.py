@@ -64,11 +64,12 @@ def _import_addon():
 
 
 def split_argv(argv):
-    """(.blend files before ``--`` when run as ``python bd_uv_batch.py FILE -- ...``, options)."""
+    """(.blend files, options): the files are those before ``--`` when this runs with the bpy
+    module (``python bd_uv_batch.py FILE -- ...``); inside Blender, Blender opened the file."""
     rest = argv[argv.index("--") + 1:] if "--" in argv else []
-    as_script = bool(argv) and os.path.abspath(argv[0]) == os.path.abspath(__file__)
-    head = argv[1:argv.index("--")] if "--" in argv else argv[1:]
-    return (head if as_script else []), rest
+    if bpy.app.binary_path:  # the Blender program, not the bpy module
+        return [], rest
+    return (argv[1:argv.index("--")] if "--" in argv else argv[1:]), rest
 
 
 def build_parser(cli):
@@ -172,26 +173,29 @@ def unwrap_objects(objects, args, batch, options, mesh_data, source):
 
 
 def pack(written, session, margin, shape):
-    """Blender's Pack Islands on the written islands, as the operator does (pinned ones stay)."""
-    bpy.ops.object.select_all(action='DESELECT')
-    todo, active_maps = [], {}
+    """Blender's Pack Islands on each object's written islands, as the operator does; islands
+    with pinned UVs stay put.
+
+    Each object is packed on its own, into its own UV space: packed together with another
+    object's pinned island lying outside the unit square, Blender's packer shrank a whole object
+    to a dot (1e-5 wide, where float32 UVs no longer hold its shape).
+    """
     for entry, ob, arrays, ok in written:
+        bpy.ops.object.select_all(action='DESELECT')
         polygons = np.zeros(len(ob.data.polygons), dtype=bool)
         polygons[arrays.tri_poly[ok]] = True
-        todo.append(session.Written(ob.name, ok, polygons))
         ob.select_set(True)
+        bpy.context.view_layer.objects.active = ob
         # Pack Islands works on the active UV map: make it the one written, for the moment.
         layers = ob.data.uv_layers
-        active_maps[ob.name] = layers.active.name
+        active = layers.active.name
         layers.active = layers[entry["uv_map"]]
-    bpy.context.view_layer.objects.active = written[0][1]
-    bpy.ops.object.mode_set(mode='EDIT')
-    try:
-        session.pack(bpy.context, todo, margin, shape)
-    finally:
-        bpy.ops.object.mode_set(mode='OBJECT')
-        for entry, ob, *_ in written:
-            ob.data.uv_layers.active = ob.data.uv_layers[active_maps[ob.name]]
+        bpy.ops.object.mode_set(mode='EDIT')
+        try:
+            session.pack(bpy.context, [session.Written(ob.name, ok, polygons)], margin, shape)
+        finally:
+            bpy.ops.object.mode_set(mode='OBJECT')
+            layers.active = layers[active]
 
 
 def measure_saved(written, core, batch, mesh_data, options, args):
@@ -230,6 +234,12 @@ def main(argv):
     core, batch, cli, mesh_data, session = _import_addon()
     args = build_parser(cli).parse_args(rest)
     options = cli.solver_kwargs(args)
+    if args.png and importlib.util.find_spec("matplotlib") is None:
+        print("error: --png needs matplotlib, which this Python (Blender's own) does not have: "
+              "install it into Blender's Python (<blender python> -m pip install matplotlib), "
+              "or run python -m bd_uv batch FILE.blend --png DIR with the bpy module",
+              file=sys.stderr)
+        return 2
     if len(blends) > 1:
         print("error: give one .blend file before '--'", file=sys.stderr)
         return 2

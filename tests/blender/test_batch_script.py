@@ -85,13 +85,13 @@ def measured(obj, uv_name=None):
     return D, det, areas, uv
 
 
-def test_script_writes_certified_uvs_keeps_pins_and_reports_them(scene_blend, tmp_path):
+def test_script_writes_certified_packed_uvs_keeps_pins_and_reports_them(scene_blend, tmp_path):
     out, report, png = tmp_path / "out" / "done.blend", tmp_path / "r.json", tmp_path / "png"
     bpy.ops.wm.open_mainfile(filepath=str(scene_blend))
     before = {name: loop_uv_array(bpy.data.objects[name].data) for name in ("Grid", "Tube")}
 
     proc = run_script(scene_blend, "--bound", "3", "--output", str(out), "--report", str(report),
-                      "--png", str(png))
+                      "--png", str(png), "--pack")
     assert proc.returncode == 0, proc.stdout + proc.stderr
     rep = json.loads(report.read_text())
     assert rep["summary"]["certified"] == 2 and rep["summary"]["failed"] == 0
@@ -119,9 +119,13 @@ def test_script_writes_certified_uvs_keeps_pins_and_reports_them(scene_blend, tm
     # The pinned loop (and the loops sharing its island vertex) are exactly where they were.
     grid_uv = loop_uv_array(bpy.data.objects["Grid"].data)
     assert grid_uv[PINNED_LOOP].tobytes() == np.array(PINNED_UV, np.float32).tobytes()
-    # The tube was cut along its one seam: a single island, unrolled nearly isometrically.
+    # The tube was cut along its one seam: a single island, unrolled nearly isometrically, and
+    # packed into the unit square on its own (not shrunk by the grid's pinned island).
     assert len(items["Tube"]["islands"]) == 1
     assert items["Tube"]["max_distortion"] < 1.05
+    tube_uv = loop_uv_array(bpy.data.objects["Tube"].data)
+    assert tube_uv.min() >= -1e-6 and tube_uv.max() <= 1 + 1e-6
+    assert np.ptp(tube_uv, axis=0).max() > 0.9
     # The grid was unwrapped at its object scale (1.5 along y), not as the raw mesh data.
     D_raw, _ = triangle_distortion(*_raw(bpy.data.objects["Grid"]))
     assert D_raw.max() > 1.2
@@ -136,9 +140,9 @@ def _raw(obj):
 
 
 def test_script_named_objects_new_uv_map_saved_in_place(scene_blend, tmp_path):
-    """--objects: only those change; --uv-map: a new map, the old one untouched; --pack packs the
-    map written; a name that is not an object is an error in the report (exit 1) that does not
-    stop the others."""
+    """--objects: only those change; --uv-map: a new map, the old one untouched; without --pack
+    the core's layout; a name that is not an object is an error in the report (exit 1) that does
+    not stop the others."""
     blend = tmp_path / "copy.blend"
     shutil.copy(scene_blend, blend)
     bpy.ops.wm.open_mainfile(filepath=str(blend))
@@ -146,7 +150,7 @@ def test_script_named_objects_new_uv_map_saved_in_place(scene_blend, tmp_path):
     old_map = bpy.data.objects["Tube"].data.uv_layers.active.name
 
     report = tmp_path / "r.json"
-    proc = run_script(blend, "--objects", "Tube", "Nothing", "--uv-map", "BD", "--pack",
+    proc = run_script(blend, "--objects", "Tube", "Nothing", "--uv-map", "BD",
                       "--method", "arap", "--bound", "2", "--report", str(report))
     assert proc.returncode == 1, proc.stdout + proc.stderr
     rep = json.loads(report.read_text())
@@ -164,8 +168,9 @@ def test_script_named_objects_new_uv_map_saved_in_place(scene_blend, tmp_path):
     D, det, _, uv = measured(tube, "BD")
     assert np.all(det > 0) and D.max() <= 2.0 * (1 + 1e-5)
     assert items["Tube"]["max_distortion"] == pytest.approx(D.max(), rel=1e-6)
-    # Packed into the unit square (unpacked, the unrolled tube is 2 pi wide: UV area = 3D area).
-    assert uv.min() >= -1e-6 and uv.max() <= 1 + 1e-6 and np.ptp(uv, axis=0).max() > 0.9
+    # Not packed: the core's layout, UV area = 3D area (the tube unrolls to about 2 pi x 2) and
+    # the bounding box at the origin.
+    assert np.allclose(uv.min(axis=0), 0.0, atol=1e-6) and np.ptp(uv, axis=0).max() > 5.0
 
 
 def test_folder_batch_reads_blend_files_through_the_script(scene_blend, tmp_path):
@@ -193,3 +198,43 @@ def test_folder_batch_reads_blend_files_through_the_script(scene_blend, tmp_path
     assert np.all(det > 0) and D.max() <= 3.0 * (1 + 1e-5)
     assert uv[PINNED_LOOP].tobytes() == np.array(PINNED_UV, np.float32).tobytes()
     assert got[("scene.blend", "Grid")]["max_distortion"] == pytest.approx(D.max(), rel=1e-6)
+
+
+ENABLED = r'''
+import runpy, sys
+import bpy
+bpy.ops.preferences.addon_enable(module="bl_ext.user_default.bd_uv")
+script, sys.argv = sys.argv[1], sys.argv[1:]
+try:
+    runpy.run_path(script, run_name="__main__")
+finally:  # the enabled extension's own package was used, not a second copy
+    assert "bd_uv_ext" not in sys.modules and "bl_ext.user_default.bd_uv.bd_uv.batch" in sys.modules
+'''
+
+
+def test_script_runs_from_the_installed_extension(scene_blend, tmp_path, linux_extension_zip):
+    """Installed from the zip into a fresh Blender user folder, the script at
+    extensions/user_default/bd_uv/scripts/ finds bd_uv and mesh_data next to it: with the
+    extension disabled (it imports the extension root itself) and enabled (it reuses Blender's
+    bl_ext.user_default.bd_uv)."""
+    env = dict(os.environ, BLENDER_USER_RESOURCES=str(tmp_path / "user"))
+    install = ("import sys, bpy; print(sorted(bpy.ops.extensions.package_install_files("
+               "filepath=sys.argv[1], repo='user_default', enable_on_install=False)))")
+    proc = subprocess.run([sys.executable, "-c", install, str(linux_extension_zip)], env=env,
+                          capture_output=True, text=True)
+    assert "FINISHED" in proc.stdout, proc.stdout + proc.stderr
+    script = tmp_path / "user" / "extensions" / "user_default" / "bd_uv" / "scripts" / SCRIPT.name
+    assert script.is_file()
+
+    for how, prefix in (("disabled", []), ("enabled", [sys.executable, "-c", ENABLED])):
+        out, report = tmp_path / f"{how}.blend", tmp_path / f"{how}.json"
+        cmd = (prefix or [sys.executable]) + [str(script), str(scene_blend), "--", "--bound", "3",
+                                              "--output", str(out), "--report", str(report)]
+        proc = subprocess.run(cmd, env=env, capture_output=True, text=True)
+        assert proc.returncode == 0, f"{how}: {proc.stdout}{proc.stderr}"
+        rep = json.loads(report.read_text())
+        assert [e["status"] for e in rep["items"]] == ["certified", "certified"], how
+        bpy.ops.wm.open_mainfile(filepath=str(out))
+        D, det, _, uv = measured(bpy.data.objects["Grid"])
+        assert np.all(det > 0) and D.max() <= 3.0 * (1 + 1e-5), how
+        assert uv[PINNED_LOOP].tobytes() == np.array(PINNED_UV, np.float32).tobytes(), how
