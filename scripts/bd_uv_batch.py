@@ -219,7 +219,10 @@ def measure_saved(written, core, batch, mesh_data, options, args):
                                  f"{entry['bound_certified']:.6g} (float32 rounding or packing)")
         if args.png:
             png = os.path.join(args.png, args.png_prefix + _file_name(ob.name) + ".png")
-            batch.entry_png(png, entry, uv, D, options)
+            try:
+                batch.entry_png(png, entry, uv, D, options)
+            except Exception as exc:  # a picture that cannot be drawn must not lose the UVs
+                entry.update(png=None, png_error=f"{type(exc).__name__}: {exc}")
 
 
 def _failed(source, name, message, error="ObjectError"):
