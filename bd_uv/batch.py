@@ -75,6 +75,13 @@ class JobResult:
     result: object = None
 
 
+def failed_entry(name, error, message, faces=None, seconds=None, **where):
+    """A report entry with nothing certified (``where``: input, object, output, ...)."""
+    return {**where, "name": name, "status": "failed", "faces": faces, "islands": [],
+            "bound_certified": None, "max_distortion": None, "mean_distortion": None,
+            "flipped": None, "seconds": seconds, "error": error, "message": message}
+
+
 def _num(x):
     return None if x is None or not np.isfinite(x) else float(x)
 
@@ -98,9 +105,7 @@ def unwrap_job(job, options, png=None):
     """
     t0 = time.perf_counter()
     m = int(len(job.F))
-    entry = {"name": job.name, "status": "failed", "faces": m, "islands": [],
-             "bound_certified": None, "max_distortion": None, "mean_distortion": None,
-             "flipped": None, "seconds": 0.0, "error": None, "message": ""}
+    entry = failed_entry(job.name, None, "", faces=m, seconds=0.0)
     kwargs = dict(options)
     if kwargs.get("frames") == "input-uv":
         kwargs["initial_uv"] = job.corner_uv
@@ -199,11 +204,9 @@ def _unwrap_file(task, options, seams_mode):
             entry["output"] = os.path.abspath(task.output)
         return [entry]
     except Exception as exc:  # one bad file never stops the rest: everything goes in its entry
-        name = os.path.splitext(os.path.basename(task.path))[0]
-        entry = {**base, "name": name, "status": "failed", "faces": None, "islands": [],
-                 "bound_certified": None, "max_distortion": None, "mean_distortion": None,
-                 "flipped": None, "seconds": round(time.perf_counter() - t0, 4),
-                 "error": type(exc).__name__, "message": str(exc)}
+        entry = failed_entry(os.path.splitext(os.path.basename(task.path))[0],
+                             type(exc).__name__, str(exc),
+                             seconds=round(time.perf_counter() - t0, 4), **base)
         if not isinstance(exc, (BDError, OSError)):
             entry["traceback"] = traceback.format_exc()
         return [entry]
@@ -333,12 +336,10 @@ def _size(path):
 
 
 def _crashed_entry(task):
-    return {"input": os.path.abspath(task.path), "object": None, "output": None,
-            "name": os.path.splitext(os.path.basename(task.path))[0], "status": "failed",
-            "faces": None, "islands": [], "bound_certified": None, "max_distortion": None,
-            "mean_distortion": None, "flipped": None, "seconds": None,
-            "error": "WorkerCrashed", "message": f"{task.path}: the worker process died while "
-            "unwrapping it (a crash, or killed for running out of memory)"}
+    return failed_entry(os.path.splitext(os.path.basename(task.path))[0], "WorkerCrashed",
+                        f"{task.path}: the worker process died while unwrapping it (a crash, "
+                        "or killed for running out of memory)",
+                        input=os.path.abspath(task.path), object=None, output=None)
 
 
 # ---- command line ------------------------------------------------------------------------------

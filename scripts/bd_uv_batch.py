@@ -167,7 +167,8 @@ def unwrap_objects(objects, args, batch, options, mesh_data, source):
                     ok)
                 written.append((entry, ob, arrays, ok))
         except Exception as exc:  # one object never stops the others
-            entry = _failed(source, ob.name, f"{ob.name}: {exc}", type(exc).__name__)
+            entry = batch.failed_entry(ob.name, type(exc).__name__, f"{ob.name}: {exc}",
+                                       input=source, object=ob.name, output=None, uv_map=None)
         items.append(entry)
     return items, written
 
@@ -225,13 +226,6 @@ def measure_saved(written, core, batch, mesh_data, options, args):
                 entry.update(png=None, png_error=f"{type(exc).__name__}: {exc}")
 
 
-def _failed(source, name, message, error="ObjectError"):
-    return {"input": source, "object": name, "output": None, "uv_map": None, "name": name,
-            "status": "failed", "faces": None, "islands": [], "bound_certified": None,
-            "max_distortion": None, "mean_distortion": None, "flipped": None, "seconds": None,
-            "error": error, "message": message}
-
-
 def main(argv):
     blends, rest = split_argv(argv)
     core, batch, cli, mesh_data, session = _import_addon()
@@ -265,7 +259,8 @@ def main(argv):
     t0 = time.perf_counter()
     objects, missing = mesh_objects(args.objects)
     _leave_edit_mode(objects)
-    items = [_failed(source, name, message) for name, message in missing]
+    items = [batch.failed_entry(name, "ObjectError", message, input=source, object=name,
+                                output=None, uv_map=None) for name, message in missing]
     for e in items:
         print(batch.item_line(e), flush=True)
     done, written = unwrap_objects(objects, args, batch, options, mesh_data, source)
