@@ -1,4 +1,4 @@
-"""Picture of a UV layout for sign-off: faces coloured by conformal distortion, a colour bar, figures.
+"""Picture of a UV layout for sign-off: faces coloured by distortion, a colour bar, the figures.
 
 The colours are Lipman 2012's scheme (section 6.1, ``bd_uv.colors.distortion_colors``): grey at
 distortion 1 ramping to red at the bound C, green above 25, blue above 50, purple for flipped and
