@@ -175,6 +175,40 @@ def write_back(batch, result):
     return written
 
 
+def verify_written(batch, result, written):
+    """Re-certify what is stored now (float32 UVs, after packing) and undo what no longer passes.
+
+    Each written island is measured again from the UV map as Blender holds it; an island whose
+    stored UVs flip a face or exceed its certified bound (e.g. packing shrank it to float32's
+    resolution) gets its previous UVs back. Returns one message per island put back. Object Mode.
+    """
+    messages = []
+    for part, w in zip(batch.parts, written):
+        if w.skipped or not w.faces.any():
+            continue
+        ob = bpy.data.objects.get(part.object_name)
+        now = mesh_data.mesh_arrays(ob, selected_only=True, uv_name=part.arrays.uv_name,
+                                    scale=_unwrap_scale(ob, part.use_object_scale),
+                                    pin_unselected_uvs=part.pin_unselected_uvs)
+        D = bd_uv.conformal_distortion(part.arrays.V, part.arrays.F, now.corner_uv)
+        islands = result.face_island[part.faces]
+        undo = np.zeros(len(islands), dtype=bool)
+        for i in np.unique(islands[w.faces]):
+            r = result.islands[i]
+            mine = (islands == i) & w.faces
+            worst = float(np.max(D[mine]))
+            if not worst <= r.bound_certified * (1 + 1e-6):
+                undo |= mine
+                messages.append(f"island {i} of {part.object_name} put back as it was: its stored "
+                                f"UVs measure {worst:.4g} > {r.bound_certified:.4g} (packing "
+                                "shrank it too far); unwrap it without packing")
+        if undo.any() and part.arrays.corner_uv is not None:
+            mesh_data.write_corner_uvs(ob.data, part.arrays.uv_name, part.arrays.tri_loops,
+                                       part.arrays.corner_uv, undo)
+            w.faces = w.faces & ~undo
+    return messages
+
+
 def pack(context, written, margin, shape='AABB'):
     """Blender's ``uv.pack_islands`` on the written islands; islands with pins stay put.
 

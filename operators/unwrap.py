@@ -142,6 +142,9 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
         if summary.written:
             if self.pack:
                 session.pack(context, written, self.margin, self.pack_shape)
+            with object_mode(context):
+                for message in session.verify_written(batch, result, written):
+                    self.report({'WARNING'}, message)
             if self.show_distortion:
                 bound = summary.bound_certified if summary.bound_certified > 1 else self.bound
                 session.show_distortion(context, written, bound)

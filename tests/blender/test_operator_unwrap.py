@@ -203,3 +203,36 @@ def test_undo_restores_the_previous_uvs(addon):
     assert np.array_equal(_edit_mode_uvs(bpy.context.edit_object), before)
     bpy.ops.ed.redo()
     assert np.array_equal(_edit_mode_uvs(bpy.context.edit_object), unwrapped)
+
+
+def test_stored_uvs_are_recertified_after_packing(addon, monkeypatch):
+    """A pack step that ruins the written island (here: collapses it to one point) must not
+    leave uncertified UVs behind: the island is measured again as stored and put back."""
+    from conftest import load_submodule
+    session = load_submodule("operators.session")
+    editmode = load_submodule("operators.editmode")
+    obj = add_grid()
+    before = loop_uv_array(obj.data).tobytes()
+    calls = []
+
+    def ruinous_pack(context, written, margin, shape='AABB'):
+        calls.append(len(written))
+        with editmode.object_mode(context):
+            layer = obj.data.uv_layers.active.uv
+            layer.foreach_set("vector", np.full(2 * len(layer), 0.5, np.float32))
+    monkeypatch.setattr(session, "pack", ruinous_pack)
+    _edit_all(obj)
+    bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', pack=True)
+    set_mode(obj, 'OBJECT')
+    assert calls == [1]
+    assert loop_uv_array(obj.data).tobytes() == before
+
+
+def test_stored_uvs_pass_recertification_after_a_real_pack(addon):
+    obj = add_grid()
+    _edit_all(obj)
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=2.0, pack=True) == {'FINISHED'}
+    set_mode(obj, 'OBJECT')
+    V, tris, loops, _ = _loop_triangles(obj)
+    D, det = triangle_distortion(V, tris, loop_uv_array(obj.data)[loops])
+    assert (det > 0).all() and D.max() <= 2.0 * SLACK
