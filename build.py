@@ -8,7 +8,7 @@ Usage::
 
 Blender 4.2 LTS to 5.0 run Python 3.11; Blender 5.1 and later run Python 3.13. Blender 4.2.0
 installs every wheel of its platform listed in a manifest, whatever its Python tag (its wheel filter
-has "TODO: Match Python & ABI tags"; the per-Python filter came later), and of two wheels of the same
+carries an upstream to-do note to match Python & ABI tags; the per-Python filter came later), and of two wheels of the same
 package and version it keeps the cp313 one: a zip holding both scipy wheels installs in bpy 4.2.0
 and then fails with "The `scipy` install you are using seems to be broken". So each Python gets its own zip,
 restricted to its Blender versions through the manifest:
