@@ -8,10 +8,10 @@ Usage::
 
 Blender 4.2 LTS to 5.0 run Python 3.11; Blender 5.1 and later run Python 3.13. Blender 4.2.0
 installs every wheel of its platform listed in a manifest, whatever its Python tag (its wheel filter
-carries an upstream to-do note to match Python & ABI tags; the per-Python filter came later), and of two wheels of the same
-package and version it keeps the cp313 one: a zip holding both scipy wheels installs in bpy 4.2.0
-and then fails with "The `scipy` install you are using seems to be broken". So each Python gets its own zip,
-restricted to its Blender versions through the manifest:
+carries an upstream to-do note to match Python & ABI tags; the per-Python filter came later), and of
+two wheels of the same package and version it keeps the cp313 one: a zip holding both scipy wheels
+installs in bpy 4.2.0 and then fails with "The `scipy` install you are using seems to be broken". So
+each Python gets its own zip, restricted to its Blender versions through the manifest:
 
 - ``bd_uv-<version>-<platform>.zip``: cp311 wheels, ``blender_version_min = "4.2.0"``,
   ``blender_version_max = "5.1.0"`` (the first version it does not support);
@@ -149,7 +149,7 @@ def validate(path: Path) -> str:
     return run_blender_ext("validate", str(path))
 
 
-# -- wheels -----------------------------------------------------------------------------------------
+# -- wheels ----------------------------------------------------------------------------------------
 
 def normalize(name: str) -> str:
     """Project name as it appears in wheel filenames (PEP 427/503)."""
@@ -326,7 +326,7 @@ def dependency_problems(wheels: list[Wheel], platform: str, python: str) -> list
     return problems
 
 
-# -- manifest ---------------------------------------------------------------------------------------
+# -- manifest --------------------------------------------------------------------------------------
 
 def toml_list(key: str, items: list[str]) -> str:
     body = "".join(f'  "{item}",\n' for item in items)
@@ -363,7 +363,7 @@ def manifest_data(text: str) -> dict:
     return tomllib.loads(text)
 
 
-# -- staging and checks -----------------------------------------------------------------------------
+# -- staging and checks ----------------------------------------------------------------------------
 
 def stage(stage_dir: Path, manifest_text: str, wheels: list[Wheel], skip: tuple[Path, ...]) -> None:
     """Copy the extension into ``stage_dir``: repo files minus the manifest's build exclusions
@@ -450,7 +450,7 @@ def check_zip(zip_path: Path, platform: str, python: str, pins: dict[str, str],
     return problems
 
 
-# -- main -------------------------------------------------------------------------------------------
+# -- main ------------------------------------------------------------------------------------------
 
 @dataclass
 class Built:

@@ -1,9 +1,9 @@
 """Fixtures shared by the whole suite.
 
 ``linux_extension_zips`` are the linux-x64 extension zips (Python 3.11 for Blender 4.2-5.0, and
-Python 3.13 for Blender 5.1+) built by ``build.py`` once per session. Their wheels come from the cache
-in ``$BD_UV_WHEEL_CACHE`` (default ``.wheel-cache`` in the repo) and are downloaded from PyPI when
-missing there (about 80 MB).
+Python 3.13 for Blender 5.1+) built by ``build.py`` once per session. Their wheels come from the
+cache in ``$BD_UV_WHEEL_CACHE`` (default ``.wheel-cache`` in the repo) and are downloaded from PyPI
+when missing there (about 80 MB).
 """
 import importlib.util
 import os

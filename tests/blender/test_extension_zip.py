@@ -1,4 +1,4 @@
-"""The built linux-x64 zip installs into a fresh Blender, loads its bundled wheels and unwraps a mesh.
+"""The built linux-x64 zip installs in a fresh Blender, loads its bundled wheels, unwraps a mesh.
 
 What a user does with Edit > Preferences > Get Extensions > Install from Disk, done headless through
 the ``bpy`` module in a child process:
@@ -16,8 +16,8 @@ the ``bpy`` module in a child process:
   their conformal distortion recomputed here from first principles.
 
 The child runs this test's Python (bpy 5.0.1: Python 3.11, the zip for Blender 4.2 to 5.0). Other
-Blender modules can be added through ``BD_UV_BPY_PYTHONS``, a ``os.pathsep``-separated list of Python
-interpreters that each have a ``bpy`` (and numpy) installed, e.g. a Python 3.11 venv with
+Blender modules can be added through ``BD_UV_BPY_PYTHONS``, a ``os.pathsep``-separated list of
+Python interpreters that each have a ``bpy`` (and numpy) installed, e.g. a Python 3.11 venv with
 ``bpy==4.2.0 numpy==1.24.3`` (the oldest supported Blender) or a Python 3.13 venv with
 ``bpy==5.1.2 numpy==2.3.4`` (which gets the py313 zip). Each runs the same checks with the zip for
 its Python, and checks that the other Python's zip is refused.
@@ -133,9 +133,10 @@ import bpy
 result = bpy.ops.extensions.package_install_files(
     filepath=os.environ["BD_UV_ZIP"], repo="user_default", enable_on_install=True)
 repo = os.path.join(bpy.utils.user_resource("EXTENSIONS"), "user_default")
+installed = sorted(os.listdir(repo)) if os.path.isdir(repo) else []
 print("BD_UV_RESULT " + json.dumps({
     "addons": [a.module for a in bpy.context.preferences.addons],
-    "installed": sorted(n for n in os.listdir(repo) if not n.startswith(".")) if os.path.isdir(repo) else [],
+    "installed": [n for n in installed if not n.startswith(".")],
     "site_packages": os.path.isdir(os.path.join(bpy.utils.user_resource("EXTENSIONS"), ".local")),
 }))
 '''
@@ -215,7 +216,8 @@ def test_bundled_wheels_are_the_ones_imported(installed):
     tag = installed["python"].replace(".", "")
     assert site.parts[-2] == f"python{installed['python']}"
     assert list((site / "scipy" / "_lib").glob(f"*.cpython-{tag}-*.so"))
-    assert [p for p in (site / "scipy" / "_lib").glob("*.so") if f"cpython-{tag}-" not in p.name] == []
+    so_files = list((site / "scipy" / "_lib").glob("*.so"))
+    assert [p for p in so_files if f"cpython-{tag}-" not in p.name] == []
     assert not (site / "numpy").exists()
     assert not pathlib.Path(installed["numpy"]).is_relative_to(site)
 

@@ -1,4 +1,4 @@
-"""The extension manifest, the wheel list and build.py's checks, run through Blender's own validator.
+"""The extension manifest, the wheel list and build.py's checks, with Blender's own validator.
 
 Blender's validator and builder (``blender_ext.py``) ship inside the ``bpy`` module; ``build.py``
 finds and runs them without importing ``bpy``.
