@@ -88,3 +88,15 @@ def test_importing_bd_uv_does_not_load_matplotlib():
     code = ("import sys, bd_uv, bd_uv.render, bd_uv.batch; "
             "assert 'matplotlib' not in sys.modules and 'bpy' not in sys.modules")
     assert subprocess.run([sys.executable, "-c", code]).returncode == 0
+
+
+def test_long_captions_are_wrapped_to_the_picture_width():
+    from bd_uv.render import DPI, wrap_caption
+    caption = ("nefertiti: BD-LSCM, 1/1 islands, 562 faces, max distortion 1.588 <= 5, "
+               "mean 1.051, 0 flipped, 0.05 s")
+    font = 1024 / 90.0  # the renderer's font size for a 1024 px picture
+    lines = wrap_caption(caption, 1024, font).split("\n")
+    assert len(lines) >= 2 and " ".join(lines) == caption
+    assert max(len(l) for l in lines) < 95  # the length that was cut off before wrapping
+    width_pt = max(len(l) for l in lines) * 0.75 * font
+    assert width_pt <= 0.92 * 1024 / DPI * 72.0
