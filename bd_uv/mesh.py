@@ -230,9 +230,7 @@ def _boundary_loops(idx, faces, tris, nv):
                                      "be flattened; mark seams that cut it open", idx, faces)
     ba, bb = a[boundary], b[boundary]
     g = sp.coo_array((np.ones(len(ba)), (ba, bb)), shape=(nv, nv)).tocsr()
-    n_comp, comp = connected_components(g, directed=False)
-    on_boundary = np.zeros(nv, dtype=bool)
-    on_boundary[ba] = True
+    _, comp = connected_components(g, directed=False)
     loop_labels = np.unique(comp[ba])
     n_loops = len(loop_labels)
     euler = nv - n_edges + k

@@ -22,7 +22,7 @@ from .errors import (BDError, CancelledError, InfeasibleError, InvalidMeshError,
 from .frames import frames_from_map, harmonic_map, lscm_map, planar_map
 from .geometry import face_areas, local_coordinates
 from .mesh import check_arrays, islands as split_islands
-from .metrics import certify, mean_distortion
+from .metrics import certify, face_jacobians, mean_distortion
 from . import solve as conic
 from .spaces import bounded_distortion_space
 
@@ -387,7 +387,6 @@ def _initial(prob, frames, initial_uv, report):
         if not np.all(np.isfinite(uvc)):
             raise InfeasibleError(f"island {isl.index}: frames from the current UVs need UVs on "
                                   "every face; unwrap it first or use frames='auto'", isl.index)
-        from .metrics import face_jacobians
         alpha, _ = face_jacobians(prob.Vn, isl.tris, uvc)
         w = frames_from_map(alpha)
         return w, "input-uv", np.inf, None
@@ -417,8 +416,6 @@ def _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_boun
     try:
         prob = _Problem(island, V, pins, method, cone, cancel)
         w0, frames_name, D0, u0 = _initial(prob, frames, initial_uv, report)
-    except _Cancelled:
-        raise
     except IslandError as exc:
         exc.island = island.index
         return _failed(island, exc, t0, bound)
@@ -504,12 +501,6 @@ def _bounded(prob, w0, D0, u0, C, raise_bound, limit, flags, report):
         if "bound_raised" not in flags:
             flags.append("bound_raised")
         C, retried = newC, False
-        if np.isfinite(D0) and C >= _guaranteed_bound(D0) and prob.solves > 8:
-            # The solver keeps failing where a solution is known to exist: return that one.
-            ok0, _ = prob.check(u0, C)
-            if ok0:
-                flags.append("initial_map")
-                return u0, C
 
 
 def _auto(prob, w0, D0, u0, limit, budget, flags, report, t0):
