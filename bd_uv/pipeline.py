@@ -23,7 +23,7 @@ from .frames import frames_from_map, harmonic_map, lscm_map, planar_map
 from .geometry import face_areas, local_coordinates
 from .mesh import check_arrays, islands as split_islands
 from .metrics import certify, face_jacobians, mean_distortion
-from . import solve as conic
+from .solvers import conic
 from .spaces import bounded_distortion_space
 
 METHODS = ("lscm", "arap", "dirichlet")

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 import bd_uv
-import bd_uv.solve
-from bd_uv.solve import ConicSolution
+import bd_uv.solvers.conic
+from bd_uv.solvers.conic import ConicSolution
 from unwrap_contract import (DATA, assert_unchanged, distortion_and_flips, read_off, snapshot,
                              unwrap_checked)
 
@@ -670,13 +670,13 @@ def test_cancel_inside_the_clarabel_solve(monkeypatch):
     Clarabel solve (its termination callback), which must be reported as cancelled too."""
     V, F = nefertiti()
     outcomes = []
-    real = bd_uv.solve.solve_conic
+    real = bd_uv.solvers.conic.solve_conic
 
     def spy(*args, **kwargs):
         sol = real(*args, **kwargs)
         outcomes.append(sol.status)
         return sol
-    monkeypatch.setattr(bd_uv.solve, "solve_conic", spy)
+    monkeypatch.setattr(bd_uv.solvers.conic, "solve_conic", spy)
     inside = 0
     for k in range(1, 7):
         outcomes.clear()
@@ -725,7 +725,7 @@ TWO_PINS = dict(pin_corners=np.array([0, 3 * 31 + 2]), pin_uv=np.array([[0.0, 0.
     ("MaxIterations", "real"), ("AlmostSolved", "real")])
 @pytest.mark.parametrize("setting", ["bound 5", "auto", "two pins"])
 def test_solver_faults_never_certify_a_bad_map(monkeypatch, status, x_mode, setting):
-    monkeypatch.setattr(bd_uv.solve.clarabel, "DefaultSolver", faulty_solver(status, x_mode))
+    monkeypatch.setattr(bd_uv.solvers.conic.clarabel, "DefaultSolver", faulty_solver(status, x_mode))
     V, F = combine(grid(), grid())
     kw = {"bound 5": {}, "auto": {"bound": "auto"}, "two pins": TWO_PINS}[setting]
     res = unwrap_checked(V, F, **kw)                # certified islands are re-verified there
@@ -746,7 +746,7 @@ def test_solver_outcome_replaced_through_solve_conic(monkeypatch):
     """Patching the wrapper itself: every solve 'inexact' with no iterate."""
     def broken(P, q, A, b, cones, cancel=None, max_iter=0):
         return ConicSolution(None, "inexact", "NumericalError", 80, 0.0, float("nan"))
-    monkeypatch.setattr(bd_uv.solve, "solve_conic", broken)
+    monkeypatch.setattr(bd_uv.solvers.conic, "solve_conic", broken)
     V, F = grid()
     res = unwrap_checked(V, F, **TWO_PINS)
     assert type(res.islands[0].error) in (bd_uv.InfeasibleError, bd_uv.SolverError)
@@ -755,7 +755,7 @@ def test_solver_outcome_replaced_through_solve_conic(monkeypatch):
 
 
 def test_solver_failure_with_pins_is_reported_as_a_solver_error(monkeypatch):
-    monkeypatch.setattr(bd_uv.solve.clarabel, "DefaultSolver",
+    monkeypatch.setattr(bd_uv.solvers.conic.clarabel, "DefaultSolver",
                         faulty_solver("NumericalError", "nan"))
     V, F = grid()
     res = unwrap_checked(V, F, **TWO_PINS)
@@ -768,7 +768,7 @@ def test_solver_exception_fails_the_island_not_the_call(monkeypatch):
     class Raising(faulty_solver("Solved", "real")):
         def solve(self):
             raise RuntimeError("simulated solver crash")
-    monkeypatch.setattr(bd_uv.solve.clarabel, "DefaultSolver", Raising)
+    monkeypatch.setattr(bd_uv.solvers.conic.clarabel, "DefaultSolver", Raising)
     V, F = grid()
     res = unwrap_checked(V, F, **TWO_PINS)
     assert type(res.islands[0].error) is bd_uv.SolverError
@@ -793,12 +793,12 @@ def test_time_budget_running_out_returns_the_best_found_so_far(monkeypatch):
     V, F = nefertiti()
     full = unwrap_checked(V, F, bound="auto")
     clock = [0.0]
-    real = bd_uv.solve.solve_conic
+    real = bd_uv.solvers.conic.solve_conic
 
     def ticking(*args, **kwargs):
         clock[0] += 1.0
         return real(*args, **kwargs)
-    monkeypatch.setattr(bd_uv.solve, "solve_conic", ticking)
+    monkeypatch.setattr(bd_uv.solvers.conic, "solve_conic", ticking)
     now = lambda: clock[0]
     monkeypatch.setattr(PIPELINE, "time",
                         types.SimpleNamespace(perf_counter=now, monotonic=now, time=now))

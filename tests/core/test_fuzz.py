@@ -23,7 +23,7 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 import bd_uv
-import bd_uv.solve
+import bd_uv.solvers.conic
 from unwrap_contract import DATA, assert_contract, assert_unchanged, read_off, snapshot
 
 NEFERTITI = read_off(DATA / "nefertiti.off")
@@ -204,7 +204,7 @@ def test_unwrap_contract_on_perturbed_real_meshes(sc):
     solver = flaky_solver(sc["solver_faults"], rng) if sc["solver_faults"] else REAL_SOLVER
     event(f"solver faults: {sc['solver_faults']:.0%} of solves")
     try:
-        with mock.patch.object(bd_uv.solve.clarabel, "DefaultSolver", solver):
+        with mock.patch.object(bd_uv.solvers.conic.clarabel, "DefaultSolver", solver):
             res = bd_uv.unwrap(V, F, seams=seams, pin_corners=pin_corners, pin_uv=pin_uv,
                                bound=sc["bound"], method=sc["method"], frames=sc["frames"],
                                cone=sc["cone"])
