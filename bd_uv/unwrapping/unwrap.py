@@ -16,6 +16,7 @@ from ..errors import BDError, CancelledError, InvalidMeshError, IslandError, Sol
 from ..mesh import check_arrays, islands as split_islands
 from ..metrics import certify, mean_distortion
 from . import strategies
+from .batched import conformal_islands
 from .initial import start_map
 from .problem import STORE_HEADROOM, Cancelled, IslandProblem
 from .results import IslandResult, UnwrapResult
@@ -75,6 +76,8 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
     face_island = np.empty(m, dtype=np.int64)
     for island in isl:
         face_island[island.faces] = island.index
+    batch, starts = _batched(V, isl, pins, face_island, method, bound, frames, progress, cancel)
+    for island in isl:
         share = len(island.faces) / total
 
         def report(frac, msg, _done=done, _share=share, _i=island.index):
@@ -85,8 +88,13 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
         try:
             if cancel is not None and cancel.is_set():
                 raise Cancelled
-            res = _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_bound,
-                                bound_limit, cone, time_budget, report, cancel)
+            if island.index in batch:
+                res = batch[island.index]
+                report(1.0, "the conformal map fits the bound")
+            else:
+                res = _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_bound,
+                                    bound_limit, cone, time_budget, report, cancel,
+                                    starts.get(island.index))
         except Cancelled:
             raise CancelledError("unwrap cancelled; nothing was changed") from None
         if res.status == "certified":
@@ -133,14 +141,33 @@ def _failed(island, error, t0, bound, frames_name="", flags=(), timings=None):
                         timings=timings or {})
 
 
+def _batched(V, isl, pins, face_island, method, bound, frames, progress, cancel):
+    """Solve every island that can go through ``batched.conformal_islands`` at once: valid,
+    unpinned, BD-LSCM at a fixed bound from the conformal start. Returns (results by island index,
+    conformal starts of the islands that did not fit)."""
+    if method != "lscm" or bound == "auto" or frames not in ("auto", "conformal"):
+        return {}, {}
+    pinned = np.zeros(len(isl), dtype=bool)
+    if len(pins[0]):
+        pinned[np.unique(face_island[pins[0] // 3])] = True
+    todo = [i for i in isl if i.error is None and not pinned[i.index]]
+    if len(todo) < 2:
+        return {}, {}
+    if progress is not None:
+        progress(0.01, f"conformal maps of {len(todo)} islands")
+    if cancel is not None and cancel.is_set():
+        raise CancelledError("unwrap cancelled; nothing was changed")
+    return conformal_islands(V, todo, float(bound))
+
+
 def _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_bound, bound_limit,
-                  cone, time_budget, report, cancel):
+                  cone, time_budget, report, cancel, lscm=None):
     t0 = time.perf_counter()
     if island.error is not None:
         return _failed(island, island.error, t0, bound)
     try:
         prob = IslandProblem(island, V, pins, method, cone, cancel)
-        start = start_map(prob, frames, initial_uv, report)
+        start = start_map(prob, frames, initial_uv, report, lscm=lscm)
     except IslandError as exc:
         exc.island = island.index
         return _failed(island, exc, t0, bound)
