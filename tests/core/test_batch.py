@@ -206,3 +206,36 @@ def test_progress_bar_on_stderr_lines_on_stdout():
     # half of the bytes in the elapsed time: as much time again is left
     elapsed = progress.eta()
     assert elapsed == pytest.approx(time.perf_counter() - progress.t0, rel=0.05, abs=0.01)
+
+
+def _slow_or_greedy(task, options, seams_mode):
+    if task.path.endswith("slow.off"):
+        time.sleep(60)
+    if task.path.endswith("greedy.off"):
+        hog = [np.ones(2**20) for _ in range(80)]            # 640 MB, held
+        time.sleep(60)
+        del hog
+    return _REAL_UNWRAP_FILE(task, options, seams_mode)
+
+
+def test_file_timeout_and_memory_limit_fail_only_their_file(tmp_path, monkeypatch):
+    """Each file runs in a child the worker watches: past --file-timeout, or above
+    --memory-limit of resident memory, the child is killed and only that file fails."""
+    monkeypatch.setattr(batch, "_unwrap_file", _slow_or_greedy)
+    src = tmp_path / "few"
+    src.mkdir()
+    for name in ("a.off", "slow.off", "greedy.off"):
+        shutil.copy(os.path.join(DATA, "nefertiti.off"), src / name)
+    out = tmp_path / "out"
+    assert run(src, "-o", out, "--jobs", "2", "--file-timeout", "3", "--memory-limit",
+               "400MB") == 1
+    items = {os.path.basename(e["input"]): e for e in
+             json.loads((out / "report.json").read_text())["items"]}
+    assert items["a.off"]["status"] == "certified" and (out / "a.obj").is_file()
+    assert items["slow.off"]["error"] == "FileTimeout"
+    assert "--file-timeout 3 s" in items["slow.off"]["message"]
+    assert items["slow.off"]["seconds"] >= 3
+    assert items["greedy.off"]["error"] == "MemoryLimit"
+    assert "--memory-limit 400 MB" in items["greedy.off"]["message"]
+    assert items["greedy.off"]["seconds"] < 3
+    assert sorted(os.listdir(out)) == ["a.obj", "report.json"]     # no temporary file left
