@@ -33,7 +33,7 @@ from .errors import BDError
 from .geometry import face_areas
 from .meshio import load_mesh, write_obj
 from .pipeline import unwrap
-from .scheduling.atomic import atomic_path
+from .scheduling.atomic import atomic_path, remove_stale
 
 MESH_SUFFIXES = (".obj", ".off", ".ply")
 BLEND_SUFFIX = ".blend"
@@ -423,7 +423,7 @@ def _positive_int(text):
 
 def run_batch(args):
     """``python -m bd_uv batch``: returns the exit code (0: all certified, 1: some failed)."""
-    from .scheduling import FileLimits, Ledger, Progress, read_previous, reusable, options_sha256
+    from .scheduling import FileLimits, Ledger, Progress, options_sha256, read_previous, reusable
     files = input_files(args.inputs)
     if not files:
         print(f"error: no .obj/.off/.ply/.blend files in {' '.join(args.inputs)}",
@@ -448,7 +448,9 @@ def run_batch(args):
 
     results = [None] * len(tasks)   # per task: its entries, once finished (or carried over)
     carried = set()
-    if args.resume:
+    if args.resume:  # a killed run may have left temporary files; its journal lists the rest
+        for folder in {args.output, args.png} - {None}:
+            remove_stale(folder)
         previous = read_previous(report_path)
         key = options_sha256(options, args.seams)
         for i, t in enumerate(tasks):

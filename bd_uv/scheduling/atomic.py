@@ -44,3 +44,15 @@ def file_sha256(path, chunk=1 << 20):
     except OSError:
         return None
     return h.hexdigest()
+
+
+def remove_stale(folder):
+    """Remove temporary files left in ``folder`` by writes that were killed; their names."""
+    try:
+        names = [n for n in os.listdir(folder) if n.startswith(".") and TMP_MARK in n]
+    except OSError:
+        return []
+    for n in names:
+        with contextlib.suppress(OSError):
+            os.remove(os.path.join(folder, n))
+    return names
