@@ -37,8 +37,10 @@ from .scheduling.atomic import atomic_path, remove_stale
 
 MESH_SUFFIXES = (".obj", ".off", ".ply")
 BLEND_SUFFIX = ".blend"
-SCRIPT = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts",
-                      "bd_uv_batch.py")
+# The Blender script of the extension: next to bd_uv/ in a clone or an installed extension; a pip
+# install of bd-uv has only the core, so .blend files there need BD_UV_BLENDER_SCRIPT.
+SCRIPT = os.environ.get("BD_UV_BLENDER_SCRIPT") or os.path.join(
+    os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts", "bd_uv_batch.py")
 
 
 @dataclass(frozen=True)
@@ -225,6 +227,10 @@ def _unwrap_blend(task, options, base):
         raise BDError(f"{task.path}: reading .blend files needs the bpy module "
                       "(pip install bpy) or Blender itself: blender -b FILE --python "
                       "scripts/bd_uv_batch.py -- ...")
+    if not os.path.isfile(SCRIPT):
+        raise BDError(f"{task.path}: reading .blend files needs the extension's "
+                      f"scripts/bd_uv_batch.py, not found at {SCRIPT}: set "
+                      "BD_UV_BLENDER_SCRIPT to it (a pip-installed bd-uv has only the core)")
     with tempfile.TemporaryDirectory() as tmp:
         report = os.path.join(tmp, "report.json")
         cmd = [sys.executable, SCRIPT, task.path, "--", "--output", task.output,
