@@ -53,12 +53,13 @@ def flip_free_map(Z, tris, nv, loops, u_lscm, C=5.0, *, pins=None, margin=0.9, m
     if solver is None:
         solver = ProjectionSolver(jacobian_operators(Z, tris, nv), nv, fixed, tris=tris)
     info = {"start": None, "iterations": 0, "seconds": 0.0,
-            "factor_seconds": solver.factor_seconds, "max_distortion": np.inf}
+            "factor_seconds": 0.0, "max_distortion": np.inf}
     scale = solver.component_scale(np.asarray(u_lscm, np.complex128))
     res = solver.project(u_lscm, C, values, margin=margin, scale=scale, max_iter=max_iter,
                          cancel=cancel)
     info["iterations"] += res.iterations
     info["max_distortion"] = float(np.max(res.max_distortion))
+    info["factor_seconds"] = solver.factor_seconds
     if res.all_converged:
         info.update(start="lscm", seconds=time.perf_counter() - t0)
         return res.u, info
@@ -71,6 +72,7 @@ def flip_free_map(Z, tris, nv, loops, u_lscm, C=5.0, *, pins=None, margin=0.9, m
     info["iterations"] += res.iterations
     info["max_distortion"] = float(np.max(res.max_distortion))
     info["seconds"] = time.perf_counter() - t0
+    info["factor_seconds"] = solver.factor_seconds
     if res.all_converged:
         info["start"] = "harmonic"
         return res.u, info

@@ -17,7 +17,7 @@ distance to the set.
 
 Iterations stop as soon as the actual map (recomputed from ``u``, flips included) is within ``C``
 on every face of every component: a component that certifies is frozen at that iterate. Projecting
-onto a slightly tighter bound ``C' = margin * C`` makes iterates cross into the set instead of
+onto a tighter bound ``C' = margin * C`` (0.9 C by default; 0.97 C gave three_peaks a 0.2% higher mean) makes iterates cross into the set instead of
 approaching its boundary from outside.
 """
 from dataclasses import dataclass
@@ -209,7 +209,8 @@ class ProjectionSolver:
     Attributes
     ----------
     n_components : int
-    factor_seconds : float
+    setup_seconds : float, operators and components
+    factor_seconds : float, the factorisation (0 until an iteration needed it)
     backend : str
     """
 
@@ -251,10 +252,22 @@ class ProjectionSolver:
         L = (self.Gx.T @ W @ self.Gx + self.Gy.T @ W @ self.Gy).tocsc()
         self._L_ff = L[self.free][:, self.free].tocsc()
         self._L_fF = L[self.free][:, self.fixed].tocsc()
-        self._solve, self.backend = factor_spd(self._L_ff, backend)
         self.GxT = sp.csr_array(self.Gx.T)
         self.GyT = sp.csr_array(self.Gy.T)
-        self.factor_seconds = time.perf_counter() - t0
+        self._solve, self.backend = None, backend
+        self.setup_seconds = time.perf_counter() - t0
+        self.factor_seconds = 0.0
+
+    def factorize(self):
+        """Factorise the global step's matrix (done on the first iteration that needs it, so a
+        map that already fits costs no factorisation)."""
+        import time
+
+        if self._solve is None:
+            t0 = time.perf_counter()
+            self._solve, self.backend = factor_spd(self._L_ff, self.backend)
+            self.factor_seconds = time.perf_counter() - t0
+        return self._solve
 
     def _tris_from_ops(self, k):
         G = sp.csr_array(self.Gx)
@@ -293,7 +306,7 @@ class ProjectionSolver:
         return np.where(np.isfinite(s) & (s > 0), s, 1.0)
 
     # -- the iterations -------------------------------------------------------------------------
-    def project(self, u0, C, fixed_values=None, *, margin=0.97, smin=None, smax=None, scale=None,
+    def project(self, u0, C, fixed_values=None, *, margin=0.9, smin=None, smax=None, scale=None,
                 stretch_margin=0.01, floor=1e-3, max_iter=500, stall=50, accelerate=True,
                 cancel=None):
         """Iterate local projections and global back-solves until the map is within the bounds.
@@ -400,7 +413,7 @@ class ProjectionSolver:
             cv = self.GxT @ Nrm[2] + self.GyT @ Nrm[3]
             f = self.free
             B = np.stack([bu[f] - rhs_fixed[:, 0], bv[f] - rhs_fixed[:, 1], cu[f], cv[f]], 1)
-            X = self._solve(B)
+            X = self.factorize()(B)
             Xc = X[:, :2]
             use_tan &= err <= prev_err * (1 + 1e-12)
             if accelerate and use_tan.any():

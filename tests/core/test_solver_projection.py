@@ -176,3 +176,14 @@ def test_flip_free_map_from_flipping_lscm():
     Dh, _ = reference_distortion(Vi, isl.tris, np.stack([uh.real, uh.imag], -1)[isl.tris])
     A = ops.area
     assert np.sum(A * D) < np.sum(A * Dh)
+
+
+def test_no_factorisation_when_the_start_fits():
+    V, F = _bumpy()
+    Vi, isl, Z, ops = _setup(V, F)
+    u0 = lscm_map(Z, isl.tris, len(Vi), isl.loops)
+    S = ProjectionSolver(ops, len(Vi), [isl.loops[0][0]], tris=isl.tris)
+    S.project(u0, 50.0)
+    assert S._solve is None and S.factor_seconds == 0.0
+    S.project(u0, 1.5)
+    assert S._solve is not None
