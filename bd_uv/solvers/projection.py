@@ -17,8 +17,8 @@ distance to the set.
 
 Iterations stop as soon as the actual map (recomputed from ``u``, flips included) is within ``C``
 on every face of every component: a component that certifies is frozen at that iterate. Projecting
-onto a tighter bound ``C' = margin * C`` (0.9 C by default; 0.97 C gave three_peaks a 0.2% higher mean) makes iterates cross into the set instead of
-approaching its boundary from outside.
+onto a tighter bound ``C' = margin * C`` (0.9 C by default; 0.97 C gave three_peaks a 0.2% higher
+mean) makes iterates cross into the set instead of approaching its boundary from outside.
 """
 from dataclasses import dataclass
 
