@@ -7,6 +7,7 @@ SVD of each face's map). Prints markdown tables; nothing is asserted.
     python3.11 benchmarks/bench_projection.py                    # the 7 disk meshes, C = 5 and 2
     python3.11 benchmarks/bench_projection.py --backends         # factorisation back-ends
     python3.11 benchmarks/bench_projection.py --big face.obj     # subdivided twice: time, memory
+    python3.11 benchmarks/bench_projection.py --islands 1000 --bounds 1.5   # many islands at once
 """
 from __future__ import annotations
 
@@ -157,6 +158,52 @@ def run_big(name, subdivisions, C, margin):
     print(f"  peak RSS {rss:.0f} MB (after loading and subdividing: {rss0:.0f} MB)")
 
 
+def many_islands(n, nx=4, seed=0):
+    """n small bumpy patches (nx x nx vertex grids, random heights), as one vertex/face array."""
+    rng = np.random.default_rng(seed)
+    xs, ys = np.meshgrid(np.linspace(0, 1, nx), np.linspace(0, 1, nx))
+    i = np.arange(nx * nx).reshape(nx, nx)
+    a, b, c, d = i[:-1, :-1].ravel(), i[:-1, 1:].ravel(), i[1:, :-1].ravel(), i[1:, 1:].ravel()
+    f = np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
+    z = rng.normal(scale=0.1, size=(n, nx * nx))
+    V = np.stack([np.broadcast_to(xs.ravel(), (n, nx * nx)),
+                  np.broadcast_to(ys.ravel(), (n, nx * nx)), z], -1)
+    V = (V + 2.0 * np.arange(n)[:, None, None] * np.array([1.0, 0, 0])).reshape(-1, 3)
+    F = (f[None] + (nx * nx) * np.arange(n)[:, None, None]).reshape(-1, 3)
+    return V, F, f, nx * nx
+
+
+def run_islands(n, C, margin):
+    """LSCM of every island and projection to C, all islands in one system each."""
+    V, F, f, per = many_islands(n)
+    t0 = time.perf_counter()
+    Z = local_coordinates(V, F)
+    # LSCM of the union in one solve: two boundary corners of each patch pinned at their 3D
+    # distance apart (any two pins give the island's LSCM map up to a similarity).
+    base = np.arange(n) * per
+    p0, p1 = base, base + per - 1  # opposite corners of each grid
+    dist = np.linalg.norm(V[p1] - V[p0], axis=1)
+    idx = np.concatenate([p0, p1])
+    val = np.concatenate([np.zeros(n), dist]).astype(np.complex128) + 3.0j * np.concatenate(
+        [np.arange(n), np.arange(n)])
+    ul = lscm_map(Z, F, len(V), [np.array([0])], pins=(idx, val))
+    t1 = time.perf_counter()
+    ops = jacobian_operators(Z, F, len(V))
+    S = ProjectionSolver(ops, len(V), p0, tris=F)
+    r = S.project(ul, C, margin=margin)
+    t2 = time.perf_counter()
+    s0 = stats(V, F, ul)
+    s = stats(V, F, r.u)
+    bad0 = np.bincount(np.repeat(np.arange(n), len(f)), weights=~(s0.distortion <= C),
+                       minlength=n) > 0
+    print(f"{n} islands, {len(F)} faces: LSCM of all {t1 - t0:.3f} s (max {fmt(s0.max_distortion)}"
+          f", flips {s0.flips}, islands above C = {C:g}: {int(bad0.sum())})")
+    print(f"  projection: {r.iterations} iterations, {t2 - t1:.3f} s (setup "
+          f"{S.setup_seconds:.3f} s, factorisation {S.factor_seconds:.3f} s), certified islands "
+          f"{int(r.converged.sum())}/{n}; max {fmt(s.max_distortion)}, flips {s.flips}, "
+          f"mean {s0.mean_distortion:.4f} -> {s.mean_distortion:.4f}")
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("meshes", nargs="*", default=DISKS)
@@ -165,10 +212,13 @@ def main(argv=None):
     ap.add_argument("--backends", action="store_true", help="compare factorisations on face.obj")
     ap.add_argument("--big", metavar="MESH", help="subdivide MESH and time LSCM + flip_free_map")
     ap.add_argument("--subdivisions", type=int, default=2)
+    ap.add_argument("--islands", type=int, metavar="N", help="N small bumpy patches at once")
     a = ap.parse_args(argv)
     print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     if a.backends:
         run_backends("face.obj")
+    elif a.islands:
+        run_islands(a.islands, a.bounds[0], a.margin)
     elif a.big:
         run_big(a.big, a.subdivisions, a.bounds[0], a.margin)
     else:

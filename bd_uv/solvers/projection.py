@@ -172,7 +172,8 @@ class ProjectionResult:
 
     Attributes
     ----------
-    u : (nv,) complex128, the map; each certified component at its first certified iterate
+    u : (nv,) complex128, the map; each certified component at its first certified iterate, each
+        other component at its iterate of least max distortion (its start if none was better)
     iterations : int, global steps (back-solves) taken; 0 when the start already fits
     converged : (c,) bool, per connected component: within the bound (and stretch bounds), no flip
     max_distortion : (c,) float64, per component, of ``u``; inf where a face flips
@@ -362,6 +363,8 @@ class ProjectionSolver:
         done_at = np.zeros(ncomp, dtype=np.int64)
         frozen_v = np.zeros(self.nv, dtype=bool)
         U_saved = U.copy()
+        U_best = U.copy()
+        best_key = np.full(ncomp, np.inf)
         best_viol = np.full(ncomp, np.inf)
         best_at = np.zeros(ncomp, dtype=np.int64)
         prev_err = np.full(ncomp, np.inf)
@@ -387,6 +390,13 @@ class ProjectionSolver:
                 U_saved[nv_new] = U[nv_new]
             if done.all() or it >= max_iter:
                 break
+            # The least distorted iterate of each unconverged component is what it returns.
+            key = self._per_comp_max(D)
+            better = ~done & ((key < best_key) | (np.isinf(key) & np.isinf(best_key)))
+            if better.any():
+                best_key = np.where(better, key, best_key)
+                bv = better[self.component]
+                U_best[bv] = U[bv]
             # Local step: the nearest allowed Jacobian, phases of alpha and beta kept.
             t1, t2, moved = project_singular_values(s1, s2, kappa, lo, hi)
             with np.errstate(invalid="ignore", divide="ignore"):
@@ -437,6 +447,7 @@ class ProjectionSolver:
             U[frozen_v] = U_saved[frozen_v]
             it += 1
         U[frozen_v] = U_saved[frozen_v]
+        U[~done[self.component]] = U_best[~done[self.component]]
         u = U[:, 0] + 1j * U[:, 1]
         J = self.jacobians(U)
         a, b = self._alpha_beta(J)
