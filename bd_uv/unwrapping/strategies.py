@@ -15,6 +15,7 @@ import numpy as np
 from ..errors import InfeasibleError
 from ..frames import frames_from_map
 from ..solvers.flip_free import flip_free_map
+from ..solvers.projection import ProjectionSolver
 from .initial import Start, start_map
 from .problem import SOLVE_MARGIN, STORE_HEADROOM, solve_bound
 
@@ -24,8 +25,14 @@ IMPROVEMENT = 0.01      # keep resetting frames while the energy drops by more t
 # Reset frames only when a solution turns faces away from their frames by more than this (radians,
 # 99th percentile, after removing the common rotation).
 FRAME_TOLERANCE = 0.1
-AUTO_TOLERANCE = 0.01   # bisection stops when C_right - C_left <= this * C_right
+# Bisection stops when C_right - C_left <= AUTO_TOLERANCE (C_right - 1) + AUTO_FLOOR: relative to
+# C - 1, because near C = 1 a 1 % tolerance on C is most of what is left to gain.
+AUTO_TOLERANCE = 0.02
+AUTO_FLOOR = 5e-4
 AUTO_MAX_SOLVES = 24
+# Minimising C steps from the best bound D to 1 + (D - 1)(1 - DESCENT): by projection while that
+# certifies, then by conic solves until one fails, then by bisection.
+DESCENT = 0.15
 # Polish a projected map with one conic solve when the projection changed more than this share of
 # the island's area (measured: three_peaks 10 % at C = 5, mannequin-devil 0.3 %, lion-head at C = 2
 # 0.2 %: a local bend leaves the conformal map's distortion elsewhere, which a solve cannot lower).
@@ -63,7 +70,7 @@ def bounded(prob, start, C, raise_bound, limit, flags, report):
         flags.append("initial_map")  # the start already fits: nothing to bend
         return start.u, C, start.name
     if prob.method != "dirichlet" and start.u is not None and C > 1.0:
-        bent = bend(prob, start, C, report)
+        bent = bend(prob, start, C, report, flags)
         if bent is not None:
             return bent, C, start.name
     start = start_for_solve(prob, start, report)
@@ -120,7 +127,7 @@ def bounded(prob, start, C, raise_bound, limit, flags, report):
         C, retried = newC, False
 
 
-def bend(prob, start, C, report):
+def bend(prob, start, C, report, flags=None):
     """Bend a start that breaks the bound into F_C, only where the bound demands.
 
     Projection iterations (Kovalsky et al. 2015, ``solvers.flip_free``) move the faces above C and
@@ -145,6 +152,8 @@ def bend(prob, start, C, report):
     D0 = prob.face_distortion(start.u)
     D = prob.face_distortion(u)
     changed = ~(np.abs(D - D0) <= 0.01 * D0)
+    if flags is not None:
+        flags.append("projected")
     if prob.method != "lscm" or np.sum(prob.ops.area[changed]) <= POLISH_AREA * prob.ops.area.sum():
         return u
     report(0.5, f"solving at C = {C:.3g}")
@@ -154,6 +163,8 @@ def bend(prob, start, C, report):
     prob.anchor_to(harmonic.u)
     us, _ = prob.solve(harmonic.frames, C)
     if prob.check(us, C)[0] and prob.mean_distortion(us) < prob.mean_distortion(u):
+        if flags is not None:
+            flags.remove("projected")
         return us
     return u
 
@@ -175,13 +186,18 @@ def minimise(prob, start, limit, budget, flags, report, t0):
         start = (Start(bent, frames_from_map(prob.alpha(bent)), start.name, prob.distortion(bent))
                  if bent is not None else start_for_solve(prob, start, report))
     formulate(prob, start)
-    lo, hi, best = 1.0, np.inf, None
+    lo, hi, best, projected = 1.0, np.inf, None, None
     if np.isfinite(start.D) and start.D <= limit:
         best, hi = (start.u, start.D), start.D   # the start is certified at its own distortion
-    w = start.frames
-    C = 5.0 if not np.isfinite(hi) else 0.5 * (lo + hi)
+        u = descend(prob, start.u, report)
+        if u is not None:
+            best, hi = (u, prob.distortion(u)), prob.distortion(u)
+            projected = u
+    w = frames_from_map(prob.alpha(best[0])) if best is not None else start.frames
+    # Conic steps close below the best C found, then bisection once one step fails.
+    C = 5.0 if not np.isfinite(hi) else 1.0 + (hi - 1.0) * (1.0 - DESCENT)
     while prob.solves < AUTO_MAX_SOLVES:
-        if np.isfinite(hi) and hi - lo <= AUTO_TOLERANCE * hi:
+        if np.isfinite(hi) and hi - lo <= AUTO_TOLERANCE * (hi - 1.0) + AUTO_FLOOR:
             break
         if prob.solves and budget is not None and time.perf_counter() - t0 > budget:
             flags.append("time_budget_exhausted")
@@ -196,15 +212,17 @@ def minimise(prob, start, limit, budget, flags, report, t0):
         elif not ok:
             lo = C
         else:  # certified, but no better than what we have: C* is not much below
-            lo = max(lo, C * (1 - AUTO_TOLERANCE))
+            lo = max(lo, C - AUTO_TOLERANCE * (C - 1.0))
         if not np.isfinite(hi):
             C = 2.0 * lo
             if np.isfinite(start.D) and C >= start.D:
                 C, w = guaranteed_bound(start.D), start.frames
             if C > limit:
                 break
-        else:
+        elif lo > 1.0:
             C = 0.5 * (lo + hi)
+        else:
+            C = 1.0 + (hi - 1.0) * (1.0 - DESCENT)
     if best is None:
         failure = prob.solver_failure()
         if failure is not None:
@@ -217,7 +235,34 @@ def minimise(prob, start, limit, budget, flags, report, t0):
                               "the limit", isl.index)
     if best[0] is start.u:
         flags.append("initial_map")  # no solve bettered the start
+    elif best[0] is projected:
+        flags.append("projected")    # no conic solve bettered the projection iterations
     return best + (start.name,)
+
+
+def descend(prob, u, report, max_iter=40):
+    """Lower the bound of a flip-free map with projection iterations (one factorisation): project
+    onto 1 + (D - 1)(1 - DESCENT) from the last certified map while that certifies. Returns the
+    last certified map, or None when the first step already stalled."""
+    if len(prob.pin_idx) >= prob.nv:
+        return None
+    t = time.perf_counter()
+    fixed = prob.pin_idx if len(prob.pin_idx) else prob.island.loops[0][:1]
+    values = prob.pin_val if len(prob.pin_idx) else u[fixed]
+    solver = ProjectionSolver(prob.ops, prob.nv, fixed, tris=prob.island.tris)
+    scale = solver.component_scale(u)
+    best, D = None, prob.distortion(u)
+    while D > 1.0 + 1e-3:
+        C = 1.0 + (D - 1.0) * (1.0 - DESCENT)
+        report(0.1, f"minimising C: projecting onto {C:.4g}")
+        res = solver.project(u, C, values, margin=1.0 - 0.5 * DESCENT, scale=scale,
+                             max_iter=max_iter, stall=10, cancel=prob.cancel)
+        prob.iterations += res.iterations
+        if not res.all_converged:
+            break
+        u, D, best = res.u, prob.distortion(res.u), res.u
+    prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
+    return best
 
 
 def arap(prob, u, C, report):
