@@ -132,34 +132,39 @@ def project_singular_values(s1, s2, kappa, lo, hi):
     moved : (k,) bool, faces outside the polygon
     """
     kappa = np.broadcast_to(np.asarray(kappa, dtype=np.float64), s1.shape)
+    lo = np.broadcast_to(np.asarray(lo, dtype=np.float64), s1.shape)
+    hi = np.broadcast_to(np.asarray(hi, dtype=np.float64), s1.shape)
     inside = (s2 >= lo) & (s1 <= kappa * s2) & (s1 <= hi) & (s1 >= s2)
+    t1, t2 = s1.copy(), s2.copy()
+    out = np.flatnonzero(~inside)
+    if not len(out):
+        return t1, t2, ~inside
+    x1, x2, kap, lo, hi = s1[out], s2[out], kappa[out], lo[out], hi[out]
     # Above the wedge's apex no projection lands higher than max(s1, kappa lo), so an infinite
     # upper bound can be replaced by that finite one without changing the answer.
-    h = np.minimum(hi, np.maximum(np.maximum(s1, kappa * lo), lo))
+    h = np.minimum(hi, np.maximum(np.maximum(x1, kap * lo), lo))
     # Polygon corners, counter-clockwise: apex on the diagonal, end of the bottom edge, the
     # cone's meeting with sigma_1 = h, and the diagonal's.
     ax, ay = lo, lo
-    bx, by = np.minimum(kappa * lo, h), lo
-    cx, cy = h, np.maximum(h / kappa, lo)
+    bx, by = np.minimum(kap * lo, h), lo
+    cx, cy = h, np.maximum(h / kap, lo)
     dx, dy = h, h
-    best = np.full(s1.shape, np.inf)
-    t1 = s1.copy()
-    t2 = s2.copy()
+    best = np.full(x1.shape, np.inf)
+    y1, y2 = x1.copy(), x2.copy()
     for (px, py, qx, qy) in ((ax, ay, bx, by), (bx, by, cx, cy), (cx, cy, dx, dy),
                              (dx, dy, ax, ay)):
         ex, ey = qx - px, qy - py
         ll = ex * ex + ey * ey
         with np.errstate(invalid="ignore", divide="ignore"):
-            t = np.where(ll > 0, ((s1 - px) * ex + (s2 - py) * ey) / ll, 0.0)
+            t = np.where(ll > 0, ((x1 - px) * ex + (x2 - py) * ey) / ll, 0.0)
         t = np.clip(t, 0.0, 1.0)
         x, y = px + t * ex, py + t * ey
-        d = (x - s1) ** 2 + (y - s2) ** 2
+        d = (x - x1) ** 2 + (y - x2) ** 2
         better = d < best
         best = np.where(better, d, best)
-        t1 = np.where(better, x, t1)
-        t2 = np.where(better, y, t2)
-    t1 = np.where(inside, s1, t1)
-    t2 = np.where(inside, s2, t2)
+        y1 = np.where(better, x, y1)
+        y2 = np.where(better, y, y2)
+    t1[out], t2[out] = y1, y2
     return t1, t2, ~inside
 
 
@@ -249,15 +254,29 @@ class ProjectionSolver:
         self._has_faces = counts > 0
         # The global step's normal matrix, scalar and shared by both coordinates:
         # L = sum_j A_j G_j^T G_j  (twice the Dirichlet form; minimises sum A |J - P|_F^2 / 2).
-        W = sp.diags_array(self.area)
-        L = (self.Gx.T @ W @ self.Gx + self.Gy.T @ W @ self.Gy).tocsc()
-        self._L_ff = L[self.free][:, self.free].tocsc()
-        self._L_fF = L[self.free][:, self.fixed].tocsc()
-        self.GxT = sp.csr_array(self.Gx.T)
-        self.GyT = sp.csr_array(self.Gy.T)
+        self._L_ff = self._L_fF = None
+        self.G = sp.csr_array(sp.vstack([self.Gx, self.Gy]))  # (2k, nv): rows d/dx, then d/dy
+        self.GT = sp.csr_array(self.G.T)
         self._solve, self.backend = None, backend
         self.setup_seconds = time.perf_counter() - t0
         self.factor_seconds = 0.0
+
+    def _assemble(self):
+        """The global step's normal matrix, scalar and shared by both coordinates:
+        ``L = sum_j A_j G_j^T G_j`` (minimises ``sum_j A_j |J_j - P_j|_F^2``), split into free and
+        fixed columns."""
+        if self._L_ff is None:
+            W = sp.diags_array(self.area)
+            L = (self.Gx.T @ W @ self.Gx + self.Gy.T @ W @ self.Gy).tocsr()
+            Lf = L[self.free]
+            self._L_ff = sp.csc_array(Lf[:, self.free])
+            self._L_fF = sp.csc_array(Lf[:, self.fixed])
+
+    def global_matrix(self):
+        """The global step's matrix over the free vertices, (nf, nf) csc, symmetric positive
+        definite."""
+        self._assemble()
+        return self._L_ff
 
     def factorize(self):
         """Factorise the global step's matrix (done on the first iteration that needs it, so a
@@ -266,6 +285,7 @@ class ProjectionSolver:
 
         if self._solve is None:
             t0 = time.perf_counter()
+            self._assemble()
             self._solve, self.backend = factor_spd(self._L_ff, self.backend)
             self.factor_seconds = time.perf_counter() - t0
         return self._solve
@@ -289,6 +309,8 @@ class ProjectionSolver:
         return 0.5 * ((ux + vy) + 1j * (vx - uy)), 0.5 * ((ux - vy) + 1j * (vx + uy))
 
     def _per_comp_max(self, v):
+        if self.n_components == 1:
+            return np.array([v.max() if len(v) else -np.inf])
         out = np.full(self.n_components, -np.inf)
         if len(v):
             m = np.maximum.reduceat(v[self._order], self._starts[self._has_faces])
@@ -358,7 +380,7 @@ class ProjectionSolver:
             fv = np.asarray(fixed_values, dtype=np.complex128)
             U[self.fixed, 0], U[self.fixed, 1] = fv.real, fv.imag
         UF = U[self.fixed]
-        rhs_fixed = self._L_fF @ UF  # (free, 2)
+        rhs_fixed = None  # L_fF x_F, once an iteration needs it
         done = np.zeros(ncomp, dtype=bool)
         done_at = np.zeros(ncomp, dtype=np.int64)
         frozen_v = np.zeros(self.nv, dtype=bool)
@@ -369,13 +391,16 @@ class ProjectionSolver:
         best_at = np.zeros(ncomp, dtype=np.int64)
         prev_err = np.full(ncomp, np.inf)
         use_tan = np.full(ncomp, bool(accelerate))
+        k = len(self.area)
+        area2 = np.concatenate([self.area, self.area])
         it = 0
         while True:
             if cancel is not None and cancel.is_set():
                 raise CancelledError("projection iterations cancelled")
-            J = self.jacobians(U)
-            a, b = self._alpha_beta(J)
-            na, nb = np.abs(a), np.abs(b)
+            R = self.G @ U  # (2k, 2): rows (d/dx, d/dy) of faces, columns (u, v)
+            ux, uy, vx, vy = R[:k, 0], R[k:, 0], R[:k, 1], R[k:, 1]
+            are, aim, bre, bim = ux + vy, vx - uy, ux - vy, vx + uy  # 2 alpha, 2 beta
+            na, nb = 0.5 * np.hypot(are, aim), 0.5 * np.hypot(bre, bim)
             s1, s2 = na + nb, na - nb
             with np.errstate(invalid="ignore", divide="ignore"):
                 D = np.where(s2 > 0, s1 / s2, np.inf)
@@ -397,18 +422,28 @@ class ProjectionSolver:
                 best_key = np.where(better, key, best_key)
                 bv = better[self.component]
                 U_best[bv] = U[bv]
-            # Local step: the nearest allowed Jacobian, phases of alpha and beta kept.
+            # Local step: the nearest allowed Jacobian, phases of alpha and beta kept; only the
+            # faces outside the set move.
             t1, t2, moved = project_singular_values(s1, s2, kappa, lo, hi)
+            m = np.flatnonzero(moved)
             with np.errstate(invalid="ignore", divide="ignore"):
-                pa = np.where(na > 0, a / na, 1.0)
-                pb = np.where(nb > 0, b / nb, 1.0)
-            pa = 0.5 * (t1 + t2) * pa
-            pb = 0.5 * (t1 - t2) * pb
-            # Back to (u_x, u_y, v_x, v_y).
-            P = (pa.real + pb.real, pb.imag - pa.imag, pa.imag + pb.imag, pa.real - pb.real)
-            Nrm = tuple(j - p for j, p in zip(J, P))
-            err = np.bincount(self.face_comp, weights=self.area * sum(n * n for n in Nrm),
-                              minlength=ncomp)
+                fa = np.where(na[m] > 0, 0.25 * (t1[m] + t2[m]) / na[m], 0.0)
+                fb = np.where(nb[m] > 0, 0.25 * (t1[m] - t2[m]) / nb[m], 0.0)
+            # A face with alpha = 0 gets the real alpha |alpha'| (phase 1), likewise beta.
+            pre = np.where(na[m] > 0, fa * are[m], 0.5 * (t1[m] + t2[m]))
+            pim = fa * aim[m]
+            qre = np.where(nb[m] > 0, fb * bre[m], 0.5 * (t1[m] - t2[m]))
+            qim = fb * bim[m]
+            # Normal n = J - P on the moved faces, back in (u_x, u_y, v_x, v_y).
+            N = np.zeros((2 * k, 2))
+            N[m, 0] = ux[m] - (pre + qre)
+            N[k + m, 0] = uy[m] - (qim - pim)
+            N[m, 1] = vx[m] - (pim + qim)
+            N[k + m, 1] = vy[m] - (pre - qre)
+            P = R - N
+            err = np.bincount(self.face_comp[m], weights=self.area[m] * (
+                N[m, 0] ** 2 + N[k + m, 0] ** 2 + N[m, 1] ** 2 + N[k + m, 1] ** 2),
+                minlength=ncomp)
             improved = err < best_viol * (1 - 1e-2)
             best_viol = np.where(improved, err, best_viol)
             best_at = np.where(improved, it, best_at)
@@ -416,26 +451,27 @@ class ProjectionSolver:
                 break
             # Global step: L_ff x = G^T A P - L_fF x_F, per coordinate, plus the tangent
             # constraint's direction G^T n for each component (one back-solve, 4 columns).
-            AP = [self.area * p for p in P]
-            bu = self.GxT @ AP[0] + self.GyT @ AP[1]
-            bv = self.GxT @ AP[2] + self.GyT @ AP[3]
-            cu = self.GxT @ Nrm[0] + self.GyT @ Nrm[1]
-            cv = self.GxT @ Nrm[2] + self.GyT @ Nrm[3]
+            GB = self.GT @ np.concatenate([area2[:, None] * P, N], axis=1)  # (nv, 4)
             f = self.free
-            B = np.stack([bu[f] - rhs_fixed[:, 0], bv[f] - rhs_fixed[:, 1], cu[f], cv[f]], 1)
+            B = GB[f]
+            if rhs_fixed is None:
+                self._assemble()
+                rhs_fixed = self._L_fF @ UF  # (free, 2)
+            B[:, :2] -= rhs_fixed
             X = self.factorize()(B)
             Xc = X[:, :2]
             use_tan &= err <= prev_err * (1 + 1e-12)
             if accelerate and use_tan.any():
                 # Constraint  n . (T x) = n . P  per component, on the free unknowns.
-                nP = np.bincount(self.face_comp, weights=sum(n * p for n, p in zip(Nrm, P)),
-                                 minlength=ncomp)
+                nP = np.bincount(self.face_comp[m], weights=(
+                    N[m, 0] * P[m, 0] + N[k + m, 0] * P[k + m, 0] + N[m, 1] * P[m, 1]
+                    + N[k + m, 1] * P[k + m, 1]), minlength=ncomp)
                 Fx = self.fixed
-                cF = (cu[Fx] * UF[:, 0] + cv[Fx] * UF[:, 1])
+                cF = GB[Fx, 2] * UF[:, 0] + GB[Fx, 3] * UF[:, 1]
                 r = nP - np.bincount(self.component[Fx], weights=cF, minlength=ncomp)
-                cxc = np.bincount(self.free_comp, weights=cu[f] * Xc[:, 0] + cv[f] * Xc[:, 1],
+                cxc = np.bincount(self.free_comp, weights=B[:, 2] * Xc[:, 0] + B[:, 3] * Xc[:, 1],
                                   minlength=ncomp)
-                cxn = np.bincount(self.free_comp, weights=cu[f] * X[:, 2] + cv[f] * X[:, 3],
+                cxn = np.bincount(self.free_comp, weights=B[:, 2] * X[:, 2] + B[:, 3] * X[:, 3],
                                   minlength=ncomp)
                 with np.errstate(invalid="ignore", divide="ignore"):
                     lam = np.where(use_tan & (np.abs(cxn) > 0), (cxc - r) / cxn, 0.0)
