@@ -234,6 +234,7 @@ class ProjectionSolver:
         if tris is None:
             tris = self._tris_from_ops(k)
         tris = np.asarray(tris, dtype=np.int64)
+        self.ops, self.tris = ops, tris
         adj = sp.coo_array((np.ones(2 * k), (np.concatenate([tris[:, 0], tris[:, 1]]),
                                               np.concatenate([tris[:, 1], tris[:, 2]]))),
                            shape=(nv, nv))
@@ -271,6 +272,28 @@ class ProjectionSolver:
             Lf = L[self.free]
             self._L_ff = sp.csc_array(Lf[:, self.free])
             self._L_fF = sp.csc_array(Lf[:, self.fixed])
+
+    def _continue_on(self, comps, U, C, scale, kw):
+        """Project the components ``comps`` (c,) bool on their own, from ``U``.
+
+        Returns the sub-solver, the vertices it covers (into this solver's) and its result."""
+        F_a = np.flatnonzero(comps[self.face_comp])
+        V_a = np.flatnonzero(comps[self.component])
+        new = np.full(self.nv, -1, dtype=np.int64)
+        new[V_a] = np.arange(len(V_a))
+        cols = np.concatenate([V_a, V_a + self.nv])
+        o = self.ops
+        ops = type(o)(*(sp.csr_array(M[F_a][:, cols]) for M in (o.Are, o.Aim, o.Bre, o.Bim)),
+                      self.area[F_a])
+        fixed = self.fixed[comps[self.component[self.fixed]]]
+        sub = ProjectionSolver(ops, len(V_a), new[fixed], tris=new[self.tris[F_a]],
+                               backend=self.backend)
+        sub_scale = np.empty(sub.n_components)
+        sub_scale[sub.component] = scale[self.component[V_a]]
+        Ua = U[V_a]
+        r = sub.project(Ua[:, 0] + 1j * Ua[:, 1], C, **kw, scale=sub_scale)
+        self.factor_seconds += sub.factor_seconds
+        return sub, V_a, r
 
     def global_matrix(self):
         """The global step's matrix over the free vertices, (nf, nf) csc, symmetric positive
@@ -330,8 +353,8 @@ class ProjectionSolver:
 
     # -- the iterations -------------------------------------------------------------------------
     def project(self, u0, C, fixed_values=None, *, margin=0.9, smin=None, smax=None, scale=None,
-                stretch_margin=0.01, floor=1e-3, max_iter=500, stall=50, accelerate=True,
-                cancel=None):
+                stretch_margin=0.01, floor=1e-3, max_iter=200, stall=30, accelerate=True,
+                shrink=0.5, cancel=None):
         """Iterate local projections and global back-solves until the map is within the bounds.
 
         Parameters
@@ -352,6 +375,9 @@ class ProjectionSolver:
             squared Frobenius distance of its Jacobians) has dropped by 1% over this many
             iterations
         accelerate : bool, use the tangent step of Kovalsky et al.
+        shrink : float, when the unconverged components hold fewer than this fraction of the
+            faces, they continue alone on a smaller system (factorised anew; the iterates are
+            the same but for a restart of the acceleration)
         cancel : object with ``is_set()``, checked once per iteration -> ``CancelledError``
 
         Returns
@@ -422,6 +448,28 @@ class ProjectionSolver:
                 best_key = np.where(better, key, best_key)
                 bv = better[self.component]
                 U_best[bv] = U[bv]
+            active = ~done[self.face_comp]
+            if ncomp > 1 and active.sum() < shrink * k:
+                # Most islands are certified: continue on a smaller system of the others.
+                sub, V_a, r = self._continue_on(~done, U, C, scale, dict(
+                    margin=margin, smin=smin, smax=smax, stretch_margin=stretch_margin,
+                    floor=floor, max_iter=max_iter - it, stall=stall, accelerate=accelerate,
+                    shrink=shrink, cancel=cancel))
+                Ua = np.stack([r.u.real, r.u.imag], 1)
+                outer = np.zeros(sub.n_components, dtype=np.int64)
+                outer[sub.component] = self.component[V_a]
+                conv = np.zeros(ncomp, dtype=bool)
+                conv[outer[r.converged]] = True
+                took = np.zeros(ncomp, dtype=bool)
+                took[outer[~r.converged & (r.max_distortion < best_key[outer])]] = True
+                done_at[outer] = it + r.iterations_per_component
+                done |= conv
+                vc, vt = conv[self.component[V_a]], took[self.component[V_a]]
+                frozen_v[V_a[vc]] = True
+                U_saved[V_a[vc]] = Ua[vc]
+                U_best[V_a[vt]] = Ua[vt]
+                it += r.iterations
+                break
             # Local step: the nearest allowed Jacobian, phases of alpha and beta kept; only the
             # faces outside the set move.
             t1, t2, moved = project_singular_values(s1, s2, kappa, lo, hi)

@@ -187,3 +187,30 @@ def test_no_factorisation_when_the_start_fits():
     assert S._solve is None and S.factor_seconds == 0.0
     S.project(u0, 1.5)
     assert S._solve is not None
+
+
+def test_many_islands_continue_on_the_unconverged_ones_alone():
+    # One hard island among easy ones: once the easy ones certify, the hard one continues on a
+    # smaller system; every island is certified and the easy ones are untouched.
+    parts = [_bumpy()] + [grid(8, 7, z=lambda x, y, s=s: 0.05 * s * x * x) for s in range(4)]
+    Vs, Zs, Ts, us, fixed, off = [], [], [], [], [], 0
+    for V, F in parts:
+        Vi, isl, Z, _ = _setup(V, F)
+        Vs.append(Vi)
+        Zs.append(Z)
+        Ts.append(isl.tris + off)
+        us.append(lscm_map(Z, isl.tris, len(Vi), isl.loops) + 3.0 * len(us))
+        fixed.append(isl.loops[0][0] + off)
+        off += len(Vi)
+    tris, Z = np.concatenate(Ts), np.concatenate(Zs)
+    ops = jacobian_operators(Z, tris, off)
+    S = ProjectionSolver(ops, off, fixed, tris=tris)
+    u0 = np.concatenate(us)
+    r = S.project(u0, 1.5, shrink=0.9)
+    assert r.all_converged
+    _check(np.concatenate(Vs), tris, r.u, 1.5)
+    easy = r.component >= 0
+    easy[:len(Vs[0])] = False
+    assert np.array_equal(r.u[easy], u0[easy])
+    r2 = S.project(u0, 1.5, shrink=0.0)  # never restricted: same certification
+    assert r2.all_converged
