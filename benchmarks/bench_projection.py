@@ -63,7 +63,7 @@ def run_meshes(names, bounds, margin):
     print(f"margin {margin}; seconds = factorisation + iterations; 'fixed' = one boundary vertex")
     print()
     print("| mesh | faces | start | start max / mean (flips) | C | iters | s | certified | "
-          "max | mean | mean / start | mean / ABF |")
+          "max (flips) | mean | mean / start | mean / ABF |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name in names:
         V, F = load_mesh_by_index(os.path.join(MESHES, name))
@@ -87,7 +87,7 @@ def run_meshes(names, bounds, margin):
                 abf = ABF_MEAN.get(name)
                 print(f"| {name} | {len(isl.tris)} | {start} | {fmt(s0.max_distortion)} / "
                       f"{s0.mean_distortion:.4f} ({s0.flips}) | {C:g} | {r.iterations} | "
-                      f"{dt:.3f} | {'yes' if ok else 'no'} | {fmt(s.max_distortion)} | "
+                      f"{dt:.3f} | {'yes' if ok else 'no'} | {fmt(s.max_distortion)} ({s.flips}) | "
                       f"{s.mean_distortion:.4f} | {s.mean_distortion / s0.mean_distortion:.4f} | "
                       f"{'' if abf is None else f'{s.mean_distortion / abf:.4f}'} |")
         print(f"<!-- {name}: LSCM {t_lscm:.3f} s -->")

@@ -214,3 +214,13 @@ def test_many_islands_continue_on_the_unconverged_ones_alone():
     assert np.array_equal(r.u[easy], u0[easy])
     r2 = S.project(u0, 1.5, shrink=0.0)  # never restricted: same certification
     assert r2.all_converged
+
+
+def test_flip_free_map_gives_none_when_no_start_reaches_the_bound():
+    V, F = load_off("three_peaks.off")
+    Vi, isl, Z, ops = _setup(V, F)
+    nv = len(Vi)
+    ul = lscm_map(Z, isl.tris, nv, isl.loops)
+    u, info = flip_free_map(Z, isl.tris, nv, isl.loops, ul, 5.0, max_iter=1)
+    assert u is None and info["start"] is None
+    assert info["iterations"] == 2  # one per start: LSCM, then harmonic
