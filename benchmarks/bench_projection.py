@@ -30,7 +30,8 @@ from bd_uv.frames import harmonic_map, lscm_map  # noqa: E402
 from bd_uv.geometry import face_areas, local_coordinates  # noqa: E402
 from bd_uv.mesh import islands  # noqa: E402
 from bd_uv.solvers.flip_free import flip_free_map  # noqa: E402
-from bd_uv.solvers.projection import ProjectionSolver, factor_spd  # noqa: E402
+from bd_uv.solvers.factor import factor_spd  # noqa: E402
+from bd_uv.solvers.projection import ProjectionSolver  # noqa: E402
 
 MESHES = "/work/shared/meshes"
 DISKS = ["nefertiti.off", "three_peaks.off", "hemisphere.obj", "mushroom.off", "lion-head.off",

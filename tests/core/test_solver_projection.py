@@ -9,7 +9,8 @@ from bd_uv.frames import harmonic_map, lscm_map
 from bd_uv.geometry import local_coordinates
 from bd_uv.mesh import islands
 from bd_uv.solvers.flip_free import flip_free_map
-from bd_uv.solvers.projection import ProjectionSolver, project_singular_values
+from bd_uv.solvers.local_projection import project_singular_values
+from bd_uv.solvers.projection import ProjectionSolver
 
 from helpers import grid, load_off, reference_distortion
 
