@@ -89,7 +89,8 @@ def run_meshes(names, bounds, margin):
                 abf = ABF_MEAN.get(name)
                 print(f"| {name} | {len(isl.tris)} | {start} | {fmt(s0.max_distortion)} / "
                       f"{s0.mean_distortion:.4f} ({s0.flips}) | {C:g} | {r.iterations} | "
-                      f"{dt:.3f} ({dc:.3f}) | {'yes' if ok else 'no'} | {fmt(s.max_distortion)} ({s.flips}) | "
+                      f"{dt:.3f} ({dc:.3f}) | {'yes' if ok else 'no'} | "
+                      f"{fmt(s.max_distortion)} ({s.flips}) | "
                       f"{s.mean_distortion:.4f} | {s.mean_distortion / s0.mean_distortion:.4f} | "
                       f"{'' if abf is None else f'{s.mean_distortion / abf:.4f}'} |")
         print(f"<!-- {name}: LSCM {t_lscm:.3f} s -->")
