@@ -20,6 +20,7 @@ on every face of every component: a component that certifies is frozen at that i
 onto a tighter bound ``C' = margin * C`` (0.9 C by default; 0.97 C gave three_peaks a 0.2% higher
 mean) makes iterates cross into the set instead of approaching its boundary from outside.
 """
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -71,7 +72,7 @@ class ProjectionSolver:
     ops : energies.JacobianOperators over (k, 2 nv)
     nv : int
     fixed_idx : (p,) int, vertices held at given values (at least one per component)
-    tris : (k,3) int, optional, used to find the connected components (else from ``ops``)
+    tris : (k,3) int, the triangles ``ops`` was built over (for the connected components)
     backend : see :func:`factor_spd`
 
     Attributes
@@ -82,9 +83,7 @@ class ProjectionSolver:
     backend : str
     """
 
-    def __init__(self, ops, nv, fixed_idx, tris=None, backend="auto"):
-        import time
-
+    def __init__(self, ops, nv, fixed_idx, tris, backend="auto"):
         t0 = time.perf_counter()
         self.nv = nv = int(nv)
         self.area = np.asarray(ops.area, dtype=np.float64)
@@ -93,8 +92,6 @@ class ProjectionSolver:
         # Re a = (u_x + v_y)/2, Im a = (v_x - u_y)/2, Re b = (u_x - v_y)/2, Im b = (v_x + u_y)/2.
         self.Gx = sp.csr_array((ops.Are + ops.Bre)[:, :nv])
         self.Gy = sp.csr_array((ops.Bim - ops.Aim)[:, :nv])
-        if tris is None:
-            tris = self._tris_from_ops(k)
         tris = np.asarray(tris, dtype=np.int64)
         self.ops, self.tris = ops, tris
         adj = sp.coo_array((np.ones(2 * k), (np.concatenate([tris[:, 0], tris[:, 1]]),
@@ -108,6 +105,7 @@ class ProjectionSolver:
                                                 minlength=self.n_components) == 0):
             raise ValueError("every connected component needs at least one fixed vertex")
         self.fixed = fixed
+        self.fixed_given = np.asarray(fixed_idx, dtype=np.int64)
         self.free = np.setdiff1d(np.arange(nv), fixed)
         self.free_comp = self.component[self.free]
         # Faces sorted by component, for per-component maxima.
@@ -115,8 +113,6 @@ class ProjectionSolver:
         counts = np.bincount(self.face_comp, minlength=self.n_components)
         self._starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
         self._has_faces = counts > 0
-        # The global step's normal matrix, scalar and shared by both coordinates:
-        # L = sum_j A_j G_j^T G_j  (twice the Dirichlet form; minimises sum A |J - P|_F^2 / 2).
         self._L_ff = self._L_fF = None
         self.G = sp.csr_array(sp.vstack([self.Gx, self.Gy]))  # (2k, nv): rows d/dx, then d/dy
         self.GT = sp.csr_array(self.G.T)
@@ -166,22 +162,12 @@ class ProjectionSolver:
     def factorize(self):
         """Factorise the global step's matrix (done on the first iteration that needs it, so a
         map that already fits costs no factorisation)."""
-        import time
-
         if self._solve is None:
             t0 = time.perf_counter()
             self._assemble()
             self._solve, self.backend = factor_spd(self._L_ff, self.backend)
             self.factor_seconds = time.perf_counter() - t0
         return self._solve
-
-    def _tris_from_ops(self, k):
-        G = sp.csr_array(self.Gx)
-        # Each row of Gx holds the face's three vertices (up to structural zeros).
-        idx = G.indices.reshape(k, -1)
-        if idx.shape[1] != 3:
-            raise ValueError("pass tris: the operators do not show three vertices per face")
-        return idx
 
     # -- pieces -------------------------------------------------------------------------------
     def jacobians(self, U):
@@ -223,8 +209,7 @@ class ProjectionSolver:
         ----------
         u0 : (nv,) complex, the start (may flip)
         C : float > 1, conformal distortion bound (Lipman 2012, eq. 4.9)
-        fixed_values : (p,) complex for ``fixed_idx`` (sorted as ``np.unique`` sorts them);
-            default: ``u0`` there
+        fixed_values : (p,) complex, one per entry of ``fixed_idx``; default: ``u0`` there
         margin : float in (0, 1], project onto the tighter bound ``C' = max(1 + 1e-3, margin C)``
         smin, smax : float or None, bounds on the singular values (eqs. 6.3-6.4), relative to each
             component's ``scale``
@@ -266,7 +251,7 @@ class ProjectionSolver:
         U = np.stack([u0.real, u0.imag], 1).copy()
         if fixed_values is not None:
             fv = np.asarray(fixed_values, dtype=np.complex128)
-            U[self.fixed, 0], U[self.fixed, 1] = fv.real, fv.imag
+            U[self.fixed_given, 0], U[self.fixed_given, 1] = fv.real, fv.imag
         UF = U[self.fixed]
         rhs_fixed = None  # L_fF x_F, once an iteration needs it
         done = np.zeros(ncomp, dtype=bool)
