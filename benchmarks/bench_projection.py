@@ -204,9 +204,9 @@ def many_islands(n, nx=4, seed=0):
     return V, F, f, nx * nx
 
 
-def run_islands(n, C, margin):
+def run_islands(n, C, margin, nx):
     """LSCM of every island and projection to C, all islands in one system each."""
-    V, F, f, per = many_islands(n)
+    V, F, f, per = many_islands(n, nx)
     t0 = time.perf_counter()
     Z = local_coordinates(V, F)
     # LSCM of the union in one solve: two boundary corners of each patch pinned at their 3D
@@ -246,12 +246,14 @@ def main(argv=None):
     ap.add_argument("--factored-lscm", action="store_true",
                     help="with --big: LSCM solved by factor_spd instead of frames.lscm_map")
     ap.add_argument("--islands", type=int, metavar="N", help="N small bumpy patches at once")
+    ap.add_argument("--patch-grid", type=int, default=3,
+                    help="with --islands: vertices per side of a patch (3: 8 faces, as issue 9)")
     a = ap.parse_args(argv)
     print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     if a.backends:
         run_backends("face.obj")
     elif a.islands:
-        run_islands(a.islands, a.bounds[0], a.margin)
+        run_islands(a.islands, a.bounds[0], a.margin, a.patch_grid)
     elif a.big:
         run_big(a.big, a.subdivisions, a.bounds[0], a.margin, a.factored_lscm)
     else:
