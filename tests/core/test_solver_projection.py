@@ -226,3 +226,16 @@ def test_flip_free_map_gives_none_when_no_start_reaches_the_bound():
     u, info = flip_free_map(Z, isl.tris, nv, isl.loops, ul, 5.0, max_iter=1)
     assert u is None and info["start"] is None
     assert info["iterations"] == 2  # one per start: LSCM, then harmonic
+
+
+def test_pinned_vertices_are_held_exactly():
+    V, F = _bumpy()
+    Vi, isl, Z, ops = _setup(V, F)
+    u0 = harmonic_map(Z, isl.tris, len(Vi), isl.loops)
+    loop = isl.loops[0]
+    pins = np.array([loop[len(loop) // 2], loop[0]])  # unsorted on purpose
+    S = ProjectionSolver(ops, len(Vi), pins, tris=isl.tris)
+    r = S.project(u0, 1.5, fixed_values=u0[pins])
+    assert r.all_converged
+    _check(Vi, isl.tris, r.u, 1.5)
+    assert np.array_equal(r.u[pins], u0[pins])
