@@ -30,7 +30,8 @@ from bd_uv.frames import harmonic_map, lscm_map  # noqa: E402
 from bd_uv.geometry import face_areas, local_coordinates  # noqa: E402
 from bd_uv.mesh import islands  # noqa: E402
 from bd_uv.solvers.flip_free import flip_free_map  # noqa: E402
-from bd_uv.solvers.projection import ProjectionSolver, factor_spd  # noqa: E402
+from bd_uv.solvers.factor import factor_spd  # noqa: E402
+from bd_uv.solvers.projection import ProjectionSolver  # noqa: E402
 
 MESHES = "/work/shared/meshes"
 DISKS = ["nefertiti.off", "three_peaks.off", "hemisphere.obj", "mushroom.off", "lion-head.off",
@@ -60,10 +61,11 @@ def fmt(x):
 
 
 def run_meshes(names, bounds, margin):
-    print(f"margin {margin}; seconds = factorisation + iterations; 'fixed' = one boundary vertex")
+    print(f"margin {margin}; seconds = setup + factorisation + iterations, wall (process CPU); "
+          "one boundary vertex fixed")
     print()
-    print("| mesh | faces | start | start max / mean (flips) | C | iters | s | certified | "
-          "max | mean | mean / start | mean / ABF |")
+    print("| mesh | faces | start | start max / mean (flips) | C | iters | s (CPU s) | certified | "
+          "max (flips) | mean | mean / start | mean / ABF |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|")
     for name in names:
         V, F = load_mesh_by_index(os.path.join(MESHES, name))
@@ -78,16 +80,17 @@ def run_meshes(names, bounds, margin):
         for start, u0 in (("lscm", ul), ("harmonic", uh)):
             s0 = stats(Vn, isl.tris, u0)
             for C in bounds:
-                t = time.perf_counter()
+                t, c = time.perf_counter(), time.process_time()
                 S = ProjectionSolver(ops, nv, [isl.loops[0][0]], tris=isl.tris)
                 r = S.project(u0, C, margin=margin)
-                dt = time.perf_counter() - t
+                dt, dc = time.perf_counter() - t, time.process_time() - c
                 s = stats(Vn, isl.tris, r.u)
                 ok = s.flips == 0 and s.max_distortion <= C * (1 + 1e-6)
                 abf = ABF_MEAN.get(name)
                 print(f"| {name} | {len(isl.tris)} | {start} | {fmt(s0.max_distortion)} / "
                       f"{s0.mean_distortion:.4f} ({s0.flips}) | {C:g} | {r.iterations} | "
-                      f"{dt:.3f} | {'yes' if ok else 'no'} | {fmt(s.max_distortion)} | "
+                      f"{dt:.3f} ({dc:.3f}) | {'yes' if ok else 'no'} | "
+                      f"{fmt(s.max_distortion)} ({s.flips}) | "
                       f"{s.mean_distortion:.4f} | {s.mean_distortion / s0.mean_distortion:.4f} | "
                       f"{'' if abf is None else f'{s.mean_distortion / abf:.4f}'} |")
         print(f"<!-- {name}: LSCM {t_lscm:.3f} s -->")
@@ -106,7 +109,7 @@ def run_backends(name):
     nv = len(Vn)
     ops = jacobian_operators(Z, isl.tris, nv)
     S = ProjectionSolver(ops, nv, [isl.loops[0][0]], tris=isl.tris, backend="splu")
-    M = S._L_ff
+    M = S.global_matrix()
     B = np.random.default_rng(0).normal(size=(M.shape[0], 4))
     print(f"{name}: {M.shape[0]} unknowns, {M.nnz} non-zeros")
     print("| backend | factorise s | back-solve 4 columns s | residual |")
@@ -128,7 +131,29 @@ def run_backends(name):
         print(f"| {backend} | {tf:.3f} | {ts:.4f} | {res:.1e} |")
 
 
-def run_big(name, subdivisions, C, margin):
+def lscm_factored(Z, tris, nv, loops, backend="auto"):
+    """The LSCM map of ``frames.lscm_map`` (same two pins), solved with ``factor_spd`` instead of
+    SuperLU on the 2nv system: what the LSCM start would cost with the projection's factoriser."""
+    import scipy.sparse as sp
+
+    from bd_uv.frames import _far_pair
+
+    ops = jacobian_operators(Z, tris, nv)
+    W = sp.diags_array(ops.area)
+    Q = (ops.Bre.T @ W @ ops.Bre + ops.Bim.T @ W @ ops.Bim).tocsr()
+    idx, val = _far_pair(Z, tris, nv, loops[0])
+    fixed = np.concatenate([idx, idx + nv])
+    xF = np.concatenate([val.real, val.imag])
+    free = np.setdiff1d(np.arange(2 * nv), fixed)
+    Qf = Q[free]
+    solve, _ = factor_spd(sp.csc_array(Qf[:, free]), backend)
+    x = np.empty(2 * nv)
+    x[fixed] = xF
+    x[free] = solve(-(Qf[:, fixed] @ xF))
+    return x[:nv] + 1j * x[nv:]
+
+
+def run_big(name, subdivisions, C, margin, factored_lscm):
     import trimesh
 
     V, F = load_mesh_by_index(os.path.join(MESHES, name))
@@ -136,26 +161,32 @@ def run_big(name, subdivisions, C, margin):
         V, F = trimesh.remesh.subdivide(V, F)
     V, F = np.asarray(V, np.float64), np.asarray(F, np.int64)
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     Vn, isl, Z = island_problem(V, F)
     nv = len(Vn)
-    t1 = time.perf_counter()
-    ul = lscm_map(Z, isl.tris, nv, isl.loops)
-    t2 = time.perf_counter()
+    t1, c1 = time.perf_counter(), time.process_time()
+    ul = (lscm_factored(Z, isl.tris, nv, isl.loops) if factored_lscm
+          else lscm_map(Z, isl.tris, nv, isl.loops))
+    t2, c2 = time.perf_counter(), time.process_time()
+    rss_lscm = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     u, info = flip_free_map(Z, isl.tris, nv, isl.loops, ul, C, margin=margin)
-    t3 = time.perf_counter()
+    t3, c3 = time.perf_counter(), time.process_time()
     rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     s0 = stats(Vn, isl.tris, ul)
     s = stats(Vn, isl.tris, u) if u is not None else None
     print(f"{name} subdivided {subdivisions}x: {len(F)} faces, {nv} vertices")
-    print(f"  islands + local coordinates {t1 - t0:.2f} s; LSCM {t2 - t1:.2f} s "
+    how = "factor_spd" if factored_lscm else "frames.lscm_map"
+    print("  wall s (process CPU s):")
+    print(f"  islands + local coordinates {t1 - t0:.2f} ({c1 - c0:.2f}); LSCM ({how}) "
+          f"{t2 - t1:.2f} ({c2 - c1:.2f}) "
           f"(max {fmt(s0.max_distortion)}, mean {s0.mean_distortion:.4f}, flips {s0.flips})")
     print(f"  projection to C = {C:g}: start {info['start']}, {info['iterations']} iterations, "
-          f"{t3 - t2:.2f} s (factorisation {info['factor_seconds']:.2f} s)")
+          f"{t3 - t2:.2f} ({c3 - c2:.2f}), factorisation {info['factor_seconds']:.2f} s wall")
     if s is not None:
         print(f"  result max {fmt(s.max_distortion)}, mean {s.mean_distortion:.4f}, "
               f"flips {s.flips}")
-    print(f"  peak RSS {rss:.0f} MB (after loading and subdividing: {rss0:.0f} MB)")
+    print(f"  peak RSS {rss:.0f} MB (after loading and subdividing: {rss0:.0f} MB, after LSCM: "
+          f"{rss_lscm:.0f} MB)")
 
 
 def many_islands(n, nx=4, seed=0):
@@ -173,9 +204,9 @@ def many_islands(n, nx=4, seed=0):
     return V, F, f, nx * nx
 
 
-def run_islands(n, C, margin):
+def run_islands(n, C, margin, nx):
     """LSCM of every island and projection to C, all islands in one system each."""
-    V, F, f, per = many_islands(n)
+    V, F, f, per = many_islands(n, nx)
     t0 = time.perf_counter()
     Z = local_coordinates(V, F)
     # LSCM of the union in one solve: two boundary corners of each patch pinned at their 3D
@@ -212,15 +243,19 @@ def main(argv=None):
     ap.add_argument("--backends", action="store_true", help="compare factorisations on face.obj")
     ap.add_argument("--big", metavar="MESH", help="subdivide MESH and time LSCM + flip_free_map")
     ap.add_argument("--subdivisions", type=int, default=2)
+    ap.add_argument("--factored-lscm", action="store_true",
+                    help="with --big: LSCM solved by factor_spd instead of frames.lscm_map")
     ap.add_argument("--islands", type=int, metavar="N", help="N small bumpy patches at once")
+    ap.add_argument("--patch-grid", type=int, default=3,
+                    help="with --islands: vertices per side of a patch (3: 8 faces, as issue 9)")
     a = ap.parse_args(argv)
     print(f"load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     if a.backends:
         run_backends("face.obj")
     elif a.islands:
-        run_islands(a.islands, a.bounds[0], a.margin)
+        run_islands(a.islands, a.bounds[0], a.margin, a.patch_grid)
     elif a.big:
-        run_big(a.big, a.subdivisions, a.bounds[0], a.margin)
+        run_big(a.big, a.subdivisions, a.bounds[0], a.margin, a.factored_lscm)
     else:
         run_meshes(a.meshes, a.bounds, a.margin)
     return 0

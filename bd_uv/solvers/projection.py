@@ -20,152 +20,20 @@ on every face of every component: a component that certifies is frozen at that i
 onto a tighter bound ``C' = margin * C`` (0.9 C by default; 0.97 C gave three_peaks a 0.2% higher
 mean) makes iterates cross into the set instead of approaching its boundary from outside.
 """
+import time
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.csgraph as csgraph
-import scipy.sparse.linalg as spla
 
 from ..errors import CancelledError
+from .factor import factor_spd
+from .local_projection import project_singular_values
 
-__all__ = ["ProjectionResult", "ProjectionSolver", "project_singular_values", "factor_spd"]
-
-
-# ---------------------------------------------------------------------------------------------
-# Sparse symmetric positive definite factorisation, several right-hand sides at once
-# ---------------------------------------------------------------------------------------------
-def _backends():
-    found = []
-    try:
-        import cholespy  # noqa: F401
-        found.append("cholespy")
-    except ImportError:
-        pass
-    try:
-        import qdldl  # noqa: F401
-        found.append("qdldl")
-    except ImportError:
-        pass
-    found.append("splu")
-    return found
+__all__ = ["ProjectionResult", "ProjectionSolver"]
 
 
-def factor_spd(M, backend="auto"):
-    """Factorise a sparse symmetric positive definite matrix once.
-
-    Parameters
-    ----------
-    M : (n, n) sparse, symmetric positive definite
-    backend : "auto" | "cholespy" | "qdldl" | "splu"
-        "auto" takes the first installed of cholespy (supernodal Cholesky, fastest back-solves),
-        qdldl (LDL^T), scipy's SuperLU.
-
-    Returns
-    -------
-    solve : callable, ``solve(B)`` with B (n,) or (n, r) float64 -> same shape
-    name : str, the backend used
-    """
-    if backend == "auto":
-        backend = _backends()[0]
-    M = sp.csc_array(M)
-    n = M.shape[0]
-    if backend == "cholespy":
-        import cholespy
-
-        C = sp.coo_array(M)
-        fac = cholespy.CholeskySolverD(n, np.ascontiguousarray(C.row, dtype=np.int32),
-                                       np.ascontiguousarray(C.col, dtype=np.int32),
-                                       np.ascontiguousarray(C.data, dtype=np.float64),
-                                       cholespy.MatrixType.COO)
-
-        def solve(B):
-            B = np.ascontiguousarray(B, dtype=np.float64)
-            X = np.empty_like(B)
-            fac.solve(B, X)
-            return X
-    elif backend == "qdldl":
-        import qdldl
-
-        fac = qdldl.Solver(sp.triu(M, format="csc"), upper=True)
-
-        def solve(B):
-            B = np.asarray(B, dtype=np.float64)
-            if B.ndim == 1:
-                return fac.solve(B)
-            return np.stack([fac.solve(np.ascontiguousarray(B[:, i]))
-                             for i in range(B.shape[1])], axis=1)
-    elif backend == "splu":
-        lu = spla.splu(M, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                       options={"SymmetricMode": True})
-
-        def solve(B):
-            return lu.solve(np.asarray(B, dtype=np.float64))
-    else:
-        raise ValueError(f"unknown backend {backend!r}: use 'auto', 'cholespy', 'qdldl' or "
-                         "'splu'")
-    return solve, backend
-
-
-# ---------------------------------------------------------------------------------------------
-# The per-face projection (local step)
-# ---------------------------------------------------------------------------------------------
-def project_singular_values(s1, s2, kappa, lo, hi):
-    """Nearest point of the convex polygon of allowed signed singular values, per face.
-
-    The polygon is ``{sigma_2 <= sigma_1 <= kappa sigma_2, lo <= sigma_2, sigma_1 <= hi}`` in the
-    ``(sigma_1, sigma_2)`` plane (Lipman 2012 eq. 4.9 for the distortion, eqs. 6.3-6.4 for the
-    bounds); ``sigma_2 < 0`` encodes a flipped face. For Jacobians with fixed singular vectors the
-    Frobenius distance is the Euclidean distance in this plane, so this is the exact projection
-    of the Jacobian (Kovalsky et al. 2015, section 4).
-
-    Parameters
-    ----------
-    s1, s2 : (k,) float, ``s1 >= s2``
-    kappa : float or (k,), the distortion bound (> 1)
-    lo : (k,) float > 0, lower bound on sigma_2
-    hi : (k,) float >= lo, upper bound on sigma_1 (may be inf)
-
-    Returns
-    -------
-    t1, t2 : (k,) float, the projected singular values
-    moved : (k,) bool, faces outside the polygon
-    """
-    kappa = np.broadcast_to(np.asarray(kappa, dtype=np.float64), s1.shape)
-    inside = (s2 >= lo) & (s1 <= kappa * s2) & (s1 <= hi) & (s1 >= s2)
-    # Above the wedge's apex no projection lands higher than max(s1, kappa lo), so an infinite
-    # upper bound can be replaced by that finite one without changing the answer.
-    h = np.minimum(hi, np.maximum(np.maximum(s1, kappa * lo), lo))
-    # Polygon corners, counter-clockwise: apex on the diagonal, end of the bottom edge, the
-    # cone's meeting with sigma_1 = h, and the diagonal's.
-    ax, ay = lo, lo
-    bx, by = np.minimum(kappa * lo, h), lo
-    cx, cy = h, np.maximum(h / kappa, lo)
-    dx, dy = h, h
-    best = np.full(s1.shape, np.inf)
-    t1 = s1.copy()
-    t2 = s2.copy()
-    for (px, py, qx, qy) in ((ax, ay, bx, by), (bx, by, cx, cy), (cx, cy, dx, dy),
-                             (dx, dy, ax, ay)):
-        ex, ey = qx - px, qy - py
-        ll = ex * ex + ey * ey
-        with np.errstate(invalid="ignore", divide="ignore"):
-            t = np.where(ll > 0, ((s1 - px) * ex + (s2 - py) * ey) / ll, 0.0)
-        t = np.clip(t, 0.0, 1.0)
-        x, y = px + t * ex, py + t * ey
-        d = (x - s1) ** 2 + (y - s2) ** 2
-        better = d < best
-        best = np.where(better, d, best)
-        t1 = np.where(better, x, t1)
-        t2 = np.where(better, y, t2)
-    t1 = np.where(inside, s1, t1)
-    t2 = np.where(inside, s2, t2)
-    return t1, t2, ~inside
-
-
-# ---------------------------------------------------------------------------------------------
-# The solver
-# ---------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class ProjectionResult:
     """Outcome of :meth:`ProjectionSolver.project`.
@@ -204,7 +72,7 @@ class ProjectionSolver:
     ops : energies.JacobianOperators over (k, 2 nv)
     nv : int
     fixed_idx : (p,) int, vertices held at given values (at least one per component)
-    tris : (k,3) int, optional, used to find the connected components (else from ``ops``)
+    tris : (k,3) int, the triangles ``ops`` was built over (for the connected components)
     backend : see :func:`factor_spd`
 
     Attributes
@@ -215,9 +83,7 @@ class ProjectionSolver:
     backend : str
     """
 
-    def __init__(self, ops, nv, fixed_idx, tris=None, backend="auto"):
-        import time
-
+    def __init__(self, ops, nv, fixed_idx, tris, backend="auto"):
         t0 = time.perf_counter()
         self.nv = nv = int(nv)
         self.area = np.asarray(ops.area, dtype=np.float64)
@@ -226,9 +92,8 @@ class ProjectionSolver:
         # Re a = (u_x + v_y)/2, Im a = (v_x - u_y)/2, Re b = (u_x - v_y)/2, Im b = (v_x + u_y)/2.
         self.Gx = sp.csr_array((ops.Are + ops.Bre)[:, :nv])
         self.Gy = sp.csr_array((ops.Bim - ops.Aim)[:, :nv])
-        if tris is None:
-            tris = self._tris_from_ops(k)
         tris = np.asarray(tris, dtype=np.int64)
+        self.ops, self.tris = ops, tris
         adj = sp.coo_array((np.ones(2 * k), (np.concatenate([tris[:, 0], tris[:, 1]]),
                                               np.concatenate([tris[:, 1], tris[:, 2]]))),
                            shape=(nv, nv))
@@ -240,6 +105,7 @@ class ProjectionSolver:
                                                 minlength=self.n_components) == 0):
             raise ValueError("every connected component needs at least one fixed vertex")
         self.fixed = fixed
+        self.fixed_given = np.asarray(fixed_idx, dtype=np.int64)
         self.free = np.setdiff1d(np.arange(nv), fixed)
         self.free_comp = self.component[self.free]
         # Faces sorted by component, for per-component maxima.
@@ -247,36 +113,61 @@ class ProjectionSolver:
         counts = np.bincount(self.face_comp, minlength=self.n_components)
         self._starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
         self._has_faces = counts > 0
-        # The global step's normal matrix, scalar and shared by both coordinates:
-        # L = sum_j A_j G_j^T G_j  (twice the Dirichlet form; minimises sum A |J - P|_F^2 / 2).
-        W = sp.diags_array(self.area)
-        L = (self.Gx.T @ W @ self.Gx + self.Gy.T @ W @ self.Gy).tocsc()
-        self._L_ff = L[self.free][:, self.free].tocsc()
-        self._L_fF = L[self.free][:, self.fixed].tocsc()
-        self.GxT = sp.csr_array(self.Gx.T)
-        self.GyT = sp.csr_array(self.Gy.T)
+        self._L_ff = self._L_fF = None
+        self.G = sp.csr_array(sp.vstack([self.Gx, self.Gy]))  # (2k, nv): rows d/dx, then d/dy
+        self.GT = sp.csr_array(self.G.T)
         self._solve, self.backend = None, backend
         self.setup_seconds = time.perf_counter() - t0
         self.factor_seconds = 0.0
 
+    def _assemble(self):
+        """The global step's normal matrix, scalar and shared by both coordinates:
+        ``L = sum_j A_j G_j^T G_j`` (minimises ``sum_j A_j |J_j - P_j|_F^2``), split into free and
+        fixed columns."""
+        if self._L_ff is None:
+            W = sp.diags_array(self.area)
+            L = (self.Gx.T @ W @ self.Gx + self.Gy.T @ W @ self.Gy).tocsr()
+            Lf = L[self.free]
+            self._L_ff = sp.csc_array(Lf[:, self.free])
+            self._L_fF = sp.csc_array(Lf[:, self.fixed])
+
+    def _continue_on(self, comps, U, C, scale, kw):
+        """Project the components ``comps`` (c,) bool on their own, from ``U``.
+
+        Returns the sub-solver, the vertices it covers (into this solver's) and its result."""
+        F_a = np.flatnonzero(comps[self.face_comp])
+        V_a = np.flatnonzero(comps[self.component])
+        new = np.full(self.nv, -1, dtype=np.int64)
+        new[V_a] = np.arange(len(V_a))
+        cols = np.concatenate([V_a, V_a + self.nv])
+        o = self.ops
+        ops = type(o)(*(sp.csr_array(M[F_a][:, cols]) for M in (o.Are, o.Aim, o.Bre, o.Bim)),
+                      self.area[F_a])
+        fixed = self.fixed[comps[self.component[self.fixed]]]
+        sub = ProjectionSolver(ops, len(V_a), new[fixed], tris=new[self.tris[F_a]],
+                               backend=self.backend)
+        sub_scale = np.empty(sub.n_components)
+        sub_scale[sub.component] = scale[self.component[V_a]]
+        Ua = U[V_a]
+        r = sub.project(Ua[:, 0] + 1j * Ua[:, 1], C, **kw, scale=sub_scale)
+        self.factor_seconds += sub.factor_seconds
+        return sub, V_a, r
+
+    def global_matrix(self):
+        """The global step's matrix over the free vertices, (nf, nf) csc, symmetric positive
+        definite."""
+        self._assemble()
+        return self._L_ff
+
     def factorize(self):
         """Factorise the global step's matrix (done on the first iteration that needs it, so a
         map that already fits costs no factorisation)."""
-        import time
-
         if self._solve is None:
             t0 = time.perf_counter()
+            self._assemble()
             self._solve, self.backend = factor_spd(self._L_ff, self.backend)
             self.factor_seconds = time.perf_counter() - t0
         return self._solve
-
-    def _tris_from_ops(self, k):
-        G = sp.csr_array(self.Gx)
-        # Each row of Gx holds the face's three vertices (up to structural zeros).
-        idx = G.indices.reshape(k, -1)
-        if idx.shape[1] != 3:
-            raise ValueError("pass tris: the operators do not show three vertices per face")
-        return idx
 
     # -- pieces -------------------------------------------------------------------------------
     def jacobians(self, U):
@@ -289,6 +180,8 @@ class ProjectionSolver:
         return 0.5 * ((ux + vy) + 1j * (vx - uy)), 0.5 * ((ux - vy) + 1j * (vx + uy))
 
     def _per_comp_max(self, v):
+        if self.n_components == 1:
+            return np.array([v.max() if len(v) else -np.inf])
         out = np.full(self.n_components, -np.inf)
         if len(v):
             m = np.maximum.reduceat(v[self._order], self._starts[self._has_faces])
@@ -308,16 +201,15 @@ class ProjectionSolver:
 
     # -- the iterations -------------------------------------------------------------------------
     def project(self, u0, C, fixed_values=None, *, margin=0.9, smin=None, smax=None, scale=None,
-                stretch_margin=0.01, floor=1e-3, max_iter=500, stall=50, accelerate=True,
-                cancel=None):
+                stretch_margin=0.01, floor=1e-3, max_iter=200, stall=30, accelerate=True,
+                shrink=0.5, cancel=None):
         """Iterate local projections and global back-solves until the map is within the bounds.
 
         Parameters
         ----------
         u0 : (nv,) complex, the start (may flip)
         C : float > 1, conformal distortion bound (Lipman 2012, eq. 4.9)
-        fixed_values : (p,) complex for ``fixed_idx`` (sorted as ``np.unique`` sorts them);
-            default: ``u0`` there
+        fixed_values : (p,) complex, one per entry of ``fixed_idx``; default: ``u0`` there
         margin : float in (0, 1], project onto the tighter bound ``C' = max(1 + 1e-3, margin C)``
         smin, smax : float or None, bounds on the singular values (eqs. 6.3-6.4), relative to each
             component's ``scale``
@@ -330,6 +222,9 @@ class ProjectionSolver:
             squared Frobenius distance of its Jacobians) has dropped by 1% over this many
             iterations
         accelerate : bool, use the tangent step of Kovalsky et al.
+        shrink : float, when the unconverged components hold fewer than this fraction of the
+            faces, they continue alone on a smaller system (factorised anew; the iterates are
+            the same but for a restart of the acceleration)
         cancel : object with ``is_set()``, checked once per iteration -> ``CancelledError``
 
         Returns
@@ -356,9 +251,9 @@ class ProjectionSolver:
         U = np.stack([u0.real, u0.imag], 1).copy()
         if fixed_values is not None:
             fv = np.asarray(fixed_values, dtype=np.complex128)
-            U[self.fixed, 0], U[self.fixed, 1] = fv.real, fv.imag
+            U[self.fixed_given, 0], U[self.fixed_given, 1] = fv.real, fv.imag
         UF = U[self.fixed]
-        rhs_fixed = self._L_fF @ UF  # (free, 2)
+        rhs_fixed = None  # L_fF x_F, once an iteration needs it
         done = np.zeros(ncomp, dtype=bool)
         done_at = np.zeros(ncomp, dtype=np.int64)
         frozen_v = np.zeros(self.nv, dtype=bool)
@@ -369,13 +264,16 @@ class ProjectionSolver:
         best_at = np.zeros(ncomp, dtype=np.int64)
         prev_err = np.full(ncomp, np.inf)
         use_tan = np.full(ncomp, bool(accelerate))
+        k = len(self.area)
+        area2 = np.concatenate([self.area, self.area])
         it = 0
         while True:
             if cancel is not None and cancel.is_set():
                 raise CancelledError("projection iterations cancelled")
-            J = self.jacobians(U)
-            a, b = self._alpha_beta(J)
-            na, nb = np.abs(a), np.abs(b)
+            R = self.G @ U  # (2k, 2): rows (d/dx, d/dy) of faces, columns (u, v)
+            ux, uy, vx, vy = R[:k, 0], R[k:, 0], R[:k, 1], R[k:, 1]
+            are, aim, bre, bim = ux + vy, vx - uy, ux - vy, vx + uy  # 2 alpha, 2 beta
+            na, nb = 0.5 * np.hypot(are, aim), 0.5 * np.hypot(bre, bim)
             s1, s2 = na + nb, na - nb
             with np.errstate(invalid="ignore", divide="ignore"):
                 D = np.where(s2 > 0, s1 / s2, np.inf)
@@ -397,18 +295,50 @@ class ProjectionSolver:
                 best_key = np.where(better, key, best_key)
                 bv = better[self.component]
                 U_best[bv] = U[bv]
-            # Local step: the nearest allowed Jacobian, phases of alpha and beta kept.
+            active = ~done[self.face_comp]
+            if ncomp > 1 and active.sum() < shrink * k:
+                # Most islands are certified: continue on a smaller system of the others.
+                sub, V_a, r = self._continue_on(~done, U, C, scale, dict(
+                    margin=margin, smin=smin, smax=smax, stretch_margin=stretch_margin,
+                    floor=floor, max_iter=max_iter - it, stall=stall, accelerate=accelerate,
+                    shrink=shrink, cancel=cancel))
+                Ua = np.stack([r.u.real, r.u.imag], 1)
+                outer = np.zeros(sub.n_components, dtype=np.int64)
+                outer[sub.component] = self.component[V_a]
+                conv = np.zeros(ncomp, dtype=bool)
+                conv[outer[r.converged]] = True
+                took = np.zeros(ncomp, dtype=bool)
+                took[outer[~r.converged & (r.max_distortion < best_key[outer])]] = True
+                done_at[outer] = it + r.iterations_per_component
+                done |= conv
+                vc, vt = conv[self.component[V_a]], took[self.component[V_a]]
+                frozen_v[V_a[vc]] = True
+                U_saved[V_a[vc]] = Ua[vc]
+                U_best[V_a[vt]] = Ua[vt]
+                it += r.iterations
+                break
+            # Local step: the nearest allowed Jacobian, phases of alpha and beta kept; only the
+            # faces outside the set move.
             t1, t2, moved = project_singular_values(s1, s2, kappa, lo, hi)
+            m = np.flatnonzero(moved)
             with np.errstate(invalid="ignore", divide="ignore"):
-                pa = np.where(na > 0, a / na, 1.0)
-                pb = np.where(nb > 0, b / nb, 1.0)
-            pa = 0.5 * (t1 + t2) * pa
-            pb = 0.5 * (t1 - t2) * pb
-            # Back to (u_x, u_y, v_x, v_y).
-            P = (pa.real + pb.real, pb.imag - pa.imag, pa.imag + pb.imag, pa.real - pb.real)
-            Nrm = tuple(j - p for j, p in zip(J, P))
-            err = np.bincount(self.face_comp, weights=self.area * sum(n * n for n in Nrm),
-                              minlength=ncomp)
+                fa = np.where(na[m] > 0, 0.25 * (t1[m] + t2[m]) / na[m], 0.0)
+                fb = np.where(nb[m] > 0, 0.25 * (t1[m] - t2[m]) / nb[m], 0.0)
+            # A face with alpha = 0 gets the real alpha |alpha'| (phase 1), likewise beta.
+            pre = np.where(na[m] > 0, fa * are[m], 0.5 * (t1[m] + t2[m]))
+            pim = fa * aim[m]
+            qre = np.where(nb[m] > 0, fb * bre[m], 0.5 * (t1[m] - t2[m]))
+            qim = fb * bim[m]
+            # Normal n = J - P on the moved faces, back in (u_x, u_y, v_x, v_y).
+            N = np.zeros((2 * k, 2))
+            N[m, 0] = ux[m] - (pre + qre)
+            N[k + m, 0] = uy[m] - (qim - pim)
+            N[m, 1] = vx[m] - (pim + qim)
+            N[k + m, 1] = vy[m] - (pre - qre)
+            P = R - N
+            err = np.bincount(self.face_comp[m], weights=self.area[m] * (
+                N[m, 0] ** 2 + N[k + m, 0] ** 2 + N[m, 1] ** 2 + N[k + m, 1] ** 2),
+                minlength=ncomp)
             improved = err < best_viol * (1 - 1e-2)
             best_viol = np.where(improved, err, best_viol)
             best_at = np.where(improved, it, best_at)
@@ -416,26 +346,27 @@ class ProjectionSolver:
                 break
             # Global step: L_ff x = G^T A P - L_fF x_F, per coordinate, plus the tangent
             # constraint's direction G^T n for each component (one back-solve, 4 columns).
-            AP = [self.area * p for p in P]
-            bu = self.GxT @ AP[0] + self.GyT @ AP[1]
-            bv = self.GxT @ AP[2] + self.GyT @ AP[3]
-            cu = self.GxT @ Nrm[0] + self.GyT @ Nrm[1]
-            cv = self.GxT @ Nrm[2] + self.GyT @ Nrm[3]
+            GB = self.GT @ np.concatenate([area2[:, None] * P, N], axis=1)  # (nv, 4)
             f = self.free
-            B = np.stack([bu[f] - rhs_fixed[:, 0], bv[f] - rhs_fixed[:, 1], cu[f], cv[f]], 1)
+            B = GB[f]
+            if rhs_fixed is None:
+                self._assemble()
+                rhs_fixed = self._L_fF @ UF  # (free, 2)
+            B[:, :2] -= rhs_fixed
             X = self.factorize()(B)
             Xc = X[:, :2]
             use_tan &= err <= prev_err * (1 + 1e-12)
             if accelerate and use_tan.any():
                 # Constraint  n . (T x) = n . P  per component, on the free unknowns.
-                nP = np.bincount(self.face_comp, weights=sum(n * p for n, p in zip(Nrm, P)),
-                                 minlength=ncomp)
+                nP = np.bincount(self.face_comp[m], weights=(
+                    N[m, 0] * P[m, 0] + N[k + m, 0] * P[k + m, 0] + N[m, 1] * P[m, 1]
+                    + N[k + m, 1] * P[k + m, 1]), minlength=ncomp)
                 Fx = self.fixed
-                cF = (cu[Fx] * UF[:, 0] + cv[Fx] * UF[:, 1])
+                cF = GB[Fx, 2] * UF[:, 0] + GB[Fx, 3] * UF[:, 1]
                 r = nP - np.bincount(self.component[Fx], weights=cF, minlength=ncomp)
-                cxc = np.bincount(self.free_comp, weights=cu[f] * Xc[:, 0] + cv[f] * Xc[:, 1],
+                cxc = np.bincount(self.free_comp, weights=B[:, 2] * Xc[:, 0] + B[:, 3] * Xc[:, 1],
                                   minlength=ncomp)
-                cxn = np.bincount(self.free_comp, weights=cu[f] * X[:, 2] + cv[f] * X[:, 3],
+                cxn = np.bincount(self.free_comp, weights=B[:, 2] * X[:, 2] + B[:, 3] * X[:, 3],
                                   minlength=ncomp)
                 with np.errstate(invalid="ignore", divide="ignore"):
                     lam = np.where(use_tan & (np.abs(cxn) > 0), (cxc - r) / cxn, 0.0)

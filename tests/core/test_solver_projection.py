@@ -9,7 +9,8 @@ from bd_uv.frames import harmonic_map, lscm_map
 from bd_uv.geometry import local_coordinates
 from bd_uv.mesh import islands
 from bd_uv.solvers.flip_free import flip_free_map
-from bd_uv.solvers.projection import ProjectionSolver, project_singular_values
+from bd_uv.solvers.local_projection import project_singular_values
+from bd_uv.solvers.projection import ProjectionSolver
 
 from helpers import grid, load_off, reference_distortion
 
@@ -75,7 +76,8 @@ def test_three_peaks_certifies_from_flipping_lscm_and_from_harmonic(start):
     u0 = lscm_map(Z, isl.tris, nv, isl.loops) if start == "lscm" else harmonic_map(
         Z, isl.tris, nv, isl.loops)
     if start == "lscm":  # this start flips faces
-        assert reference_distortion(Vi, isl.tris, np.stack([u0.real, u0.imag], -1)[isl.tris])[1].any()
+        uv = np.stack([u0.real, u0.imag], -1)[isl.tris]
+        assert reference_distortion(Vi, isl.tris, uv)[1].any()
     S = ProjectionSolver(ops, nv, [isl.loops[0][0]], tris=isl.tris)
     r = S.project(u0, 5.0)
     assert r.all_converged
@@ -187,3 +189,53 @@ def test_no_factorisation_when_the_start_fits():
     assert S._solve is None and S.factor_seconds == 0.0
     S.project(u0, 1.5)
     assert S._solve is not None
+
+
+def test_many_islands_continue_on_the_unconverged_ones_alone():
+    # One hard island among easy ones: once the easy ones certify, the hard one continues on a
+    # smaller system; every island is certified and the easy ones are untouched.
+    parts = [_bumpy()] + [grid(8, 7, z=lambda x, y, s=s: 0.05 * s * x * x) for s in range(4)]
+    Vs, Zs, Ts, us, fixed, off = [], [], [], [], [], 0
+    for V, F in parts:
+        Vi, isl, Z, _ = _setup(V, F)
+        Vs.append(Vi)
+        Zs.append(Z)
+        Ts.append(isl.tris + off)
+        us.append(lscm_map(Z, isl.tris, len(Vi), isl.loops) + 3.0 * len(us))
+        fixed.append(isl.loops[0][0] + off)
+        off += len(Vi)
+    tris, Z = np.concatenate(Ts), np.concatenate(Zs)
+    ops = jacobian_operators(Z, tris, off)
+    S = ProjectionSolver(ops, off, fixed, tris=tris)
+    u0 = np.concatenate(us)
+    r = S.project(u0, 1.5, shrink=0.9)
+    assert r.all_converged
+    _check(np.concatenate(Vs), tris, r.u, 1.5)
+    easy = r.component >= 0
+    easy[:len(Vs[0])] = False
+    assert np.array_equal(r.u[easy], u0[easy])
+    r2 = S.project(u0, 1.5, shrink=0.0)  # never restricted: same certification
+    assert r2.all_converged
+
+
+def test_flip_free_map_gives_none_when_no_start_reaches_the_bound():
+    V, F = load_off("three_peaks.off")
+    Vi, isl, Z, ops = _setup(V, F)
+    nv = len(Vi)
+    ul = lscm_map(Z, isl.tris, nv, isl.loops)
+    u, info = flip_free_map(Z, isl.tris, nv, isl.loops, ul, 5.0, max_iter=1)
+    assert u is None and info["start"] is None
+    assert info["iterations"] == 2  # one per start: LSCM, then harmonic
+
+
+def test_pinned_vertices_are_held_exactly():
+    V, F = _bumpy()
+    Vi, isl, Z, ops = _setup(V, F)
+    u0 = harmonic_map(Z, isl.tris, len(Vi), isl.loops)
+    loop = isl.loops[0]
+    pins = np.array([loop[len(loop) // 2], loop[0]])  # unsorted on purpose
+    S = ProjectionSolver(ops, len(Vi), pins, tris=isl.tris)
+    r = S.project(u0, 1.5, fixed_values=u0[pins])
+    assert r.all_converged
+    _check(Vi, isl.tris, r.u, 1.5)
+    assert np.array_equal(r.u[pins], u0[pins])
