@@ -1,0 +1,401 @@
+"""Bijective maps onto a boundary you choose (Lipman 2012, section 5, Theorems 5.1 and 5.2).
+
+An orientation-preserving piecewise-linear map that takes a disk's boundary one-to-one onto a
+simple polygon is a bijection onto the polygon's inside (Theorem 5.1), even a non-convex one; with
+holes, the outer boundary and every hole must go one-to-one onto the boundary of a domain with as
+many holes (Theorem 5.2). ``boundary_targets`` gives target positions for the outer boundary of an
+island (circle, rectangle, or the polygon its pins give), which a fixed-boundary BD solve keeps as
+pins; holes stay free. ``bijectivity_premises`` checks the theorem's premises on the result.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import InfeasibleError
+from .frames import _corner_angles, frames_from_map, harmonic_map
+from .geometry import face_areas, local_coordinates
+from .metrics import conformal_distortion
+
+HOMOTOPY_STEPS = (0.25, 0.5, 0.75, 1.0)
+
+SHAPES = ("circle", "rectangle", "pinned")
+
+
+@dataclass(frozen=True)
+class BijectivityPremises:
+    """Theorems 5.1/5.2's premises checked on a map.
+
+    Attributes
+    ----------
+    orientation_preserving : bool, every face's image has positive signed area
+    boundary_simple : bool, the outer image loop is a simple counter-clockwise polygon, every hole
+        loop a simple clockwise polygon inside it, and no two loops touch or nest wrongly
+    bijective : bool, both (the map is then a bijection onto the polygon's domain)
+    message : str, what failed ("" when bijective)
+    """
+    orientation_preserving: bool
+    boundary_simple: bool
+    bijective: bool
+    message: str
+
+
+def oriented_loop(tris, loop):
+    """The loop in the direction of its faces' edges, so the faces lie on its left.
+
+    Parameters
+    ----------
+    tris : (k,3) int, loop : (b,) int
+
+    Returns
+    -------
+    (b,) int64
+    """
+    loop = np.asarray(loop, dtype=np.int64)
+    E = np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]])
+    n = int(tris.max()) + 1
+    keys = np.sort(E[:, 0] * n + E[:, 1])
+    k = loop[0] * n + loop[1]
+    pos = np.searchsorted(keys, k)
+    forward = pos < len(keys) and keys[pos] == k
+    return loop if forward else loop[::-1].copy()
+
+
+def _loop_lengths(V, loop):
+    return np.linalg.norm(V[np.roll(loop, -1)] - V[loop], axis=1)
+
+
+def _corner_sum(V, tris, nv):
+    """Sum of the face angles at each vertex (boundary vertices: the boundary's interior angle)."""
+    ang = _corner_angles(local_coordinates(V, tris))
+    return np.bincount(tris.ravel(), weights=ang.ravel(), minlength=nv)
+
+
+def rectangle_corners(V, tris, loop, count=4):
+    """The ``count`` boundary vertices whose interior angles best fit a rectangle's corners.
+
+    Greedy on ``|angle - pi/2|`` (angles summed over the faces at each boundary vertex), keeping
+    corners at least an eighth of the perimeter apart (arc length) so no side is empty.
+
+    Returns
+    -------
+    (4,) int64 positions in ``loop`` (increasing)
+    """
+    L = _loop_lengths(V, loop)
+    s = np.concatenate([[0.0], np.cumsum(L)[:-1]])
+    per = L.sum()
+    ang = _corner_sum(V, tris, len(V))[loop]
+    order = np.argsort(np.abs(ang - 0.5 * np.pi), kind="stable")
+    chosen = []
+    for gap in (per / 8, per / 16, 0.0):
+        chosen = []
+        for i in order:  # at most b candidates; each step is a vector test
+            d = np.abs(s[i] - s[chosen]) if chosen else np.array([per])
+            if np.all(np.minimum(d, per - d) >= gap):
+                chosen.append(int(i))
+            if len(chosen) == count:
+                return np.sort(np.array(chosen, dtype=np.int64))
+    raise ValueError(f"a boundary of {len(loop)} vertices cannot carry {count} corners")
+
+
+def _polygon_by_arc_length(V, loop, corner_pos, corner_uv):
+    """Boundary positions: corners at ``corner_uv``, other vertices by arc length between them."""
+    L = _loop_lengths(V, loop)
+    s = np.concatenate([[0.0], np.cumsum(L)])  # s[i] = arc length at loop[i], s[b] = perimeter
+    b = len(loop)
+    cp = np.asarray(corner_pos)
+    seg = np.searchsorted(cp, np.arange(b), side="right") - 1  # segment each vertex lies on
+    seg[seg < 0] = len(cp) - 1  # before the first corner: the last side (wraps around)
+    start, end = cp[seg], cp[(seg + 1) % len(cp)]
+    s0 = s[start]
+    s1 = np.where(end > start, s[end], s[end] + s[b])
+    si = np.where(np.arange(b) >= start, s[np.arange(b)], s[np.arange(b)] + s[b])
+    t = ((si - s0) / (s1 - s0))[:, None]
+    P = np.asarray(corner_uv, dtype=np.float64)
+    return (1 - t) * P[seg] + t * P[(seg + 1) % len(cp)]
+
+
+def boundary_targets(V, tris, loops, shape, pins=None):
+    """Target UVs of an island's outer boundary: a circle, a rectangle or the pinned polygon.
+
+    Lipman 2012, section 5: kept as pins of a bounded-distortion solve, an orientation-preserving
+    result maps the boundary one-to-one onto the target polygon and is then a bijection (Theorem
+    5.1; with holes, which stay free, Theorem 5.2 once ``bijectivity_premises`` holds).
+
+    Parameters
+    ----------
+    V : (nv,3) float, the island's vertex positions
+    tris : (k,3) int, its faces in island vertex ids (counter-clockwise seen from the normal side)
+    loops : sequence of (b,) int, its boundary loops (``Island.loops``); the one longest in arc
+        length is the outer boundary
+    shape : "circle" (arc length, area = the island's 3D area), "rectangle" (corners at the four
+        boundary vertices nearest a right angle, or at pinned ones; side lengths the mean of
+        opposite sides' arc lengths, scaled to the island's 3D area) or "pinned" (the pinned
+        boundary vertices are the polygon's corners at their pinned UVs, in boundary order; the
+        others by arc length between them; needs >= 3 pins on the outer boundary)
+    pins : tuple (idx (p,) int, uv (p,2) float), optional, pinned island vertices
+
+    Returns
+    -------
+    idx : (b,) int64 outer-boundary vertices (ordered with the faces on the left), uv : (b,2)
+        counter-clockwise; circle and rectangle have their bounding box starting at (0, 0)
+
+    Raises
+    ------
+    ValueError for an unknown shape or pins that cannot define it.
+    """
+    if shape not in SHAPES:
+        raise ValueError(f"boundary shape must be one of {SHAPES}, got {shape!r}")
+    V = np.asarray(V, dtype=np.float64)
+    tris = np.asarray(tris, dtype=np.int64)
+    lengths = [float(_loop_lengths(V, np.asarray(lp)).sum()) for lp in loops]
+    loop = oriented_loop(tris, loops[int(np.argmax(lengths))])
+    pin_idx = np.zeros(0, np.int64) if pins is None else np.asarray(pins[0], dtype=np.int64)
+    pin_uv = np.zeros((0, 2)) if pins is None else np.asarray(pins[1], float).reshape(-1, 2)
+    where = np.full(len(V), -1, dtype=np.int64)
+    where[loop] = np.arange(len(loop))
+    on = where[pin_idx] >= 0
+    area = float(face_areas(V, tris).sum())
+    if shape == "pinned":
+        if on.sum() < 3:
+            raise ValueError(f"boundary 'pinned' needs at least 3 pinned vertices on the outer "
+                             f"boundary, got {int(on.sum())}")
+        order = np.argsort(where[pin_idx[on]])
+        return loop, _polygon_by_arc_length(V, loop, where[pin_idx[on]][order],
+                                            pin_uv[on][order])
+    L = _loop_lengths(V, loop)
+    if shape == "circle":
+        s = np.concatenate([[0.0], np.cumsum(L)[:-1]]) / L.sum()
+        R = np.sqrt(area / np.pi)
+        uv = R * np.stack([1 + np.cos(2 * np.pi * s), 1 + np.sin(2 * np.pi * s)], 1)
+        return loop, uv
+    if on.sum() == 4:
+        cp = np.sort(where[pin_idx[on]])
+    elif on.sum() == 0:
+        cp = rectangle_corners(V, tris, loop)
+    else:
+        raise ValueError(f"boundary 'rectangle' takes exactly 4 pinned corners on the outer "
+                         f"boundary (or none), got {int(on.sum())}")
+    cum = np.concatenate([[0.0], np.cumsum(L)])
+    side = np.diff(np.concatenate([cum[cp], [cum[cp[0]] + cum[-1]]]))
+    w, h = 0.5 * (side[0] + side[2]), 0.5 * (side[1] + side[3])
+    k = np.sqrt(area / (w * h))
+    corners = k * np.array([[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]])
+    return loop, _polygon_by_arc_length(V, loop, cp, corners)
+
+
+def _cross(a, b):
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def _segments_cross(P, Q, Pn, Qn):
+    """Closed segments P-Pn and Q-Qn intersect (touching counts), for stacked pairs."""
+    d1, d2 = Pn - P, Qn - Q
+    o1, o2 = _cross(d1, Q - P), _cross(d1, Qn - P)
+    o3, o4 = _cross(d2, P - Q), _cross(d2, Pn - Q)
+    proper = (o1 * o2 <= 0) & (o3 * o4 <= 0)
+    colinear = (o1 == 0) & (o2 == 0)
+    lo1, hi1 = np.minimum(P, Pn), np.maximum(P, Pn)
+    lo2, hi2 = np.minimum(Q, Qn), np.maximum(Q, Qn)
+    overlap = np.all((lo1 <= hi2) & (lo2 <= hi1), axis=-1)
+    return np.where(colinear, overlap, proper & overlap)
+
+
+def _signed_area(X):
+    return 0.5 * np.sum(_cross(X, np.roll(X, -1, axis=0)))
+
+
+def _inside(pt, X):
+    """Point strictly inside polygon X (even-odd rule)."""
+    a, b = X, np.roll(X, -1, axis=0)
+    up = (a[:, 1] <= pt[1]) != (b[:, 1] <= pt[1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = a[:, 0] + (pt[1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / (b[:, 1] - a[:, 1])
+    return bool(np.sum(up & (x > pt[0])) % 2)
+
+
+def bijectivity_premises(uv, tris, loops):
+    """Check Theorem 5.1/5.2's premises on a map: orientation-preserving, simple target boundary.
+
+    Parameters
+    ----------
+    uv : (nv,2) float, the map's vertex positions
+    tris : (k,3) int
+    loops : sequence of (b,) int boundary loops (the one with the largest image area is outer)
+
+    Returns
+    -------
+    BijectivityPremises
+    """
+    uv = np.asarray(uv, dtype=np.float64)
+    tris = np.asarray(tris, dtype=np.int64)
+    T = uv[tris]
+    e1, e2 = T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]
+    n_bad = int(np.sum(~(_cross(e1, e2) > 0)))
+    orient = n_bad == 0
+    rings = [uv[oriented_loop(tris, lp)] for lp in loops]
+    areas = np.array([_signed_area(X) for X in rings])
+    outer = int(np.argmax(areas))
+    msgs = [] if orient else [f"{n_bad} face(s) flipped or collapsed"]
+    simple = bool(areas[outer] > 0) and all(areas[i] < 0 for i in range(len(rings)) if i != outer)
+    if not simple:
+        msgs.append("a boundary loop runs the wrong way round")
+    # No two boundary edges meet except consecutive ones at their shared vertex.
+    P = np.concatenate(rings)
+    Pn = np.concatenate([np.roll(X, -1, axis=0) for X in rings])
+    ring = np.repeat(np.arange(len(rings)), [len(X) for X in rings])
+    pos = np.concatenate([np.arange(len(X)) for X in rings])
+    size = np.array([len(X) for X in rings])[ring]
+    i, j = np.triu_indices(len(P), 1)
+    same = ring[i] == ring[j]
+    adjacent = same & ((pos[j] - pos[i] == 1) | (pos[j] - pos[i] == size[i] - 1))
+    hit = _segments_cross(P[i], P[j], Pn[i], Pn[j]) & ~adjacent
+    # Consecutive edges meet only at their shared vertex: not folded back onto each other.
+    offset = np.concatenate([[0], np.cumsum([len(X) for X in rings])[:-1]])
+    nxt = offset[ring] + (pos + 1) % size
+    d_in, d_out = Pn - P, Pn[nxt] - P[nxt]
+    folded = (_cross(d_in, d_out) == 0) & (np.einsum("ij,ij->i", d_in, d_out) <= 0)
+    if hit.any() or folded.any():
+        simple = False
+        msgs.append(f"the boundary image touches or crosses itself ({int(hit.sum())} edge pair(s))")
+    for h in range(len(rings)):
+        if h != outer and not _inside(rings[h][0], rings[outer]):
+            simple = False
+            msgs.append(f"hole {h} lies outside the outer boundary")
+        for g in range(len(rings)):
+            if g not in (h, outer) and h != outer and _inside(rings[h][0], rings[g]):
+                simple = False
+                msgs.append(f"hole {h} lies inside hole {g}")
+    return BijectivityPremises(orient, simple, orient and simple, "; ".join(msgs))
+
+
+def boundary_pins(V, F, shape, seams=None, pin_corners=None, pin_uv=None):
+    """Pins for ``bd_uv.unwrap`` that put every island's outer boundary onto ``shape``.
+
+    Each island's outer boundary gets ``boundary_targets``; holes stay free; other pins (inside
+    the island or on holes) are kept. Passing the result as ``pin_corners=, pin_uv=`` to
+    ``bd_uv.unwrap`` gives the fixed-boundary bounded-distortion map of section 5.
+
+    Parameters
+    ----------
+    V : (n,3) float, F : (m,3) int, seams : (s,2) int, optional
+    shape : "circle" | "rectangle" | "pinned"
+    pin_corners : (p,) int flat corner indices (face * 3 + corner), optional; pin_uv : (p,2)
+
+    Returns
+    -------
+    pin_corners : (q,) int64, pin_uv : (q,2) float64
+    """
+    from .mesh import islands as split_islands
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    pc = np.zeros(0, np.int64) if pin_corners is None else np.asarray(pin_corners, np.int64)
+    pu = np.zeros((0, 2)) if pin_uv is None else np.asarray(pin_uv, np.float64).reshape(-1, 2)
+    out_c, out_uv = [], []
+    pinned_face = pc // 3
+    for isl in split_islands(V, F, seams):
+        if isl.error is not None or not len(isl.loops):
+            continue
+        pos = np.full(len(F), -1, dtype=np.int64)
+        pos[isl.faces] = np.arange(len(isl.faces))
+        mine = pos[pinned_face] >= 0
+        vid = isl.tris[pos[pinned_face[mine]], pc[mine] % 3]
+        ids, first = np.unique(vid, return_index=True)
+        pins = (ids, pu[mine][first]) if len(ids) else None
+        idx, uv = boundary_targets(V[isl.vertices], isl.tris, isl.loops, shape, pins)
+        target = np.full((len(isl.vertices), 2), np.nan)
+        target[idx] = uv
+        corners = isl.faces[:, None] * 3 + np.arange(3)[None, :]
+        on = ~np.isnan(target[isl.tris][..., 0])
+        out_c.append(corners[on])
+        out_uv.append(target[isl.tris][on])
+        keep = np.isnan(target[vid][:, 0])  # the island's other pins stay
+        out_c.append(pc[mine][keep])
+        out_uv.append(pu[mine][keep])
+    if not out_c:
+        return np.zeros(0, np.int64), np.zeros((0, 2))
+    return np.concatenate(out_c).astype(np.int64), np.concatenate(out_uv)
+
+
+@dataclass(frozen=True)
+class FixedBoundaryMap:
+    """A bounded-distortion map with its outer boundary fixed.
+
+    Attributes
+    ----------
+    uv : (nv,2) float64, pinned vertices exactly at their targets
+    max_distortion : float, conformal distortion (eq. 4.9), <= the bound
+    premises : BijectivityPremises, checked on ``uv``
+    solves : int
+    """
+    uv: np.ndarray
+    max_distortion: float
+    premises: BijectivityPremises
+    solves: int
+
+
+def fixed_boundary_map(V, tris, loops, idx, uv, method="dirichlet", bound=5.0, stretch=None,
+                       cone="soc"):
+    """Minimise an energy over F_C with the vertices ``idx`` pinned at ``uv`` (section 5).
+
+    The frames come from the flip-free Tutte embedding onto a circle (``frames.harmonic_map``),
+    turned by the rotation that best fits its pinned vertices to their targets (F_C only admits
+    rotations within 90 degrees of the frames, so the embedding's arbitrary global rotation must
+    go). When that space is empty the pins are reached in steps (``HOMOTOPY_STEPS``) from the
+    fitted embedding's own positions, each step's frames from the last (eq. 4.21).
+
+    Parameters
+    ----------
+    V : (nv,3) float, tris : (k,3) int, loops : sequence of (b,) int (``Island`` fields)
+    idx : (p,) int, pinned island vertices (e.g. ``boundary_targets``' outer boundary, plus any
+        interior pins); uv : (p,2) float, their targets
+    method : an energy of ``deform.METHODS``
+    bound : float >= 1
+    stretch : (smin, smax) or None, singular-value bounds relative to the 3D geometry (sec. 6.3)
+    cone : "soc" | "linf"
+
+    Returns
+    -------
+    FixedBoundaryMap
+
+    Raises
+    ------
+    InfeasibleError when no certified map was found.
+    """
+    from .deform import _max_distortion, alpha_of, bounded_with_resets
+    from .energies import jacobian_operators
+    V = np.asarray(V, dtype=np.float64)
+    tris = np.asarray(tris, dtype=np.int64)
+    idx = np.asarray(idx, dtype=np.int64)
+    uv = np.asarray(uv, dtype=np.float64).reshape(-1, 2)
+    nv = len(V)
+    scale = np.sqrt(face_areas(V, tris).sum())
+    Z = local_coordinates(V / scale, tris)
+    ops = jacobian_operators(Z, tris, nv)
+    c = uv.mean(axis=0)
+    val = ((uv[:, 0] - c[0]) + 1j * (uv[:, 1] - c[1])) / scale
+    ut = harmonic_map(Z, tris, nv, [oriented_loop(tris, lp) for lp in loops])
+    a = ut[idx] - ut[idx].mean()
+    z = np.sum(np.conj(a) * val)  # least-squares similarity: embedding -> targets
+    ut = ut * (z / np.sum(np.abs(a) ** 2)) if abs(z) > 0 else ut
+    st = None if stretch is None else tuple(np.asarray(stretch, float))
+    w = frames_from_map(alpha_of(ops, ut))
+    u, solves, _ = bounded_with_resets(ops, idx, val, w, bound, method, 1e-3, st, cone)
+    if u is None:
+        start = ut[idx]
+        for t in HOMOTOPY_STEPS:
+            u, n, _ = bounded_with_resets(ops, idx, (1 - t) * start + t * val, w, bound, method,
+                                          1e-3, st if t == 1.0 else None, cone)
+            solves += n
+            if u is None:
+                raise InfeasibleError(f"no map within C = {bound:g} reaches the boundary targets "
+                                      f"(stuck at {int(100 * t)}% of the way from a circle); "
+                                      "raise the bound or choose another boundary")
+            w = frames_from_map(alpha_of(ops, u))
+    out = np.column_stack([u.real * scale + c[0], u.imag * scale + c[1]])
+    out[idx] = uv
+    D = conformal_distortion(V, tris, out[tris])
+    premises = bijectivity_premises(out, tris, loops)
+    if not (np.all(D <= bound * (1 + 1e-6)) and premises.orientation_preserving):
+        raise InfeasibleError(f"the fixed-boundary map did not certify within C = {bound:g} once "
+                              "the pins were written back; raise the bound slightly")
+    return FixedBoundaryMap(out, float(D.max()), premises, solves)
