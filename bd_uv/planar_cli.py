@@ -4,6 +4,7 @@ Both read a flat mesh (OBJ, OFF or PLY; z is ignored after checking it is consta
 OBJ with the input's faces in order and the new positions as vertex coordinates (z = 0).
 """
 import json
+import os
 import sys
 
 import numpy as np
@@ -62,6 +63,12 @@ def run_improve(args):
           f"-> {res.max_after:.4f} ({100 * (1 - res.max_after / res.max_before):.1f}% lower), "
           f"boundary unchanged, {res.flipped} flipped, {res.solves} solves, {res.seconds:.2f} s "
           f"-> {args.output}")
+    if args.report:
+        with open(args.report, "w", encoding="utf-8") as fh:
+            json.dump({"input": os.path.abspath(args.input), "faces": int(len(mesh.F)),
+                       "max_distortion_before": res.max_before,
+                       "max_distortion_after": res.max_after, "flipped": res.flipped,
+                       "solves": res.solves, "seconds": round(res.seconds, 4)}, fh, indent=2)
     return 0
 
 
@@ -83,4 +90,6 @@ def add_planar_parsers(sub):
                                        "(boundary fixed)")
     p.add_argument("input", help="flat mesh file (.obj, .off, .ply) in the xy plane")
     p.add_argument("-o", "--output", required=True, help="output OBJ (same faces, z = 0)")
+    p.add_argument("--report", help="write a JSON report here (max distortion against the "
+                                    "equilateral before and after)")
     p.set_defaults(func=run_improve)

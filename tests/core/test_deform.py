@@ -58,10 +58,40 @@ def test_bd_biharmonic_square_with_one_interior_handle_is_bijective():
     c = int(np.argmin(np.linalg.norm(V - [-0.3, 0.0], axis=1)))
     H = np.concatenate([b, [c]])
     P = np.concatenate([V[b], V[[c]] + [0.9, 0.0]])
+    ops = jacobian_operators(local_coordinates(np.column_stack([V, 0 * V[:, 0]]), F), F, len(V))
+    Q, _, _ = energy("biharmonic", ops, np.ones(len(F)))
+    u = _solve_fixed(Q, len(V), H, P[:, 0] + 1j * P[:, 1])
+    assert (svd_of_maps(V, np.column_stack([u.real, u.imag]), F)[1] <= 0).sum() > 0  # plain folds
     res = deform(V, F, H, P, method="biharmonic", bound=5.0)
     s, det = svd_of_maps(V, res.uv, F)
     assert np.all(det > 0) and np.max(s[:, 0] / s[:, 1]) <= 5.0 * (1 + 1e-6)
     assert np.array_equal(res.uv[H], P)
+    assert overlapping_pairs(res.uv, F) == 0
+
+
+def test_steps_with_previous_frames_reach_what_one_step_cannot(annulus):
+    """Turning the hole by 90 degrees: rest frames admit no map within C = 5 (faces would turn
+    beyond 90 degrees from their frames); three steps, each from the previous result, do."""
+    V, F, _, _ = annulus
+    b = np.unique(boundary_edges(F))
+    inner = b[np.linalg.norm(V[b], axis=1) < 0.5]
+    outer = np.setdiff1d(b, inner)
+
+    def targets(deg, shift):
+        t = np.deg2rad(deg)
+        R = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+        return np.concatenate([V[outer], V[inner] @ R.T + [shift, 0.0]])
+    Hs = np.concatenate([outer, inner])
+    with pytest.raises(bd_uv.InfeasibleError):
+        deform(V, F, Hs, targets(90, 0.1), method="arap", bound=5.0)
+    prev = None
+    for k in (1, 2, 3):
+        res = deform(V, F, Hs, targets(30 * k, 0.1 * k / 3), method="arap", bound=5.0,
+                     frames="previous", previous=prev)
+        prev = res.uv
+    s, det = svd_of_maps(V, res.uv, F)
+    assert np.all(det > 0) and np.max(s[:, 0] / s[:, 1]) <= 5.0 * (1 + 1e-6)
+    assert np.array_equal(res.uv[Hs], targets(90, 0.1 * 3 / 3))
     assert overlapping_pairs(res.uv, F) == 0
 
 
@@ -95,3 +125,7 @@ def test_cli_deform(tmp_path, annulus):
     s, det = svd_of_maps(V, m.V[:, :2], F)
     assert np.all(det > 0)
     assert np.max(np.abs(m.V[H, :2] - P)) < 1e-12
+    hj.write_text(json.dumps({"vertices": [0]}))
+    r = subprocess.run([sys.executable, "-m", "bd_uv", "deform", str(src), "-o", str(out),
+                        "--handles", str(hj)], capture_output=True, text=True)
+    assert r.returncode == 2 and r.stderr.startswith("error:")

@@ -1,4 +1,5 @@
 """2D mesh improvement (Lipman 2012, section 6.6) on meshes from Shewchuk's Triangle."""
+import json
 import subprocess
 import sys
 
@@ -52,8 +53,9 @@ def test_cli_improve(tmp_path):
     V, F = mesh_polygon(STAR, area=0.01)
     src, out = tmp_path / "star.obj", tmp_path / "better.obj"
     bd_uv.write_obj(str(src), np.column_stack([V, np.zeros(len(V))]), F)
-    r = subprocess.run([sys.executable, "-m", "bd_uv", "improve", str(src), "-o", str(out)],
-                       capture_output=True, text=True)
+    rep = tmp_path / "report.json"
+    r = subprocess.run([sys.executable, "-m", "bd_uv", "improve", str(src), "-o", str(out),
+                        "--report", str(rep)], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert "max distortion vs equilateral" in r.stdout
     m = bd_uv.load_mesh(str(out))
@@ -62,3 +64,6 @@ def test_cli_improve(tmp_path):
     assert m.V[b, :2].tobytes() == V[b].tobytes()
     after, det = distortion_vs_equilateral(m.V[:, :2], F)
     assert np.all(det > 0) and after.max() <= 0.8 * distortion_vs_equilateral(V, F)[0].max()
+    report = json.loads(rep.read_text())
+    assert np.isclose(report["max_distortion_before"], distortion_vs_equilateral(V, F)[0].max())
+    assert np.isclose(report["max_distortion_after"], after.max())
