@@ -33,7 +33,10 @@ class ImproveResult:
     distortion_before, distortion_after : (m,) float64, conformal distortion of each face
         against the equilateral triangle
     max_before, max_after : float
-    bound : float, the C* every face was certified within (``max_after <= bound``)
+    bound : float, the C* every face with a movable (interior) vertex was certified within;
+        faces whose three vertices are all on the boundary cannot change and keep their own
+        distortion
+    movable_before, movable_after : float, max distortion over the faces with an interior vertex
     flipped : int, 0
     solves : int
     seconds : float
@@ -44,6 +47,8 @@ class ImproveResult:
     max_before: float
     max_after: float
     bound: float
+    movable_before: float
+    movable_after: float
     flipped: int
     solves: int
     seconds: float
@@ -113,13 +118,20 @@ def improve(V2, F, tolerance=TOLERANCE, max_solves=MAX_SOLVES, cancel=None):
     if not np.all(np.isfinite(D_before)):
         raise ValueError(f"{int((~np.isfinite(D_before)).sum())} face(s) are clockwise or "
                          "degenerate; improve needs a valid counter-clockwise mesh")
-    ops = equilateral_operators(F, n)
     fixed = _boundary_vertices(F)
+    # Faces with all three corners on the boundary cannot move: leave them out of the space, or
+    # they would hold C* at their own distortion.
+    movable = ~np.all(np.isin(F, fixed), axis=1)
+    if not movable.any():
+        return ImproveResult(V2.copy(), D_before, D_before, float(D_before.max()),
+                             float(D_before.max()), float(D_before.max()), float("nan"),
+                             float("nan"), 0, 0, time.perf_counter() - t0)
+    ops = equilateral_operators(F[movable], n)
     u0 = V2[:, 0] + 1j * V2[:, 1]
     val = u0[fixed]
     w = frames_from_map(alpha_of(ops, u0))
     sigma = 1e-3 * float(np.median(np.abs(alpha_of(ops, u0))))
-    lo, hi, best, solves = 1.0, float(D_before.max()), u0, 0
+    lo, hi, best, solves = 1.0, float(D_before[movable].max()), u0, 0
     C = 0.5 * (lo + hi)
     while solves < max_solves and hi - lo > tolerance * hi:
         Csolve = 1.0 + (C - 1.0) * (1.0 - SOLVE_MARGIN)
@@ -129,6 +141,8 @@ def improve(V2, F, tolerance=TOLERANCE, max_solves=MAX_SOLVES, cancel=None):
         if D <= C:
             best, hi = u, D  # the map is certified within its own max distortion D <= C
             w = frames_from_map(alpha_of(ops, u))
+            if hi <= lo:  # new frames beat an earlier infeasible C: that evidence is stale
+                lo = 1.0
         else:
             lo = C
         C = 0.5 * (lo + hi)
@@ -137,7 +151,8 @@ def improve(V2, F, tolerance=TOLERANCE, max_solves=MAX_SOLVES, cancel=None):
     out[interior, 0] = best.real[interior]
     out[interior, 1] = best.imag[interior]
     D_after = equilateral_distortion(out, F)
-    if not D_after.max() <= D_before.max():  # rounding never makes it worse than the input
+    if not D_after[movable].max() <= D_before[movable].max():  # never worse than the input
         out, D_after = V2.copy(), D_before
     return ImproveResult(out, D_before, D_after, float(D_before.max()), float(D_after.max()),
-                         float(D_after.max()), 0, solves, time.perf_counter() - t0)
+                         float(D_after[movable].max()), float(D_before[movable].max()),
+                         float(D_after[movable].max()), 0, solves, time.perf_counter() - t0)
