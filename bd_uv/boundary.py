@@ -361,7 +361,7 @@ def fixed_boundary_map(V, tris, loops, idx, uv, method="dirichlet", bound=5.0, s
     ------
     InfeasibleError when no certified map was found.
     """
-    from .deform import _max_distortion, alpha_of, bounded_with_resets
+    from .deform import alpha_of, bounded_with_resets
     from .energies import jacobian_operators
     V = np.asarray(V, dtype=np.float64)
     tris = np.asarray(tris, dtype=np.int64)

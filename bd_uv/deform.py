@@ -123,8 +123,8 @@ def solve_with_handles(ops, idx, val, w, C, method, sigma, stretch=None, cone="s
     return x[:nv] + 1j * x[nv:2 * nv], sol
 
 
-def _max_distortion(ops, u):
-    """Max conformal distortion of a map from its alpha, beta (inf if any face flips)."""
+def map_distortion(ops, u):
+    """Max conformal distortion (eq. 4.9) of a map u (nv,) complex; inf if any face flips."""
     x = np.concatenate([u.real, u.imag])
     a = np.abs(ops.Are @ x + 1j * (ops.Aim @ x))
     b = np.abs(ops.Bre @ x + 1j * (ops.Bim @ x))
@@ -168,7 +168,7 @@ def bounded_with_resets(ops, idx, val, w, C, method, sigma, stretch=None, cone="
         iterations += sol.iterations
         if sol.outcome == "cancelled":
             raise CancelledError("deformation cancelled")
-        ok = u is not None and _max_distortion(ops, u) <= C
+        ok = u is not None and map_distortion(ops, u) <= C
         if ok and stretch is not None:
             x = np.concatenate([u.real, u.imag])
             a = np.abs(ops.Are @ x + 1j * (ops.Aim @ x))
@@ -209,7 +209,7 @@ def deform(V2, F, handles, positions, method="lscm", bound=5.0, frames="rest", p
     bound : float >= 1, the conformal bound C
     frames : "rest" (frames of the rest shape: constant frames) or "previous" (frames of
         ``previous``, e.g. the last deformation; without it, of the plain minimiser of the
-        energy with the handles, which may fold)
+        energy with the handles, which may fold; for "arap" and "stretch-l1", the rest frames)
     previous : (n,2) float, optional
     stretch : float S >= sqrt(C), optional: every face's singular values in [1/S, S] (section 6.3)
     cone : "soc" (F_C) | "linf" (F_C^inf, eq. 4.22)

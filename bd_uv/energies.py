@@ -98,7 +98,9 @@ def energy(method, ops, w):
 
 
 def cotangent_laplacian(ops):
-    """Cotangent stiffness matrix ``L`` (nv, nv), positive semidefinite: ``u^T L u = sum A |grad u|^2``.
+    """Cotangent stiffness matrix ``L`` (nv, nv), positive semidefinite.
+
+    ``u^T L u = sum_j Area_j |grad u|^2`` for real vertex values u (nv,).
 
     Built from the Jacobian operators: ``|alpha|^2 + |beta|^2 = (|grad Re u|^2 + |grad Im u|^2)/2``
     per face, so the Dirichlet form in x is ``blockdiag(L, L) / 2``.

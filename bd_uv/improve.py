@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .deform import alpha_of, solve_with_handles, _max_distortion
+from .deform import alpha_of, map_distortion, solve_with_handles
 from .energies import jacobian_operators
 from .frames import frames_from_map
 
@@ -137,7 +137,7 @@ def improve(V2, F, tolerance=TOLERANCE, max_solves=MAX_SOLVES, cancel=None):
         Csolve = 1.0 + (C - 1.0) * (1.0 - SOLVE_MARGIN)
         u, _ = solve_with_handles(ops, fixed, val, w, Csolve, None, sigma, cancel=cancel)
         solves += 1
-        D = _max_distortion(ops, u) if u is not None else np.inf
+        D = map_distortion(ops, u) if u is not None else np.inf
         if D <= C:
             best, hi = u, D  # the map is certified within its own max distortion D <= C
             w = frames_from_map(alpha_of(ops, u))

@@ -77,8 +77,8 @@ def check_stretch(C, S):
     if not (isinstance(S, (int, float)) and 1.0 <= S < np.inf):
         raise ValueError(f"stretch must be a finite number >= 1, got {S!r}")
     if S * S < C * (1.0 - 1e-12):
-        raise ValueError(f"stretch {S:g} cannot hold with conformal bound C = {C:g}: singular values "
-                         f"in [1/S, S] allow a distortion of at most S^2 = {S * S:g}; use "
+        raise ValueError(f"stretch {S:g} cannot hold with conformal bound C = {C:g}: singular "
+                         f"values in [1/S, S] allow a distortion of at most S^2 = {S * S:g}; use "
                          f"S >= sqrt(C) = {np.sqrt(C):.4g} or lower C")
 
 

@@ -8,7 +8,7 @@ import pytest
 
 import bd_uv
 from bd_uv.improve import improve
-from planar import boundary_edges, circle, mesh_polygon, overlapping_pairs, square, svd_of_maps
+from planar import boundary_edges, circle, mesh_polygon, overlapping_pairs, square
 
 EQ = np.array([[0.0, 0.0], [1.0, 0.0], [0.5, np.sqrt(3) / 2]])
 
