@@ -141,7 +141,8 @@ def boundary_targets(V, tris, loops, shape, pins=None):
 
     Raises
     ------
-    ValueError for an unknown shape or pins that cannot define it.
+    ValueError for an unknown shape, pins that cannot define it, or a face with all three
+    corners on the boundary that would be flat or flipped on the target (``check_targets``).
     """
     if shape not in SHAPES:
         raise ValueError(f"boundary shape must be one of {SHAPES}, got {shape!r}")
@@ -160,13 +161,15 @@ def boundary_targets(V, tris, loops, shape, pins=None):
             raise ValueError(f"boundary 'pinned' needs at least 3 pinned vertices on the outer "
                              f"boundary, got {int(on.sum())}")
         order = np.argsort(where[pin_idx[on]])
-        return loop, _polygon_by_arc_length(V, loop, where[pin_idx[on]][order],
-                                            pin_uv[on][order])
+        uv = _polygon_by_arc_length(V, loop, where[pin_idx[on]][order], pin_uv[on][order])
+        check_targets(tris, loop, uv)
+        return loop, uv
     L = _loop_lengths(V, loop)
     if shape == "circle":
         s = np.concatenate([[0.0], np.cumsum(L)[:-1]]) / L.sum()
         R = np.sqrt(area / np.pi)
         uv = R * np.stack([1 + np.cos(2 * np.pi * s), 1 + np.sin(2 * np.pi * s)], 1)
+        check_targets(tris, loop, uv)
         return loop, uv
     if on.sum() == 4:
         cp = np.sort(where[pin_idx[on]])
@@ -180,7 +183,32 @@ def boundary_targets(V, tris, loops, shape, pins=None):
     w, h = 0.5 * (side[0] + side[2]), 0.5 * (side[1] + side[3])
     k = np.sqrt(area / (w * h))
     corners = k * np.array([[0.0, 0.0], [w, 0.0], [w, h], [0.0, h]])
-    return loop, _polygon_by_arc_length(V, loop, cp, corners)
+    uv = _polygon_by_arc_length(V, loop, cp, corners)
+    check_targets(tris, loop, uv)
+    return loop, uv
+
+
+def check_targets(tris, idx, uv):
+    """Raise when a face with all three corners pinned would be flat or flipped on the target.
+
+    Such a face (e.g. a 90-degree boundary corner with one triangle, put on a straight side)
+    leaves F_C empty for every C.
+
+    Raises
+    ------
+    ValueError naming the faces
+    """
+    pos = np.full(int(max(tris.max(), np.max(idx))) + 1, -1, dtype=np.int64)
+    pos[idx] = np.arange(len(idx))
+    full = np.all(pos[tris] >= 0, axis=1)
+    T = np.asarray(uv, dtype=np.float64)[pos[tris[full]]]
+    e1, e2 = T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]
+    scale = np.maximum(np.sum(e1 * e1, 1), np.sum(e2 * e2, 1))
+    bad = np.flatnonzero(full)[~(_cross(e1, e2) > 1e-9 * scale)]  # flat up to rounding
+    if len(bad):
+        raise ValueError(f"{len(bad)} face(s) (e.g. {bad[:5].tolist()}) have all three corners on "
+                         "the target boundary and would be flat or flipped there; choose other "
+                         "corners (pins) or split those faces")
 
 
 def _cross(a, b):

@@ -110,3 +110,33 @@ def test_bad_shape_and_too_few_pins():
         boundary_pins(V, F, "hexagon")
     with pytest.raises(ValueError, match="at least 3"):
         boundary_pins(V, F, "pinned", pin_corners=[0, 1], pin_uv=[[0, 0], [1, 0]])
+
+
+def test_rectangle_corners_chosen_by_pins_straighten_a_curved_strip():
+    """Trim-sheet use: a bent strip, four pinned vertices (not its geometric corners) become the
+    rectangle's corners; their pinned UVs only choose the corners."""
+    V, F = grid(16, 4)
+    ang = V[:, 0] * np.pi  # bend the strip into a half ring
+    V = np.column_stack([(1 + V[:, 1]) * np.cos(ang), (1 + V[:, 1]) * np.sin(ang), 0.2 * V[:, 1]])
+    corners = np.array([1, 15, 63, 48])  # 1: one step in from the corner 0, which goes on a side
+    fc = np.array([int(np.flatnonzero(F.ravel() == v)[0]) for v in corners])
+    pc, pu = boundary_pins(V, F, "rectangle", pin_corners=fc, pin_uv=np.zeros((4, 2)))
+    res = bd_uv.unwrap(V, F, pin_corners=pc, pin_uv=pu, bound=5.0)
+    assert res.certified
+    r = res.islands[0]
+    D, flipped = reference_distortion(V, F, res.corner_uv)
+    assert not flipped.any() and D.max() <= 5.0 * (1 + 1e-6)
+    b = r.uv[bd_uv.islands(V, F)[0].loops[0]]
+    lo, hi = b.min(0), b.max(0)
+    assert np.min(np.abs(np.concatenate([b - lo, b - hi], 1)), axis=1).max() < 1e-12
+    at = r.uv[[int(np.flatnonzero(r.vertices == c)[0]) for c in corners]]
+    assert np.all(np.min(np.abs(np.stack([at - lo, at - hi], 0)), axis=0) < 1e-12)  # corners
+    assert overlapping_pairs(r.uv, r.tris) == 0
+
+
+def test_a_corner_triangle_on_a_straight_side_is_refused_with_its_face():
+    V, F = grid(16, 4)
+    corners = np.array([1, 14, 63, 48])  # puts grid corner 15 (one triangle) on a straight side
+    fc = np.array([int(np.flatnonzero(F.ravel() == v)[0]) for v in corners])
+    with pytest.raises(ValueError, match="all three corners"):
+        boundary_pins(V, F, "rectangle", pin_corners=fc, pin_uv=np.zeros((4, 2)))
