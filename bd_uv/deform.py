@@ -20,7 +20,7 @@ from .frames import _solve_fixed, frames_from_map
 from .geometry import local_coordinates
 from .metrics import conformal_distortion, flipped_faces
 from .solvers import conic
-from .spaces import bounded_distortion_space, check_stretch, stretch_space
+from .spaces import bounded_distortion_space, check_stretch, mean_scale_row, stretch_space
 
 METHODS = ("lscm", "arap", "dirichlet", "biharmonic", "stretch-l1")
 SOLVE_MARGIN = 2e-3     # solve at a C slightly below the bound so certification has headroom
@@ -61,7 +61,7 @@ def planar_operators(Z, tris, nv):
 
 
 def solve_with_handles(ops, idx, val, w, C, method, sigma, stretch=None, cone="soc",
-                       cancel=None):
+                       cancel=None, fix_scale=False):
     """Minimise an energy over F_C (optionally with stretch bounds) with vertices held fixed.
 
     Parameters
@@ -75,6 +75,8 @@ def solve_with_handles(ops, idx, val, w, C, method, sigma, stretch=None, cone="s
     stretch : (smin, smax) or None, singular-value bounds (section 6.3, ``spaces.stretch_space``)
     cone : "soc" | "linf"
     cancel : object with ``is_set()``, optional
+    fix_scale : bool, add ``spaces.mean_scale_row`` (area-weighted mean of Re(w alpha) = 1), for
+        free-boundary islands whose stretch is measured after scaling to UV area = 3D area
 
     Returns
     -------
@@ -91,6 +93,10 @@ def solve_with_handles(ops, idx, val, w, C, method, sigma, stretch=None, cone="s
         As, bs, cs = stretch_space(ops, w, C, *stretch)
         A = sp.vstack([A, As]).tocsc()
         b, cones = np.concatenate([b, bs]), cones + cs
+    if fix_scale:
+        Az, bz, cz = mean_scale_row(ops, w)
+        A = sp.vstack([Az, A]).tocsc()  # Clarabel: zero cones may come first or anywhere
+        b, cones = np.concatenate([bz, b]), cz + cones
     if method == "stretch-l1":
         P, q, A, b, cones = stretch_l1_program(ops, A, b, cones)
     elif method is None:
@@ -151,10 +157,13 @@ def alpha_of(ops, u):
 
 
 def bounded_with_resets(ops, idx, val, w, C, method, sigma, stretch=None, cone="soc",
-                        cancel=None, max_resets=MAX_RESETS):
+                        cancel=None, max_resets=MAX_RESETS, fix_scale=False):
     """Solve over F_C, resetting frames (eq. 4.21) after infeasible solves and after solutions.
 
     Lipman 2012, section 4 ("Resetting the frame-field and iterating") and section 6, step 4.
+
+    Parameters are those of ``solve_with_handles``; ``max_resets`` caps the resets after the
+    first certified solve.
 
     Returns
     -------
@@ -163,7 +172,8 @@ def bounded_with_resets(ops, idx, val, w, C, method, sigma, stretch=None, cone="
     Csolve = 1.0 + (C - 1.0) * (1.0 - SOLVE_MARGIN)
     best, best_e, solves, iterations, retries, resets = None, np.inf, 0, 0, 0, 0
     while True:
-        u, sol = solve_with_handles(ops, idx, val, w, Csolve, method, sigma, stretch, cone, cancel)
+        u, sol = solve_with_handles(ops, idx, val, w, Csolve, method, sigma, stretch, cone, cancel,
+                                    fix_scale)
         solves += 1
         iterations += sol.iterations
         if sol.outcome == "cancelled":

@@ -120,3 +120,21 @@ def stretch_space(ops, w, C, smin, smax):
     b_lo = np.concatenate([np.full(nf, -float(smin)), np.zeros(2 * nf)])[perm]
     return (sp.vstack([up, lo]).tocsc(), np.concatenate([b_up, b_lo]),
             [("soc", 3)] * (2 * nf))
+
+
+def mean_scale_row(ops, w, value=1.0):
+    """One equality row fixing the area-weighted mean of ``Re(w_j alpha_j)`` to ``value``.
+
+    Not from the paper: with stretch bounds, energies that reward shrinking (Dirichlet, L1
+    stretch) sit at the lower bound, and rescaling the result to UV area = 3D area afterwards
+    would push the largest singular values past S. Fixing the mean similarity scale to 1 (the
+    island's own scale) keeps that rescaling close to 1. ``Re(w alpha) <= |alpha|``, so the row
+    only pins a lower estimate of the scale; certify after rescaling.
+
+    Returns
+    -------
+    A : (1, 2nv) csc, b : (1,), cones : [("zero", 1)]
+    """
+    Ra, _ = rotated_alpha(ops, w)
+    row = sp.csr_array(ops.area[None, :] @ Ra) / ops.area.sum()
+    return row.tocsc(), np.array([float(value)]), [("zero", 1)]

@@ -78,3 +78,29 @@ def test_free_boundary_surface_map_within_stretch_bounds():
     assert np.all(np.linalg.det(E1 @ np.linalg.inv(E0)) > 0)
     assert s[:, 1].min() >= (1 / S) * (1 - 1e-6) and s[:, 0].max() <= S * (1 + 1e-6)
     assert np.max(s[:, 0] / s[:, 1]) <= 2.0 * (1 + 1e-6)
+
+
+def test_fixed_mean_scale_keeps_bounds_after_area_normalisation():
+    """BD-Dirichlet rewards shrinking: without the mean-scale row it sits at 1/S and scaling the
+    map to UV area = 3D area pushes its largest singular value past S."""
+    V, F = load_off("nefertiti.off")
+    isl = bd_uv.islands(V, F)[0]
+    Vi = V[isl.vertices]
+    Vn = (Vi - Vi.mean(0)) / np.sqrt(face_areas(Vi, isl.tris).sum())
+    Z = local_coordinates(Vn, isl.tris)
+    ops = jacobian_operators(Z, isl.tris, len(Vn))
+    w = frames_from_map(alpha_of(ops, lscm_map(Z, isl.tris, len(Vn), isl.loops)))
+    S, margin = 1.5, 0.01
+    bounds = ((1 + margin) / S, (1 - margin) * S)
+    spread = {}
+    for fix in (False, True):
+        u, _, _ = bounded_with_resets(ops, [0], [0j], w, 2.0, "dirichlet", bounds[0], bounds,
+                                      fix_scale=fix)
+        uv = np.column_stack([u.real, u.imag])
+        T = uv[isl.tris]
+        uv_area = 0.5 * np.sum(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]))
+        uv = uv * np.sqrt(1.0 / uv_area)  # the island's scale: UV area = 3D area (= 1 here)
+        smax, smin = singular_values(Vn, isl.tris, uv[isl.tris], normalize=False)
+        spread[fix] = (smin.min(), smax.max())
+    assert spread[False][1] > S
+    assert spread[True][0] >= 1 / S and spread[True][1] <= S
