@@ -4,7 +4,8 @@
 >>> res = bd_uv.unwrap(V, F, bound=5.0)          # doctest: +SKIP
 >>> res.corner_uv, [r.max_distortion for r in res.islands]   # doctest: +SKIP
 """
-from .boundary import bijectivity_premises, boundary_pins, boundary_targets, fixed_boundary_map
+from .bijectivity import bijectivity_premises
+from .boundary import boundary_pins, boundary_targets, fixed_boundary_map
 from .colors import distortion_colors
 from .deform import DeformResult, deform
 from .errors import (BDError, CancelledError, ClosedIslandError, DegenerateFacesError,
