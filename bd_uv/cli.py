@@ -159,6 +159,8 @@ def build_parser():
     p.set_defaults(func=run_unwrap)
     from .batch import add_batch_parser  # batch builds on this module's options
     add_batch_parser(sub)
+    from .planar_cli import add_planar_parsers
+    add_planar_parsers(sub)
     return parser
 
 
