@@ -90,8 +90,8 @@ def build_parser(cli):
                         "operator (islands with pinned UVs stay where they are)")
     p.add_argument("--margin", type=float, default=0.001, help="space between packed islands")
     p.add_argument("--pack-shape", choices=("AABB", "CONVEX", "CONCAVE"), default="AABB",
-                   help="island shape for packing: bounding box (fast, default), convex hull, "
-                        "exact shape (slowest)")
+                   help="island shape for packing: bounding box (fastest, default), convex hull "
+                        "or exact shape (tighter; either can take seconds on thousands of faces)")
     p.add_argument("--output", metavar="OUT.blend",
                    help="save here (default: save the opened file in place)")
     p.add_argument("--report", metavar="REPORT.json", help="write the JSON report here")
