@@ -386,7 +386,7 @@ def failure_text(batch, r):
     with triangle counts and indices replaced by the polygons they belong to."""
     text = re.sub(rf"^island {r.index}(?: \(\d+ faces\))?:?\s*", "", r.message or "")
     tris = getattr(r.error, "faces", None)
-    if tris is not None and len(tris) and len(tris) < len(r.faces):
+    if tris is not None and len(tris):
         where = batch.polygons(tris)
         n = sum(len(p) for p in where.values())
         listed = "; ".join(f"{name} faces {_some(p)}" if len(where) > 1 else f"faces {_some(p)}"

@@ -1,0 +1,296 @@
+"""Issue 10, Blender side: every write path re-checks what it stores, and says so in Blender's terms.
+
+The stored UVs are measured here independently of bd_uv (``conftest.triangle_distortion``: numpy
+SVD of each triangle's 2x2 Jacobian) and the operator's report and panel are compared with that:
+what the line says is what the UV map holds. Islands are found here from the loops' UVs (faces
+sharing a vertex and its UV), not from the product.
+"""
+import importlib.util
+import re
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+from conftest import (REPO_ROOT, add_grid, add_suzanne_with_seams, bpy, load_addon,
+                      load_submodule, loop_uv_array, select_polygons, set_mode,
+                      triangle_distortion)
+
+SLACK = 1 + 1e-4  # float32 storage, see test_operator_unwrap.py
+
+
+def _stored(obj):
+    """(D, det, area, island label, polygon) per loop triangle of ``obj`` (Object Mode), from
+    the stored UVs and the scaled positions; islands = components of faces sharing UV edges."""
+    mesh = obj.data
+    mesh.calc_loop_triangles()
+    n = len(mesh.loop_triangles)
+    get = lambda coll, attr, dt, k, w=1: (lambda a: (coll.foreach_get(attr, a), a)[1])(
+        np.empty(k * w, dt))
+    tris = get(mesh.loop_triangles, "vertices", np.int32, n, 3).reshape(-1, 3)
+    loops = get(mesh.loop_triangles, "loops", np.int32, n, 3).reshape(-1, 3)
+    poly = get(mesh.loop_triangles, "polygon_index", np.int32, n)
+    V = get(mesh.vertices, "co", np.float32, len(mesh.vertices), 3).reshape(-1, 3)
+    V = V.astype(np.float64) * np.abs(np.array(obj.scale))
+    uv = loop_uv_array(mesh)[loops].astype(np.float64)
+    D, det = triangle_distortion(V, tris, uv)
+    P = V[tris]
+    area = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+    # Corners are the same island point when they share the vertex and the exact UV.
+    key = np.concatenate([tris.reshape(-1, 1).astype(np.float64), uv.reshape(-1, 2)], axis=1)
+    _, point = np.unique(key, axis=0, return_inverse=True)
+    point = point.reshape(-1, 3)
+    rows = np.repeat(np.arange(n), 3)
+    g = sp.coo_array((np.ones(3 * n), (rows, point.ravel())),
+                     shape=(n, point.max() + 1)).tocsr()
+    _, label = connected_components(g @ g.T, directed=False)
+    return D, det, area, label, poly
+
+
+def _report_figures(report):
+    m = re.match(r"BD-\w+: (\d+) islands?, max distortion ([\d.]+) \u2264 ([\d.]+)", report)
+    assert m, report
+    return int(m[1]), float(m[2]), float(m[3])
+
+
+@pytest.mark.parametrize("pack", [False, True])
+def test_minimise_keeps_every_island_and_reports_what_is_stored(addon, capsys, pack):
+    """Suzanne with Smart UV Project seams, Minimise, as an artist would: no island is put back,
+    every island is certified as stored, and the report line and the panel give the figures the
+    stored UVs measure (max, area-weighted mean, islands)."""
+    obj = add_suzanne_with_seams()
+    set_mode(obj, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    capsys.readouterr()
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', minimise=True, pack=pack) == {'FINISHED'}
+    out = capsys.readouterr().out
+    last = bpy.context.window_manager.bd_uv_last_result
+    assert "put back" not in out and last.put_back == 0, out
+    assert out.startswith("Info: BD-LSCM: ") and "(minimised)" in last.report, out
+    set_mode(obj, 'OBJECT')
+    D, det, area, label, _ = _stored(obj)
+    assert (det > 0).all()
+    n_islands, shown_max, shown_bound = _report_figures(last.report)
+    assert n_islands == last.islands == len(np.unique(label)) > 50
+    assert D.max() <= last.bound_certified * SLACK and D.max() <= shown_bound
+    assert last.max_distortion == pytest.approx(D.max(), rel=1e-6)
+    assert shown_max == pytest.approx(D.max(), rel=1e-3) and shown_max <= D.max()
+    assert last.mean_distortion == pytest.approx(np.sum(area * D) / area.sum(), rel=1e-6)
+    # Minimised island by island: most islands sit well below the largest one's C.
+    worst = np.full(label.max() + 1, -np.inf)
+    np.maximum.at(worst, label, D)
+    assert np.median(worst) < 0.9 * D.max()
+    if pack:
+        uv = loop_uv_array(obj.data)
+        assert uv.min() >= -1e-6 and uv.max() <= 1 + 1e-6
+
+
+def test_raised_bound_is_named_per_island(addon, capsys):
+    """Asking for C = 1.001 on a bent grid: C is raised, and the line says from what, for which
+    island (in polygons) and to what; the stored UVs measure within the raised C."""
+    obj = add_grid(6, 5)
+    set_mode(obj, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=1.001, bound_limit=50.0) == {'FINISHED'}
+    last = bpy.context.window_manager.bd_uv_last_result
+    m = re.search(r"; C raised from 1\.001: island 0 of Grid \(30 faces\) to ([\d.]+)$",
+                  last.report)
+    assert m, last.report
+    assert last.raised == 1 and float(m[1]) >= last.bound_certified > 1.001
+    set_mode(obj, 'OBJECT')
+    D, det, *_ = _stored(obj)
+    assert (det > 0).all() and 1.001 < D.max() <= last.bound_certified * SLACK
+
+
+def test_fin_is_named_in_polygons(addon, capsys):
+    """A fin (a third face on an interior edge) makes its island non-manifold: FINISHED with a
+    WARNING naming the island once and the faces at the fin by their polygon indices; the
+    other island is written."""
+    import bmesh
+
+    obj = add_grid(4, 4)
+    set_mode(obj, 'EDIT')
+    bm = bmesh.from_edit_mesh(obj.data)
+    bm.edges.ensure_lookup_table()
+    bm.faces.ensure_lookup_table()
+    inner = next(e for e in bm.edges if len(e.link_faces) == 2)
+    expected = sorted(f.index for f in inner.link_faces)
+    a, b = inner.verts
+    top = bm.verts.new(tuple((np.array(a.co) + np.array(b.co)) / 2 + (0.0, 0.0, 1.0)))
+    bm.faces.new((a, b, top))
+    far = [bm.verts.new(p) for p in ((5, 0, 0), (6, 0, 0), (6, 1, 0.2), (5, 1, 0))]
+    bm.faces.new(far)
+    bmesh.update_edit_mesh(obj.data)
+    bpy.ops.mesh.select_all(action='SELECT')
+    capsys.readouterr()
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=3.0) == {'FINISHED'}
+    out = capsys.readouterr().out
+    assert out.startswith("Warning: BD-LSCM: 1 island, "), out
+    report = bpy.context.window_manager.bd_uv_last_result.report
+    # The core splits the fin off at the non-manifold edge: the grid's 16 quads are one island,
+    # the fin another; each is named once, with the polygons at the edge.
+    fin = len(obj.data.polygons) - 2
+    found = re.findall(r"; island \d+ of Grid \((\d+) faces?\) left as it was: non-manifold "
+                       r"edges \(shared by 3 or more faces\) at faces ([\d, ]+);", report)
+    assert [(int(n), sorted(int(i) for i in at.split(", "))) for n, at in found] == [
+        (16, expected), (1, [fin])], report
+    assert report.count("island") == 3  # the written one in the head, each failed one once
+
+
+_REAL = {}
+
+
+def _failing(stored, fail):
+    """A post-write check that fails the islands ``fail(F, k) -> (k,) bool`` over its labels."""
+    real = _REAL.setdefault(stored.__name__, stored.certify_islands)
+
+    def check(V, F, corner_uv, face_island, bounds):
+        certs = real(V, F, corner_uv, face_island, bounds)
+        bad = fail(F, len(certs))
+        return [c if not bad[i] else type(c)(**{**c.__dict__, "certified": False,
+                                                 "reason": "injected failure"})
+                if hasattr(c, "__dataclass_fields__") else c for i, c in enumerate(certs)]
+    return check
+
+
+def test_operator_puts_back_islands_on_a_mesh_without_uv_map(addon, monkeypatch):
+    """A mesh with no UV map: when the post-write check fails every island, the map the operator
+    created is removed again (the mesh is as it was); when it fails one of two islands, that
+    island's loops get back what the new map held before writing, the other is kept."""
+    stored = load_submodule("operators.stored")
+    obj = add_grid(4, 4)
+    obj.data.uv_layers.remove(obj.data.uv_layers[0])
+    monkeypatch.setattr(stored, "certify_islands",
+                        _failing(stored, lambda F, k: np.ones(k, bool)))
+    set_mode(obj, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT') == {'CANCELLED'}
+    last = bpy.context.window_manager.bd_uv_last_result
+    assert re.search(r"island 0 of Grid \(16 faces\) put back as it was: its stored UVs fail "
+                     r"the certificate \(injected failure\); packing", last.report), last.report
+    set_mode(obj, 'OBJECT')
+    assert len(obj.data.uv_layers) == 0
+
+    # Two islands (a second, separate grid joined in); fail the one that is listed first.
+    other = add_grid(3, 3)
+    other.location.x = 5
+    set_mode(other, 'OBJECT')
+    other.data.uv_layers.remove(other.data.uv_layers[0])
+    obj.select_set(True)
+    bpy.context.view_layer.objects.active = obj
+    bpy.ops.object.join()
+    mesh = obj.data
+    assert len(mesh.uv_layers) == 0
+    monkeypatch.setattr(stored, "certify_islands", _failing(
+        stored, lambda F, k: np.arange(k) == 0))
+    set_mode(obj, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', pack=False) == {'FINISHED'}
+    assert bpy.context.window_manager.bd_uv_last_result.put_back == 1
+    set_mode(obj, 'OBJECT')
+    assert [layer.name for layer in mesh.uv_layers] == ["UVMap"]
+    # What a fresh UV map holds, for comparison.
+    fresh = mesh.copy()
+    fresh.uv_layers.remove(fresh.uv_layers[0])
+    fresh.uv_layers.new(name="UVMap")
+    initial = loop_uv_array(fresh)
+    bpy.data.meshes.remove(fresh)
+    D, det, _, label, poly = _stored(obj)
+    total = np.array([p.loop_total for p in mesh.polygons])
+    first = np.repeat(np.arange(len(mesh.polygons)) < 16, total)
+    uv = loop_uv_array(mesh)
+    put_back = first if np.array_equal(uv[first], initial[first]) else ~first
+    assert np.array_equal(uv[put_back], initial[put_back])
+    kept = ~put_back
+    assert not np.array_equal(uv[kept], initial[kept])
+    kept_poly = np.flatnonzero(np.array([kept[p.loop_start] for p in mesh.polygons]))
+    on_kept = np.isin(poly, kept_poly)
+    assert (det[on_kept] > 0).all() and D[on_kept].max() <= 5.0 * SLACK
+
+
+def _load_script():
+    load_addon()
+    spec = importlib.util.spec_from_file_location("bd_uv_batch_script",
+                                                  REPO_ROOT / "scripts" / "bd_uv_batch.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_batch_script_never_saves_an_island_that_failed(empty_scene, tmp_path, monkeypatch):
+    """scripts/bd_uv_batch.py with an injected failing post-write check on one object's island:
+    that island is saved with its old UVs, the object is reported failed with the reason, the
+    other object is saved certified; a mesh that had no UV map saves without one."""
+    import json
+
+    grid = add_grid(5, 4)
+    grid.name = "Grid"
+    bpy.ops.mesh.primitive_cylinder_add(vertices=12, end_fill_type='NOTHING', location=(4, 0, 0))
+    tube = bpy.context.active_object
+    tube.name = "Tube"
+    seam = np.zeros(len(tube.data.edges), bool)
+    ev = np.array([e.vertices[:] for e in tube.data.edges])
+    co = np.array([v.co[:] for v in tube.data.vertices])
+    seam[np.all((np.abs(co[ev, 1]) < 1e-5) & (co[ev, 0] > 0.5), axis=1)] = True
+    tube.data.edges.foreach_set("use_seam", seam)
+    tube.data.uv_layers.remove(tube.data.uv_layers[0])
+    blend, out, report = tmp_path / "in.blend", tmp_path / "out.blend", tmp_path / "r.json"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    grid_before = loop_uv_array(grid.data).copy()
+    tube_triangles = 2 * len(tube.data.polygons)
+
+    script = _load_script()
+    stored = script._import_addon()[-1]  # the add-on package the script found (pytest's own)
+    monkeypatch.setattr(stored, "certify_islands", _failing(
+        stored, lambda F, k: np.full(k, len(F) == tube_triangles)))
+    code = script.main([str(script.__file__), str(blend), "--", "--bound", "3", "--pack",
+                        "--output", str(out), "--report", str(report)])
+    assert code == 1
+    rep = {e["object"]: e for e in json.loads(report.read_text())["items"]}
+    assert rep["Grid"]["status"] == "certified" and rep["Tube"]["status"] == "failed"
+    assert rep["Tube"]["islands"][0]["status"] == "failed"
+    assert "injected failure" in rep["Tube"]["message"] and "packing" in rep["Tube"]["message"]
+    assert rep["Tube"]["uv_map"] is None and rep["Tube"]["max_distortion"] is None
+
+    bpy.ops.wm.open_mainfile(filepath=str(out))
+    assert len(bpy.data.objects["Tube"].data.uv_layers) == 0  # nothing of the failed island
+    g = bpy.data.objects["Grid"]
+    D, det, area, *_ = _stored(g)
+    assert not np.array_equal(loop_uv_array(g.data), grid_before)
+    assert (det > 0).all() and D.max() <= 3.0 * SLACK
+    assert rep["Grid"]["max_distortion"] == pytest.approx(D.max(), rel=1e-6)
+    assert rep["Grid"]["mean_distortion"] == pytest.approx(np.sum(area * D) / area.sum(),
+                                                          rel=1e-6)
+
+    # The same with the Grid failing: its pre-existing map is saved exactly as it was.
+    bpy.ops.wm.open_mainfile(filepath=str(blend))
+    monkeypatch.setattr(stored, "certify_islands", _failing(
+        stored, lambda F, k: np.full(k, len(F) != tube_triangles)))
+    code = script.main([str(script.__file__), str(blend), "--", "--bound", "3",
+                        "--output", str(out), "--report", str(report)])
+    assert code == 1
+    bpy.ops.wm.open_mainfile(filepath=str(out))
+    assert loop_uv_array(bpy.data.objects["Grid"].data).tobytes() == grid_before.tobytes()
+    assert len(bpy.data.objects["Tube"].data.uv_layers) == 1
+
+
+def test_select_distorted_reports_what_it_selects_in_vertex_mode(addon, capsys):
+    """In vertex select mode Edit Mode also selects faces whose vertices are all selected: the
+    count reported is the count Edit Mode shows."""
+    import bmesh
+
+    obj = add_suzanne_with_seams()
+    set_mode(obj, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    bpy.ops.uv.unwrap(method='ANGLE_BASED', margin=0.01)
+    bpy.context.scene.tool_settings.mesh_select_mode = (True, False, False)
+    bpy.ops.mesh.select_all(action='DESELECT')
+    for threshold in (1.05, 1.1, 1.2):
+        capsys.readouterr()
+        assert bpy.ops.uv.bd_select_distorted('EXEC_DEFAULT', threshold=threshold) == {
+            'FINISHED'}
+        said = int(re.search(r"Info: (\d+) faces selected", capsys.readouterr().out)[1])
+        bm = bmesh.from_edit_mesh(obj.data)
+        shown = sum(f.select for f in bm.faces)
+        assert said == shown > 0
