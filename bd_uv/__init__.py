@@ -13,6 +13,6 @@ from .metrics import (certify, conformal_distortion, face_jacobians, flipped_fac
                       mean_distortion, signed_uv_areas)
 from .mesh import Island, islands
 from .meshio import Mesh, load_mesh, write_obj
-from .pipeline import IslandResult, UnwrapResult, unwrap
+from .unwrapping import IslandResult, UnwrapResult, unwrap
 
 __version__ = "0.1.0"

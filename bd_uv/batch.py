@@ -29,7 +29,7 @@ from .cli import add_solver_options, solver_kwargs
 from .errors import BDError
 from .geometry import face_areas
 from .meshio import load_mesh, write_obj
-from .pipeline import unwrap
+from .unwrapping import unwrap
 
 MESH_SUFFIXES = (".obj", ".off", ".ply")
 BLEND_SUFFIX = ".blend"

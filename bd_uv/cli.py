@@ -13,7 +13,7 @@ import numpy as np
 
 from .errors import BDError
 from .meshio import load_mesh, write_obj
-from .pipeline import FRAMES, METHODS, unwrap
+from .unwrapping import FRAMES, METHODS, unwrap
 
 
 def bound_arg(text):

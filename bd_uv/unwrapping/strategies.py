@@ -1,0 +1,206 @@
+"""How an island's map is found for a bound: keep, bend, raise, minimise (Lipman 2012, section 6).
+
+- ``bounded``: a start map within C is returned as it is; otherwise one solve over F_C from the
+  start's frames, anchored at the start (``IslandProblem.anchor_to``); when F_C is empty, C is
+  raised towards the bound the flip-free start is known to meet.
+- ``minimise`` (``bound="auto"``): Algorithm 1, bisection on C with frame updates.
+- ``arap``: BD-ARAP iterations with frames from the previous map.
+Each returns a map in the normalised geometry and the C it is meant to be certified at; the caller
+certifies it from its final UVs.
+"""
+import time
+
+import numpy as np
+
+from ..errors import InfeasibleError
+from ..frames import frames_from_map
+from .problem import SOLVE_MARGIN, STORE_HEADROOM
+
+RAISE_FACTOR = 1.5      # C grows by this factor when infeasible
+MAX_RESETS = 3          # frame resets after the first feasible solve (BD-Dirichlet, BD-ARAP)
+IMPROVEMENT = 0.01      # keep resetting frames while the energy drops by more than this fraction
+# Reset frames only when a solution turns faces away from their frames by more than this (radians,
+# 99th percentile, after removing the common rotation).
+FRAME_TOLERANCE = 0.1
+AUTO_TOLERANCE = 0.01   # bisection stops when C_right - C_left <= this * C_right
+AUTO_MAX_SOLVES = 24
+
+_WHY = {"infeasible": "the space is empty for these frames",
+        "inexact": "the solver did not converge", "error": "the solver failed",
+        "solved": "the solver's map did not pass certification"}
+
+
+def fits(start, C):
+    """Whether a start map is within C with room for how its UVs will be stored."""
+    return start.u is not None and start.D * (1.0 + STORE_HEADROOM) <= C
+
+
+def guaranteed_bound(D0):
+    """The requested C whose solve bound still contains a flip-free map of max distortion D0."""
+    return max(1.0 + (D0 - 1.0) / (1.0 - SOLVE_MARGIN), D0 * (1.0 + STORE_HEADROOM)) \
+        * (1 + 1e-9) + 1e-12
+
+
+def formulate(prob, start):
+    """Set up the island's formulation from its start map (see ``IslandProblem.anchor_to``)."""
+    u = start.u if start.u is not None else prob.fallback_map()
+    if prob.method == "dirichlet":
+        prob.floor_scale(u, start.frames)
+    else:
+        prob.anchor_to(u)
+
+
+def bounded(prob, start, C, raise_bound, limit, flags, report):
+    """A certified-to-be map within C. Returns (u, C)."""
+    isl = prob.island
+    if prob.method != "dirichlet" and fits(start, C):
+        flags.append("initial_map")  # the start already fits: nothing to bend
+        return start.u, C
+    formulate(prob, start)
+    w, best, prev_e, retried, resets = start.frames, None, None, False, 0
+    D0 = start.D
+    while True:
+        report(min(0.9, 0.1 + 0.15 * prob.solves), f"solving at C = {C:.3g}")
+        u, outcome = prob.solve(w, C)
+        ok, D = prob.check(u, C)
+        if ok:
+            best = (u, C)
+            if prob.method != "dirichlet":
+                # BD-LSCM: frame resets lower the energy but measured higher mean distortion
+                # (three_peaks 1.378 -> 1.397 over 5 resets), so one solve is the answer.
+                return best
+            e = prob.energy_of(u, w)
+            if (prev_e is not None and prev_e - e <= IMPROVEMENT * abs(prev_e)
+                    or resets >= MAX_RESETS or frame_turn(prob, u, w) <= FRAME_TOLERANCE):
+                return best
+            prev_e, resets = e, resets + 1
+            w = frames_from_map(prob.alpha(u))
+            continue
+        if best is not None:  # a later frame reset did not certify: keep the last certified map
+            return best
+        if u is not None and not retried and outcome == "inexact":
+            retried = True  # an inexact iterate may still give better frames; an infeasible one not
+            w = frames_from_map(prob.alpha(u))
+            continue
+        if np.isfinite(D0) and prob.check(start.u, C)[0]:
+            flags.append("initial_map")  # the solver failed where the start already fits
+            return start.u, C
+        failure = prob.solver_failure()
+        if failure is not None and (not raise_bound or C * RAISE_FACTOR > limit):
+            raise failure
+        if not raise_bound:
+            raise InfeasibleError(f"island {isl.index}: no map within distortion {C:g} was found "
+                                  f"({_WHY.get(outcome, outcome)}); allow raising the bound or "
+                                  "use a larger C", isl.index)
+        newC = C * RAISE_FACTOR
+        if np.isfinite(D0):  # approach the bound known to be feasible geometrically
+            newC = max(newC, np.sqrt(C * D0))
+            if newC * RAISE_FACTOR >= D0:
+                newC = max(guaranteed_bound(D0), C * 1.0001)
+        w = start.frames
+        if newC > limit:
+            raise InfeasibleError(f"island {isl.index}: infeasible up to the bound limit "
+                                  f"{limit:g}" + (" (the pins force a flip or a larger distortion)"
+                                                  if len(prob.pin_idx) >= 2 else "")
+                                  + "; raise the limit, move or remove pins, or add seams",
+                                  isl.index)
+        if "bound_raised" not in flags:
+            flags.append("bound_raised")
+        C, retried = newC, False
+
+
+def minimise(prob, start, limit, budget, flags, report, t0):
+    """Algorithm 1: bisection on C with frame updates. Returns (u, smallest certified C)."""
+    isl = prob.island
+    formulate(prob, start)
+    lo, hi, best = 1.0, np.inf, None
+    if np.isfinite(start.D) and start.D <= limit:
+        best, hi = (start.u, start.D), start.D   # the start is certified at its own distortion
+    w = start.frames
+    C = 5.0 if not np.isfinite(hi) else 0.5 * (lo + hi)
+    while prob.solves < AUTO_MAX_SOLVES:
+        if np.isfinite(hi) and hi - lo <= AUTO_TOLERANCE * hi:
+            break
+        if prob.solves and budget is not None and time.perf_counter() - t0 > budget:
+            flags.append("time_budget_exhausted")
+            break
+        frac = 0.1 + 0.8 * prob.solves / AUTO_MAX_SOLVES
+        report(frac, f"minimising C: {lo:.3g} < C* <= {hi:.4g}")
+        u, _ = prob.solve(w, C)
+        ok, D = prob.check(u, C)
+        if ok and D < hi:
+            best, hi = (u, D), D
+            w = frames_from_map(prob.alpha(u))
+        elif not ok:
+            lo = C
+        else:  # certified, but no better than what we have: C* is not much below
+            lo = max(lo, C * (1 - AUTO_TOLERANCE))
+        if not np.isfinite(hi):
+            C = 2.0 * lo
+            if np.isfinite(start.D) and C >= start.D:
+                C, w = guaranteed_bound(start.D), start.frames
+            if C > limit:
+                break
+        else:
+            C = 0.5 * (lo + hi)
+    if best is None:
+        failure = prob.solver_failure()
+        if failure is not None:
+            raise failure
+        spent = ("; the time budget ran out after "
+                 f"{prob.solves} solve(s): allow more time" if "time_budget_exhausted" in flags
+                 else "")
+        raise InfeasibleError(f"island {isl.index}: no certified map found up to C = "
+                              f"{min(limit, 2 * lo):g}{spent}; add seams, move pins, or raise "
+                              "the limit", isl.index)
+    if best[0] is start.u:
+        flags.append("initial_map")  # no solve bettered the start
+    return best
+
+
+def arap(prob, u, C, report):
+    """BD-ARAP: minimise the ARAP energy over F_C with frames from the previous map, resetting
+    the frames while the energy improves (section 6.1, "As-rigid-as-possible")."""
+    if len(prob.pin_idx) < 2:
+        # ARAP has an absolute scale: start from the map scaled to the 3D area, one anchor.
+        scale = np.sqrt(1.0 / uv_area(u, prob.island.tris))
+        if len(prob.pin_idx):
+            p = prob.pin_val[0]
+            u = p + (u - p) * scale
+            prob.set_anchors(prob.pin_idx, prob.pin_val)
+        else:
+            u = (u - u[0]) * scale
+            prob.set_anchors(np.array([0]), u[:1])
+    else:
+        prob.set_anchors(prob.pin_idx, prob.pin_val)
+    prob.weights = None
+    prob.sigma = 1e-3 * float(np.median(np.abs(prob.alpha(u))))
+    prev = None
+    for i in range(MAX_RESETS + 1):
+        w = frames_from_map(prob.alpha(u))
+        prob.scale = 1.0 / max(prob.energy_of(u, w), 1e-6)
+        report(0.9, f"BD-ARAP iteration {i + 1}")
+        un, _ = prob.solve(w, C)
+        if un is None or not prob.check(un, C)[0]:
+            break
+        e = prob.energy_of(un, w)
+        u = un
+        if prev is not None and prev - e <= IMPROVEMENT * abs(prev):
+            break
+        prev = e
+    return u
+
+
+def frame_turn(prob, u, w):
+    """How far a map turns faces away from frames w, beyond their common rotation (radians,
+    99th percentile)."""
+    wa = w * prob.alpha(u)
+    common = np.sum(prob.ops.area * wa / np.maximum(np.abs(wa), 1e-300))
+    turn = np.abs(np.angle(wa * np.conj(common)))
+    return float(np.percentile(turn, 99))
+
+
+def uv_area(u, tris):
+    """Signed UV area of a map."""
+    p = u[tris]
+    return float(np.sum(0.5 * ((p[:, 1] - p[:, 0]).conj() * (p[:, 2] - p[:, 0])).imag))
