@@ -32,9 +32,10 @@ _METHODS = (
      "same certified bound"),
 )
 _FRAMES = (
-    ('auto', "Auto", "Frames from a flip-free initial map chosen by bd-uv"),
-    ('input-uv', "From Current UVs", "Frames from the UVs the faces have now (Lipman 2012, "
-     "eq. 4.21); keeps the layout close to them"),
+    ('auto', "Auto", "Start from the conformal map (or a flip-free one) chosen by bd-uv"),
+    ('input-uv', "From Current UVs", "Start from the UVs the faces have now: an island within C "
+     "keeps its layout (scaled to its 3D area), one beyond C is bent only as far as C demands "
+     "(frames from its UVs, Lipman 2012 eq. 4.21)"),
 )
 
 

@@ -187,7 +187,9 @@ def test_operator_puts_back_islands_on_a_mesh_without_uv_map(addon, monkeypatch)
     set_mode(obj, 'EDIT')
     bpy.ops.mesh.select_all(action='SELECT')
     assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', pack=False) == {'FINISHED'}
-    assert bpy.context.window_manager.bd_uv_last_result.put_back == 1
+    last = bpy.context.window_manager.bd_uv_last_result
+    assert last.put_back == 1 and last.islands == 1
+    assert "packing" not in last.report and "float32 storage" in last.report, last.report
     set_mode(obj, 'OBJECT')
     assert [layer.name for layer in mesh.uv_layers] == ["UVMap"]
     # What a fresh UV map holds, for comparison.
@@ -294,3 +296,44 @@ def test_select_distorted_reports_what_it_selects_in_vertex_mode(addon, capsys):
         bm = bmesh.from_edit_mesh(obj.data)
         shown = sum(f.select for f in bm.faces)
         assert said == shown > 0
+
+
+def _similarity_residual(a, b, label):
+    """Largest, over islands, relative residual of fitting ``b ~ z a + c`` (complex z, c: a
+    rotation, uniform scale and translation) to corner UVs (m,3,2)."""
+    A, B = a[..., 0] + 1j * a[..., 1], b[..., 0] + 1j * b[..., 1]
+    worst = 0.0
+    for i in np.unique(label):
+        x, y = A[label == i].ravel(), B[label == i].ravel()
+        M = np.stack([x, np.ones_like(x)], 1)
+        sol = np.linalg.lstsq(M, y, rcond=None)[0]
+        worst = max(worst, np.abs(M @ sol - y).max() / np.abs(y - y.mean()).max())
+    return worst
+
+
+def test_frames_from_current_uvs_keep_the_current_layout(addon):
+    """"From Current UVs" starts from the UVs the faces have: Blender's Angle Based unwrap of
+    Suzanne (within C = 5 everywhere) comes back island by island as it was, up to a similarity,
+    where Auto gives the conformal map, a different layout. (With the frames only, as before the
+    core started from the current map, both gave the same map: at C = 5 the conformal optimum
+    lies inside every frame's convex space, so the frames never became active.)"""
+    residual = {}
+    for frames in ('auto', 'input-uv'):
+        obj = add_suzanne_with_seams()
+        set_mode(obj, 'EDIT')
+        bpy.ops.mesh.select_all(action='SELECT')
+        bpy.ops.uv.unwrap(method='ANGLE_BASED', margin=0.01)
+        set_mode(obj, 'OBJECT')
+        _, _, _, label, _ = _stored(obj)  # ABF's islands, packed apart
+        mesh = obj.data
+        loops = np.array([t.loops[:] for t in mesh.loop_triangles])
+        before = loop_uv_array(mesh)[loops].astype(np.float64)
+        set_mode(obj, 'EDIT')
+        assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', frames=frames, bound=5.0,
+                                    pack=False) == {'FINISHED'}
+        set_mode(obj, 'OBJECT')
+        D, det, *_ = _stored(obj)
+        assert (det > 0).all() and D.max() <= 5.0 * SLACK
+        residual[frames] = _similarity_residual(
+            before, loop_uv_array(mesh)[loops].astype(np.float64), label)
+    assert residual['input-uv'] < 1e-5 and residual['auto'] > 1e-2, residual
