@@ -380,14 +380,22 @@ def _down(x, digits=4):
 _FACE_LIST = re.compile(r"\bfaces (\d+(?:, \d+)*(?:, \.\.\. \(\d+ in all\))?)")
 
 
-def failure_text(batch, r):
+def failure_text(r, polygons):
     """Why island ``r`` (a failed IslandResult) was not unwrapped, in Blender's terms: the
     core's message without its own "island N (k faces)" prefix (the caller names the island),
-    with triangle counts and indices replaced by the polygons they belong to."""
+    with triangle counts and indices replaced by the polygons they belong to.
+
+    Parameters
+    ----------
+    r : IslandResult
+    polygons : callable
+        ``polygons(tris)`` -> {object name: sorted polygon indices} of (k,) triangle indices
+        (``Batch.polygons``).
+    """
     text = re.sub(rf"^island {r.index}(?: \(\d+ faces\))?:?\s*", "", r.message or "")
     tris = getattr(r.error, "faces", None)
     if tris is not None and len(tris):
-        where = batch.polygons(tris)
+        where = polygons(tris)
         n = sum(len(p) for p in where.values())
         listed = "; ".join(f"{name} faces {_some(p)}" if len(where) > 1 else f"faces {_some(p)}"
                            for name, p in where.items())
@@ -453,7 +461,7 @@ def summarise(batch, result, written, seconds, verified=None, packed=False):
                      + ", ".join(f"{_name(batch, result, c.stored.island, names)} "
                                  f"to {_up(c.stored.bound)}" for c, _ in raised))
     for r in failed:
-        text = failure_text(batch, r)
+        text = failure_text(r, batch.polygons)
         parts.append(f"{_name(batch, result, r.index, names)} {text}; left as it was"
                      if re.match(r"(is|has) ", text) else
                      f"{_name(batch, result, r.index, names)} left as it was: {text}")

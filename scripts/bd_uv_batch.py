@@ -143,7 +143,24 @@ def _file_name(text):
     return re.sub(r'[\\/:*?"<>|\s]+', "_", text).strip("._") or "object"
 
 
-def unwrap_objects(objects, args, batch, options, mesh_data, source):
+def in_polygons(entry, result, name, arrays, session):
+    """Each island entry gains ``polygons`` (its faces as Blender counts them), and a failed
+    island's message names polygons, not the triangles the core was given."""
+    def polygons(tris):
+        return {name: np.unique(arrays.tri_poly[np.asarray(tris, dtype=np.int64)])}
+    for isl in entry["islands"]:
+        r = result.islands[isl["island"]]
+        isl["polygons"] = int(len(np.unique(arrays.tri_poly[r.faces])))
+        if r.status != "certified":
+            isl["message"] = (f"island {r.index} ({isl['polygons']} faces): "
+                              f"{session.failure_text(r, polygons)}")
+    bad = [i for i in entry["islands"] if i["status"] != "certified"]
+    if bad:
+        more = f" (and {len(bad) - 1} more failed island(s))" if len(bad) > 1 else ""
+        entry["message"] = bad[0]["message"] + more
+
+
+def unwrap_objects(objects, args, batch, options, mesh_data, session, source):
     """Unwrap each object and write its certified islands into its UV map.
 
     Returns
@@ -162,6 +179,8 @@ def unwrap_objects(objects, args, batch, options, mesh_data, source):
             result = batch.unwrap_job(job, options)
             entry = {"input": source, "object": ob.name, "output": None, "uv_map": None,
                      "polygons": int(len(np.unique(arrays.tri_poly))), **result.entry}
+            if result.result is not None:
+                in_polygons(entry, result.result, ob.name, arrays, session)
             ok = np.isfinite(result.corner_uv).all(axis=(1, 2))
             if ok.any():
                 name = args.uv_map or arrays.uv_name
@@ -344,7 +363,7 @@ def main(argv):
                                 output=None, uv_map=None) for name, message in missing]
     for e in items:
         print(batch.item_line(e), flush=True)
-    done, written = unwrap_objects(objects, args, batch, options, mesh_data, source)
+    done, written = unwrap_objects(objects, args, batch, options, mesh_data, session, source)
     if written and args.pack:
         pack(written, session, args.margin, args.pack_shape)
     check_saved(written, mesh_data, stored, args.pack)

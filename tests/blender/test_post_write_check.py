@@ -337,3 +337,26 @@ def test_frames_from_current_uvs_keep_the_current_layout(addon):
         residual[frames] = _similarity_residual(
             before, loop_uv_array(mesh)[loops].astype(np.float64), label)
     assert residual['input-uv'] < 1e-5 and residual['auto'] > 1e-2, residual
+
+
+def test_batch_script_carries_on_past_a_closed_mesh_named_in_polygons(empty_scene, tmp_path):
+    """A closed cube among the objects: the script reports it (6 faces, not 12 triangles) and
+    goes on to unwrap and save the others."""
+    import json
+
+    grid = add_grid(4, 4)
+    grid.name = "Grid"
+    bpy.ops.mesh.primitive_cube_add(location=(5, 0, 0))
+    bpy.context.active_object.name = "Cube"
+    blend, out, report = tmp_path / "in.blend", tmp_path / "out.blend", tmp_path / "r.json"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    script = _load_script()
+    assert script.main([str(script.__file__), str(blend), "--", "--output", str(out),
+                        "--report", str(report)]) == 1
+    rep = {e["object"]: e for e in json.loads(report.read_text())["items"]}
+    assert rep["Grid"]["status"] == "certified" and rep["Cube"]["status"] == "failed"
+    assert rep["Cube"]["polygons"] == 6 and rep["Cube"]["islands"][0]["polygons"] == 6
+    assert rep["Cube"]["message"].startswith("island 0 (6 faces): is closed"), rep["Cube"]
+    bpy.ops.wm.open_mainfile(filepath=str(out))
+    D, det, *_ = _stored(bpy.data.objects["Grid"])
+    assert (det > 0).all() and D.max() <= rep["Grid"]["bound_certified"] * SLACK
