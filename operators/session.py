@@ -3,7 +3,9 @@
 ``gather`` copies every object's selected faces into one concatenated problem (islands never span
 objects, so one ``bd_uv.unwrap`` call solves them all), ``write_back`` re-fetches each object,
 checks it did not change meanwhile and writes the certified islands, ``pack`` runs Blender's own
-``uv.pack_islands`` on them, and ``summarise`` turns the result into the report line.
+``uv.pack_islands`` on them, ``verify_written`` certifies every written island again from the UVs
+as stored and puts back those that fail, and ``summarise`` turns what is stored into the report
+line (in Blender's terms: faces are polygons).
 """
 from __future__ import annotations
 
@@ -304,8 +306,8 @@ def pack(context, written, margin, shape='AABB'):
         for ob in objects:
             saved[ob.name] = mesh_data.selection(ob.data)
             w = next((w for w in todo if w.object_name == ob.name), None)
-            mesh_data.select_polygons(
-                ob.data, w.pack_polygons if w is not None else np.zeros(len(ob.data.polygons), bool))
+            mesh_data.select_polygons(ob.data, w.pack_polygons if w is not None
+                                      else np.zeros(len(ob.data.polygons), bool))
         tool.use_uv_select_sync = True
         tool.mesh_select_mode = (False, False, True)
     try:

@@ -12,11 +12,13 @@ With the ``bpy`` module (``pip install bpy``)::
 
 Each object is unwrapped along its seams, keeping its pinned UVs exactly, with the object's scale
 applied like the ``uv.bd_unwrap`` operator, and with ``--pack`` the islands are packed by Blender's
-Pack Islands as the operator does. The report's figures and the PNG are recomputed from the UV map
-as saved (float32, packed or not): each island is certified again from the saved map with its
-own bound, and an island that fails is put back before saving (never saved). Arrays come from the add-on's ``operators/mesh_data.py``
-and are solved by ``bd_uv.batch.unwrap_job``, the code ``python -m bd_uv batch`` runs. Islands
-that are not certified keep their old UVs. Exit code 0 only if every object was certified.
+Pack Islands as the operator does. Then each island is certified again from the UV map as it will
+be saved (float32, packed or not) with its own bound, and an island that fails is put back before
+saving: no island that failed is ever saved. The report's figures and the PNG are those of the
+saved map; faces are also counted as Blender's polygons. Arrays come from the add-on's
+``operators/mesh_data.py`` and are solved by ``bd_uv.batch.unwrap_job``, the code
+``python -m bd_uv batch`` runs. Islands that are not certified keep their old UVs. Exit code 0
+only if every object was certified.
 
 This file lives in ``<extension root>/scripts/``; it imports ``bd_uv`` and ``mesh_data`` from the
 extension root by path, so it works from the repository and from an installed extension alike.

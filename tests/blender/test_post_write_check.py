@@ -1,4 +1,4 @@
-"""Issue 10, Blender side: every write path re-checks what it stores, and says so in Blender's terms.
+"""Issue 10, Blender side: every write path re-checks what it stores and says so in Blender's terms.
 
 The stored UVs are measured here independently of bd_uv (``conftest.triangle_distortion``: numpy
 SVD of each triangle's 2x2 Jacobian) and the operator's report and panel are compared with that:
