@@ -360,3 +360,73 @@ def test_batch_script_carries_on_past_a_closed_mesh_named_in_polygons(empty_scen
     bpy.ops.wm.open_mainfile(filepath=str(out))
     D, det, *_ = _stored(bpy.data.objects["Grid"])
     assert (det > 0).all() and D.max() <= rep["Grid"]["bound_certified"] * SLACK
+
+
+def _two_islands():
+    """A grid with a second, separate grid joined in: one object, two islands."""
+    obj = add_grid(4, 4)
+    other = add_grid(3, 3)
+    other.location.x = 5
+    set_mode(other, 'OBJECT')
+    obj.select_set(True)
+    bpy.context.view_layer.objects.active = obj
+    bpy.ops.object.join()
+    set_mode(obj, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    return obj
+
+
+def _uv_overlap_pairs(obj):
+    """Pairs of islands (by this test's own labels) whose stored UV triangles overlap, from
+    first principles: two triangles overlap when no edge of either separates them (separating
+    axis theorem), shrunk by 1e-9 so that touching is not overlapping."""
+    D, det, area, label, poly = _stored(obj)
+    mesh = obj.data
+    loops = np.array([t.loops[:] for t in mesh.loop_triangles])
+    uv = loop_uv_array(mesh)[loops].astype(np.float64)
+    i, j = np.triu_indices(len(uv), 1)
+    keep = label[i] != label[j]
+    i, j = i[keep], j[keep]
+    A, B = uv[i], uv[j]
+
+    def separated(P, Q):
+        out = np.zeros(len(P), bool)
+        for k in range(3):
+            e = P[:, (k + 1) % 3] - P[:, k]
+            n = np.stack([-e[:, 1], e[:, 0]], 1)
+            p = np.einsum("tij,tj->ti", P, n)
+            q = np.einsum("tij,tj->ti", Q, n)
+            out |= (p.max(1) <= q.min(1) + 1e-9) | (q.max(1) <= p.min(1) + 1e-9)
+        return out
+    hit = ~(separated(A, B) | separated(B, A))
+    return {tuple(sorted(p)) for p in zip(label[i][hit], label[j][hit])}
+
+
+def test_overlaps_between_islands_are_reported(addon, monkeypatch):
+    """Overlaps between islands of the stored layout are reported (here from an injected check
+    of the layout), with a hint when packing was off; packed, the stored islands do not
+    overlap (checked from first principles)."""
+    stored = load_submodule("operators.stored")
+    seen = []
+
+    def overlaps(corner_uv, face_island):
+        seen.append(np.unique(face_island[face_island >= 0]))
+        return np.array([seen[-1][:2]])
+    monkeypatch.setattr(stored, "layout_overlaps", overlaps)
+    obj = _two_islands()
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', pack=False) == {'FINISHED'}
+    last = bpy.context.window_manager.bd_uv_last_result
+    assert last.overlaps == 1 and len(seen) == 1 and list(seen[0]) == [0, 1]
+    assert last.report.endswith("; islands overlap in Grid's UV map: 0 and 1; turn on Pack "
+                                "Islands to lay them apart"), last.report
+    monkeypatch.undo()
+    set_mode(obj, 'OBJECT')
+    assert _uv_overlap_pairs(obj)  # not packed: both islands start at (0, 0)
+
+    set_mode(obj, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', pack=True) == {'FINISHED'}
+    last = bpy.context.window_manager.bd_uv_last_result
+    assert last.overlaps == 0 and "overlap" not in last.report
+    set_mode(obj, 'OBJECT')
+    assert not _uv_overlap_pairs(obj)
