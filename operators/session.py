@@ -267,14 +267,17 @@ def verify_written(batch, result, written):
         checks = stored.check_stored(part.arrays.V, part.arrays.F, uv, labels, result.islands)
         P = part.arrays.V[part.arrays.F]
         area = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
-        undo = np.zeros(len(islands), dtype=bool)
-        for c in checks:
-            mine = labels == c.island
-            if not c.certified:
-                undo |= mine
-            checked.append(Checked(part.object_name,
-                                   int(len(np.unique(part.arrays.tri_poly[mine]))),
-                                   float(area[mine].sum()), c, not c.certified))
+        n = len(result.islands)
+        on = labels >= 0
+        island_area = np.bincount(labels[on], weights=area[on], minlength=n)
+        pairs = np.unique(np.stack([labels[on], part.arrays.tri_poly[on]], 1), axis=0)
+        island_polygons = np.bincount(pairs[:, 0], minlength=n)
+        failed = np.zeros(n + 1, dtype=bool)  # the last entry: faces not written (label -1)
+        failed[[c.island for c in checks if not c.certified]] = True
+        undo = failed[labels]
+        checked.extend(Checked(part.object_name, int(island_polygons[c.island]),
+                               float(island_area[c.island]), c, not c.certified)
+                       for c in checks)
         if undo.any():
             _restore(ob, part, w, undo)
             w.faces = w.faces & ~undo
@@ -354,6 +357,13 @@ class Summary:
     raised: int = 0     # islands certified at a C above the one asked for
     put_back: int = 0   # islands put back by the post-write check
     overlaps: int = 0   # pairs of islands overlapping in the stored layouts
+
+
+LISTED = 8  # islands named one by one in the report line; the rest are counted
+
+
+def _more(n):
+    return f", ... ({n} islands in all)" if n > LISTED else ""
 
 
 def _some(values, k=8):
@@ -459,20 +469,25 @@ def summarise(batch, result, written, seconds, verified=None, packed=False):
         parts.append(f"{label}: nothing unwrapped")
     if raised:
         asked = sorted({a for _, a in raised})
+        listed = [f"{_name(batch, result, c.stored.island, names)} to {_up(c.stored.bound)}"
+                  for c, _ in raised[:LISTED]]
         parts.append(f"C raised from {', '.join(f'{a:g}' for a in asked)}: "
-                     + ", ".join(f"{_name(batch, result, c.stored.island, names)} "
-                                 f"to {_up(c.stored.bound)}" for c, _ in raised))
-    for r in failed:
+                     + ", ".join(listed) + _more(len(raised)))
+    for r in failed[:LISTED]:
         text = failure_text(r, batch.polygons)
         parts.append(f"{_name(batch, result, r.index, names)} {text}; left as it was"
                      if re.match(r"(is|has) ", text) else
                      f"{_name(batch, result, r.index, names)} left as it was: {text}")
-    for c in back:
+    if len(failed) > LISTED:
+        parts.append(f"{len(failed) - LISTED} more islands left as they were")
+    for c in back[:LISTED]:
         why = c.stored.reason or "it no longer passes"
         cause = ("packing shrank or moved it too far: unwrap it without packing" if packed
                  else "float32 storage changed it")
         parts.append(f"{_name(batch, result, c.stored.island, names)} put back as it was: its "
                      f"stored UVs fail the certificate ({why}); {cause}")
+    if len(back) > LISTED:
+        parts.append(f"{len(back) - LISTED} more islands put back as they were")
     n_overlaps = 0
     for object_name, pairs in (verified.overlaps.items() if verified is not None else ()):
         if pairs is None or not len(pairs):

@@ -288,7 +288,9 @@ def check_saved(written, mesh_data, stored, packed):
         kept = [c for c in checks if c.certified]
         P = arrays.V[arrays.F]
         area = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
-        weights = np.array([area[labels == c.island].sum() for c in kept])
+        on = labels >= 0
+        island_area = np.bincount(labels[on], weights=area[on], minlength=len(w.result.islands))
+        weights = np.array([island_area[c.island] for c in kept])
         bad = [i for i in entry["islands"] if i["status"] != "certified"]
         entry["status"] = "certified" if not bad else ("partial" if kept else "failed")
         if kept:
