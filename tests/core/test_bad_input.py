@@ -21,7 +21,7 @@ from bd_uv.solvers.conic import ConicSolution
 from unwrap_contract import (DATA, assert_unchanged, distortion_and_flips, read_off, snapshot,
                              unwrap_checked)
 
-# The module that defines unwrap() (bd_uv/pipeline.py): found from the function, not by name.
+# The module that defines unwrap() (bd_uv/unwrapping/unwrap.py): found from the function, not by name.
 PIPELINE = sys.modules[bd_uv.unwrap.__module__]
 
 
