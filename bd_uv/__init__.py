@@ -4,6 +4,7 @@
 >>> res = bd_uv.unwrap(V, F, bound=5.0)          # doctest: +SKIP
 >>> res.corner_uv, [r.max_distortion for r in res.islands]   # doctest: +SKIP
 """
+from .certificate import Certificate, certificate_totals, certify_islands
 from .colors import distortion_colors
 from .errors import (BDError, CancelledError, ClosedIslandError, DegenerateFacesError,
                      DuplicateFacesError, InfeasibleError, InvalidMeshError, IslandError,
@@ -12,6 +13,7 @@ from .errors import (BDError, CancelledError, ClosedIslandError, DegenerateFaces
 from .metrics import (certify, conformal_distortion, face_jacobians, flipped_faces,
                       mean_distortion, signed_uv_areas)
 from .mesh import Island, islands
+from .overlap import island_overlaps, layout_overlaps
 from .meshio import Mesh, load_mesh, write_obj
 from .unwrapping import IslandResult, UnwrapResult, unwrap
 
