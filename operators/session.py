@@ -264,7 +264,8 @@ def verify_written(batch, result, written):
         uv = mesh_data.loop_uvs(ob.data, uv_name)[part.arrays.tri_loops].astype(np.float64)
         islands = result.face_island[part.faces]
         labels = np.where(w.faces, islands, -1)
-        checks = stored.check_stored(part.arrays.V, part.arrays.F, uv, labels, result.islands)
+        checks = stored.check_stored(part.arrays.V, part.arrays.F, uv, labels, result.islands,
+                                     solved_uv=result.corner_uv[part.faces])
         P = part.arrays.V[part.arrays.F]
         area = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
         n = len(result.islands)
@@ -283,7 +284,7 @@ def verify_written(batch, result, written):
             w.faces = w.faces & ~undo
             labels = np.where(w.faces, islands, -1)
         if len(np.unique(labels[labels >= 0])) > 1:
-            overlaps[part.object_name] = stored.layout_overlaps(uv, labels)
+            overlaps[part.object_name] = stored.layout_overlaps(uv, labels, part.arrays.F)
     return Verified(checked, overlaps)
 
 
@@ -482,10 +483,13 @@ def summarise(batch, result, written, seconds, verified=None, packed=False):
         parts.append(f"{len(failed) - LISTED} more islands left as they were")
     for c in back[:LISTED]:
         why = c.stored.reason or "it no longer passes"
-        cause = ("packing shrank or moved it too far: unwrap it without packing" if packed
-                 else "float32 storage changed it")
-        parts.append(f"{_name(batch, result, c.stored.island, names)} put back as it was: its "
-                     f"stored UVs fail the certificate ({why}); {cause}")
+        if c.stored.failed_as_solved:  # the solve's own certificate did not check this
+            text = f"its UVs fail the certificate ({why}) as solved already"
+        else:
+            text = (f"its stored UVs fail the certificate ({why}); " + (
+                "packing shrank or moved it too far: unwrap it without packing" if packed
+                else "float32 storage changed it"))
+        parts.append(f"{_name(batch, result, c.stored.island, names)} put back as it was: {text}")
     if len(back) > LISTED:
         parts.append(f"{len(back) - LISTED} more islands put back as they were")
     n_overlaps = 0

@@ -267,7 +267,8 @@ def check_saved(written, mesh_data, stored, packed):
         entry, arrays = w.entry, w.arrays
         uv = mesh_data.loop_uvs(w.ob.data, entry["uv_map"])[arrays.tri_loops].astype(np.float64)
         labels = np.where(w.ok, w.result.face_island, -1)
-        checks = stored.check_stored(arrays.V, arrays.F, uv, labels, w.result.islands)
+        checks = stored.check_stored(arrays.V, arrays.F, uv, labels, w.result.islands,
+                                     solved_uv=w.result.corner_uv)
         by_index = {c.island: c for c in checks}
         undo = np.isin(labels, [c.island for c in checks if not c.certified])
         for isl in entry["islands"]:
@@ -276,12 +277,13 @@ def check_saved(written, mesh_data, stored, packed):
                 continue
             isl.update(bound_certified=c.bound, max_distortion=c.max_distortion,
                        mean_distortion=c.mean_distortion, flipped=c.flipped,
-                       overlap_free=c.overlap_free)
+                       overlap_free=bool(c.overlap_free))
             if not c.certified:
-                cause = "packing" if packed else "float32 storage"
+                cause = ("as solved already" if c.failed_as_solved else
+                         "after packing" if packed else "after float32 storage")
                 isl.update(status="failed", error="CertificationError",
                            message=f"island {c.island}: put back as it was, its saved UVs fail "
-                                   f"the certificate ({c.reason}; after {cause})")
+                                   f"the certificate ({c.reason}; {cause})")
         if undo.any():
             _put_back(w, undo, mesh_data)
             w.ok = w.ok & ~undo
@@ -307,7 +309,7 @@ def check_saved(written, mesh_data, stored, packed):
             more = f" (and {len(bad) - 1} more failed island(s))" if len(bad) > 1 else ""
             entry["message"] = bad[0]["message"] + more
         kept_labels = np.where(w.ok, labels, -1)
-        pairs = (stored.layout_overlaps(uv, kept_labels)
+        pairs = (stored.layout_overlaps(uv, kept_labels, arrays.F)
                  if len(np.unique(kept_labels[kept_labels >= 0])) > 1 else [])
         entry["island_overlaps"] = None if pairs is None else [
             [int(a), int(b)] for a, b in np.asarray(pairs).reshape(-1, 2)]
