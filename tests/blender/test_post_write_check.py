@@ -457,3 +457,43 @@ def test_overlaps_between_islands_are_reported(addon, monkeypatch):
     assert last.overlaps == 0 and "overlap" not in last.report
     set_mode(obj, 'OBJECT')
     assert not _uv_overlap_pairs(obj)
+
+
+def test_minimised_island_is_certified_at_what_it_measures_as_stored():
+    """stored.check_stored on its own: an island certified at the exact float64 max of its solve
+    (no headroom) that float32 storage pushes a hair above is kept when minimised, at the C its
+    stored UVs measure (recomputed here with the independent SVD), and put back when a C was asked
+    for; storage that truly changes it (here: shrunk to float32's resolution) is put back even
+    when minimised."""
+    stored = load_submodule("operators.stored")
+    rng = np.random.default_rng(3)
+    n = 6
+    x, y = np.meshgrid(np.arange(n, dtype=float), np.arange(n, dtype=float))
+    V = np.stack([x.ravel(), y.ravel(), 0.1 * rng.random(n * n)], 1)
+    q = (np.arange(n - 1)[:, None] * n + np.arange(n - 1)[None, :]).ravel()
+    F = np.concatenate([np.stack([q, q + 1, q + n + 1], 1), np.stack([q, q + n + 1, q + n], 1)])
+
+    class Solved:  # the IslandResult fields check_stored reads
+        def __init__(self, bound, requested):
+            self.bound_certified, self.bound_requested = bound, requested
+
+    labels = np.zeros(len(F), np.int64)
+    for seed in range(100):  # a layout whose float32 rounding raises its max distortion
+        uv = 0.5 + 1e-3 * (V[:, :2] + 0.05 * np.random.default_rng(seed).random((n * n, 2)))
+        corner = uv[F]
+        exact = triangle_distortion(V, F, corner)[0].max()
+        as_stored = corner.astype(np.float32).astype(np.float64)
+        measured = triangle_distortion(V, F, as_stored)[0].max()
+        if exact < measured <= exact * (1 + stored.STORAGE_RTOL):
+            break
+    else:
+        pytest.fail("no layout whose float32 storage raises the max")
+    [kept] = stored.check_stored(V, F, as_stored, labels, [Solved(exact, "auto")])
+    assert kept.certified and not kept.failed_as_solved
+    assert kept.bound == pytest.approx(measured, rel=1e-9) and kept.bound >= kept.max_distortion
+    [asked] = stored.check_stored(V, F, as_stored, labels, [Solved(exact, 2.0)],
+                                  solved_uv=corner)
+    assert not asked.certified and not asked.failed_as_solved and "max distortion" in asked.reason
+    shrunk = (0.5 + 1e-9 * (corner - 0.5)).astype(np.float32)
+    [ruined] = stored.check_stored(V, F, shrunk, labels, [Solved(exact, "auto")])
+    assert not ruined.certified
