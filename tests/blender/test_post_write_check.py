@@ -497,3 +497,28 @@ def test_minimised_island_is_certified_at_what_it_measures_as_stored():
     shrunk = (0.5 + 1e-9 * (corner - 0.5)).astype(np.float32)
     [ruined] = stored.check_stored(V, F, shrunk, labels, [Solved(exact, "auto")])
     assert not ruined.certified
+
+
+def test_background_path_puts_back_what_fails_as_stored(addon, monkeypatch):
+    """The modal (background) path ends in the same post-write check: an island failing as
+    stored is put back (the grid keeps its UVs bit for bit), and the report says so."""
+    from test_operator_background import Context, _event, _invoke, _operator
+
+    unwrap_module = load_submodule("operators.unwrap")
+    monkeypatch.setattr(unwrap_module, "has_event_loop", lambda context: True)
+    stored = load_submodule("operators.stored")
+    monkeypatch.setattr(stored, "certify_islands",
+                        _failing(stored, lambda F, k: np.ones(k, bool)))
+    obj = add_grid(5, 4)
+    before = loop_uv_array(obj.data).tobytes()
+    set_mode(obj, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    op, context = _operator(bound=2.0), Context()
+    assert _invoke(op, context) == {'RUNNING_MODAL'}
+    op._job.wait()
+    assert op.modal(context, _event('TIMER')) == {'CANCELLED'}
+    level, message = op.reports[-1]
+    assert level == {'WARNING'} and message.startswith("BD-LSCM: nothing unwrapped; island 0 of "
+                                                       "Grid (20 faces) put back as it was")
+    set_mode(obj, 'OBJECT')
+    assert loop_uv_array(obj.data).tobytes() == before
