@@ -294,8 +294,9 @@ def island_overlaps(F, corner_uv, face_island, n_islands=None):
 def layout_overlaps(corner_uv, face_island, F=None):
     """Pairs of islands of a layout that overlap each other.
 
-    Two islands overlap when their UV boundaries meet, or when one lies inside the other (a point
-    of its boundary inside the other's outer boundary and outside its holes, even-odd rule).
+    Two islands overlap when their UV boundaries meet (touching counts: pack with a margin), or
+    when one lies inside the other (a point of its boundary inside the other's outer boundary and
+    outside its holes, even-odd rule).
 
     Parameters
     ----------

@@ -71,7 +71,8 @@ def test_folder_good_files_written_bad_ones_reported_exit_1(folder, tmp_path, ca
     assert set(items) == {"nefertiti.off", "bump.obj", "tetra.off", "broken.ply"}
     assert rep["summary"] | {"seconds": 0} == {
         "files": 4, "meshes": 4, "certified": 2, "partial": 0, "failed": 2, "not_run": 0,
-        "seconds": 0, "jobs": 2, "interrupted": False}
+        "seconds": 0, "jobs": 2, "interrupted": False,
+        "overlapping_islands": 0, "layout_overlaps": 0}
 
     for name, stem in (("nefertiti.off", "nefertiti"), ("bump.obj", "bump")):
         e = items[name]
