@@ -7,7 +7,7 @@ import pytest
 
 from bd_uv.certificate import certificate_totals, certify_islands
 from bd_uv.overlap import island_overlaps, layout_overlaps, uv_boundary
-from overlap_shapes import figure8_uv, overlapping_triangle_pairs, spiral_uv, strip
+from overlap_shapes import figure8_uv, overlapping_triangle_pairs, spiral_uv
 
 
 def square():
@@ -103,7 +103,6 @@ def test_flipped_face_fails_with_reason():
 def test_island_nested_inside_itself_without_crossing_is_caught():
     # Two squares with one label: the small one lies inside the big one, no boundary crossing.
     V, F, uv = square()
-    V2 = np.concatenate([V, V])
     F2 = np.concatenate([F, F + 4])
     uv2 = np.concatenate([uv * 3, uv + 1.0])
     ov = island_overlaps(F2, uv2, np.zeros(4, int))
