@@ -1,4 +1,4 @@
-"""Is a flip-free map one-to-one? Its UV boundary decides (Lipman 2012, section 5, Theorems 5.1-5.2).
+"""Is a flip-free map one-to-one? Its UV boundary decides (Lipman 2012, Theorems 5.1 and 5.2).
 
 For a map with no flipped face the number of preimages of a UV point ``p`` (off the boundary image)
 is the winding number of the UV boundary curves around ``p``. So an island is a bijection onto its
@@ -294,8 +294,9 @@ def island_overlaps(F, corner_uv, face_island, n_islands=None):
 def layout_overlaps(corner_uv, face_island, F=None):
     """Pairs of islands of a layout that overlap each other.
 
-    Two islands overlap when their UV boundaries meet, or when one lies inside the other (a point
-    of its boundary inside the other's outer boundary and outside its holes, even-odd rule).
+    Two islands overlap when their UV boundaries meet (touching counts: pack with a margin), or
+    when one lies inside the other (a point of its boundary inside the other's outer boundary and
+    outside its holes, even-odd rule).
 
     Parameters
     ----------
@@ -334,7 +335,7 @@ def layout_overlaps(corner_uv, face_island, F=None):
     r, s = tree.query(rays, predicate="intersects")
     other = bd.island[s] != isl_ids[r]
     r, s = r[other], s[other]
-    (x1, y1), (x2, y2) = bd.p[s].T, bd.q[s].T
+    y1, y2 = bd.p[s, 1], bd.q[s, 1]
     py = pts[r, 1]
     straddle = (y1 > py) != (y2 > py)
     key = r * n_isl + bd.island[s]

@@ -75,7 +75,7 @@ def test_folder_good_files_written_bad_ones_reported_exit_1(folder, tmp_path, ca
     assert rep["summary"] | timing == {
         "files": 4, "meshes": 4, "certified": 2, "partial": 0, "failed": 2, "not_run": 0,
         "resumed": 0, **timing, "scheduler": "pool", "jobs": 2, "interrupted": False,
-        "running": False}
+        "running": False, "overlapping_islands": 0, "layout_overlaps": 0}
     minutes = rep["summary"]["seconds"] / 60
     assert rep["summary"]["files_per_minute"] == pytest.approx(4 / minutes, rel=0.01)
     faces = sum(e["faces"] or 0 for e in rep["items"])

@@ -7,7 +7,7 @@ import pytest
 
 from bd_uv.certificate import certificate_totals, certify_islands
 from bd_uv.overlap import island_overlaps, layout_overlaps, uv_boundary
-from overlap_shapes import figure8_uv, overlapping_triangle_pairs, spiral_uv, strip
+from overlap_shapes import figure8_uv, overlapping_triangle_pairs, spiral_uv
 
 
 def square():
@@ -103,7 +103,6 @@ def test_flipped_face_fails_with_reason():
 def test_island_nested_inside_itself_without_crossing_is_caught():
     # Two squares with one label: the small one lies inside the big one, no boundary crossing.
     V, F, uv = square()
-    V2 = np.concatenate([V, V])
     F2 = np.concatenate([F, F + 4])
     uv2 = np.concatenate([uv * 3, uv + 1.0])
     ov = island_overlaps(F2, uv2, np.zeros(4, int))
@@ -146,3 +145,65 @@ def test_unlabelled_and_nonfinite_faces():
     assert not c.certified and c.flipped == 1
     certs = certify_islands(V, F, square()[2], [-1, 0], [5.0])
     assert certs[0].certified and certs[0].faces == 1
+
+
+# ---- the shapes through bd_uv.unwrap, then certify / cut ---------------------------------
+
+from overlap_shapes import folded_strip, helicoid_ribbon, spiral_strip  # noqa: E402
+
+import bd_uv  # noqa: E402
+from bd_uv.cut import split_overlapping  # noqa: E402
+from bd_uv.layout import stored_layout  # noqa: E402
+
+
+@pytest.mark.parametrize("shape", [helicoid_ribbon, spiral_strip, folded_strip])
+def test_unwrapped_shapes_are_never_certified_with_an_overlap(shape):
+    V, F = shape()
+    res = bd_uv.unwrap(V, F, bound=5.0)
+    assert [r.status for r in res.islands] == ["certified"]
+    C = res.islands[0].bound_certified
+    cert = certify_islands(V, F, res.corner_uv, res.face_island, [C])[0]
+    overlapping = overlapping_triangle_pairs(res.corner_uv)
+    assert cert.overlap_free == (len(overlapping) == 0)
+    if cert.certified:
+        assert len(overlapping) == 0
+        return
+    # not certified: it must be for its overlap (the unwrap's own figures hold), and cut it
+    assert cert.flipped == 0 and cert.max_distortion <= C * (1 + 1e-6) and cert.crossings > 0
+    pieces, cut = split_overlapping(V, F, res.corner_uv, np.arange(len(F)))
+    assert len(pieces) >= 2 and len(cut) > 0
+    assert np.array_equal(np.sort(np.concatenate(pieces)), np.arange(len(F)))
+    lab = np.full(len(F), -1)
+    for i, p in enumerate(pieces):
+        lab[p] = i
+    for c, p in zip(certify_islands(V, F, res.corner_uv, lab, [C] * len(pieces)), pieces):
+        assert c.certified and c.overlap_free
+        assert len(overlapping_triangle_pairs(res.corner_uv[p])) == 0
+    # the cut edges are mesh edges joining two different pieces
+    E = {tuple(sorted(e)) for f in F for e in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0]))}
+    assert all(tuple(sorted(e)) in E for e in cut.tolist())
+    faces_at = [set(np.flatnonzero((F == a).any(1) & (F == b).any(1))) for a, b in cut.tolist()]
+    assert all(len({lab[f] for f in fs}) == 2 for fs in faces_at)
+
+
+def test_stored_layout_cuts_packs_and_recertifies():
+    V, F = helicoid_ribbon()
+    res = bd_uv.unwrap(V, F, bound=5.0)
+    lay = stored_layout(V, F, res, pack=True, cut=True, dtype=np.float32)
+    t = lay.totals()
+    assert t["overlapping_unwrapped"] == 1 and t["cut_islands"] == 1 and t["cut_edges"] > 0
+    assert t["certified"] == t["islands"] >= 2 and t["layout_overlaps"] == 0
+    assert (lay.face_island >= 0).all() and lay.corner_uv.min() >= 0 and lay.corner_uv.max() <= 1
+    assert np.array_equal(lay.corner_uv, lay.corner_uv.astype(np.float32))   # as stored
+    assert len(overlapping_triangle_pairs(lay.corner_uv)) == 0
+    (e,) = lay.island_entries(res)
+    assert e["status"] == "certified" and e["overlap_free"] and e["pieces"] >= 2
+    assert e["crossings"] > 0 and len(e["cut_edges"]) == t["cut_edges"]
+    json.dumps(e, allow_nan=False)
+    # refusing the cut: the island fails and nothing is written
+    lay = stored_layout(V, F, res, pack=True, cut=False)
+    (e,) = lay.island_entries(res)
+    assert e["status"] == "failed" and e["overlap_free"] is False
+    assert "crosses itself" in e["message"] and (lay.face_island == -1).all()
+    uv, F_uv = lay.vertex_uv(F)
+    assert len(uv) == 0 and (F_uv == -1).all()
