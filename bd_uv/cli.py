@@ -79,6 +79,8 @@ def split_options(options):
     layout keys (the Blender script, which packs with Blender) nothing is cut or packed."""
     solve = {k: v for k, v in options.items() if k not in LAYOUT_OPTIONS}
     layout = {k: options[k] for k in LAYOUT_OPTIONS if k in options}
+    if "cut" in layout:  # unwrap() itself cuts (or fails) an island whose UVs overlap
+        solve["overlap"] = "cut" if layout["cut"] else "fail"
     layout.setdefault("pack", False)
     layout.setdefault("cut", False)
     return solve, layout
@@ -120,7 +122,8 @@ def run_unwrap(args):
             print(f"error: --frames input-uv needs UVs in {args.input}", file=sys.stderr)
             return 2
         kwargs["initial_uv"] = mesh.corner_uv
-    res = unwrap(mesh.V, mesh.F, seams=seams, progress=ProgressBar(), **kwargs)
+    res = unwrap(mesh.V, mesh.F, seams=seams, progress=ProgressBar(), overlap=args.overlap,
+                 **kwargs)
     layout = stored_layout(mesh.V, mesh.F, res, **layout_kwargs(args))
     uv, F_uv = layout.vertex_uv(mesh.F)
     write_obj(args.output, mesh.V, mesh.F, uv, F_uv)
@@ -148,12 +151,21 @@ def run_unwrap(args):
     return 0 if not failed else 1
 
 
+def core_cuts(islands):
+    """Islands unwrap() cut because their UVs overlapped: {"islands": n, "edges": cut edges},
+    from the report entries (pieces name the island they were cut from)."""
+    first = {e["cut_from"]: len(e["cut_edges"] or []) for e in islands
+             if e.get("cut_from") is not None}
+    return {"islands": len(first), "edges": sum(first.values())}
+
+
 def _print_report(name, islands, layout, seconds, args, out):
     t = layout.totals()
+    cut = core_cuts(islands)
     print(f"{name}: BD-{args.method.upper()}, bound {args.bound}, {len(islands)} island(s), "
           f"{t['certified']}/{t['islands']} stored island(s) certified, "
-          f"{t['overlapping_unwrapped']} overlapping ({t['cut_islands']} cut along "
-          f"{t['cut_edges']} edges), {t['layout_overlaps']} overlapping island pair(s)"
+          f"{t['overlapping_unwrapped'] + cut['islands']} overlapping ({t['cut_islands'] + cut['islands']} cut along "
+          f"{t['cut_edges'] + cut['edges']} edges), {t['layout_overlaps']} overlapping island pair(s)"
           f"{'' if layout.packed else ' (not packed)'}, {seconds:.2f} s -> {args.output}",
           file=out)
     for e in islands:

@@ -68,3 +68,7 @@ class InfeasibleError(IslandError):
 
 class SolverError(IslandError):
     """The solver failed or its result could not be certified."""
+
+
+class OverlapError(IslandError):
+    """The island's UVs lie over themselves (its UV boundary is not simple); cut it or mark seams."""

@@ -82,7 +82,8 @@ class Layout:
             mine = [c for c, s in zip(self.certificates, self.source) if s == r.index]
             before = self.unwrapped[r.index]
             e["crossings"] = before.crossings if before is not None else None
-            e["cut_edges"] = self.cut_edges[r.index].tolist()
+            if len(self.cut_edges[r.index]) or e["cut_edges"] is None:  # else unwrap() cut it
+                e["cut_edges"] = self.cut_edges[r.index].tolist()
             e["pieces"] = len(mine)
             if not mine:  # the unwrap failed: nothing stored
                 e["overlap_free"] = None

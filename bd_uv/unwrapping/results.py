@@ -30,6 +30,9 @@ class IslandResult:
     distortion: np.ndarray = None
     flags: tuple = ()
     timings: dict = field(default_factory=dict)
+    overlap_free: bool = False
+    cut_edges: np.ndarray = None
+    cut_from: int = None
 
     def summary(self):
         """The island's entry in the JSON report."""
@@ -42,6 +45,9 @@ class IslandResult:
                 "mean_distortion": num(self.mean_distortion), "flipped": int(self.flipped),
                 "frames": self.frames, "seconds": round(self.seconds, 4), "status": self.status,
                 "solves": self.solves, "iterations": self.iterations, "flags": list(self.flags),
+                "overlap_free": bool(self.overlap_free),
+                "cut_edges": None if self.cut_edges is None else self.cut_edges.tolist(),
+                "cut_from": self.cut_from,
                 "error": type(self.error).__name__ if self.error else None,
                 "message": self.message,
                 "timings": {k: round(v, 4) for k, v in self.timings.items()}}

@@ -7,12 +7,16 @@ Per island (Lipman 2012, sections 4 and 6; issue 9's "never worse than its start
    (``strategies.bounded``), or C is minimised (``strategies.minimise``);
 3. every result is certified from its final UVs: no flipped face and max distortion <= C.
 """
+import dataclasses
 import math
 import time
 
 import numpy as np
 
-from ..errors import BDError, CancelledError, InvalidMeshError, IslandError, SolverError
+from ..certificate import certify_islands
+from ..cut import split_overlapping
+from ..errors import (BDError, CancelledError, InvalidMeshError, IslandError, OverlapError,
+                      SolverError)
 from ..mesh import check_arrays, islands as split_islands
 from ..metrics import certify, mean_distortion
 from . import strategies
@@ -28,7 +32,7 @@ HIGH_DISTORTION = 50.0  # certified bounds above this get a "high_distortion" fl
 
 def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound=5.0,
            frames="auto", initial_uv=None, raise_bound=True, bound_limit=1000.0, cone="soc",
-           time_budget=None, progress=None, cancel=None):
+           time_budget=None, overlap="cut", progress=None, cancel=None):
     """Map a triangle mesh to the plane with no flipped face and conformal distortion <= C.
 
     Parameters
@@ -47,6 +51,9 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
     bound_limit : float
     cone : "soc" (F_C, eq. 4.15) or "linf" (F_C^inf, eq. 4.22)
     time_budget : float seconds per island for ``bound="auto"``, optional
+    overlap : "cut" | "fail", an island whose UVs lie over themselves: cut it into overlap-free
+        pieces (islands of their own, ``cut_edges`` naming the mesh edges cut), or fail it with
+        ``OverlapError``
     progress : callable(fraction, message), optional
     cancel : object with ``is_set()``, optional
 
@@ -61,6 +68,8 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
     """
     t0 = time.perf_counter()
     _check_options(method, frames, bound, bound_limit, cone)
+    if overlap not in ("cut", "fail"):
+        raise ValueError(f"overlap must be 'cut' or 'fail', got {overlap!r}")
     V, F = check_arrays(V, F)
     m = len(F)
     if frames == "input-uv":
@@ -101,9 +110,88 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
             corner_uv[island.faces] = res.uv[island.tris]
         results.append(res)
         done += share
+    pinned = set(face_island[pins[0] // 3].tolist())
+    results, face_island, corner_uv = _overlap_certificate(V, F, results, face_island, corner_uv,
+                                                           pinned, overlap == "cut")
     if progress is not None:
         progress(1.0, "done")
     return UnwrapResult(corner_uv, face_island, results, time.perf_counter() - t0, method)
+
+
+def _overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True):
+    """Certify every certified island one-to-one from its final UVs (Lipman 2012, Theorems 5.1,
+    5.2: simple, disjoint, rightly wound UV boundaries), and cut an island that overlaps itself
+    into overlap-free pieces (``cut.split_overlapping``: no UV moves, so each piece keeps its
+    distortion certificate). The pieces become islands of their own, numbered after the others;
+    unpinned pieces are moved to start at (0, 0) like every island; each piece names the mesh
+    edges cut (``cut_edges``) and carries the flag "cut".
+
+    Parameters
+    ----------
+    pinned : set of island indices with pins (their pieces stay where the pins put them)
+    cut : bool, cut an overlapping island (else it fails with OverlapError)
+
+    Returns
+    -------
+    results, face_island (m,), corner_uv (m,3,2)
+    """
+    ok = np.array([r.status == "certified" for r in results], dtype=bool)
+    if not ok.any():
+        return results, face_island, corner_uv
+    lab = np.where(ok[face_island], face_island, -1)
+    certs = certify_islands(V, F, corner_uv, lab, np.where(ok, [
+        r.bound_certified or 1.0 for r in results], 1.0))
+    out, extra = [], []
+    for r, c in zip(results, certs):
+        if r.status != "certified" or c.overlap_free:
+            out.append(dataclasses.replace(r, overlap_free=r.status == "certified"))
+            continue
+        if not cut:
+            err = OverlapError(f"island {r.index}: its UVs lie over themselves ({c.reason}); "
+                               "cut it into overlap-free pieces or mark seams", r.index, r.faces)
+            out.append(dataclasses.replace(r, status="failed", error=err, message=str(err),
+                                           uv=None))
+            corner_uv[r.faces] = np.nan
+            continue
+        pieces, cut_edges = split_overlapping(V, F, corner_uv, r.faces)
+        local = np.full(len(F), -1, dtype=np.int64)
+        local[r.faces] = np.arange(len(r.faces))
+        for n, faces in enumerate(pieces):
+            rows = local[faces]
+            vids, tris = np.unique(r.tris[rows], return_inverse=True)
+            uv = r.uv[vids]
+            if r.index not in pinned:
+                uv = uv - uv.min(axis=0)
+                corner_uv[faces] = uv[tris.reshape(-1, 3)]
+            index = r.index if n == 0 else len(results) + len(extra)
+            piece = dataclasses.replace(
+                r, index=index, faces=faces, vertices=r.vertices[vids],
+                tris=tris.reshape(-1, 3).astype(np.int64), uv=uv, distortion=r.distortion[rows],
+                max_distortion=float(np.max(r.distortion[rows])), overlap_free=True,
+                cut_edges=cut_edges, cut_from=r.index, flags=r.flags + ("cut",),
+                message=(f"island {r.index} overlapped itself in UV and was cut into "
+                         f"{len(pieces)} overlap-free pieces along {len(cut_edges)} edges "
+                         f"(mark them as seams to keep the cut); piece {n + 1}: {len(faces)} "
+                         f"faces, max distortion {np.max(r.distortion[rows]):.3f} <= "
+                         f"{r.bound_certified:.4g}"))
+            face_island[faces] = index
+            (out if n == 0 else extra).append(piece)
+    results = out + extra
+    cut = np.array(["cut" in r.flags for r in results], dtype=bool)
+    if cut.any():  # the pieces are certified again from their UVs, not assumed overlap-free
+        lab = np.where(cut[face_island], face_island, -1)
+        bounds = [r.bound_certified or 1.0 for r in results]
+        for c in certify_islands(V, F, corner_uv, lab, bounds):
+            if cut[c.island] and not c.certified:
+                r = results[c.island]
+                err = SolverError(f"island {r.index}: a piece cut from an overlapping island "
+                                  f"failed its certificate ({c.reason}); mark seams there",
+                                  r.index)
+                results[c.island] = dataclasses.replace(r, status="failed", error=err,
+                                                        message=str(err), overlap_free=False,
+                                                        uv=None)
+                corner_uv[r.faces] = np.nan
+    return results, face_island, corner_uv
 
 
 def _check_options(method, frames, bound, bound_limit, cone):

@@ -845,9 +845,6 @@ def test_input_uv_frames_with_an_island_missing_uvs():
     assert_message(bad.message, "island 1", "UVs", "unwrap it first")
 
 
-@pytest.mark.xfail(reason="issue 10: this slit with 3 pins comes back certified with 4 boundary "
-                          "crossings; passes once unwrap() certifies with bd_uv.certify_islands",
-                   strict=False)
 def test_read_only_inputs_are_accepted_and_untouched():
     """Inputs flagged read-only: any attempt to write into them would raise."""
     V, F = nefertiti()

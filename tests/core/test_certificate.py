@@ -158,37 +158,63 @@ from bd_uv.layout import stored_layout  # noqa: E402
 
 @pytest.mark.parametrize("shape", [helicoid_ribbon, spiral_strip, folded_strip])
 def test_unwrapped_shapes_are_never_certified_with_an_overlap(shape):
+    """unwrap() certifies overlap from the final UVs: an island that overlaps itself comes back
+    cut into overlap-free pieces (UVs unchanged), each piece naming the mesh edges cut."""
     V, F = shape()
     res = bd_uv.unwrap(V, F, bound=5.0)
-    assert [r.status for r in res.islands] == ["certified"]
+    assert all(r.status == "certified" for r in res.islands)
     C = res.islands[0].bound_certified
-    cert = certify_islands(V, F, res.corner_uv, res.face_island, [C])[0]
-    overlapping = overlapping_triangle_pairs(res.corner_uv)
-    assert cert.overlap_free == (len(overlapping) == 0)
-    if cert.certified:
-        assert len(overlapping) == 0
+    certs = certify_islands(V, F, res.corner_uv, res.face_island, [C] * len(res.islands))
+    for r, c in zip(res.islands, certs):
+        assert c.certified and c.overlap_free and r.overlap_free
+        assert len(overlapping_triangle_pairs(res.corner_uv[r.faces])) == 0   # independent test
+    assert np.array_equal(np.sort(np.concatenate([r.faces for r in res.islands])),
+                          np.arange(len(F)))
+    if len(res.islands) == 1:
+        assert "cut" not in res.islands[0].flags
         return
-    # not certified: it must be for its overlap (the unwrap's own figures hold), and cut it
-    assert cert.flipped == 0 and cert.max_distortion <= C * (1 + 1e-6) and cert.crossings > 0
-    pieces, cut = split_overlapping(V, F, res.corner_uv, np.arange(len(F)))
-    assert len(pieces) >= 2 and len(cut) > 0
-    assert np.array_equal(np.sort(np.concatenate(pieces)), np.arange(len(F)))
-    lab = np.full(len(F), -1)
-    for i, p in enumerate(pieces):
-        lab[p] = i
-    for c, p in zip(certify_islands(V, F, res.corner_uv, lab, [C] * len(pieces)), pieces):
-        assert c.certified and c.overlap_free
-        assert len(overlapping_triangle_pairs(res.corner_uv[p])) == 0
+    cut = res.islands[0].cut_edges
+    assert all("cut" in r.flags and np.array_equal(r.cut_edges, cut) for r in res.islands)
+    assert len(cut) > 0 and "cut into" in res.islands[0].message
     # the cut edges are mesh edges joining two different pieces
     E = {tuple(sorted(e)) for f in F for e in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0]))}
     assert all(tuple(sorted(e)) in E for e in cut.tolist())
     faces_at = [set(np.flatnonzero((F == a).any(1) & (F == b).any(1))) for a, b in cut.tolist()]
-    assert all(len({lab[f] for f in fs}) == 2 for fs in faces_at)
+    assert all(len({res.face_island[f] for f in fs}) == 2 for fs in faces_at)
+
+
+def overlapping_result():
+    """A one-island UnwrapResult whose certified-looking map overlaps itself: a strip laid along
+    1.6 turns of a spiral (flip-free, boundary crossing itself)."""
+    V, F, uv = spiral_uv(1.6)
+    vuv = np.zeros((len(V), 2))
+    vuv[F.ravel()] = uv.reshape(-1, 2)
+    D = bd_uv.conformal_distortion(V, F, uv)
+    C = float(D.max()) * 1.01
+    isl = bd_uv.IslandResult(0, np.arange(len(F)), np.arange(len(V)), F, uv=vuv,
+                             status="certified", bound_requested=C, bound_certified=C,
+                             max_distortion=float(D.max()), distortion=D)
+    return V, F, bd_uv.UnwrapResult(uv, np.zeros(len(F), dtype=np.int64), [isl], 0.0, "lscm"), C
+
+
+def test_split_overlapping_cuts_an_overlapping_map_into_certified_pieces():
+    V, F, res, C = overlapping_result()
+    uv = res.corner_uv
+    assert not certify_islands(V, F, uv, np.zeros(len(F), dtype=np.int64), [C])[0].overlap_free
+    pieces, cut = split_overlapping(V, F, uv, np.arange(len(F)))
+    assert len(pieces) >= 2 and len(cut) > 0
+    lab = np.full(len(F), -1)
+    for i, p in enumerate(pieces):
+        lab[p] = i
+    for c, p in zip(certify_islands(V, F, uv, lab, [C] * len(pieces)), pieces):
+        assert c.certified and c.overlap_free
+        assert len(overlapping_triangle_pairs(uv[p])) == 0
 
 
 def test_stored_layout_cuts_packs_and_recertifies():
-    V, F = helicoid_ribbon()
-    res = bd_uv.unwrap(V, F, bound=5.0)
+    """The write paths' safety net: a result holding an overlapping island is cut, packed and
+    re-certified as stored (unwrap() itself never returns one)."""
+    V, F, res, C = overlapping_result()
     lay = stored_layout(V, F, res, pack=True, cut=True, dtype=np.float32)
     t = lay.totals()
     assert t["overlapping_unwrapped"] == 1 and t["cut_islands"] == 1 and t["cut_edges"] > 0

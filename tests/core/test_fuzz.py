@@ -195,9 +195,6 @@ def flaky_solver(p, rng):
 EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "25"))
 
 
-@pytest.mark.xfail(reason="issue 10: the pipeline certifies islands whose UVs overlap (seams, "
-                          "pins); passes once unwrap() certifies with bd_uv.certify_islands",
-                   strict=False)
 @settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(sc=scenarios())
 def test_unwrap_contract_on_perturbed_real_meshes(sc):

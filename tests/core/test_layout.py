@@ -23,6 +23,7 @@ def test_cli_cuts_packs_and_writes_only_what_it_certified(tmp_path, capsys):
     assert cli.main(["unwrap", str(src), "-o", str(out), "--report", str(rep)]) == 0
     stdout = capsys.readouterr().out
     assert "1 overlapping (1 cut along" in stdout and "0 overlapping island pair(s)" in stdout
+    # unwrap() cut the ribbon: its pieces are islands of their own, naming the cut
     mesh = load_mesh(out)
     uv = mesh.corner_uv                                   # as the OBJ stores them
     assert uv is not None and np.isfinite(uv).all()
@@ -30,10 +31,14 @@ def test_cli_cuts_packs_and_writes_only_what_it_certified(tmp_path, capsys):
     assert len(overlapping_triangle_pairs(uv)) == 0
     D, flipped = distortion_and_flips(V, F, uv)
     report = json.loads(rep.read_text())
-    (isl,) = report["islands"]
-    assert isl["status"] == "certified" and isl["overlap_free"] is True and isl["pieces"] >= 2
-    assert isl["crossings"] > 0 and len(isl["cut_edges"]) == report["summary"]["cut_edges"]
-    assert not flipped.any() and np.isclose(isl["max_distortion"], D.max(), rtol=1e-9)
+    pieces = report["islands"]
+    assert len(pieces) >= 2
+    assert all(p["status"] == "certified" and p["overlap_free"] is True for p in pieces)
+    assert all("cut" in p["flags"] and p["cut_from"] == 0 for p in pieces)
+    isl = pieces[0]
+    assert len(isl["cut_edges"]) > 0
+    assert not flipped.any()
+    assert np.isclose(max(p["max_distortion"] for p in pieces), D.max(), rtol=1e-9)
     assert report["summary"]["layout_overlaps"] == 0 and report["layout_overlaps"] == []
     # the cut edges are where the stored UVs are discontinuous
     seams = {tuple(sorted(e)) for e in mesh.uv_seams().tolist()}
@@ -49,7 +54,7 @@ def test_cli_no_pack_and_overlap_fail(tmp_path, capsys):
     assert "(not packed)" in capsys.readouterr().out
     assert cli.main(["unwrap", str(src), "-o", str(out), "--overlap", "fail"]) == 1
     err = capsys.readouterr().err
-    assert "not written" in err and "crosses itself" in err
+    assert "lie over themselves" in err and "crosses itself" in err
     assert load_mesh(out).corner_uv is None                     # nothing stored
 
 
@@ -59,12 +64,10 @@ def test_batch_entry_and_caption_come_from_the_stored_uvs(tmp_path):
                "pack": True, "cut": True, "margin": 0.01}
     res = batch.unwrap_job(batch.Job("helicoid", V, F), options)
     e = res.entry
-    assert e["status"] == "certified" and e["overlapping"] == 1 and e["cut_edges"] > 0
+    assert e["status"] == "certified" and len(e["islands"]) >= 2   # unwrap() cut the ribbon
     D, flipped = distortion_and_flips(V, F, res.corner_uv)
     assert np.isclose(e["max_distortion"], D.max(), rtol=1e-9) and not flipped.any()
-    assert "overlapping island(s) cut" in batch.caption(e, options)
-    # without layout options (the Blender script packs itself): nothing cut, the overlap fails
-    plain = batch.unwrap_job(batch.Job("helicoid", V, F), cli.solver_kwargs(
-        cli.build_parser().parse_args(["batch", "x", "-o", "y"])))
-    assert plain.entry["status"] == "failed" and "crosses itself" in plain.entry["message"]
-    assert np.isnan(plain.corner_uv).all()
+    # refusing the cut: the overlapping island fails and nothing is stored
+    refused = batch.unwrap_job(batch.Job("helicoid", V, F), {**options, "cut": False})
+    assert refused.entry["status"] == "failed" and "lie over themselves" in str(refused.entry)
+    assert np.isnan(refused.corner_uv).all()
