@@ -44,7 +44,8 @@ TOL_FEAS = 1e-7     # relative primal and dual residuals (as conic.TOL_FEAS)
 TOL_INFEAS = 1e-7   # ||A^T z|| <= TOL_INFEAS * (-b^T z) * scale certifies primal infeasibility
 STEP = 0.99         # fraction of the step to the cone boundary
 _DEBUG = False
-REFINE = 3          # iterative refinement steps per Newton solve (at most)
+REFINE = 1          # iterative refinement steps per Newton solve (at most)
+REFINE_TOL = 1e-8   # ... until the unreduced residual is below this, relative to the right side
 REG = 1e-11         # static regularisation of H, relative to its largest diagonal entry
 
 
@@ -76,6 +77,28 @@ class _Cones:
         self.soc = {d: np.asarray(s)[:, None] + np.arange(d) for d, s in sorted(soc.items())}
         self.degree = len(self.lp) + sum(len(r) for r in self.soc.values())
         self.key = tuple((kind, int(dim)) for kind, dim in cones)
+        # The block-diagonal pattern of W (m x m): the orthant's diagonal, then per cone
+        # dimension d the d x d blocks, entries ordered (i, j, cone); ``perm`` maps that order
+        # onto CSR order.
+        ri, ci = [self.lp], [self.lp]
+        for d, rows in self.soc.items():
+            for i in range(d):
+                for j in range(d):
+                    ri.append(rows[:, i])
+                    ci.append(rows[:, j])
+        ri, ci = np.concatenate(ri), np.concatenate(ci)
+        order = np.lexsort((ci, ri))
+        self.w_perm = order
+        self.w_indices = ci[order].astype(np.int32)
+        self.w_indptr = np.concatenate([[0], np.cumsum(np.bincount(ri, minlength=self.m))])
+
+    def block_matrix(self, diag, blocks):
+        """CSR matrix from the orthant's diagonal (nlp,) and {d: d x d nested lists of (nb,)}."""
+        parts = [diag]
+        for d in self.soc:
+            parts.extend(blocks[d][i][j] for i in range(d) for j in range(d))
+        data = np.concatenate(parts)[self.w_perm]
+        return sp.csr_matrix((data, self.w_indices, self.w_indptr), shape=(self.m, self.m))
 
     def identity(self):
         """e: ones on the orthant, (1, 0, ..., 0) on each second-order cone."""
@@ -85,14 +108,17 @@ class _Cones:
             e[rows[:, 0]] = 1.0
         return e
 
+    def blocks(self, v):
+        """{d: (d, nb) view-copies of v on the d-dimensional cones} (coordinate-major)."""
+        return {d: v[rows.T] for d, rows in self.soc.items()}
+
     def margin(self, s):
         """Largest t with s - t e in K (negative when s is outside K)."""
         t = np.inf
         if len(self.lp):
             t = min(t, float(s[self.lp].min()))
-        for rows in self.soc.values():
-            u = s[rows]
-            t = min(t, float(np.min(u[:, 0] - np.linalg.norm(u[:, 1:], axis=1))))
+        for u in self.blocks(s).values():
+            t = min(t, float(np.min(u[0] - _norm1(u))))
         return t
 
     def step(self, s, ds):
@@ -104,11 +130,11 @@ class _Cones:
             if neg.any():
                 a = min(a, float(np.min(-s[self.lp][neg] / d[neg])))
         for rows in self.soc.values():
-            u, d = s[rows], ds[rows]
+            u, d = s[rows.T], ds[rows.T]
             # f(alpha) = aa alpha^2 + 2 bb alpha + cc, cc > 0; the first positive root (or none)
-            aa = d[:, 0] ** 2 - np.sum(d[:, 1:] ** 2, axis=1)
-            bb = u[:, 0] * d[:, 0] - np.sum(u[:, 1:] * d[:, 1:], axis=1)
-            cc = np.maximum(u[:, 0] ** 2 - np.sum(u[:, 1:] ** 2, axis=1), 0.0)
+            aa = _jdot(d, d)
+            bb = _jdot(u, d)
+            cc = np.maximum(_jdot(u, u), 0.0)
             disc = bb * bb - aa * cc
             hit = (aa < 0) | ((bb < 0) & (disc >= 0))
             if hit.any():
@@ -118,9 +144,21 @@ class _Cones:
         return a
 
 
-def _jdot(u):
-    """u^T J u per row of (nb, d)."""
-    return u[:, 0] ** 2 - np.sum(u[:, 1:] ** 2, axis=1)
+def _dot1(u, v):
+    """sum_{i >= 1} u_i v_i over the leading (cone coordinate) axis."""
+    out = u[1] * v[1]
+    for i in range(2, len(u)):  # the cone's dimension, not its count
+        out = out + u[i] * v[i]
+    return out
+
+
+def _norm1(u):
+    return np.sqrt(_dot1(u, u)) if len(u) > 1 else np.zeros_like(u[0])
+
+
+def _jdot(u, v):
+    """u^T J v per cone, u and v (d, nb)."""
+    return u[0] * v[0] - (_dot1(u, v) if len(u) > 1 else 0.0)
 
 
 class _Scaling:
@@ -128,55 +166,79 @@ class _Scaling:
 
     Orthant: W = diag(sqrt(s/z)). Second-order cone of dimension d: with a = sqrt(s^T J s),
     b = sqrt(z^T J z), beta = sqrt(a/b), s' = s/a, z' = z/b, gamma = sqrt((1 + s'^T z')/2),
-    w = (s' + J z') / (2 gamma):  W = beta [[w0, w1^T], [w1, I + w1 w1^T / (1 + w0)]].
-    Then W z = W^-1 s = lambda.
+    w = (s' + J z') / (2 gamma):  W = beta [[w0, w1^T], [w1, I + w1 w1^T / (1 + w0)]] and
+    W^-1 = (1/beta) [[w0, -w1^T], [-w1, I + w1 w1^T / (1 + w0)]]. Then W z = W^-1 s = lambda.
+    W is applied in closed form (O(d) per cone), never as a matrix.
     """
 
     def __init__(self, cones, s, z):
         self.cones = cones
         self.d_lp = np.sqrt(s[cones.lp] / z[cones.lp])      # (nlp,)
-        self.W, self.Winv = {}, {}
+        self.soc = {}
         for d, rows in cones.soc.items():
-            us, uz = s[rows], z[rows]
-            a = np.sqrt(np.maximum(_jdot(us), 1e-300))
-            bq = np.sqrt(np.maximum(_jdot(uz), 1e-300))
-            beta = np.sqrt(a / bq)
-            sn, zn = us / a[:, None], uz / bq[:, None]
-            gamma = np.sqrt(np.maximum((1.0 + np.sum(sn * zn, axis=1)) / 2.0, 1e-300))
-            Jz = zn.copy()
-            Jz[:, 1:] *= -1.0
-            w = (sn + Jz) / (2.0 * gamma[:, None])
-            w0, w1 = w[:, 0], w[:, 1:]
-            nb = len(rows)
-            M = np.empty((nb, d, d))
-            M[:, 0, 0] = w0
-            M[:, 0, 1:] = w1
-            M[:, 1:, 0] = w1
-            M[:, 1:, 1:] = (np.eye(d - 1)[None] + w1[:, :, None] * w1[:, None, :]
-                            / (1.0 + w0)[:, None, None])
-            Minv = M.copy()
-            Minv[:, 0, 1:] *= -1.0
-            Minv[:, 1:, 0] *= -1.0
-            self.W[d] = beta[:, None, None] * M
-            self.Winv[d] = Minv / beta[:, None, None]
+            us, uz = s[rows.T], z[rows.T]
+            a = np.sqrt(np.maximum(_jdot(us, us), 1e-300))
+            bq = np.sqrt(np.maximum(_jdot(uz, uz), 1e-300))
+            sn, zn = us / a, uz / bq
+            gamma = np.sqrt(np.maximum((1.0 + np.sum(sn * zn, axis=0)) / 2.0, 1e-300))
+            w = (sn + zn) / (2.0 * gamma)
+            w[1:] = (sn[1:] - zn[1:]) / (2.0 * gamma)
+            self.soc[d] = (np.sqrt(a / bq), w)
+        self._mats = {}
+
+    def _blocks(self, inverse):
+        """{d: W's (or W^-1's) d x d blocks as nested lists of (nb,) arrays}."""
+        out = {}
+        sgn = -1.0 if inverse else 1.0
+        for d, (beta, w) in self.soc.items():
+            f = 1.0 / beta if inverse else beta
+            h = 1.0 / (1.0 + w[0])
+            M = [[None] * d for _ in range(d)]
+            M[0][0] = f * w[0]
+            for i in range(1, d):
+                M[0][i] = M[i][0] = sgn * f * w[i]
+                for j in range(i, d):
+                    M[i][j] = M[j][i] = f * ((i == j) + w[i] * w[j] * h)
+            out[d] = M
+        return out
+
+    def matrix(self, inverse=False, power=1):
+        """W^p or W^-p (p in {1, 2}) as a block-diagonal CSR matrix (cached)."""
+        key = (inverse, power)
+        if key not in self._mats:
+            c = self.cones
+            dl = (1.0 / self.d_lp if inverse else self.d_lp) ** power
+            B = self._blocks(inverse)
+            if power == 2:
+                B2 = {}
+                for d, M in B.items():
+                    B2[d] = [[sum(M[i][k] * M[k][j] for k in range(d)) for j in range(d)]
+                             for i in range(d)]
+                B = B2
+            self._mats[key] = c.block_matrix(dl, B)
+        return self._mats[key]
+
+    @staticmethod
+    def _soc(par, u, inverse):
+        """W u (or W^-1 u) for u (d, nb) or (d, nb, k)."""
+        beta, w = par
+        if u.ndim == 3:
+            w, beta = w[:, :, None], beta[:, None]
+        sgn = -1.0 if inverse else 1.0
+        wu = _dot1(w, u) if len(u) > 1 else 0.0
+        out = np.empty_like(u)
+        out[0] = w[0] * u[0] + sgn * wu
+        coef = sgn * u[0] + wu / (1.0 + w[0])
+        out[1:] = u[1:] + coef * w[1:]
+        return out / beta if inverse else out * beta
 
     def apply(self, v, inverse=False, power=1):
         """W^p v or W^-p v, p in {1, 2}, for v of size m."""
-        out = np.empty_like(v)
-        c = self.cones
-        dl = 1.0 / self.d_lp if inverse else self.d_lp
-        out[c.lp] = v[c.lp] * dl ** power
-        mats = self.Winv if inverse else self.W
-        for d, rows in c.soc.items():
-            u = v[rows]
-            for _ in range(power):
-                u = np.einsum("bij,bj->bi", mats[d], u)
-            out[rows] = u
-        return out
+        return self.matrix(inverse, power) @ v
 
-    def inv2_blocks(self):
-        """W^-2 per block: (nlp,) diagonal and {d: (nb, d, d)}."""
-        return self.d_lp ** -2, {d: Mi @ Mi for d, Mi in self.Winv.items()}
+    def inv_blocks(self, d, G):
+        """W^-1 G for the d-dimensional cones' blocks G (d, nb, k)."""
+        return self._soc(self.soc[d], G, True)
 
 
 def _jprod(cones, u, v):
@@ -184,11 +246,11 @@ def _jprod(cones, u, v):
     out = np.empty_like(u)
     out[cones.lp] = u[cones.lp] * v[cones.lp]
     for rows in cones.soc.values():
-        a, b = u[rows], v[rows]
+        a, b = u[rows.T], v[rows.T]
         r = np.empty_like(a)
-        r[:, 0] = np.sum(a * b, axis=1)
-        r[:, 1:] = a[:, :1] * b[:, 1:] + b[:, :1] * a[:, 1:]
-        out[rows] = r
+        r[0] = np.sum(a * b, axis=0)
+        r[1:] = a[0] * b[1:] + b[0] * a[1:]
+        out[rows.T] = r
     return out
 
 
@@ -197,13 +259,11 @@ def _jdiv(cones, lam, r):
     out = np.empty_like(r)
     out[cones.lp] = r[cones.lp] / lam[cones.lp]
     for rows in cones.soc.values():
-        lm, rr = lam[rows], r[rows]
-        l0 = lm[:, 0]
-        u0 = (l0 * rr[:, 0] - np.sum(lm[:, 1:] * rr[:, 1:], axis=1)) / _jdot(lm)
+        lm, rr = lam[rows.T], r[rows.T]
         u = np.empty_like(rr)
-        u[:, 0] = u0
-        u[:, 1:] = (rr[:, 1:] - u0[:, None] * lm[:, 1:]) / l0[:, None]
-        out[rows] = u
+        u[0] = (lm[0] * rr[0] - (_dot1(lm, rr) if len(lm) > 1 else 0.0)) / _jdot(lm, lm)
+        u[1:] = (rr[1:] - u[0] * lm[1:]) / lm[0]
+        out[rows.T] = u
     return out
 
 
@@ -212,9 +272,10 @@ def _jinv(cones, s):
     out = np.empty_like(s)
     out[cones.lp] = 1.0 / s[cones.lp]
     for rows in cones.soc.values():
-        u = s[rows].copy()
-        u[:, 1:] *= -1.0
-        out[rows] = u / _jdot(s[rows])[:, None]
+        u = s[rows.T]
+        v = u / _jdot(u, u)
+        v[1:] *= -1.0
+        out[rows.T] = v
     return out
 
 
@@ -359,15 +420,20 @@ class SchurIPM:
         return same, Ar, Pu
 
     def _schur(self, Pdata, Gs, scaling):
-        """Upper triangle of H = P + A^T W^-2 A (+ REG) as CSC on the fixed pattern."""
-        dlp, dsoc = scaling.inv2_blocks()
+        """Upper triangle of H = P + A^T W^-2 A (+ REG) as CSC on the fixed pattern.
+
+        Per block, with G its rows of A on its columns: G^T W^-2 G = Y^T Y, Y = W^-1 G.
+        """
         vals = []
         for (kind, d, rows, gidx, flat), G in zip(self.groups, Gs):
             if kind == "lp":
-                g = G[:, 0, :]
-                contrib = dlp[:, None, None] * (g[:, :, None] * g[:, None, :])
+                g = G[:, 0, :] / scaling.d_lp[:, None]
+                contrib = g[:, :, None] * g[:, None, :]
             else:
-                contrib = np.einsum("bik,bij,bjl->bkl", G, dsoc[d], G, optimize=True)
+                Y = scaling.inv_blocks(d, G)                      # (d, nb, k)
+                contrib = Y[0][:, :, None] * Y[0][:, None, :]
+                for i in range(1, d):
+                    contrib += Y[i][:, :, None] * Y[i][:, None, :]
             vals.append(contrib.ravel()[flat])
         vals.append(Pdata)
         data = np.zeros(self.nnz)
@@ -439,7 +505,8 @@ class SchurIPM:
         Pfull = Pu + sp.triu(Pu, 1, format="csc").T
         Pfull = Pfull.tocsr()
         Adata = np.concatenate([Ar.data, [0.0]])  # index -1 reads the appended zero
-        Gs = [Adata[g] for (_, _, _, g, _) in self.groups]
+        Gs = [Adata[g] if kind == "lp" else np.ascontiguousarray(Adata[g].transpose(1, 0, 2))
+              for (kind, _, _, g, _) in self.groups]   # orthant (nb, 1, k); cones (d, nb, k)
         Pdata = Pu.data
         e = c.identity()
         nq = max(1.0, float(np.max(np.abs(q)))) if n else 1.0
@@ -447,10 +514,12 @@ class SchurIPM:
 
         def kkt(scaling, bx, bz, bs):
             """Solve P dx + A^T dz = bx, A dx + ds = bz, W dz + W^-1 ds = bs through H."""
-            t = scaling.apply(scaling.apply(bs) - bz, inverse=True, power=2)
+            Wi2 = scaling.matrix(inverse=True, power=2)
+            t = Wi2 @ (scaling.apply(bs) - bz)
             dx = self.factor.solve(bx - At @ t)
-            dz = scaling.apply(Ar @ dx + scaling.apply(bs) - bz, inverse=True, power=2)
-            ds = scaling.apply(bs - scaling.apply(dz))
+            Adx = Ar @ dx
+            dz = t + Wi2 @ Adx
+            ds = bz - Adx  # exactly the primal equation (W^2 W^-2 is I only to rounding)
             return dx, ds, dz
 
         def newton(scaling, lam, rx, rz, rc):
@@ -466,11 +535,11 @@ class SchurIPM:
                         float(np.max(np.abs(bs))))
             for _ in range(REFINE):
                 ex = bx - Pfull @ dx - At @ dz
-                ez = bz - Ar @ dx - ds
+                ez = np.zeros_like(bz)  # kkt meets the primal equation exactly
                 es = bs - scaling.apply(dz) - scaling.apply(ds, inverse=True)
-                err = max(float(np.max(np.abs(ex))), float(np.max(np.abs(ez))),
-                          float(np.max(np.abs(es))))
-                if err <= 1e-13 * scale:
+                err = max(float(np.max(np.abs(ex))), float(np.max(np.abs(es))))
+                self.refinements += 1
+                if err <= REFINE_TOL * scale:
                     break
                 cx, cs, cz = kkt(scaling, ex, ez, es)
                 dx, ds, dz = dx + cx, ds + cs, dz + cz
@@ -509,6 +578,7 @@ class SchurIPM:
         last = None
         best = (np.inf, x.copy())
         self.last_info = None
+        self.refinements = 0
         stall = 0
         for it in range(1, max_iter + 1):
             if cancel is not None and cancel.is_set():
