@@ -46,6 +46,9 @@ STEP = 0.99         # fraction of the step to the cone boundary
 _DEBUG = False
 REFINE = 1          # iterative refinement steps per Newton solve (at most)
 REFINE_TOL = 1e-8   # ... until the unreduced residual is below this, relative to the right side
+WARM_DELTA = 1e-2   # warm start: each cone's slack margin at least this x median |b - A x0|
+WARM_MU = 1.0       # warm start: mu = this x |objective at x0| / degree
+STALL = 20          # stop (InsufficientProgress) after this many iterations without progress
 REG = 1e-11         # static regularisation of H, relative to its largest diagonal entry
 
 
@@ -264,6 +267,17 @@ def _jdiv(cones, lam, r):
         u[0] = (lm[0] * rr[0] - (_dot1(lm, rr) if len(lm) > 1 else 0.0)) / _jdot(lm, lm)
         u[1:] = (rr[1:] - u[0] * lm[1:]) / lm[0]
         out[rows.T] = u
+    return out
+
+
+def _lift(cones, s, delta):
+    """s + max(0, delta - margin_i) e_i on every cone i (margin: s_i, or s_0 - |s_1| on a SOC)."""
+    out = s.copy()
+    lp = cones.lp
+    out[lp] = np.maximum(s[lp], delta)
+    for rows in cones.soc.values():
+        u = s[rows.T]
+        out[rows[:, 0]] += np.maximum(delta - (u[0] - _norm1(u)), 0.0)
     return out
 
 
@@ -546,20 +560,18 @@ class SchurIPM:
             return dx, ds, dz
 
         # Starting point.
-        feasible_start = False
         if x0 is not None:
+            # Warm start: x0 as it is; its slack b - A x0, each cone lifted to a margin of at
+            # least delta (a small primal residual where x0 is on or near the boundary, as the
+            # optimum at a tighter bound is); z = mu s^-1 on the central path.
             x = np.asarray(x0, np.float64).copy()
             s = b - Ar @ x
-            feasible_start = c.margin(s) > 0
-        if feasible_start:
-            # A feasible start: keep (x0, s0) and pick z = mu s^-1 on the central path, mu matched
-            # to the size of the dual residual the start leaves (P x0 + q).
-            sinv = _jinv(c, s)
+            typical = float(np.median(np.abs(s))) if len(s) else 1.0
+            delta = WARM_DELTA * max(typical, 1e-12)
+            s = _lift(c, s, delta)
             g = Pfull @ x + q
-            ga = At @ sinv
-            mu = float(np.linalg.norm(g) / max(np.linalg.norm(ga), 1e-300))
-            mu = max(mu, 1e-8 * max(1.0, abs(float(0.5 * x @ g + 0.5 * q @ x))) / c.degree)
-            z = mu * sinv
+            mu = WARM_MU * max(abs(float(0.5 * x @ g + 0.5 * q @ x)), 1e-12) / c.degree
+            z = mu * _jinv(c, s)
         else:
             # CVXOPT's default start: the W = I Newton system, then shift s and z into int K.
             ident = _Scaling(c, e, e)
@@ -617,7 +629,7 @@ class SchurIPM:
                 stall = 0
             else:
                 stall += 1
-                if stall >= 10:
+                if stall >= STALL:
                     status = "InsufficientProgress"
                     break
             scaling = _Scaling(c, s, z)
