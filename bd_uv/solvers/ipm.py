@@ -370,7 +370,7 @@ class SchurIPM:
             groups.append(("soc", d, rows))
         rows_of = np.repeat(np.arange(Ar.shape[0]), np.diff(Ar.indptr))
         self.groups = []
-        keys, srcs = [], []
+        keys = []
         for kind, d, rows in groups:
             nb = len(rows)
             # entries of A in these blocks: block id, row within block, column, data position
@@ -394,14 +394,15 @@ class SchurIPM:
             slot = np.searchsorted(bc, eb.astype(np.int64) * n + ec) - first[eb]
             gidx = np.full((nb, d, mc), -1, np.int64)
             gidx[eb, er, slot] = ent
-            # H entries of the block: (cols[i], cols[j]) for i, j with row <= col (upper)
-            ci = np.broadcast_to(cols[:, :, None], (nb, mc, mc))
-            cj = np.broadcast_to(cols[:, None, :], (nb, mc, mc))
-            ok = (ci >= 0) & (cj >= 0) & (ci <= cj)
+            # H entries of the block: slot pairs k <= l (the block is symmetric), each onto the
+            # upper-triangle entry (min col, max col)
+            kk, ll = np.triu_indices(mc)
+            ci, cj = cols[:, kk], cols[:, ll]                       # (nb, npairs)
+            ok = (ci >= 0) & (cj >= 0)
             flat = np.flatnonzero(ok.ravel())
-            keys.append(cj.ravel()[flat] * n + ci.ravel()[flat])  # column-major key: col*n+row
-            srcs.append(flat)
-            self.groups.append((kind, d, rows, gidx, flat))
+            lo, hi = np.minimum(ci, cj).ravel()[flat], np.maximum(ci, cj).ravel()[flat]
+            keys.append(hi * n + lo)  # column-major key: col*n+row
+            self.groups.append((kind, d, rows, gidx, flat, kk, ll))
         # P's upper triangle
         pc = np.repeat(np.arange(n), np.diff(Pu.indptr))
         keys.append(pc.astype(np.int64) * n + Pu.indices)
@@ -414,8 +415,8 @@ class SchurIPM:
         self.H_indptr = np.concatenate([[0], np.cumsum(np.bincount(hc, minlength=n))])
         self.H_indices = hr.astype(np.int32)
         offs = np.cumsum([0] + [len(k) for k in keys])
-        self.targets = [inv[offs[i]:offs[i + 1]] for i in range(len(keys))]
-        self.diag_pos = self.targets[-1]
+        self.target_all = inv[:offs[-2]]  # every entry but the diagonal's own keys
+        self.diag_pos = inv[offs[-2]:]
         self.factor = _Factor(self.backend)
 
     def _same_pattern(self, P, A, cones):
@@ -439,20 +440,18 @@ class SchurIPM:
         Per block, with G its rows of A on its columns: G^T W^-2 G = Y^T Y, Y = W^-1 G.
         """
         vals = []
-        for (kind, d, rows, gidx, flat), G in zip(self.groups, Gs):
+        for (kind, d, rows, gidx, flat, kk, ll), G in zip(self.groups, Gs):
             if kind == "lp":
                 g = G[:, 0, :] / scaling.d_lp[:, None]
-                contrib = g[:, :, None] * g[:, None, :]
+                contrib = g[:, kk] * g[:, ll]
             else:
                 Y = scaling.inv_blocks(d, G)                      # (d, nb, k)
-                contrib = Y[0][:, :, None] * Y[0][:, None, :]
+                contrib = Y[0][:, kk] * Y[0][:, ll]
                 for i in range(1, d):
-                    contrib += Y[i][:, :, None] * Y[i][:, None, :]
+                    contrib += Y[i][:, kk] * Y[i][:, ll]
             vals.append(contrib.ravel()[flat])
         vals.append(Pdata)
-        data = np.zeros(self.nnz)
-        for t, v in zip(self.targets[:-1], vals):
-            data += np.bincount(t, weights=v, minlength=self.nnz)
+        data = np.bincount(self.target_all, weights=np.concatenate(vals), minlength=self.nnz)
         dmax = float(np.max(data[self.diag_pos])) if self.n else 1.0
         data[self.diag_pos] += REG * max(dmax, 1e-300)
         return sp.csc_matrix((data, self.H_indices, self.H_indptr), shape=(self.n, self.n))
@@ -520,7 +519,7 @@ class SchurIPM:
         Pfull = Pfull.tocsr()
         Adata = np.concatenate([Ar.data, [0.0]])  # index -1 reads the appended zero
         Gs = [Adata[g] if kind == "lp" else np.ascontiguousarray(Adata[g].transpose(1, 0, 2))
-              for (kind, _, _, g, _) in self.groups]   # orthant (nb, 1, k); cones (d, nb, k)
+              for (kind, _, _, g, *_) in self.groups]   # orthant (nb, 1, k); cones (d, nb, k)
         Pdata = Pu.data
         e = c.identity()
         nq = max(1.0, float(np.max(np.abs(q)))) if n else 1.0
