@@ -41,7 +41,7 @@ except ImportError:  # pragma: no cover - exercised where qdldl is absent
 MAX_ITER = 80
 TOL_GAP = 1e-6      # absolute and relative duality gap s^T z (as conic.TOL_GAP)
 TOL_FEAS = 1e-7     # relative primal and dual residuals (as conic.TOL_FEAS)
-TOL_INFEAS = 1e-7   # ||A^T z|| <= TOL_INFEAS * (-b^T z) * scale certifies primal infeasibility
+TOL_INFEAS = 1e-6   # |A^T z|_1 max(1, |x|_inf) <= TOL_INFEAS (-b^T z) certifies infeasibility
 STEP = 0.99         # fraction of the step to the cone boundary
 _DEBUG = False
 REFINE = 1          # iterative refinement steps per Newton solve (at most)
@@ -49,6 +49,7 @@ REFINE_TOL = 1e-8   # ... until the unreduced residual is below this, relative t
 WARM_DELTA = 1e-2   # warm start: each cone's slack margin at least this x median |b - A x0|
 WARM_MU = 1.0       # warm start: mu = this x |objective at x0| / degree
 STALL = 20          # stop (InsufficientProgress) after this many iterations without progress
+STALL_INFEAS = 5    # ... or this many while b'z < 0 (a suspected infeasibility, see _phase1)
 REG = 1e-11         # static regularisation of H, relative to its largest diagonal entry
 
 
@@ -611,8 +612,10 @@ class SchurIPM:
                 break
             bz = float(b @ z)
             if bz < 0:
-                atz = float(np.max(np.abs(At @ z))) if n else 0.0
-                if atz <= TOL_INFEAS * (-bz) * max(1.0, float(np.max(np.abs(x)))):
+                # z in K* with b'z < 0: every feasible x has |x|_inf >= -b'z / |A'z|_1 (since
+                # 0 <= z's = z'b - (A'z)'x). Infeasible when that is far beyond the iterates.
+                atz = float(np.sum(np.abs(At @ z))) if n else 0.0
+                if atz * max(1.0, float(np.max(np.abs(x)))) <= TOL_INFEAS * (-bz):
                     status = "PrimalInfeasible"
                     break
             score = max(pres, dres, gap / max(1.0, abs(pobj)))
@@ -628,7 +631,9 @@ class SchurIPM:
                 stall = 0
             else:
                 stall += 1
-                if stall >= STALL:
+                # no progress while z drifts along a Farkas direction (b'z < 0): let phase 1
+                # decide soon rather than after STALL iterations
+                if stall >= STALL or (stall >= STALL_INFEAS and bz < 0):
                     status = "InsufficientProgress"
                     break
             scaling = _Scaling(c, s, z)
