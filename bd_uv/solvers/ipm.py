@@ -6,7 +6,7 @@ Problem (the same form and result as ``conic.solve_conic``)::
 
 K a product of nonnegative orthants and second-order cones (Lipman 2012, eqs. 4.15-4.17 as
 ``spaces.bounded_distortion_space`` builds them: one ``("nonneg", k)`` block, then one
-``("soc", 3)`` per face).
+``("soc", 3)`` per face; other dimensions work too).
 
 Method: the infeasible-start primal-dual path-following method of CVXOPT's ``coneqp``
 (Vandenberghe 2010, "The CVXOPT linear and quadratic cone program solvers", sections 3-7) with
@@ -18,12 +18,17 @@ lambda``), the Newton system eliminates ds and dz, leaving one symmetric positiv
 in the free vertex unknowns only. Every cone block of the bounded-distortion space involves one
 face's 3 vertices, so H has the LSCM/Laplacian pattern whatever W is: its symbolic analysis is done
 once (``SchurIPM``) and each iteration only refactorises numerically (qdldl's ``update``, else
-scipy's SuperLU).
+scipy's SuperLU), then one step of iterative refinement on the unreduced system.
+
+Warm start (``x0``): the iterates start at x0, each cone's slack lifted to a small margin, with the
+dual on the central path; from the optimum at a tighter bound this halves the iterations.
 
 Infeasibility: when F_C is empty the dual iterates diverge along a Farkas certificate z in K*,
-``A^T z = 0``, ``b^T z < 0``; the method stops with ``"infeasible"`` once the current z certifies
-this to a relative tolerance, and confirms a stalled run with a phase-1 problem (maximise the
-margin t with ``b - A x - t e`` in K, e the cone's identity).
+``A^T z = 0``, ``b^T z < 0``. The method stops with ``"infeasible"`` when the current z proves that
+every feasible point would be a million times larger than the iterates, and otherwise, when the
+iterates stop making progress, decides with a phase-1 problem (maximise the margin t with
+``b - A x - t e`` in K, e the cone's identity): infeasible when max t < 0 by both its primal and
+dual objective.
 """
 import time
 
@@ -43,7 +48,6 @@ TOL_GAP = 1e-6      # absolute and relative duality gap s^T z (as conic.TOL_GAP)
 TOL_FEAS = 1e-7     # relative primal and dual residuals (as conic.TOL_FEAS)
 TOL_INFEAS = 1e-6   # |A^T z|_1 max(1, |x|_inf) <= TOL_INFEAS (-b^T z) certifies infeasibility
 STEP = 0.99         # fraction of the step to the cone boundary
-_DEBUG = False
 REFINE = 1          # iterative refinement steps per Newton solve (at most)
 REFINE_TOL = 1e-8   # ... until the unreduced residual is below this, relative to the right side
 WARM_DELTA = 1e-2   # warm start: each cone's slack margin at least this x median |b - A x0|
@@ -619,9 +623,6 @@ class SchurIPM:
                     status = "PrimalInfeasible"
                     break
             score = max(pres, dres, gap / max(1.0, abs(pobj)))
-            if _DEBUG:
-                print(f"{it:3d} pobj {pobj:+.6e} dobj {dobj:+.6e} gap {gap:.2e} pres {pres:.2e} "
-                      f"dres {dres:.2e}")
             if not np.isfinite(score):
                 status = "NumericalError"
                 break
