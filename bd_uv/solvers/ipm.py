@@ -66,25 +66,30 @@ class _Cones:
     """
 
     def __init__(self, cones):
-        lp, soc = [], {}
-        start = 0
-        for kind, dim in cones:
-            dim = int(dim)
-            if kind == "nonneg":
-                lp.append(np.arange(start, start + dim))
-            elif kind == "soc":
-                if dim < 1:
-                    raise ValueError("a second-order cone needs dimension >= 1")
-                soc.setdefault(dim, []).append(start)
-            else:
-                raise ValueError(f"cone kind {kind!r} is not supported: use 'nonneg' or 'soc'")
-            start += dim
-        self.m = start
-        self.lp = np.concatenate(lp) if lp else np.zeros(0, np.int64)
+        self.key = list(cones)
+        kinds = [k for k, _ in self.key]
+        dims = np.fromiter((d for _, d in self.key), np.int64, len(self.key))
+        is_lp = np.fromiter((k == "nonneg" for k in kinds), bool, len(kinds))
+        is_soc = np.fromiter((k == "soc" for k in kinds), bool, len(kinds))
+        bad = ~(is_lp | is_soc)
+        if bad.any():
+            kind = kinds[int(np.flatnonzero(bad)[0])]
+            raise ValueError(f"cone kind {kind!r} is not supported: use 'nonneg' or 'soc'")
+        if np.any(dims[is_soc] < 1) or np.any(dims < 0):
+            raise ValueError("cone dimensions must be >= 0 (>= 1 for a second-order cone)")
+        start = np.concatenate([[0], np.cumsum(dims)])
+        self.m = int(start[-1])
+        # orthant rows: the ranges of every nonneg block
+        lpb = np.flatnonzero(is_lp)
+        lens = dims[lpb]
+        self.lp = (np.repeat(start[lpb] - np.concatenate([[0], np.cumsum(lens)[:-1]]), lens)
+                   + np.arange(int(lens.sum()))) if len(lpb) else np.zeros(0, np.int64)
         # soc[d]: (nb, d) row indices of every d-dimensional cone
-        self.soc = {d: np.asarray(s)[:, None] + np.arange(d) for d, s in sorted(soc.items())}
+        self.soc = {}
+        for d in np.unique(dims[is_soc]):
+            first = start[np.flatnonzero(is_soc & (dims == d))]
+            self.soc[int(d)] = first[:, None] + np.arange(int(d))
         self.degree = len(self.lp) + sum(len(r) for r in self.soc.values())
-        self.key = tuple((kind, int(dim)) for kind, dim in cones)
         # The block-diagonal pattern of W (m x m): the orthant's diagonal, then per cone
         # dimension d the d x d blocks, entries ordered (i, j, cone); ``perm`` maps that order
         # onto CSR order.
@@ -414,7 +419,8 @@ class SchurIPM:
         diag_key = np.arange(n, dtype=np.int64) * (n + 1)
         keys.append(diag_key)  # the diagonal always (regularisation)
         allk = np.concatenate(keys)
-        uk, inv = np.unique(allk, return_inverse=True)
+        uk = np.unique(allk)            # a sort; the inverse by bisection (cheaper than argsort)
+        inv = np.searchsorted(uk, allk)
         self.nnz = len(uk)
         hc, hr = uk // n, uk % n
         self.H_indptr = np.concatenate([[0], np.cumsum(np.bincount(hc, minlength=n))])
@@ -431,7 +437,7 @@ class SchurIPM:
         Pu = sp.csc_matrix(sp.triu(sp.csc_matrix(P), format="csc"))
         Pu.sum_duplicates()
         Pu.sort_indices()
-        same = (tuple((k, int(d)) for k, d in cones) == self.cones.key
+        same = (list(cones) == self.cones.key
                 and Ar.shape == (self.cones.m, self.n)
                 and np.array_equal(Ar.indptr, self.A_indptr)
                 and np.array_equal(Ar.indices, self.A_indices)
