@@ -44,7 +44,9 @@ except ImportError:  # pragma: no cover - exercised where qdldl is absent
     qdldl = None
 
 MAX_ITER = 80
-TOL_GAP = 1e-6      # absolute and relative duality gap s^T z (as conic.TOL_GAP)
+TOL_GAP = 1e-6      # relative duality gap s^T z (conic.TOL_GAP is also absolute: see GAP_FLOOR)
+GAP_FLOOR = 1e-3    # gap <= TOL_GAP max(GAP_FLOOR, |objective|): an absolute 1e-6 let the
+                    # energy of mannequin-devil (objective 5e-4) differ from Clarabel's by 1e-3
 TOL_FEAS = 1e-7     # relative primal and dual residuals (as conic.TOL_FEAS)
 TOL_INFEAS = 1e-6   # |A^T z|_1 max(1, |x|_inf) <= TOL_INFEAS (-b^T z) certifies infeasibility
 STEP = 0.99         # fraction of the step to the cone boundary
@@ -518,6 +520,8 @@ class SchurIPM:
                 status = "CallbackTerminated"
         outcome = {"Solved": "solved", "PrimalInfeasible": "infeasible",
                    "CallbackTerminated": "cancelled"}.get(status, "inexact")
+        if outcome == "infeasible":
+            obj = float("nan")  # as Clarabel reports it: there is no optimum
         if x is not None and not np.all(np.isfinite(x)):
             x = None
         return ConicSolution(x, outcome, status, it, time.perf_counter() - t0, obj)
@@ -617,7 +621,7 @@ class SchurIPM:
             dres = float(np.max(np.abs(rx))) / nq if n else 0.0
             last = pobj
             if pres <= tol_feas and dres <= tol_feas and (
-                    gap <= tol_gap or gap <= tol_gap * max(1e-300, min(abs(pobj), abs(dobj)))):
+                    gap <= tol_gap * max(GAP_FLOOR, min(abs(pobj), abs(dobj)))):
                 status = "Solved"
                 break
             bz = float(b @ z)
