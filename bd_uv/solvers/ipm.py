@@ -183,7 +183,15 @@ class SchurIPM:
         self.H_indptr = np.concatenate([[0], np.cumsum(np.bincount(hc, minlength=n))])
         self.H_indices = hr.astype(np.int32)
         offs = np.cumsum([0] + [len(k) for k in keys])
-        self.target_all = inv[:offs[-2]]  # every entry but the diagonal's own keys
+        # Targets of every block entry, padded pairs included (sent to a dummy slot nnz, so the
+        # per-iteration values need no gather), then P's; the diagonal's positions.
+        targets = []
+        for i, (kind, d, rows, gidx, flat, kk, ll) in enumerate(self.groups):
+            t = np.full(len(rows) * len(kk), self.nnz, np.int64)
+            t[flat] = inv[offs[i]:offs[i + 1]]
+            targets.append(t)
+        targets.append(inv[offs[-3]:offs[-2]])
+        self.target_all = np.concatenate(targets)
         self.diag_pos = inv[offs[-2]:]
         self.factor = _Factor(self.backend)
 
@@ -217,9 +225,10 @@ class SchurIPM:
                 contrib = Y[0][:, kk] * Y[0][:, ll]
                 for i in range(1, d):
                     contrib += Y[i][:, kk] * Y[i][:, ll]
-            vals.append(contrib.ravel()[flat])
+            vals.append(contrib.ravel())
         vals.append(Pdata)
-        data = np.bincount(self.target_all, weights=np.concatenate(vals), minlength=self.nnz)
+        data = np.bincount(self.target_all, weights=np.concatenate(vals),
+                           minlength=self.nnz + 1)[:self.nnz]
         dmax = float(np.max(data[self.diag_pos])) if self.n else 1.0
         data[self.diag_pos] += REG * max(dmax, 1e-300)
         return sp.csc_matrix((data, self.H_indices, self.H_indptr), shape=(self.n, self.n))
