@@ -246,9 +246,11 @@ class SchurIPM:
         cones : list of (kind, dim), kind in {"nonneg", "soc"}
         cancel : object with is_set(), optional; checked once per iteration
         max_iter : int
-        x0 : (n,) float, optional; a start. When ``b - A x0`` is strictly inside K the method
-            starts from x0 (a feasible start); otherwise x0 is shifted into the cone.
-        tol_gap, tol_feas : float, stopping tolerances (absolute/relative gap; residuals)
+        x0 : (n,) float, optional; a warm start (e.g. a certified map, or the solution at a
+            tighter bound). The iterates start at x0 with its slack ``b - A x0`` lifted to a
+            margin of WARM_DELTA x its median on each cone (a small primal residual if x0 is on
+            or outside the boundary) and the dual on the central path.
+        tol_gap, tol_feas : float, stopping tolerances (relative gap, see GAP_FLOOR; residuals)
         phase1 : bool, confirm infeasibility with a phase-1 problem when the run stalls
 
         Returns
