@@ -4,12 +4,13 @@ Usage::
 
     python3.11 benchmarks/bench_solvers.py [--bound 2] [--frames lscm|harmonic] MESH...
 
-Per mesh (its first island) the program is built as the pipeline builds it: area-1 island, frames
-from the LSCM map (the harmonic map when LSCM flips, or with ``--frames harmonic``), sigma = 1,
-objective scaled to order 1, vertex 0 pinned. Printed per mesh and solver: outcome, iterations,
-seconds, objective, and for the IPM the seconds spent in numeric factorisations per iteration and the
-symbolic analysis; then a warm start from the IPM's own solution at a looser bound (C + 1), i.e. a
-bisection step. One run, one process: timings on a shared machine are noisy.
+Per mesh (its largest island) the program is built as the pipeline builds it: area-1 island,
+frames from the LSCM map (the harmonic map when LSCM flips, or with ``--frames harmonic``),
+sigma = 1, objective scaled to order 1, vertex 0 pinned. Printed per mesh and solver: outcome,
+iterations, seconds, objective, and for the IPM the mean seconds of one numeric factorisation
+(fact/it) and of the symbolic analysis (symb); then the same at a looser bound C + 1 (a bisection
+step), cold and warm-started from the IPM's solution at C. One process: timings on a shared machine
+are noisy, so the load average is printed.
 """
 import argparse
 import os

@@ -6,7 +6,7 @@ Problem (the same form and result as ``conic.solve_conic``)::
 
 K a product of nonnegative orthants and second-order cones (Lipman 2012, eqs. 4.15-4.17 as
 ``spaces.bounded_distortion_space`` builds them: one ``("nonneg", k)`` block, then one
-``("soc", 3)`` per face).
+``("soc", 3)`` per face; other dimensions work too).
 
 Method: the infeasible-start primal-dual path-following method of CVXOPT's ``coneqp``
 (Vandenberghe 2010, "The CVXOPT linear and quadratic cone program solvers", sections 3-7) with
@@ -18,12 +18,17 @@ lambda``), the Newton system eliminates ds and dz, leaving one symmetric positiv
 in the free vertex unknowns only. Every cone block of the bounded-distortion space involves one
 face's 3 vertices, so H has the LSCM/Laplacian pattern whatever W is: its symbolic analysis is done
 once (``SchurIPM``) and each iteration only refactorises numerically (qdldl's ``update``, else
-scipy's SuperLU).
+scipy's SuperLU), then one step of iterative refinement on the unreduced system.
+
+Warm start (``x0``): the iterates start at x0, each cone's slack lifted to a small margin, with the
+dual on the central path; from the optimum at a tighter bound this halves the iterations.
 
 Infeasibility: when F_C is empty the dual iterates diverge along a Farkas certificate z in K*,
-``A^T z = 0``, ``b^T z < 0``; the method stops with ``"infeasible"`` once the current z certifies
-this to a relative tolerance, and confirms a stalled run with a phase-1 problem (maximise the
-margin t with ``b - A x - t e`` in K, e the cone's identity).
+``A^T z = 0``, ``b^T z < 0``. The method stops with ``"infeasible"`` when the current z proves that
+every feasible point would be a million times larger than the iterates, and otherwise, when the
+iterates stop making progress, decides with a phase-1 problem (maximise the margin t with
+``b - A x - t e`` in K, e the cone's identity): infeasible when max t < 0 by both its primal and
+dual objective.
 """
 import time
 
@@ -31,6 +36,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from . import cones as cones_
 from .conic import ConicSolution
 
 try:  # qdldl: LDL^T with AMD ordering, numeric refactorisation on a fixed pattern
@@ -39,183 +45,19 @@ except ImportError:  # pragma: no cover - exercised where qdldl is absent
     qdldl = None
 
 MAX_ITER = 80
-TOL_GAP = 1e-6      # absolute and relative duality gap s^T z (as conic.TOL_GAP)
+TOL_GAP = 1e-6      # relative duality gap s^T z (conic.TOL_GAP is also absolute: see GAP_FLOOR)
+GAP_FLOOR = 1e-3    # gap <= TOL_GAP max(GAP_FLOOR, |objective|): an absolute 1e-6 let the
+                    # energy of mannequin-devil (objective 5e-4) differ from Clarabel's by 1e-3
 TOL_FEAS = 1e-7     # relative primal and dual residuals (as conic.TOL_FEAS)
-TOL_INFEAS = 1e-7   # ||A^T z|| <= TOL_INFEAS * (-b^T z) * scale certifies primal infeasibility
+TOL_INFEAS = 1e-6   # |A^T z|_1 max(1, |x|_inf) <= TOL_INFEAS (-b^T z) certifies infeasibility
 STEP = 0.99         # fraction of the step to the cone boundary
-_DEBUG = False
-REFINE = 3          # iterative refinement steps per Newton solve (at most)
+REFINE = 1          # iterative refinement steps per Newton solve (at most)
+REFINE_TOL = 1e-8   # ... until the unreduced residual is below this, relative to the right side
+WARM_DELTA = 1e-2   # warm start: each cone's slack margin at least this x median |b - A x0|
+WARM_MU = 1.0       # warm start: mu = this x |objective at x0| / degree
+STALL = 20          # stop (InsufficientProgress) after this many iterations without progress
+STALL_INFEAS = 5    # ... or this many while b'z < 0 (a suspected infeasibility, see _phase1)
 REG = 1e-11         # static regularisation of H, relative to its largest diagonal entry
-
-
-class _Cones:
-    """Index arrays of a cone list: one nonnegative block and second-order blocks per dimension.
-
-    Parameters
-    ----------
-    cones : list of (kind, dim), kind in {"nonneg", "soc"}
-    """
-
-    def __init__(self, cones):
-        lp, soc = [], {}
-        start = 0
-        for kind, dim in cones:
-            dim = int(dim)
-            if kind == "nonneg":
-                lp.append(np.arange(start, start + dim))
-            elif kind == "soc":
-                if dim < 1:
-                    raise ValueError("a second-order cone needs dimension >= 1")
-                soc.setdefault(dim, []).append(start)
-            else:
-                raise ValueError(f"cone kind {kind!r} is not supported: use 'nonneg' or 'soc'")
-            start += dim
-        self.m = start
-        self.lp = np.concatenate(lp) if lp else np.zeros(0, np.int64)
-        # soc[d]: (nb, d) row indices of every d-dimensional cone
-        self.soc = {d: np.asarray(s)[:, None] + np.arange(d) for d, s in sorted(soc.items())}
-        self.degree = len(self.lp) + sum(len(r) for r in self.soc.values())
-        self.key = tuple((kind, int(dim)) for kind, dim in cones)
-
-    def identity(self):
-        """e: ones on the orthant, (1, 0, ..., 0) on each second-order cone."""
-        e = np.zeros(self.m)
-        e[self.lp] = 1.0
-        for rows in self.soc.values():
-            e[rows[:, 0]] = 1.0
-        return e
-
-    def margin(self, s):
-        """Largest t with s - t e in K (negative when s is outside K)."""
-        t = np.inf
-        if len(self.lp):
-            t = min(t, float(s[self.lp].min()))
-        for rows in self.soc.values():
-            u = s[rows]
-            t = min(t, float(np.min(u[:, 0] - np.linalg.norm(u[:, 1:], axis=1))))
-        return t
-
-    def step(self, s, ds):
-        """Largest alpha >= 0 (up to inf) with s + alpha ds in K, for s in int K."""
-        a = np.inf
-        if len(self.lp):
-            d = ds[self.lp]
-            neg = d < 0
-            if neg.any():
-                a = min(a, float(np.min(-s[self.lp][neg] / d[neg])))
-        for rows in self.soc.values():
-            u, d = s[rows], ds[rows]
-            # f(alpha) = aa alpha^2 + 2 bb alpha + cc, cc > 0; the first positive root (or none)
-            aa = d[:, 0] ** 2 - np.sum(d[:, 1:] ** 2, axis=1)
-            bb = u[:, 0] * d[:, 0] - np.sum(u[:, 1:] * d[:, 1:], axis=1)
-            cc = np.maximum(u[:, 0] ** 2 - np.sum(u[:, 1:] ** 2, axis=1), 0.0)
-            disc = bb * bb - aa * cc
-            hit = (aa < 0) | ((bb < 0) & (disc >= 0))
-            if hit.any():
-                den = -bb[hit] + np.sqrt(np.maximum(disc[hit], 0.0))
-                with np.errstate(divide="ignore"):
-                    a = min(a, float(np.min(np.where(den > 0, cc[hit] / den, 0.0))))
-        return a
-
-
-def _jdot(u):
-    """u^T J u per row of (nb, d)."""
-    return u[:, 0] ** 2 - np.sum(u[:, 1:] ** 2, axis=1)
-
-
-class _Scaling:
-    """Nesterov-Todd scaling W of a pair (s, z) in int K (Vandenberghe 2010, section 4.3).
-
-    Orthant: W = diag(sqrt(s/z)). Second-order cone of dimension d: with a = sqrt(s^T J s),
-    b = sqrt(z^T J z), beta = sqrt(a/b), s' = s/a, z' = z/b, gamma = sqrt((1 + s'^T z')/2),
-    w = (s' + J z') / (2 gamma):  W = beta [[w0, w1^T], [w1, I + w1 w1^T / (1 + w0)]].
-    Then W z = W^-1 s = lambda.
-    """
-
-    def __init__(self, cones, s, z):
-        self.cones = cones
-        self.d_lp = np.sqrt(s[cones.lp] / z[cones.lp])      # (nlp,)
-        self.W, self.Winv = {}, {}
-        for d, rows in cones.soc.items():
-            us, uz = s[rows], z[rows]
-            a = np.sqrt(np.maximum(_jdot(us), 1e-300))
-            bq = np.sqrt(np.maximum(_jdot(uz), 1e-300))
-            beta = np.sqrt(a / bq)
-            sn, zn = us / a[:, None], uz / bq[:, None]
-            gamma = np.sqrt(np.maximum((1.0 + np.sum(sn * zn, axis=1)) / 2.0, 1e-300))
-            Jz = zn.copy()
-            Jz[:, 1:] *= -1.0
-            w = (sn + Jz) / (2.0 * gamma[:, None])
-            w0, w1 = w[:, 0], w[:, 1:]
-            nb = len(rows)
-            M = np.empty((nb, d, d))
-            M[:, 0, 0] = w0
-            M[:, 0, 1:] = w1
-            M[:, 1:, 0] = w1
-            M[:, 1:, 1:] = (np.eye(d - 1)[None] + w1[:, :, None] * w1[:, None, :]
-                            / (1.0 + w0)[:, None, None])
-            Minv = M.copy()
-            Minv[:, 0, 1:] *= -1.0
-            Minv[:, 1:, 0] *= -1.0
-            self.W[d] = beta[:, None, None] * M
-            self.Winv[d] = Minv / beta[:, None, None]
-
-    def apply(self, v, inverse=False, power=1):
-        """W^p v or W^-p v, p in {1, 2}, for v of size m."""
-        out = np.empty_like(v)
-        c = self.cones
-        dl = 1.0 / self.d_lp if inverse else self.d_lp
-        out[c.lp] = v[c.lp] * dl ** power
-        mats = self.Winv if inverse else self.W
-        for d, rows in c.soc.items():
-            u = v[rows]
-            for _ in range(power):
-                u = np.einsum("bij,bj->bi", mats[d], u)
-            out[rows] = u
-        return out
-
-    def inv2_blocks(self):
-        """W^-2 per block: (nlp,) diagonal and {d: (nb, d, d)}."""
-        return self.d_lp ** -2, {d: Mi @ Mi for d, Mi in self.Winv.items()}
-
-
-def _jprod(cones, u, v):
-    """Jordan product u o v (orthant: elementwise; SOC: (u^T v, u0 v1 + v0 u1))."""
-    out = np.empty_like(u)
-    out[cones.lp] = u[cones.lp] * v[cones.lp]
-    for rows in cones.soc.values():
-        a, b = u[rows], v[rows]
-        r = np.empty_like(a)
-        r[:, 0] = np.sum(a * b, axis=1)
-        r[:, 1:] = a[:, :1] * b[:, 1:] + b[:, :1] * a[:, 1:]
-        out[rows] = r
-    return out
-
-
-def _jdiv(cones, lam, r):
-    """u with lam o u = r (lam in int K)."""
-    out = np.empty_like(r)
-    out[cones.lp] = r[cones.lp] / lam[cones.lp]
-    for rows in cones.soc.values():
-        lm, rr = lam[rows], r[rows]
-        l0 = lm[:, 0]
-        u0 = (l0 * rr[:, 0] - np.sum(lm[:, 1:] * rr[:, 1:], axis=1)) / _jdot(lm)
-        u = np.empty_like(rr)
-        u[:, 0] = u0
-        u[:, 1:] = (rr[:, 1:] - u0[:, None] * lm[:, 1:]) / l0[:, None]
-        out[rows] = u
-    return out
-
-
-def _jinv(cones, s):
-    """s^-1 (s o s^-1 = e): 1/s on the orthant, J s / (s^T J s) on each second-order cone."""
-    out = np.empty_like(s)
-    out[cones.lp] = 1.0 / s[cones.lp]
-    for rows in cones.soc.values():
-        u = s[rows].copy()
-        u[:, 1:] *= -1.0
-        out[rows] = u / _jdot(s[rows])[:, None]
-    return out
 
 
 class _Factor:
@@ -273,7 +115,7 @@ class SchurIPM:
     def _analyse(self, P, A, cones):
         n = A.shape[1]
         self.n = n
-        self.cones = _Cones(cones)
+        self.cones = cones_.Cones(cones)
         if A.shape[0] != self.cones.m:
             raise ValueError(f"A has {A.shape[0]} rows but the cones {self.cones.m}")
         Ar = sp.csr_matrix(A)
@@ -295,7 +137,7 @@ class SchurIPM:
             groups.append(("soc", d, rows))
         rows_of = np.repeat(np.arange(Ar.shape[0]), np.diff(Ar.indptr))
         self.groups = []
-        keys, srcs = [], []
+        keys = []
         for kind, d, rows in groups:
             nb = len(rows)
             # entries of A in these blocks: block id, row within block, column, data position
@@ -319,28 +161,38 @@ class SchurIPM:
             slot = np.searchsorted(bc, eb.astype(np.int64) * n + ec) - first[eb]
             gidx = np.full((nb, d, mc), -1, np.int64)
             gidx[eb, er, slot] = ent
-            # H entries of the block: (cols[i], cols[j]) for i, j with row <= col (upper)
-            ci = np.broadcast_to(cols[:, :, None], (nb, mc, mc))
-            cj = np.broadcast_to(cols[:, None, :], (nb, mc, mc))
-            ok = (ci >= 0) & (cj >= 0) & (ci <= cj)
+            # H entries of the block: slot pairs k <= l (the block is symmetric), each onto the
+            # upper-triangle entry (min col, max col)
+            kk, ll = np.triu_indices(mc)
+            ci, cj = cols[:, kk], cols[:, ll]                       # (nb, npairs)
+            ok = (ci >= 0) & (cj >= 0)
             flat = np.flatnonzero(ok.ravel())
-            keys.append(cj.ravel()[flat] * n + ci.ravel()[flat])  # column-major key: col*n+row
-            srcs.append(flat)
-            self.groups.append((kind, d, rows, gidx, flat))
+            lo, hi = np.minimum(ci, cj).ravel()[flat], np.maximum(ci, cj).ravel()[flat]
+            keys.append(hi * n + lo)  # column-major key: col*n+row
+            self.groups.append((kind, d, rows, gidx, flat, kk, ll))
         # P's upper triangle
         pc = np.repeat(np.arange(n), np.diff(Pu.indptr))
         keys.append(pc.astype(np.int64) * n + Pu.indices)
         diag_key = np.arange(n, dtype=np.int64) * (n + 1)
         keys.append(diag_key)  # the diagonal always (regularisation)
         allk = np.concatenate(keys)
-        uk, inv = np.unique(allk, return_inverse=True)
+        uk = np.unique(allk)            # a sort; the inverse by bisection (cheaper than argsort)
+        inv = np.searchsorted(uk, allk)
         self.nnz = len(uk)
         hc, hr = uk // n, uk % n
         self.H_indptr = np.concatenate([[0], np.cumsum(np.bincount(hc, minlength=n))])
         self.H_indices = hr.astype(np.int32)
         offs = np.cumsum([0] + [len(k) for k in keys])
-        self.targets = [inv[offs[i]:offs[i + 1]] for i in range(len(keys))]
-        self.diag_pos = self.targets[-1]
+        # Targets of every block entry, padded pairs included (sent to a dummy slot nnz, so the
+        # per-iteration values need no gather), then P's; the diagonal's positions.
+        targets = []
+        for i, (kind, d, rows, gidx, flat, kk, ll) in enumerate(self.groups):
+            t = np.full(len(rows) * len(kk), self.nnz, np.int64)
+            t[flat] = inv[offs[i]:offs[i + 1]]
+            targets.append(t)
+        targets.append(inv[offs[-3]:offs[-2]])
+        self.target_all = np.concatenate(targets)
+        self.diag_pos = inv[offs[-2]:]
         self.factor = _Factor(self.backend)
 
     def _same_pattern(self, P, A, cones):
@@ -350,7 +202,7 @@ class SchurIPM:
         Pu = sp.csc_matrix(sp.triu(sp.csc_matrix(P), format="csc"))
         Pu.sum_duplicates()
         Pu.sort_indices()
-        same = (tuple((k, int(d)) for k, d in cones) == self.cones.key
+        same = (list(cones) == self.cones.key
                 and Ar.shape == (self.cones.m, self.n)
                 and np.array_equal(Ar.indptr, self.A_indptr)
                 and np.array_equal(Ar.indices, self.A_indices)
@@ -359,20 +211,24 @@ class SchurIPM:
         return same, Ar, Pu
 
     def _schur(self, Pdata, Gs, scaling):
-        """Upper triangle of H = P + A^T W^-2 A (+ REG) as CSC on the fixed pattern."""
-        dlp, dsoc = scaling.inv2_blocks()
+        """Upper triangle of H = P + A^T W^-2 A (+ REG) as CSC on the fixed pattern.
+
+        Per block, with G its rows of A on its columns: G^T W^-2 G = Y^T Y, Y = W^-1 G.
+        """
         vals = []
-        for (kind, d, rows, gidx, flat), G in zip(self.groups, Gs):
+        for (kind, d, rows, gidx, flat, kk, ll), G in zip(self.groups, Gs):
             if kind == "lp":
-                g = G[:, 0, :]
-                contrib = dlp[:, None, None] * (g[:, :, None] * g[:, None, :])
+                g = G[:, 0, :] / scaling.d_lp[:, None]
+                contrib = g[:, kk] * g[:, ll]
             else:
-                contrib = np.einsum("bik,bij,bjl->bkl", G, dsoc[d], G, optimize=True)
-            vals.append(contrib.ravel()[flat])
+                Y = scaling.inv_blocks(d, G)                      # (d, nb, k)
+                contrib = Y[0][:, kk] * Y[0][:, ll]
+                for i in range(1, d):
+                    contrib += Y[i][:, kk] * Y[i][:, ll]
+            vals.append(contrib.ravel())
         vals.append(Pdata)
-        data = np.zeros(self.nnz)
-        for t, v in zip(self.targets[:-1], vals):
-            data += np.bincount(t, weights=v, minlength=self.nnz)
+        data = np.bincount(self.target_all, weights=np.concatenate(vals),
+                           minlength=self.nnz + 1)[:self.nnz]
         dmax = float(np.max(data[self.diag_pos])) if self.n else 1.0
         data[self.diag_pos] += REG * max(dmax, 1e-300)
         return sp.csc_matrix((data, self.H_indices, self.H_indptr), shape=(self.n, self.n))
@@ -390,9 +246,11 @@ class SchurIPM:
         cones : list of (kind, dim), kind in {"nonneg", "soc"}
         cancel : object with is_set(), optional; checked once per iteration
         max_iter : int
-        x0 : (n,) float, optional; a start. When ``b - A x0`` is strictly inside K the method
-            starts from x0 (a feasible start); otherwise x0 is shifted into the cone.
-        tol_gap, tol_feas : float, stopping tolerances (absolute/relative gap; residuals)
+        x0 : (n,) float, optional; a warm start (e.g. a certified map, or the solution at a
+            tighter bound). The iterates start at x0 with its slack ``b - A x0`` lifted to a
+            margin of WARM_DELTA x its median on each cone (a small primal residual if x0 is on
+            or outside the boundary) and the dual on the central path.
+        tol_gap, tol_feas : float, stopping tolerances (relative gap, see GAP_FLOOR; residuals)
         phase1 : bool, confirm infeasibility with a phase-1 problem when the run stalls
 
         Returns
@@ -428,6 +286,8 @@ class SchurIPM:
                 status = "CallbackTerminated"
         outcome = {"Solved": "solved", "PrimalInfeasible": "infeasible",
                    "CallbackTerminated": "cancelled"}.get(status, "inexact")
+        if outcome == "infeasible":
+            obj = float("nan")  # as Clarabel reports it: there is no optimum
         if x is not None and not np.all(np.isfinite(x)):
             x = None
         return ConicSolution(x, outcome, status, it, time.perf_counter() - t0, obj)
@@ -439,7 +299,8 @@ class SchurIPM:
         Pfull = Pu + sp.triu(Pu, 1, format="csc").T
         Pfull = Pfull.tocsr()
         Adata = np.concatenate([Ar.data, [0.0]])  # index -1 reads the appended zero
-        Gs = [Adata[g] for (_, _, _, g, _) in self.groups]
+        Gs = [Adata[g] if kind == "lp" else np.ascontiguousarray(Adata[g].transpose(1, 0, 2))
+              for (kind, _, _, g, *_) in self.groups]   # orthant (nb, 1, k); cones (d, nb, k)
         Pdata = Pu.data
         e = c.identity()
         nq = max(1.0, float(np.max(np.abs(q)))) if n else 1.0
@@ -447,10 +308,12 @@ class SchurIPM:
 
         def kkt(scaling, bx, bz, bs):
             """Solve P dx + A^T dz = bx, A dx + ds = bz, W dz + W^-1 ds = bs through H."""
-            t = scaling.apply(scaling.apply(bs) - bz, inverse=True, power=2)
+            Wi2 = scaling.matrix(inverse=True, power=2)
+            t = Wi2 @ (scaling.apply(bs) - bz)
             dx = self.factor.solve(bx - At @ t)
-            dz = scaling.apply(Ar @ dx + scaling.apply(bs) - bz, inverse=True, power=2)
-            ds = scaling.apply(bs - scaling.apply(dz))
+            Adx = Ar @ dx
+            dz = t + Wi2 @ Adx
+            ds = bz - Adx  # exactly the primal equation (W^2 W^-2 is I only to rounding)
             return dx, ds, dz
 
         def newton(scaling, lam, rx, rz, rc):
@@ -460,40 +323,38 @@ class SchurIPM:
             a few steps of iterative refinement on the unreduced system restore it (each one
             back-solve with the same factors).
             """
-            bx, bz, bs = -rx, -rz, _jdiv(c, lam, rc)      # W dz + W^-1 ds = bs
+            bx, bz, bs = -rx, -rz, cones_.jordan_divide(c, lam, rc)  # W dz + W^-1 ds = bs
             dx, ds, dz = kkt(scaling, bx, bz, bs)
             scale = max(1.0, float(np.max(np.abs(bx))), float(np.max(np.abs(bz))),
                         float(np.max(np.abs(bs))))
             for _ in range(REFINE):
                 ex = bx - Pfull @ dx - At @ dz
-                ez = bz - Ar @ dx - ds
+                ez = np.zeros_like(bz)  # kkt meets the primal equation exactly
                 es = bs - scaling.apply(dz) - scaling.apply(ds, inverse=True)
-                err = max(float(np.max(np.abs(ex))), float(np.max(np.abs(ez))),
-                          float(np.max(np.abs(es))))
-                if err <= 1e-13 * scale:
+                err = max(float(np.max(np.abs(ex))), float(np.max(np.abs(es))))
+                self.refinements += 1
+                if err <= REFINE_TOL * scale:
                     break
                 cx, cs, cz = kkt(scaling, ex, ez, es)
                 dx, ds, dz = dx + cx, ds + cs, dz + cz
             return dx, ds, dz
 
         # Starting point.
-        feasible_start = False
         if x0 is not None:
+            # Warm start: x0 as it is; its slack b - A x0, each cone lifted to a margin of at
+            # least delta (a small primal residual where x0 is on or near the boundary, as the
+            # optimum at a tighter bound is); z = mu s^-1 on the central path.
             x = np.asarray(x0, np.float64).copy()
             s = b - Ar @ x
-            feasible_start = c.margin(s) > 0
-        if feasible_start:
-            # A feasible start: keep (x0, s0) and pick z = mu s^-1 on the central path, mu matched
-            # to the size of the dual residual the start leaves (P x0 + q).
-            sinv = _jinv(c, s)
+            typical = float(np.median(np.abs(s))) if len(s) else 1.0
+            delta = WARM_DELTA * max(typical, 1e-12)
+            s = cones_.lift(c, s, delta)
             g = Pfull @ x + q
-            ga = At @ sinv
-            mu = float(np.linalg.norm(g) / max(np.linalg.norm(ga), 1e-300))
-            mu = max(mu, 1e-8 * max(1.0, abs(float(0.5 * x @ g + 0.5 * q @ x))) / c.degree)
-            z = mu * sinv
+            mu = WARM_MU * max(abs(float(0.5 * x @ g + 0.5 * q @ x)), 1e-12) / c.degree
+            z = mu * cones_.jordan_inverse(c, s)
         else:
             # CVXOPT's default start: the W = I Newton system, then shift s and z into int K.
-            ident = _Scaling(c, e, e)
+            ident = cones_.NTScaling(c, e, e)
             self.factor.factor(self._schur(Pdata, Gs, ident))
             x = self.factor.solve(-q + At @ b)
             s = b - Ar @ x
@@ -509,6 +370,7 @@ class SchurIPM:
         last = None
         best = (np.inf, x.copy())
         self.last_info = None
+        self.refinements = 0
         stall = 0
         for it in range(1, max_iter + 1):
             if cancel is not None and cancel.is_set():
@@ -525,19 +387,18 @@ class SchurIPM:
             dres = float(np.max(np.abs(rx))) / nq if n else 0.0
             last = pobj
             if pres <= tol_feas and dres <= tol_feas and (
-                    gap <= tol_gap or gap <= tol_gap * max(1e-300, min(abs(pobj), abs(dobj)))):
+                    gap <= tol_gap * max(GAP_FLOOR, min(abs(pobj), abs(dobj)))):
                 status = "Solved"
                 break
             bz = float(b @ z)
             if bz < 0:
-                atz = float(np.max(np.abs(At @ z))) if n else 0.0
-                if atz <= TOL_INFEAS * (-bz) * max(1.0, float(np.max(np.abs(x)))):
+                # z in K* with b'z < 0: every feasible x has |x|_inf >= -b'z / |A'z|_1 (since
+                # 0 <= z's = z'b - (A'z)'x). Infeasible when that is far beyond the iterates.
+                atz = float(np.sum(np.abs(At @ z))) if n else 0.0
+                if atz * max(1.0, float(np.max(np.abs(x)))) <= TOL_INFEAS * (-bz):
                     status = "PrimalInfeasible"
                     break
             score = max(pres, dres, gap / max(1.0, abs(pobj)))
-            if _DEBUG:
-                print(f"{it:3d} pobj {pobj:+.6e} dobj {dobj:+.6e} gap {gap:.2e} pres {pres:.2e} "
-                      f"dres {dres:.2e}")
             if not np.isfinite(score):
                 status = "NumericalError"
                 break
@@ -547,19 +408,21 @@ class SchurIPM:
                 stall = 0
             else:
                 stall += 1
-                if stall >= 10:
+                # no progress while z drifts along a Farkas direction (b'z < 0): let phase 1
+                # decide soon rather than after STALL iterations
+                if stall >= STALL or (stall >= STALL_INFEAS and bz < 0):
                     status = "InsufficientProgress"
                     break
-            scaling = _Scaling(c, s, z)
+            scaling = cones_.NTScaling(c, s, z)
             lam = scaling.apply(z)
             self.factor.factor(self._schur(Pdata, Gs, scaling))
             # predictor (affine scaling)
-            lamsq = _jprod(c, lam, lam)
+            lamsq = cones_.jordan_product(c, lam, lam)
             dxa, dsa, dza = newton(scaling, lam, rx, rz, -lamsq)
             aa = min(1.0, c.step(s, dsa), c.step(z, dza))
             sigma = (1.0 - aa) ** 3
             # corrector (Mehrotra): second-order term (W^-1 ds_a) o (W dz_a)
-            corr = _jprod(c, scaling.apply(dsa, inverse=True), scaling.apply(dza))
+            corr = cones_.jordan_product(c, scaling.apply(dsa, inverse=True), scaling.apply(dza))
             rc = -lamsq - corr + sigma * mu * e
             dx, ds, dz = newton(scaling, lam, rx, rz, rc)
             a = min(1.0, STEP * min(c.step(s, ds), c.step(z, dz)))
