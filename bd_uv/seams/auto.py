@@ -8,14 +8,18 @@ the union still passes. ``bd_uv.unwrap`` finally certifies every chart at C (ben
 whose conformal map exceeds C), and any chart the certified map leaves beyond S or crossing
 itself is split again.
 """
+import dataclasses
 import time
 
 import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
 
-from ..errors import ClosedIslandError, TopologyError
+from ..errors import ClosedIslandError, InfeasibleError, SolverError, TopologyError
 from ..geometry import face_areas
 from ..metrics import face_jacobians
 from ..mesh import check_arrays, islands
+from ..unwrapping.results import UnwrapResult
 from ..unwrapping.unwrap import unwrap
 from .charts import boundary_crossings, chart_maps
 from .cut_graph import cut_graph
@@ -23,6 +27,10 @@ from .edges import edge_table
 from .split import fiedler_split
 
 MAX_ROUNDS = 60
+# Charts are accepted a little inside S: bending a map into C moves its stretch slightly.
+MARGIN = 0.98
+# Passes that split charts the certified map leaves beyond S.
+FINISH_ROUNDS = 4
 
 
 def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merge=True,
@@ -70,25 +78,27 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             break
     if merge:
         _merge(V, F, E, cut, original, C, S, n)
-    result = None
-    for _ in range(8):
-        result = unwrap(V, F, seams=E.ends[cut], bound=C, raise_bound=False, **unwrap_options)
+    result = unwrap(V, F, seams=E.ends[cut], bound=C, raise_bound=False, **unwrap_options)
+    for _ in range(FINISH_ROUNDS):
+        # Charts the certified map leaves beyond S or crossing itself are split again and only
+        # their faces unwrapped anew.
         st, cr = _measure(V, F, result, E.ends[cut])
         bad = [r for r, s, c in zip(result.islands, st, cr)
-               if r.status == "certified" and (s > S * (1 + 1e-9) or c > 0)]
-        bad += [r for r in result.islands if r.status != "certified"
-                and isinstance(r.error, type(None)) is False and len(r.faces) > 1
-                and not isinstance(r.error, (ClosedIslandError, TopologyError))
-                and type(r.error).__name__ in ("InfeasibleError", "SolverError")]
+               if len(r.faces) > 1 and ((r.status == "certified" and (s > S * (1 + 1e-9) or c))
+                                        or isinstance(r.error, (InfeasibleError, SolverError)))]
         if not bad:
             break
         frozen[:] = True
         for r in bad:
             frozen[r.faces] = False
             _split_faces(r.faces, E, cut, A, cen)
+        sub = np.flatnonzero(~frozen)
         for _ in range(MAX_ROUNDS):
             if not _refine(V, F, E, cut, frozen, A, cen, C, S, n):
                 break
+        Fc, voc = cut_mesh(F, E, cut)
+        part = unwrap(V[voc], Fc[sub], bound=C, raise_bound=False, **unwrap_options)
+        result = _splice(result, part, sub, voc, m)
     st, cr = _measure(V, F, result, E.ends[cut])
     added = E.ends[cut & ~original]
     info = {"charts": len(result.islands),
@@ -102,11 +112,14 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
 
 def _refine(V, F, E, cut, frozen, A, cen, C, S, n):
     """One top-down round over the charts not yet accepted; True when a seam was added."""
-    isl = islands(V, F, E.ends[cut])
+    # Only the faces not yet accepted: accepted charts are cut off from them by seams.
+    sub = np.flatnonzero(~frozen)
+    if len(sub) == 0:
+        return False
+    Fc, voc = cut_mesh(F, E, cut)
+    isl = [_Chart(i, sub[i.faces], voc) for i in islands(V[voc], Fc[sub])]
     open_, disks = [], []
     for i in isl:
-        if frozen[i.faces[0]]:
-            continue
         if isinstance(i.error, (ClosedIslandError, TopologyError)) or (
                 i.error is None and len(i.loops) > 1):
             open_.append(i)
@@ -130,7 +143,7 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n):
     if disks:
         cm = chart_maps(V, disks)
         for j, i in enumerate(disks):
-            ok = (np.isfinite(cm.max_distortion[j]) and cm.max_stretch[j] <= S
+            ok = (np.isfinite(cm.max_distortion[j]) and cm.max_stretch[j] <= S * MARGIN
                   and cm.crossings[j] == 0)
             if ok or len(i.faces) < 2:
                 frozen[i.faces] = True
@@ -139,6 +152,15 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n):
             else:
                 frozen[i.faces] = True
     return changed
+
+
+class _Chart:
+    """An island of a face subset, with its faces as input face ids."""
+
+    def __init__(self, island, faces, voc):
+        self.faces = faces
+        self.vertices, self.tris, self.loops = voc[island.vertices], island.tris, island.loops
+        self.error = island.error
 
 
 def _edge_weight(E, pairs, n):
@@ -206,7 +228,7 @@ def _merge(V, F, E, cut, original, C, S, n, rounds=6):
         if not disks:
             return
         cm = chart_maps(V, disks)
-        ok = np.isfinite(cm.max_distortion) & (cm.max_stretch <= S) & (cm.crossings == 0)
+        ok = np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN) & (cm.crossings == 0)
         merged = 0
         for j, c in enumerate(disks):
             if not ok[j]:
@@ -224,26 +246,80 @@ def _merge(V, F, E, cut, original, C, S, n, rounds=6):
 
 def _measure(V, F, result, seams):
     """Per island of a result: max stretch and boundary self-crossings from its final UVs."""
-    st, cr = [], []
     isl = islands(V, F, seams)
-    for r in result.islands:
-        if r.uv is None or r.status != "certified":
-            st.append(float("nan"))
-            cr.append(0)
-            continue
-        uv = r.uv[:, 0] + 1j * r.uv[:, 1]
-        P = V[r.vertices]
-        corner = r.uv[r.tris]
-        alpha, beta = face_jacobians(P, r.tris, corner)
-        a, b = np.abs(alpha), np.abs(beta)
-        s = np.sqrt(face_areas(P, r.tris).sum() / max(_uv_area(corner), 1e-300))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            st.append(float(np.max(np.maximum(s * (a + b), 1.0 / (s * (a - b))))))
-        cr.append(int(boundary_crossings(uv, list(isl[r.index].loops)).sum()))
-    return st, cr
-
-
-def _uv_area(corner):
+    rs = [r for r in result.islands if r.uv is not None and r.status == "certified"]
+    st = np.full(len(result.islands), np.nan)
+    cr = np.zeros(len(result.islands), dtype=np.int64)
+    if not rs:
+        return st.tolist(), cr.tolist()
+    nvs = np.array([len(r.vertices) for r in rs])
+    nfs = np.array([len(r.tris) for r in rs])
+    voff = np.concatenate([[0], np.cumsum(nvs)])
+    foff = np.concatenate([[0], np.cumsum(nfs)])
+    fc = np.repeat(np.arange(len(rs)), nfs)
+    P = V[np.concatenate([r.vertices for r in rs])]
+    uv = np.concatenate([r.uv for r in rs])
+    tris = np.concatenate([r.tris for r in rs]) + voff[fc][:, None]
+    corner = uv[tris]
+    alpha, beta = face_jacobians(P, tris, corner)
+    a, b = np.abs(alpha), np.abs(beta)
     e1 = corner[:, 1] - corner[:, 0]
     e2 = corner[:, 2] - corner[:, 0]
-    return float(0.5 * np.sum(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]))
+    uv_area = np.bincount(fc, 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]), len(rs))
+    s = np.sqrt(np.bincount(fc, face_areas(P, tris), len(rs)) / np.maximum(uv_area, 1e-300))[fc]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        fs = np.where(a > b, np.maximum(s * (a + b), 1.0 / (s * (a - b))), np.inf)
+    idx = np.array([r.index for r in rs])
+    st[idx] = np.maximum.reduceat(fs, foff[:-1])
+    z = uv[:, 0] + 1j * uv[:, 1]
+    cr[idx] = boundary_crossings(z, [isl[r.index].loops[0] + voff[j] for j, r in enumerate(rs)])
+    return st.tolist(), cr.tolist()
+
+
+def _splice(result, part, sub, voc, m):
+    """``result`` with the islands on faces ``sub`` replaced by ``part`` (unwrapped on F[sub])."""
+    redo = np.zeros(m, dtype=bool)
+    redo[sub] = True
+    keep = [r for r in result.islands if not redo[r.faces[0]]]
+    new = [dataclasses.replace(r, faces=sub[r.faces], vertices=voc[r.vertices])
+           for r in part.islands]
+    isl = sorted(keep + new, key=lambda r: int(r.faces.min()))
+    isl = [dataclasses.replace(r, index=j) for j, r in enumerate(isl)]
+    corner_uv = result.corner_uv.copy()
+    corner_uv[sub] = part.corner_uv
+    face_island = np.empty(m, dtype=np.int64)
+    for r in isl:
+        face_island[r.faces] = r.index
+    return UnwrapResult(corner_uv, face_island, isl, result.seconds + part.seconds, result.method)
+
+
+def cut_mesh(F, E, cut):
+    """The mesh cut open along the seams: a face subset of it keeps the charts' own topology.
+
+    Parameters
+    ----------
+    F : (m,3) int64
+    E : EdgeTable
+    cut : (e,) bool, the seams
+
+    Returns
+    -------
+    Fc : (m,3) int64, faces in cut vertex ids (corners glued across uncut interior edges only)
+    voc : (nc,) int64, the input vertex of each cut vertex
+    """
+    m = len(F)
+    join = (E.faces[:, 1] >= 0) & ~cut
+    f0, f1 = E.faces[join, 0], E.faces[join, 1]
+    rows, cols = [], []
+    for end in (0, 1):
+        v = E.ends[join, end]
+        c0 = f0 * 3 + np.argmax(F[f0] == v[:, None], axis=1)
+        c1 = f1 * 3 + np.argmax(F[f1] == v[:, None], axis=1)
+        rows.append(c0)
+        cols.append(c1)
+    rows, cols = np.concatenate(rows), np.concatenate(cols)
+    g = sp.coo_array((np.ones(len(rows)), (rows, cols)), shape=(3 * m, 3 * m))
+    _, corner = connected_components(g, directed=False)
+    voc = np.empty(corner.max() + 1, dtype=np.int64)
+    voc[corner] = F.ravel()
+    return corner.reshape(m, 3).astype(np.int64), voc

@@ -66,6 +66,7 @@ def fiedler_split(face_area, centroid, pairs, edge_len, edge_cost):
         score = cut / np.maximum(small, 1e-300)
     t = int(np.argmin(score)) + 1
     side = rank < t
+    raw = side.copy()
     # Majority filter: faces with two or three neighbours across move over (a few passes).
     for _ in range(3):
         other = side[pairs[:, 0]] != side[pairs[:, 1]]
@@ -75,5 +76,5 @@ def fiedler_split(face_area, centroid, pairs, edge_len, edge_cost):
             break
         side = side ^ move
     if side.all() or not side.any():
-        return None
+        side = raw
     return side
