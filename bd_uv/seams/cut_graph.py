@@ -53,7 +53,9 @@ def cut_graph(tris, nv, weight):
     real = ends[:, 1] < nv
     w = np.full(len(uniq), 0.0)
     w[real] = weight(ends[real])
-    w[~real] = 1e-9 * max(w[real].mean() if real.any() else 1.0, 1e-300)
+    # Zero weights would drop out of the sparse graph: floor every weight.
+    tiny = 1e-9 * max(w[real].mean() if real.any() else 1.0, 1e-300)
+    w = np.maximum(w, tiny)
     root = nv if n_caps else 0
     G = sp.csr_matrix(sp.coo_array((w, (ends[:, 0], ends[:, 1])), shape=(N, N)))
     dist, pred = dijkstra(G, directed=False, indices=root, return_predecessors=True)
@@ -73,7 +75,8 @@ def cut_graph(tris, nv, weight):
     D = sp.coo_array((big - loop_len[dual] + 1e-12, (f0[dual], f1[dual])), shape=(nf, nf))
     mst = minimum_spanning_tree(sp.csr_matrix(D)).tocoo()
     cot = np.zeros(len(uniq), dtype=bool)
-    pairs = np.stack([np.minimum(mst.row, mst.col), np.maximum(mst.row, mst.col)], axis=1)
+    r, c = mst.row.astype(np.int64), mst.col.astype(np.int64)  # int32: pair keys overflow
+    pairs = np.stack([np.minimum(r, c), np.maximum(r, c)], axis=1)
     dual_idx = np.flatnonzero(dual)
     dpairs = np.stack([np.minimum(f0[dual], f1[dual]), np.maximum(f0[dual], f1[dual])], axis=1)
     dk = dpairs[:, 0] * nf + dpairs[:, 1]

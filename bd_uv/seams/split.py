@@ -2,6 +2,7 @@
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
+from scipy.sparse.csgraph import connected_components
 
 # Neither side of a split may hold less than this share of the chart's area.
 MIN_SIDE = 0.05
@@ -37,18 +38,9 @@ def fiedler_split(face_area, centroid, pairs, edge_len, edge_cost):
                                                np.concatenate([pairs[:, 1], pairs[:, 0]]))),
                      shape=(k, k)).tocsc()
     L = (sp.diags(np.asarray(W.sum(axis=1)).ravel()) - W).tocsc()
-    M = sp.diags(face_area).tocsc()
-    scale = L.diagonal().mean() / face_area.mean()
-    if k <= 400:
-        from scipy.linalg import eigh
-        vals, vecs = eigh(L.toarray(), M.toarray())
-        x = vecs[:, 1]
-    else:
-        try:
-            vals, vecs = spla.eigsh(L, k=2, M=M, sigma=-1e-6 * scale, which="LM")
-        except (RuntimeError, spla.ArpackNoConvergence):
-            return None
-        x = vecs[:, np.argsort(vals)[1]]
+    x = _fiedler_vector(L, face_area, centroid)
+    if x is None:
+        return None
     order = np.argsort(x, kind="stable")
     rank = np.empty(k, dtype=np.int64)
     rank[order] = np.arange(k)
@@ -67,14 +59,56 @@ def fiedler_split(face_area, centroid, pairs, edge_len, edge_cost):
     t = int(np.argmin(score)) + 1
     side = rank < t
     raw = side.copy()
-    # Majority filter: faces with two or three neighbours across move over (a few passes).
-    for _ in range(3):
+    # Majority filter: a face with two or three neighbours across moves over (never two
+    # neighbours at once, which could leave a checkerboard), a few passes.
+    for _ in range(4):
         other = side[pairs[:, 0]] != side[pairs[:, 1]]
-        votes = np.bincount(pairs[other].ravel(), minlength=k)
-        move = votes >= 2
+        move = np.bincount(pairs[other].ravel(), minlength=k) >= 2
+        both = move[pairs[:, 0]] & move[pairs[:, 1]]
+        move[np.maximum(pairs[both, 0], pairs[both, 1])] = False
         if not move.any():
             break
         side = side ^ move
+    # Pieces cut off from their side's bulk (a few faces) go to the other side.
+    same = side[pairs[:, 0]] == side[pairs[:, 1]]
+    g = sp.coo_array((np.ones(int(same.sum())), (pairs[same, 0], pairs[same, 1])), shape=(k, k))
+    _, comp = connected_components(g, directed=False)
+    size = np.bincount(comp)
+    side = side ^ (size[comp] < max(3, 0.02 * k))
     if side.all() or not side.any():
         side = raw
     return side
+
+
+def _fiedler_vector(L, mass, centroid, iters=12):
+    """Approximate Fiedler vector of ``L x = lambda M x`` by inverse iteration.
+
+    Starts from the faces' coordinate along the chart's principal axis (already a smooth
+    ordering along its longest extent), deflates the constant vector (M-orthogonally) each step;
+    a dozen steps with one sparse factorisation are enough for a sweep cut.
+
+    Parameters
+    ----------
+    L : (k,k) sparse graph Laplacian
+    mass : (k,) float64 > 0
+    centroid : (k,3) float64
+
+    Returns
+    -------
+    x : (k,) float64, or None when the system cannot be factored
+    """
+    c = centroid - np.average(centroid, axis=0, weights=mass)
+    _, _, vt = np.linalg.svd(c * np.sqrt(mass)[:, None], full_matrices=False)
+    x = c @ vt[0]
+    shift = 1e-8 * L.diagonal().mean() / mass.mean()
+    try:
+        lu = spla.splu((L + sp.diags(shift * mass)).tocsc(), permc_spec="MMD_AT_PLUS_A",
+                       options={"SymmetricMode": True})
+    except RuntimeError:
+        return None
+    total = mass.sum()
+    for _ in range(iters):
+        x = x - (mass @ x) / total
+        x = lu.solve(mass * x)
+        x /= max(np.sqrt(mass @ x ** 2), 1e-300)
+    return x - (mass @ x) / total
