@@ -31,10 +31,12 @@ MAX_ROUNDS = 60
 MARGIN = 0.98
 # Passes that split charts the certified map leaves beyond S.
 FINISH_ROUNDS = 4
+# Rounds of pairwise merging (each merges a matching of neighbouring charts).
+MERGE_ROUNDS = 40
 
 
 def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merge=True,
-                **unwrap_options):
+                method="lscm", frames="auto", cone="soc", progress=None, cancel=None):
     """Unwrap with seams added where needed: every chart a disk, certified at C, stretch <= S.
 
     Parameters
@@ -47,7 +49,8 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         its 3D area (section 6.3's bounds, ``max(sigma_1, 1/sigma_2) <= S``)
     face_groups : (m,) int array, optional, material per face: seams prefer group boundaries
     merge : bool, merge neighbouring charts while their union passes
-    **unwrap_options : passed to ``bd_uv.unwrap`` (method, cone, progress, cancel, ...)
+    method, frames, cone, progress, cancel : as for ``bd_uv.unwrap``, which certifies the charts
+        (with ``raise_bound=False``: a chart that cannot be certified at C is split further)
 
     Returns
     -------
@@ -60,6 +63,11 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     t0 = time.perf_counter()
     V, F = check_arrays(V, F)
     C, S = float(bound), float(stretch)
+    if not (C >= 1.0 and S >= 1.0):
+        raise ValueError(f"seams='auto' needs a bound C >= 1 and a stretch S >= 1, not {bound!r}, "
+                         f"{stretch!r}")
+    unwrap_options = dict(method=method, frames=frames, cone=cone, progress=progress,
+                          cancel=cancel)
     E = edge_table(V, F, face_groups)
     n, m = len(V), len(F)
     cut = np.zeros(len(E.ends), dtype=bool)
@@ -100,13 +108,14 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         part = unwrap(V[voc], Fc[sub], bound=C, raise_bound=False, **unwrap_options)
         result = _splice(result, part, sub, voc, m)
     st, cr = _measure(V, F, result, E.ends[cut])
+    result = dataclasses.replace(result, seconds=time.perf_counter() - t0)
     added = E.ends[cut & ~original]
     info = {"charts": len(result.islands),
             "seam_length": float(E.length[cut].sum()),
             "added_length": float(E.length[cut & ~original].sum()),
             "edge_length": float(E.length.sum()),
             "max_stretch": st, "crossings": cr, "rounds": rounds,
-            "seconds": time.perf_counter() - t0}
+            "seconds": result.seconds}
     return result, added, info
 
 
@@ -186,13 +195,19 @@ def _split_faces(faces, E, cut, A, cen):
     return len(new) > 0
 
 
-def _merge(V, F, E, cut, original, C, S, n, rounds=6):
-    """Merge neighbouring charts pairwise while the union's conformal map still passes."""
+def _merge(V, F, E, cut, original, C, S, n, rounds=MERGE_ROUNDS):
+    """Merge neighbouring charts pairwise while the union's conformal map still passes.
+
+    Each round tests a matching of neighbouring pairs (longest shared seam first) in one
+    batched solve; pairs that fail are not tried again while both charts stay as they are.
+    """
+    tried = set()
     for _ in range(rounds):
         isl = islands(V, F, E.ends[cut])
         label = np.empty(len(F), dtype=np.int64)
         for i in isl:
             label[i.faces] = i.index
+        ident = [(int(i.faces[0]), len(i.faces)) for i in isl]
         good = np.array([i.error is None and len(i.loops) == 1 for i in isl])
         inner = (E.faces[:, 1] >= 0) & cut & ~original
         la, lb = label[E.faces[inner, 0]], label[E.faces[inner, 1]]
@@ -204,15 +219,16 @@ def _merge(V, F, E, cut, original, C, S, n, rounds=6):
         key = la * len(isl) + lb
         uk, inv = np.unique(key, return_inverse=True)
         shared = np.bincount(inv.ravel(), E.length[ei])
-        # Greedy matching: longest shared boundary first, each chart in at most one pair.
+        # Greedy matching: longest shared seam first, each chart in at most one pair.
         order = np.argsort(-shared)
         used = np.zeros(len(isl), dtype=bool)
         chosen = []
         for p in order:
             x, y = divmod(int(uk[p]), len(isl))
-            if not used[x] and not used[y]:
+            if not used[x] and not used[y] and (ident[x], ident[y]) not in tried:
                 used[x] = used[y] = True
                 chosen.append(p)
+                tried.add((ident[x], ident[y]))
         if not chosen:
             return
         trial = cut.copy()
@@ -226,10 +242,9 @@ def _merge(V, F, E, cut, original, C, S, n, rounds=6):
         cand = list({c.index: c for c in cand}.values())
         disks = [c for c in cand if c.error is None and len(c.loops) == 1]
         if not disks:
-            return
+            continue
         cm = chart_maps(V, disks)
         ok = np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN) & (cm.crossings == 0)
-        merged = 0
         for j, c in enumerate(disks):
             if not ok[j]:
                 continue
@@ -237,11 +252,7 @@ def _merge(V, F, E, cut, original, C, S, n, rounds=6):
             both = (E.faces[fe, 1] >= 0)
             f0, f1 = E.faces[fe, 0], E.faces[fe, 1]
             inside = both & (tlabel[f0] == c.index) & (tlabel[np.where(both, f1, 0)] == c.index)
-            kill = fe[inside & cut[fe] & ~trial[fe]]
-            cut[kill] = False
-            merged += 1
-        if merged == 0:
-            return
+            cut[fe[inside & cut[fe] & ~trial[fe]]] = False
 
 
 def _measure(V, F, result, seams):

@@ -5,6 +5,9 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, dijkstra, minimum_spanning_tree
 
+# Roots tried (farthest-point samples) for the loops of a closed chart of genus >= 1.
+ROOT_TRIES = 6
+
 
 def cut_graph(tris, nv, weight):
     """Edges to cut so that a connected manifold chart becomes one disk.
@@ -56,7 +59,26 @@ def cut_graph(tris, nv, weight):
     # Zero weights would drop out of the sparse graph: floor every weight.
     tiny = 1e-9 * max(w[real].mean() if real.any() else 1.0, 1e-300)
     w = np.maximum(w, tiny)
-    root = nv if n_caps else 0
+    if n_caps:
+        return _loops_from(nv, uniq, ends, inv, w, all_tris, N, nv, n_caps)[0]
+    # Closed: the loops all pass through the root, so try a few roots spread over the chart
+    # and keep the shortest system of loops.
+    best = _loops_from(0, uniq, ends, inv, w, all_tris, N, nv, n_caps)
+    if len(best[0]) == 0:
+        return best[0]                     # a sphere: no loop to cut
+    G = sp.csr_matrix(sp.coo_array((w, (ends[:, 0], ends[:, 1])), shape=(N, N)))
+    far = dijkstra(G, directed=False, indices=0)
+    for _ in range(ROOT_TRIES):
+        r = int(np.argmax(far))
+        trial = _loops_from(r, uniq, ends, inv, w, all_tris, N, nv, n_caps)
+        if trial[1] < best[1]:
+            best = trial
+        far = np.minimum(far, dijkstra(G, directed=False, indices=r))
+    return best[0]
+
+
+def _loops_from(root, uniq, ends, inv, w, all_tris, N, nv, n_caps):
+    """Tree-cotree cut from ``root``: (cut (c,2) chart vertex pairs, its total weight)."""
     G = sp.csr_matrix(sp.coo_array((w, (ends[:, 0], ends[:, 1])), shape=(N, N)))
     dist, pred = dijkstra(G, directed=False, indices=root, return_predecessors=True)
     in_tree = np.zeros(len(uniq), dtype=bool)
@@ -94,4 +116,6 @@ def cut_graph(tris, nv, weight):
         front = front[front >= 0]
     v = np.flatnonzero(marked & (pred >= 0))
     cut = np.concatenate([np.stack([v, pred[v]], axis=1), ends[left]])
-    return cut[np.all(cut < nv, axis=1)].astype(np.int64)
+    cut = cut[np.all(cut < nv, axis=1)].astype(np.int64)
+    return cut, float(np.sum(w[np.searchsorted(uniq, np.minimum(cut[:, 0], cut[:, 1]) * N
+                                                + np.maximum(cut[:, 0], cut[:, 1]))]))

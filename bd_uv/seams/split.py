@@ -2,10 +2,12 @@
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from scipy.sparse.csgraph import connected_components
+from scipy.sparse.csgraph import breadth_first_order, connected_components, maximum_flow
 
 # Neither side of a split may hold less than this share of the chart's area.
 MIN_SIDE = 0.05
+# Dual rings on each side of a sweep cut within which the min cut may move it.
+BAND_RINGS = 4
 
 
 def fiedler_split(face_area, centroid, pairs, edge_len, edge_cost):
@@ -58,6 +60,7 @@ def fiedler_split(face_area, centroid, pairs, edge_len, edge_cost):
         score = cut / np.maximum(small, 1e-300)
     t = int(np.argmin(score)) + 1
     side = rank < t
+    side = _snap(side, pairs, c)
     raw = side.copy()
     # Majority filter: a face with two or three neighbours across moves over (never two
     # neighbours at once, which could leave a checkerboard), a few passes.
@@ -112,3 +115,56 @@ def _fiedler_vector(L, mass, centroid, iters=12):
         x = lu.solve(mass * x)
         x /= max(np.sqrt(mass @ x ** 2), 1e-300)
     return x - (mass @ x) / total
+
+
+def _snap(side, pairs, cost, rings=BAND_RINGS):
+    """Move a two-way cut to the cheapest one within a band of faces around it (s-t min cut).
+
+    The faces more than ``rings`` dual steps from the cut keep their side (they are the source
+    and the sink); inside the band the cut is free, so it runs along creases (cheap edges) and
+    takes the shortest route, straight where the mesh has a straight edge loop, rather than the
+    level set's staircase.
+
+    Parameters
+    ----------
+    side : (k,) bool
+    pairs : (e,2) int64, neighbouring faces
+    cost : (e,) float64 > 0, the seam cost of each shared edge (length times crease discount)
+
+    Returns
+    -------
+    (k,) bool
+    """
+    k = len(side)
+    A = sp.coo_array((np.ones(2 * len(pairs)), (np.concatenate([pairs[:, 0], pairs[:, 1]]),
+                                                np.concatenate([pairs[:, 1], pairs[:, 0]]))),
+                     shape=(k, k)).tocsr()
+    across = side[pairs[:, 0]] != side[pairs[:, 1]]
+    band = np.zeros(k, dtype=bool)
+    band[pairs[across].ravel()] = True
+    for _ in range(rings):
+        band |= (A @ band.astype(np.float64)) > 0
+    if band.all():
+        return side
+    # Graph: faces 0..k-1, source k (side True outside the band), sink k+1.
+    scale = 1e4 / max(cost.max(), 1e-300)    # integer capacities, sums within int32
+    cap = np.maximum(np.round(cost * scale), 1).astype(np.int64)
+    src_f = np.flatnonzero(~band & side)
+    snk_f = np.flatnonzero(~band & ~side)
+    if len(src_f) == 0 or len(snk_f) == 0:
+        return side
+    inf = min(int(cap.sum()) + 1, 2 ** 30)
+    rows = np.concatenate([pairs[:, 0], pairs[:, 1], np.full(len(src_f), k), snk_f])
+    cols = np.concatenate([pairs[:, 1], pairs[:, 0], src_f, np.full(len(snk_f), k + 1)])
+    vals = np.concatenate([cap, cap, np.full(len(src_f), inf), np.full(len(snk_f), inf)])
+    G = sp.csr_matrix(sp.coo_array((vals, (rows, cols)), shape=(k + 2, k + 2)))
+    G.sum_duplicates()
+    G.data = np.minimum(G.data, 2 ** 30).astype(np.int32)
+    flow = maximum_flow(G, k, k + 1).flow
+    residual = (G - flow).tocsr()
+    residual.data = (residual.data > 0).astype(np.float64)
+    residual.eliminate_zeros()
+    reach = breadth_first_order(residual, k, directed=True, return_predecessors=False)
+    new = np.zeros(k + 2, dtype=bool)
+    new[reach] = True
+    return new[:k]
