@@ -12,8 +12,6 @@ import dataclasses
 import time
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
 
 from ..errors import ClosedIslandError, InfeasibleError, SolverError, TopologyError
 from ..geometry import face_areas
@@ -25,6 +23,7 @@ from .charts import boundary_crossings, chart_maps
 from .cut_graph import cut_graph
 from .edges import edge_table
 from .split import fiedler_split
+from .topology import charts, cut_mesh
 
 MAX_ROUNDS = 60
 # Charts are accepted a little inside S: bending a map into C moves its stretch slightly.
@@ -33,6 +32,8 @@ MARGIN = 0.98
 FINISH_ROUNDS = 4
 # Rounds of pairwise merging (each merges a matching of neighbouring charts).
 MERGE_ROUNDS = 40
+# Matchings of neighbouring chart pairs tested together in one merging round.
+MERGE_LAYERS = 1
 
 
 def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merge=True,
@@ -78,19 +79,25 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     original = cut.copy()
     A = face_areas(V, F)
     cen = V[F].mean(axis=1)
+    # Islands the seams cannot fix (non-manifold, degenerate, ...) are left to ``unwrap`` to
+    # report; the rest of the search works on charts of the validated mesh.
     frozen = np.zeros(m, dtype=bool)
+    for i in islands(V, F, E.ends[cut]):
+        if i.error is not None and not isinstance(i.error, (ClosedIslandError, TopologyError)):
+            frozen[i.faces] = True
+    invalid = frozen.copy()
     rounds = 0
     for rounds in range(1, MAX_ROUNDS + 1):
         changed = _refine(V, F, E, cut, frozen, A, cen, C, S, n)
         if not changed:
             break
     if merge:
-        _merge(V, F, E, cut, original, C, S, n)
+        _merge(V, F, E, cut, original, invalid, S)
     result = unwrap(V, F, seams=E.ends[cut], bound=C, raise_bound=False, **unwrap_options)
     for _ in range(FINISH_ROUNDS):
         # Charts the certified map leaves beyond S or crossing itself are split again and only
         # their faces unwrapped anew.
-        st, cr = _measure(V, F, result, E.ends[cut])
+        st, cr = _measure(V, F, E, cut, result)
         bad = [r for r, s, c in zip(result.islands, st, cr)
                if len(r.faces) > 1 and ((r.status == "certified" and (s > S * (1 + 1e-9) or c))
                                         or isinstance(r.error, (InfeasibleError, SolverError)))]
@@ -104,10 +111,10 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         for _ in range(MAX_ROUNDS):
             if not _refine(V, F, E, cut, frozen, A, cen, C, S, n):
                 break
-        Fc, voc = cut_mesh(F, E, cut)
+        Fc, voc = cut_mesh(F, E, cut, sub)
         part = unwrap(V[voc], Fc[sub], bound=C, raise_bound=False, **unwrap_options)
         result = _splice(result, part, sub, voc, m)
-    st, cr = _measure(V, F, result, E.ends[cut])
+    st, cr = _measure(V, F, E, cut, result)
     result = dataclasses.replace(result, seconds=time.perf_counter() - t0)
     added = E.ends[cut & ~original]
     info = {"charts": len(result.islands),
@@ -121,55 +128,39 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
 
 def _refine(V, F, E, cut, frozen, A, cen, C, S, n):
     """One top-down round over the charts not yet accepted; True when a seam was added."""
-    # Only the faces not yet accepted: accepted charts are cut off from them by seams.
     sub = np.flatnonzero(~frozen)
     if len(sub) == 0:
         return False
-    Fc, voc = cut_mesh(F, E, cut)
-    isl = [_Chart(i, sub[i.faces], voc) for i in islands(V[voc], Fc[sub])]
-    open_, disks = [], []
-    for i in isl:
-        if isinstance(i.error, (ClosedIslandError, TopologyError)) or (
-                i.error is None and len(i.loops) > 1):
-            open_.append(i)
-        elif i.error is None:
-            disks.append(i)
-        else:                              # degenerate, non-manifold, ...: not ours to fix
-            frozen[i.faces] = True
+    chs = charts(F, E, cut, sub)
     changed = False
-    for i in open_:
-        w = lambda pairs, _v=i.vertices: _edge_weight(E, _v[pairs], n)
-        c = cut_graph(i.tris, len(i.vertices), w)
-        k = E.keys(i.vertices[c], n) if len(c) else np.zeros(0, np.int64)
-        k = k[k >= 0]
-        if len(k) and not cut[k].all():
-            cut[k] = True
-            changed = True
-        elif _split_faces(i.faces, E, cut, A, cen):   # a sphere: split along its neck
-            changed = True
-        else:
-            frozen[i.faces] = True
-    if disks:
-        cm = chart_maps(V, disks)
-        for j, i in enumerate(disks):
-            ok = (np.isfinite(cm.max_distortion[j]) and cm.max_stretch[j] <= S * MARGIN
-                  and cm.crossings[j] == 0)
-            if ok or len(i.faces) < 2:
-                frozen[i.faces] = True
-            elif _split_faces(i.faces, E, cut, A, cen):
+    for c in chs:
+        if c.kind == "open":                # handles, or several boundary loops
+            w = lambda pairs, _v=c.vertices: _edge_weight(E, _v[pairs], n)
+            g = cut_graph(c.tris, len(c.vertices), w)
+            k = E.keys(c.vertices[g], n) if len(g) else np.zeros(0, np.int64)
+            k = k[k >= 0]
+            if len(k) and not cut[k].all():
+                cut[k] = True
+                changed = True
+                continue
+        if c.kind in ("open", "sphere"):    # a sphere: split along its neck
+            if _split_faces(c.faces, E, cut, A, cen):
                 changed = True
             else:
-                frozen[i.faces] = True
+                frozen[c.faces] = True
+    disks = [c for c in chs if c.kind == "disk"]
+    if disks:
+        cm = chart_maps(V, disks)
+        for j, c in enumerate(disks):
+            ok = (np.isfinite(cm.max_distortion[j]) and cm.max_stretch[j] <= S * MARGIN
+                  and cm.crossings[j] == 0)
+            if ok or len(c.faces) < 2:
+                frozen[c.faces] = True
+            elif _split_faces(c.faces, E, cut, A, cen):
+                changed = True
+            else:
+                frozen[c.faces] = True
     return changed
-
-
-class _Chart:
-    """An island of a face subset, with its faces as input face ids."""
-
-    def __init__(self, island, faces, voc):
-        self.faces = faces
-        self.vertices, self.tris, self.loops = voc[island.vertices], island.tris, island.loops
-        self.error = island.error
 
 
 def _edge_weight(E, pairs, n):
@@ -195,20 +186,20 @@ def _split_faces(faces, E, cut, A, cen):
     return len(new) > 0
 
 
-def _merge(V, F, E, cut, original, C, S, n, rounds=MERGE_ROUNDS):
+def _merge(V, F, E, cut, original, invalid, S, rounds=MERGE_ROUNDS):
     """Merge neighbouring charts pairwise while the union's conformal map still passes.
 
     Each round tests a matching of neighbouring pairs (longest shared seam first) in one
-    batched solve; pairs that fail are not tried again while both charts stay as they are.
+    batched solve; a pair that fails is not tried again while both charts stay as they are.
     """
     tried = set()
     for _ in range(rounds):
-        isl = islands(V, F, E.ends[cut])
+        chs = charts(F, E, cut)
         label = np.empty(len(F), dtype=np.int64)
-        for i in isl:
-            label[i.faces] = i.index
-        ident = [(int(i.faces[0]), len(i.faces)) for i in isl]
-        good = np.array([i.error is None and len(i.loops) == 1 for i in isl])
+        for j, c in enumerate(chs):
+            label[c.faces] = j
+        ident = [(int(c.faces[0]), len(c.faces)) for c in chs]
+        good = np.array([c.kind == "disk" and not invalid[c.faces[0]] for c in chs])
         inner = (E.faces[:, 1] >= 0) & cut & ~original
         la, lb = label[E.faces[inner, 0]], label[E.faces[inner, 1]]
         diff = (la != lb) & good[la] & good[lb]
@@ -216,48 +207,55 @@ def _merge(V, F, E, cut, original, C, S, n, rounds=MERGE_ROUNDS):
             return
         ei = np.flatnonzero(inner)[diff]
         la, lb = np.minimum(la[diff], lb[diff]), np.maximum(la[diff], lb[diff])
-        key = la * len(isl) + lb
-        uk, inv = np.unique(key, return_inverse=True)
-        shared = np.bincount(inv.ravel(), E.length[ei])
-        # Greedy matching: longest shared seam first, each chart in at most one pair.
-        order = np.argsort(-shared)
-        used = np.zeros(len(isl), dtype=bool)
-        chosen = []
-        for p in order:
-            x, y = divmod(int(uk[p]), len(isl))
-            if not used[x] and not used[y] and (ident[x], ident[y]) not in tried:
-                used[x] = used[y] = True
-                chosen.append(p)
-                tried.add((ident[x], ident[y]))
-        if not chosen:
-            return
-        trial = cut.copy()
-        pick = np.isin(inv.ravel(), chosen)
-        trial[ei[pick]] = False
-        tis = islands(V, F, E.ends[trial])
-        tlabel = np.empty(len(F), dtype=np.int64)
-        for i in tis:
-            tlabel[i.faces] = i.index
-        cand = [tis[tlabel[i.faces[0]]] for i in isl if used[i.index]]
-        cand = list({c.index: c for c in cand}.values())
-        disks = [c for c in cand if c.error is None and len(c.loops) == 1]
-        if not disks:
-            continue
-        cm = chart_maps(V, disks)
-        ok = np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN) & (cm.crossings == 0)
-        for j, c in enumerate(disks):
-            if not ok[j]:
+        uk, inv = np.unique(la * len(chs) + lb, return_inverse=True)
+        inv = inv.ravel()
+        shared = np.bincount(inv, E.length[ei])
+        # Matchings ("layers"): longest shared seam first, each chart in at most one pair of a
+        # layer; every layer's unions are tested in one batched solve.
+        used = np.zeros((MERGE_LAYERS, len(chs)), dtype=bool)
+        layers = [[] for _ in range(MERGE_LAYERS)]
+        for p in np.argsort(-shared):
+            x, y = divmod(int(uk[p]), len(chs))
+            if (ident[x], ident[y]) in tried:
                 continue
+            free = np.flatnonzero(~used[:, x] & ~used[:, y])
+            if len(free) == 0:
+                continue
+            used[free[0], [x, y]] = True
+            layers[free[0]].append(p)
+            tried.add((ident[x], ident[y]))
+        disks = []
+        for lay, chosen in enumerate(layers):
+            if not chosen:
+                continue
+            trial = cut.copy()
+            trial[ei[np.isin(inv, chosen)]] = False
+            faces = np.flatnonzero(used[lay][label])
+            disks += [(c, trial) for c in charts(F, E, trial, faces)
+                      if c.kind == "disk" and len(np.unique(label[c.faces])) == 2]
+        if not disks:
+            if not any(layers):
+                return
+            continue
+        cm = chart_maps(V, [c for c, _ in disks])
+        ok = np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN) & (cm.crossings == 0)
+        merged = np.zeros(len(chs), dtype=bool)
+        # Accept passing unions, longest shared seam first, each chart merged once per round.
+        gain = [E.length[np.unique(E.face_edges[c.faces].ravel())][
+            (cut & ~t)[np.unique(E.face_edges[c.faces].ravel())]].sum() for c, t in disks]
+        for j in np.argsort(-np.asarray(gain)):
+            c, trial = disks[j]
+            two = np.unique(label[c.faces])
+            if not ok[j] or merged[two].any():
+                continue
+            merged[two] = True
             fe = np.unique(E.face_edges[c.faces].ravel())
-            both = (E.faces[fe, 1] >= 0)
-            f0, f1 = E.faces[fe, 0], E.faces[fe, 1]
-            inside = both & (tlabel[f0] == c.index) & (tlabel[np.where(both, f1, 0)] == c.index)
-            cut[fe[inside & cut[fe] & ~trial[fe]]] = False
+            cut[fe[cut[fe] & ~trial[fe]]] = False
 
 
-def _measure(V, F, result, seams):
+def _measure(V, F, E, cut, result):
     """Per island of a result: max stretch and boundary self-crossings from its final UVs."""
-    isl = islands(V, F, seams)
+    isl = {int(c.faces[0]): c for c in charts(F, E, cut)}
     rs = [r for r in result.islands if r.uv is not None and r.status == "certified"]
     st = np.full(len(result.islands), np.nan)
     cr = np.zeros(len(result.islands), dtype=np.int64)
@@ -283,7 +281,8 @@ def _measure(V, F, result, seams):
     idx = np.array([r.index for r in rs])
     st[idx] = np.maximum.reduceat(fs, foff[:-1])
     z = uv[:, 0] + 1j * uv[:, 1]
-    cr[idx] = boundary_crossings(z, [isl[r.index].loops[0] + voff[j] for j, r in enumerate(rs)])
+    cr[idx] = boundary_crossings(z, [_loop(isl.get(int(r.faces.min())), r) + voff[j]
+                                     for j, r in enumerate(rs)])
     return st.tolist(), cr.tolist()
 
 
@@ -304,33 +303,13 @@ def _splice(result, part, sub, voc, m):
     return UnwrapResult(corner_uv, face_island, isl, result.seconds + part.seconds, result.method)
 
 
-def cut_mesh(F, E, cut):
-    """The mesh cut open along the seams: a face subset of it keeps the charts' own topology.
 
-    Parameters
-    ----------
-    F : (m,3) int64
-    E : EdgeTable
-    cut : (e,) bool, the seams
-
-    Returns
-    -------
-    Fc : (m,3) int64, faces in cut vertex ids (corners glued across uncut interior edges only)
-    voc : (nc,) int64, the input vertex of each cut vertex
-    """
-    m = len(F)
-    join = (E.faces[:, 1] >= 0) & ~cut
-    f0, f1 = E.faces[join, 0], E.faces[join, 1]
-    rows, cols = [], []
-    for end in (0, 1):
-        v = E.ends[join, end]
-        c0 = f0 * 3 + np.argmax(F[f0] == v[:, None], axis=1)
-        c1 = f1 * 3 + np.argmax(F[f1] == v[:, None], axis=1)
-        rows.append(c0)
-        cols.append(c1)
-    rows, cols = np.concatenate(rows), np.concatenate(cols)
-    g = sp.coo_array((np.ones(len(rows)), (rows, cols)), shape=(3 * m, 3 * m))
-    _, corner = connected_components(g, directed=False)
-    voc = np.empty(corner.max() + 1, dtype=np.int64)
-    voc[corner] = F.ravel()
-    return corner.reshape(m, 3).astype(np.int64), voc
+def _loop(chart, r):
+    """The boundary loop of ``chart`` in the vertex ids of the unwrap result ``r`` (same chart)."""
+    if chart is None or not chart.loops or len(chart.faces) != len(r.faces):
+        return np.zeros(0, dtype=np.int64)
+    # Same faces, vertices numbered differently: map chart vertex -> result vertex by corner.
+    pos = np.searchsorted(chart.faces, r.faces)
+    ids = np.full(len(chart.vertices), -1, dtype=np.int64)
+    ids[chart.tris[pos].ravel()] = r.tris.ravel()
+    return ids[chart.loops[0]]
