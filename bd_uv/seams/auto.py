@@ -31,7 +31,7 @@ MARGIN = 0.98
 # Passes that split charts the certified map leaves beyond S.
 FINISH_ROUNDS = 4
 # Rounds of pairwise merging (each merges a matching of neighbouring charts).
-MERGE_ROUNDS = 40
+MERGE_ROUNDS = 15
 # Matchings of neighbouring chart pairs tested together in one merging round.
 MERGE_LAYERS = 1
 
@@ -186,14 +186,14 @@ def _split_faces(faces, E, cut, A, cen):
     return len(new) > 0
 
 
-def _merge(V, F, E, cut, original, invalid, S, rounds=MERGE_ROUNDS):
+def _merge(V, F, E, cut, original, invalid, S, rounds=None):
     """Merge neighbouring charts pairwise while the union's conformal map still passes.
 
     Each round tests a matching of neighbouring pairs (longest shared seam first) in one
     batched solve; a pair that fails is not tried again while both charts stay as they are.
     """
     tried = set()
-    for _ in range(rounds):
+    for _ in range(MERGE_ROUNDS if rounds is None else rounds):
         chs = charts(F, E, cut)
         label = np.empty(len(F), dtype=np.int64)
         for j, c in enumerate(chs):

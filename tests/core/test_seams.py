@@ -183,3 +183,22 @@ def test_bad_options():
         unwrap_auto(V, F, bound=0.5)
     with pytest.raises(ValueError):
         unwrap_auto(V, F, stretch=0.9)
+
+
+def test_cli_and_batch_seams_auto(tmp_path):
+    """``--seams auto`` on ``unwrap`` and ``batch``: a closed torus comes out certified."""
+    from bd_uv.cli import main
+    V, F, _, _ = torus(nu=24, nv=10)
+    src = tmp_path / "torus.obj"
+    bd_uv.write_obj(str(src), V, F)
+    out = tmp_path / "torus-uv.obj"
+    assert main(["unwrap", str(src), "-o", str(out), "--seams", "auto", "--bound", "2",
+                 "--stretch", "2"]) == 0
+    mesh = bd_uv.load_mesh(str(out))
+    assert mesh.corner_uv is not None and np.all(np.isfinite(mesh.corner_uv))
+    D = bd_uv.conformal_distortion(mesh.V, mesh.F, mesh.corner_uv)
+    assert np.max(D) <= 2 * (1 + 1e-4)           # the OBJ stores UVs rounded to text
+    assert main(["unwrap", str(src), "-o", str(out), "--seams", "auto", "--bound", "auto"]) == 2
+    assert main(["batch", str(src), "-o", str(tmp_path / "b"), "--seams", "auto", "--bound", "2",
+                 "--jobs", "1"]) == 0
+    assert main(["unwrap", str(src), "-o", str(out), "--bound", "2"]) == 1   # closed: refused
