@@ -13,7 +13,8 @@ import time
 
 import numpy as np
 
-from ..errors import ClosedIslandError, InfeasibleError, SolverError, TopologyError
+from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, SolverError,
+                      TopologyError)
 from ..geometry import face_areas
 from ..metrics import face_jacobians
 from ..mesh import check_arrays, islands
@@ -53,6 +54,10 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     method, frames, cone, progress, cancel : as for ``bd_uv.unwrap``, which certifies the charts
         (with ``raise_bound=False``: a chart that cannot be certified at C is split further)
 
+    Raises
+    ------
+    ValueError for a bound or stretch below 1, CancelledError when cancelled
+
     Returns
     -------
     result : UnwrapResult, one island per chart
@@ -88,6 +93,10 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     invalid = frozen.copy()
     rounds = 0
     for rounds in range(1, MAX_ROUNDS + 1):
+        if cancel is not None and cancel.is_set():
+            raise CancelledError("cancelled while placing seams")
+        if progress is not None:
+            progress(0.0, f"seams: round {rounds}, {int(frozen.sum())}/{m} faces in charts")
         changed = _refine(V, F, E, cut, frozen, A, cen, C, S, n)
         if not changed:
             break
@@ -241,15 +250,15 @@ def _merge(V, F, E, cut, original, invalid, S, rounds=None):
         ok = np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN) & (cm.crossings == 0)
         merged = np.zeros(len(chs), dtype=bool)
         # Accept passing unions, longest shared seam first, each chart merged once per round.
-        gain = [E.length[np.unique(E.face_edges[c.faces].ravel())][
-            (cut & ~t)[np.unique(E.face_edges[c.faces].ravel())]].sum() for c, t in disks]
-        for j in np.argsort(-np.asarray(gain)):
+        fes = [np.unique(E.face_edges[c.faces].ravel()) for c, _ in disks]
+        gain = np.array([E.length[fe[cut[fe] & ~t[fe]]].sum() for fe, (_, t) in zip(fes, disks)])
+        for j in np.argsort(-gain):
             c, trial = disks[j]
             two = np.unique(label[c.faces])
             if not ok[j] or merged[two].any():
                 continue
             merged[two] = True
-            fe = np.unique(E.face_edges[c.faces].ravel())
+            fe = fes[j]
             cut[fe[cut[fe] & ~trial[fe]]] = False
 
 
