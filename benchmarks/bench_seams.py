@@ -203,7 +203,8 @@ def _crossings(p, q, owner):
     i, j = pairs[:, 0], pairs[:, 1]
 
     def orient(o_, s, t):
-        return (s[:, 0] - o_[:, 0]) * (t[:, 1] - o_[:, 1]) - (s[:, 1] - o_[:, 1]) * (t[:, 0] - o_[:, 0])
+        return ((s[:, 0] - o_[:, 0]) * (t[:, 1] - o_[:, 1])
+                - (s[:, 1] - o_[:, 1]) * (t[:, 0] - o_[:, 0]))
     d1, d2 = orient(p[j], q[j], p[i]), orient(p[j], q[j], q[i])
     d3, d4 = orient(p[i], q[i], p[j]), orient(p[i], q[i], q[j])
     return int(np.count_nonzero((d1 * d2 < 0) & (d3 * d4 < 0)))
@@ -233,13 +234,14 @@ def main(argv=None):
             try:
                 uv, secs, note = fn()
                 charts, seam, total, mst, cross, st = chart_stats(V, F, uv)
-                rows[name, method] = dict(charts=charts, seam=seam, secs=secs, mean=st.mean_distortion,
-                                          flips=st.flips, note=note)
+                rows[name, method] = dict(charts=charts, seam=seam, secs=secs,
+                                          mean=st.mean_distortion, flips=st.flips, note=note)
                 line = (f"| {name} | {len(F)} | {method} | {charts} | {seam:.4g} | "
                         f"{100 * seam / total:.2f}% | {secs:.2f} | {st.max_distortion:.3f} | "
                         f"{st.mean_distortion:.4f} | {st.flips} | {mst:.3f} | {cross} | {note} |")
             except Exception as exc:  # one method failing never stops the run
-                line = f"| {name} | {len(F)} | {method} | | | | | | | | | | {type(exc).__name__}: {exc} |"
+                line = (f"| {name} | {len(F)} | {method} | | | | | | | | | | "
+                        f"{type(exc).__name__}: {exc} |")
             print(line, flush=True)
             lines.append(line)
     lines += ["", "| mesh | certified, 0 flips, mean <= 1.10 | charts <= xatlas | charts <= smart/3 "
@@ -250,8 +252,9 @@ def main(argv=None):
         if not (bd and xa and sm):
             continue
         yes = lambda c: "yes" if c else "**no**"
+        good = bd["note"] == "certified" and bd["flips"] == 0 and bd["mean"] <= 1.10
         lines.append(
-            f"| {name} | {yes(bd['note'] == 'certified' and bd['flips'] == 0 and bd['mean'] <= 1.10)}"
+            f"| {name} | {yes(good)}"
             f" | {yes(bd['charts'] <= xa['charts'])} ({bd['charts']} vs {xa['charts']})"
             f" | {yes(3 * bd['charts'] <= sm['charts'])} ({bd['charts']} vs {sm['charts']})"
             f" | {yes(bd['seam'] <= xa['seam'])} ({bd['seam']:.4g} vs {xa['seam']:.4g})"
