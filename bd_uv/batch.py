@@ -10,9 +10,12 @@ The unit of parallel work is a file, not an island: a file is read, solved and w
 (no mesh or UV arrays travel between processes, only the small report entry), the split into islands
 stays the core's own, and an asset folder has more files than a machine has cores. Files are handed
 out largest first so one big mesh does not end up last.
+
+Where the files run (a local process pool, or Dask distributed), the per-file limits, the report
+on disk while the batch runs, ``--resume`` and the atomic writes of the outputs live in
+``bd_uv.scheduling``; this module is what one file's job is, and the command line.
 """
 import argparse
-import concurrent.futures as cf
 import importlib.util
 import json
 import os
@@ -29,12 +32,15 @@ from .cli import add_solver_options, solver_kwargs
 from .errors import BDError
 from .geometry import face_areas
 from .meshio import load_mesh, write_obj
+from .scheduling.atomic import atomic_path, remove_stale
 from .unwrapping import unwrap
 
 MESH_SUFFIXES = (".obj", ".off", ".ply")
 BLEND_SUFFIX = ".blend"
-SCRIPT = os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts",
-                      "bd_uv_batch.py")
+# The Blender script of the extension: next to bd_uv/ in a clone or an installed extension; a pip
+# install of bd-uv has only the core, so .blend files there need BD_UV_BLENDER_SCRIPT.
+SCRIPT = os.environ.get("BD_UV_BLENDER_SCRIPT") or os.path.join(
+    os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "scripts", "bd_uv_batch.py")
 
 
 @dataclass(frozen=True)
@@ -159,7 +165,9 @@ def entry_png(path, entry, corner_uv, distortion, options):
     """
     from .render import uv_layout_png
     entry["png"] = os.path.abspath(path)
-    uv_layout_png(path, corner_uv, distortion, entry["bound_certified"], caption(entry, options))
+    with atomic_path(path) as tmp:
+        uv_layout_png(tmp, corner_uv, distortion, entry["bound_certified"],
+                      caption(entry, options))
 
 
 def caption(entry, options):
@@ -207,7 +215,8 @@ def _unwrap_file(task, options, seams_mode):
         entry = {**base, **result.entry}
         if entry["status"] != "failed":
             uv, F_uv = result.result.vertex_uv()
-            write_obj(task.output, mesh.V, mesh.F, uv, F_uv)
+            with atomic_path(task.output) as tmp:
+                write_obj(tmp, mesh.V, mesh.F, uv, F_uv)
             entry["output"] = os.path.abspath(task.output)
         return [entry]
     except Exception as exc:  # one bad file never stops the rest: everything goes in its entry
@@ -225,6 +234,10 @@ def _unwrap_blend(task, options, base):
         raise BDError(f"{task.path}: reading .blend files needs the bpy module "
                       "(pip install bpy) or Blender itself: blender -b FILE --python "
                       "scripts/bd_uv_batch.py -- ...")
+    if not os.path.isfile(SCRIPT):
+        raise BDError(f"{task.path}: reading .blend files needs the extension's "
+                      f"scripts/bd_uv_batch.py, not found at {SCRIPT}: set "
+                      "BD_UV_BLENDER_SCRIPT to it (a pip-installed bd-uv has only the core)")
     with tempfile.TemporaryDirectory() as tmp:
         report = os.path.join(tmp, "report.json")
         cmd = [sys.executable, SCRIPT, task.path, "--", "--output", task.output,
@@ -259,14 +272,16 @@ def _script_options(options):
 def input_files(paths):
     """Expand folders (not recursively) into their OBJ/OFF/PLY/.blend files, sorted by name.
 
-    Files named explicitly are kept whatever their suffix (they fail in the report if unreadable).
+    Files named explicitly are kept whatever their suffix (they fail in the report if unreadable);
+    hidden files (such as an unfinished output's temporary name) are not taken from folders.
     """
     suffixes = MESH_SUFFIXES + (BLEND_SUFFIX,)
     files = []
     for p in paths:
         if os.path.isdir(p):
             files += sorted(os.path.join(p, f) for f in os.listdir(p)
-                            if f.lower().endswith(suffixes) and os.path.isfile(os.path.join(p, f)))
+                            if f.lower().endswith(suffixes) and not f.startswith(".")
+                            and os.path.isfile(os.path.join(p, f)))
         else:
             files.append(p)
     return files
@@ -288,51 +303,47 @@ def plan(files, out_dir, png_dir=None):
     return tasks
 
 
-def run_tasks(tasks, options, seams_mode=None, jobs=1, on_done=None):
-    """Run every task, in ``jobs`` worker processes (in this process when 1).
+def run_tasks(tasks, options, seams_mode=None, jobs=1, on_done=None, scheduler=None,
+              limits=None, retries=2, order=None, on_start=None):
+    """Run every task: in a local pool of ``jobs`` processes (in this process when 1), or on a
+    Dask cluster when ``scheduler`` is given (an address, or "local" for a LocalCluster of
+    ``jobs`` workers). Files are handed out largest first.
 
-    A worker that dies (crash, out of memory) breaks the pool; the tasks it took down are run
-    again one per fresh process, so only the file that kills its worker fails.
+    A worker that dies (crash, out of memory) has its file run again on another worker up to
+    ``retries`` times; then the file fails (``WorkerCrashed``) and the batch goes on.
+
+    Parameters
+    ----------
+    on_done : callable(i, entries, attempts), as each file finishes, in this process
+    limits : scheduling.FileLimits, per-file time and memory limits, or None
+    order : indices of ``tasks`` to run, or None for all (largest first either way)
 
     Returns
     -------
-    entries : list of list of dict, per task (in task order)
+    entries : list of list of dict, per task (in task order; None for tasks not run)
     """
+    from .scheduling import run_pool
     results = [None] * len(tasks)
 
-    def done(i, entries):
+    def done(i, entries, attempts):
+        if attempts > 1:
+            for e in entries:
+                e["attempts"] = attempts
         results[i] = entries
         if on_done is not None:
-            on_done(i, entries)
+            on_done(i, entries, attempts)
 
-    if jobs <= 1:
-        for i, t in enumerate(tasks):
-            done(i, _unwrap_file(t, options, seams_mode))
-        return results
-    order = sorted(range(len(tasks)), key=lambda i: -_size(tasks[i].path))
-    retry = _run_pool(tasks, order, options, seams_mode, jobs, done)
-    for i in retry:  # isolate: one process per task, so a crash takes down only its own file
-        if _run_pool(tasks, [i], options, seams_mode, 1, done):
-            done(i, [_crashed_entry(tasks[i])])
+    order = range(len(tasks)) if order is None else order
+    order = sorted(order, key=lambda i: -_size(tasks[i].path))
+    if scheduler:
+        from .scheduling.cluster import run_dask
+        run_dask(tasks, order, options, seams_mode, scheduler, jobs, done, limits, retries,
+                 on_start=on_start)
+    else:
+        if on_start is not None:
+            on_start(jobs)
+        run_pool(tasks, order, options, seams_mode, jobs, done, limits, retries)
     return results
-
-
-def _run_pool(tasks, order, options, seams_mode, jobs, done):
-    """Submit ``order`` to a pool of ``jobs`` processes; returns the indices lost to a crash."""
-    lost = []
-    with cf.ProcessPoolExecutor(max_workers=min(jobs, len(order))) as pool:
-        futures = {pool.submit(_unwrap_file, tasks[i], options, seams_mode): i for i in order}
-        try:
-            for fut in cf.as_completed(futures):
-                i = futures[fut]
-                try:
-                    done(i, fut.result())
-                except cf.process.BrokenProcessPool:
-                    lost.append(i)
-        except BaseException:
-            pool.shutdown(wait=False, cancel_futures=True)
-            raise
-    return sorted(lost)
 
 
 def _size(path):
@@ -340,14 +351,6 @@ def _size(path):
         return os.path.getsize(path)
     except OSError:
         return 0
-
-
-def _crashed_entry(task):
-    return failed_entry(os.path.splitext(os.path.basename(task.path))[0], "WorkerCrashed",
-                        f"{task.path}: the worker process died while unwrapping it (a crash, "
-                        "or killed for running out of memory)",
-                        input=os.path.abspath(task.path), object=None, output=None)
-
 
 # ---- command line ------------------------------------------------------------------------------
 
@@ -366,11 +369,59 @@ def add_batch_parser(subparsers):
                    help="uv: cut where an OBJ's UVs are discontinuous (default when it has vt); "
                         "none: islands are the mesh's components; auto: add seams where needed")
     p.add_argument("--jobs", type=_positive_int, default=os.cpu_count() or 1,
-                   help="worker processes, one file each (default: the number of cores)")
+                   help="worker processes, one file each (default: the number of cores); with "
+                        "--scheduler local, the LocalCluster's workers")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run on Dask distributed: a scheduler address (tcp://host:8786), or "
+                        "'local' to start a LocalCluster of --jobs workers (needs the cluster "
+                        "extra); default: a local process pool")
+    p.add_argument("--resume", action="store_true",
+                   help="keep the files the report (and its journal) already certifies for the "
+                        "same input content and options, with their outputs unchanged; run the "
+                        "rest")
+    p.add_argument("--file-timeout", type=_positive_float, metavar="SECONDS",
+                   help="fail a file that takes longer than this (it runs in a child process "
+                        "that is killed); the batch goes on")
+    p.add_argument("--memory-limit", type=_memory, metavar="SIZE",
+                   help="fail a file whose process uses more resident memory than this "
+                        "(e.g. 4GB, 800MB)")
+    p.add_argument("--retries", type=_non_negative_int, default=2,
+                   help="times a file is run again after its worker died (default 2; a remote "
+                        "scheduler keeps its own allowed-failures)")
     p.add_argument("--report", help="JSON report path (default OUT_DIR/report.json)")
     p.add_argument("--png", metavar="DIR", help="write a picture of each UV layout into DIR")
     p.set_defaults(func=run_batch)
     return p
+
+
+def _positive_float(text):
+    try:
+        value = float(text)
+    except ValueError:
+        value = 0.0
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be a number > 0, not {text!r}")
+    return value
+
+
+def _non_negative_int(text):
+    if not text.isdigit():
+        raise argparse.ArgumentTypeError(f"must be a whole number >= 0, not {text!r}")
+    return int(text)
+
+
+def _memory(text):
+    """``4GB``, ``800MB``, ``512M``, ``2e9`` (bytes) -> bytes."""
+    units = {"": 1, "K": 2**10, "M": 2**20, "G": 2**30, "T": 2**40}
+    t = text.strip().upper().removesuffix("IB").removesuffix("B")
+    unit = t[-1] if t and t[-1] in units else ""
+    try:
+        value = float(t[:-1] if unit else t) * units[unit]
+    except ValueError:
+        value = 0
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be a size such as 4GB or 800MB, not {text!r}")
+    return int(value)
 
 
 def _positive_int(text):
@@ -385,6 +436,7 @@ def _positive_int(text):
 
 def run_batch(args):
     """``python -m bd_uv batch``: returns the exit code (0: all certified, 1: some failed)."""
+    from .scheduling import FileLimits, Ledger, Progress, options_sha256, read_previous, reusable
     files = input_files(args.inputs)
     if not files:
         print(f"error: no .obj/.off/.ply/.blend files in {' '.join(args.inputs)}",
@@ -401,52 +453,99 @@ def run_batch(args):
             return 2
         options["auto_stretch"] = args.stretch
     report_path = args.report or os.path.join(args.output, "report.json")
-    progress = Progress(len(tasks))
     collisions = [t for t in tasks if os.path.abspath(t.output) == os.path.abspath(t.path)]
     if collisions:
         print(f"error: {collisions[0].output} would overwrite its input; choose another -o",
               file=sys.stderr)
         return 2
+    limits = FileLimits(args.file_timeout, args.memory_limit)
+    if limits and not hasattr(os, "fork"):
+        print("error: --file-timeout and --memory-limit need os.fork (Linux, macOS)",
+              file=sys.stderr)
+        return 2
 
-    results = [None] * len(tasks)
-
-    def on_done(i, entries):
-        results[i] = entries
-        progress.advance("\n".join(item_line(e) for e in entries))
-
+    results = [None] * len(tasks)   # per task: its entries, once finished (or carried over)
+    carried = set()
+    if args.resume:  # a killed run may have left temporary files; its journal lists the rest
+        for folder in {args.output, args.png} - {None}:
+            remove_stale(folder)
+        previous = read_previous(report_path)
+        key = options_sha256(options, args.seams)
+        for i, t in enumerate(tasks):
+            entries = previous.get(os.path.abspath(t.path))
+            if reusable(t, entries, key):
+                results[i] = entries
+                carried.add(i)
+    todo = [i for i in range(len(tasks)) if i not in carried]
+    setup = {"scheduler": args.scheduler or "pool", "jobs": args.jobs}
     t0 = time.perf_counter()
     interrupted = False
+
+    def build(final=False):
+        items = [e for entries in results if entries for e in entries]
+        return batch_report(items, options, time.perf_counter() - t0, files=files,
+                            interrupted=interrupted, running=not final,
+                            resumed=[results[i] for i in sorted(carried)], **setup)
+
+    ledger = Ledger(report_path, build)
+    ledger.start([(os.path.abspath(tasks[i].path), results[i]) for i in sorted(carried)])
+    progress = Progress(len(todo), weight=sum(_size(tasks[i].path) for i in todo))
+
+    def on_done(i, entries, attempts):
+        results[i] = entries
+        ledger.record(os.path.abspath(tasks[i].path), entries)
+        progress.advance("\n".join(item_line(e) for e in entries),
+                         [e["status"] for e in entries], _size(tasks[i].path))
+
+    def on_start(workers):
+        setup["jobs"] = workers
+
+    if carried:
+        print(f"--resume: {len(carried)} file(s) already certified with these options, "
+              f"{len(todo)} to run")
     try:
-        run_tasks(tasks, options, args.seams, jobs=args.jobs, on_done=on_done)
+        run_tasks(tasks, options, args.seams, jobs=args.jobs, on_done=on_done,
+                  scheduler=args.scheduler, limits=limits, retries=args.retries, order=todo,
+                  on_start=on_start)
     except KeyboardInterrupt:  # keep what is done: its outputs are written, the report says so
         interrupted = True
-    wall = time.perf_counter() - t0
-    items = [e for entries in results if entries for e in entries]
-    report = batch_report(items, options, wall, jobs=args.jobs, files=files,
-                          interrupted=interrupted)
-    os.makedirs(os.path.dirname(os.path.abspath(report_path)), exist_ok=True)
-    with open(report_path, "w", encoding="utf-8") as fh:
-        json.dump(report, fh, indent=2)
+    report = build(final=True)
+    ledger.finish(report)
     progress.close()
     s = report["summary"]
     print(f"{s['files']} file(s), {s['meshes']} mesh(es): {s['certified']} certified, "
           f"{s['partial']} partial, {s['failed']} failed"
           + (f", {s['not_run']} not run (interrupted)" if interrupted else "")
-          + f"; {wall:.1f} s with {args.jobs} job(s); report: {report_path}")
+          + (f", {s['resumed']} file(s) kept from the earlier run" if carried else "")
+          + f"; {s['seconds']:.1f} s on {s['jobs']} {setup['scheduler']} worker(s): "
+          f"{s['files_per_minute']:.1f} files/min, {s['faces_per_minute']:.0f} faces/min; "
+          f"report: {report_path}")
     if interrupted:
         return 130
     return 0 if s["certified"] == s["meshes"] and s["meshes"] > 0 else 1
 
 
-def batch_report(items, options, wall, jobs, files, interrupted=False):
-    """The JSON report: options, a summary and one entry per mesh (file or .blend object)."""
+def batch_report(items, options, wall, jobs, files, interrupted=False, running=False,
+                 resumed=(), scheduler="pool"):
+    """The JSON report: options, a summary and one entry per mesh (file or .blend object).
+
+    ``resumed`` are the entry lists of the files kept from an earlier run by ``--resume``; the
+    throughput (files and faces per minute of ``wall``) counts only the files run this time.
+    """
     from . import __version__
     count = {k: sum(e["status"] == k for e in items) for k in ("certified", "partial", "failed")}
     seen = {e["input"] for e in items}
+    kept = {id(e) for entries in resumed for e in entries}
+    ran = [e for e in items if id(e) not in kept]
+    minutes = max(wall, 1e-9) / 60.0
     return {"tool": "bd_uv batch", "version": __version__, "options": options,
             "summary": {"files": len(files), "meshes": len(items), **count,
                         "not_run": sum(os.path.abspath(f) not in seen for f in files),
-                        "seconds": round(wall, 3), "jobs": jobs, "interrupted": interrupted},
+                        "resumed": len(resumed), "seconds": round(wall, 3),
+                        "files_per_minute": round(len({e["input"] for e in ran}) / minutes, 2),
+                        "faces_per_minute": round(sum(e["faces"] or 0 for e in ran) / minutes),
+                        "scheduler": scheduler, "jobs": jobs, "interrupted": interrupted,
+                        "running": running},
             "items": items}
 
 
@@ -463,40 +562,8 @@ def item_line(e):
                  f"{e['mean_distortion']:.3f}, {e['flipped']} flipped")
     if e["seconds"] is not None:
         head += f", {e['seconds']:.2f} s"
+    if e.get("attempts", 1) > 1:
+        head += f" (attempt {e['attempts']})"
     if e["status"] != "certified":
         head += f" -- {e['error']}: {e['message']}"
     return head
-
-
-class Progress:
-    """Per-mesh lines on stdout and, when stderr is a terminal, a progress bar below them."""
-
-    def __init__(self, total, out=None, err=None, bar=None):
-        self.total, self.done = total, 0
-        self.out, self.err = out or sys.stdout, err or sys.stderr
-        self.bar = self.err.isatty() if bar is None else bar
-        self.t0 = time.perf_counter()
-        self._draw()
-
-    def advance(self, lines):
-        self.done += 1
-        self._clear()
-        width = len(str(self.total))
-        for line in lines.splitlines():
-            print(f"[{self.done:>{width}}/{self.total}] {line}", file=self.out, flush=True)
-        self._draw()
-
-    def close(self):
-        self._clear()
-
-    def _clear(self):
-        if self.bar:
-            self.err.write("\r\033[K")
-            self.err.flush()
-
-    def _draw(self):
-        if self.bar:
-            n = int(30 * self.done / max(self.total, 1))
-            self.err.write(f"[{'#' * n}{'.' * (30 - n)}] {self.done}/{self.total} files, "
-                           f"{time.perf_counter() - self.t0:.0f} s")
-            self.err.flush()

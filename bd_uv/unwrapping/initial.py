@@ -2,7 +2,8 @@
 
 The result inherits the start: a start that already fits the bound is returned as it is, and a
 start that does not is bent only where the bound demands. So the start is the best map we can get
-cheaply: the free-boundary conformal map (LSCM) when it has no flipped face; else a flip-free map.
+cheaply: the free-boundary conformal map (LSCM), flipped faces and all (projection iterations
+untangle them, see ``strategies.bend``); the harmonic map when asked for, or when bending stalls.
 """
 from dataclasses import dataclass
 
@@ -77,10 +78,8 @@ def start_map(prob, frames, initial_uv, report, lscm=None):
             report(0.02, "conformal initial map")
             pins = (prob.pin_idx, prob.pin_val) if npins >= 2 else None
             lscm = lscm_map(prob.Z, isl.tris, prob.nv, isl.loops, pins)
-        u = place(lscm)
-        D = guaranteed(u)
-        if frames == "conformal" or np.isfinite(D):
-            return Start(u, frames_from_map(prob.alpha(u)), "conformal", D)
+        u = place(lscm)  # when it flips (D = inf), the strategies bend it or replace it
+        return Start(u, frames_from_map(prob.alpha(u)), "conformal", guaranteed(u))
     report(0.04, "harmonic initial map")
     u = place(harmonic_map(prob.Z, isl.tris, prob.nv, isl.loops))
     return Start(u, frames_from_map(prob.alpha(u)), "harmonic", guaranteed(u))

@@ -177,15 +177,16 @@ def _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_boun
     flags = []
     try:
         if bound == "auto":
-            u, C = strategies.minimise(prob, start, bound_limit, time_budget, flags, report, t0)
+            u, C, name = strategies.minimise(prob, start, bound_limit, time_budget, flags, report,
+                                             t0)
         else:
-            u, C = strategies.bounded(prob, start, float(bound), raise_bound, bound_limit, flags,
-                                      report)
+            u, C, name = strategies.bounded(prob, start, float(bound), raise_bound, bound_limit,
+                                            flags, report)
         if method == "arap" and u is not None:
             u = strategies.arap(prob, u, C, report)
     except IslandError as exc:
         return _failed(island, exc, t0, bound, start.name, flags, prob.timings)
-    return _finish(prob, u, C, bound, start.name, flags, t0)
+    return _finish(prob, u, C, bound, name, flags, t0)
 
 
 def certified_bound(max_distortion):

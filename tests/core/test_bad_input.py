@@ -21,7 +21,7 @@ from bd_uv.solvers.conic import ConicSolution
 from unwrap_contract import (DATA, assert_unchanged, distortion_and_flips, read_off, snapshot,
                              unwrap_checked)
 
-# The module that defines unwrap() (bd_uv/pipeline.py): found from the function, not by name.
+# The module that defines unwrap() (bd_uv/unwrapping/unwrap.py): found from the function, not by name.
 PIPELINE = sys.modules[bd_uv.unwrap.__module__]
 
 
@@ -681,8 +681,8 @@ def test_cancel_inside_the_clarabel_solve(monkeypatch):
     inside = 0
     for k in range(1, 7):
         outcomes.clear()
-        # C = 1.3 is below the conformal map's max distortion (1.443), so a solve runs
-        raises_unchanged(bd_uv.CancelledError, V, F, bound=1.3, cancel=CancelAfter(k))
+        # BD-Dirichlet always solves F_C with Clarabel (no projection first)
+        raises_unchanged(bd_uv.CancelledError, V, F, method="dirichlet", cancel=CancelAfter(k))
         inside += outcomes[-1:] == ["CallbackTerminated"]
     assert inside >= 1
 

@@ -8,12 +8,14 @@ import io
 import json
 import os
 import shutil
+import time
 
 import numpy as np
 import pytest
 from matplotlib.image import imread
 
 from bd_uv import batch
+from bd_uv.scheduling import Progress
 from helpers import DATA, grid, reference_distortion
 
 
@@ -69,9 +71,16 @@ def test_folder_good_files_written_bad_ones_reported_exit_1(folder, tmp_path, ca
     rep = json.loads((out / "report.json").read_text())
     items = {os.path.basename(e["input"]): e for e in rep["items"]}
     assert set(items) == {"nefertiti.off", "bump.obj", "tetra.off", "broken.ply"}
-    assert rep["summary"] | {"seconds": 0} == {
+    timing = {"seconds": 0, "files_per_minute": 0, "faces_per_minute": 0}
+    assert rep["summary"] | timing == {
         "files": 4, "meshes": 4, "certified": 2, "partial": 0, "failed": 2, "not_run": 0,
-        "seconds": 0, "jobs": 2, "interrupted": False}
+        "resumed": 0, **timing, "scheduler": "pool", "jobs": 2, "interrupted": False,
+        "running": False}
+    minutes = rep["summary"]["seconds"] / 60
+    assert rep["summary"]["files_per_minute"] == pytest.approx(4 / minutes, rel=0.01)
+    faces = sum(e["faces"] or 0 for e in rep["items"])
+    assert rep["summary"]["faces_per_minute"] == pytest.approx(faces / minutes, rel=0.01)
+    assert not (out / "report.json.journal").exists()
 
     for name, stem in (("nefertiti.off", "nefertiti"), ("bump.obj", "bump")):
         e = items[name]
@@ -187,10 +196,46 @@ def test_unwrap_job_keeps_pins_and_reports_island_errors():
 
 def test_progress_bar_on_stderr_lines_on_stdout():
     out, err = io.StringIO(), io.StringIO()
-    progress = batch.Progress(3, out=out, err=err, bar=True)
-    progress.advance("certified a")
-    progress.advance("failed b")
+    progress = Progress(3, weight=400.0, out=out, err=err, bar=True)
+    progress.advance("certified a", ["certified"], 100.0)
+    progress.advance("failed b", ["failed"], 100.0)
     progress.close()
     assert out.getvalue().splitlines() == ["[1/3] certified a", "[2/3] failed b"]
-    assert "[" + "#" * 20 + "." * 10 + "] 2/3 files" in err.getvalue()
-    assert err.getvalue().endswith("\r\033[K")
+    assert "[" + "#" * 20 + "." * 10 + "] 2/3 files, 1 certified, 1 failed" in err.getvalue()
+    assert " left" in err.getvalue() and err.getvalue().endswith("\r\033[K")
+    # half of the bytes in the elapsed time: as much time again is left
+    elapsed = progress.eta()
+    assert elapsed == pytest.approx(time.perf_counter() - progress.t0, rel=0.05, abs=0.01)
+
+
+def _slow_or_greedy(task, options, seams_mode):
+    if task.path.endswith("slow.off"):
+        time.sleep(60)
+    if task.path.endswith("greedy.off"):
+        hog = [np.ones(2**20) for _ in range(80)]            # 640 MB, held
+        time.sleep(60)
+        del hog
+    return _REAL_UNWRAP_FILE(task, options, seams_mode)
+
+
+def test_file_timeout_and_memory_limit_fail_only_their_file(tmp_path, monkeypatch):
+    """Each file runs in a child the worker watches: past --file-timeout, or above
+    --memory-limit of resident memory, the child is killed and only that file fails."""
+    monkeypatch.setattr(batch, "_unwrap_file", _slow_or_greedy)
+    src = tmp_path / "few"
+    src.mkdir()
+    for name in ("a.off", "slow.off", "greedy.off"):
+        shutil.copy(os.path.join(DATA, "nefertiti.off"), src / name)
+    out = tmp_path / "out"
+    assert run(src, "-o", out, "--jobs", "2", "--file-timeout", "3", "--memory-limit",
+               "400MB") == 1
+    items = {os.path.basename(e["input"]): e for e in
+             json.loads((out / "report.json").read_text())["items"]}
+    assert items["a.off"]["status"] == "certified" and (out / "a.obj").is_file()
+    assert items["slow.off"]["error"] == "FileTimeout"
+    assert "--file-timeout 3 s" in items["slow.off"]["message"]
+    assert items["slow.off"]["seconds"] >= 3
+    assert items["greedy.off"]["error"] == "MemoryLimit"
+    assert "--memory-limit 400 MB" in items["greedy.off"]["message"]
+    assert items["greedy.off"]["seconds"] < 3
+    assert sorted(os.listdir(out)) == ["a.obj", "report.json"]     # no temporary file left

@@ -1,0 +1,97 @@
+"""The batch on Dask distributed: ``--scheduler tcp://HOST:8786`` or ``--scheduler local``.
+
+One Dask task per file (``worker.run_file``), submitted largest first through task priorities;
+only the task (paths and options) and its report entries travel, the meshes are read and the
+outputs written by the worker, so inputs and outputs must be on paths every worker sees (a shared
+filesystem), and every worker needs bd-uv installed (``pip install bd-uv`` or the wheel), with
+the ``bpy`` module for .blend files.
+
+A worker that dies while unwrapping a file (killed, or by its nanny for exceeding the worker
+memory limit) makes the scheduler give the file to another worker; after ``retries`` such deaths
+the scheduler gives up (Dask's ``KilledWorker``) and the file is reported as ``WorkerCrashed``.
+``--scheduler local`` starts a ``LocalCluster`` of ``jobs`` one-thread worker processes with that
+retry bound; a remote scheduler keeps its own (``distributed.scheduler.allowed-failures``,
+3 by default). Dask is an optional extra: nothing else in bd-uv imports it.
+"""
+import contextlib
+import logging
+import uuid
+
+from ..errors import BDError
+from .pool import crashed_entry
+from .worker import limit_entry, run_file
+
+
+def run_dask(tasks, order, options, seams_mode, scheduler, jobs, done, limits=None,
+             retries=2, on_start=None):
+    """Run ``tasks[i]`` for ``i`` in ``order`` (first = highest priority) on a Dask cluster.
+
+    Parameters
+    ----------
+    scheduler : str, a scheduler address, or "local" for a LocalCluster of ``jobs`` workers
+    done : callable(i, entries, attempts), called in this process as each file finishes
+    on_start : callable(workers: int), called once the client is connected
+
+    Returns
+    -------
+    workers : int, the number of workers when the batch started
+    """
+    try:
+        import dask
+        from distributed import Client, LocalCluster, as_completed
+        from distributed.scheduler import KilledWorker
+    except ImportError as exc:
+        raise BDError("--scheduler needs Dask distributed: pip install 'bd-uv[cluster]' "
+                      "(or -r requirements-cluster.txt)") from exc
+    with contextlib.ExitStack() as stack:
+        stack.enter_context(dask.config.set({"distributed.scheduler.allowed-failures": retries}))
+        try:
+            if scheduler == "local":
+                cluster = stack.enter_context(LocalCluster(
+                    n_workers=jobs, threads_per_worker=1, processes=True,
+                    dashboard_address=None, silence_logs=logging.ERROR))
+                client = stack.enter_context(Client(cluster))
+            else:
+                client = stack.enter_context(Client(scheduler, timeout="30s"))
+        except (OSError, TimeoutError) as exc:
+            raise BDError(f"cannot reach the Dask scheduler {scheduler}: {exc}") from exc
+        workers = len(client.scheduler_info()["workers"])
+        if on_start is not None:
+            on_start(workers)
+        run = uuid.uuid4().hex[:12]
+        futures = {}
+        for rank, i in enumerate(order):
+            fut = client.submit(run_file, tasks[i], options, seams_mode, limits,
+                                key=f"bd-uv-{run}-{i}", priority=len(order) - rank, pure=False)
+            futures[fut] = i
+        try:
+            for fut in as_completed(list(futures)):
+                i = futures.pop(fut)
+                attempts = 1 + _deaths(client, fut.key)
+                if fut.status == "finished":
+                    entries = fut.result()
+                else:
+                    exc = fut.exception()
+                    if isinstance(exc, KilledWorker):
+                        entries = [crashed_entry(tasks[i], attempts, "Dask gave up on it")]
+                    else:
+                        entries = [limit_entry(tasks[i], type(exc).__name__,
+                                               f"{tasks[i].path}: {exc}")]
+                fut.release()
+                done(i, entries, attempts)
+        except BaseException:
+            client.cancel(list(futures))
+            raise
+    return workers
+
+
+def _deaths(client, key):
+    """How many workers died while running task ``key`` (the scheduler's ``suspicious`` count;
+    0 when the scheduler does not let us ask)."""
+    def suspicious(dask_scheduler, key):
+        ts = dask_scheduler.tasks.get(key)
+        return int(ts.suspicious) if ts is not None else 0
+    try:
+        return client.run_on_scheduler(suspicious, key=key)
+    except Exception:  # noqa: BLE001 - a scheduler that refuses remote code
+        return 0
