@@ -36,11 +36,7 @@ def fiedler_split(face_area, centroid, pairs, edge_len, edge_cost):
         return None
     d = np.linalg.norm(centroid[pairs[:, 0]] - centroid[pairs[:, 1]], axis=1)
     w = edge_len * edge_cost / np.maximum(d, 1e-12 * edge_len.mean())
-    W = sp.coo_array((np.concatenate([w, w]), (np.concatenate([pairs[:, 0], pairs[:, 1]]),
-                                               np.concatenate([pairs[:, 1], pairs[:, 0]]))),
-                     shape=(k, k)).tocsc()
-    L = (sp.diags(np.asarray(W.sum(axis=1)).ravel()) - W).tocsc()
-    x = _fiedler_vector(L, face_area, centroid)
+    x = _fiedler_vector(pairs, w, face_area, centroid)
     if x is None:
         return None
     order = np.argsort(x, kind="stable")
@@ -83,7 +79,7 @@ def fiedler_split(face_area, centroid, pairs, edge_len, edge_cost):
     return side
 
 
-def _fiedler_vector(L, mass, centroid, iters=12):
+def _fiedler_vector(pairs, w, mass, centroid, iters=12):
     """Approximate Fiedler vector of ``L x = lambda M x`` by inverse iteration.
 
     Starts from the faces' coordinate along the chart's principal axis (already a smooth
@@ -92,7 +88,7 @@ def _fiedler_vector(L, mass, centroid, iters=12):
 
     Parameters
     ----------
-    L : (k,k) sparse graph Laplacian
+    pairs : (e,2) int64, w : (e,) float64, the graph's edges and weights (Laplacian L)
     mass : (k,) float64 > 0
     centroid : (k,3) float64
 
@@ -103,10 +99,16 @@ def _fiedler_vector(L, mass, centroid, iters=12):
     c = centroid - np.average(centroid, axis=0, weights=mass)
     _, _, vt = np.linalg.svd(c * np.sqrt(mass)[:, None], full_matrices=False)
     x = c @ vt[0]
-    shift = 1e-8 * L.diagonal().mean() / mass.mean()
+    k = len(mass)
+    deg = np.bincount(pairs.ravel(), np.repeat(w, 2), minlength=k)   # pairs.ravel(): row-major
+    shift = 1e-8 * deg.mean() / mass.mean()
+    # L + shift M from triplets in one go: off-diagonal -w, diagonal degree + shift * mass.
+    idx = np.arange(k)
+    K = sp.csc_matrix((np.concatenate([-w, -w, deg + shift * mass]),
+                       (np.concatenate([pairs[:, 0], pairs[:, 1], idx]),
+                        np.concatenate([pairs[:, 1], pairs[:, 0], idx]))), shape=(k, k))
     try:
-        lu = spla.splu((L + sp.diags(shift * mass)).tocsc(), permc_spec="MMD_AT_PLUS_A",
-                       options={"SymmetricMode": True})
+        lu = spla.splu(K, permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
     except RuntimeError:
         return None
     total = mass.sum()
