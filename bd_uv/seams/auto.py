@@ -202,8 +202,8 @@ def _merge(V, F, E, cut, original, invalid, S, rounds=None):
     batched solve; a pair that fails is not tried again while both charts stay as they are.
     """
     tried = set()
+    chs = charts(F, E, cut)
     for _ in range(MERGE_ROUNDS if rounds is None else rounds):
-        chs = charts(F, E, cut)
         label = np.empty(len(F), dtype=np.int64)
         for j, c in enumerate(chs):
             label[c.faces] = j
@@ -252,6 +252,7 @@ def _merge(V, F, E, cut, original, invalid, S, rounds=None):
         # Accept passing unions, longest shared seam first, each chart merged once per round.
         fes = [np.unique(E.face_edges[c.faces].ravel()) for c, _ in disks]
         gain = np.array([E.length[fe[cut[fe] & ~t[fe]]].sum() for fe, (_, t) in zip(fes, disks)])
+        unions = []
         for j in np.argsort(-gain):
             c, trial = disks[j]
             two = np.unique(label[c.faces])
@@ -260,6 +261,11 @@ def _merge(V, F, E, cut, original, invalid, S, rounds=None):
             merged[two] = True
             fe = fes[j]
             cut[fe[cut[fe] & ~trial[fe]]] = False
+            unions.append(c)
+        # The charts after this round: the unions (as found on the trial cut, which agrees with
+        # the new cut on their faces) and every chart not merged, as they were.
+        chs = sorted([c for j, c in enumerate(chs) if not merged[j]] + unions,
+                     key=lambda ch: int(ch.faces[0]))
 
 
 def _measure(V, F, E, cut, result):
