@@ -125,7 +125,14 @@ def unwrap_job(job, options, png=None):
     try:
         if kwargs.get("frames") == "input-uv" and job.corner_uv is None:
             raise ValueError(f"{job.name} has no UVs to take frames from (--frames input-uv)")
-        res = unwrap(job.V, job.F, seams=job.seams, **kwargs)
+        stretch = kwargs.pop("auto_stretch", None)
+        if stretch is not None:     # --seams auto: the file's own seams are kept, more added
+            from .seams import unwrap_auto
+            res = unwrap_auto(job.V, job.F, seams=job.seams, bound=kwargs["bound"],
+                              stretch=stretch, method=kwargs["method"], frames=kwargs["frames"],
+                              cone=kwargs["cone"])[0]
+        else:
+            res = unwrap(job.V, job.F, seams=job.seams, **kwargs)
         layout = stored_layout(job.V, job.F, res, **layout_options)
     except Exception as exc:  # a bad mesh, or a bug: either way it stays this job's failure
         entry.update(error=type(exc).__name__, message=str(exc),
@@ -211,7 +218,7 @@ def _unwrap_file(task, options, seams_mode):
             return _unwrap_blend(task, options, base)
         mesh = load_mesh(task.path)
         seams = None
-        if seams_mode == "uv" or (seams_mode is None and mesh.corner_uv is not None):
+        if seams_mode == "uv" or (seams_mode in (None, "auto") and mesh.corner_uv is not None):
             if mesh.corner_uv is None:
                 raise BDError(f"{task.path} has no UVs, so --seams uv has nothing to cut along")
             seams = mesh.uv_seams()
@@ -371,9 +378,9 @@ def add_batch_parser(subparsers):
     p.add_argument("-o", "--output", required=True, metavar="OUT_DIR", help="output folder")
     add_solver_options(p)
     add_layout_options(p)
-    p.add_argument("--seams", choices=("uv", "none"), default=None,
+    p.add_argument("--seams", choices=("uv", "none", "auto"), default=None,
                    help="uv: cut where an OBJ's UVs are discontinuous (default when it has vt); "
-                        "none: islands are the mesh's components")
+                        "none: islands are the mesh's components; auto: add seams where needed")
     p.add_argument("--jobs", type=_positive_int, default=os.cpu_count() or 1,
                    help="worker processes, one file each (default: the number of cores); with "
                         "--scheduler local, the LocalCluster's workers")
@@ -453,6 +460,11 @@ def run_batch(args):
         os.makedirs(args.png, exist_ok=True)
     tasks = plan(files, args.output, args.png)
     options = {**solver_kwargs(args), **layout_kwargs(args)}
+    if args.seams == "auto":
+        if args.bound == "auto":
+            print("error: --seams auto needs a numeric --bound C", file=sys.stderr)
+            return 2
+        options["auto_stretch"] = args.stretch
     report_path = args.report or os.path.join(args.output, "report.json")
     collisions = [t for t in tasks if os.path.abspath(t.output) == os.path.abspath(t.path)]
     if collisions:

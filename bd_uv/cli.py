@@ -46,6 +46,9 @@ def add_solver_options(p):
                    help="space: F_C with second-order cones (default) or F_C^inf (eq. 4.22)")
     p.add_argument("--time-budget", type=float, default=120.0,
                    help="seconds per island for --bound auto (default 120)")
+    p.add_argument("--stretch", type=float, default=2.0,
+                   help="with --seams auto: every face's stretch max(sigma_1, 1/sigma_2), each "
+                        "chart at its 3D area, at most S (default 2)")
 
 
 def solver_kwargs(args):
@@ -122,8 +125,13 @@ def run_unwrap(args):
             print(f"error: --frames input-uv needs UVs in {args.input}", file=sys.stderr)
             return 2
         kwargs["initial_uv"] = mesh.corner_uv
-    res = unwrap(mesh.V, mesh.F, seams=seams, progress=ProgressBar(), overlap=args.overlap,
-                 **kwargs)
+    if args.seams == "auto":
+        res = auto_seams(mesh, args, kwargs)
+        if res is None:
+            return 2
+    else:
+        res = unwrap(mesh.V, mesh.F, seams=seams, progress=ProgressBar(), overlap=args.overlap,
+                     **kwargs)
     layout = stored_layout(mesh.V, mesh.F, res, **layout_kwargs(args))
     uv, F_uv = layout.vertex_uv(mesh.F)
     write_obj(args.output, mesh.V, mesh.F, uv, F_uv)
@@ -159,6 +167,23 @@ def core_cuts(islands):
     return {"islands": len(first), "edges": sum(first.values())}
 
 
+def auto_seams(mesh, args, kwargs):
+    """``--seams auto``: the file's UV seams (if any) kept, more added where needed."""
+    if args.bound == "auto":
+        print("error: --seams auto needs a numeric --bound C", file=sys.stderr)
+        return None
+    from .seams import unwrap_auto
+    seams = mesh.uv_seams() if mesh.corner_uv is not None else None
+    res, added, info = unwrap_auto(mesh.V, mesh.F, seams=seams, bound=args.bound,
+                                   stretch=args.stretch, method=args.method, frames=args.frames,
+                                   cone=args.cone, progress=ProgressBar())
+    print(f"seams auto: {info['charts']} charts, {len(added)} edges added, seam length "
+          f"{info['seam_length']:.4g} ({100 * info['seam_length'] / info['edge_length']:.2f}% of "
+          f"all edge length), max stretch {max(info['max_stretch'], default=1.0):.3f} <= "
+          f"{args.stretch:g}")
+    return res
+
+
 def _print_report(name, islands, layout, seconds, args, out):
     t = layout.totals()
     cut = core_cuts(islands)
@@ -191,9 +216,10 @@ def build_parser():
     p.add_argument("-o", "--output", required=True, help="output OBJ with UVs")
     add_solver_options(p)
     add_layout_options(p)
-    p.add_argument("--seams", choices=("uv", "none"), default=None,
+    p.add_argument("--seams", choices=("uv", "none", "auto"), default=None,
                    help="uv: cut where the file's UVs are discontinuous (default when the OBJ "
-                        "has vt); none: islands are the mesh's components")
+                        "has vt); none: islands are the mesh's components; auto: add seams "
+                        "where needed (closed, genus, over C or --stretch)")
     p.add_argument("--report", help="write the JSON report here")
     p.add_argument("--png", help="write a picture of the UV layout coloured by distortion")
     p.set_defaults(func=run_unwrap)

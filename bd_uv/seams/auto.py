@@ -1,0 +1,330 @@
+"""``seams="auto"``: cut every island that cannot be certified as it is into certified charts.
+
+Top-down: a chart that is not a disk is opened by its handle cuts (``cut_graph``), a closed
+sphere and a disk whose conformal map breaks a bound are split along their cheapest neck
+(``fiedler_split``), until every chart's conformal map (LSCM) is flip-free with stretch within S
+and a boundary that does not cross itself. Then bottom-up: neighbouring charts are merged while
+the union still passes. ``bd_uv.unwrap`` finally certifies every chart at C (bending the few
+whose conformal map exceeds C), and any chart the certified map leaves beyond S or crossing
+itself is split again.
+"""
+import dataclasses
+import time
+
+import numpy as np
+
+from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, SolverError,
+                      TopologyError)
+from ..geometry import face_areas
+from ..metrics import face_jacobians
+from ..mesh import check_arrays, islands
+from ..unwrapping.results import UnwrapResult
+from ..unwrapping.unwrap import unwrap
+from .charts import boundary_crossings, chart_maps
+from .cut_graph import cut_graph
+from .edges import edge_table
+from .split import fiedler_split
+from .topology import charts, cut_mesh
+
+MAX_ROUNDS = 60
+# Charts are accepted a little inside S: bending a map into C moves its stretch slightly.
+MARGIN = 0.98
+# Passes that split charts the certified map leaves beyond S.
+FINISH_ROUNDS = 4
+# Rounds of pairwise merging (each merges a matching of neighbouring charts).
+MERGE_ROUNDS = 15
+# Matchings of neighbouring chart pairs tested together in one merging round.
+MERGE_LAYERS = 1
+
+
+def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merge=True,
+                method="lscm", frames="auto", cone="soc", progress=None, cancel=None):
+    """Unwrap with seams added where needed: every chart a disk, certified at C, stretch <= S.
+
+    Parameters
+    ----------
+    V : (n,3) float array
+    F : (m,3) int array
+    seams : (s,2) int array, optional, vertex pairs of existing seams (all kept)
+    bound : float, C: conformal distortion of every face at most C (Lipman 2012, eq. 4.9)
+    stretch : float, S: every face's singular values within [1/S, S] with each chart scaled to
+        its 3D area (section 6.3's bounds, ``max(sigma_1, 1/sigma_2) <= S``)
+    face_groups : (m,) int array, optional, material per face: seams prefer group boundaries
+    merge : bool, merge neighbouring charts while their union passes
+    method, frames, cone, progress, cancel : as for ``bd_uv.unwrap``, which certifies the charts
+        (with ``raise_bound=False``: a chart that cannot be certified at C is split further)
+
+    Raises
+    ------
+    ValueError for a bound or stretch below 1, CancelledError when cancelled
+
+    Returns
+    -------
+    result : UnwrapResult, one island per chart
+    added : (k,2) int64, vertex pairs of the seams added (smaller index first)
+    info : dict, ``charts``, ``seam_length``, ``added_length``, ``edge_length`` (all edges),
+        ``max_stretch`` (per chart, from the final UVs), ``crossings`` (per chart), ``rounds``,
+        ``seconds``
+    """
+    t0 = time.perf_counter()
+    V, F = check_arrays(V, F)
+    C, S = float(bound), float(stretch)
+    if not (C >= 1.0 and S >= 1.0):
+        raise ValueError(f"seams='auto' needs a bound C >= 1 and a stretch S >= 1, not {bound!r}, "
+                         f"{stretch!r}")
+    unwrap_options = dict(method=method, frames=frames, cone=cone, progress=progress,
+                          cancel=cancel)
+    E = edge_table(V, F, face_groups)
+    n, m = len(V), len(F)
+    cut = np.zeros(len(E.ends), dtype=bool)
+    if seams is not None and len(seams):
+        k = E.keys(seams, n)
+        cut[k[k >= 0]] = True
+    cut[E.faces[:, 1] < 0] = False
+    original = cut.copy()
+    A = face_areas(V, F)
+    cen = V[F].mean(axis=1)
+    # Islands the seams cannot fix (non-manifold, degenerate, ...) are left to ``unwrap`` to
+    # report; the rest of the search works on charts of the validated mesh.
+    frozen = np.zeros(m, dtype=bool)
+    for i in islands(V, F, E.ends[cut]):
+        if i.error is not None and not isinstance(i.error, (ClosedIslandError, TopologyError)):
+            frozen[i.faces] = True
+    invalid = frozen.copy()
+    rounds = 0
+    for rounds in range(1, MAX_ROUNDS + 1):
+        if cancel is not None and cancel.is_set():
+            raise CancelledError("cancelled while placing seams")
+        if progress is not None:
+            progress(0.0, f"seams: round {rounds}, {int(frozen.sum())}/{m} faces in charts")
+        changed = _refine(V, F, E, cut, frozen, A, cen, C, S, n)
+        if not changed:
+            break
+    if merge:
+        _merge(V, F, E, cut, original, invalid, S)
+    result = unwrap(V, F, seams=E.ends[cut], bound=C, raise_bound=False, **unwrap_options)
+    for _ in range(FINISH_ROUNDS):
+        # Charts the certified map leaves beyond S or crossing itself are split again and only
+        # their faces unwrapped anew.
+        st, cr = _measure(V, F, E, cut, result)
+        bad = [r for r, s, c in zip(result.islands, st, cr)
+               if len(r.faces) > 1 and ((r.status == "certified" and (s > S * (1 + 1e-9) or c))
+                                        or isinstance(r.error, (InfeasibleError, SolverError)))]
+        if not bad:
+            break
+        frozen[:] = True
+        for r in bad:
+            frozen[r.faces] = False
+            _split_faces(r.faces, E, cut, A, cen)
+        sub = np.flatnonzero(~frozen)
+        for _ in range(MAX_ROUNDS):
+            if not _refine(V, F, E, cut, frozen, A, cen, C, S, n):
+                break
+        Fc, voc = cut_mesh(F, E, cut, sub)
+        part = unwrap(V[voc], Fc[sub], bound=C, raise_bound=False, **unwrap_options)
+        result = _splice(result, part, sub, voc, m)
+    st, cr = _measure(V, F, E, cut, result)
+    result = dataclasses.replace(result, seconds=time.perf_counter() - t0)
+    added = E.ends[cut & ~original]
+    info = {"charts": len(result.islands),
+            "seam_length": float(E.length[cut].sum()),
+            "added_length": float(E.length[cut & ~original].sum()),
+            "edge_length": float(E.length.sum()),
+            "max_stretch": st, "crossings": cr, "rounds": rounds,
+            "seconds": result.seconds}
+    return result, added, info
+
+
+def _refine(V, F, E, cut, frozen, A, cen, C, S, n):
+    """One top-down round over the charts not yet accepted; True when a seam was added."""
+    sub = np.flatnonzero(~frozen)
+    if len(sub) == 0:
+        return False
+    chs = charts(F, E, cut, sub)
+    changed = False
+    for c in chs:
+        if c.kind == "open":                # handles, or several boundary loops
+            w = lambda pairs, _v=c.vertices: _edge_weight(E, _v[pairs], n)
+            g = cut_graph(c.tris, len(c.vertices), w)
+            k = E.keys(c.vertices[g], n) if len(g) else np.zeros(0, np.int64)
+            k = k[k >= 0]
+            if len(k) and not cut[k].all():
+                cut[k] = True
+                changed = True
+                continue
+        if c.kind in ("open", "sphere"):    # a sphere: split along its neck
+            if _split_faces(c.faces, E, cut, A, cen):
+                changed = True
+            else:
+                frozen[c.faces] = True
+    disks = [c for c in chs if c.kind == "disk"]
+    if disks:
+        cm = chart_maps(V, disks)
+        for j, c in enumerate(disks):
+            ok = (np.isfinite(cm.max_distortion[j]) and cm.max_stretch[j] <= S * MARGIN
+                  and cm.crossings[j] == 0)
+            if ok or len(c.faces) < 2:
+                frozen[c.faces] = True
+            elif _split_faces(c.faces, E, cut, A, cen):
+                changed = True
+            else:
+                frozen[c.faces] = True
+    return changed
+
+
+def _edge_weight(E, pairs, n):
+    k = E.keys(pairs, n)
+    return np.where(k >= 0, E.length[k] * E.cost[k], np.inf)
+
+
+def _split_faces(faces, E, cut, A, cen):
+    """Split a chart (global face ids) by ``fiedler_split``; mark the new seams. True if split."""
+    m = len(E.face_edges)
+    local = np.full(m, -1, dtype=np.int64)
+    local[faces] = np.arange(len(faces))
+    fe = np.unique(E.face_edges[faces].ravel())
+    fe = fe[(E.faces[fe, 1] >= 0) & ~cut[fe]]
+    la, lb = local[E.faces[fe, 0]], local[E.faces[fe, 1]]
+    inside = (la >= 0) & (lb >= 0)
+    fe, pairs = fe[inside], np.stack([la[inside], lb[inside]], axis=1)
+    side = fiedler_split(A[faces], cen[faces], pairs, E.length[fe], E.cost[fe])
+    if side is None:
+        return False
+    new = fe[side[pairs[:, 0]] != side[pairs[:, 1]]]
+    cut[new] = True
+    return len(new) > 0
+
+
+def _merge(V, F, E, cut, original, invalid, S, rounds=None):
+    """Merge neighbouring charts pairwise while the union's conformal map still passes.
+
+    Each round tests a matching of neighbouring pairs (longest shared seam first) in one
+    batched solve; a pair that fails is not tried again while both charts stay as they are.
+    """
+    tried = set()
+    chs = charts(F, E, cut)
+    for _ in range(MERGE_ROUNDS if rounds is None else rounds):
+        label = np.empty(len(F), dtype=np.int64)
+        for j, c in enumerate(chs):
+            label[c.faces] = j
+        ident = [(int(c.faces[0]), len(c.faces)) for c in chs]
+        good = np.array([c.kind == "disk" and not invalid[c.faces[0]] for c in chs])
+        inner = (E.faces[:, 1] >= 0) & cut & ~original
+        la, lb = label[E.faces[inner, 0]], label[E.faces[inner, 1]]
+        diff = (la != lb) & good[la] & good[lb]
+        if not diff.any():
+            return
+        ei = np.flatnonzero(inner)[diff]
+        la, lb = np.minimum(la[diff], lb[diff]), np.maximum(la[diff], lb[diff])
+        uk, inv = np.unique(la * len(chs) + lb, return_inverse=True)
+        inv = inv.ravel()
+        shared = np.bincount(inv, E.length[ei])
+        # Matchings ("layers"): longest shared seam first, each chart in at most one pair of a
+        # layer; every layer's unions are tested in one batched solve.
+        used = np.zeros((MERGE_LAYERS, len(chs)), dtype=bool)
+        layers = [[] for _ in range(MERGE_LAYERS)]
+        for p in np.argsort(-shared):
+            x, y = divmod(int(uk[p]), len(chs))
+            if (ident[x], ident[y]) in tried:
+                continue
+            free = np.flatnonzero(~used[:, x] & ~used[:, y])
+            if len(free) == 0:
+                continue
+            used[free[0], [x, y]] = True
+            layers[free[0]].append(p)
+            tried.add((ident[x], ident[y]))
+        disks = []
+        for lay, chosen in enumerate(layers):
+            if not chosen:
+                continue
+            trial = cut.copy()
+            trial[ei[np.isin(inv, chosen)]] = False
+            faces = np.flatnonzero(used[lay][label])
+            disks += [(c, trial) for c in charts(F, E, trial, faces)
+                      if c.kind == "disk" and len(np.unique(label[c.faces])) == 2]
+        if not disks:
+            if not any(layers):
+                return
+            continue
+        cm = chart_maps(V, [c for c, _ in disks])
+        ok = np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN) & (cm.crossings == 0)
+        merged = np.zeros(len(chs), dtype=bool)
+        # Accept passing unions, longest shared seam first, each chart merged once per round.
+        fes = [np.unique(E.face_edges[c.faces].ravel()) for c, _ in disks]
+        gain = np.array([E.length[fe[cut[fe] & ~t[fe]]].sum() for fe, (_, t) in zip(fes, disks)])
+        unions = []
+        for j in np.argsort(-gain):
+            c, trial = disks[j]
+            two = np.unique(label[c.faces])
+            if not ok[j] or merged[two].any():
+                continue
+            merged[two] = True
+            fe = fes[j]
+            cut[fe[cut[fe] & ~trial[fe]]] = False
+            unions.append(c)
+        # The charts after this round: the unions (as found on the trial cut, which agrees with
+        # the new cut on their faces) and every chart not merged, as they were.
+        chs = sorted([c for j, c in enumerate(chs) if not merged[j]] + unions,
+                     key=lambda ch: int(ch.faces[0]))
+
+
+def _measure(V, F, E, cut, result):
+    """Per island of a result: max stretch and boundary self-crossings from its final UVs."""
+    isl = {int(c.faces[0]): c for c in charts(F, E, cut)}
+    rs = [r for r in result.islands if r.uv is not None and r.status == "certified"]
+    st = np.full(len(result.islands), np.nan)
+    cr = np.zeros(len(result.islands), dtype=np.int64)
+    if not rs:
+        return st.tolist(), cr.tolist()
+    nvs = np.array([len(r.vertices) for r in rs])
+    nfs = np.array([len(r.tris) for r in rs])
+    voff = np.concatenate([[0], np.cumsum(nvs)])
+    foff = np.concatenate([[0], np.cumsum(nfs)])
+    fc = np.repeat(np.arange(len(rs)), nfs)
+    P = V[np.concatenate([r.vertices for r in rs])]
+    uv = np.concatenate([r.uv for r in rs])
+    tris = np.concatenate([r.tris for r in rs]) + voff[fc][:, None]
+    corner = uv[tris]
+    alpha, beta = face_jacobians(P, tris, corner)
+    a, b = np.abs(alpha), np.abs(beta)
+    e1 = corner[:, 1] - corner[:, 0]
+    e2 = corner[:, 2] - corner[:, 0]
+    uv_area = np.bincount(fc, 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]), len(rs))
+    s = np.sqrt(np.bincount(fc, face_areas(P, tris), len(rs)) / np.maximum(uv_area, 1e-300))[fc]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        fs = np.where(a > b, np.maximum(s * (a + b), 1.0 / (s * (a - b))), np.inf)
+    idx = np.array([r.index for r in rs])
+    st[idx] = np.maximum.reduceat(fs, foff[:-1])
+    z = uv[:, 0] + 1j * uv[:, 1]
+    cr[idx] = boundary_crossings(z, [_loop(isl.get(int(r.faces.min())), r) + voff[j]
+                                     for j, r in enumerate(rs)])
+    return st.tolist(), cr.tolist()
+
+
+def _splice(result, part, sub, voc, m):
+    """``result`` with the islands on faces ``sub`` replaced by ``part`` (unwrapped on F[sub])."""
+    redo = np.zeros(m, dtype=bool)
+    redo[sub] = True
+    keep = [r for r in result.islands if not redo[r.faces[0]]]
+    new = [dataclasses.replace(r, faces=sub[r.faces], vertices=voc[r.vertices])
+           for r in part.islands]
+    isl = sorted(keep + new, key=lambda r: int(r.faces.min()))
+    isl = [dataclasses.replace(r, index=j) for j, r in enumerate(isl)]
+    corner_uv = result.corner_uv.copy()
+    corner_uv[sub] = part.corner_uv
+    face_island = np.empty(m, dtype=np.int64)
+    for r in isl:
+        face_island[r.faces] = r.index
+    return UnwrapResult(corner_uv, face_island, isl, result.seconds + part.seconds, result.method)
+
+
+
+def _loop(chart, r):
+    """The boundary loop of ``chart`` in the vertex ids of the unwrap result ``r`` (same chart)."""
+    if chart is None or not chart.loops or len(chart.faces) != len(r.faces):
+        return np.zeros(0, dtype=np.int64)
+    # Same faces, vertices numbered differently: map chart vertex -> result vertex by corner.
+    pos = np.searchsorted(chart.faces, r.faces)
+    ids = np.full(len(chart.vertices), -1, dtype=np.int64)
+    ids[chart.tris[pos].ravel()] = r.tris.ravel()
+    return ids[chart.loops[0]]

@@ -1,0 +1,179 @@
+"""Conformal maps of many charts in one solve, and what each chart's map costs in distortion.
+
+A chart passes when its free-boundary conformal map (LSCM) has no flipped face, conformal
+distortion within C (Lipman 2012, eq. 4.9), stretch within S (the singular-value bounds of
+section 6.3, measured after scaling the chart to its 3D area) and a boundary that does not cross
+itself (so the flip-free map of the disk is injective).
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..energies import jacobian_operators
+from ..frames import _solve_fixed
+from ..geometry import face_areas, local_coordinates
+from ..unwrapping.batched import _far_pairs
+
+
+@dataclass(frozen=True)
+class ChartMaps:
+    """Conformal maps of a list of charts (islands), stacked.
+
+    Attributes
+    ----------
+    uv : (nv,) complex128, every chart's vertices in turn, each chart scaled to its 3D area
+    voff, foff : (k+1,) int64, offsets of each chart's vertices and faces
+    distortion : (f,) float64, conformal distortion per face (inf when flipped)
+    stretch : (f,) float64, ``max(sigma_1, 1/sigma_2)`` per face (inf when flipped)
+    max_distortion, max_stretch : (k,) float64 per chart
+    crossings : (k,) int64, pairs of boundary edges of the chart that cross in UV
+    """
+    uv: np.ndarray
+    voff: np.ndarray
+    foff: np.ndarray
+    distortion: np.ndarray
+    stretch: np.ndarray
+    max_distortion: np.ndarray
+    max_stretch: np.ndarray
+    crossings: np.ndarray
+
+
+def chart_maps(V, charts):
+    """LSCM of every chart in one block-diagonal solve, with per-face distortion and stretch.
+
+    Parameters
+    ----------
+    V : (n,3) float64
+    charts : list of mesh.Island, each valid with exactly one boundary loop
+
+    Returns
+    -------
+    ChartMaps
+    """
+    k = len(charts)
+    nvs = np.array([len(c.vertices) for c in charts])
+    nfs = np.array([len(c.faces) for c in charts])
+    voff = np.concatenate([[0], np.cumsum(nvs)])
+    foff = np.concatenate([[0], np.cumsum(nfs)])
+    face_c = np.repeat(np.arange(k), nfs)
+    vert_c = np.repeat(np.arange(k), nvs)
+    P = V[np.concatenate([c.vertices for c in charts])]
+    tris = np.concatenate([c.tris for c in charts]) + voff[face_c][:, None]
+    A3 = face_areas(P, tris)
+    area = np.bincount(face_c, A3, minlength=k)
+    Z = local_coordinates(P, tris) / np.sqrt(area)[face_c][:, None]
+    n = len(P)
+    ops = jacobian_operators(Z, tris, n)
+    Q = (ops.Bre.T.multiply(ops.area) @ ops.Bre + ops.Bim.T.multiply(ops.area) @ ops.Bim).tocsc()
+    idx = _far_pairs(P, charts, voff)
+    u = _solve_fixed(Q, n, idx, np.tile(np.array([0.0, 1.0], dtype=np.complex128), k))
+    # Scale each chart so its UV area equals its (unit-normalised) 3D area: sigma are then the
+    # singular values of the map with the chart at its 3D size.
+    e1 = u[tris[:, 1]] - u[tris[:, 0]]
+    e2 = u[tris[:, 2]] - u[tris[:, 0]]
+    uv_area = np.bincount(face_c, 0.5 * (e1.conj() * e2).imag, minlength=k)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        s = np.sqrt(1.0 / np.abs(uv_area))
+    s[~np.isfinite(s)] = 1.0
+    u = u * s[vert_c]
+    x = np.concatenate([u.real, u.imag])
+    a = np.abs(ops.Are @ x + 1j * (ops.Aim @ x))
+    b = np.abs(ops.Bre @ x + 1j * (ops.Bim @ x))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        ok = a > b
+        D = np.where(ok, (a + b) / (a - b), np.inf)
+        St = np.where(ok, np.maximum(a + b, 1.0 / (a - b)), np.inf)
+    D[~np.isfinite(D)] = np.inf
+    St[~np.isfinite(St)] = np.inf
+    maxD = np.maximum.reduceat(D, foff[:-1])
+    maxS = np.maximum.reduceat(St, foff[:-1])
+    uv = u * np.sqrt(area)[vert_c]
+    cross = boundary_crossings(uv, [c.loops[0] + voff[j] for j, c in enumerate(charts)])
+    return ChartMaps(uv, voff, foff, D, St, maxD, maxS, cross)
+
+
+def boundary_crossings(uv, loops):
+    """Count pairs of non-adjacent boundary edges that cross, per loop (polygon self-crossings).
+
+    Candidate pairs come from a uniform grid (cell = the loop's mean edge length), so the work
+    is about linear in the number of boundary edges.
+
+    Parameters
+    ----------
+    uv : (nv,) complex, vertex positions
+    loops : list of (b,) int arrays, one closed vertex loop per chart
+
+    Returns
+    -------
+    (k,) int64, crossing pairs per loop
+    """
+    k = len(loops)
+    if k == 0:
+        return np.zeros(0, np.int64)
+    lens = np.array([len(lp) for lp in loops])
+    owner = np.repeat(np.arange(k), lens)
+    a_idx = np.concatenate(loops)
+    start = np.concatenate([[0], np.cumsum(lens)[:-1]])
+    nxt = np.arange(len(a_idx)) + 1
+    nxt[start + lens - 1] = start
+    p, q = uv[a_idx], uv[a_idx[nxt]]
+    seg = np.abs(q - p)
+    # Cell size: the mean edge, or a quarter of the longest, so no edge spans more than 5 cells.
+    longest = np.zeros(k)
+    np.maximum.at(longest, owner, seg)
+    h = np.maximum(np.maximum(np.bincount(owner, seg) / lens, longest / 4), 1e-300)[owner]
+    lo = np.minimum(p.real, q.real), np.minimum(p.imag, q.imag)
+    hi = np.maximum(p.real, q.real), np.maximum(p.imag, q.imag)
+    x0, y0 = np.floor(lo[0] / h).astype(np.int64), np.floor(lo[1] / h).astype(np.int64)
+    x1, y1 = np.floor(hi[0] / h).astype(np.int64), np.floor(hi[1] / h).astype(np.int64)
+    span = int(max((x1 - x0).max(), (y1 - y0).max())) + 1
+    dx, dy = np.meshgrid(np.arange(span), np.arange(span), indexing="ij")
+    dx, dy = dx.ravel(), dy.ravel()
+    cx = x0[:, None] + dx[None]
+    cy = y0[:, None] + dy[None]
+    inside = (cx <= x1[:, None]) & (cy <= y1[:, None])
+    sid = np.broadcast_to(np.arange(len(p))[:, None], cx.shape)[inside]
+    cx, cy = cx[inside], cy[inside]
+    cell = np.stack([owner[sid], cx, cy], axis=1)
+    _, cell_id = np.unique(cell, axis=0, return_inverse=True)
+    cell_id = cell_id.ravel()
+    order = np.argsort(cell_id, kind="stable")
+    cell_id, sid = cell_id[order], sid[order]
+    bounds = np.flatnonzero(np.diff(cell_id)) + 1
+    starts = np.concatenate([[0], bounds])
+    sizes = np.diff(np.concatenate([starts, [len(cell_id)]]))
+    # All pairs within each cell.
+    reps = sizes ** 2
+    grp = np.repeat(np.arange(len(starts)), reps)
+    r = np.arange(reps.sum()) - np.repeat(np.cumsum(reps) - reps, reps)
+    i = sid[starts[grp] + r // sizes[grp]]
+    j = sid[starts[grp] + r % sizes[grp]]
+    keep = i < j
+    i, j = i[keep], j[keep]
+    pair = np.unique(np.stack([i, j], axis=1), axis=0)
+    if len(pair) == 0:
+        return np.zeros(k, np.int64)
+    i, j = pair[:, 0], pair[:, 1]
+    adjacent = (nxt[i] == j) | (nxt[j] == i)
+    i, j = i[~adjacent], j[~adjacent]
+    hit = _segments_cross(p[i], q[i], p[j], q[j])
+    return np.bincount(owner[i[hit]], minlength=k).astype(np.int64)
+
+
+def _segments_cross(p1, q1, p2, q2):
+    """Whether segments p1q1 and p2q2 intersect (touching counts), vectorised over rows."""
+    def orient(a, b, c):
+        return ((b - a).conj() * (c - a)).imag
+    d1, d2 = orient(p2, q2, p1), orient(p2, q2, q1)
+    d3, d4 = orient(p1, q1, p2), orient(p1, q1, q2)
+    return (np.sign(d1) * np.sign(d2) <= 0) & (np.sign(d3) * np.sign(d4) <= 0) & \
+        ~((d1 == 0) & (d2 == 0) & (d3 == 0) & (d4 == 0) & ~_collinear_overlap(p1, q1, p2, q2))
+
+
+def _collinear_overlap(p1, q1, p2, q2):
+    """For collinear segments: whether their extents overlap."""
+    lo1 = np.minimum(p1.real, q1.real), np.minimum(p1.imag, q1.imag)
+    hi1 = np.maximum(p1.real, q1.real), np.maximum(p1.imag, q1.imag)
+    lo2 = np.minimum(p2.real, q2.real), np.minimum(p2.imag, q2.imag)
+    hi2 = np.maximum(p2.real, q2.real), np.maximum(p2.imag, q2.imag)
+    return ((lo1[0] <= hi2[0]) & (lo2[0] <= hi1[0]) & (lo1[1] <= hi2[1]) & (lo2[1] <= hi1[1]))

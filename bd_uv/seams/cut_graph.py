@@ -1,0 +1,121 @@
+"""Cuts that open a chart into a disk: the handles of a genus-g surface and the paths that join
+its boundary loops (tree-cotree, Eppstein 2003; greedy shortest loops, Erickson and Whittlesey
+2005)."""
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components, dijkstra, minimum_spanning_tree
+
+# Roots tried (farthest-point samples) for the loops of a closed chart of genus >= 1.
+ROOT_TRIES = 6
+
+
+def cut_graph(tris, nv, weight):
+    """Edges to cut so that a connected manifold chart becomes one disk.
+
+    Each boundary loop is capped by a virtual vertex; on the closed surface so obtained a
+    shortest-path tree T from the root (a cap, when there is one) and a dual spanning tree of the
+    faces not crossed by T leave exactly 2g edges, each closing one loop through T. The cut is
+    those loops plus the tree paths from the root to every cap, without the caps' edges: the
+    handles' shortest generators and the shortest paths joining the boundary loops.
+
+    Parameters
+    ----------
+    tris : (k,3) int64, the chart's triangles in chart vertex ids 0..nv-1
+    nv : int
+    weight : callable((e,2) int64 chart vertex pairs) -> (e,) float64 > 0, cost of cutting each
+        edge (its length times the crease discount)
+
+    Returns
+    -------
+    (c,2) int64, chart vertex pairs to cut. Empty for a disk and for a closed sphere (which
+    needs a cut that this graph cannot choose: see ``split.fiedler_split``).
+    """
+    a = tris.ravel()
+    b = np.roll(tris, -1, axis=1).ravel()
+    fwd = a * nv + b
+    boundary = ~np.isin(fwd, b * nv + a)
+    ba, bb = a[boundary], b[boundary]
+    # Cap each boundary loop with a virtual vertex nv + loop and a fan of faces (bb, ba, cap).
+    if len(ba):
+        g = sp.coo_array((np.ones(len(ba)), (ba, bb)), shape=(nv, nv))
+        _, comp = connected_components(g, directed=False)
+        labels, loop_of = np.unique(comp[ba], return_inverse=True)
+        caps = nv + loop_of.ravel()
+        n_caps = len(labels)
+        all_tris = np.concatenate([tris, np.stack([bb, ba, caps], axis=1)])
+    else:
+        n_caps = 0
+        all_tris = tris
+    N = nv + n_caps
+    ea = all_tris.ravel()
+    eb = np.roll(all_tris, -1, axis=1).ravel()
+    key = np.minimum(ea, eb) * N + np.maximum(ea, eb)
+    uniq, inv = np.unique(key, return_inverse=True)
+    inv = inv.ravel()
+    ends = np.stack([uniq // N, uniq % N], axis=1)
+    real = ends[:, 1] < nv
+    w = np.full(len(uniq), 0.0)
+    w[real] = weight(ends[real])
+    # Zero weights would drop out of the sparse graph: floor every weight.
+    tiny = 1e-9 * max(w[real].mean() if real.any() else 1.0, 1e-300)
+    w = np.maximum(w, tiny)
+    if n_caps:
+        return _loops_from(nv, uniq, ends, inv, w, all_tris, N, nv, n_caps)[0]
+    # Closed: the loops all pass through the root, so try a few roots spread over the chart
+    # and keep the shortest system of loops.
+    best = _loops_from(0, uniq, ends, inv, w, all_tris, N, nv, n_caps)
+    if len(best[0]) == 0:
+        return best[0]                     # a sphere: no loop to cut
+    G = sp.csr_matrix(sp.coo_array((w, (ends[:, 0], ends[:, 1])), shape=(N, N)))
+    far = dijkstra(G, directed=False, indices=0)
+    for _ in range(ROOT_TRIES):
+        r = int(np.argmax(far))
+        trial = _loops_from(r, uniq, ends, inv, w, all_tris, N, nv, n_caps)
+        if trial[1] < best[1]:
+            best = trial
+        far = np.minimum(far, dijkstra(G, directed=False, indices=r))
+    return best[0]
+
+
+def _loops_from(root, uniq, ends, inv, w, all_tris, N, nv, n_caps):
+    """Tree-cotree cut from ``root``: (cut (c,2) chart vertex pairs, its total weight)."""
+    G = sp.csr_matrix(sp.coo_array((w, (ends[:, 0], ends[:, 1])), shape=(N, N)))
+    dist, pred = dijkstra(G, directed=False, indices=root, return_predecessors=True)
+    in_tree = np.zeros(len(uniq), dtype=bool)
+    child = np.flatnonzero(pred >= 0)
+    tk = np.minimum(child, pred[child]) * N + np.maximum(child, pred[child])
+    in_tree[np.searchsorted(uniq, tk)] = True
+    # Dual spanning tree over edges not in T, keeping the longest loops (so the leftover edges
+    # close the shortest ones).
+    order = np.argsort(inv, kind="stable")
+    first = np.searchsorted(inv[order], np.arange(len(uniq)))
+    f0, f1 = order[first] // 3, order[first + 1] // 3
+    loop_len = dist[ends[:, 0]] + dist[ends[:, 1]] + w
+    dual = ~in_tree
+    big = loop_len[dual].max(initial=0.0) + 1.0
+    nf = len(all_tris)
+    D = sp.coo_array((big - loop_len[dual] + 1e-12, (f0[dual], f1[dual])), shape=(nf, nf))
+    mst = minimum_spanning_tree(sp.csr_matrix(D)).tocoo()
+    cot = np.zeros(len(uniq), dtype=bool)
+    r, c = mst.row.astype(np.int64), mst.col.astype(np.int64)  # int32: pair keys overflow
+    pairs = np.stack([np.minimum(r, c), np.maximum(r, c)], axis=1)
+    dual_idx = np.flatnonzero(dual)
+    dpairs = np.stack([np.minimum(f0[dual], f1[dual]), np.maximum(f0[dual], f1[dual])], axis=1)
+    dk = dpairs[:, 0] * nf + dpairs[:, 1]
+    dorder = np.argsort(dk)
+    hit = dorder[np.searchsorted(dk[dorder], pairs[:, 0] * nf + pairs[:, 1])]
+    cot[dual_idx[hit]] = True
+    left = np.flatnonzero(~in_tree & ~cot)
+    # Mark the tree paths from the leftover edges' ends and from every cap back to the root.
+    marked = np.zeros(N, dtype=bool)
+    front = np.unique(np.concatenate([ends[left].ravel(), nv + np.arange(n_caps)]))
+    while len(front):
+        front = front[~marked[front]]
+        marked[front] = True
+        front = pred[front]
+        front = front[front >= 0]
+    v = np.flatnonzero(marked & (pred >= 0))
+    cut = np.concatenate([np.stack([v, pred[v]], axis=1), ends[left]])
+    cut = cut[np.all(cut < nv, axis=1)].astype(np.int64)
+    return cut, float(np.sum(w[np.searchsorted(uniq, np.minimum(cut[:, 0], cut[:, 1]) * N
+                                                + np.maximum(cut[:, 0], cut[:, 1]))]))
