@@ -176,9 +176,10 @@ def run_header(command, footprints):
         out.append("Peak RSS of a Python process that only imports: " + ", ".join(
             f"{k} {fmt_mb(v)} MiB" for k, v in footprints.items())
             + " (bpy: import plus the empty factory scene). Every method below runs in its own "
-            "process; 'base' is that process's peak after imports, mesh load and the untimed "
-            "warm-up, 'peak' after the timed call, both in MiB (ru_maxrss); 'peak - base' is what "
-            "the call itself added.")
+            "process; 'peak' is that process's most resident memory during the timed call "
+            "(Linux VmHWM, reset after imports, mesh load and the untimed warm-up; so it includes "
+            "the bpy or bd_uv import and the loaded mesh), 'peak - base' what the call added to "
+            "the memory resident just before it, both in MiB.")
     return out
 
 

@@ -6,13 +6,16 @@ Parent side: ``run_isolated(mesh_path, key, max_seconds)`` starts
 ``numpy`` / ``bd_uv`` / ``bpy`` (the bpy module's own footprint, to set Blender's peaks beside
 bd-uv's).
 
-Child side (``main``): import, load the mesh, warm the method up (untimed), read the process's
-peak resident set size (``resource.getrusage(RUSAGE_SELF).ru_maxrss``: "baseline"), run the method
-once (timed as the method says), read the peak again ("peak"; plus ``RUSAGE_CHILDREN`` for any
-worker processes the method waited for, reported separately when it grew during the call: a
-fork during bpy's warm-up does not count), then measure the UVs with
-``measure.uv_stats`` and print one JSON line prefixed ``BENCH_RESULT``. ``ru_maxrss`` is a
-high-water mark, so measuring after the peak was read does not change it.
+Child side (``main``): import, load the mesh, warm the method up (untimed); then on Linux reset
+the process's resident-memory high-water mark (``echo 5 > /proc/self/clear_refs``), so that the
+transient memory of loading a large OBJ does not hide the method's own peak, and read the resident
+set size ("base", ``VmRSS``); run the method once (timed as the method says), read the high-water
+mark ("peak", ``VmHWM``: the most resident memory at any moment of the call, base included).
+Where ``/proc`` cannot do that, both come from ``resource.getrusage(RUSAGE_SELF).ru_maxrss``
+(then the peak also covers loading and warm-up). ``RUSAGE_CHILDREN`` covers worker processes the
+method waited for, reported separately when it grew during the call (a fork during bpy's warm-up
+does not count). Then the UVs are measured with ``measure.uv_stats`` and one JSON line prefixed
+``BENCH_RESULT`` is printed; the peak was read before, so measuring does not change it.
 """
 from __future__ import annotations
 
@@ -32,6 +35,29 @@ def _maxrss_mb(who=resource.RUSAGE_SELF) -> float:
     """Peak resident set size in MiB (Linux reports ru_maxrss in KiB, macOS in bytes)."""
     r = resource.getrusage(who).ru_maxrss
     return r / (1024.0 * 1024.0) if sys.platform == "darwin" else r / 1024.0
+
+
+def _proc_status_mb(field: str) -> float | None:
+    """``VmRSS`` / ``VmHWM`` of this process from /proc/self/status in MiB, or None."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as fh:
+            for line in fh:
+                if line.startswith(field + ":"):
+                    return int(line.split()[1]) / 1024.0
+    except OSError:
+        pass
+    return None
+
+
+def _reset_peak() -> bool:
+    """Reset this process's VmHWM to its current RSS (Linux >= 4.0); True if it worked."""
+    try:
+        with open("/proc/self/clear_refs", "w", encoding="ascii") as fh:
+            fh.write("5")
+    except OSError:
+        return False
+    hwm, rss = _proc_status_mb("VmHWM"), _proc_status_mb("VmRSS")
+    return hwm is not None and rss is not None and hwm <= rss + 1.0
 
 
 def _child_env():
@@ -124,9 +150,12 @@ def main(argv=None):
 
     V, F = load_mesh_by_index(a.mesh)
     warmup(a.key)
-    base, base_children = _maxrss_mb(), _maxrss_mb(resource.RUSAGE_CHILDREN)
+    hwm = _reset_peak()
+    base = _proc_status_mb("VmRSS") if hwm else _maxrss_mb()
+    base_children = _maxrss_mb(resource.RUSAGE_CHILDREN)
     cu, seconds, note, cert = run_method(a.key, V, F, a.max_seconds)
-    peak, peak_children = _maxrss_mb(), _maxrss_mb(resource.RUSAGE_CHILDREN)
+    peak = _proc_status_mb("VmHWM") if hwm else _maxrss_mb()
+    peak_children = _maxrss_mb(resource.RUSAGE_CHILDREN)
     st = uv_stats(V, F, cu)
     if cert is not None and st.max_distortion > cert * (1 + 1e-6):
         note += f"; recomputed max D exceeds certified C {cert:.6g}"
@@ -134,6 +163,7 @@ def main(argv=None):
            "max_d": None if not np.isfinite(st.max_distortion) else st.max_distortion,
            "mean_d": None if not np.isfinite(st.mean_distortion) else st.mean_distortion,
            "flips": st.flips, "faces": int(len(F)), "rss_base_mb": base, "rss_peak_mb": peak,
+           "peak_source": "VmHWM" if hwm else "ru_maxrss",
            "rss_children_mb": peak_children if peak_children > base_children else 0.0}
     print(MARK + json.dumps(res), flush=True)
     return 0
