@@ -88,6 +88,9 @@ def measure_row(path, name, faces, key, max_seconds, repeat=1, kill_after=None) 
         r = run_isolated(path, key, max_seconds, kill_after)
         if "error" in r:
             row.error = r["error"]
+            row.rss_base_mb, row.rss_peak_mb = r.get("rss_base_mb"), r.get("rss_peak_mb")
+            if "load_start" in r:
+                row.load = f"{r['load_start']:.1f}->{r['load_end']:.1f}"
             return row
         if best is None or r["seconds"] < best["seconds"]:
             best = r

@@ -153,7 +153,14 @@ def main(argv=None):
     hwm = _reset_peak()
     base = _proc_status_mb("VmRSS") if hwm else _maxrss_mb()
     base_children = _maxrss_mb(resource.RUSAGE_CHILDREN)
-    cu, seconds, note, cert = run_method(a.key, V, F, a.max_seconds)
+    try:
+        cu, seconds, note, cert = run_method(a.key, V, F, a.max_seconds)
+    except Exception as exc:  # still report the memory the failed or cancelled call reached
+        print(MARK + json.dumps({"error": f"{type(exc).__name__}: {exc}".splitlines()[0][:300],
+                                 "faces": int(len(F)), "rss_base_mb": base,
+                                 "rss_peak_mb": _proc_status_mb("VmHWM") if hwm else _maxrss_mb()}),
+              flush=True)
+        return 1
     peak = _proc_status_mb("VmHWM") if hwm else _maxrss_mb()
     peak_children = _maxrss_mb(resource.RUSAGE_CHILDREN)
     st = uv_stats(V, F, cu)
