@@ -123,8 +123,9 @@ def named_checks(rows, islands_name=None):
     return out
 
 
-def plot(rows, families, png):
-    """Log-log seconds and peak MiB vs faces, one line per (family, method)."""
+def plot(rows, families, png, footprints=None):
+    """Log-log seconds and peak MiB vs faces, one line per (family, method); dotted horizontal
+    lines mark the import-only footprints of bpy and bd_uv."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -145,6 +146,11 @@ def plot(rows, families, png):
             lab = f"{METHODS[key][0]} ({fam})"
             axes[0].loglog(f, s, styles.get(fam, ":"), marker="o", color=colors[key], label=lab)
             axes[1].loglog(f, m, styles.get(fam, ":"), marker="o", color=colors[key], label=lab)
+    for what, col in (("bpy", "C0"), ("bd_uv", "C3")):
+        if footprints and footprints.get(what):
+            axes[1].axhline(footprints[what], color=col, ls=":", lw=1,
+                            label=f"import {what} only")
+    axes[1].legend(fontsize=7)
     axes[0].set(xlabel="faces", ylabel="seconds", title="time vs faces")
     axes[1].set(xlabel="faces", ylabel="peak resident MiB (own process)",
                 title="peak memory vs faces")
@@ -281,7 +287,7 @@ def write_report(rows, info, out_path):
     if scale_rows:
         out += ["", "### Scale: time and peak memory vs faces", ""]
         out += table(scale_rows, families)
-        plot(scale_rows, families, png)
+        plot(scale_rows, families, png, info.get("footprints_mb"))
         out += ["", f"Plot: `{os.path.basename(png)}` (log-log).", ""]
     isl_rows = [r for r in rows if families.get(r.mesh) == "islands"]
     if isl_rows:
