@@ -37,8 +37,8 @@ if REPO not in sys.path:
     sys.path.insert(1, REPO)
 
 import assets  # noqa: E402
-from bench_unwrap import (fmt, fmt_mb, fmt_s, from_cache, load_cache, measure_row,  # noqa: E402
-                          run_header, save_json)
+from bench_unwrap import (cached_warning, fmt, fmt_mb, fmt_s, from_cache,  # noqa: E402
+                          load_cache, measure_row, run_header, save_json)
 from isolate import footprint  # noqa: E402
 from methods import METHODS, is_peer  # noqa: E402
 
@@ -201,7 +201,8 @@ def main(argv=None) -> int:
                                    [os.path.relpath(sys.argv[0], REPO)] + sys.argv[1:])
     caps = parse_caps(args.cap, args.max_seconds)
     cache = load_cache(args.reuse_peers) if args.reuse_peers else {}
-    method_max = {k: int(v) for k, _, v in (it.partition("=") for it in args.method_max_faces or [])}
+    method_max = {k: int(v) for k, _, v in (it.partition("=")
+                                            for it in args.method_max_faces or [])}
 
     if args.render_only:
         return render_only(args)
@@ -282,6 +283,7 @@ def write_report(rows, info, out_path):
                f"{tuple(round(x, 1) for x in ls) if ls else '-'}, at end "
                f"{tuple(round(x, 1) for x in le) if le else '- (run stopped early)'}. Caps: "
                + ", ".join(f"{k} {v:g} s" for k, v in info["caps"].items()) + ".")
+    out += [""] + cached_warning(rows)
     scale_rows = [r for r in rows if families.get(r.mesh) != "islands"]
     png = os.path.splitext(out_path)[0] + ".png"
     if scale_rows:

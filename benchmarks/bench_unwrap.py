@@ -186,6 +186,15 @@ def run_header(command, footprints):
     return out
 
 
+def cached_warning(rows):
+    """A warning line when some rows were reused from an earlier run (``--reuse-peers``)."""
+    if not any(r.cached for r in rows):
+        return []
+    return ["**Some peer rows are reused from an earlier run (`--reuse-peers`): their time ratios "
+            "compare two runs made under different loads (see 'load' per row); for ratios of "
+            "record, run the peers again in the same run.**", ""]
+
+
 def main_table(rows):
     """The per-(mesh, method) markdown table."""
     out = ["| mesh | faces | method | seconds | max D | mean D | flips | time / ABF | "
@@ -334,6 +343,7 @@ def render(rows, skipped, methods, command, footprints=None) -> str:
                "max D and the 3D-area-weighted mean D are over non-flipped faces. 'load' is the "
                "1-minute load average when the method's process started and ended.")
     out.append("")
+    out += cached_warning(rows)
     out += main_table(rows)
     if skipped:
         out.append("")
