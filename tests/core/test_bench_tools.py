@@ -1,0 +1,125 @@
+"""The benchmark's own tools: generated assets, the isolated run and the done-when verdicts.
+
+They are measuring instruments for issue 9's "done when", so their verdicts are checked here on
+numbers built by hand; nothing asserts a time.
+"""
+import os
+import sys
+
+import numpy as np
+import pytest
+
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "benchmarks"))
+
+import assets  # noqa: E402
+import bench_unwrap  # noqa: E402
+from isolate import run_isolated  # noqa: E402
+from measure import load_mesh_by_index, uv_stats  # noqa: E402
+
+import bd_uv  # noqa: E402
+
+DATA = os.path.join(ROOT, "tests", "data")
+
+
+def test_many_islands_is_deterministic_and_has_n_disk_like_islands(tmp_path):
+    a = assets.many_islands(40, seed=3, out_dir=str(tmp_path / "a"))
+    b = assets.many_islands(40, seed=3, out_dir=str(tmp_path / "b"))
+    with open(a, "rb") as fa, open(b, "rb") as fb:
+        assert fa.read() == fb.read()
+    V, F = load_mesh_by_index(a)
+    isl = bd_uv.islands(V, F)
+    assert len(isl) == 40
+    assert all(i.error is None for i in isl)
+    # no vertex is unreferenced, every patch keeps its orientation (a consistent disk or annulus)
+    assert np.array_equal(np.unique(F), np.arange(len(V)))
+    sizes = sorted(len(i.faces) for i in isl)
+    assert sizes[0] == 8
+
+
+def test_many_islands_holes_are_extra_boundary_loops(tmp_path):
+    V, F = load_mesh_by_index(assets.many_islands(300, seed=0, out_dir=str(tmp_path)))
+    isl = bd_uv.islands(V, F)
+    holed = [i for i in isl if len(i.loops) > 1]
+    assert holed and all(len(i.loops) == 2 for i in holed)
+    # Euler characteristic of an annulus is 0, of a disk 1
+    for i in isl:
+        e = np.unique(np.sort(i.tris[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+        chi = len(i.vertices) - len(e) + len(i.tris)
+        assert chi == 2 - len(i.loops)
+
+
+def test_patch_and_subdivide_keep_a_disk(tmp_path):
+    src = os.path.join(DATA, "three_peaks.off")
+    p = assets.patch(src, 1000, out_dir=str(tmp_path))
+    V, F = load_mesh_by_index(p)
+    assert len(F) >= 1000
+    isl = bd_uv.islands(V, F)
+    assert len(isl) == 1 and len(isl[0].loops) == 1
+    s = assets.subdivided(os.path.join(DATA, "nefertiti.off"), 1, out_dir=str(tmp_path))
+    V2, F2 = assets.read_obj_fast(s)
+    assert len(F2) == 4 * 562
+    V3, F3 = load_mesh_by_index(s)
+    assert np.array_equal(F2, F3) and np.allclose(V2, V3)
+
+
+def test_isolated_run_reports_the_same_distortion_and_a_peak():
+    path = os.path.join(DATA, "nefertiti.off")
+    r = run_isolated(path, "bd-init-lscm", 60)
+    assert "error" not in r, r
+    V, F = load_mesh_by_index(path)
+    from bd_uv.frames import lscm_map
+    from bd_uv.geometry import local_coordinates
+
+    isl = bd_uv.islands(V, F)[0]
+    u = lscm_map(local_coordinates(V[isl.vertices], isl.tris), isl.tris, len(isl.vertices),
+                 isl.loops)
+    cu = np.zeros((len(F), 3, 2))
+    cu[isl.faces] = np.stack([u[isl.tris].real, u[isl.tris].imag], axis=-1)
+    st = uv_stats(V, F, cu)
+    assert r["flips"] == st.flips == 0
+    assert r["max_d"] == pytest.approx(st.max_distortion, rel=1e-12)
+    assert r["rss_peak_mb"] >= r["rss_base_mb"] > 0
+
+
+def _row(mesh, key, seconds, max_d, mean_d, flips=0, c=None):
+    return bench_unwrap.Row(mesh, 100, key, seconds=seconds, max_d=max_d, mean_d=mean_d,
+                            flips=flips, certified_c=c)
+
+
+def test_done_when_verdicts():
+    rows = [
+        _row("a", "blender-abf", 1.0, 2.0, 1.10),
+        _row("a", "blender-lscm", 0.5, 1.9, 1.10),
+        _row("a", "blender-minstretch", 1.0, 3.0, 1.3),
+        _row("a", "igl-slim", 1.0, 1.7, 1.3, flips=0),
+        _row("a", "bd-init-lscm", 0.1, 1.8, 1.10),
+        _row("a", "bd-lscm-5", 0.9, 1.8, 1.12, c=5.0),           # mean 1.12 <= 1.122
+        _row("a", "bd-lscm-auto", 2.0, 1.6, 1.15, c=1.6),        # 1.6 < 1.7, mean 1.15 <= 1.155
+        _row("b", "blender-abf", 1.0, 2.0, 1.0),
+        _row("b", "blender-lscm", 0.5, 1.0, 1.0, flips=3),        # flipped: not a candidate
+        _row("b", "blender-minstretch", 1.0, 3.0, 1.3),
+        _row("b", "igl-slim", 1.0, 2.5, 1.3),
+        _row("b", "bd-init-lscm", 0.1, 1e4, 1.5, flips=2),
+        _row("b", "bd-lscm-5", 4.0, 5.0, 1.03, c=5.0),            # mean 1.03 > 1.02, 4x time
+        _row("b", "bd-lscm-auto", 2.5, 2.0, 1.04, c=2.0),         # 2.0 == ABF max: not below
+    ]
+    text = "\n".join(bench_unwrap.done_when(rows, bench_unwrap.DEFAULT_ORDER))
+    line = {ln.split(":")[0] + ":" + ln.split(":")[1]: ln for ln in text.splitlines()
+            if ln.startswith("- **")}
+
+    def verdict(prefix):
+        hits = [v for k, v in line.items() if prefix in k]
+        assert len(hits) == 1, (prefix, list(line))
+        return hits[0].split("**")[1]
+
+    assert verdict("C=5: 0 flips") == "PASS"
+    assert verdict("C=5: max D <= 5") == "PASS"
+    assert verdict("C=5: max D <= initial") == "PASS"        # b's initial map flips: n/a
+    assert verdict("C=5: mean D") == "FAIL"
+    assert verdict("auto: certified C") == "FAIL"
+    assert verdict("auto: mean D") == "PASS"
+    assert verdict("auto: median time") == "PASS"            # median(2.0, 2.5)
+    assert verdict("C=5: median time") == "FAIL"             # median(0.9, 4.0) = 2.45
+    assert verdict("C=5: no mesh above 3x") == "FAIL"
+    assert "n/a (initial map flips)" in text
