@@ -32,14 +32,16 @@ HIGH_DISTORTION = 50.0  # certified bounds above this get a "high_distortion" fl
 
 def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound=5.0,
            frames="auto", initial_uv=None, raise_bound=True, bound_limit=1000.0, cone="soc",
-           time_budget=None, overlap="cut", progress=None, cancel=None):
+           time_budget=None, overlap="cut", stretch=None, progress=None, cancel=None):
     """Map a triangle mesh to the plane with no flipped face and conformal distortion <= C.
 
     Parameters
     ----------
     V : (n,3) float array
     F : (m,3) int array
-    seams : (s,2) int array, optional, vertex pairs of the edges to cut along
+    seams : (s,2) int array, optional, vertex pairs of the edges to cut along; or "auto": cut
+        every island that cannot be certified as it is into certified disk charts
+        (``bd_uv.seams.unwrap_auto``, which also takes existing seams to keep)
     pin_corners : (p,) int array, optional, flat corner indices (face * 3 + corner)
     pin_uv : (p,2) float array, optional, the UV of each pinned corner (kept exactly)
     method : "lscm" | "arap" | "dirichlet"
@@ -54,6 +56,8 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
     overlap : "cut" | "fail", an island whose UVs lie over themselves: cut it into overlap-free
         pieces (islands of their own, ``cut_edges`` naming the mesh edges cut), or fail it with
         ``OverlapError``
+    stretch : float S, with seams="auto": every chart's singular values within [1/S, S] (UV area =
+        3D area); default 2
     progress : callable(fraction, message), optional
     cancel : object with ``is_set()``, optional
 
@@ -66,6 +70,19 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
     InvalidMeshError for a mesh that cannot be read, ValueError for bad options,
     CancelledError when cancelled.
     """
+    if isinstance(seams, str):
+        if seams != "auto":
+            raise ValueError(f"seams must be vertex pairs or 'auto', got {seams!r}")
+        if bound == "auto":
+            raise ValueError("seams='auto' needs a numeric bound C")
+        from ..seams import unwrap_auto  # the seams package builds on this module
+        return unwrap_auto(V, F, bound=bound, stretch=2.0 if stretch is None else stretch,
+                           method=method, frames=frames, cone=cone, progress=progress,
+                           cancel=cancel)[0]
+    if stretch is not None:
+        raise ValueError("stretch= is applied with seams='auto' (each chart's singular values "
+                         "within [1/S, S]); bounding stretch inside one island's solve is not "
+                         "available yet")
     t0 = time.perf_counter()
     _check_options(method, frames, bound, bound_limit, cone)
     if overlap not in ("cut", "fail"):
