@@ -50,7 +50,7 @@ class Batch:
     pin_uv: np.ndarray
     initial_uv: np.ndarray | None
     areas: np.ndarray = field(default=None)  # (m,) 3D area of each triangle
-    polygons: np.ndarray = field(default=None)  # (m,) polygon of each triangle, unique over parts
+    tri_polygons: np.ndarray = field(default=None)  # (m,) polygon per triangle, unique over parts
 
     @property
     def face_count(self):
@@ -134,7 +134,7 @@ def unwrap_arguments(batch, *, method, bound, minimise, raise_bound, bound_limit
     """Positional and keyword arguments of ``bd_uv.unwrap`` for ``batch``."""
     kwargs = dict(seams=batch.seams, method=method, bound="auto" if minimise else float(bound),
                   frames=frames, raise_bound=raise_bound, bound_limit=float(bound_limit),
-                  face_groups=batch.polygons)  # an overlap cut never splits a polygon
+                  face_groups=batch.tri_polygons)  # an overlap cut never splits a polygon
     if len(batch.pin_corners):
         kwargs.update(pin_corners=batch.pin_corners, pin_uv=batch.pin_uv)
     if frames == "input-uv":
