@@ -6,7 +6,8 @@ the ``bpy`` module in a child process:
 - ``BLENDER_USER_RESOURCES`` points at an empty directory, so Blender starts with a fresh user
   config and extension repositories, and nothing leaks into this test session.
 - The child sees an environment like Blender's own Python: numpy yes, but none of the packages the
-  zip bundles (scipy, clarabel, cffi, pycparser, trimesh): they are hidden from its ``sys.path``.
+  zip bundles (scipy, clarabel, cffi, pycparser, trimesh, shapely, qdldl): they are hidden from its
+  ``sys.path``.
   So the add-on can only work if Blender installed the zip's wheels into the extensions'
   ``.local/lib/python3.11/site-packages`` and the add-on imported them from there, which the child
   checks module by module.
@@ -208,7 +209,7 @@ def test_zip_installs_and_enables(installed):
 def test_bundled_wheels_are_the_ones_imported(installed):
     site = pathlib.Path(installed["site_packages"])
     assert set(installed["modules"]) == {"scipy", "clarabel", "cffi", "_cffi_backend", "pycparser",
-                                         "trimesh"}
+                                         "trimesh", "shapely", "qdldl"}
     for name, (path, _version) in installed["modules"].items():
         assert pathlib.Path(path).is_relative_to(site), (name, path)
     # scipy built for this Python; numpy is Blender's (here: the environment's).
