@@ -28,6 +28,7 @@ __all__ = [
     "selection",
     "set_selection",
     "select_polygons",
+    "mark_seams",
 ]
 
 
@@ -345,3 +346,27 @@ def select_polygons(mesh, poly_mask, select_mode=(False, False, True)):
                                      2)].all(axis=1))
     set_selection(mesh, vert, edge, poly_mask)
     return poly_mask
+
+
+def mark_seams(mesh, vertex_pairs):
+    """Mark the edges joining the (k,2) Blender vertex pairs as seams (Object Mode).
+
+    Pairs that are no edge of ``mesh`` are left out (never a polygon's diagonal). One bulk
+    ``foreach_get`` / ``foreach_set`` of ``use_seam``.
+
+    Returns
+    -------
+    (e,) bool
+        The edges that were not seams before and are now.
+    """
+    _require_object_mode(mesh)
+    n_edge, n = len(mesh.edges), max(len(mesh.vertices), 1)
+    pairs = np.sort(np.asarray(vertex_pairs, dtype=np.int64).reshape(-1, 2), axis=1)
+    ends = np.sort(_get(mesh.edges, "vertices", np.int32, n_edge, 2).astype(np.int64), axis=1)
+    seam = _get(mesh.edges, "use_seam", bool, n_edge)
+    hit = np.isin(ends[:, 0] * n + ends[:, 1], pairs[:, 0] * n + pairs[:, 1])
+    new = hit & ~seam
+    if new.any():
+        mesh.edges.foreach_set("use_seam", seam | hit)
+        mesh.update()
+    return new

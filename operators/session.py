@@ -136,6 +136,58 @@ def unwrap_arguments(batch, *, method, bound, minimise, raise_bound, bound_limit
     return (batch.V, batch.F), kwargs
 
 
+def auto_arguments(batch, *, method, bound, minimise, stretch, frames):
+    """Positional and keyword arguments of :func:`auto_seams.solve` (Seams "Add Where Needed").
+
+    Raises
+    ------
+    UserError for what the automatic seams cannot do yet: Minimise (it needs a numeric C),
+    From Current UVs, pinned UVs (its charts are not known before it runs, so it cannot keep
+    pins in place).
+    """
+    if minimise:
+        raise UserError("Add Where Needed seams need a bound C: turn off Minimise (or mark the "
+                        "seams and minimise then)")
+    if frames == "input-uv":
+        raise UserError("Add Where Needed seams start from the conformal map: set Frames to "
+                        "Auto (or mark the seams and unwrap From Current UVs)")
+    if len(batch.pin_corners):
+        raise UserError("Add Where Needed seams cannot keep pinned UVs in place: unpin them, "
+                        "unwrap with Sync Selection on or from the 3D Viewport, or mark the "
+                        "seams yourself")
+    tri_poly, tri_loops, poly_off, loop_off = [], [], 0, 0
+    for part in batch.parts:
+        tri_poly.append(part.arrays.tri_poly + poly_off)
+        tri_loops.append(part.arrays.tri_loops + loop_off)
+        poly_off += int(part.arrays.tri_poly.max()) + 1
+        loop_off += int(part.arrays.tri_loops.max()) + 1
+    kwargs = dict(tri_poly=np.concatenate(tri_poly), tri_loops=np.concatenate(tri_loops),
+                  seams=batch.seams, method=method, bound=float(bound), stretch=float(stretch),
+                  frames=frames)
+    return (batch.V, batch.F), kwargs
+
+
+def mark_seams(batch, written, added):
+    """Mark the seams ``added`` (k,2) vertex pairs of the batch on each written object's mesh
+    (Object Mode); objects skipped by ``write_back`` or with nothing written are left alone.
+
+    Returns
+    -------
+    int, edges newly marked as seams over all objects
+    """
+    added = np.asarray(added, dtype=np.int64).reshape(-1, 2)
+    total, offset = 0, 0
+    for part, w in zip(batch.parts, written):
+        nv = len(part.arrays.V)
+        mine = added[((added >= offset) & (added < offset + nv)).all(axis=1)] - offset
+        offset += nv
+        if w.skipped or not w.faces.any() or not len(mine):
+            continue
+        ob = bpy.data.objects.get(part.object_name)
+        total += int(mesh_data.mark_seams(ob.data, part.arrays.vertices[mine]).sum())
+    return total
+
+
 @dataclass
 class Written:
     """What ``write_back`` wrote for one object."""
