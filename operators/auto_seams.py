@@ -21,6 +21,9 @@ import numpy as np
 from .. import bd_uv
 from ..bd_uv.seams import edge_table, unwrap_auto
 
+# Rounds of giving split polygons to one chart and certifying the charts again.
+REPAIR_ROUNDS = 3
+
 __all__ = ["AutoSeams", "solve", "split_polygons", "torn_loops", "whole_polygon_labels"]
 
 
@@ -131,8 +134,8 @@ def _fail_torn(result, tri_loops):
     return dataclasses.replace(result, islands=islands)
 
 
-def solve(V, F, *, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0, method="lscm",
-          frames="auto", progress=None, cancel=None):
+def solve(V, F, *, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0, face_groups=None,
+          method="lscm", frames="auto", progress=None, cancel=None):
     """Unwrap with seams added where needed, every Blender polygon kept in one chart.
 
     Parameters
@@ -143,6 +146,7 @@ def solve(V, F, *, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0, meth
     seams : (s,2) int, the marked seams (all kept)
     bound : float, C (conformal distortion of every face, Lipman 2012 eq. 4.9)
     stretch : float, S (every chart's singular values within [1/S, S], section 6.3)
+    face_groups : (m,) int, optional, material of each triangle: seams prefer their boundaries
     method, frames, progress, cancel : as for ``bd_uv.unwrap``
 
     Returns
@@ -155,32 +159,43 @@ def solve(V, F, *, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0, meth
     seams = np.zeros((0, 2), np.int64) if seams is None else np.asarray(seams, np.int64)
     options = dict(method=method, frames=frames, progress=progress, cancel=cancel)
     result, added, _ = unwrap_auto(V, F, seams=seams, bound=float(bound), stretch=float(stretch),
-                                   **options)
+                                   face_groups=face_groups, **options)
     E = edge_table(V, F)
     n = len(V)
-    split = split_polygons(result.face_island, tri_poly)
+    inner = E.faces[:, 1] >= 0
+    # Edges inside one polygon (diagonals of quads and n-gons): never a seam in Blender.
+    diagonal = np.zeros(len(E.ends), dtype=bool)
+    diagonal[inner] = tri_poly[E.faces[inner, 0]] == tri_poly[E.faces[inner, 1]]
+    marked = np.zeros(len(E.ends), dtype=bool)
+    if len(seams):
+        ks = E.keys(seams, n)
+        marked[ks[ks >= 0]] = True
+    cut = marked.copy()
     k = E.keys(added, n)
-    k = k[k >= 0]
-    diagonal = tri_poly[E.faces[k, 0]] == tri_poly[np.maximum(E.faces[k, 1], 0)]
-    diagonal &= E.faces[k, 1] >= 0
-    if len(split) or diagonal.any():
-        P = V[F]
-        area = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+    cut[k[k >= 0]] = True
+    repaired = np.zeros(int(tri_poly.max(initial=-1)) + 1, dtype=bool)
+    P = V[F]
+    area = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+    for _ in range(REPAIR_ROUNDS):
+        # Certifying may cut an overlapping chart again, through a polygon too: repeat.
+        split = split_polygons(result.face_island, tri_poly)
+        if not len(split) and not (cut & diagonal).any():
+            break
+        repaired[split] = True
+        repaired[tri_poly[E.faces[cut & diagonal, 0]]] = True
         labels = whole_polygon_labels(result.face_island, tri_poly, area)
-        inner = E.faces[:, 1] >= 0
         across = np.zeros(len(E.ends), dtype=bool)
         across[inner] = labels[E.faces[inner, 0]] != labels[E.faces[inner, 1]]
-        marked = np.zeros(len(E.ends), dtype=bool)
-        if len(seams):
-            ks = E.keys(seams, n)
-            marked[ks[ks >= 0]] = True
-        slit = np.zeros(len(E.ends), dtype=bool)  # cuts inside a chart along real edges
-        slit[k[~diagonal]] = True
-        cut = across | marked | slit
+        cut = (cut & ~diagonal) | across | marked
         result = bd_uv.unwrap(V, F, seams=E.ends[cut], bound=float(bound), raise_bound=False,
                               **options)
-        added = E.ends[cut & ~marked]
+    # The pieces an overlap cut made in the last round are islands of their own: mark the real
+    # edges between islands too, so the marked seams are exactly where the UVs are cut.
+    island = result.face_island
+    across = np.zeros(len(E.ends), dtype=bool)
+    across[inner] = island[E.faces[inner, 0]] != island[E.faces[inner, 1]]
+    cut |= across & ~diagonal
+    added = E.ends[cut & ~marked]
     result = _fail_torn(result, np.asarray(tri_loops, np.int64))
-    repaired = len(np.union1d(split, tri_poly[E.faces[k[diagonal], 0]]))
     return AutoSeams(result, np.asarray(added, np.int64).reshape(-1, 2), len(result.islands),
-                     repaired)
+                     int(repaired.sum()))

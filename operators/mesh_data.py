@@ -63,6 +63,9 @@ class MeshArrays:
     topology_key : tuple
         Fingerprint of everything the solve depends on (counts, connectivity, positions, seams,
         selection, UVs and pins); compare before writing back.
+    material : (m,) int64 or None
+        Material slot index of each triangle's polygon (automatic seams prefer material
+        boundaries).
     """
 
     V: np.ndarray
@@ -76,6 +79,7 @@ class MeshArrays:
     vertices: np.ndarray
     uv_name: str | None
     topology_key: tuple
+    material: np.ndarray | None = None
 
 
 def _get(collection, attr, dtype, count, width=1):
@@ -198,6 +202,7 @@ def mesh_arrays(obj_or_mesh, *, selected_only=False, uv_name=None, scale=(1.0, 1
     loop_vert = _get(mesh.loops, "vertex_index", np.int32, n_loop)
     poly_select = _get(mesh.polygons, "select", bool, n_poly)
     poly_hide = _get(mesh.polygons, "hide", bool, n_poly)
+    poly_material = _get(mesh.polygons, "material_index", np.int32, n_poly).astype(np.int64)
 
     if selected_only:
         keep = face_mask_of_polygons(tri_poly, poly_select & ~poly_hide)
@@ -244,7 +249,8 @@ def mesh_arrays(obj_or_mesh, *, selected_only=False, uv_name=None, scale=(1.0, 1
     )
     return MeshArrays(V=V, F=F, tri_loops=tri_loops, tri_poly=tri_poly, seams=seams,
                       corner_uv=corner_uv, pin_corners=pin_corners, pin_uv=pin_uv,
-                      vertices=vertices, uv_name=layer_name, topology_key=key)
+                      vertices=vertices, uv_name=layer_name, topology_key=key,
+                      material=poly_material[tri_poly])
 
 
 def write_corner_uvs(mesh, uv_name, tri_loops, corner_uv, face_mask):

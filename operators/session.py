@@ -161,7 +161,9 @@ def auto_arguments(batch, *, method, bound, minimise, stretch, frames):
         tri_loops.append(part.arrays.tri_loops + loop_off)
         poly_off += int(part.arrays.tri_poly.max()) + 1
         loop_off += int(part.arrays.tri_loops.max()) + 1
+    material = np.concatenate([p.arrays.material for p in batch.parts])
     kwargs = dict(tri_poly=np.concatenate(tri_poly), tri_loops=np.concatenate(tri_loops),
+                  face_groups=material if len(np.unique(material)) > 1 else None,
                   seams=batch.seams, method=method, bound=float(bound), stretch=float(stretch),
                   frames=frames)
     return (batch.V, batch.F), kwargs
