@@ -24,7 +24,7 @@ from ..bd_uv.seams import edge_table, unwrap_auto
 # Rounds of giving split polygons to one chart and certifying the charts again.
 REPAIR_ROUNDS = 3
 
-__all__ = ["AutoSeams", "solve", "split_polygons", "torn_loops", "whole_polygon_labels"]
+__all__ = ["AutoSeams", "solve", "whole_polygons", "split_polygons", "torn_loops", "whole_polygon_labels"]
 
 
 @dataclass(frozen=True)
@@ -161,34 +161,14 @@ def solve(V, F, *, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0, face
     result, added, _ = unwrap_auto(V, F, seams=seams, bound=float(bound), stretch=float(stretch),
                                    face_groups=face_groups, **options)
     E = edge_table(V, F)
-    n = len(V)
+    marked = _edge_mask(E, seams, len(V))
+    cut = marked | _edge_mask(E, added, len(V))
+    result, cut, repaired = _repair(
+        V, F, E, tri_poly, result, cut, marked,
+        lambda pairs: bd_uv.unwrap(V, F, seams=pairs, bound=float(bound), raise_bound=False,
+                                   **options))
     inner = E.faces[:, 1] >= 0
-    # Edges inside one polygon (diagonals of quads and n-gons): never a seam in Blender.
-    diagonal = np.zeros(len(E.ends), dtype=bool)
-    diagonal[inner] = tri_poly[E.faces[inner, 0]] == tri_poly[E.faces[inner, 1]]
-    marked = np.zeros(len(E.ends), dtype=bool)
-    if len(seams):
-        ks = E.keys(seams, n)
-        marked[ks[ks >= 0]] = True
-    cut = marked.copy()
-    k = E.keys(added, n)
-    cut[k[k >= 0]] = True
-    repaired = np.zeros(int(tri_poly.max(initial=-1)) + 1, dtype=bool)
-    P = V[F]
-    area = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
-    for _ in range(REPAIR_ROUNDS):
-        # Certifying may cut an overlapping chart again, through a polygon too: repeat.
-        split = split_polygons(result.face_island, tri_poly)
-        if not len(split) and not (cut & diagonal).any():
-            break
-        repaired[split] = True
-        repaired[tri_poly[E.faces[cut & diagonal, 0]]] = True
-        labels = whole_polygon_labels(result.face_island, tri_poly, area)
-        across = np.zeros(len(E.ends), dtype=bool)
-        across[inner] = labels[E.faces[inner, 0]] != labels[E.faces[inner, 1]]
-        cut = (cut & ~diagonal) | across | marked
-        result = bd_uv.unwrap(V, F, seams=E.ends[cut], bound=float(bound), raise_bound=False,
-                              **options)
+    diagonal = _diagonals(E, tri_poly)
     # The pieces an overlap cut made in the last round are islands of their own: mark the real
     # edges between islands too, so the marked seams are exactly where the UVs are cut.
     island = result.face_island
@@ -198,4 +178,80 @@ def solve(V, F, *, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0, face
     added = E.ends[cut & ~marked]
     result = _fail_torn(result, np.asarray(tri_loops, np.int64))
     return AutoSeams(result, np.asarray(added, np.int64).reshape(-1, 2), len(result.islands),
-                     int(repaired.sum()))
+                     repaired)
+
+
+def _edge_mask(E, pairs, n):
+    """(e,) bool: the edges of ``E`` among the (k,2) vertex ``pairs``."""
+    mask = np.zeros(len(E.ends), dtype=bool)
+    if pairs is not None and len(pairs):
+        k = E.keys(pairs, n)
+        mask[k[k >= 0]] = True
+    return mask
+
+
+def _diagonals(E, tri_poly):
+    """(e,) bool: edges inside one polygon (diagonals of quads and n-gons), never seams."""
+    inner = E.faces[:, 1] >= 0
+    diagonal = np.zeros(len(E.ends), dtype=bool)
+    diagonal[inner] = tri_poly[E.faces[inner, 0]] == tri_poly[E.faces[inner, 1]]
+    return diagonal
+
+
+def _repair(V, F, E, tri_poly, result, cut, marked, resolve):
+    """Give every polygon a solve split (or cut along a diagonal) to one island, and solve again.
+
+    Each round relabels the triangles (:func:`whole_polygon_labels`), cuts along the real edges
+    between the new labels plus the real edges of ``cut``, and calls ``resolve(seams (s,2))``;
+    at most ``REPAIR_ROUNDS`` rounds (certifying may cut an overlapping island again).
+
+    Returns
+    -------
+    result, cut (e,) bool (the edges cut for it), repaired (polygons moved)
+    """
+    inner = E.faces[:, 1] >= 0
+    diagonal = _diagonals(E, tri_poly)
+    repaired = np.zeros(int(tri_poly.max(initial=-1)) + 1, dtype=bool)
+    P = V[F]
+    area = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+    for round_ in range(REPAIR_ROUNDS):
+        split = split_polygons(result.face_island, tri_poly)
+        if not len(split) and not (cut & diagonal).any():
+            break
+        repaired[split] = True
+        repaired[tri_poly[E.faces[cut & diagonal, 0]]] = True
+        # First round: the island holding most of the polygon; later rounds (the same polygon
+        # split again, by an overlap cut): the smallest island, so the cut moves off it.
+        size = np.bincount(result.face_island, minlength=len(result.islands))
+        weight = area if not round_ else 1.0 / size[result.face_island] * area.sum()
+        labels = whole_polygon_labels(result.face_island, tri_poly, weight)
+        across = np.zeros(len(E.ends), dtype=bool)
+        across[inner] = labels[E.faces[inner, 0]] != labels[E.faces[inner, 1]]
+        cut = (cut & ~diagonal) | across | marked
+        result = resolve(E.ends[cut])
+    return result, cut, int(repaired.sum())
+
+
+def whole_polygons(solve, V, F, *, tri_poly, tri_loops, seams=None, **kwargs):
+    """``solve(V, F, seams=seams, **kwargs)`` (``bd_uv.unwrap``, Seams "Marked") with every
+    Blender polygon kept in one island.
+
+    The core's overlap cut may split an island through a quad (Suzanne with Smart UV Project
+    seams: one triangle of a quad became an island of its own). Such polygons go to the island
+    holding most of their area and the islands are solved again with the real edges between
+    them as seams (not marked on the mesh); islands still giving a loop two UVs are failed.
+
+    Returns
+    -------
+    UnwrapResult
+    """
+    V = np.asarray(V, np.float64)
+    F = np.asarray(F, np.int64)
+    tri_poly = np.asarray(tri_poly, np.int64)
+    result = solve(V, F, seams=seams, **kwargs)
+    if len(split_polygons(result.face_island, tri_poly)):
+        E = edge_table(V, F)
+        marked = _edge_mask(E, seams, len(V))
+        result, _, _ = _repair(V, F, E, tri_poly, result, marked.copy(), marked,
+                               lambda pairs: solve(V, F, seams=pairs, **kwargs))
+    return _fail_torn(result, np.asarray(tri_loops, np.int64))

@@ -136,6 +136,18 @@ def unwrap_arguments(batch, *, method, bound, minimise, raise_bound, bound_limit
     return (batch.V, batch.F), kwargs
 
 
+def polygon_ids(batch):
+    """``tri_poly`` (m,) and ``tri_loops`` (m,3): each triangle's polygon and each corner's loop,
+    numbered over the whole batch (objects one after another)."""
+    tri_poly, tri_loops, poly_off, loop_off = [], [], 0, 0
+    for part in batch.parts:
+        tri_poly.append(part.arrays.tri_poly + poly_off)
+        tri_loops.append(part.arrays.tri_loops + loop_off)
+        poly_off += int(part.arrays.tri_poly.max()) + 1
+        loop_off += int(part.arrays.tri_loops.max()) + 1
+    return dict(tri_poly=np.concatenate(tri_poly), tri_loops=np.concatenate(tri_loops))
+
+
 def auto_arguments(batch, *, method, bound, minimise, stretch, frames):
     """Positional and keyword arguments of :func:`auto_seams.solve` (Seams "Add Where Needed").
 
@@ -155,14 +167,8 @@ def auto_arguments(batch, *, method, bound, minimise, stretch, frames):
         raise UserError("Add Where Needed seams cannot keep pinned UVs in place: unpin them, "
                         "unwrap with Sync Selection on or from the 3D Viewport, or mark the "
                         "seams yourself")
-    tri_poly, tri_loops, poly_off, loop_off = [], [], 0, 0
-    for part in batch.parts:
-        tri_poly.append(part.arrays.tri_poly + poly_off)
-        tri_loops.append(part.arrays.tri_loops + loop_off)
-        poly_off += int(part.arrays.tri_poly.max()) + 1
-        loop_off += int(part.arrays.tri_loops.max()) + 1
     material = np.concatenate([p.arrays.material for p in batch.parts])
-    kwargs = dict(tri_poly=np.concatenate(tri_poly), tri_loops=np.concatenate(tri_loops),
+    kwargs = dict(**polygon_ids(batch),
                   face_groups=material if len(np.unique(material)) > 1 else None,
                   seams=batch.seams, method=method, bound=float(bound), stretch=float(stretch),
                   frames=frames)

@@ -6,6 +6,7 @@ bar, and Esc cancels leaving mesh and UVs exactly as they were. Both end in ``_f
 back, pack, colour, report) so they cannot drift apart.
 """
 import dataclasses
+import functools
 import time
 
 import bpy
@@ -208,7 +209,8 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
         batch, auto, args, kwargs = prepared
         start = time.perf_counter()
         try:
-            result = (AUTO_SOLVE if auto else bd_uv.unwrap)(*args, **kwargs)
+            result = AUTO_SOLVE(*args, **kwargs) if auto else auto_seams.whole_polygons(
+                bd_uv.unwrap, *args, **kwargs, **session.polygon_ids(batch))
         except (bd_uv.BDError, ValueError) as error:
             return self._failed(error)
         return self._finish(context, batch, result, time.perf_counter() - start)
@@ -221,7 +223,10 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
         if prepared is None:
             return {'CANCELLED'}
         self._batch, auto, args, kwargs = prepared
-        self._job = UnwrapJob(AUTO_SOLVE if auto else SOLVE, *args, **kwargs).start()
+        # Marked seams: every polygon kept in one island (the core's overlap cut may split one).
+        solve = AUTO_SOLVE if auto else functools.partial(auto_seams.whole_polygons, SOLVE,
+                                                          **session.polygon_ids(self._batch))
+        self._job = UnwrapJob(solve, *args, **kwargs).start()
         wm = context.window_manager
         self._timer = wm.event_timer_add(0.1, window=context.window)
         wm.progress_begin(0, 100)
