@@ -24,7 +24,8 @@ from ..bd_uv.seams import edge_table, unwrap_auto
 # Rounds of giving split polygons to one chart and certifying the charts again.
 REPAIR_ROUNDS = 3
 
-__all__ = ["AutoSeams", "solve", "whole_polygons", "split_polygons", "torn_loops", "whole_polygon_labels"]
+__all__ = ["AutoSeams", "solve", "whole_polygons", "split_polygons", "torn_loops",
+           "whole_polygon_labels"]
 
 
 @dataclass(frozen=True)
