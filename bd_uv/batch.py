@@ -58,6 +58,7 @@ class Job:
     pin_corners : (p,) int64 flat corner indices (face * 3 + corner), or None
     pin_uv : (p,2) float64, or None
     corner_uv : (m,3,2) float64 current UVs (for ``frames="input-uv"``), or None
+    face_groups : (m,) int64 polygon of each triangle (a cut never splits a polygon), or None
     """
     name: str
     V: np.ndarray
@@ -66,6 +67,7 @@ class Job:
     pin_corners: np.ndarray = None
     pin_uv: np.ndarray = None
     corner_uv: np.ndarray = None
+    face_groups: np.ndarray = None
 
 
 @dataclass(frozen=True)
@@ -122,6 +124,8 @@ def unwrap_job(job, options, png=None):
         kwargs["initial_uv"] = job.corner_uv
     if job.pin_corners is not None and len(job.pin_corners):
         kwargs.update(pin_corners=job.pin_corners, pin_uv=job.pin_uv)
+    if job.face_groups is not None:
+        kwargs["face_groups"] = job.face_groups
     try:
         if kwargs.get("frames") == "input-uv" and job.corner_uv is None:
             raise ValueError(f"{job.name} has no UVs to take frames from (--frames input-uv)")

@@ -19,7 +19,7 @@ def _overlap_free(F, uv, faces):
     return bool(island_overlaps(F, uv, lab, 1).overlap_free[0])
 
 
-def split_overlapping(V, F, corner_uv, faces_of_island):
+def split_overlapping(V, F, corner_uv, faces_of_island, face_groups=None):
     """Cut one island into pieces whose UV boundaries are simple and disjoint.
 
     Parameters
@@ -29,6 +29,9 @@ def split_overlapping(V, F, corner_uv, faces_of_island):
     corner_uv : (m,3,2) float array, the island's UVs (no flipped face expected: a flipped face
         is never overlap-free on its own and stays a piece of one face)
     faces_of_island : (k,) int array, the island's faces (indices into F)
+    face_groups : (m,) int array, optional, a group per face of F (e.g. the Blender polygon each
+        triangle comes from): faces of one group always end in the same piece, so no cut runs
+        through a polygon
 
     Returns
     -------
@@ -48,6 +51,8 @@ def split_overlapping(V, F, corner_uv, faces_of_island):
     pairs = uv_boundary(Fi, uvi, np.zeros(k, dtype=np.int64)).interior // 3   # face pairs
     adj = sp.coo_array((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(k, k)).tocsr()
     adj = adj + adj.T
+    group = (np.arange(k) if face_groups is None
+             else np.unique(np.asarray(face_groups)[faces], return_inverse=True)[1].ravel())
     piece = np.full(k, -1, dtype=np.int64)
     todo = [np.arange(k)]
     while todo:  # one pass per piece or component, never per face
@@ -56,8 +61,16 @@ def split_overlapping(V, F, corner_uv, faces_of_island):
             piece[comp] = piece.max() + 1
             continue
         sub = adj[comp][:, comp]
-        seed = int(np.argmax(shortest_path(sub, unweighted=True, indices=0)))  # peripheral face
-        dist = shortest_path(sub, unweighted=True, indices=seed)
+        # Distances between groups (faces of one group at distance 0 from each other), so a ball
+        # holds whole groups.
+        gid, g = np.unique(group[comp], return_inverse=True)
+        gs = sub.tocoo()
+        keep = g[gs.row] != g[gs.col]
+        gsub = sp.coo_array((np.ones(int(keep.sum())), (g[gs.row[keep]], g[gs.col[keep]])),
+                            shape=(len(gid), len(gid))).tocsr()
+        seed_g = int(np.argmax(shortest_path(gsub, unweighted=True, indices=0)))  # peripheral
+        dist = shortest_path(gsub, unweighted=True, indices=seed_g)[g]
+        seed = int(np.flatnonzero(g == seed_g)[0])
         lo, hi = 0, int(np.max(dist[np.isfinite(dist)]))
         best = np.array([seed])
         while lo < hi:  # largest radius whose ball (its part around the seed) is overlap-free

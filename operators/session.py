@@ -50,6 +50,7 @@ class Batch:
     pin_uv: np.ndarray
     initial_uv: np.ndarray | None
     areas: np.ndarray = field(default=None)  # (m,) 3D area of each triangle
+    tri_polygons: np.ndarray = field(default=None)  # (m,) polygon per triangle, unique over parts
 
     @property
     def face_count(self):
@@ -120,15 +121,20 @@ def gather(objects, *, pin_unselected_uvs=False, use_object_scale=True, need_uvs
     V, F = np.concatenate(Vs), np.concatenate(Fs)
     P = V[F]
     areas = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+    polygons, offset = [], 0
+    for part in parts:
+        polygons.append(part.arrays.tri_poly + offset)
+        offset += int(part.arrays.tri_poly.max()) + 1
     return Batch(parts, V, F, np.concatenate(seams).reshape(-1, 2),
                  np.concatenate(pins), np.concatenate(pin_uv).reshape(-1, 2),
-                 np.concatenate(uvs) if need_uvs else None, areas)
+                 np.concatenate(uvs) if need_uvs else None, areas, np.concatenate(polygons))
 
 
 def unwrap_arguments(batch, *, method, bound, minimise, raise_bound, bound_limit, frames):
     """Positional and keyword arguments of ``bd_uv.unwrap`` for ``batch``."""
     kwargs = dict(seams=batch.seams, method=method, bound="auto" if minimise else float(bound),
-                  frames=frames, raise_bound=raise_bound, bound_limit=float(bound_limit))
+                  frames=frames, raise_bound=raise_bound, bound_limit=float(bound_limit),
+                  face_groups=batch.tri_polygons)  # an overlap cut never splits a polygon
     if len(batch.pin_corners):
         kwargs.update(pin_corners=batch.pin_corners, pin_uv=batch.pin_uv)
     if frames == "input-uv":

@@ -177,7 +177,7 @@ def unwrap_objects(objects, args, batch, options, mesh_data, session, source):
             arrays = mesh_data.mesh_arrays(ob, uv_name=args.uv_map, scale=scale)
             job = batch.Job(ob.name, arrays.V, arrays.F, seams=arrays.seams,
                             pin_corners=arrays.pin_corners, pin_uv=arrays.pin_uv,
-                            corner_uv=arrays.corner_uv)
+                            corner_uv=arrays.corner_uv, face_groups=arrays.tri_poly)
             result = batch.unwrap_job(job, options)
             entry = {"input": source, "object": ob.name, "output": None, "uv_map": None,
                      "polygons": int(len(np.unique(arrays.tri_poly))), **result.entry}

@@ -32,7 +32,8 @@ HIGH_DISTORTION = 50.0  # certified bounds above this get a "high_distortion" fl
 
 def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound=5.0,
            frames="auto", initial_uv=None, raise_bound=True, bound_limit=1000.0, cone="soc",
-           time_budget=None, overlap="cut", stretch=None, progress=None, cancel=None):
+           time_budget=None, overlap="cut", face_groups=None, stretch=None, progress=None,
+           cancel=None):
     """Map a triangle mesh to the plane with no flipped face and conformal distortion <= C.
 
     Parameters
@@ -56,6 +57,8 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
     overlap : "cut" | "fail", an island whose UVs lie over themselves: cut it into overlap-free
         pieces (islands of their own, ``cut_edges`` naming the mesh edges cut), or fail it with
         ``OverlapError``
+    face_groups : (m,) int array, optional, a group per face (the polygon each triangle comes
+        from): a cut never separates faces of one group
     stretch : float S, with seams="auto": every chart's singular values within [1/S, S] (UV area =
         3D area); default 2
     progress : callable(fraction, message), optional
@@ -129,13 +132,14 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
         done += share
     pinned = set(face_island[pins[0] // 3].tolist())
     results, face_island, corner_uv = _overlap_certificate(V, F, results, face_island, corner_uv,
-                                                           pinned, overlap == "cut")
+                                                           pinned, overlap == "cut", face_groups)
     if progress is not None:
         progress(1.0, "done")
     return UnwrapResult(corner_uv, face_island, results, time.perf_counter() - t0, method)
 
 
-def _overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True):
+def _overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True,
+                         face_groups=None):
     """Certify every certified island one-to-one from its final UVs (Lipman 2012, Theorems 5.1,
     5.2: simple, disjoint, rightly wound UV boundaries), and cut an island that overlaps itself
     into overlap-free pieces (``cut.split_overlapping``: no UV moves, so each piece keeps its
@@ -170,7 +174,7 @@ def _overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True
                                            uv=None))
             corner_uv[r.faces] = np.nan
             continue
-        pieces, cut_edges = split_overlapping(V, F, corner_uv, r.faces)
+        pieces, cut_edges = split_overlapping(V, F, corner_uv, r.faces, face_groups)
         local = np.full(len(F), -1, dtype=np.int64)
         local[r.faces] = np.arange(len(r.faces))
         for n, faces in enumerate(pieces):

@@ -359,10 +359,15 @@ def test_frames_from_current_uvs_keep_the_current_layout(addon):
         assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', frames=frames, bound=5.0,
                                     pack=False) == {'FINISHED'}
         set_mode(obj, 'OBJECT')
-        D, det, *_ = _stored(obj)
+        D, det, _, after, _ = _stored(obj)
         assert (det > 0).all() and D.max() <= 5.0 * SLACK
+        # An ABF island whose UVs lie over themselves is cut into pieces, moved apart: only the
+        # islands that stayed whole can keep their layout.
+        pairs = np.unique(np.stack([label, after], 1), axis=0)
+        whole = np.isin(label, np.flatnonzero(np.bincount(pairs[:, 0]) == 1))
+        assert whole.mean() > 0.8
         residual[frames] = _similarity_residual(
-            before, loop_uv_array(mesh)[loops].astype(np.float64), label)
+            before[whole], loop_uv_array(mesh)[loops].astype(np.float64)[whole], label[whole])
     assert residual['input-uv'] < 1e-5 and residual['auto'] > 1e-2, residual
 
 

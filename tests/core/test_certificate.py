@@ -233,3 +233,17 @@ def test_stored_layout_cuts_packs_and_recertifies():
     assert "crosses itself" in e["message"] and (lay.face_island == -1).all()
     uv, F_uv = lay.vertex_uv(F)
     assert len(uv) == 0 and (F_uv == -1).all()
+
+
+def test_a_cut_never_splits_a_polygon():
+    """With face_groups (the polygon each triangle comes from, as Blender hands them over), the
+    pieces of an overlapping island hold whole polygons: a Blender polygon has one UV per corner,
+    so a cut through its diagonal could not be stored."""
+    V, F = helicoid_ribbon()
+    h = len(F) // 2
+    quads = np.arange(len(F)) % h                  # triangles q and q + h make quad q
+    assert np.array_equal(F[:h, 0], F[h:, 0]) and np.array_equal(F[:h, 2], F[h:, 1])
+    res = bd_uv.unwrap(V, F, bound=5.0, face_groups=quads)
+    assert all(r.status == "certified" and r.overlap_free for r in res.islands)
+    assert len(res.islands) >= 2
+    assert np.all(res.face_island[:h] == res.face_island[h:])
