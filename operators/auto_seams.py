@@ -167,7 +167,7 @@ def solve(V, F, *, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0, face
     result, cut, repaired = _repair(
         V, F, E, tri_poly, result, cut, marked,
         lambda pairs: bd_uv.unwrap(V, F, seams=pairs, bound=float(bound), raise_bound=False,
-                                   **options))
+                                   face_groups=tri_poly, **options))
     inner = E.faces[:, 1] >= 0
     diagonal = _diagonals(E, tri_poly)
     # The pieces an overlap cut made in the last round are islands of their own: mark the real
@@ -237,10 +237,11 @@ def whole_polygons(solve, V, F, *, tri_poly, tri_loops, seams=None, **kwargs):
     """``solve(V, F, seams=seams, **kwargs)`` (``bd_uv.unwrap``, Seams "Marked") with every
     Blender polygon kept in one island.
 
-    The core's overlap cut may split an island through a quad (Suzanne with Smart UV Project
-    seams: one triangle of a quad became an island of its own). Such polygons go to the island
-    holding most of their area and the islands are solved again with the real edges between
-    them as seams (not marked on the mesh); islands still giving a loop two UVs are failed.
+    The core's overlap cut split islands through quads (Suzanne with Smart UV Project seams:
+    one triangle of a quad became an island of its own) until ``unwrap(face_groups=)`` kept
+    polygons whole; this stays as the guard of what a UV map can hold. Polygons split anyway go
+    to one island and the islands are solved again with the real edges between them as seams
+    (not marked on the mesh); islands still giving a loop two UVs are failed.
 
     Returns
     -------

@@ -145,13 +145,11 @@ def unwrap_arguments(batch, *, method, bound, minimise, raise_bound, bound_limit
 def polygon_ids(batch):
     """``tri_poly`` (m,) and ``tri_loops`` (m,3): each triangle's polygon and each corner's loop,
     numbered over the whole batch (objects one after another)."""
-    tri_poly, tri_loops, poly_off, loop_off = [], [], 0, 0
+    tri_loops, offset = [], 0
     for part in batch.parts:
-        tri_poly.append(part.arrays.tri_poly + poly_off)
-        tri_loops.append(part.arrays.tri_loops + loop_off)
-        poly_off += int(part.arrays.tri_poly.max()) + 1
-        loop_off += int(part.arrays.tri_loops.max()) + 1
-    return dict(tri_poly=np.concatenate(tri_poly), tri_loops=np.concatenate(tri_loops))
+        tri_loops.append(part.arrays.tri_loops + offset)
+        offset += int(part.arrays.tri_loops.max()) + 1
+    return dict(tri_poly=batch.tri_polygons, tri_loops=np.concatenate(tri_loops))
 
 
 def auto_arguments(batch, *, method, bound, minimise, stretch, frames):
