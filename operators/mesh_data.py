@@ -28,6 +28,7 @@ __all__ = [
     "selection",
     "set_selection",
     "select_polygons",
+    "mark_seams",
 ]
 
 
@@ -62,6 +63,9 @@ class MeshArrays:
     topology_key : tuple
         Fingerprint of everything the solve depends on (counts, connectivity, positions, seams,
         selection, UVs and pins); compare before writing back.
+    material : (m,) int64 or None
+        Material slot index of each triangle's polygon (automatic seams prefer material
+        boundaries).
     """
 
     V: np.ndarray
@@ -75,6 +79,7 @@ class MeshArrays:
     vertices: np.ndarray
     uv_name: str | None
     topology_key: tuple
+    material: np.ndarray | None = None
 
 
 def _get(collection, attr, dtype, count, width=1):
@@ -197,6 +202,7 @@ def mesh_arrays(obj_or_mesh, *, selected_only=False, uv_name=None, scale=(1.0, 1
     loop_vert = _get(mesh.loops, "vertex_index", np.int32, n_loop)
     poly_select = _get(mesh.polygons, "select", bool, n_poly)
     poly_hide = _get(mesh.polygons, "hide", bool, n_poly)
+    poly_material = _get(mesh.polygons, "material_index", np.int32, n_poly).astype(np.int64)
 
     if selected_only:
         keep = face_mask_of_polygons(tri_poly, poly_select & ~poly_hide)
@@ -243,7 +249,8 @@ def mesh_arrays(obj_or_mesh, *, selected_only=False, uv_name=None, scale=(1.0, 1
     )
     return MeshArrays(V=V, F=F, tri_loops=tri_loops, tri_poly=tri_poly, seams=seams,
                       corner_uv=corner_uv, pin_corners=pin_corners, pin_uv=pin_uv,
-                      vertices=vertices, uv_name=layer_name, topology_key=key)
+                      vertices=vertices, uv_name=layer_name, topology_key=key,
+                      material=poly_material[tri_poly])
 
 
 def write_corner_uvs(mesh, uv_name, tri_loops, corner_uv, face_mask):
@@ -345,3 +352,27 @@ def select_polygons(mesh, poly_mask, select_mode=(False, False, True)):
                                      2)].all(axis=1))
     set_selection(mesh, vert, edge, poly_mask)
     return poly_mask
+
+
+def mark_seams(mesh, vertex_pairs):
+    """Mark the edges joining the (k,2) Blender vertex pairs as seams (Object Mode).
+
+    Pairs that are no edge of ``mesh`` are left out (never a polygon's diagonal). One bulk
+    ``foreach_get`` / ``foreach_set`` of ``use_seam``.
+
+    Returns
+    -------
+    (e,) bool
+        The edges that were not seams before and are now.
+    """
+    _require_object_mode(mesh)
+    n_edge, n = len(mesh.edges), max(len(mesh.vertices), 1)
+    pairs = np.sort(np.asarray(vertex_pairs, dtype=np.int64).reshape(-1, 2), axis=1)
+    ends = np.sort(_get(mesh.edges, "vertices", np.int32, n_edge, 2).astype(np.int64), axis=1)
+    seam = _get(mesh.edges, "use_seam", bool, n_edge)
+    hit = np.isin(ends[:, 0] * n + ends[:, 1], pairs[:, 0] * n + pairs[:, 1])
+    new = hit & ~seam
+    if new.any():
+        mesh.edges.foreach_set("use_seam", seam | hit)
+        mesh.update()
+    return new

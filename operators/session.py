@@ -142,6 +142,64 @@ def unwrap_arguments(batch, *, method, bound, minimise, raise_bound, bound_limit
     return (batch.V, batch.F), kwargs
 
 
+def polygon_ids(batch):
+    """``tri_poly`` (m,) and ``tri_loops`` (m,3): each triangle's polygon and each corner's loop,
+    numbered over the whole batch (objects one after another)."""
+    tri_loops, offset = [], 0
+    for part in batch.parts:
+        tri_loops.append(part.arrays.tri_loops + offset)
+        offset += int(part.arrays.tri_loops.max()) + 1
+    return dict(tri_poly=batch.tri_polygons, tri_loops=np.concatenate(tri_loops))
+
+
+def auto_arguments(batch, *, method, bound, minimise, stretch, frames):
+    """Positional and keyword arguments of :func:`auto_seams.solve` (Seams "Add Where Needed").
+
+    Raises
+    ------
+    UserError for what the automatic seams cannot do yet: Minimise (it needs a numeric C),
+    From Current UVs, pinned UVs (its charts are not known before it runs, so it cannot keep
+    pins in place).
+    """
+    if minimise:
+        raise UserError("Add Where Needed seams need a bound C: turn off Minimise (or mark the "
+                        "seams and minimise then)")
+    if frames == "input-uv":
+        raise UserError("Add Where Needed seams start from the conformal map: set Frames to "
+                        "Auto (or mark the seams and unwrap From Current UVs)")
+    if len(batch.pin_corners):
+        raise UserError("Add Where Needed seams cannot keep pinned UVs in place: unpin them, "
+                        "unwrap with Sync Selection on or from the 3D Viewport, or mark the "
+                        "seams yourself")
+    material = np.concatenate([p.arrays.material for p in batch.parts])
+    kwargs = dict(**polygon_ids(batch),
+                  face_groups=material if len(np.unique(material)) > 1 else None,
+                  seams=batch.seams, method=method, bound=float(bound), stretch=float(stretch),
+                  frames=frames)
+    return (batch.V, batch.F), kwargs
+
+
+def mark_seams(batch, written, added):
+    """Mark the seams ``added`` (k,2) vertex pairs of the batch on each written object's mesh
+    (Object Mode); objects skipped by ``write_back`` or with nothing written are left alone.
+
+    Returns
+    -------
+    int, edges newly marked as seams over all objects
+    """
+    added = np.asarray(added, dtype=np.int64).reshape(-1, 2)
+    total, offset = 0, 0
+    for part, w in zip(batch.parts, written):
+        nv = len(part.arrays.V)
+        mine = added[((added >= offset) & (added < offset + nv)).all(axis=1)] - offset
+        offset += nv
+        if w.skipped or not w.faces.any() or not len(mine):
+            continue
+        ob = bpy.data.objects.get(part.object_name)
+        total += int(mesh_data.mark_seams(ob.data, part.arrays.vertices[mine]).sum())
+    return total
+
+
 @dataclass
 class Written:
     """What ``write_back`` wrote for one object."""

@@ -5,18 +5,22 @@ background :class:`~.worker.UnwrapJob`, polls it from a modal timer, shows progr
 bar, and Esc cancels leaving mesh and UVs exactly as they were. Both end in ``_finish`` (write
 back, pack, colour, report) so they cannot drift apart.
 """
+import dataclasses
+import functools
 import time
 
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty
 
 from .. import bd_uv
-from . import session
+from . import auto_seams, session
 from .editmode import edit_mesh_objects, object_mode
 from .worker import Failed, UnwrapJob
 
 # The background job's solve function (tests substitute a gated one to control timing).
 SOLVE = bd_uv.unwrap
+# ... and with Seams "Add Where Needed".
+AUTO_SOLVE = auto_seams.solve
 
 
 
@@ -30,6 +34,12 @@ _METHODS = (
      "Conformal, with a certified distortion bound"),
     ('arap', "BD-ARAP", "As-rigid-as-possible energy: keeps areas and lengths too, within the "
      "same certified bound"),
+)
+_SEAMS = (
+    ('MARKED', "Marked", "Cut along the marked seams only: every island must be a disk"),
+    ('AUTO', "Add Where Needed", "Keep the marked seams and add seams where an island cannot "
+     "be unwrapped within C and Limit Stretch (closed meshes, handles, too much distortion); "
+     "the added seams are marked on the mesh"),
 )
 _FRAMES = (
     ('auto', "Auto", "Start from the conformal map (or a flip-free one) chosen by bd-uv"),
@@ -48,6 +58,12 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
     bl_options = {'REGISTER', 'UNDO'}
 
     method: EnumProperty(name="Method", items=_METHODS, default='lscm')
+    seams: EnumProperty(name="Seams", items=_SEAMS, default='MARKED')
+    stretch: FloatProperty(name="Limit Stretch", default=2.0, min=1.0, soft_min=1.1,
+                           soft_max=10.0,
+                           description="Add Where Needed: largest stretch allowed on any face, "
+                           "with each chart scaled to its 3D area (both singular values within "
+                           "[1/S, S])")
     bound: FloatProperty(name="Bound C", default=5.0, min=1.0001, soft_min=1.05, soft_max=50.0,
                          description="Largest conformal distortion allowed on any face")
     minimise: BoolProperty(name="Minimise", default=False,
@@ -89,13 +105,16 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
         layout = self.layout
         layout.use_property_split = True
         layout.prop(self, "method")
+        layout.prop(self, "seams")
+        if self.seams == 'AUTO':
+            layout.prop(self, "stretch")
         layout.prop(self, "minimise")
         row = layout.row()
         row.active = not self.minimise
         row.prop(self, "bound")
         layout.prop(self, "raise_bound")
         row = layout.row()
-        row.active = self.raise_bound and not self.minimise
+        row.active = self.raise_bound and not self.minimise and self.seams != 'AUTO'
         row.prop(self, "bound_limit")
         layout.prop(self, "frames")
         layout.prop(self, "use_object_scale")
@@ -110,7 +129,9 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
 
     # -- shared --------------------------------------------------------------------------------
     def _prepare(self, context):
-        """Gather the batch and the core's arguments, or report why not (returns None)."""
+        """Gather the batch, whether the seams are added (``auto_seams.solve``) and the solve's
+        arguments, or report why not (returns None). With Seams "Add Where Needed" C is not
+        raised: a chart that cannot be certified at C is cut further."""
         space = context.space_data
         pin_unselected = (space is not None and space.type == 'IMAGE_EDITOR'
                           and not context.scene.tool_settings.use_uv_select_sync)
@@ -118,14 +139,20 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
             with object_mode(context) as objects:
                 batch = session.gather(objects, pin_unselected_uvs=pin_unselected,
                                        use_object_scale=self.use_object_scale,
-                                       need_uvs=self.frames == 'input-uv')
+                                       need_uvs=(self.frames == 'input-uv'
+                                                 and self.seams != 'AUTO'))
+            if self.seams == 'AUTO':
+                args, kwargs = session.auto_arguments(
+                    batch, method=self.method, bound=self.bound, minimise=self.minimise,
+                    stretch=self.stretch, frames=self.frames)
+                return batch, True, args, kwargs
         except session.UserError as error:
             self.report({'WARNING'}, str(error))
             return None
         args, kwargs = session.unwrap_arguments(
             batch, method=self.method, bound=self.bound, minimise=self.minimise,
             raise_bound=self.raise_bound, bound_limit=self.bound_limit, frames=self.frames)
-        return batch, args, kwargs
+        return batch, False, args, kwargs
 
     def _failed(self, error):
         """Report an exception from the core; nothing has been written."""
@@ -140,12 +167,18 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
             raise error
         return {'CANCELLED'}
 
-    def _finish(self, context, batch, result, seconds):
-        """Write, pack, re-certify what is stored (putting back what fails), colour, report.
+    def _finish(self, context, batch, solved, seconds):
+        """Write, pack, re-certify what is stored (putting back what fails), mark the added
+        seams, colour, report.
 
-        The report line and the panel show the figures of the post-write check. FINISHED when
-        anything was written and kept, as Blender's own Unwrap does when some islands fail;
-        CANCELLED when nothing at all was written (with a WARNING saying why)."""
+        ``solved`` is an ``UnwrapResult``, or with Seams "Add Where Needed" an
+        ``auto_seams.AutoSeams`` whose added seams are marked on every object something was
+        written and kept on (in the operator's one undo step). The report line and the panel
+        show the figures of the post-write check. FINISHED when anything was written and kept,
+        as Blender's own Unwrap does when some islands fail; CANCELLED when nothing at all was
+        written (with a WARNING saying why; no seam is marked then)."""
+        auto = solved if isinstance(solved, auto_seams.AutoSeams) else None
+        result = auto.result if auto is not None else solved
         with object_mode(context):
             written = session.write_back(batch, result)
         verified = None
@@ -155,6 +188,12 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
             with object_mode(context):
                 verified = session.verify_written(batch, result, written)
         summary = session.summarise(batch, result, written, seconds, verified, packed=self.pack)
+        if auto is not None and summary.written:
+            with object_mode(context):
+                marked = session.mark_seams(batch, written, auto.added)
+            summary = dataclasses.replace(summary, message=(
+                f"{summary.message}; {marked} seam{'s' if marked != 1 else ''} added, "
+                f"{auto.charts} chart{'s' if auto.charts != 1 else ''}"))
         if summary.written and self.show_distortion:
             bound = summary.bound_certified if summary.bound_certified > 1 else self.bound
             session.show_distortion(context, written, bound)
@@ -167,10 +206,11 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
         prepared = self._prepare(context)
         if prepared is None:
             return {'CANCELLED'}
-        batch, args, kwargs = prepared
+        batch, auto, args, kwargs = prepared
         start = time.perf_counter()
         try:
-            result = bd_uv.unwrap(*args, **kwargs)
+            result = AUTO_SOLVE(*args, **kwargs) if auto else auto_seams.whole_polygons(
+                bd_uv.unwrap, *args, **kwargs, **session.polygon_ids(batch))
         except (bd_uv.BDError, ValueError) as error:
             return self._failed(error)
         return self._finish(context, batch, result, time.perf_counter() - start)
@@ -182,8 +222,11 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
         prepared = self._prepare(context)
         if prepared is None:
             return {'CANCELLED'}
-        self._batch, args, kwargs = prepared
-        self._job = UnwrapJob(SOLVE, *args, **kwargs).start()
+        self._batch, auto, args, kwargs = prepared
+        # Marked seams: every polygon kept in one island (the core's overlap cut may split one).
+        solve = AUTO_SOLVE if auto else functools.partial(auto_seams.whole_polygons, SOLVE,
+                                                          **session.polygon_ids(self._batch))
+        self._job = UnwrapJob(solve, *args, **kwargs).start()
         wm = context.window_manager
         self._timer = wm.event_timer_add(0.1, window=context.window)
         wm.progress_begin(0, 100)
