@@ -130,10 +130,12 @@ def gather(objects, *, pin_unselected_uvs=False, use_object_scale=True, need_uvs
                  np.concatenate(uvs) if need_uvs else None, areas, np.concatenate(polygons))
 
 
-def unwrap_arguments(batch, *, method, bound, minimise, raise_bound, bound_limit, frames):
+def unwrap_arguments(batch, *, method, bound, minimise, raise_bound, bound_limit, frames,
+                     overlap="cut"):
     """Positional and keyword arguments of ``bd_uv.unwrap`` for ``batch``."""
     kwargs = dict(seams=batch.seams, method=method, bound="auto" if minimise else float(bound),
                   frames=frames, raise_bound=raise_bound, bound_limit=float(bound_limit),
+                  overlap=overlap,
                   face_groups=batch.tri_polygons)  # an overlap cut never splits a polygon
     if len(batch.pin_corners):
         kwargs.update(pin_corners=batch.pin_corners, pin_uv=batch.pin_uv)
@@ -177,6 +179,16 @@ def auto_arguments(batch, *, method, bound, minimise, stretch, frames):
                   seams=batch.seams, method=method, bound=float(bound), stretch=float(stretch),
                   frames=frames)
     return (batch.V, batch.F), kwargs
+
+
+def overlap_cuts(result):
+    """(k,2) batch vertex pairs of the edges along which the core cut islands whose UVs lay over
+    themselves (certified pieces only)."""
+    cuts = [r.cut_edges for r in result.islands
+            if r.status == "certified" and r.cut_edges is not None and len(r.cut_edges)]
+    if not cuts:
+        return np.zeros((0, 2), dtype=np.int64)
+    return np.unique(np.sort(np.concatenate(cuts), axis=1), axis=0)
 
 
 def mark_seams(batch, written, added):

@@ -41,6 +41,12 @@ _SEAMS = (
      "be unwrapped within C and Limit Stretch (closed meshes, handles, too much distortion); "
      "the added seams are marked on the mesh"),
 )
+_OVERLAP = (
+    ('CUT', "Cut Into Pieces", "An island whose UVs would lie over themselves is cut into "
+     "overlap-free pieces (no UV moves within a piece); the cut edges are marked as seams"),
+    ('KEEP', "Keep as One Island", "An island whose UVs would lie over themselves is not written: "
+     "it keeps its UVs and the report names it (mark seams, or let bd-uv cut it)"),
+)
 _FRAMES = (
     ('auto', "Auto", "Start from the conformal map (or a flip-free one) chosen by bd-uv"),
     ('input-uv', "From Current UVs", "Start from the UVs the faces have now: an island within C "
@@ -59,6 +65,7 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
 
     method: EnumProperty(name="Method", items=_METHODS, default='lscm')
     seams: EnumProperty(name="Seams", items=_SEAMS, default='MARKED')
+    overlap: EnumProperty(name="Overlaps", items=_OVERLAP, default='CUT')
     stretch: FloatProperty(name="Limit Stretch", default=2.0, min=1.0, soft_min=1.1,
                            soft_max=10.0,
                            description="Add Where Needed: largest stretch allowed on any face, "
@@ -108,6 +115,8 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
         layout.prop(self, "seams")
         if self.seams == 'AUTO':
             layout.prop(self, "stretch")
+        else:
+            layout.prop(self, "overlap")
         layout.prop(self, "minimise")
         row = layout.row()
         row.active = not self.minimise
@@ -151,7 +160,8 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
             return None
         args, kwargs = session.unwrap_arguments(
             batch, method=self.method, bound=self.bound, minimise=self.minimise,
-            raise_bound=self.raise_bound, bound_limit=self.bound_limit, frames=self.frames)
+            raise_bound=self.raise_bound, bound_limit=self.bound_limit, frames=self.frames,
+            overlap='cut' if self.overlap == 'CUT' else 'fail')
         return batch, False, args, kwargs
 
     def _failed(self, error):
@@ -194,6 +204,14 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
             summary = dataclasses.replace(summary, message=(
                 f"{summary.message}; {marked} seam{'s' if marked != 1 else ''} added, "
                 f"{auto.charts} chart{'s' if auto.charts != 1 else ''}"))
+        elif summary.written:
+            cut = session.overlap_cuts(result)
+            if len(cut):  # an island that overlapped itself was cut: show the artist where
+                with object_mode(context):
+                    marked = session.mark_seams(batch, written, cut)
+                summary = dataclasses.replace(summary, message=(
+                    f"{summary.message}; {marked} seam{'s' if marked != 1 else ''} marked where "
+                    "overlapping islands were cut"))
         if summary.written and self.show_distortion:
             bound = summary.bound_certified if summary.bound_certified > 1 else self.bound
             session.show_distortion(context, written, bound)

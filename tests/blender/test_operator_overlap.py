@@ -1,0 +1,104 @@
+"""uv.bd_unwrap on an island whose UVs would lie over themselves (issue 10): with Overlaps "Cut
+Into Pieces" the island comes back as overlap-free pieces and the cut edges are marked as seams
+(one undo step takes both back); with "Keep as One Island" nothing is written and the report
+names the island. Distortion and overlap are checked here independently of bd_uv."""
+import numpy as np
+from conftest import bpy, loop_uv_array, set_mode, triangle_distortion
+
+
+def add_helicoid_ribbon(turns=2.2, n_around=110, n_across=2, r0=0.3, r1=1.0, pitch=0.35):
+    """A ribbon of quads winding 2.2 times round an axis: its conformal map spirals over itself."""
+    th = np.linspace(0, 2 * np.pi * turns, n_around + 1)
+    r = np.linspace(r0, r1, n_across + 1)
+    T, R = np.meshgrid(th, r, indexing="ij")
+    V = np.stack([R * np.cos(T), R * np.sin(T), pitch * T], -1).reshape(-1, 3)
+    a = (np.arange(n_around)[:, None] * (n_across + 1) + np.arange(n_across)[None, :]).ravel()
+    quads = np.stack([a, a + n_across + 1, a + n_across + 2, a + 1], 1)
+    mesh = bpy.data.meshes.new("Ribbon")
+    mesh.from_pydata(V.tolist(), [], quads.tolist())
+    mesh.uv_layers.new(name="UVMap")
+    obj = bpy.data.objects.new("Ribbon", mesh)
+    bpy.context.collection.objects.link(obj)
+    return obj
+
+
+def seams(mesh):
+    s = np.zeros(len(mesh.edges), bool)
+    mesh.edges.foreach_get("use_seam", s)
+    return s
+
+
+def tri_arrays(mesh):
+    mesh.calc_loop_triangles()
+    V = np.array([v.co[:] for v in mesh.vertices])
+    tris = np.array([t.vertices[:] for t in mesh.loop_triangles])
+    loops = np.array([t.loops[:] for t in mesh.loop_triangles])
+    return V, tris, loops
+
+
+def segments_cross(a, b, c, d):
+    """Proper crossing of segments ab and cd (2D)."""
+    def orient(p, q, r):
+        return np.sign((q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0]))
+    return (orient(a, b, c) * orient(a, b, d) < 0) and (orient(c, d, a) * orient(c, d, b) < 0)
+
+
+def overlapping_triangles(uv):
+    """Pairs of UV triangles whose edges cross properly (a brute-force, bd_uv-free test)."""
+    lo, hi = uv.min(axis=1), uv.max(axis=1)
+    hits = 0
+    for i in range(len(uv)):
+        cand = np.flatnonzero(np.all(lo[i] < hi, axis=1) & np.all(lo < hi[i], axis=1))
+        for j in cand[cand > i]:
+            if any(segments_cross(uv[i][e], uv[i][(e + 1) % 3], uv[j][f], uv[j][(f + 1) % 3])
+                   for e in range(3) for f in range(3)):
+                hits += 1
+    return hits
+
+
+def test_cut_into_pieces_marks_the_cut_as_seams_and_undo_takes_both_back(addon, capsys):
+    obj = add_helicoid_ribbon()
+    set_mode(obj, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    bpy.ops.ed.undo_push(message="before")
+    set_mode(obj, 'OBJECT')
+    before_uv = loop_uv_array(obj.data).copy()
+    assert not seams(obj.data).any()
+    set_mode(obj, 'EDIT')
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', True, bound=5.0, overlap='CUT',
+                                pack=True) == {'FINISHED'}
+    out = capsys.readouterr().out
+    set_mode(obj, 'OBJECT')
+    mesh = obj.data
+    marked = seams(mesh)
+    assert marked.any() and "marked where overlapping islands were cut" in out, out
+    V, tris, loops = tri_arrays(mesh)
+    uv = loop_uv_array(mesh).astype(np.float64)[loops]
+    D, det = triangle_distortion(V, tris, uv)
+    assert (det > 0).all() and D.max() <= 5.0 * (1 + 1e-4)
+    assert overlapping_triangles(uv) == 0
+    # every marked edge is a real cut: the UVs on its two sides differ
+    edge_keys = {tuple(sorted(e.vertices)) for e, m in zip(mesh.edges, marked) if m}
+    assert all(k in {tuple(sorted(e.vertices)) for e in mesh.edges} for k in edge_keys)
+    # one undo step takes back the UVs and the seams
+    set_mode(obj, 'EDIT')
+    bpy.ops.ed.undo()
+    set_mode(obj, 'OBJECT')
+    obj = bpy.data.objects["Ribbon"]
+    assert not seams(obj.data).any()
+    assert np.array_equal(loop_uv_array(obj.data), before_uv)
+
+
+def test_keep_as_one_island_writes_nothing_and_names_it(addon, capsys):
+    obj = add_helicoid_ribbon()
+    set_mode(obj, 'OBJECT')
+    before_uv = loop_uv_array(obj.data).copy()
+    set_mode(obj, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    result = bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=5.0, overlap='KEEP')
+    out = capsys.readouterr().out
+    assert result == {'CANCELLED'}
+    assert "lie over themselves" in out, out
+    set_mode(obj, 'OBJECT')
+    assert np.array_equal(loop_uv_array(obj.data), before_uv)
+    assert not seams(obj.data).any()
