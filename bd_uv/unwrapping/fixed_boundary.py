@@ -1,0 +1,113 @@
+"""One island mapped with its outer boundary fixed on a circle, a rectangle or its pinned polygon.
+
+Lipman 2012, section 5: an orientation-preserving map that takes the boundary one-to-one onto a
+simple polygon is a bijection onto it (Theorem 5.1), also with holes, which stay free, once every
+loop's image is simple and nested rightly (Theorem 5.2). ``boundary.boundary_targets`` places the
+outer boundary, ``boundary.fixed_boundary_map`` minimises the energy over F_C (eqs. 4.15-4.18) with
+those targets (and the island's other pins) held fixed; the caller certifies the result from its
+final UVs like every island (``unwrap._finish``), and ``with_premises`` then checks Theorems
+5.1/5.2's premises on the certified UVs (``IslandResult.bijective``).
+"""
+import dataclasses
+
+import numpy as np
+
+from ..bijectivity import bijectivity_premises
+from ..boundary import SHAPES, boundary_targets, fixed_boundary_map
+from ..errors import CancelledError, InfeasibleError
+from .problem import Cancelled, IslandProblem
+from .strategies import RAISE_FACTOR
+
+BOUNDARIES = ("free",) + SHAPES
+FRAMES_NAME = "harmonic"  # fixed_boundary_map's frames: the Tutte embedding, turned to the targets
+
+
+def fixed_boundary_island(island, V, pins, shape, method, bound, raise_bound, bound_limit, cone,
+                          cancel, report):
+    """Map one island with its outer boundary on ``shape``; raise C when F_C is empty.
+
+    Parameters
+    ----------
+    island : mesh.Island (valid: ``island.error is None``)
+    V : (n,3) float64, the whole mesh's vertices
+    pins : (corners (p,), uv (p,2)), the whole mesh's pinned corners; those on the island's outer
+        boundary define the rectangle's corners or the pinned polygon (``boundary_targets``) and
+        are otherwise replaced by the targets; the island's other pins are kept exactly
+    shape : "circle" | "rectangle" | "pinned"
+    method : an energy of ``energies.energy`` ("lscm", "arap", "dirichlet", "biharmonic")
+    bound : float >= 1, the conformal bound C
+    raise_bound : bool, multiply C by ``strategies.RAISE_FACTOR`` while no map is found
+    bound_limit : float, the largest C tried
+    cone : "soc" | "linf"
+    cancel : object with ``is_set()`` or None
+    report : callable(fraction, message)
+
+    Returns
+    -------
+    prob : IslandProblem whose pins are the targets and kept pins (``pin_idx`` (q,),
+        ``pin_val`` (q,) complex), so that ``unwrap._finish`` writes them back exactly
+    u : (nv,) complex, the map in UV coordinates (not normalised)
+    C : float, the bound it is to be certified at
+    flags : list of str (``"bound_raised"``)
+
+    Raises
+    ------
+    InfeasibleError when the targets cannot be placed or no map is found up to ``bound_limit``;
+    Cancelled when cancelled.
+    """
+    prob = IslandProblem(island, V, pins, method, cone, cancel)
+    own = np.column_stack([prob.pin_val.real, prob.pin_val.imag])
+    try:
+        idx, uv = boundary_targets(prob.V, island.tris, island.loops, shape,
+                                   (prob.pin_idx, own) if len(prob.pin_idx) else None)
+    except ValueError as exc:
+        raise InfeasibleError(f"island {island.index}: boundary {shape!r}: {exc}",
+                              island.index) from None
+    keep = ~np.isin(prob.pin_idx, idx)  # pins inside the island or on holes stay where they are
+    all_idx = np.concatenate([idx, prob.pin_idx[keep]])
+    all_uv = np.concatenate([uv, own[keep]])
+    C, flags = float(bound), []
+    while True:
+        if cancel is not None and cancel.is_set():
+            raise Cancelled
+        report(0.2, f"solving with the boundary on a {shape} at C = {C:.3g}")
+        try:
+            res = fixed_boundary_map(prob.V, island.tris, island.loops, all_idx, all_uv,
+                                     method=method, bound=C, cone=cone, cancel=cancel)
+            break
+        except CancelledError:
+            raise Cancelled from None
+        except InfeasibleError as exc:
+            if not raise_bound or C * RAISE_FACTOR > bound_limit:
+                raise InfeasibleError(f"island {island.index}: {exc}"
+                                      + ("" if not raise_bound else
+                                         f" (tried up to C = {C:g}, bound limit "
+                                         f"{bound_limit:g})"), island.index) from None
+            C *= RAISE_FACTOR
+            if "bound_raised" not in flags:
+                flags.append("bound_raised")
+    prob.pin_idx = all_idx
+    prob.pin_val = all_uv[:, 0] + 1j * all_uv[:, 1]
+    prob.solves += res.solves
+    return prob, res.uv[:, 0] + 1j * res.uv[:, 1], C, flags
+
+
+def with_premises(result, island):
+    """``result`` with ``bijective`` set from Theorems 5.1/5.2's premises on its final UVs.
+
+    Parameters
+    ----------
+    result : IslandResult, certified or failed
+    island : mesh.Island it came from (its ``loops``)
+
+    Returns
+    -------
+    IslandResult; ``bijective`` is False for a failed island, and a certified island whose
+    premises fail says which in its message
+    """
+    if result.status != "certified":
+        return dataclasses.replace(result, bijective=False)
+    p = bijectivity_premises(result.uv, result.tris, island.loops)
+    msg = result.message + (", bijective onto its boundary polygon (Theorems 5.1, 5.2)"
+                            if p.bijective else f"; not shown bijective: {p.message}")
+    return dataclasses.replace(result, bijective=bool(p.bijective), message=msg)
