@@ -192,7 +192,8 @@ def _overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True
             err = OverlapError(f"island {r.index}: its UVs lie over themselves ({c.reason}); "
                                "cut it into overlap-free pieces or mark seams", r.index, r.faces)
             out.append(dataclasses.replace(r, status="failed", error=err, message=str(err),
-                                           uv=None))
+                                           uv=None, bijective=None if r.bijective is None
+                                           else False))
             corner_uv[r.faces] = np.nan
             continue
         pieces, cut_edges = split_overlapping(V, F, corner_uv, r.faces)

@@ -198,3 +198,78 @@ def batch_read_uv(path, F0):
             ft.append([int(t.split("/")[1]) - 1 for t in p[1:]])
     assert np.array_equal(np.array(fv), F0)
     return np.array(vt)[np.array(ft)]
+
+
+def holed_domain(outer):
+    """A bumpy disk ("circle") or square of half-width 1 with two holes (Triangle):
+    (V (n,3), F, outer boundary vertex ids)."""
+    from planar import circle, mesh_polygon, square
+    holes = [circle(12, 0.3, (0.2, 0.1))[::-1], circle(10, 0.2, (-0.5, -0.4))[::-1]]
+    poly = circle(40) if outer == "circle" else square(8)
+    V2, F = mesh_polygon(poly, holes, [[0.2, 0.1], [-0.5, -0.4]], area=0.01)
+    V = np.column_stack([V2, 0.3 * np.exp(-2 * (V2 ** 2).sum(1))])
+    b = boundary_vertices(F)
+    far = np.linalg.norm(V2[b], axis=1) if outer == "circle" else np.abs(V2[b]).max(1)
+    return V, F, b[far > 0.9]  # the holes reach 0.84 from the centre at most
+
+
+@pytest.mark.parametrize("shape", ["circle", "rectangle"])
+def test_holes_stay_free_inside_the_target(shape):
+    V, F, outer = holed_domain(shape)
+    res = bd_uv.unwrap(V, F, boundary=shape, bound=5.0)
+    r = res.islands[0]
+    assert res.certified and r.bijective is True and r.bound_certified == 5.0
+    assert len(bd_uv.islands(V, F)[0].loops) == 3
+    check_bijective_disk(V, F, res.corner_uv, 5.0)
+    uv = vertex_uv(V, F, res.corner_uv)
+    hole = np.setdiff1d(boundary_vertices(F), outer)
+    if shape == "circle":
+        centre, R, off = circle_fit(uv[outer])
+        assert off < 1e-9 * R and R == pytest.approx(np.sqrt(area_3d(V, F) / np.pi), rel=1e-9)
+        assert np.linalg.norm(uv[hole] - centre, axis=1).max() < R  # holes inside, not on it
+    else:
+        lo, hi = uv[outer].min(0), uv[outer].max(0)
+        d = np.abs(np.column_stack([uv[outer] - lo, uv[outer] - hi])).min(1)
+        assert d.max() < 1e-12 * (hi - lo).max()
+        assert np.all((uv[hole] > lo) & (uv[hole] < hi))
+    # the triangles cover the target minus the holes: less UV area than the target's
+    assert uv_area(res.corner_uv) < area_3d(V, F) * (1 + 1e-9)
+
+
+def test_a_hole_pushed_through_the_boundary_is_not_called_bijective():
+    """A disk's boundary on a rectangle with free holes: locally injective within C, but a hole
+    crosses the outer boundary, so Theorem 5.2's premises fail; the island is cut into
+    overlap-free pieces (or fails with overlap='fail'), never reported bijective."""
+    V, F, _ = holed_domain("circle")
+    res = bd_uv.unwrap(V, F, boundary="rectangle", bound=5.0)
+    assert res.certified and len(res.islands) > 1
+    assert all(r.bijective is False and "cut" in r.flags for r in res.islands)
+    assert len(overlapping_triangle_pairs(res.corner_uv[res.face_island == 0])) == 0
+    r = bd_uv.unwrap(V, F, boundary="rectangle", bound=5.0, overlap="fail").islands[0]
+    assert r.status == "failed" and r.bijective is False and "crosses itself" in r.message
+
+
+def test_every_island_gets_its_own_circle(nefertiti):
+    V, F = nefertiti
+    V2 = np.concatenate([V, V + [10.0, 0, 0]])
+    F2 = np.concatenate([F, F + len(V)])
+    res = bd_uv.unwrap(V2, F2, boundary="circle", bound=5.0)
+    assert res.certified and [r.bijective for r in res.islands] == [True, True]
+    for r in res.islands:
+        P = r.uv[np.isin(r.vertices, boundary_vertices(F2))]
+        _, R, off = circle_fit(P)
+        assert off < 1e-9 * R
+        assert R == pytest.approx(np.sqrt(area_3d(V, F) / np.pi), rel=1e-9)
+
+
+def test_cancel(nefertiti):
+    V, F = nefertiti
+
+    class Later:  # set after a few checks: inside the fixed-boundary solve
+        n = 0
+
+        def is_set(self):
+            self.n += 1
+            return self.n > 3
+    with pytest.raises(bd_uv.CancelledError):
+        bd_uv.unwrap(V, F, boundary="circle", cancel=Later())
