@@ -6,7 +6,7 @@ Per island (Lipman 2012, sections 4 and 6; issue 9's "never worse than its start
 2. a start within the bound is returned as it is; otherwise it is bent only where the bound demands
    (``strategies.bounded``), or C is minimised (``strategies.minimise``);
 3. every result is certified from its final UVs: no flipped face and max distortion <= C.
-With ``boundary`` other than "free", step 1-2 are replaced by a solve with the island's outer
+With ``boundary`` other than "free", steps 1-2 are replaced by a solve with the island's outer
 boundary fixed on a circle, a rectangle or its pinned polygon (``fixed_boundary``, section 5),
 certified the same way and checked for Theorems 5.1/5.2's premises (``bijective``).
 """

@@ -273,3 +273,19 @@ def test_cancel(nefertiti):
             return self.n > 3
     with pytest.raises(bd_uv.CancelledError):
         bd_uv.unwrap(V, F, boundary="circle", cancel=Later())
+
+
+def test_premises_sweep_keeps_every_pair_whose_boxes_meet():
+    """bijectivity_premises tests only segment pairs whose bounding boxes meet (a sweep, so long
+    boundaries stay cheap); recomputed here over all pairs, on grid-snapped segments with ties."""
+    from bd_uv.bijectivity import _box_pairs
+    rng = np.random.default_rng(3)
+    P = np.round(rng.uniform(0, 4, (300, 2)))
+    Pn = np.round(P + rng.uniform(-1.5, 1.5, (300, 2)))
+    lo, hi = np.minimum(P, Pn), np.maximum(P, Pn)
+    i, j = np.triu_indices(len(P), 1)
+    meet = np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1)
+    want = {(a, b) for a, b in zip(i[meet].tolist(), j[meet].tolist())}
+    a, b = _box_pairs(P, Pn)
+    got = list(zip(a.tolist(), b.tolist()))
+    assert len(got) == len(set(got)) and set(got) == want
