@@ -48,7 +48,8 @@ def fixed_boundary_island(island, V, pins, shape, method, bound, raise_bound, bo
         ``pin_val`` (q,) complex), so that ``unwrap._finish`` writes them back exactly
     u : (nv,) complex, the map in UV coordinates (not normalised)
     C : float, the bound it is to be certified at
-    flags : list of str (``"bound_raised"``)
+    flags : list of str: ``"bound_raised"``; ``"boundary_pins_moved"`` when pins on the outer
+        boundary were placed on the circle or rectangle rather than kept at their pinned UVs
 
     Raises
     ------
@@ -67,6 +68,8 @@ def fixed_boundary_island(island, V, pins, shape, method, bound, raise_bound, bo
     all_idx = np.concatenate([idx, prob.pin_idx[keep]])
     all_uv = np.concatenate([uv, own[keep]])
     C, flags = float(bound), []
+    if shape != "pinned" and not keep.all():
+        flags.append("boundary_pins_moved")  # on the circle/rectangle, not at their pinned UVs
     while True:
         if cancel is not None and cancel.is_set():
             raise Cancelled

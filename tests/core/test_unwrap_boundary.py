@@ -289,3 +289,19 @@ def test_premises_sweep_keeps_every_pair_whose_boxes_meet():
     a, b = _box_pairs(P, Pn)
     got = list(zip(a.tolist(), b.tolist()))
     assert len(got) == len(set(got)) and set(got) == want
+
+
+def test_rectangle_corners_from_four_pins_are_flagged_as_moved(nefertiti):
+    V, F = nefertiti
+    corners = outer_loop(V, F)[[2, 11, 19, 28]]
+    pc = np.array([3 * np.argwhere(F == v)[0][0] + np.argwhere(F == v)[0][1] for v in corners])
+    res = bd_uv.unwrap(V, F, boundary="rectangle", pin_corners=pc, pin_uv=np.zeros((4, 2)),
+                       bound=5.0)
+    r = res.islands[0]
+    assert res.certified and r.bijective is True and "boundary_pins_moved" in r.flags
+    got = res.corner_uv.reshape(-1, 2)[pc]                  # the rectangle's four corners
+    lo, hi = got.min(0), got.max(0)
+    assert {tuple(np.isclose(g, hi, rtol=0, atol=1e-12)) for g in got} == \
+        {(False, False), (True, False), (True, True), (False, True)}
+    assert np.allclose(lo, 0, atol=1e-12)
+    check_bijective_disk(V, F, res.corner_uv, 5.0)
