@@ -15,11 +15,15 @@ import numpy as np
 from ..bijectivity import bijectivity_premises
 from ..boundary import SHAPES, boundary_targets, fixed_boundary_map
 from ..errors import CancelledError, InfeasibleError
+from ..metrics import conformal_distortion
 from .problem import Cancelled, IslandProblem
-from .strategies import RAISE_FACTOR
+from .strategies import RAISE_FACTOR, guaranteed_bound
 
 BOUNDARIES = ("free",) + SHAPES
 FRAMES_NAME = "harmonic"  # fixed_boundary_map's frames: the Tutte embedding, turned to the targets
+# When faces with all three corners pinned force C above the bound, the first C tried is this much
+# above the smallest that admits them (a solve with that face exactly on its cone is fragile).
+FORCED_HEADROOM = 1.02
 
 
 def fixed_boundary_island(island, V, pins, shape, method, bound, raise_bound, bound_limit, cone,
@@ -70,6 +74,17 @@ def fixed_boundary_island(island, V, pins, shape, method, bound, raise_bound, bo
     C, flags = float(bound), []
     if shape != "pinned" and not keep.all():
         flags.append("boundary_pins_moved")  # on the circle/rectangle, not at their pinned UVs
+    forced = forced_distortion(prob.V, island.tris, all_idx, all_uv)
+    if forced > C / (1.0 + 1e-6):
+        why = (f"island {island.index}: faces with all three corners on the {shape} have "
+               f"distortion {forced:.4g} there, above C = {C:g}")
+        C = FORCED_HEADROOM * guaranteed_bound(forced)
+        if not raise_bound or C > bound_limit:
+            raise InfeasibleError(why + ("; allow raising the bound" if not raise_bound else
+                                         f", beyond the bound limit {bound_limit:g}")
+                                  + ", or choose other corners (pins) or split those faces",
+                                  island.index)
+        flags.append("bound_raised")  # straight to the C those faces need, not by steps
     while True:
         if cancel is not None and cancel.is_set():
             raise Cancelled
@@ -93,6 +108,26 @@ def fixed_boundary_island(island, V, pins, shape, method, bound, raise_bound, bo
     prob.pin_val = all_uv[:, 0] + 1j * all_uv[:, 1]
     prob.solves += res.solves
     return prob, res.uv[:, 0] + 1j * res.uv[:, 1], C, flags
+
+
+def forced_distortion(V, tris, idx, uv):
+    """The largest conformal distortion (eq. 4.9) of the faces whose three corners are all pinned:
+    a lower bound on C for any map with those pins (1 when there is no such face).
+
+    Parameters
+    ----------
+    V : (nv,3) float, tris : (k,3) int, idx : (p,) int pinned vertices, uv : (p,2) their targets
+
+    Returns
+    -------
+    float (inf when such a face is flat or flipped on the targets)
+    """
+    T = np.full((len(V), 2), np.nan)
+    T[idx] = uv
+    full = ~np.isnan(T[tris][..., 0]).any(axis=1)
+    if not full.any():
+        return 1.0
+    return float(np.max(conformal_distortion(V, tris[full], T[tris[full]])))
 
 
 def with_premises(result, island):

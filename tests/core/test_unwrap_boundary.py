@@ -305,3 +305,23 @@ def test_rectangle_corners_from_four_pins_are_flagged_as_moved(nefertiti):
         {(False, False), (True, False), (True, True), (False, True)}
     assert np.allclose(lo, 0, atol=1e-12)
     check_bijective_disk(V, F, res.corner_uv, 5.0)
+
+
+def test_a_face_with_three_corners_on_the_circle_raises_c_at_once():
+    """A grid's lone corner triangle has all three corners on the boundary: on the circle its
+    distortion is fixed by the targets, so C starts there instead of failing step by step."""
+    from helpers import grid
+    V, F = grid(8, 7, lambda x, y: 0.1 * x * y)
+    b = boundary_vertices(F)
+    lone = np.flatnonzero(np.isin(F, b).all(axis=1))
+    assert len(lone) == 2                                    # the two single-triangle corners
+    r = bd_uv.unwrap(V, F, boundary="circle", bound=1.5, raise_bound=False).islands[0]
+    assert r.status == "failed" and isinstance(r.error, bd_uv.InfeasibleError)
+    assert "all three corners" in r.message and r.bijective is False
+    res = bd_uv.unwrap(V, F, boundary="circle", bound=1.5)
+    r = res.islands[0]
+    assert res.certified and r.bijective is True and "bound_raised" in r.flags
+    D, flipped = reference_distortion(V, F, res.corner_uv)
+    assert not flipped.any() and D.max() <= r.bound_certified * (1 + 1e-6)
+    assert D[lone].max() > 1.5 and r.bound_certified <= 1.03 * D[lone].max()
+    assert len(overlapping_triangle_pairs(res.corner_uv)) == 0
