@@ -282,6 +282,8 @@ def _script_options(options):
         out.append("--no-raise")
     if options.get("time_budget") is not None:
         out += ["--time-budget", str(options["time_budget"])]
+    if options.get("boundary", "free") != "free":
+        out += ["--boundary", options["boundary"]]
     return out
 
 
@@ -467,6 +469,10 @@ def run_batch(args):
     if args.seams == "auto":
         if args.bound == "auto":
             print("error: --seams auto needs a numeric --bound C", file=sys.stderr)
+            return 2
+        if args.boundary != "free":
+            print("error: --seams auto makes free-boundary charts; use --boundary free with it",
+                  file=sys.stderr)
             return 2
         options["auto_stretch"] = args.stretch
     report_path = args.report or os.path.join(args.output, "report.json")

@@ -239,7 +239,7 @@ class FixedBoundaryMap:
 
 
 def fixed_boundary_map(V, tris, loops, idx, uv, method="dirichlet", bound=5.0, stretch=None,
-                       cone="soc"):
+                       cone="soc", cancel=None):
     """Minimise an energy over F_C with the vertices ``idx`` pinned at ``uv`` (section 5).
 
     The frames come from the flip-free Tutte embedding onto a circle (``frames.harmonic_map``),
@@ -257,6 +257,7 @@ def fixed_boundary_map(V, tris, loops, idx, uv, method="dirichlet", bound=5.0, s
     bound : float >= 1
     stretch : (smin, smax) or None, singular-value bounds relative to the 3D geometry (sec. 6.3)
     cone : "soc" | "linf"
+    cancel : object with ``is_set()``, optional (``CancelledError`` when set)
 
     Returns
     -------
@@ -284,12 +285,13 @@ def fixed_boundary_map(V, tris, loops, idx, uv, method="dirichlet", bound=5.0, s
     ut = ut * (z / np.sum(np.abs(a) ** 2)) if abs(z) > 0 else ut
     st = None if stretch is None else tuple(np.asarray(stretch, float))
     w = frames_from_map(alpha_of(ops, ut))
-    u, solves, _ = bounded_with_resets(ops, idx, val, w, bound, method, 1e-3, st, cone)
+    u, solves, _ = bounded_with_resets(ops, idx, val, w, bound, method, 1e-3, st, cone,
+                                      cancel)
     if u is None:
         start = ut[idx]
         for t in HOMOTOPY_STEPS:
             u, n, _ = bounded_with_resets(ops, idx, (1 - t) * start + t * val, w, bound, method,
-                                          1e-3, st if t == 1.0 else None, cone)
+                                          1e-3, st if t == 1.0 else None, cone, cancel)
             solves += n
             if u is None:
                 raise InfeasibleError(f"no map within C = {bound:g} reaches the boundary targets "

@@ -15,6 +15,7 @@ from .errors import BDError
 from .layout import stored_layout
 from .meshio import load_mesh, write_obj
 from .unwrapping import FRAMES, METHODS, unwrap
+from .unwrapping.fixed_boundary import BOUNDARIES
 
 
 def bound_arg(text):
@@ -33,7 +34,8 @@ def bound_arg(text):
 def add_solver_options(p):
     """Options shared by ``unwrap`` and ``batch``."""
     p.add_argument("--method", choices=METHODS, default="lscm",
-                   help="energy: BD-LSCM (default), BD-ARAP or BD-Dirichlet")
+                   help="energy: BD-LSCM (default), BD-ARAP, BD-Dirichlet or BD-Biharmonic "
+                        "(eq. 6.1, meant for --boundary circle|rectangle|pinned)")
     p.add_argument("--bound", type=bound_arg, default=5.0,
                    help="conformal distortion bound C >= 1, or 'auto' to minimise it (default 5)")
     p.add_argument("--frames", choices=FRAMES, default="auto",
@@ -49,13 +51,21 @@ def add_solver_options(p):
     p.add_argument("--stretch", type=float, default=2.0,
                    help="with --seams auto: every face's stretch max(sigma_1, 1/sigma_2), each "
                         "chart at its 3D area, at most S (default 2)")
+    p.add_argument("--boundary", choices=BOUNDARIES, default="free",
+                   help="each island's outer boundary: free (default), on a circle, on a rectangle "
+                        "(corners at the four boundary vertices nearest a right angle, or four "
+                        "pinned ones) or on the polygon of its pinned UVs; holes stay free; the "
+                        "report says bijective: true when Theorems 5.1/5.2's premises hold")
 
 
 def solver_kwargs(args):
     """The unwrap() keyword arguments from parsed options."""
-    return dict(method=args.method, bound=args.bound, frames=args.frames,
-                bound_limit=args.bound_limit, raise_bound=not args.no_raise, cone=args.cone,
-                time_budget=args.time_budget if args.bound == "auto" else None)
+    kwargs = dict(method=args.method, bound=args.bound, frames=args.frames,
+                  bound_limit=args.bound_limit, raise_bound=not args.no_raise, cone=args.cone,
+                  time_budget=args.time_budget if args.bound == "auto" else None)
+    if args.boundary != "free":  # absent by default: options hashed by --resume stay the same
+        kwargs["boundary"] = args.boundary
+    return kwargs
 
 
 LAYOUT_OPTIONS = ("pack", "cut", "margin")
@@ -172,6 +182,10 @@ def auto_seams(mesh, args, kwargs):
     if args.bound == "auto":
         print("error: --seams auto needs a numeric --bound C", file=sys.stderr)
         return None
+    if args.boundary != "free":
+        print("error: --seams auto makes free-boundary charts; use --boundary free with it",
+              file=sys.stderr)
+        return None
     from .seams import unwrap_auto
     seams = mesh.uv_seams() if mesh.corner_uv is not None else None
     res, added, info = unwrap_auto(mesh.V, mesh.F, seams=seams, bound=args.bound,
@@ -200,7 +214,8 @@ def _print_report(name, islands, layout, seconds, args, out):
                   f"{e['bound_certified']:.4g}, max distortion {e['max_distortion']:.4f}, mean "
                   f"{e['mean_distortion']:.4f}, {e['flipped']} flipped, overlap-free{cut}, "
                   f"frames {e['frames']}, {e['solves']} solves / {e['iterations']} iterations, "
-                  f"{e['seconds']:.2f} s" + (f" [{', '.join(e['flags'])}]" if e["flags"] else ""),
+                  f"{e['seconds']:.2f} s" + (f" [{', '.join(e['flags'])}]" if e["flags"] else "")
+                  + (", bijective" if e.get("bijective") else ""),
                   file=out)
         else:
             print(f"  island {e['island']}: FAILED ({e['error']}): {e['message']}", file=out)

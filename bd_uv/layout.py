@@ -98,6 +98,7 @@ class Layout:
             else:
                 bad = [c for c in mine if not c.certified]
                 e.update(status="failed", error="NotCertifiedAsStored", bound_certified=None,
+                         bijective=None if e["bijective"] is None else False,
                          max_distortion=max(c.max_distortion for c in mine),
                          message=f"island {r.index}: not written, the UVs as stored fail "
                                  f"certification: {bad[0].reason}")

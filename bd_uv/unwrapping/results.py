@@ -33,6 +33,7 @@ class IslandResult:
     overlap_free: bool = False
     cut_edges: np.ndarray = None
     cut_from: int = None
+    bijective: bool = None
 
     def summary(self):
         """The island's entry in the JSON report."""
@@ -48,6 +49,7 @@ class IslandResult:
                 "overlap_free": bool(self.overlap_free),
                 "cut_edges": None if self.cut_edges is None else self.cut_edges.tolist(),
                 "cut_from": self.cut_from,
+                "bijective": self.bijective,
                 "error": type(self.error).__name__ if self.error else None,
                 "message": self.message,
                 "timings": {k: round(v, 4) for k, v in self.timings.items()}}

@@ -6,6 +6,9 @@ Per island (Lipman 2012, sections 4 and 6; issue 9's "never worse than its start
 2. a start within the bound is returned as it is; otherwise it is bent only where the bound demands
    (``strategies.bounded``), or C is minimised (``strategies.minimise``);
 3. every result is certified from its final UVs: no flipped face and max distortion <= C.
+With ``boundary`` other than "free", steps 1-2 are replaced by a solve with the island's outer
+boundary fixed on a circle, a rectangle or its pinned polygon (``fixed_boundary``, section 5),
+certified the same way and checked for Theorems 5.1/5.2's premises (``bijective``).
 """
 import dataclasses
 import math
@@ -21,19 +24,20 @@ from ..mesh import check_arrays, islands as split_islands
 from ..metrics import certify, mean_distortion
 from . import strategies
 from .batched import conformal_islands
+from .fixed_boundary import BOUNDARIES, FRAMES_NAME, fixed_boundary_island, with_premises
 from .initial import start_map
 from .problem import STORE_HEADROOM, Cancelled, IslandProblem
 from .results import IslandResult, UnwrapResult
 
-METHODS = ("lscm", "arap", "dirichlet")
+METHODS = ("lscm", "arap", "dirichlet", "biharmonic")
 FRAMES = ("auto", "harmonic", "conformal", "input-uv", "constant")
 HIGH_DISTORTION = 50.0  # certified bounds above this get a "high_distortion" flag and a hint
 
 
 def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound=5.0,
            frames="auto", initial_uv=None, raise_bound=True, bound_limit=1000.0, cone="soc",
-           time_budget=None, overlap="cut", face_groups=None, stretch=None, progress=None,
-           cancel=None):
+           time_budget=None, overlap="cut", face_groups=None, stretch=None, boundary="free",
+           progress=None, cancel=None):
     """Map a triangle mesh to the plane with no flipped face and conformal distortion <= C.
 
     Parameters
@@ -45,7 +49,9 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
         (``bd_uv.seams.unwrap_auto``, which also takes existing seams to keep)
     pin_corners : (p,) int array, optional, flat corner indices (face * 3 + corner)
     pin_uv : (p,2) float array, optional, the UV of each pinned corner (kept exactly)
-    method : "lscm" | "arap" | "dirichlet"
+    method : "lscm" | "arap" | "dirichlet" | "biharmonic" (eq. 6.1; with boundary="free" it is
+        held at two boundary vertices of the start map, and its mean distortion is higher than
+        BD-LSCM's: it is meant for a fixed boundary)
     bound : float >= 1 or "auto"
     frames : "auto" | "harmonic" | "conformal" | "input-uv" | "constant"
     initial_uv : (m,3,2) float array, optional, per-corner UVs (needed for frames="input-uv":
@@ -61,6 +67,12 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
         from): a cut never separates faces of one group
     stretch : float S, with seams="auto": every chart's singular values within [1/S, S] (UV area =
         3D area); default 2
+    boundary : "free" | "circle" | "rectangle" | "pinned", where each island's outer boundary
+        goes (Lipman 2012, section 5; ``boundary.boundary_targets``): free (the default), on a
+        circle or a rectangle of the island's 3D area (rectangle corners at the four boundary
+        vertices nearest a right angle, or at four pinned ones), or on the polygon of its pinned
+        boundary vertices (at least 3); holes stay free. Needs a numeric bound; frames come
+        from a Tutte embedding ("auto" or "harmonic"). Each such island reports ``bijective``.
     progress : callable(fraction, message), optional
     cancel : object with ``is_set()``, optional
 
@@ -76,12 +88,23 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
     if isinstance(seams, str):
         if seams != "auto":
             raise ValueError(f"seams must be vertex pairs or 'auto', got {seams!r}")
+        if boundary != "free":
+            raise ValueError("seams='auto' makes free-boundary charts; boundary= needs "
+                             "boundary='free' there")
         if bound == "auto":
             raise ValueError("seams='auto' needs a numeric bound C")
         from ..seams import unwrap_auto  # the seams package builds on this module
         return unwrap_auto(V, F, bound=bound, stretch=2.0 if stretch is None else stretch,
                            method=method, frames=frames, cone=cone, progress=progress,
                            cancel=cancel)[0]
+    if boundary not in BOUNDARIES:
+        raise ValueError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}")
+    if boundary != "free" and bound == "auto":
+        raise ValueError(f"boundary={boundary!r} needs a numeric bound C (bound='auto' minimises C "
+                         "with a free boundary only)")
+    if boundary != "free" and frames not in ("auto", "harmonic"):
+        raise ValueError(f"boundary={boundary!r} takes its frames from a Tutte embedding onto the "
+                         f"boundary (frames 'auto' or 'harmonic'), got frames={frames!r}")
     if stretch is not None:
         raise ValueError("stretch= is applied with seams='auto' (each chart's singular values "
                          "within [1/S, S]); bounding stretch inside one island's solve is not "
@@ -105,7 +128,8 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
     face_island = np.empty(m, dtype=np.int64)
     for island in isl:
         face_island[island.faces] = island.index
-    batch, starts = _batched(V, isl, pins, face_island, method, bound, frames, progress, cancel)
+    batch, starts = ({}, {}) if boundary != "free" else \
+        _batched(V, isl, pins, face_island, method, bound, frames, progress, cancel)
     for island in isl:
         share = len(island.faces) / total
 
@@ -123,7 +147,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
             else:
                 res = _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_bound,
                                     bound_limit, cone, time_budget, report, cancel,
-                                    starts.get(island.index))
+                                    starts.get(island.index), boundary)
         except Cancelled:
             raise CancelledError("unwrap cancelled; nothing was changed") from None
         if res.status == "certified":
@@ -171,7 +195,8 @@ def _overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True
             err = OverlapError(f"island {r.index}: its UVs lie over themselves ({c.reason}); "
                                "cut it into overlap-free pieces or mark seams", r.index, r.faces)
             out.append(dataclasses.replace(r, status="failed", error=err, message=str(err),
-                                           uv=None))
+                                           uv=None, bijective=None if r.bijective is None
+                                           else False))
             corner_uv[r.faces] = np.nan
             continue
         pieces, cut_edges = split_overlapping(V, F, corner_uv, r.faces, face_groups)
@@ -190,6 +215,7 @@ def _overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True
                 tris=tris.reshape(-1, 3).astype(np.int64), uv=uv, distortion=r.distortion[rows],
                 max_distortion=float(np.max(r.distortion[rows])), overlap_free=True,
                 cut_edges=cut_edges, cut_from=r.index, flags=r.flags + ("cut",),
+                bijective=None if r.bijective is None else False,
                 message=(f"island {r.index} overlapped itself in UV and was cut into "
                          f"{len(pieces)} overlap-free pieces along {len(cut_edges)} edges "
                          f"(mark them as seams to keep the cut); piece {n + 1}: {len(faces)} "
@@ -270,10 +296,23 @@ def _batched(V, isl, pins, face_island, method, bound, frames, progress, cancel)
 
 
 def _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_bound, bound_limit,
-                  cone, time_budget, report, cancel, lscm=None):
+                  cone, time_budget, report, cancel, lscm=None, boundary="free"):
     t0 = time.perf_counter()
     if island.error is not None:
-        return _failed(island, island.error, t0, bound)
+        res = _failed(island, island.error, t0, bound)
+        return res if boundary == "free" else with_premises(res, island)
+    if boundary != "free":
+        try:
+            prob, u, C, flags = fixed_boundary_island(island, V, pins, boundary, method, bound,
+                                                      raise_bound, bound_limit, cone, cancel,
+                                                      report)
+        except IslandError as exc:
+            exc.island = island.index
+            return with_premises(_failed(island, exc, t0, bound, FRAMES_NAME), island)
+        except BDError as exc:
+            err = SolverError(f"island {island.index}: {exc}", island.index)
+            return with_premises(_failed(island, err, t0, bound, FRAMES_NAME), island)
+        return with_premises(_finish(prob, u, C, bound, FRAMES_NAME, flags, t0), island)
     try:
         prob = IslandProblem(island, V, pins, method, cone, cancel)
         start = start_map(prob, frames, initial_uv, report, lscm=lscm)
