@@ -131,11 +131,11 @@ def gather(objects, *, pin_unselected_uvs=False, use_object_scale=True, need_uvs
 
 
 def unwrap_arguments(batch, *, method, bound, minimise, raise_bound, bound_limit, frames,
-                     overlap="cut"):
+                     overlap="cut", boundary="free"):
     """Positional and keyword arguments of ``bd_uv.unwrap`` for ``batch``."""
     kwargs = dict(seams=batch.seams, method=method, bound="auto" if minimise else float(bound),
                   frames=frames, raise_bound=raise_bound, bound_limit=float(bound_limit),
-                  overlap=overlap,
+                  overlap=overlap, boundary=boundary,
                   face_groups=batch.tri_polygons)  # an overlap cut never splits a polygon
     if len(batch.pin_corners):
         kwargs.update(pin_corners=batch.pin_corners, pin_uv=batch.pin_uv)

@@ -47,6 +47,14 @@ _OVERLAP = (
     ('KEEP', "Keep as One Island", "An island whose UVs would lie over themselves is not written: "
      "it keeps its UVs and the report names it (mark seams, or let bd-uv cut it)"),
 )
+_BOUNDARY = (
+    ('free', "Free", "The boundary goes where the map puts it"),
+    ('circle', "Circle", "The outer boundary onto a circle (holes stay free): a bijection, "
+     "Lipman 2012, Theorems 5.1-5.2"),
+    ('rectangle', "Rectangle", "The outer boundary onto a rectangle, corners at the four boundary "
+     "vertices that best fit one, or at four pinned UVs (straighten a strip for a trim sheet)"),
+    ('pinned', "Pinned Polygon", "The outer boundary onto the polygon its pinned UVs make"),
+)
 _FRAMES = (
     ('auto', "Auto", "Start from the conformal map (or a flip-free one) chosen by bd-uv"),
     ('input-uv', "From Current UVs", "Start from the UVs the faces have now: an island within C "
@@ -66,6 +74,7 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
     method: EnumProperty(name="Method", items=_METHODS, default='lscm')
     seams: EnumProperty(name="Seams", items=_SEAMS, default='MARKED')
     overlap: EnumProperty(name="Overlaps", items=_OVERLAP, default='CUT')
+    boundary: EnumProperty(name="Boundary", items=_BOUNDARY, default='free')
     stretch: FloatProperty(name="Limit Stretch", default=2.0, min=1.0, soft_min=1.1,
                            soft_max=10.0,
                            description="Add Where Needed: largest stretch allowed on any face, "
@@ -117,6 +126,7 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
             layout.prop(self, "stretch")
         else:
             layout.prop(self, "overlap")
+            layout.prop(self, "boundary")
         layout.prop(self, "minimise")
         row = layout.row()
         row.active = not self.minimise
@@ -158,10 +168,14 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
         except session.UserError as error:
             self.report({'WARNING'}, str(error))
             return None
+        if self.boundary != 'free' and (self.minimise or self.frames == 'input-uv'):
+            self.report({'WARNING'}, "A fixed boundary needs a bound C and the Auto frames: turn "
+                        "off Minimise and From Current UVs, or set Boundary to Free")
+            return None
         args, kwargs = session.unwrap_arguments(
             batch, method=self.method, bound=self.bound, minimise=self.minimise,
             raise_bound=self.raise_bound, bound_limit=self.bound_limit, frames=self.frames,
-            overlap='cut' if self.overlap == 'CUT' else 'fail')
+            overlap='cut' if self.overlap == 'CUT' else 'fail', boundary=self.boundary)
         return batch, False, args, kwargs
 
     def _failed(self, error):

@@ -102,3 +102,36 @@ def test_keep_as_one_island_writes_nothing_and_names_it(addon, capsys):
     set_mode(obj, 'OBJECT')
     assert np.array_equal(loop_uv_array(obj.data), before_uv)
     assert not seams(obj.data).any()
+
+
+def test_boundary_circle_puts_the_outer_boundary_on_a_circle(addon):
+    """Boundary "Circle" (issue 12, section 5): every boundary vertex's UV on one circle, no
+    flipped face, distortion within C, no overlapping triangles."""
+    from conftest import add_grid
+    obj = add_grid(8, 6)
+    set_mode(obj, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=5.0, boundary='circle',
+                                pack=False) == {'FINISHED'}
+    set_mode(obj, 'OBJECT')
+    mesh = obj.data
+    V, tris, loops = tri_arrays(mesh)
+    uv = loop_uv_array(mesh).astype(np.float64)
+    D, det = triangle_distortion(V, tris, uv[loops])
+    # The square's corner faces lie on the circle with all three corners: their distortion is
+    # forced, so C is raised to it and the report says so.
+    last = bpy.context.window_manager.bd_uv_last_result
+    assert (det > 0).all() and D.max() <= last.bound_certified * (1 + 1e-4)
+    assert overlapping_triangles(uv[loops]) == 0
+    count = {}
+    for e in mesh.edges:
+        count[tuple(sorted(e.vertices))] = 0
+    for p in mesh.polygons:
+        for k in p.edge_keys:
+            count[tuple(sorted(k))] += 1
+    boundary = {v for k, c in count.items() if c == 1 for v in k}
+    loop_vert = np.array([lp.vertex_index for lp in mesh.loops])
+    on = np.isin(loop_vert, list(boundary))
+    centre = uv[on].mean(axis=0)
+    r = np.linalg.norm(uv[on] - centre, axis=1)
+    assert r.std() <= 1e-4 * r.mean()
