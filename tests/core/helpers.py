@@ -10,8 +10,8 @@ import numpy as np
 DATA = os.path.join(os.path.dirname(os.path.dirname(__file__)), "data")
 
 
-def reference_distortion(V, F, corner_uv):
-    """(D, flipped): D = s_max / s_min of each face's Jacobian (numpy SVD), flipped = det <= 0."""
+def reference_jacobians(V, F, corner_uv):
+    """(m,2,2) Jacobian of each face's map from its own 3D triangle (laid in 2D) to its UVs."""
     P = np.asarray(V, float)[np.asarray(F)]
     e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
     x = e1 / np.linalg.norm(e1, axis=1)[:, None]
@@ -21,7 +21,12 @@ def reference_distortion(V, F, corner_uv):
                   np.stack([np.einsum("ij,ij->i", e2, x), np.einsum("ij,ij->i", e2, y)], 1)], 2)
     uv = np.asarray(corner_uv, float)
     T = np.stack([uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]], 2)  # columns: UV edges
-    J = T @ np.linalg.inv(S)
+    return T @ np.linalg.inv(S)
+
+
+def reference_distortion(V, F, corner_uv):
+    """(D, flipped): D = s_max / s_min of each face's Jacobian (numpy SVD), flipped = det <= 0."""
+    J = reference_jacobians(V, F, corner_uv)
     s = np.linalg.svd(J, compute_uv=False)
     det = np.linalg.det(J)
     with np.errstate(divide="ignore"):

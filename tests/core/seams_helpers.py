@@ -6,6 +6,8 @@ edges.
 """
 import numpy as np
 
+from helpers import reference_jacobians
+
 
 def torus(R=4.0, r=1.0, nu=48, nv=16):
     """A torus of revolution (genus 1) as a triangulated grid; returns V, F and its two loops.
@@ -71,16 +73,7 @@ def genus(F):
 
 def face_singular_values(V, F, corner_uv):
     """(s1, s2, det) of each face's map from its 3D triangle to its UV triangle (numpy SVD)."""
-    P = np.asarray(V, float)[np.asarray(F)]
-    e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
-    x = e1 / np.linalg.norm(e1, axis=1)[:, None]
-    n = np.cross(e1, e2)
-    y = np.cross(n / np.linalg.norm(n, axis=1)[:, None], x)
-    S = np.stack([np.stack([np.einsum("ij,ij->i", e1, x), np.einsum("ij,ij->i", e1, y)], 1),
-                  np.stack([np.einsum("ij,ij->i", e2, x), np.einsum("ij,ij->i", e2, y)], 1)], 2)
-    uv = np.asarray(corner_uv, float)
-    T = np.stack([uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]], 2)
-    J = T @ np.linalg.inv(S)
+    J = reference_jacobians(V, F, corner_uv)
     s = np.linalg.svd(J, compute_uv=False)
     return s[:, 0], s[:, 1], np.linalg.det(J)
 
