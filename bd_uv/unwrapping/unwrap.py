@@ -93,6 +93,10 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
                              "boundary='free' there")
         if bound == "auto":
             raise ValueError("seams='auto' needs a numeric bound C")
+        if (pin_corners is not None and len(pin_corners)) or frames == "input-uv" \
+                or face_groups is not None:
+            raise ValueError("seams='auto' does not take pins, the current UVs or face_groups: "
+                             "call bd_uv.seams.unwrap_auto for material groups, or mark seams")
         from ..seams import unwrap_auto  # the seams package builds on this module
         return unwrap_auto(V, F, bound=bound, stretch=2.0 if stretch is None else stretch,
                            method=method, frames=frames, cone=cone, progress=progress,
