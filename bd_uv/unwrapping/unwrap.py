@@ -197,7 +197,9 @@ def _overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True
             continue
         if not cut:
             err = OverlapError(f"island {r.index}: its UVs lie over themselves ({c.reason}); "
-                               "cut it into overlap-free pieces or mark seams", r.index, r.faces)
+                               "cut it into overlap-free pieces, mark seams, or put its boundary "
+                               "on a circle (boundary='circle': a bijection without new seams)",
+                               r.index, r.faces)
             out.append(dataclasses.replace(r, status="failed", error=err, message=str(err),
                                            uv=None, bijective=None if r.bijective is None
                                            else False))
@@ -222,7 +224,8 @@ def _overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True
                 bijective=None if r.bijective is None else False,
                 message=(f"island {r.index} overlapped itself in UV and was cut into "
                          f"{len(pieces)} overlap-free pieces along {len(cut_edges)} edges "
-                         f"(mark them as seams to keep the cut); piece {n + 1}: {len(faces)} "
+                         f"(mark them as seams to keep the cut, or use boundary='circle' for "
+                         f"one bijective island); piece {n + 1}: {len(faces)} "
                          f"faces, max distortion {np.max(r.distortion[rows]):.3f} <= "
                          f"{r.bound_certified:.4g}"))
             face_island[faces] = index
