@@ -474,7 +474,7 @@ def run_batch(args):
             print("error: --seams auto makes free-boundary charts; use --boundary free with it",
                   file=sys.stderr)
             return 2
-        options["auto_stretch"] = args.stretch
+        options["auto_stretch"] = 2.0 if args.stretch is None else args.stretch
     report_path = args.report or os.path.join(args.output, "report.json")
     collisions = [t for t in tasks if os.path.abspath(t.output) == os.path.abspath(t.path)]
     if collisions:

@@ -48,9 +48,10 @@ def add_solver_options(p):
                    help="space: F_C with second-order cones (default) or F_C^inf (eq. 4.22)")
     p.add_argument("--time-budget", type=float, default=120.0,
                    help="seconds per island for --bound auto (default 120)")
-    p.add_argument("--stretch", type=float, default=2.0,
-                   help="with --seams auto: every face's stretch max(sigma_1, 1/sigma_2), each "
-                        "chart at its 3D area, at most S (default 2)")
+    p.add_argument("--stretch", type=float, default=None, metavar="S",
+                   help="every face's singular values within [1/S, S] at its island's own scale "
+                        "(UV area = 3D area; Lipman 2012, section 6.3): with --seams auto "
+                        "(default 2 there) and with a numeric --bound for BD-LSCM")
     p.add_argument("--boundary", choices=BOUNDARIES, default="free",
                    help="each island's outer boundary: free (default), on a circle, on a rectangle "
                         "(corners at the four boundary vertices nearest a right angle, or four "
@@ -65,6 +66,8 @@ def solver_kwargs(args):
                   time_budget=args.time_budget if args.bound == "auto" else None)
     if args.boundary != "free":  # absent by default: options hashed by --resume stay the same
         kwargs["boundary"] = args.boundary
+    if args.stretch is not None and args.seams != "auto":
+        kwargs["stretch"] = args.stretch
     return kwargs
 
 
@@ -189,12 +192,13 @@ def auto_seams(mesh, args, kwargs):
     from .seams import unwrap_auto
     seams = mesh.uv_seams() if mesh.corner_uv is not None else None
     res, added, info = unwrap_auto(mesh.V, mesh.F, seams=seams, bound=args.bound,
-                                   stretch=args.stretch, method=args.method, frames=args.frames,
+                                   stretch=2.0 if args.stretch is None else args.stretch,
+                                   method=args.method, frames=args.frames,
                                    cone=args.cone, progress=ProgressBar())
     print(f"seams auto: {info['charts']} charts, {len(added)} edges added, seam length "
           f"{info['seam_length']:.4g} ({100 * info['seam_length'] / info['edge_length']:.2f}% of "
           f"all edge length), max stretch {max(info['max_stretch'], default=1.0):.3f} <= "
-          f"{args.stretch:g}")
+          f"{2.0 if args.stretch is None else args.stretch:g}")
     return res
 
 

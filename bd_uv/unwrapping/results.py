@@ -31,6 +31,8 @@ class IslandResult:
     flags: tuple = ()
     timings: dict = field(default_factory=dict)
     overlap_free: bool = False
+    min_singular: float = float("nan")
+    max_singular: float = float("nan")
     cut_edges: np.ndarray = None
     cut_from: int = None
     bijective: bool = None
@@ -47,6 +49,7 @@ class IslandResult:
                 "frames": self.frames, "seconds": round(self.seconds, 4), "status": self.status,
                 "solves": self.solves, "iterations": self.iterations, "flags": list(self.flags),
                 "overlap_free": bool(self.overlap_free),
+                "min_singular": num(self.min_singular), "max_singular": num(self.max_singular),
                 "cut_edges": None if self.cut_edges is None else self.cut_edges.tolist(),
                 "cut_from": self.cut_from,
                 "bijective": self.bijective,

@@ -37,6 +37,8 @@ DESCENT = 0.15
 # the island's area (measured: three_peaks 10 % at C = 5, mannequin-devil 0.3 %, lion-head at C = 2
 # 0.2 %: a local bend leaves the conformal map's distortion elsewhere, which a solve cannot lower).
 POLISH_AREA = 0.05
+# Stretch bounds are projected onto [m/S, S/m]: the result is certified at its own final scale.
+STRETCH_MARGIN = 1.03
 
 _WHY = {"infeasible": "the space is empty for these frames",
         "inexact": "the solver did not converge", "error": "the solver failed",
@@ -61,6 +63,51 @@ def formulate(prob, start):
         prob.floor_scale(u, start.frames)
     else:
         prob.anchor_to(u)
+
+
+def stretch_range(prob, u):
+    """(smallest sigma_2, largest sigma_1) of a map relative to its own scale (UV area = 3D
+    area), Lipman 2012 eqs. 4.7-4.8, 6.3-6.4."""
+    a, b = np.abs(prob.alpha(u)), np.abs(prob.beta(u))
+    area = prob.ops.area
+    s = np.sqrt(max(float(np.sum(area * (a * a - b * b)) / np.sum(area)), 1e-300))
+    return float(np.min(a - b)) / s, float(np.max(a + b)) / s
+
+
+def bounded_stretch(prob, start, C, S, report):
+    """A map within C whose singular values lie in [1/S, S] at the island's own scale: the start
+    when it already does, else projection iterations with the singular-value bounds (Kovalsky et
+    al. 2015 with Lipman 2012, section 6.3), from the start and, if that stalls, from the harmonic
+    map. Returns (u, C, name)."""
+    if start.u is not None and np.isfinite(start.D) and fits(start, C):
+        lo, hi = stretch_range(prob, start.u)
+        if lo * (1 + STORE_HEADROOM) >= 1.0 / S and hi * (1 + STORE_HEADROOM) <= S:
+            return start.u, C, start.name
+    if len(prob.pin_idx) >= prob.nv:
+        raise InfeasibleError(f"island {prob.island.index}: every vertex is pinned and the pins "
+                              f"break the bounds C = {C:g}, S = {S:g}", prob.island.index)
+    fixed = prob.pin_idx if len(prob.pin_idx) else prob.island.loops[0][:1]
+    solver = ProjectionSolver(prob.ops, prob.nv, fixed, tris=prob.island.tris)
+    starts = [start] if start.u is not None else []
+    starts.append(start_map(prob, "harmonic", None, report))
+    t = time.perf_counter()
+    try:
+        for st in starts:
+            report(0.2, f"bending into C = {C:.3g}, stretch {S:.3g}")
+            values = prob.pin_val if len(prob.pin_idx) else st.u[fixed]
+            # margins: the result is measured again at its own scale, which the iterations move
+            res = solver.project(st.u, solve_bound(C), values, smin=STRETCH_MARGIN / S,
+                                 smax=S / STRETCH_MARGIN, max_iter=400, cancel=prob.cancel)
+            prob.iterations += res.iterations
+            if res.all_converged and prob.check(res.u, C)[0]:
+                lo, hi = stretch_range(prob, res.u)
+                if lo >= 1.0 / S and hi <= S:
+                    return res.u, C, st.name
+    finally:
+        prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
+    raise InfeasibleError(f"island {prob.island.index}: no map found within C = {C:g} and stretch "
+                          f"S = {S:g}; raise S or C, or let bd-uv add seams (seams='auto')",
+                          prob.island.index)
 
 
 def bounded(prob, start, C, raise_bound, limit, flags, report):

@@ -21,7 +21,8 @@ from ..cut import split_overlapping
 from ..errors import (BDError, CancelledError, InvalidMeshError, IslandError, OverlapError,
                       SolverError)
 from ..mesh import check_arrays, islands as split_islands
-from ..metrics import certify, mean_distortion
+from ..metrics import certify, mean_distortion, singular_values
+from ..spaces import check_stretch
 from . import strategies
 from .batched import conformal_islands
 from .fixed_boundary import BOUNDARIES, FRAMES_NAME, fixed_boundary_island, with_premises
@@ -110,9 +111,9 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
         raise ValueError(f"boundary={boundary!r} takes its frames from a Tutte embedding onto the "
                          f"boundary (frames 'auto' or 'harmonic'), got frames={frames!r}")
     if stretch is not None:
-        raise ValueError("stretch= is applied with seams='auto' (each chart's singular values "
-                         "within [1/S, S]); bounding stretch inside one island's solve is not "
-                         "available yet")
+        if bound == "auto" or method != "lscm" or boundary != "free":
+            raise ValueError("stretch= needs a numeric bound, method='lscm' and a free boundary")
+        check_stretch(float(bound), stretch)
     t0 = time.perf_counter()
     _check_options(method, frames, bound, bound_limit, cone)
     if overlap not in ("cut", "fail"):
@@ -132,7 +133,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
     face_island = np.empty(m, dtype=np.int64)
     for island in isl:
         face_island[island.faces] = island.index
-    batch, starts = ({}, {}) if boundary != "free" else \
+    batch, starts = ({}, {}) if boundary != "free" or stretch is not None else \
         _batched(V, isl, pins, face_island, method, bound, frames, progress, cancel)
     for island in isl:
         share = len(island.faces) / total
@@ -151,7 +152,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
             else:
                 res = _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_bound,
                                     bound_limit, cone, time_budget, report, cancel,
-                                    starts.get(island.index), boundary)
+                                    starts.get(island.index), boundary, stretch)
         except Cancelled:
             raise CancelledError("unwrap cancelled; nothing was changed") from None
         if res.status == "certified":
@@ -303,7 +304,7 @@ def _batched(V, isl, pins, face_island, method, bound, frames, progress, cancel)
 
 
 def _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_bound, bound_limit,
-                  cone, time_budget, report, cancel, lscm=None, boundary="free"):
+                  cone, time_budget, report, cancel, lscm=None, boundary="free", stretch=None):
     t0 = time.perf_counter()
     if island.error is not None:
         res = _failed(island, island.error, t0, bound)
@@ -334,6 +335,8 @@ def _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_boun
         if bound == "auto":
             u, C, name = strategies.minimise(prob, start, bound_limit, time_budget, flags, report,
                                              t0)
+        elif stretch is not None:
+            u, C, name = strategies.bounded_stretch(prob, start, float(bound), stretch, report)
         else:
             u, C, name = strategies.bounded(prob, start, float(bound), raise_bound, bound_limit,
                                             flags, report)
@@ -341,7 +344,7 @@ def _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_boun
             u = strategies.arap(prob, u, C, report)
     except IslandError as exc:
         return _failed(island, exc, t0, bound, start.name, flags, prob.timings)
-    return _finish(prob, u, C, bound, name, flags, t0)
+    return _finish(prob, u, C, bound, name, flags, t0, stretch)
 
 
 def certified_bound(max_distortion):
@@ -352,7 +355,7 @@ def certified_bound(max_distortion):
     return math.ceil(c * 10 ** digits) / 10 ** digits
 
 
-def _finish(prob, u, C, bound, frames_name, flags, t0):
+def _finish(prob, u, C, bound, frames_name, flags, t0, stretch=None):
     """Scale and place the island, certify it from its final UVs in the input geometry."""
     isl = prob.island
     npins = len(prob.pin_idx)
@@ -371,6 +374,10 @@ def _finish(prob, u, C, bound, frames_name, flags, t0):
     t = time.perf_counter()
     target = C if bound != "auto" else certified_bound(C)
     ok, D, n_flipped = certify(prob.V, isl.tris, uv[isl.tris], target)
+    smax, smin = singular_values(prob.V, isl.tris, uv[isl.tris], normalize=npins < 2)
+    lo_s, hi_s = float(np.min(smin)), float(np.max(smax))
+    if stretch is not None:  # section 6.3: 1/S <= gamma <= Gamma <= S, certified from the UVs
+        ok = ok and lo_s >= (1.0 - 1e-6) / stretch and hi_s <= stretch * (1.0 + 1e-6)
     prob.timings["certify"] += time.perf_counter() - t
     maxD = float(np.max(D))
     meanD = mean_distortion(prob.V, isl.tris, D)
@@ -378,6 +385,7 @@ def _finish(prob, u, C, bound, frames_name, flags, t0):
     common = dict(bound_requested=bound, max_distortion=maxD, mean_distortion=meanD,
                   flipped=n_flipped, frames=frames_name, seconds=seconds, solves=prob.solves,
                   iterations=prob.iterations, distortion=D, flags=tuple(flags),
+                  min_singular=lo_s, max_singular=hi_s,
                   timings=dict(prob.timings))
     if not ok:
         err = SolverError(f"island {isl.index}: the result could not be certified (max distortion "
