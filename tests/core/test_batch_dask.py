@@ -1,6 +1,6 @@
 """bd_uv batch on Dask distributed: a worker killed mid-batch, its file retried elsewhere.
 
-The batch is 42 files made from the test meshes (perturbed copies, one unreadable, one closed).
+The batch is 40 files made from the test meshes (perturbed copies, one unreadable, one closed).
 It runs on a 2-worker LocalCluster (worker processes) while a thread kills one worker's process
 after a few files; the result must match a local ``--jobs 2`` run file by file: same statuses and
 errors, and certified UVs whose distortion, recomputed from the written OBJs, is the same.
@@ -85,8 +85,8 @@ def by_input(report_path):
 
 
 def test_dask_batch_survives_a_killed_worker_and_matches_the_local_pool(tmp_path):
-    files = asset_folder(tmp_path / "in")
-    assert len(files) == 42
+    files = asset_folder(tmp_path / "in", big=6, small=32)
+    assert len(files) == 40
     assert run(tmp_path / "in", "-o", tmp_path / "pool", "--jobs", "2", "--bound", "4") == 1
 
     with dask.config.set({"distributed.scheduler.allowed-failures": 2}), \
@@ -119,7 +119,7 @@ def test_dask_batch_survives_a_killed_worker_and_matches_the_local_pool(tmp_path
     assert set(pool) == set(dask_items) == {f.name for f in files}
     counts = ("files", "meshes", "certified", "partial", "failed", "not_run")
     assert [dask_rep["summary"][k] for k in counts] == [pool_rep["summary"][k] for k in counts] \
-        == [42, 42, 40, 0, 2, 0]
+        == [40, 40, 38, 0, 2, 0]
     assert dask_rep["summary"]["scheduler"] == cluster.scheduler_address
     assert pool["tetra.off"]["error"] == dask_items["tetra.off"]["error"] == "ClosedIslandError"
     assert pool["broken.ply"]["error"] == dask_items["broken.ply"]["error"] == "InvalidMeshError"
