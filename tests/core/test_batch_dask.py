@@ -57,7 +57,8 @@ def asset_folder(folder, big=10, small=30, seed=0):
         V, F = load_off(f"{name}.off")
         edge = np.linalg.norm(V[F[:, 1]] - V[F[:, 0]], axis=1).mean()
         for k in range(count):
-            write_off(folder / f"{name}-{k:02d}.off", V + 0.02 * edge * rng.standard_normal(V.shape), F)
+            noise = 0.02 * edge * rng.standard_normal(V.shape)
+            write_off(folder / f"{name}-{k:02d}.off", V + noise, F)
     (folder / "tetra.off").write_text("OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n"
                                       "3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n")
     (folder / "broken.ply").write_text("ply\nformat ascii 1.0\nelement vertex 3\nend_header\n")
