@@ -476,19 +476,22 @@ def run_batch(args):
                             interrupted=interrupted, running=not final,
                             resumed=[results[i] for i in sorted(carried)],
                             files_run=sum(r is not None for r in results) - len(carried),
-                            startup=ready[0] - t0 if ready else now - t0, **setup)
+                            startup=(ready[0] if ready else now) - t0,
+                            working=(last[0] if last else now) - (ready[0] if ready else now),
+                            **setup)
 
     ledger = Ledger(report_path, build)
     ledger.start([(os.path.abspath(tasks[i].path), results[i]) for i in sorted(carried)])
     progress = Progress(len(todo), weight=sum(_size(tasks[i].path) for i in todo))
 
     def on_done(i, entries, attempts):
+        last[:] = [time.perf_counter()]
         results[i] = entries
         ledger.record(os.path.abspath(tasks[i].path), entries)
         progress.advance("\n".join(item_line(e) for e in entries),
                          [e["status"] for e in entries], _size(tasks[i].path))
 
-    ready = []
+    ready, last = [], []
 
     def on_start(workers):
         setup["jobs"] = workers
@@ -522,20 +525,22 @@ def run_batch(args):
 
 
 def batch_report(items, options, wall, jobs, files, interrupted=False, running=False,
-                 resumed=(), scheduler="pool", files_run=None, startup=0.0):
+                 resumed=(), scheduler="pool", files_run=None, startup=0.0, working=None):
     """The JSON report: options, a summary and one entry per mesh (file or .blend object).
 
     ``resumed`` are the entry lists of the files kept from an earlier run by ``--resume``. The
     throughput (files and faces per minute) counts only the ``files_run`` files run this time
-    (default: every file with an entry, less those resumed), over ``wall`` less the ``startup``
-    seconds spent before the workers were ready (starting a LocalCluster, connecting).
+    (default: every file with an entry, less those resumed), over the ``working`` seconds from
+    the workers being ready to the last file done (default: ``wall`` less the ``startup``
+    seconds spent before the workers were ready: starting a LocalCluster, connecting).
     """
     from . import __version__
     count = {k: sum(e["status"] == k for e in items) for k in ("certified", "partial", "failed")}
     seen = {e["input"] for e in items}
     kept = {id(e) for entries in resumed for e in entries}
     ran = [e for e in items if id(e) not in kept]
-    minutes = max(wall - startup, 1e-9) / 60.0
+    working = wall - startup if working is None else working
+    minutes = max(working, 1e-9) / 60.0
     if files_run is None:
         files_run = len({e["input"] for e in ran})
     return {"tool": "bd_uv batch", "version": __version__, "options": options,
@@ -543,6 +548,7 @@ def batch_report(items, options, wall, jobs, files, interrupted=False, running=F
                         "not_run": sum(os.path.abspath(f) not in seen for f in files),
                         "resumed": len(resumed), "seconds": round(wall, 3),
                         "startup_seconds": round(startup, 3),
+                        "working_seconds": round(working, 3),
                         "files_per_minute": round(files_run / minutes, 2),
                         "faces_per_minute": round(sum(e["faces"] or 0 for e in ran) / minutes),
                         "scheduler": scheduler, "jobs": jobs, "interrupted": interrupted,

@@ -44,7 +44,10 @@ def run_dask(tasks, order, options, seams_mode, scheduler, jobs, done, limits=No
         raise BDError("--scheduler needs Dask distributed: pip install 'bd-uv[cluster]' "
                       "(or -r requirements-cluster.txt)") from exc
     with contextlib.ExitStack() as stack:
-        stack.enter_context(dask.config.set({"distributed.scheduler.allowed-failures": retries}))
+        # the workers' statistical profiler samples every task's stack every 10 ms, for a
+        # dashboard a LocalCluster here does not serve: off, like the dashboard
+        stack.enter_context(dask.config.set({"distributed.scheduler.allowed-failures": retries,
+                                             "distributed.worker.profile.enabled": False}))
         try:
             if scheduler == "local":
                 cluster = stack.enter_context(LocalCluster(
