@@ -44,15 +44,15 @@ def run_dask(tasks, order, options, seams_mode, scheduler, jobs, done, limits=No
         raise BDError("--scheduler needs Dask distributed: pip install 'bd-uv[cluster]' "
                       "(or -r requirements-cluster.txt)") from exc
     with contextlib.ExitStack() as stack:
-        # the workers' statistical profiler samples every task's stack every 10 ms, for a
-        # dashboard a LocalCluster here does not serve: off, like the dashboard
+        # the workers' statistical profiler samples every task's stack every 10 ms for the
+        # dashboard's profile page: off (a batch needs no flame graphs)
         stack.enter_context(dask.config.set({"distributed.scheduler.allowed-failures": retries,
                                              "distributed.worker.profile.enabled": False}))
         try:
             if scheduler == "local":
                 cluster = stack.enter_context(LocalCluster(
                     n_workers=jobs, threads_per_worker=1, processes=True,
-                    dashboard_address=None, silence_logs=logging.ERROR))
+                    dashboard_address=":0", silence_logs=logging.ERROR))   # any free port
                 client = stack.enter_context(Client(cluster))
             else:
                 client = stack.enter_context(Client(scheduler, timeout="30s"))

@@ -92,7 +92,7 @@ def test_dask_batch_survives_a_killed_worker_and_matches_the_local_pool(tmp_path
 
     with dask.config.set({"distributed.scheduler.allowed-failures": 2}), \
             distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                     dashboard_address=None, silence_logs=50) as cluster, \
+                                     dashboard_address=":0", silence_logs=50) as cluster, \
             distributed.Client(cluster) as client:
         pids = client.run(os.getpid)                      # {worker address: pid}
         assert len(set(pids.values()) - {os.getpid()}) == 2
