@@ -28,12 +28,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .cli import add_solver_options, solver_kwargs
+from .cli import (add_layout_options, add_solver_options, layout_kwargs, solver_kwargs,
+                  split_options)
 from .errors import BDError
-from .geometry import face_areas
+from .layout import stored_layout
+from .metrics import conformal_distortion
 from .meshio import load_mesh, write_obj
-from .pipeline import unwrap
 from .scheduling.atomic import atomic_path, remove_stale
+from .unwrapping import unwrap
 
 MESH_SUFFIXES = (".obj", ".off", ".ply")
 BLEND_SUFFIX = ".blend"
@@ -73,12 +75,15 @@ class JobResult:
     Attributes
     ----------
     entry : dict, the job's JSON report entry
-    corner_uv : (m,3,2) float64, NaN on faces not certified
+    corner_uv : (m,3,2) float64, the UVs to store (cut, packed as asked), NaN on faces not
+        certified as stored
     result : UnwrapResult, or None when ``unwrap`` raised (the entry says why)
+    layout : bd_uv.layout.Layout, the stored UVs and their certificates, or None
     """
     entry: dict
     corner_uv: np.ndarray
     result: object = None
+    layout: object = None
 
 
 def failed_entry(name, error, message, faces=None, seconds=None, **where):
@@ -112,7 +117,7 @@ def unwrap_job(job, options, png=None):
     t0 = time.perf_counter()
     m = int(len(job.F))
     entry = failed_entry(job.name, None, "", faces=m, seconds=0.0)
-    kwargs = dict(options)
+    kwargs, layout_options = split_options(options)
     if kwargs.get("frames") == "input-uv":
         kwargs["initial_uv"] = job.corner_uv
     if job.pin_corners is not None and len(job.pin_corners):
@@ -121,34 +126,38 @@ def unwrap_job(job, options, png=None):
         if kwargs.get("frames") == "input-uv" and job.corner_uv is None:
             raise ValueError(f"{job.name} has no UVs to take frames from (--frames input-uv)")
         res = unwrap(job.V, job.F, seams=job.seams, **kwargs)
+        layout = stored_layout(job.V, job.F, res, **layout_options)
     except Exception as exc:  # a bad mesh, or a bug: either way it stays this job's failure
         entry.update(error=type(exc).__name__, message=str(exc),
                      seconds=round(time.perf_counter() - t0, 4))
         if not isinstance(exc, (BDError, ValueError)):
             entry["traceback"] = traceback.format_exc()
         return JobResult(entry, np.full((m, 3, 2), np.nan), None)
-    ok = [r for r in res.islands if r.status == "certified"]
-    bad = [r for r in res.islands if r.status != "certified"]
+    # Every figure below is measured on the UVs as stored (layout.certificates).
+    islands = layout.island_entries(res)
+    ok = [e for e in islands if e["status"] == "certified"]
+    bad = [e for e in islands if e["status"] != "certified"]
+    t = layout.totals()
+    w = layout.face_island >= 0
     D = np.full(m, np.nan)
-    for r in ok:
-        D[r.faces] = r.distortion
-    entry["islands"] = res.report()["islands"]
+    if w.any():
+        D[w] = conformal_distortion(job.V, np.asarray(job.F)[w], layout.corner_uv[w])
+    entry["islands"] = islands
     entry["status"] = "certified" if not bad else ("partial" if ok else "failed")
+    entry.update(overlapping=t["overlapping_unwrapped"], cut_edges=t["cut_edges"],
+                 layout_overlaps=t["layout_overlaps"])
     if ok:
-        faces = np.concatenate([r.faces for r in ok])
-        area = face_areas(np.asarray(job.V, dtype=np.float64), np.asarray(job.F)[faces])
-        entry.update(bound_certified=max(r.bound_certified for r in ok),
-                     max_distortion=float(D[faces].max()),
-                     mean_distortion=_num(float(np.sum(area * D[faces]) / np.sum(area))),
-                     flipped=int(sum(r.flipped for r in ok)))
+        entry.update(bound_certified=max(e["bound_certified"] for e in ok),
+                     max_distortion=t["max_distortion"], mean_distortion=_num(t["mean_distortion"]),
+                     flipped=int(t["flipped"]))
     if bad:
-        entry["error"] = type(bad[0].error).__name__ if bad[0].error else "IslandError"
+        entry["error"] = bad[0]["error"] or "IslandError"
         more = f" (and {len(bad) - 1} more failed island(s))" if len(bad) > 1 else ""
-        entry["message"] = bad[0].message + more
+        entry["message"] = bad[0]["message"] + more
     entry["seconds"] = round(res.seconds, 4)
     if png:
-        entry_png(png, entry, res.corner_uv, D, options)
-    return JobResult(entry, res.corner_uv, res)
+        entry_png(png, entry, layout.corner_uv, D, options)
+    return JobResult(entry, layout.corner_uv, res, layout)
 
 
 def entry_png(path, entry, corner_uv, distortion, options):
@@ -174,7 +183,10 @@ def caption(entry, options):
     n_ok = sum(i["status"] == "certified" for i in entry["islands"])
     lines = [head, f"certified C = {entry['bound_certified']:.4g} on {n_ok} island(s): max "
              f"distortion {entry['max_distortion']:.4f}, mean {entry['mean_distortion']:.4f}, "
-             f"{entry['flipped']} flipped, {entry['seconds']:.2f} s"]
+             f"{entry['flipped']} flipped, "
+             + (f"{entry['overlapping']} overlapping island(s) cut along {entry['cut_edges']} "
+                "edges, " if entry.get("overlapping") else "")
+             + f"{entry['seconds']:.2f} s"]
     if entry["status"] != "certified":
         lines.append(f"not certified: {entry['message']}"[:160])
     return "\n".join(lines)
@@ -207,7 +219,7 @@ def _unwrap_file(task, options, seams_mode):
         result = unwrap_job(job, options, png=task.png)
         entry = {**base, **result.entry}
         if entry["status"] != "failed":
-            uv, F_uv = result.result.vertex_uv()
+            uv, F_uv = result.layout.vertex_uv(mesh.F)
             with atomic_path(task.output) as tmp:
                 write_obj(tmp, mesh.V, mesh.F, uv, F_uv)
             entry["output"] = os.path.abspath(task.output)
@@ -358,6 +370,7 @@ def add_batch_parser(subparsers):
                    help="mesh files or folders (their .obj/.off/.ply/.blend files, not recursive)")
     p.add_argument("-o", "--output", required=True, metavar="OUT_DIR", help="output folder")
     add_solver_options(p)
+    add_layout_options(p)
     p.add_argument("--seams", choices=("uv", "none"), default=None,
                    help="uv: cut where an OBJ's UVs are discontinuous (default when it has vt); "
                         "none: islands are the mesh's components")
@@ -439,7 +452,7 @@ def run_batch(args):
     if args.png:
         os.makedirs(args.png, exist_ok=True)
     tasks = plan(files, args.output, args.png)
-    options = solver_kwargs(args)
+    options = {**solver_kwargs(args), **layout_kwargs(args)}
     report_path = args.report or os.path.join(args.output, "report.json")
     collisions = [t for t in tasks if os.path.abspath(t.output) == os.path.abspath(t.path)]
     if collisions:
@@ -514,6 +527,8 @@ def run_batch(args):
           f"{s['partial']} partial, {s['failed']} failed"
           + (f", {s['not_run']} not run (interrupted)" if interrupted else "")
           + (f", {s['resumed']} file(s) kept from the earlier run" if carried else "")
+          + f"; {s['overlapping_islands']} overlapping island(s), "
+            f"{s['layout_overlaps']} overlapping island pair(s)"
           + f"; {s['seconds']:.1f} s"
           + (f" ({s['startup_seconds']:.1f} s to start)" if args.scheduler else "")
           + f" on {s['jobs']} {setup['scheduler']} worker(s): "
@@ -551,6 +566,8 @@ def batch_report(items, options, wall, jobs, files, interrupted=False, running=F
                         "working_seconds": round(working, 3),
                         "files_per_minute": round(files_run / minutes, 2),
                         "faces_per_minute": round(sum(e["faces"] or 0 for e in ran) / minutes),
+                        "overlapping_islands": sum(e.get("overlapping") or 0 for e in items),
+                        "layout_overlaps": sum(e.get("layout_overlaps") or 0 for e in items),
                         "scheduler": scheduler, "jobs": jobs, "interrupted": interrupted,
                         "running": running},
             "items": items}

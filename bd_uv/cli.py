@@ -12,8 +12,9 @@ import time
 import numpy as np
 
 from .errors import BDError
+from .layout import stored_layout
 from .meshio import load_mesh, write_obj
-from .pipeline import FRAMES, METHODS, unwrap
+from .unwrapping import FRAMES, METHODS, unwrap
 
 
 def bound_arg(text):
@@ -54,6 +55,35 @@ def solver_kwargs(args):
                 time_budget=args.time_budget if args.bound == "auto" else None)
 
 
+LAYOUT_OPTIONS = ("pack", "cut", "margin")
+
+
+def add_layout_options(p):
+    """How the UVs are stored (``unwrap`` and ``batch``): cut overlaps, pack, margin."""
+    p.add_argument("--no-pack", action="store_true",
+                   help="keep each island at (0, 0) instead of packing them into the unit square")
+    p.add_argument("--margin", type=float, default=0.005,
+                   help="packing margin between islands, in the unit square (default 0.005)")
+    p.add_argument("--overlap", choices=("cut", "fail"), default="cut",
+                   help="an island whose UVs lie over themselves: cut it into overlap-free "
+                        "pieces (default, the cut edges are reported), or fail it")
+
+
+def layout_kwargs(args):
+    """The :func:`bd_uv.layout.stored_layout` keyword arguments from parsed options."""
+    return dict(pack=not args.no_pack, cut=args.overlap == "cut", margin=args.margin)
+
+
+def split_options(options):
+    """(unwrap keyword arguments, stored_layout keyword arguments) of one options dict; without
+    layout keys (the Blender script, which packs with Blender) nothing is cut or packed."""
+    solve = {k: v for k, v in options.items() if k not in LAYOUT_OPTIONS}
+    layout = {k: options[k] for k in LAYOUT_OPTIONS if k in options}
+    layout.setdefault("pack", False)
+    layout.setdefault("cut", False)
+    return solve, layout
+
+
 class ProgressBar:
     """A one-line progress bar on stderr (only when stderr is a terminal, or forced)."""
 
@@ -91,55 +121,52 @@ def run_unwrap(args):
             return 2
         kwargs["initial_uv"] = mesh.corner_uv
     res = unwrap(mesh.V, mesh.F, seams=seams, progress=ProgressBar(), **kwargs)
-    uv, F_uv = res.vertex_uv()
+    layout = stored_layout(mesh.V, mesh.F, res, **layout_kwargs(args))
+    uv, F_uv = layout.vertex_uv(mesh.F)
     write_obj(args.output, mesh.V, mesh.F, uv, F_uv)
-    report = {"input": os.path.abspath(args.input), **res.report()}
+    islands = layout.island_entries(res)
+    report = {"input": os.path.abspath(args.input), **res.report(), "islands": islands,
+              "summary": layout.totals(), "layout_overlaps": layout.overlaps.tolist()}
     if args.report:
         os.makedirs(os.path.dirname(os.path.abspath(args.report)), exist_ok=True)
         with open(args.report, "w", encoding="utf-8") as fh:
             json.dump(report, fh, indent=2)
     if args.png:
+        from .metrics import conformal_distortion
         from .render import uv_layout_png
         D = np.full(len(mesh.F), np.nan)
-        for r in res.islands:
-            if r.distortion is not None:
-                D[r.faces] = r.distortion
-        bound = max([r.bound_certified or 1.0 for r in res.islands] +
-                    [args.bound if args.bound != "auto" else 1.0])
-        caption = _caption(mesh.name, res, args.method)
-        uv_layout_png(args.png, res.corner_uv, D, bound, caption)
-    _print_report(mesh.name, res, args, sys.stdout)
-    failed = [r for r in res.islands if r.status != "certified"]
-    for r in failed:
-        print(f"error: {r.message}", file=sys.stderr)
+        w = layout.face_island >= 0
+        if w.any():
+            D[w] = conformal_distortion(mesh.V, mesh.F[w], layout.corner_uv[w])
+        bound = layout.totals()["bound"] or (args.bound if args.bound != "auto" else None)
+        uv_layout_png(args.png, layout.corner_uv, D, bound,
+                      layout.caption(mesh.name, args.method, res.seconds))
+    _print_report(mesh.name, islands, layout, res.seconds, args, sys.stdout)
+    failed = [e for e in islands if e["status"] != "certified"]
+    for e in failed:
+        print(f"error: {e['message']}", file=sys.stderr)
     return 0 if not failed else 1
 
 
-def _caption(name, res, method):
-    ok = [r for r in res.islands if r.status == "certified"]
-    if not ok:
-        return f"{name}: BD-{method.upper()}, no island certified"
-    maxD = max(r.max_distortion for r in ok)
-    C = max(r.bound_certified for r in ok)
-    nf = sum(len(r.faces) for r in ok)
-    mean = sum(r.mean_distortion * len(r.faces) for r in ok) / nf
-    return (f"{name}: BD-{method.upper()}, {len(ok)}/{len(res.islands)} islands, {nf} faces, "
-            f"max distortion {maxD:.3f} <= {C:.3g}, mean {mean:.3f}, 0 flipped, "
-            f"{res.seconds:.2f} s")
-
-
-def _print_report(name, res, args, out):
-    print(f"{name}: BD-{args.method.upper()}, bound {args.bound}, {len(res.islands)} island(s), "
-          f"{res.seconds:.2f} s -> {args.output}", file=out)
-    for r in res.islands:
-        if r.status == "certified":
-            print(f"  island {r.index}: {len(r.faces)} faces, certified C = "
-                  f"{r.bound_certified:.4g}, max distortion {r.max_distortion:.4f}, mean "
-                  f"{r.mean_distortion:.4f}, {r.flipped} flipped, frames {r.frames}, "
-                  f"{r.solves} solves / {r.iterations} iterations, {r.seconds:.2f} s"
-                  + (f" [{', '.join(r.flags)}]" if r.flags else ""), file=out)
+def _print_report(name, islands, layout, seconds, args, out):
+    t = layout.totals()
+    print(f"{name}: BD-{args.method.upper()}, bound {args.bound}, {len(islands)} island(s), "
+          f"{t['certified']}/{t['islands']} stored island(s) certified, "
+          f"{t['overlapping_unwrapped']} overlapping ({t['cut_islands']} cut along "
+          f"{t['cut_edges']} edges), {t['layout_overlaps']} overlapping island pair(s)"
+          f"{'' if layout.packed else ' (not packed)'}, {seconds:.2f} s -> {args.output}",
+          file=out)
+    for e in islands:
+        if e["status"] == "certified":
+            cut = f", cut into {e['pieces']} pieces" if e["pieces"] > 1 else ""
+            print(f"  island {e['island']}: {e['faces']} faces, certified C = "
+                  f"{e['bound_certified']:.4g}, max distortion {e['max_distortion']:.4f}, mean "
+                  f"{e['mean_distortion']:.4f}, {e['flipped']} flipped, overlap-free{cut}, "
+                  f"frames {e['frames']}, {e['solves']} solves / {e['iterations']} iterations, "
+                  f"{e['seconds']:.2f} s" + (f" [{', '.join(e['flags'])}]" if e["flags"] else ""),
+                  file=out)
         else:
-            print(f"  island {r.index}: FAILED ({type(r.error).__name__}): {r.message}", file=out)
+            print(f"  island {e['island']}: FAILED ({e['error']}): {e['message']}", file=out)
 
 
 def build_parser():
@@ -151,6 +178,7 @@ def build_parser():
     p.add_argument("input", help="mesh file: .obj, .off or .ply")
     p.add_argument("-o", "--output", required=True, help="output OBJ with UVs")
     add_solver_options(p)
+    add_layout_options(p)
     p.add_argument("--seams", choices=("uv", "none"), default=None,
                    help="uv: cut where the file's UVs are discontinuous (default when the OBJ "
                         "has vt); none: islands are the mesh's components")
@@ -159,6 +187,8 @@ def build_parser():
     p.set_defaults(func=run_unwrap)
     from .batch import add_batch_parser  # batch builds on this module's options
     add_batch_parser(sub)
+    from .planar_cli import add_planar_parsers
+    add_planar_parsers(sub)
     return parser
 
 

@@ -157,7 +157,9 @@ def _solve_fixed(Q, n, idx, val, symmetric=True):
     rhs = -(Q[free][:, fixed] @ xval)
     A = Q[free][:, free].tocsc()
     try:
-        lu = spla.splu(A)
+        # A symmetric system (LSCM) factors about twice as fast with a symmetric ordering.
+        lu = (spla.splu(A, permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
+              if symmetric else spla.splu(A))
         if np.iscomplexobj(rhs):
             sol = lu.solve(np.ascontiguousarray(np.stack([rhs.real, rhs.imag], axis=1)))
             xf = sol[:, 0] + 1j * sol[:, 1]

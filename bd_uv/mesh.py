@@ -157,26 +157,47 @@ def islands(V, F, seams=None):
     inconsistent_face[f1[~consistent]] = True
     inconsistent_face[f2[~consistent]] = True
 
-    # Group faces by island, ordered by smallest face index.
-    isl_order = np.argsort(face_isl, kind="stable")
-    bounds = np.searchsorted(face_isl[isl_order], np.arange(n_isl + 1))
-    groups = [isl_order[bounds[i]:bounds[i + 1]] for i in range(n_isl)]
-    groups.sort(key=lambda g: g[0])
+    # Islands numbered by their smallest face index; faces of each island in increasing order.
+    first_face = np.full(n_isl, m, dtype=np.int64)
+    np.minimum.at(first_face, face_isl, np.arange(m))
+    label_of = np.empty(n_isl, dtype=np.int64)
+    label_of[np.argsort(first_face, kind="stable")] = np.arange(n_isl)
+    fisl = label_of[face_isl]                              # island index per face
+    order = np.argsort(fisl, kind="stable")                # faces grouped by island
+    fbounds = np.searchsorted(fisl[order], np.arange(n_isl + 1))
     first_corner = np.empty(corner_vertex.max() + 1, dtype=np.int64)
     first_corner[corner_vertex[::-1]] = np.arange(3 * m)[::-1]
     vertex_of_cut = src[first_corner]
+    # Island-local vertex ids: a cut vertex's rank among its island's cut vertices, by id.
+    ncut = len(first_corner)
+    cut_isl = fisl[first_corner // 3]
+    cut_order = np.lexsort((np.arange(ncut), cut_isl))
+    vbounds = np.searchsorted(cut_isl[cut_order], np.arange(n_isl + 1))
+    local = np.empty(ncut, dtype=np.int64)
+    local[cut_order] = np.arange(ncut) - vbounds[cut_isl[cut_order]]
+    cv = corner_vertex.reshape(m, 3)[order]                # (m,3) cut ids, island by island
+    tris_all = local[cv]
+
+    problem = (degenerate | nonfinite_face | duplicate | nonmanifold_face | inconsistent_face)
+    if len(bowtie):
+        problem |= np.isin(src, bowtie[:, 0]).reshape(m, 3).any(axis=1)
+    bad_isl = np.bincount(fisl, problem, minlength=n_isl) > 0
+    loops_of, topo_err = _all_boundary_loops(cv, fisl[order], n_isl, ncut, fbounds, ~bad_isl,
+                                             local)
     out = []
-    for idx, faces in enumerate(groups):
-        cv = corner_vertex.reshape(m, 3)[faces]
-        ids, tris = np.unique(cv, return_inverse=True)
-        tris = tris.reshape(-1, 3).astype(np.int64)
-        vertices = vertex_of_cut[ids]
-        err = _validate(idx, faces, tris, vertices, V, degenerate, nonfinite_face, duplicate,
-                        nonmanifold_face, inconsistent_face, bowtie, face_isl[faces[0]])
+    for idx in range(n_isl):
+        f0, f1 = fbounds[idx], fbounds[idx + 1]
+        faces = order[f0:f1].astype(np.int64)
+        tris = tris_all[f0:f1]
+        vertices = vertex_of_cut[cut_order[vbounds[idx]:vbounds[idx + 1]]]
+        err = None
+        if bad_isl[idx]:
+            err = _validate(idx, faces, tris, vertices, V, degenerate, nonfinite_face, duplicate,
+                            nonmanifold_face, inconsistent_face, bowtie, face_isl[faces[0]])
         loops = ()
         if err is None:
-            loops, err = _boundary_loops(idx, faces, tris, len(ids))
-        out.append(Island(idx, faces.astype(np.int64), vertices, tris, loops, err))
+            loops, err = loops_of[idx], topo_err(idx, faces)
+        out.append(Island(idx, faces, vertices, tris, loops if err is None else (), err))
     return out
 
 
@@ -215,34 +236,86 @@ def _validate(idx, faces, tris, vertices, V, degenerate, nonfinite, duplicate, n
     return None
 
 
-def _boundary_loops(idx, faces, tris, nv):
-    """Boundary loops of a validated island, or the topology error that forbids flattening it."""
-    k = len(tris)
-    a = tris.ravel()
-    b = np.roll(tris, -1, axis=1).ravel()
-    fwd = a * nv + b
-    rev = b * nv + a
-    boundary = ~np.isin(fwd, rev)
-    n_edges = (3 * k + int(boundary.sum())) // 2
-    name = f"island {idx}"
-    if not boundary.any():
-        return (), ClosedIslandError(f"{name} ({k} faces) is closed: it has no boundary and cannot "
-                                     "be flattened; mark seams that cut it open", idx, faces)
-    ba, bb = a[boundary], b[boundary]
-    g = sp.coo_array((np.ones(len(ba)), (ba, bb)), shape=(nv, nv)).tocsr()
-    _, comp = connected_components(g, directed=False)
-    loop_labels = np.unique(comp[ba])
-    n_loops = len(loop_labels)
+def _all_boundary_loops(cv, hisl, n_isl, ncut, fbounds, valid, local):
+    """Boundary loops of every valid island at once, and the topology check.
+
+    Parameters
+    ----------
+    cv : (m,3) int, cut vertex ids of each face, faces grouped by island
+    hisl : (m,) int, island of each face (grouped)
+    valid : (n_isl,) bool, islands whose loops are wanted
+    local : (ncut,) int, island-local id of each cut vertex
+
+    Returns
+    -------
+    loops_of : list of tuples of (b,) int64 arrays (island-local ids), longest first
+    topo_err : callable(idx, faces) -> ClosedIslandError, TopologyError or None
+    """
+    k = np.diff(fbounds)
+    a = cv.ravel()
+    b = np.roll(cv, -1, axis=1).ravel()
+    eisl = np.repeat(hisl, 3)
+    fwd = a * ncut + b
+    boundary = ~np.isin(fwd, b * ncut + a)
+    nb = np.bincount(eisl, boundary, minlength=n_isl).astype(np.int64)
+    nv = np.bincount(_island_of_vertices(a, eisl, ncut), minlength=n_isl)
+    n_edges = (3 * k + nb) // 2
     euler = nv - n_edges + k
-    genus2 = 2 - n_loops - euler
-    if genus2 != 0:
-        return (), TopologyError(f"{name} ({k} faces) has genus {genus2 / 2:g} (handles or "
-                                 "tunnels); mark seams across each handle so it becomes a disk "
+    keep = boundary & valid[eisl]
+    ba, bb = a[keep], b[keep]
+    # Each boundary vertex has one outgoing boundary half-edge (pinched vertices were rejected):
+    # rank every vertex along its loop by pointer jumping, starting each loop at the source of its
+    # first boundary half-edge (in face order), as a depth-first walk from there would.
+    pos = np.full(ncut, -1, dtype=np.int64)
+    pos[ba] = np.arange(len(ba))
+    nxt = pos[bb]
+    g = sp.coo_array((np.ones(len(ba)), (np.arange(len(ba)), nxt)), shape=(len(ba), len(ba)))
+    n_loops, lab = connected_components(g, directed=False) if len(ba) else (0, np.zeros(0, int))
+    start = np.full(n_loops, len(ba), dtype=np.int64)
+    np.minimum.at(start, lab, np.arange(len(ba)))
+    prev = np.empty(len(ba), dtype=np.int64)
+    prev[nxt] = np.arange(len(ba))
+    ptr = nxt.copy()
+    ptr[prev[start]] = prev[start]                         # the loop's last vertex ends it
+    rank = (ptr != np.arange(len(ba))).astype(np.int64)
+    while True:
+        nptr = ptr[ptr]
+        if np.array_equal(nptr, ptr):
+            break
+        rank = rank + rank[ptr]
+        ptr = nptr
+    lisl = eisl[keep]
+    loops_per_isl = np.bincount(lisl[start], minlength=n_isl) if n_loops else np.zeros(n_isl, int)
+    ordr = np.lexsort((-rank, lab))
+    lens = np.bincount(lab, minlength=n_loops)
+    cuts = np.concatenate([[0], np.cumsum(lens)])
+    loop_isl = lisl[start]
+    by_isl = np.argsort(loop_isl, kind="stable")
+    ibounds = np.searchsorted(loop_isl[by_isl], np.arange(n_isl + 1))
+    verts = local[ba[ordr]]
+    loops_of = []
+    for idx in range(n_isl):
+        mine = by_isl[ibounds[idx]:ibounds[idx + 1]]
+        loops = [verts[cuts[j]:cuts[j + 1]].astype(np.int64) for j in mine]
+        loops.sort(key=len, reverse=True)
+        loops_of.append(tuple(loops))
+    genus2 = 2 - loops_per_isl - euler
+
+    def topo_err(idx, faces):
+        name = f"island {idx}"
+        if nb[idx] == 0:
+            return ClosedIslandError(f"{name} ({k[idx]} faces) is closed: it has no boundary and "
+                                     "cannot be flattened; mark seams that cut it open", idx, faces)
+        if genus2[idx] != 0:
+            return TopologyError(f"{name} ({k[idx]} faces) has genus {genus2[idx] / 2:g} (handles "
+                                 "or tunnels); mark seams across each handle so it becomes a disk "
                                  "(possibly with holes)", idx, faces)
-    loops = []
-    for lab in loop_labels:
-        start = int(ba[np.argmax(comp[ba] == lab)])
-        loop = depth_first_order(g, start, directed=True, return_predecessors=False)
-        loops.append(loop.astype(np.int64))
-    loops.sort(key=len, reverse=True)
-    return tuple(loops), None
+        return None
+    return loops_of, topo_err
+
+
+def _island_of_vertices(a, eisl, ncut):
+    """Island of each cut vertex used by the half-edges, one entry per distinct vertex."""
+    isl = np.full(ncut, -1, dtype=np.int64)
+    isl[a] = eisl
+    return isl[isl >= 0]

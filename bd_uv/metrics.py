@@ -72,6 +72,34 @@ def conformal_distortion(V, F, corner_uv):
     return D
 
 
+def singular_values(V, F, corner_uv, normalize=True):
+    """Singular values of each face's map, ``Gamma = |alpha|+|beta|``, ``gamma = |alpha|-|beta|``.
+
+    Lipman 2012, eqs. 4.7-4.8; for certifying the stretch bounds of section 6.3.
+
+    Parameters
+    ----------
+    V : (n,3) float array
+    F : (m,3) int array, the faces of one island (the scale is the island's as a whole)
+    corner_uv : (m,3,2) float array
+    normalize : bool, measure relative to the island's own scale: the UVs scaled so the total UV
+        area equals the total 3D area (as written UVs are). False: relative to the 3D geometry.
+
+    Returns
+    -------
+    smax, smin : (m,) float64
+        ``smin`` is negative for a flipped face (``|beta| > |alpha|``); NaN for degenerate faces.
+    """
+    alpha, beta = face_jacobians(V, F, corner_uv)
+    a, b = np.abs(alpha), np.abs(beta)
+    smax, smin = a + b, a - b
+    if normalize:
+        uv_area = np.sum(np.abs(signed_uv_areas(corner_uv)))
+        scale = np.sqrt(np.sum(face_areas(V, F)) / uv_area) if uv_area > 0 else np.nan
+        smax, smin = smax * scale, smin * scale
+    return smax, smin
+
+
 def certify(V, F, corner_uv, bound, rtol=1e-6):
     """Check a map: no flipped face and every face's distortion within ``bound``.
 

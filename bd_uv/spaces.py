@@ -7,6 +7,11 @@ r_j = Re(w_j alpha_j)), face j's constraints are
     |beta_j| <= k Re(w_j alpha_j),  k = (C-1)/(C+1)   (4.15, second-order cone), or
     |Re beta_j|, |Im beta_j| <= k Re(w_j alpha_j) / sqrt(2)  (4.22, the L-infinity variant)
 
+and, with stretch bounds ``s <= gamma_j <= Gamma_j <= S`` (section 6.3, ``stretch_space``),
+
+    |alpha_j| <= S - k Re(w_j alpha_j)             (6.3, second-order cone)
+    |beta_j| <= Re(w_j alpha_j) - s                (a weaker sufficient form of 6.4, see below)
+
 and continuity (4.18) holds by construction, alpha and beta being linear in the vertex positions.
 In Clarabel's form ``A x + s = b, s in K``.
 """
@@ -59,3 +64,77 @@ def bounded_distortion_space(ops, w, C, sigma, cone="soc"):
     else:
         raise ValueError(f"unknown cone {cone!r}: use 'soc' or 'linf'")
     return sp.vstack(blocks).tocsc(), np.concatenate(b), cones
+
+
+def check_stretch(C, S):
+    """Validate a stretch bound ``S`` (meaning 1/S <= gamma <= Gamma <= S) against the bound C.
+
+    Raises
+    ------
+    ValueError when ``S`` is not a finite number or ``S < sqrt(C)``: the paper's restriction
+    ``S / s >= C`` (section 6.3) with ``s = 1/S``; below it F_C with stretch bounds is empty.
+    """
+    if not (isinstance(S, (int, float)) and 1.0 <= S < np.inf):
+        raise ValueError(f"stretch must be a finite number >= 1, got {S!r}")
+    if S * S < C * (1.0 - 1e-12):
+        raise ValueError(f"stretch {S:g} cannot hold with conformal bound C = {C:g}: singular "
+                         f"values in [1/S, S] allow a distortion of at most S^2 = {S * S:g}; use "
+                         f"S >= sqrt(C) = {np.sqrt(C):.4g} or lower C")
+
+
+def stretch_space(ops, w, C, smin, smax):
+    """Conic rows bounding every face's singular values: ``smin <= gamma_j <= Gamma_j <= smax``.
+
+    Lipman 2012, section 6.3. With ``r_j = Re(w_j alpha_j)`` and ``k = (C-1)/(C+1)``:
+
+    - upper bound, eq. 6.3: ``|alpha_j| <= smax - k r_j``, a 3-dimensional second-order cone
+      ``(smax - k r_j, Re alpha_j, Im alpha_j)``. With ``|beta_j| <= k r_j`` (eq. 4.15, or 4.22
+      which implies it) it gives ``Gamma_j = |alpha_j| + |beta_j| <= smax``.
+    - lower bound: ``|beta_j| <= r_j - smin``, the cone ``(r_j - smin, Re beta_j, Im beta_j)``.
+      Since ``|alpha_j| >= r_j`` it gives ``gamma_j = |alpha_j| - |beta_j| >= smin``. The paper's
+      eq. 6.4, ``r_j >= (C+1)/2 smin``, implies it (with 4.15), so this space contains the paper's.
+
+    Both use the vertex unknowns only: no auxiliary variable. Append the rows to those of
+    ``bounded_distortion_space`` (same unknowns ``x = [Re u; Im u]``).
+
+    Parameters
+    ----------
+    ops : energies.JacobianOperators
+    w : (k,) complex unit frames
+    C : float >= 1, the conformal bound the rows are combined with
+    smin, smax : float, 0 <= smin <= smax, in the units of the geometry ``ops`` was built on
+
+    Returns
+    -------
+    A : (6k, 2nv) csc, b : (6k,), cones : list of ("soc", 3), 2k entries
+    """
+    k = cone_factor(C)
+    Ra, _ = rotated_alpha(ops, w)
+    nf = Ra.shape[0]
+    perm = np.arange(3 * nf).reshape(3, nf).T.ravel()
+    # (6.3): s = [smax, 0, 0] - [k Ra; -Are; -Aim] x  in SOC(3), interleaved per face
+    up = sp.vstack([k * Ra, -ops.Are, -ops.Aim]).tocsr()[perm]
+    b_up = np.concatenate([np.full(nf, float(smax)), np.zeros(2 * nf)])[perm]
+    # lower: s = [-smin, 0, 0] - [-Ra; -Bre; -Bim] x  in SOC(3)
+    lo = sp.vstack([-Ra, -ops.Bre, -ops.Bim]).tocsr()[perm]
+    b_lo = np.concatenate([np.full(nf, -float(smin)), np.zeros(2 * nf)])[perm]
+    return (sp.vstack([up, lo]).tocsc(), np.concatenate([b_up, b_lo]),
+            [("soc", 3)] * (2 * nf))
+
+
+def mean_scale_row(ops, w, value=1.0):
+    """One equality row fixing the area-weighted mean of ``Re(w_j alpha_j)`` to ``value``.
+
+    Not from the paper: with stretch bounds, energies that reward shrinking (Dirichlet, L1
+    stretch) sit at the lower bound, and rescaling the result to UV area = 3D area afterwards
+    would push the largest singular values past S. Fixing the mean similarity scale to 1 (the
+    island's own scale) keeps that rescaling close to 1. ``Re(w alpha) <= |alpha|``, so the row
+    only pins a lower estimate of the scale; certify after rescaling.
+
+    Returns
+    -------
+    A : (1, 2nv) csc, b : (1,), cones : [("zero", 1)]
+    """
+    Ra, _ = rotated_alpha(ops, w)
+    row = sp.csr_array(ops.area[None, :] @ Ra) / ops.area.sum()
+    return row.tocsc(), np.array([float(value)]), [("zero", 1)]

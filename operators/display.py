@@ -175,6 +175,7 @@ class UV_OT_bd_select_distorted(bpy.types.Operator):
 
     def execute(self, context):
         total = 0
+        select_mode = tuple(context.scene.tool_settings.mesh_select_mode)
         with object_mode(context) as objects:
             for ob in objects:
                 mesh = ob.data
@@ -191,8 +192,8 @@ class UV_OT_bd_select_distorted(bpy.types.Operator):
                 hidden = np.empty(len(mesh.polygons), bool)
                 mesh.polygons.foreach_get("hide", hidden)
                 pick &= ~hidden
-                mesh_data.select_polygons(mesh, pick)
-                total += int(pick.sum())
+                # Counted as Edit Mode shows it (in vertex select mode more faces light up).
+                total += int(mesh_data.select_polygons(mesh, pick, select_mode).sum())
         self.report({'INFO'}, f"{total} faces selected")
         return {'FINISHED'}
 

@@ -306,18 +306,42 @@ def set_selection(mesh, vert, edge, poly):
     mesh.update()
 
 
-def select_polygons(mesh, poly_mask):
-    """Select exactly the polygons in the (P,) bool ``poly_mask``, with their edges and vertices.
+def select_polygons(mesh, poly_mask, select_mode=(False, False, True)):
+    """Select the polygons in the (P,) bool ``poly_mask``, with their edges and vertices, as
+    Blender's Edit Mode will show them in ``select_mode`` (the tool settings' vertex, edge, face
+    flags).
 
-    In vertex select mode Blender's Edit Mode also selects any other face whose vertices are all
-    selected, as its own selection tools do.
+    In vertex select mode Edit Mode also selects every other visible face whose vertices are all
+    selected (in edge select mode: whose edges are), as its own selection tools do; those faces
+    are selected here too, so the returned mask is what the user sees.
+
+    Returns
+    -------
+    (P,) bool
+        The polygons selected.
     """
     _require_object_mode(mesh)
     poly_mask = np.asarray(poly_mask, dtype=bool)
-    total = _get(mesh.polygons, "loop_total", np.int32, len(mesh.polygons))
+    n_poly = len(mesh.polygons)
+    total = _get(mesh.polygons, "loop_total", np.int32, n_poly)
     loop_selected = np.repeat(poly_mask, total)
+    loop_vert = _get(mesh.loops, "vertex_index", np.int32, len(mesh.loops))
+    loop_edge = _get(mesh.loops, "edge_index", np.int32, len(mesh.loops))
     vert = np.zeros(len(mesh.vertices), dtype=bool)
-    vert[_get(mesh.loops, "vertex_index", np.int32, len(mesh.loops))[loop_selected]] = True
+    vert[loop_vert[loop_selected]] = True
     edge = np.zeros(len(mesh.edges), dtype=bool)
-    edge[_get(mesh.loops, "edge_index", np.int32, len(mesh.loops))[loop_selected]] = True
+    edge[loop_edge[loop_selected]] = True
+    if n_poly and (select_mode[0] or select_mode[1]):  # vertex mode wins when several are on
+        start = _get(mesh.polygons, "loop_start", np.int32, n_poly)
+        order = np.argsort(start, kind="stable")
+        # Loops of one polygon are contiguous from its loop_start.
+        flag = vert[loop_vert] if select_mode[0] else edge[loop_edge]
+        closed = np.zeros(n_poly, dtype=bool)
+        closed[order] = np.logical_and.reduceat(flag, start[order]) & (total[order] > 0)
+        hidden = _get(mesh.polygons, "hide", bool, n_poly)
+        poly_mask = poly_mask | (closed & ~hidden)
+        if select_mode[0]:
+            edge = edge | (vert[_get(mesh.edges, "vertices", np.int32, len(mesh.edges),
+                                     2)].all(axis=1))
     set_selection(mesh, vert, edge, poly_mask)
+    return poly_mask

@@ -32,9 +32,10 @@ _METHODS = (
      "same certified bound"),
 )
 _FRAMES = (
-    ('auto', "Auto", "Frames from a flip-free initial map chosen by bd-uv"),
-    ('input-uv', "From Current UVs", "Frames from the UVs the faces have now (Lipman 2012, "
-     "eq. 4.21); keeps the layout close to them"),
+    ('auto', "Auto", "Start from the conformal map (or a flip-free one) chosen by bd-uv"),
+    ('input-uv', "From Current UVs", "Start from the UVs the faces have now: an island within C "
+     "keeps its layout (scaled to its 3D area), one beyond C is bent only as far as C demands "
+     "(frames from its UVs, Lipman 2012 eq. 4.21)"),
 )
 
 
@@ -64,9 +65,10 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
                        "islands with pinned UVs stay where they are")
     pack_shape: EnumProperty(
         name="Pack Shape", default='AABB',
-        items=(('AABB', "Bounding Box", "Fast, like Blender's own Unwrap"),
-               ('CONVEX', "Convex Hull", "Tighter, slower"),
-               ('CONCAVE', "Exact Shape", "Tightest, slowest (seconds for thousands of faces)")),
+        items=(('AABB', "Bounding Box", "Fastest, like Blender's own Unwrap"),
+               ('CONVEX', "Convex Hull", "Tighter than bounding boxes; can take seconds on "
+                "thousands of faces, sometimes longer than Exact Shape"),
+               ('CONCAVE', "Exact Shape", "Tightest; can take seconds on thousands of faces")),
         description="Island shape Pack Islands works with")
     show_distortion: BoolProperty(name="Colour by Distortion", default=False,
                                   description="Colour faces by their distortion afterwards")
@@ -129,25 +131,33 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
         """Report an exception from the core; nothing has been written."""
         if isinstance(error, bd_uv.CancelledError):
             self.report({'WARNING'}, "Unwrap cancelled: mesh and UVs unchanged")
-        elif isinstance(error, (bd_uv.BDError, ValueError)):
+        elif isinstance(error, bd_uv.BDError):
+            # The user's mesh needs work: a WARNING, so a script looping over objects goes on.
+            self.report({'WARNING'}, str(error))
+        elif isinstance(error, ValueError):
             self.report({'ERROR'}, str(error))
         else:
             raise error
         return {'CANCELLED'}
 
     def _finish(self, context, batch, result, seconds):
+        """Write, pack, re-certify what is stored (putting back what fails), colour, report.
+
+        The report line and the panel show the figures of the post-write check. FINISHED when
+        anything was written and kept, as Blender's own Unwrap does when some islands fail;
+        CANCELLED when nothing at all was written (with a WARNING saying why)."""
         with object_mode(context):
             written = session.write_back(batch, result)
-        summary = session.summarise(batch, result, written, seconds)
-        if summary.written:
+        verified = None
+        if any(w.faces.any() for w in written):
             if self.pack:
                 session.pack(context, written, self.margin, self.pack_shape)
             with object_mode(context):
-                for message in session.verify_written(batch, result, written):
-                    self.report({'WARNING'}, message)
-            if self.show_distortion:
-                bound = summary.bound_certified if summary.bound_certified > 1 else self.bound
-                session.show_distortion(context, written, bound)
+                verified = session.verify_written(batch, result, written)
+        summary = session.summarise(batch, result, written, seconds, verified, packed=self.pack)
+        if summary.written and self.show_distortion:
+            bound = summary.bound_certified if summary.bound_certified > 1 else self.bound
+            session.show_distortion(context, written, bound)
         session.store(context.window_manager, summary, batch.face_count)
         self.report({summary.level}, summary.message)
         return {'FINISHED'} if summary.written else {'CANCELLED'}

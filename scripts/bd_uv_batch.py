@@ -12,10 +12,13 @@ With the ``bpy`` module (``pip install bpy``)::
 
 Each object is unwrapped along its seams, keeping its pinned UVs exactly, with the object's scale
 applied like the ``uv.bd_unwrap`` operator, and with ``--pack`` the islands are packed by Blender's
-Pack Islands as the operator does. The report's figures and the PNG are recomputed from the UV map
-as saved (float32, packed or not). Arrays come from the add-on's ``operators/mesh_data.py``
-and are solved by ``bd_uv.batch.unwrap_job``, the code ``python -m bd_uv batch`` runs. Islands
-that are not certified keep their old UVs. Exit code 0 only if every object was certified.
+Pack Islands as the operator does. Then each island is certified again from the UV map as it will
+be saved (float32, packed or not) with its own bound, and an island that fails is put back before
+saving: no island that failed is ever saved. The report's figures and the PNG are those of the
+saved map; faces are also counted as Blender's polygons. Arrays come from the add-on's
+``operators/mesh_data.py`` and are solved by ``bd_uv.batch.unwrap_job``, the code
+``python -m bd_uv batch`` runs. Islands that are not certified keep their old UVs. Exit code 0
+only if every object was certified.
 
 This file lives in ``<extension root>/scripts/``; it imports ``bd_uv`` and ``mesh_data`` from the
 extension root by path, so it works from the repository and from an installed extension alike.
@@ -57,10 +60,11 @@ def _extension_package():
 
 def _import_addon():
     """The modules used here, from this extension: bd_uv's batch and cli, and the add-on's
-    mesh_data (bpy <-> numpy) and session (packing)."""
+    mesh_data (bpy <-> numpy), session (packing) and stored (the post-write check)."""
     pkg = _extension_package().__name__
     return tuple(importlib.import_module(f"{pkg}.{name}") for name in
-                 ("bd_uv", "bd_uv.batch", "bd_uv.cli", "operators.mesh_data", "operators.session"))
+                 ("bd_uv", "bd_uv.batch", "bd_uv.cli", "operators.mesh_data", "operators.session",
+                  "operators.stored"))
 
 
 def split_argv(argv):
@@ -90,8 +94,8 @@ def build_parser(cli):
                         "operator (islands with pinned UVs stay where they are)")
     p.add_argument("--margin", type=float, default=0.001, help="space between packed islands")
     p.add_argument("--pack-shape", choices=("AABB", "CONVEX", "CONCAVE"), default="AABB",
-                   help="island shape for packing: bounding box (fast, default), convex hull, "
-                        "exact shape (slowest)")
+                   help="island shape for packing: bounding box (fastest, default), convex hull "
+                        "or exact shape (tighter; either can take seconds on thousands of faces)")
     p.add_argument("--output", metavar="OUT.blend",
                    help="save here (default: save the opened file in place)")
     p.add_argument("--report", metavar="REPORT.json", help="write the JSON report here")
@@ -141,13 +145,30 @@ def _file_name(text):
     return re.sub(r'[\\/:*?"<>|\s]+', "_", text).strip("._") or "object"
 
 
-def unwrap_objects(objects, args, batch, options, mesh_data, source):
+def in_polygons(entry, result, name, arrays, session):
+    """Each island entry gains ``polygons`` (its faces as Blender counts them), and a failed
+    island's message names polygons, not the triangles the core was given."""
+    def polygons(tris):
+        return {name: np.unique(arrays.tri_poly[np.asarray(tris, dtype=np.int64)])}
+    for isl in entry["islands"]:
+        r = result.islands[isl["island"]]
+        isl["polygons"] = int(len(np.unique(arrays.tri_poly[r.faces])))
+        if r.status != "certified":
+            isl["message"] = (f"island {r.index} ({isl['polygons']} faces): "
+                              f"{session.failure_text(r, polygons)}")
+    bad = [i for i in entry["islands"] if i["status"] != "certified"]
+    if bad:
+        more = f" (and {len(bad) - 1} more failed island(s))" if len(bad) > 1 else ""
+        entry["message"] = bad[0]["message"] + more
+
+
+def unwrap_objects(objects, args, batch, options, mesh_data, session, source):
     """Unwrap each object and write its certified islands into its UV map.
 
     Returns
     -------
     items : list of report entries, one per object
-    written : list of (entry, object, MeshArrays, (m,) bool certified triangles)
+    written : list of Written, one per object with something written
     """
     items, written = [], []
     for ob in objects:
@@ -159,18 +180,34 @@ def unwrap_objects(objects, args, batch, options, mesh_data, source):
                             corner_uv=arrays.corner_uv)
             result = batch.unwrap_job(job, options)
             entry = {"input": source, "object": ob.name, "output": None, "uv_map": None,
-                     **result.entry}
+                     "polygons": int(len(np.unique(arrays.tri_poly))), **result.entry}
+            if result.result is not None:
+                in_polygons(entry, result.result, ob.name, arrays, session)
             ok = np.isfinite(result.corner_uv).all(axis=(1, 2))
             if ok.any():
+                name = args.uv_map or arrays.uv_name
+                initial = None
+                if arrays.corner_uv is None:  # a new map: keep what it holds before writing
+                    layer = ob.data.uv_layers.new(name=name or "UVMap")
+                    name, initial = layer.name, mesh_data.loop_uvs(ob.data, layer.name)
                 entry["uv_map"] = mesh_data.write_corner_uvs(
-                    ob.data, args.uv_map or arrays.uv_name, arrays.tri_loops, result.corner_uv,
-                    ok)
-                written.append((entry, ob, arrays, ok))
+                    ob.data, name, arrays.tri_loops, result.corner_uv, ok)
+                written.append(Written(entry, ob, arrays, ok, result.result, initial))
         except Exception as exc:  # one object never stops the others
             entry = batch.failed_entry(ob.name, type(exc).__name__, f"{ob.name}: {exc}",
                                        input=source, object=ob.name, output=None, uv_map=None)
         items.append(entry)
     return items, written
+
+
+class Written:
+    """One object's written islands: its report entry, the object, its MeshArrays, the (m,) bool
+    triangles written (and kept), the UnwrapResult, and for a map created here what it held
+    before writing ((L,2) float32; None when the map existed)."""
+
+    def __init__(self, entry, ob, arrays, ok, result, initial_uv=None):
+        self.entry, self.ob, self.arrays, self.ok = entry, ob, arrays, ok
+        self.result, self.initial_uv = result, initial_uv
 
 
 def pack(written, session, margin, shape):
@@ -181,7 +218,8 @@ def pack(written, session, margin, shape):
     object's pinned island lying outside the unit square, Blender's packer shrank a whole object
     to a dot (1e-5 wide, where float32 UVs no longer hold its shape).
     """
-    for entry, ob, arrays, ok in written:
+    for w in written:
+        entry, ob, arrays, ok = w.entry, w.ob, w.arrays, w.ok
         bpy.ops.object.select_all(action='DESELECT')
         polygons = np.zeros(len(ob.data.polygons), dtype=bool)
         polygons[arrays.tri_poly[ok]] = True
@@ -199,36 +237,104 @@ def pack(written, session, margin, shape):
             layers.active = layers[active]
 
 
-def measure_saved(written, core, batch, mesh_data, options, args):
-    """Report the UVs as saved (float32, packed or not), re-checked, and draw them.
+def _put_back(w, undo, mesh_data):
+    """Give the triangles ``undo`` (m,) bool their UVs from before the unwrap; a map created
+    here is restored to what it held, or removed when nothing written is left on it."""
+    mesh, name = w.ob.data, w.entry["uv_map"]
+    if w.initial_uv is None:
+        mesh_data.write_corner_uvs(mesh, name, w.arrays.tri_loops, w.arrays.corner_uv, undo)
+        return
+    if not (w.ok & ~undo).any():
+        mesh.uv_layers.remove(mesh.uv_layers[name])
+        mesh.update()
+        w.entry["uv_map"] = None
+        return
+    uv = mesh_data.loop_uvs(mesh, name)
+    loops = w.arrays.tri_loops[undo].ravel()
+    uv[loops] = w.initial_uv[loops]
+    mesh.uv_layers[name].uv.foreach_set("vector", uv.ravel())
+    mesh.update()
 
-    The per-island figures stay those of the solve; the object's figures are recomputed here from
-    its UV map, and an object whose saved map breaks the certificate is marked failed.
+
+def check_saved(written, mesh_data, stored, packed):
+    """The post-write check: re-certify each written island from the UV map as it will be saved
+    (float32, packed or not) with that island's own bound, and put back every island that fails,
+    so no island that failed is ever saved. The entry's figures become those of the stored,
+    kept islands (area-weighted mean), its island entries gain the stored figures, and overlaps
+    between the kept islands of the layout are counted.
     """
-    for entry, ob, arrays, ok in written:
+    for w in written:
+        entry, arrays = w.entry, w.arrays
+        uv = mesh_data.loop_uvs(w.ob.data, entry["uv_map"])[arrays.tri_loops].astype(np.float64)
+        labels = np.where(w.ok, w.result.face_island, -1)
+        checks = stored.check_stored(arrays.V, arrays.F, uv, labels, w.result.islands,
+                                     solved_uv=w.result.corner_uv)
+        by_index = {c.island: c for c in checks}
+        undo = np.isin(labels, [c.island for c in checks if not c.certified])
+        for isl in entry["islands"]:
+            c = by_index.get(isl["island"])
+            if c is None:
+                continue
+            isl.update(bound_certified=c.bound, max_distortion=c.max_distortion,
+                       mean_distortion=c.mean_distortion, flipped=c.flipped,
+                       overlap_free=bool(c.overlap_free))
+            if not c.certified:
+                cause = ("as solved already" if c.failed_as_solved else
+                         "after packing" if packed else "after float32 storage")
+                isl.update(status="failed", error="CertificationError",
+                           message=f"island {c.island}: put back as it was, its saved UVs fail "
+                                   f"the certificate ({c.reason}; {cause})")
+        if undo.any():
+            _put_back(w, undo, mesh_data)
+            w.ok = w.ok & ~undo
+        kept = [c for c in checks if c.certified]
+        P = arrays.V[arrays.F]
+        area = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+        on = labels >= 0
+        island_area = np.bincount(labels[on], weights=area[on], minlength=len(w.result.islands))
+        weights = np.array([island_area[c.island] for c in kept])
+        bad = [i for i in entry["islands"] if i["status"] != "certified"]
+        entry["status"] = "certified" if not bad else ("partial" if kept else "failed")
+        if kept:
+            entry.update(bound_certified=max(c.bound for c in kept),
+                         max_distortion=max(c.max_distortion for c in kept),
+                         mean_distortion=float(np.dot(weights, [c.mean_distortion for c in kept])
+                                               / weights.sum()),
+                         flipped=int(sum(c.flipped for c in kept)))
+        else:
+            entry.update(bound_certified=None, max_distortion=None, mean_distortion=None,
+                         flipped=None)
+        if bad:
+            entry["error"] = bad[0]["error"] or "IslandError"
+            more = f" (and {len(bad) - 1} more failed island(s))" if len(bad) > 1 else ""
+            entry["message"] = bad[0]["message"] + more
+        kept_labels = np.where(w.ok, labels, -1)
+        pairs = (stored.layout_overlaps(uv, kept_labels, arrays.F)
+                 if len(np.unique(kept_labels[kept_labels >= 0])) > 1 else [])
+        entry["island_overlaps"] = None if pairs is None else [
+            [int(a), int(b)] for a, b in np.asarray(pairs).reshape(-1, 2)]
+
+
+def draw_saved(written, core, batch, mesh_data, options, args):
+    """Draw each object's UV layout as saved (only the islands kept), when ``--png``."""
+    for w in written:
+        entry, ob, arrays, ok = w.entry, w.ob, w.arrays, w.ok
+        if not args.png or entry["uv_map"] is None:
+            continue
         uv = mesh_data.loop_uvs(ob.data, entry["uv_map"])[arrays.tri_loops].astype(np.float64)
         uv[~ok] = np.nan
         D = np.full(len(arrays.F), np.nan)
         D[ok] = core.conformal_distortion(arrays.V, arrays.F[ok], uv[ok])
-        flipped = int(core.flipped_faces(arrays.V, arrays.F[ok], uv[ok]).sum())
-        entry.update(max_distortion=float(D[ok].max()), flipped=flipped,
-                     mean_distortion=float(core.mean_distortion(arrays.V, arrays.F[ok], D[ok])))
-        if flipped or not D[ok].max() <= entry["bound_certified"] * (1 + 1e-5):
-            entry.update(status="failed", error="CertificationError",
-                         message=f"the saved UV map of {ob.name} has {flipped} flipped faces "
-                                 f"and max distortion {D[ok].max():.6g} > C = "
-                                 f"{entry['bound_certified']:.6g} (float32 rounding or packing)")
-        if args.png:
-            png = os.path.join(args.png, args.png_prefix + _file_name(ob.name) + ".png")
-            try:
-                batch.entry_png(png, entry, uv, D, options)
-            except Exception as exc:  # a picture that cannot be drawn must not lose the UVs
-                entry.update(png=None, png_error=f"{type(exc).__name__}: {exc}")
+        png = os.path.join(args.png, args.png_prefix + _file_name(ob.name) + ".png")
+        try:
+            batch.entry_png(png, entry, uv, D, options)
+        except Exception as exc:  # a picture that cannot be drawn must not lose the UVs
+            entry.update(png=None, png_error=f"{type(exc).__name__}: {exc}")
 
 
 def main(argv):
     blends, rest = split_argv(argv)
-    core, batch, cli, mesh_data, session = _import_addon()
+    core, batch, cli, mesh_data, session, stored = _import_addon()
     args = build_parser(cli).parse_args(rest)
     options = cli.solver_kwargs(args)
     if args.png and importlib.util.find_spec("matplotlib") is None:
@@ -263,17 +369,19 @@ def main(argv):
                                 output=None, uv_map=None) for name, message in missing]
     for e in items:
         print(batch.item_line(e), flush=True)
-    done, written = unwrap_objects(objects, args, batch, options, mesh_data, source)
+    done, written = unwrap_objects(objects, args, batch, options, mesh_data, session, source)
     if written and args.pack:
         pack(written, session, args.margin, args.pack_shape)
-    measure_saved(written, core, batch, mesh_data, options, args)
+    check_saved(written, mesh_data, stored, args.pack)
+    written = [w for w in written if w.ok.any()]
+    draw_saved(written, core, batch, mesh_data, options, args)
     items += done
     for e in done:
         print(batch.item_line(e), flush=True)
     if written or args.output:
         bpy.ops.wm.save_as_mainfile(filepath=output)
-        for entry, *_ in written:
-            entry["output"] = output
+        for w in written:
+            w.entry["output"] = output
     wall = time.perf_counter() - t0
 
     report = batch.batch_report(items, options, wall, jobs=1,

@@ -24,8 +24,13 @@ class IMAGE_PT_bd_uv_result(bpy.types.Panel):
                       + (f", {last.failed} failed" if last.failed else ""))
             col.label(text=f"Max distortion {last.max_distortion:.3f}")
             col.label(text=f"Mean distortion {last.mean_distortion:.3f}")
-            col.label(text=f"Certified C {last.bound_certified:.3g}")
+            col.label(text=f"Certified C {last.bound_certified:.4g}"
+                      + (f" (raised on {last.raised})" if last.raised else ""))
             col.label(text=f"Flipped {last.flipped}")
+            if last.put_back:
+                col.label(text=f"Put back {last.put_back}", icon='ERROR')
+            if last.overlaps:
+                col.label(text=f"Overlapping island pairs {last.overlaps}", icon='ERROR')
             col.label(text=f"Time {last.seconds:.2f} s")
         col = layout.column(align=True)
         col.operator(UV_OT_bd_show_distortion.bl_idname)

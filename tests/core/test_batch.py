@@ -76,7 +76,7 @@ def test_folder_good_files_written_bad_ones_reported_exit_1(folder, tmp_path, ca
     assert rep["summary"] | timing == {
         "files": 4, "meshes": 4, "certified": 2, "partial": 0, "failed": 2, "not_run": 0,
         "resumed": 0, **timing, "scheduler": "pool", "jobs": 2, "interrupted": False,
-        "running": False}
+        "running": False, "overlapping_islands": 0, "layout_overlaps": 0}
     s = rep["summary"]
     minutes = s["working_seconds"] / 60
     assert 0 < s["startup_seconds"] + s["working_seconds"] <= s["seconds"]

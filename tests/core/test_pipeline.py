@@ -66,7 +66,8 @@ def test_auto_finds_a_smaller_certified_bound_than_a_fixed_one(nefertiti):
     auto = bd_uv.unwrap(V, F, bound="auto")
     _check_certified(V, F, auto)
     r = auto.islands[0]
-    assert r.bound_certified == pytest.approx(r.max_distortion)
+    # the certified bound keeps a little room above the map's distortion for float32 storage
+    assert r.max_distortion <= r.bound_certified <= r.max_distortion * 1.001
     assert r.bound_certified <= fixed.max_distortion
     assert r.bound_certified < 1.35  # Blender ABF reaches 1.405 on this mesh (BENCHMARKS.md)
 
@@ -145,8 +146,8 @@ def test_cancel_during_the_solve(nefertiti):
         seen.append(msg)
         if "solving" in msg:
             ev.set()
-    with pytest.raises(bd_uv.CancelledError):
-        bd_uv.unwrap(V, F, cancel=ev, progress=progress)
+    with pytest.raises(bd_uv.CancelledError):  # C = 1.3: below the conformal map's 1.443
+        bd_uv.unwrap(V, F, bound=1.3, cancel=ev, progress=progress)
     assert any("solving" in m for m in seen)
 
 

@@ -10,6 +10,7 @@ import pathlib
 import numpy as np
 
 import bd_uv
+from overlap_shapes import overlapping_triangle_pairs
 
 DATA = pathlib.Path(__file__).resolve().parents[1] / "data"
 
@@ -103,6 +104,26 @@ def assert_disk_with_holes(tris, label="island"):
     assert euler == 2 - loops, f"{label}: genus {(2 - loops - euler) / 2} with {loops} loops"
 
 
+def assert_overlap_free(corner_uv, label="island", max_faces=4000):
+    """No two UV triangles overlap (independent separating-axis test, overlap_shapes.py); above
+    ``max_faces`` the product's boundary check stands in (the pairwise test grows as m^2)."""
+    if len(corner_uv) <= max_faces:
+        pairs = overlapping_triangle_pairs(corner_uv)
+        assert len(pairs) == 0, f"{label}: {len(pairs)} overlapping UV triangle pairs certified"
+    else:
+        from bd_uv.overlap import island_overlaps
+        F = np.arange(3 * len(corner_uv)).reshape(-1, 3)
+        ov = island_overlaps(_shared_corners(corner_uv), corner_uv, np.zeros(len(F), int), 1)
+        assert ov.overlap_free[0], f"{label}: {int(ov.crossings[0])} boundary crossings certified"
+
+
+def _shared_corners(corner_uv):
+    """Vertex ids for corners: equal UVs, one vertex (the UV-connected mesh)."""
+    flat = np.ascontiguousarray(corner_uv.reshape(-1, 2))
+    _, ids = np.unique(flat, axis=0, return_inverse=True)
+    return ids.reshape(-1, 3)
+
+
 def snapshot(*arrays):
     """Byte-exact copies of the inputs (None passes through)."""
     return [None if a is None else (np.asarray(a).dtype, np.asarray(a).shape,
@@ -159,6 +180,9 @@ def assert_contract(res, V, F, pin_corners=None, pin_uv=None):
         assert np.isclose(isl.max_distortion, D.max(), rtol=1e-5), (isl.max_distortion, D.max())
         assert isl.flipped == 0
         assert_disk_with_holes(isl.tris, f"certified island {i}")
+        assert_overlap_free(cuv, f"certified island {i}")
+        if hasattr(isl, "overlap_free"):   # IslandResult gains it once the pipeline certifies it
+            assert isl.overlap_free is True, f"island {i}: certified but not overlap-free"
         assert np.all(np.isfinite(V[F[isl.faces]])), f"island {i}: non-finite vertex certified"
     assert np.all(seen == 1), "islands do not partition the faces"
     assert res.certified == all(s == "certified" for s in statuses)

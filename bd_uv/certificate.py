@@ -1,0 +1,143 @@
+"""One certificate per island, measured from its UVs as stored; every write path uses it.
+
+An island is certified when its map has no flipped face, its conformal distortion is at most its
+bound C everywhere (Lipman 2012, eq. 4.9), and it is one-to-one: its UV boundary curves are simple,
+disjoint and wound the right way (Theorems 5.1 and 5.2, see :mod:`bd_uv.overlap`).
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from .geometry import face_areas
+from .metrics import conformal_distortion, flipped_faces
+from .overlap import island_overlaps
+
+# Same relative tolerance as metrics.certify: the bound is met up to rounding.
+RTOL = 1e-6
+
+
+@dataclass(frozen=True)
+class Certificate:
+    """What one island's stored UVs prove.
+
+    Attributes
+    ----------
+    island : int
+    certified : bool, ``flipped == 0 and max_distortion <= bound and overlap_free``
+    bound : float, the C it is checked against
+    max_distortion : float (inf when a face is flipped, collapsed or has non-finite UVs)
+    mean_distortion : float, area-weighted over the island's faces with finite distortion
+    flipped : int, faces with signed UV area <= 0 (or non-finite UVs)
+    overlap_free : bool, the island is one-to-one in UV
+    crossings : int, pairs of crossing boundary edges (0 when overlap_free)
+    reason : str, "" when certified, else what failed, in words
+    faces : int, number of faces
+    area : float, 3D area of the faces with finite distortion (weights the mean across islands)
+    """
+    island: int
+    certified: bool
+    bound: float
+    max_distortion: float
+    mean_distortion: float
+    flipped: int
+    overlap_free: bool
+    crossings: int
+    reason: str
+    faces: int = 0
+    area: float = 0.0
+
+    def summary(self):
+        """JSON-ready dict (no NaN or inf: those become None)."""
+        def num(v):
+            return None if v is None or not np.isfinite(v) else float(v)
+        return {"island": int(self.island), "certified": bool(self.certified),
+                "bound": num(self.bound), "max_distortion": num(self.max_distortion),
+                "mean_distortion": num(self.mean_distortion), "flipped": int(self.flipped),
+                "overlap_free": bool(self.overlap_free), "crossings": int(self.crossings),
+                "faces": int(self.faces), "reason": self.reason}
+
+
+def certify_islands(V, F, corner_uv, face_island, bounds, rtol=RTOL):
+    """Certify every island of a layout from its UVs as stored.
+
+    Parameters
+    ----------
+    V : (n,3) float array
+    F : (m,3) int array
+    corner_uv : (m,3,2) float array, UVs as stored (float32 allowed; measured in float64)
+    face_island : (m,) int array, island per face, -1 for faces of no island
+    bounds : (k,) float array, the bound C of each island (k islands, labels 0..k-1)
+    rtol : float, relative tolerance on the bound
+
+    Returns
+    -------
+    list of Certificate, one per island in label order
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    uv = np.asarray(corner_uv).reshape(len(F), 3, 2)
+    lab = np.asarray(face_island, dtype=np.int64).reshape(-1)
+    bounds = np.asarray(bounds, dtype=np.float64).reshape(-1)
+    k = len(bounds)
+    lab = np.where(lab < k, lab, -1)
+    faces = np.flatnonzero(lab >= 0)
+    fl = lab[faces]
+    uv64 = uv[faces].astype(np.float64)
+    finite = np.isfinite(uv64).all(axis=(1, 2))
+    with np.errstate(invalid="ignore", over="ignore"):
+        D = np.where(finite, conformal_distortion(V, F[faces], np.where(
+            finite[:, None, None], uv64, 0.0)), np.inf)
+        flip = flipped_faces(V, F[faces], uv64) | ~finite
+    n_faces = np.bincount(fl, minlength=k)
+    n_flip = np.bincount(fl, weights=flip, minlength=k).astype(np.int64)
+    maxD = np.full(k, -np.inf)
+    np.maximum.at(maxD, fl, D)
+    maxD[n_faces == 0] = np.nan
+    A = face_areas(V, F[faces])
+    ok_d = np.isfinite(D) & np.isfinite(A)
+    wsum = np.bincount(fl[ok_d], weights=A[ok_d], minlength=k)
+    dsum = np.bincount(fl[ok_d], weights=(A * D)[ok_d], minlength=k)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        meanD = np.where(wsum > 0, dsum / wsum, np.inf)
+    ov = island_overlaps(F, uv, lab, k)
+    certs = []
+    for i in range(k):  # one small record per island, no per-face work
+        why = []
+        if n_faces[i] == 0:
+            why.append("no faces with UVs")
+        if n_flip[i]:
+            why.append(f"{n_flip[i]} flipped or collapsed face(s)")
+        if not n_flip[i] and n_faces[i] and not maxD[i] <= bounds[i] * (1.0 + rtol):
+            why.append(f"max distortion {maxD[i]:.6g} > bound {bounds[i]:.6g}")
+        if ov.crossings[i]:
+            why.append(f"the UV boundary crosses itself ({ov.crossings[i]} crossing(s))")
+        elif ov.bad_loops[i]:
+            why.append(f"{ov.bad_loops[i]} UV boundary loop(s) wound the wrong way (a hole "
+                       "outside its island, or the island lying over itself)")
+        overlap_free = bool(ov.overlap_free[i]) and n_faces[i] > 0
+        certs.append(Certificate(
+            island=i, certified=not why, bound=float(bounds[i]), max_distortion=float(maxD[i]),
+            mean_distortion=float(meanD[i]), flipped=int(n_flip[i]), overlap_free=overlap_free,
+            crossings=int(ov.crossings[i]), reason="; ".join(why), faces=int(n_faces[i]),
+            area=float(wsum[i])))
+    return certs
+
+
+def certificate_totals(certs):
+    """Figures over many islands, for summary lines and captions.
+
+    Returns
+    -------
+    dict: islands, certified, overlapping (islands not overlap-free), flipped, faces (of certified
+    islands), and over the certified islands max_distortion, bound and the area-weighted
+    mean_distortion (None when no island is certified)
+    """
+    ok = [c for c in certs if c.certified]
+    area = sum(c.area for c in ok)
+    return {"islands": len(certs), "certified": len(ok),
+            "overlapping": sum(not c.overlap_free for c in certs),
+            "flipped": sum(c.flipped for c in certs), "faces": sum(c.faces for c in ok),
+            "max_distortion": max((c.max_distortion for c in ok), default=None),
+            "bound": max((c.bound for c in ok), default=None),
+            "mean_distortion": (sum(c.area * c.mean_distortion for c in ok) / area
+                                if ok and area > 0 else None)}

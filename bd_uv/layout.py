@@ -1,0 +1,186 @@
+"""From an unwrap to the UVs a file stores: cut overlapping islands, pack, re-certify as stored.
+
+The one write path of the command line and the batch tool (and the pattern the Blender operator and
+script follow with their own storage): every island is certified by :func:`certify_islands` from
+the UVs exactly as they will be stored, and only islands that pass are written. The report entries,
+the summary line and the PNG caption all read the same :class:`Certificate` objects.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+
+from .certificate import certificate_totals, certify_islands
+from .cut import split_overlapping
+from .overlap import _bits, _row_ids, layout_overlaps
+from .pack import MARGIN, island_boxes, pack_islands
+
+
+@dataclass(frozen=True)
+class Layout:
+    """The UVs as stored and what they prove.
+
+    Attributes
+    ----------
+    corner_uv : (m,3,2) float64, the stored UVs; NaN on faces not written
+    face_island : (m,) int64, stored island of each face (-1: not written)
+    source : (k,) int64, the unwrap island each stored island comes from
+    certificates : list of Certificate, one per stored island, measured as stored (failed ones
+        included: their faces are not written)
+    unwrapped : list of Certificate, one per unwrap island, measured on the unwrap's own UVs
+        (None for islands the unwrap did not certify)
+    cut_edges : list of (c,2) int64 per unwrap island, the edges cut to remove its overlap
+    overlaps : (p,2) int64, pairs of written stored islands that overlap each other
+    packed : bool
+    """
+    corner_uv: np.ndarray
+    face_island: np.ndarray
+    source: np.ndarray
+    certificates: list
+    unwrapped: list
+    cut_edges: list
+    overlaps: np.ndarray
+    packed: bool
+
+    def vertex_uv(self, F):
+        """One ``vt`` per (island, vertex, UV) of the written faces, for :func:`write_obj`.
+
+        Returns
+        -------
+        uv : (K,2) float64
+        F_uv : (m,3) int64, -1 on faces not written
+        """
+        F = np.asarray(F, dtype=np.int64)
+        written = self.face_island >= 0
+        F_uv = np.full(F.shape, -1, dtype=np.int64)
+        if not written.any():
+            return np.zeros((0, 2)), F_uv
+        uv = self.corner_uv[written].reshape(-1, 2)
+        isl = np.repeat(self.face_island[written], 3)
+        ids = _row_ids(isl, F[written].ravel(), _bits(uv[:, 0]), _bits(uv[:, 1]))
+        table = np.zeros((int(ids.max()) + 1, 2))
+        table[ids] = uv
+        F_uv[written] = ids.reshape(-1, 3)
+        return table, F_uv
+
+    def totals(self):
+        """certificate_totals over the stored islands, plus cut and overlap counts."""
+        t = certificate_totals(self.certificates)
+        t.update(overlapping_unwrapped=sum(c is not None and not c.overlap_free
+                                           for c in self.unwrapped),
+                 cut_islands=sum(len(c) > 0 for c in self.cut_edges),
+                 cut_edges=int(sum(len(c) for c in self.cut_edges)),
+                 layout_overlaps=int(len(self.overlaps)))
+        return t
+
+    def island_entries(self, res):
+        """The report's per-island entries: the unwrap's own summary, with the figures replaced by
+        what the stored UVs measure, and ``overlap_free``, ``crossings``, ``pieces``, ``cut_edges``
+        added."""
+        entries = []
+        for r in res.islands:
+            e = r.summary()
+            mine = [c for c, s in zip(self.certificates, self.source) if s == r.index]
+            before = self.unwrapped[r.index]
+            e["crossings"] = before.crossings if before is not None else None
+            e["cut_edges"] = self.cut_edges[r.index].tolist()
+            e["pieces"] = len(mine)
+            if not mine:  # the unwrap failed: nothing stored
+                e["overlap_free"] = None
+                entries.append(e)
+                continue
+            t = certificate_totals(mine)
+            e["overlap_free"] = all(c.overlap_free for c in mine)
+            e["flipped"] = int(sum(c.flipped for c in mine))
+            e["stored"] = [c.summary() for c in mine]
+            if t["certified"] == len(mine):
+                e.update(max_distortion=t["max_distortion"], mean_distortion=t["mean_distortion"])
+            else:
+                bad = [c for c in mine if not c.certified]
+                e.update(status="failed", error="NotCertifiedAsStored", bound_certified=None,
+                         max_distortion=max(c.max_distortion for c in mine),
+                         message=f"island {r.index}: not written, the UVs as stored fail "
+                                 f"certification: {bad[0].reason}")
+                if not np.isfinite(e["max_distortion"]):
+                    e["max_distortion"] = None
+            entries.append(e)
+        return entries
+
+    def caption(self, name, method, seconds):
+        """The PNG caption, from the stored certificates (area-weighted mean)."""
+        t = self.totals()
+        head = f"{name}: BD-{method.upper()}"
+        if not t["certified"]:
+            return f"{head}, no island certified"
+        extra = ""
+        if t["cut_islands"]:
+            extra += f", {t['cut_islands']} island(s) cut ({t['cut_edges']} edges)"
+        if t["layout_overlaps"]:
+            extra += f", {t['layout_overlaps']} overlapping island pair(s)"
+        return (f"{head}, {t['certified']}/{t['islands']} islands, {t['faces']} faces, max "
+                f"distortion {t['max_distortion']:.3f} <= {t['bound']:.3g}, mean "
+                f"{t['mean_distortion']:.3f}, 0 flipped, overlap-free{extra}, {seconds:.2f} s")
+
+
+def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float64):
+    """Turn an :class:`UnwrapResult` into the UVs to store, and certify them as stored.
+
+    1. islands the unwrap certified are checked for self-overlap; with ``cut`` an overlapping one
+       is cut into overlap-free pieces (:func:`split_overlapping`, UVs unchanged);
+    2. with ``pack`` all islands go into the unit square (:func:`pack_islands`), else each cut
+       piece is moved to (0, 0) like the unwrap's islands;
+    3. the UVs are rounded to ``dtype`` (float32 in Blender; the OBJ writer keeps float64) and every
+       stored island is certified from them; islands that fail are not written.
+
+    Parameters
+    ----------
+    V : (n,3) float array
+    F : (m,3) int array
+    res : UnwrapResult
+    pack, cut : bool
+    margin : float, packing margin in the unit square
+    dtype : numpy dtype the UVs are stored in
+
+    Returns
+    -------
+    Layout
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    m = len(F)
+    n = len(res.islands)
+    ok = np.array([r.status == "certified" for r in res.islands], dtype=bool)
+    bounds = np.array([r.bound_certified if r.status == "certified" else np.nan
+                       for r in res.islands], dtype=np.float64)
+    lab = np.where(ok[res.face_island], res.face_island, -1) if n else np.full(m, -1)
+    uv = np.asarray(res.corner_uv, dtype=np.float64)
+    before = certify_islands(V, F, uv, lab, np.where(ok, bounds, 1.0))
+    unwrapped = [c if ok[i] else None for i, c in enumerate(before)]
+    new = np.full(m, -1, dtype=np.int64)
+    source, cuts, moved = [], [], []
+    for i in range(n):  # per island
+        faces = np.flatnonzero(lab == i)
+        pieces, cut_edges = ([faces] if ok[i] else []), np.zeros((0, 2), dtype=np.int64)
+        if ok[i] and cut and not before[i].overlap_free:
+            pieces, cut_edges = split_overlapping(V, F, uv, faces)
+        for p in pieces:
+            new[p] = len(source)
+            source.append(i)
+            moved.append(len(pieces) > 1)
+        cuts.append(cut_edges)
+    source = np.asarray(source, dtype=np.int64)
+    if pack:
+        uv = pack_islands(uv, new, margin)
+    elif any(moved):
+        lo, _ = island_boxes(uv, new, len(source))
+        shift = np.where(np.asarray(moved)[:, None], lo, 0.0)
+        sel = new >= 0
+        uv = uv.copy()
+        uv[sel] -= shift[new[sel]][:, None, :]
+    stored = uv.astype(dtype).astype(np.float64)
+    certs = certify_islands(V, F, stored, new, bounds[source] if len(source) else [])
+    passed = np.array([c.certified for c in certs], dtype=bool)
+    written = np.where(new >= 0, passed[np.maximum(new, 0)] if len(passed) else False, False)
+    face_island = np.where(written, new, -1)
+    stored[~written] = np.nan
+    overlaps = layout_overlaps(stored, face_island, F) if written.any() else np.zeros((0, 2), int)
+    return Layout(stored, face_island, source, certs, unwrapped, cuts, overlaps, bool(pack))

@@ -1,0 +1,85 @@
+"""Sparse symmetric positive definite factorisation, factorised once and back-solved with several
+right-hand sides at once (the global step of ``projection``; usable for any Laplacian-like system).
+
+Measured on face.obj's projection matrix (25.9k unknowns, 181k non-zeros, busy 2-core machine):
+cholespy factorises in 0.14 s and back-solves 4 columns in 2.3 ms, qdldl 0.053 s and 4.9 ms, scipy's
+SuperLU 0.080 s and 4.5 ms (``benchmarks/bench_projection.py --backends``). All three have wheels
+for cp311 and cp313 on linux-x64, windows-x64, macos-arm64 and macos-x64.
+"""
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+__all__ = ["factor_spd"]
+
+
+def _backends():
+    found = []
+    try:
+        import cholespy  # noqa: F401
+        found.append("cholespy")
+    except ImportError:
+        pass
+    try:
+        import qdldl  # noqa: F401
+        found.append("qdldl")
+    except ImportError:
+        pass
+    found.append("splu")
+    return found
+
+
+def factor_spd(M, backend="auto"):
+    """Factorise a sparse symmetric positive definite matrix once.
+
+    Parameters
+    ----------
+    M : (n, n) sparse, symmetric positive definite
+    backend : "auto" | "cholespy" | "qdldl" | "splu"
+        "auto" takes the first installed of cholespy (supernodal Cholesky, fastest back-solves),
+        qdldl (LDL^T), scipy's SuperLU.
+
+    Returns
+    -------
+    solve : callable, ``solve(B)`` with B (n,) or (n, r) float64 -> same shape
+    name : str, the backend used
+    """
+    if backend == "auto":
+        backend = _backends()[0]
+    M = sp.csc_array(M)
+    n = M.shape[0]
+    if backend == "cholespy":
+        import cholespy
+
+        C = sp.coo_array(M)
+        fac = cholespy.CholeskySolverD(n, np.ascontiguousarray(C.row, dtype=np.int32),
+                                       np.ascontiguousarray(C.col, dtype=np.int32),
+                                       np.ascontiguousarray(C.data, dtype=np.float64),
+                                       cholespy.MatrixType.COO)
+
+        def solve(B):
+            B = np.ascontiguousarray(B, dtype=np.float64)
+            X = np.empty_like(B)
+            fac.solve(B, X)
+            return X
+    elif backend == "qdldl":
+        import qdldl
+
+        fac = qdldl.Solver(sp.triu(M, format="csc"), upper=True)
+
+        def solve(B):
+            B = np.asarray(B, dtype=np.float64)
+            if B.ndim == 1:
+                return fac.solve(B)
+            return np.stack([fac.solve(np.ascontiguousarray(B[:, i]))
+                             for i in range(B.shape[1])], axis=1)
+    elif backend == "splu":
+        lu = spla.splu(M, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                       options={"SymmetricMode": True})
+
+        def solve(B):
+            return lu.solve(np.asarray(B, dtype=np.float64))
+    else:
+        raise ValueError(f"unknown backend {backend!r}: use 'auto', 'cholespy', 'qdldl' or "
+                         "'splu'")
+    return solve, backend

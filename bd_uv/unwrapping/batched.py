@@ -1,0 +1,126 @@
+"""Many islands at once: one conformal solve and one certification for every island that fits.
+
+A hard-surface asset has hundreds to thousands of small islands, and per-island Python work (a
+problem object, its operators, a factorisation) costs milliseconds each. Islands without pins whose
+free-boundary conformal map (LSCM) already fits the bound need nothing else, so they are solved
+together: one block-diagonal LSCM system with each island's two far boundary vertices fixed, one
+sparse factorisation, distortion and certification vectorised over all faces. Islands that do not
+fit go on to the per-island strategies with their conformal map as start.
+"""
+import time
+
+import numpy as np
+
+from ..energies import jacobian_operators
+from ..frames import _solve_fixed
+from ..geometry import face_areas, local_coordinates
+from ..metrics import conformal_distortion, flipped_faces
+from .problem import STORE_HEADROOM
+from .results import IslandResult
+
+
+def conformal_islands(V, islands, C):
+    """Conformal maps of many islands in one solve, and the results of those that fit C.
+
+    Parameters
+    ----------
+    V : (n,3) float64
+    islands : list of mesh.Island, valid (no error), without pins
+    C : float, the bound
+
+    Returns
+    -------
+    done : dict island index -> IslandResult (certified, flag "initial_map")
+    starts : dict island index -> (nv,) complex128, the conformal map (unit-area normalisation) of
+        each island that did not fit, for the per-island path
+    """
+    t0 = time.perf_counter()
+    if not islands:
+        return {}, {}
+    nvs = np.array([len(i.vertices) for i in islands])
+    nfs = np.array([len(i.faces) for i in islands])
+    voff = np.concatenate([[0], np.cumsum(nvs)])
+    foff = np.concatenate([[0], np.cumsum(nfs)])
+    k = len(islands)
+    face_isl = np.repeat(np.arange(k), nfs)
+    vert_isl = np.repeat(np.arange(k), nvs)
+    verts = np.concatenate([i.vertices for i in islands])
+    tris = np.concatenate([i.tris for i in islands]) + voff[face_isl][:, None]
+    P = V[verts]
+    area = np.bincount(face_isl, face_areas(P, tris), minlength=k)
+    # Normalise each island to unit area (as IslandProblem does): local coordinates scale with it.
+    Z = local_coordinates(P, tris) / np.sqrt(area)[face_isl][:, None]
+    n = len(verts)
+    ops = jacobian_operators(Z, tris, n)
+    W = ops.area
+    Q = (ops.Bre.T.multiply(W) @ ops.Bre + ops.Bim.T.multiply(W) @ ops.Bim).tocsc()
+    idx = _far_pairs(P, islands, voff)
+    val = np.tile(np.array([0.0, 1.0], dtype=np.complex128), k)
+    u = _solve_fixed(Q, n, idx, val)
+    x = np.concatenate([u.real, u.imag])
+    a = np.abs(ops.Are @ x + 1j * (ops.Aim @ x))
+    b = np.abs(ops.Bre @ x + 1j * (ops.Bim @ x))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        D = np.where(a > b, (a + b) / (a - b), np.inf)
+    maxD = np.maximum.reduceat(D, foff[:-1])
+    fit = maxD * (1.0 + STORE_HEADROOM) <= C
+
+    # Fitting islands: UV area = 3D area, bounding box at (0, 0), as IslandProblem's finish.
+    e1 = u[tris[:, 1]] - u[tris[:, 0]]
+    e2 = u[tris[:, 2]] - u[tris[:, 0]]
+    uv_area = np.bincount(face_isl, 0.5 * (e1.conj() * e2).imag, minlength=k)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        s = np.sqrt(area / uv_area)
+    us = u * s[vert_isl]
+    lo = (np.minimum.reduceat(us.real, voff[:-1]) + 1j * np.minimum.reduceat(us.imag, voff[:-1]))
+    us = us - lo[vert_isl]
+    uv = np.stack([us.real, us.imag], axis=1)
+    # Certify from the final UVs in the input geometry, every face at once.
+    corner_uv = uv[tris]
+    Dc = conformal_distortion(P, tris, corner_uv)
+    flipped = np.add.reduceat(flipped_faces(P, tris, corner_uv).astype(np.int64), foff[:-1])
+    maxc = np.maximum.reduceat(Dc, foff[:-1])
+    A3 = face_areas(P, tris)
+    finite = np.isfinite(Dc)
+    mean = (np.bincount(face_isl, np.where(finite, A3 * Dc, 0.0), minlength=k)
+            / np.maximum(np.bincount(face_isl, np.where(finite, A3, 0.0), minlength=k), 1e-300))
+    ok = fit & (flipped == 0) & (maxc <= C * (1 + 1e-6))
+    seconds = (time.perf_counter() - t0) / k
+    done, starts = {}, {}
+    for j, isl in enumerate(islands):
+        if not ok[j]:
+            starts[isl.index] = u[voff[j]:voff[j + 1]] / 1.0
+            continue
+        mx = float(maxc[j])
+        done[isl.index] = IslandResult(
+            isl.index, isl.faces, isl.vertices, isl.tris, uv=uv[voff[j]:voff[j + 1]],
+            status="certified",
+            message=f"island {isl.index}: {len(isl.faces)} faces, max distortion {mx:.3f} <= "
+                    f"{C:.4g}, 0 flipped",
+            bound_requested=C, bound_certified=float(C), max_distortion=mx,
+            mean_distortion=float(mean[j]), flipped=0, frames="conformal", seconds=seconds,
+            distortion=Dc[foff[j]:foff[j + 1]], flags=("initial_map",),
+            timings={"setup": 0.0, "solve": 0.0, "certify": 0.0})
+    return done, starts
+
+
+def _far_pairs(P, islands, voff):
+    """Per island, two boundary vertices about half the boundary length apart (as
+    ``frames._far_pair``), as union vertex ids (2k,)."""
+    loops = [i.loops[0] for i in islands]
+    lens = np.array([len(lp) for lp in loops])
+    owner = np.repeat(np.arange(len(islands)), lens)
+    lv = np.concatenate(loops) + voff[owner]
+    start = np.concatenate([[0], np.cumsum(lens)[:-1]])
+    nxt = np.arange(len(lv)) + 1
+    last = start + lens - 1
+    nxt[last] = start
+    seg = np.linalg.norm(P[lv[nxt]] - P[lv], axis=1)
+    cum = np.cumsum(seg)
+    before = cum - seg                      # arc length from the loop's first vertex
+    before = before - before[start][owner]
+    total = np.bincount(owner, seg)
+    gap = np.abs(before - 0.5 * total[owner])
+    order = np.lexsort((gap, owner))
+    first = order[np.searchsorted(owner[order], np.arange(len(islands)))]
+    return np.stack([lv[start], lv[first]], axis=1).ravel()

@@ -1,0 +1,240 @@
+"""One island's bounded-distortion problem: normalised geometry, operators, pins, one conic solve.
+
+The variables are the island's vertex UVs ``u`` (complex, ``x = [Re u; Im u]``). A solve minimises
+an energy over F_C (Lipman 2012, eqs. 4.15-4.18) for given frames ``w``, with some vertices held
+fixed ("anchors"): the user's pins, or the two far boundary vertices of a start map kept where that
+map has them (see ``anchor_to``), so that the scale of the result is the start's and no global floor
+on the scale is needed.
+"""
+import dataclasses
+import time
+
+import numpy as np
+
+from ..energies import energy, jacobian_operators
+from ..errors import InfeasibleError, SolverError
+from ..frames import _far_pair, frames_from_map, lscm_map
+from ..geometry import face_areas, local_coordinates
+from ..solvers import conic
+from ..spaces import bounded_distortion_space
+
+SOLVE_MARGIN = 2e-3      # solve at a C slightly below the bound so certification has headroom
+# Relative headroom a certified bound keeps above the map's float64 distortion, so that the UVs
+# still pass when stored as float32 (Blender) or packed into the unit square.
+STORE_HEADROOM = 2e-4
+
+
+def solve_bound(C):
+    """The C a solve uses for a requested bound C: a little below it (SOLVE_MARGIN on C - 1, and
+    STORE_HEADROOM relative), never below 1."""
+    return max(1.0, min(1.0 + (C - 1.0) * (1.0 - SOLVE_MARGIN), C / (1.0 + STORE_HEADROOM)))
+
+
+class Cancelled(Exception):
+    """Raised inside the unwrap when its cancel event is set."""
+
+
+class IslandProblem:
+    """One island's normalised geometry and operators; solves F_C for given frames.
+
+    Parameters
+    ----------
+    island : mesh.Island
+    V : (n,3) float64, the whole mesh's vertices
+    pins : (corners (p,), uv (p,2)), the whole mesh's pinned corners
+    method : "lscm" | "arap" | "dirichlet"
+    cone : "soc" | "linf"
+    cancel : object with ``is_set()`` or None
+    """
+
+    def __init__(self, island, V, pins, method, cone, cancel):
+        self.island = island
+        self.method, self.cone, self.cancel = method, cone, cancel
+        Vi = V[island.vertices]
+        self.V = Vi
+        self.area3d = float(face_areas(Vi, island.tris).sum())
+        # Normalise: centre and unit total area (huge or tiny coordinates solve alike).
+        self.Vn = (Vi - Vi.mean(axis=0)) / np.sqrt(self.area3d)
+        self.nv = len(Vi)
+        self.Z = local_coordinates(self.Vn, island.tris)
+        self.ops = jacobian_operators(self.Z, island.tris, self.nv)
+        self.pin_idx, self.pin_val = self._island_pins(pins)
+        self.sigma = 1.0
+        self.scale = 1.0
+        self.weights = None
+        self.set_anchors(self.pin_idx if len(self.pin_idx) else np.array([0]),
+                         self.pin_val if len(self.pin_idx) else np.array([0j]))
+        self.solves = 0
+        self.iterations = 0
+        self.outcomes = []
+        self.last_status = None
+        self.timings = {"setup": 0.0, "solve": 0.0, "certify": 0.0}
+
+    def _island_pins(self, pins):
+        corners, uv = pins
+        isl = self.island
+        if not len(corners):
+            return np.zeros(0, np.int64), np.zeros(0, np.complex128)
+        face, k = corners // 3, corners % 3
+        pos = np.full(isl.faces.max() + 1, -1, dtype=np.int64)
+        pos[isl.faces] = np.arange(len(isl.faces))
+        inside = face <= isl.faces.max()
+        inside[inside] = pos[face[inside]] >= 0
+        if not inside.any():
+            return np.zeros(0, np.int64), np.zeros(0, np.complex128)
+        vid = isl.tris[pos[face[inside]], k[inside]]
+        val = uv[inside, 0] + 1j * uv[inside, 1]
+        ids, first = np.unique(vid, return_index=True)
+        clash = np.abs(val - val[first][np.searchsorted(ids, vid)]) > 0
+        if clash.any():
+            raise InfeasibleError(f"island {isl.index}: corners of one vertex are pinned to "
+                                  "different UVs; unpin one of them or mark a seam there",
+                                  isl.index)
+        return ids, val[first]
+
+    # -- the map's Jacobians -------------------------------------------------------------------
+    def alpha(self, u):
+        x = np.concatenate([u.real, u.imag])
+        return self.ops.Are @ x + 1j * (self.ops.Aim @ x)
+
+    def beta(self, u):
+        x = np.concatenate([u.real, u.imag])
+        return self.ops.Bre @ x + 1j * (self.ops.Bim @ x)
+
+    def face_distortion(self, u):
+        """Conformal distortion per face (eq. 4.9); inf where a face flips or collapses."""
+        a, b = np.abs(self.alpha(u)), np.abs(self.beta(u))
+        with np.errstate(invalid="ignore", divide="ignore"):
+            D = (a + b) / (a - b)
+        D[~(a > b) | ~np.isfinite(D)] = np.inf
+        return D
+
+    def distortion(self, u):
+        """Max distortion of a map (inf when any face flips)."""
+        return float(np.max(self.face_distortion(u)))
+
+    def mean_distortion(self, u):
+        """Area-weighted mean distortion (inf when any face flips)."""
+        D = self.face_distortion(u)
+        return float(np.sum(self.ops.area * D) / np.sum(self.ops.area))
+
+    def check(self, u, C):
+        """Certify a map in the normalised geometry: (ok, max distortion)."""
+        t = time.perf_counter()
+        D = self.distortion(u) if u is not None else np.inf
+        self.timings["certify"] += time.perf_counter() - t
+        return D <= C * (1 + 1e-9), D
+
+    def fallback_map(self):
+        """The conformal map, for a formulation when the start gives frames only."""
+        isl = self.island
+        pins = (self.pin_idx, self.pin_val) if len(self.pin_idx) >= 2 else None
+        return lscm_map(self.Z, isl.tris, self.nv, isl.loops, pins)
+
+    # -- formulations --------------------------------------------------------------------------
+    def set_anchors(self, idx, val):
+        """Hold vertices ``idx`` at complex ``val`` in every solve."""
+        nv = self.nv
+        self.fixed = np.concatenate([idx, idx + nv])
+        self.xfix = np.concatenate([np.real(val), np.imag(val)])
+        self.free = np.setdiff1d(np.arange(2 * nv), self.fixed)
+
+    def anchor_to(self, u_start):
+        """Formulation that keeps a start map's scale: no global floor (issue 9).
+
+        With fewer than two pins, the two boundary vertices about half the boundary apart stay
+        where ``u_start`` has them; sigma (eq. 4.17) is tiny, so it only excludes collapsed faces,
+        and ``u_start`` stays feasible (sigma below its smallest |alpha|). For BD-LSCM the energy
+        of each face is weighted by ``1 / |alpha|`` of the start map: LSCM's absolute energy
+        rewards shrinking distorted regions, which raises their share of the distortion; dividing
+        by the local scale makes the energy closer to the mean conformal distortion (measured:
+        three_peaks mean 1.346 against 1.378 unweighted, mannequin-devil 1.071 both, at C = 5).
+        """
+        a = np.abs(self.alpha(u_start))
+        if len(self.pin_idx) >= 2:
+            self.set_anchors(self.pin_idx, self.pin_val)
+        else:
+            isl = self.island
+            idx, _ = _far_pair(self.Z, isl.tris, self.nv, isl.loops[0])
+            if len(self.pin_idx) == 1:
+                idx = np.unique(np.concatenate([self.pin_idx, idx]))
+            self.set_anchors(idx, u_start[idx])
+        typical = float(np.median(a))
+        self.sigma = min(1e-3 * typical, 0.5 * float(a.min())) if typical > 0 else 1e-12
+        if self.method == "lscm":
+            self.weights = 1.0 / np.maximum(a, 1e-6 * typical)
+        self._scale_objective(u_start, frames_from_map(self.alpha(u_start)))
+
+    def floor_scale(self, u0, w0):
+        """The first release's free-boundary formulation: sigma = 1 on the unit-area island with
+        one anchor vertex. BD-Dirichlet needs it: its energy has no scale of its own, so without a
+        floor its optimum collapses the map."""
+        if len(self.pin_idx) >= 2:
+            typical = np.median(np.abs(self.alpha(u0)))
+            self.sigma = 1e-3 * typical if typical > 0 else 1e-8
+            us = u0
+        else:
+            self.sigma = 1.0
+            lo = np.real(w0 * self.alpha(u0)).min()
+            us = u0 / lo if lo > 0 else u0
+        self._scale_objective(us, w0)
+
+    def _energy(self, w):
+        ops = self.ops if self.weights is None else dataclasses.replace(
+            self.ops, area=self.ops.area * self.weights)
+        return energy(self.method, ops, w)
+
+    def _scale_objective(self, u, w):
+        P, q, const = self._energy(w)
+        x = np.concatenate([u.real, u.imag])
+        e0 = 0.5 * x @ (P @ x) + q @ x + const
+        self.scale = 1.0 / max(abs(e0), 1e-12)
+
+    def energy_of(self, u, w):
+        P, q, const = self._energy(w)
+        x = np.concatenate([u.real, u.imag])
+        return float(0.5 * x @ (P @ x) + q @ x + const)
+
+    # -- solving -------------------------------------------------------------------------------
+    def solver_failure(self):
+        """A SolverError when no solve ever gave an answer (no certificate either way)."""
+        if self.outcomes and not ({"solved", "infeasible"} & set(self.outcomes)):
+            return SolverError(f"island {self.island.index}: the solver failed on every attempt "
+                               f"(last status: {self.last_status}); try other frames or the "
+                               "L-infinity space, or report the mesh", self.island.index)
+        return None
+
+    def solve(self, w, C):
+        """Minimise the energy over F_C with frames w. Returns (u or None, outcome)."""
+        if self.cancel is not None and self.cancel.is_set():
+            raise Cancelled
+        t = time.perf_counter()
+        nv = self.nv
+        if len(self.free) == 0:
+            x = np.zeros(2 * nv)
+            x[self.fixed] = self.xfix
+            return x[:nv] + 1j * x[nv:], "solved"
+        P, q, _ = self._energy(w)
+        P, q = P * self.scale, q * self.scale
+        A, b, cones = bounded_distortion_space(self.ops, w, solve_bound(C), self.sigma, self.cone)
+        fr, fx = self.free, self.fixed
+        Pff = P[:, fr][fr]
+        qf = q[fr] + P[fr][:, fx] @ self.xfix
+        Af = A[:, fr]
+        bf = b - A[:, fx] @ self.xfix
+        self.timings["setup"] += time.perf_counter() - t
+        sol = conic.solve_conic(Pff, qf, Af, bf, cones, cancel=self.cancel)
+        self.timings["solve"] += sol.seconds
+        self.solves += 1
+        self.iterations += sol.iterations
+        self.outcomes.append(sol.outcome)
+        self.last_status = sol.status
+        if sol.outcome == "cancelled" and self.cancel is not None and self.cancel.is_set():
+            raise Cancelled
+        if sol.x is None:
+            return None, sol.outcome
+        x = np.zeros(2 * nv)
+        x[fx] = self.xfix
+        x[fr] = sol.x
+        return x[:nv] + 1j * x[nv:], sol.outcome
+

@@ -1,0 +1,82 @@
+"""What an unwrap returns: one result per island and the mesh's corner UVs."""
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import BDError
+
+
+@dataclass(frozen=True)
+class IslandResult:
+    """The outcome for one island; see docs/ARCHITECTURE.md for every field."""
+    index: int
+    faces: np.ndarray
+    vertices: np.ndarray
+    tris: np.ndarray
+    uv: np.ndarray = None
+    status: str = "failed"
+    error: BDError = None
+    message: str = ""
+    bound_requested: object = None
+    bound_certified: float = None
+    max_distortion: float = float("nan")
+    mean_distortion: float = float("nan")
+    flipped: int = 0
+    frames: str = ""
+    energy: float = float("nan")
+    seconds: float = 0.0
+    solves: int = 0
+    iterations: int = 0
+    distortion: np.ndarray = None
+    flags: tuple = ()
+    timings: dict = field(default_factory=dict)
+
+    def summary(self):
+        """The island's entry in the JSON report."""
+        def num(v):
+            return None if v is None or not np.isfinite(v) else float(v)
+        return {"island": self.index, "faces": int(len(self.faces)),
+                "bound_requested": self.bound_requested,
+                "bound_certified": num(self.bound_certified),
+                "max_distortion": num(self.max_distortion),
+                "mean_distortion": num(self.mean_distortion), "flipped": int(self.flipped),
+                "frames": self.frames, "seconds": round(self.seconds, 4), "status": self.status,
+                "solves": self.solves, "iterations": self.iterations, "flags": list(self.flags),
+                "error": type(self.error).__name__ if self.error else None,
+                "message": self.message,
+                "timings": {k: round(v, 4) for k, v in self.timings.items()}}
+
+
+@dataclass(frozen=True)
+class UnwrapResult:
+    """UVs of a whole mesh; ``corner_uv`` is NaN on faces of failed islands."""
+    corner_uv: np.ndarray
+    face_island: np.ndarray
+    islands: list
+    seconds: float
+    method: str
+
+    @property
+    def certified(self):
+        return all(r.status == "certified" for r in self.islands)
+
+    def vertex_uv(self):
+        """UVs as one table per island vertex, for OBJ output.
+
+        Returns
+        -------
+        uv : (K,2) float64, the certified islands' vertices in island order
+        F_uv : (m,3) int64, index into uv of each face corner; -1 on faces of failed islands
+        """
+        uvs, F_uv, offset = [], np.full((len(self.face_island), 3), -1, dtype=np.int64), 0
+        for r in self.islands:
+            if r.status == "certified":
+                uvs.append(r.uv)
+                F_uv[r.faces] = r.tris + offset
+                offset += len(r.uv)
+        return (np.concatenate(uvs) if uvs else np.zeros((0, 2))), F_uv
+
+    def report(self):
+        """JSON-ready report: method, seconds and one entry per island."""
+        return {"method": self.method, "seconds": round(self.seconds, 4),
+                "islands": [r.summary() for r in self.islands]}

@@ -1,0 +1,313 @@
+"""How an island's map is found for a bound: keep, bend, raise, minimise (Lipman 2012, section 6).
+
+- ``bounded``: a start map within C is returned as it is; otherwise one solve over F_C from the
+  start's frames, anchored at the start (``IslandProblem.anchor_to``); when F_C is empty, C is
+  raised towards the bound the flip-free start is known to meet.
+- ``minimise`` (``bound="auto"``): Algorithm 1, bisection on C with frame updates.
+- ``arap``: BD-ARAP iterations with frames from the previous map.
+Each returns a map in the normalised geometry and the C it is meant to be certified at; the caller
+certifies it from its final UVs.
+"""
+import time
+
+import numpy as np
+
+from ..errors import InfeasibleError
+from ..frames import frames_from_map
+from ..solvers.flip_free import flip_free_map
+from ..solvers.projection import ProjectionSolver
+from .initial import Start, start_map
+from .problem import SOLVE_MARGIN, STORE_HEADROOM, solve_bound
+
+RAISE_FACTOR = 1.5      # C grows by this factor when infeasible
+MAX_RESETS = 3          # frame resets after the first feasible solve (BD-Dirichlet, BD-ARAP)
+IMPROVEMENT = 0.01      # keep resetting frames while the energy drops by more than this fraction
+# Reset frames only when a solution turns faces away from their frames by more than this (radians,
+# 99th percentile, after removing the common rotation).
+FRAME_TOLERANCE = 0.1
+# Bisection stops when C_right - C_left <= AUTO_TOLERANCE (C_right - 1) + AUTO_FLOOR: relative to
+# C - 1, because near C = 1 a 1 % tolerance on C is most of what is left to gain.
+AUTO_TOLERANCE = 0.02
+AUTO_FLOOR = 5e-4
+AUTO_MAX_SOLVES = 24
+# Minimising C steps from the best bound D to 1 + (D - 1)(1 - DESCENT): by projection while that
+# certifies, then by conic solves until one fails, then by bisection.
+DESCENT = 0.15
+# Polish a projected map with one conic solve when the projection changed more than this share of
+# the island's area (measured: three_peaks 10 % at C = 5, mannequin-devil 0.3 %, lion-head at C = 2
+# 0.2 %: a local bend leaves the conformal map's distortion elsewhere, which a solve cannot lower).
+POLISH_AREA = 0.05
+
+_WHY = {"infeasible": "the space is empty for these frames",
+        "inexact": "the solver did not converge", "error": "the solver failed",
+        "solved": "the solver's map did not pass certification"}
+
+
+def fits(start, C):
+    """Whether a start map is within C with room for how its UVs will be stored."""
+    return start.u is not None and start.D * (1.0 + STORE_HEADROOM) <= C
+
+
+def guaranteed_bound(D0):
+    """The requested C whose solve bound still contains a flip-free map of max distortion D0."""
+    return max(1.0 + (D0 - 1.0) / (1.0 - SOLVE_MARGIN), D0 * (1.0 + STORE_HEADROOM)) \
+        * (1 + 1e-9) + 1e-12
+
+
+def formulate(prob, start):
+    """Set up the island's formulation from its start map (see ``IslandProblem.anchor_to``)."""
+    u = start.u if start.u is not None else prob.fallback_map()
+    if prob.method == "dirichlet":
+        prob.floor_scale(u, start.frames)
+    else:
+        prob.anchor_to(u)
+
+
+def bounded(prob, start, C, raise_bound, limit, flags, report):
+    """A certified-to-be map within C. Returns (u, C, name of the start it came from)."""
+    isl = prob.island
+    if prob.method != "dirichlet" and fits(start, C):
+        flags.append("initial_map")  # the start already fits: nothing to bend
+        return start.u, C, start.name
+    if prob.method != "dirichlet" and start.u is not None and C > 1.0:
+        bent = bend(prob, start, C, report, flags)
+        if bent is not None:
+            return bent, C, start.name
+    start = start_for_solve(prob, start, report)
+    formulate(prob, start)
+    w, best, prev_e, retried, resets = start.frames, None, None, False, 0
+    D0 = start.D
+    while True:
+        report(min(0.9, 0.1 + 0.15 * prob.solves), f"solving at C = {C:.3g}")
+        u, outcome = prob.solve(w, C)
+        ok, D = prob.check(u, C)
+        if ok:
+            best = (u, C, start.name)
+            if prob.method != "dirichlet":
+                # BD-LSCM: frame resets lower the energy but measured higher mean distortion
+                # (three_peaks 1.378 -> 1.397 over 5 resets), so one solve is the answer.
+                return best
+            e = prob.energy_of(u, w)
+            if (prev_e is not None and prev_e - e <= IMPROVEMENT * abs(prev_e)
+                    or resets >= MAX_RESETS or frame_turn(prob, u, w) <= FRAME_TOLERANCE):
+                return best
+            prev_e, resets = e, resets + 1
+            w = frames_from_map(prob.alpha(u))
+            continue
+        if best is not None:  # a later frame reset did not certify: keep the last certified map
+            return best
+        if u is not None and not retried and outcome == "inexact":
+            retried = True  # an inexact iterate may still give better frames; an infeasible one not
+            w = frames_from_map(prob.alpha(u))
+            continue
+        if np.isfinite(D0) and prob.check(start.u, C)[0]:
+            flags.append("initial_map")  # the solver failed where the start already fits
+            return start.u, C, start.name
+        failure = prob.solver_failure()
+        if failure is not None and (not raise_bound or C * RAISE_FACTOR > limit):
+            raise failure
+        if not raise_bound:
+            raise InfeasibleError(f"island {isl.index}: no map within distortion {C:g} was found "
+                                  f"({_WHY.get(outcome, outcome)}); allow raising the bound or "
+                                  "use a larger C", isl.index)
+        newC = C * RAISE_FACTOR
+        if np.isfinite(D0):  # approach the bound known to be feasible geometrically
+            newC = max(newC, np.sqrt(C * D0))
+            if newC * RAISE_FACTOR >= D0:
+                newC = max(guaranteed_bound(D0), C * 1.0001)
+        w = start.frames
+        if newC > limit:
+            raise InfeasibleError(f"island {isl.index}: infeasible up to the bound limit "
+                                  f"{limit:g}" + (" (the pins force a flip or a larger distortion)"
+                                                  if len(prob.pin_idx) >= 2 else "")
+                                  + "; raise the limit, move or remove pins, or add seams",
+                                  isl.index)
+        if "bound_raised" not in flags:
+            flags.append("bound_raised")
+        C, retried = newC, False
+
+
+def bend(prob, start, C, report, flags=None):
+    """Bend a start that breaks the bound into F_C, only where the bound demands.
+
+    Projection iterations (Kovalsky et al. 2015, ``solvers.flip_free``) move the faces above C and
+    their neighbourhood, from the start itself even when it flips, and keep the start's
+    distortion elsewhere. When they changed more than POLISH_AREA of the island's area, one conic
+    solve from the harmonic map's frames (``IslandProblem.anchor_to``) redistributes the
+    distortion; the map with the lower mean is kept (three_peaks at C = 5: projection 1.378, the
+    solve 1.346).
+    Returns the map, or None when the projection stalled (the caller solves from a flip-free start).
+    """
+    if len(prob.pin_idx) >= prob.nv:
+        return None  # every vertex pinned: nothing can move
+    report(0.1, f"bending into C = {C:.3g}")
+    t = time.perf_counter()
+    pins = (prob.pin_idx, prob.pin_val) if len(prob.pin_idx) else None
+    u, info = flip_free_map(prob.Z, prob.island.tris, prob.nv, prob.island.loops, start.u,
+                            solve_bound(C), pins=pins, cancel=prob.cancel)
+    prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
+    prob.iterations += info["iterations"]
+    if u is None or not prob.check(u, C)[0]:
+        return None
+    D0 = prob.face_distortion(start.u)
+    D = prob.face_distortion(u)
+    changed = ~(np.abs(D - D0) <= 0.01 * D0)
+    if flags is not None:
+        flags.append("projected")
+    if prob.method != "lscm" or np.sum(prob.ops.area[changed]) <= POLISH_AREA * prob.ops.area.sum():
+        return u
+    report(0.5, f"solving at C = {C:.3g}")
+    # From the harmonic map's frames, anchored at it: on three_peaks they gave a lower mean (1.346)
+    # than the projected map's own frames (1.369).
+    harmonic = start_map(prob, "harmonic", None, report)
+    prob.anchor_to(harmonic.u)
+    us, _ = prob.solve(harmonic.frames, C)
+    if prob.check(us, C)[0] and prob.mean_distortion(us) < prob.mean_distortion(u):
+        if flags is not None:
+            flags.remove("projected")
+        return us
+    return u
+
+
+def start_for_solve(prob, start, report):
+    """A flip-free start for the conic solve when projection stalled: the start itself when it is
+    flip-free (or frames only), else the harmonic map."""
+    if start.u is None or np.isfinite(start.D):
+        return start
+    return start_map(prob, "harmonic", None, report)
+
+
+def minimise(prob, start, limit, budget, flags, report, t0):
+    """Algorithm 1: bisection on C with frame updates. Returns (u, smallest certified C, name of
+    the start)."""
+    isl = prob.island
+    if not np.isfinite(start.D):  # a flip-free start bounds C* from above
+        bent = bend(prob, start, min(5.0, limit), report) if start.u is not None else None
+        start = (Start(bent, frames_from_map(prob.alpha(bent)), start.name, prob.distortion(bent))
+                 if bent is not None else start_for_solve(prob, start, report))
+    formulate(prob, start)
+    lo, hi, best, projected = 1.0, np.inf, None, None
+    if np.isfinite(start.D) and start.D <= limit:
+        best, hi = (start.u, start.D), start.D   # the start is certified at its own distortion
+        u = descend(prob, start.u, report)
+        if u is not None:
+            best, hi = (u, prob.distortion(u)), prob.distortion(u)
+            projected = u
+    w = frames_from_map(prob.alpha(best[0])) if best is not None else start.frames
+    # Conic steps close below the best C found, then bisection once one step fails.
+    C = 5.0 if not np.isfinite(hi) else 1.0 + (hi - 1.0) * (1.0 - DESCENT)
+    while prob.solves < AUTO_MAX_SOLVES:
+        if np.isfinite(hi) and hi - lo <= AUTO_TOLERANCE * (hi - 1.0) + AUTO_FLOOR:
+            break
+        if prob.solves and budget is not None and time.perf_counter() - t0 > budget:
+            flags.append("time_budget_exhausted")
+            break
+        frac = 0.1 + 0.8 * prob.solves / AUTO_MAX_SOLVES
+        report(frac, f"minimising C: {lo:.3g} < C* <= {hi:.4g}")
+        u, _ = prob.solve(w, C)
+        ok, D = prob.check(u, C)
+        if ok and D < hi:
+            best, hi = (u, D), D
+            w = frames_from_map(prob.alpha(u))
+        elif not ok:
+            lo = C
+        else:  # certified, but no better than what we have: C* is not much below
+            lo = max(lo, C - AUTO_TOLERANCE * (C - 1.0))
+        if not np.isfinite(hi):
+            C = 2.0 * lo
+            if np.isfinite(start.D) and C >= start.D:
+                C, w = guaranteed_bound(start.D), start.frames
+            if C > limit:
+                break
+        elif lo > 1.0:
+            C = 0.5 * (lo + hi)
+        else:
+            C = 1.0 + (hi - 1.0) * (1.0 - DESCENT)
+    if best is None:
+        failure = prob.solver_failure()
+        if failure is not None:
+            raise failure
+        spent = ("; the time budget ran out after "
+                 f"{prob.solves} solve(s): allow more time" if "time_budget_exhausted" in flags
+                 else "")
+        raise InfeasibleError(f"island {isl.index}: no certified map found up to C = "
+                              f"{min(limit, 2 * lo):g}{spent}; add seams, move pins, or raise "
+                              "the limit", isl.index)
+    if best[0] is start.u:
+        flags.append("initial_map")  # no solve bettered the start
+    elif best[0] is projected:
+        flags.append("projected")    # no conic solve bettered the projection iterations
+    return best + (start.name,)
+
+
+def descend(prob, u, report, max_iter=40):
+    """Lower the bound of a flip-free map with projection iterations (one factorisation): project
+    onto 1 + (D - 1)(1 - DESCENT) from the last certified map while that certifies. Returns the
+    last certified map, or None when the first step already stalled."""
+    if len(prob.pin_idx) >= prob.nv:
+        return None
+    t = time.perf_counter()
+    fixed = prob.pin_idx if len(prob.pin_idx) else prob.island.loops[0][:1]
+    values = prob.pin_val if len(prob.pin_idx) else u[fixed]
+    solver = ProjectionSolver(prob.ops, prob.nv, fixed, tris=prob.island.tris)
+    scale = solver.component_scale(u)
+    best, D = None, prob.distortion(u)
+    while D > 1.0 + 1e-3:
+        C = 1.0 + (D - 1.0) * (1.0 - DESCENT)
+        report(0.1, f"minimising C: projecting onto {C:.4g}")
+        res = solver.project(u, C, values, margin=1.0 - 0.5 * DESCENT, scale=scale,
+                             max_iter=max_iter, stall=10, cancel=prob.cancel)
+        prob.iterations += res.iterations
+        if not res.all_converged:
+            break
+        u, D, best = res.u, prob.distortion(res.u), res.u
+    prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
+    return best
+
+
+def arap(prob, u, C, report):
+    """BD-ARAP: minimise the ARAP energy over F_C with frames from the previous map, resetting
+    the frames while the energy improves (section 6.1, "As-rigid-as-possible")."""
+    if len(prob.pin_idx) < 2:
+        # ARAP has an absolute scale: start from the map scaled to the 3D area, one anchor.
+        scale = np.sqrt(1.0 / uv_area(u, prob.island.tris))
+        if len(prob.pin_idx):
+            p = prob.pin_val[0]
+            u = p + (u - p) * scale
+            prob.set_anchors(prob.pin_idx, prob.pin_val)
+        else:
+            u = (u - u[0]) * scale
+            prob.set_anchors(np.array([0]), u[:1])
+    else:
+        prob.set_anchors(prob.pin_idx, prob.pin_val)
+    prob.weights = None
+    prob.sigma = 1e-3 * float(np.median(np.abs(prob.alpha(u))))
+    prev = None
+    for i in range(MAX_RESETS + 1):
+        w = frames_from_map(prob.alpha(u))
+        prob.scale = 1.0 / max(prob.energy_of(u, w), 1e-6)
+        report(0.9, f"BD-ARAP iteration {i + 1}")
+        un, _ = prob.solve(w, C)
+        if un is None or not prob.check(un, C)[0]:
+            break
+        e = prob.energy_of(un, w)
+        u = un
+        if prev is not None and prev - e <= IMPROVEMENT * abs(prev):
+            break
+        prev = e
+    return u
+
+
+def frame_turn(prob, u, w):
+    """How far a map turns faces away from frames w, beyond their common rotation (radians,
+    99th percentile)."""
+    wa = w * prob.alpha(u)
+    common = np.sum(prob.ops.area * wa / np.maximum(np.abs(wa), 1e-300))
+    turn = np.abs(np.angle(wa * np.conj(common)))
+    return float(np.percentile(turn, 99))
+
+
+def uv_area(u, tris):
+    """Signed UV area of a map."""
+    p = u[tris]
+    return float(np.sum(0.5 * ((p[:, 1] - p[:, 0]).conj() * (p[:, 2] - p[:, 0])).imag))

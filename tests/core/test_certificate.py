@@ -1,0 +1,209 @@
+"""certify_islands and layout_overlaps on hand-checkable layouts, re-checked by an independent
+triangle-overlap test (tests/core/overlap_shapes.py)."""
+import json
+
+import numpy as np
+import pytest
+
+from bd_uv.certificate import certificate_totals, certify_islands
+from bd_uv.overlap import island_overlaps, layout_overlaps, uv_boundary
+from overlap_shapes import figure8_uv, overlapping_triangle_pairs, spiral_uv
+
+
+def square():
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    F = np.array([[0, 1, 2], [0, 2, 3]])
+    return V, F, V[F][:, :, :2].copy()
+
+
+def annulus(n=16, r0=1.0, r1=2.0):
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    ring = np.stack([np.cos(t), np.sin(t)], 1)
+    P = np.concatenate([r0 * ring, r1 * ring])
+    i = np.arange(n)
+    j = (i + 1) % n
+    F = np.concatenate([np.stack([i, n + i, n + j], 1), np.stack([i, n + j, j], 1)])
+    return np.concatenate([P, np.zeros((2 * n, 1))], 1), F, P[F]
+
+
+def one(V, F, uv, bound, labels=None):
+    labels = np.zeros(len(F), int) if labels is None else labels
+    certs = certify_islands(V, F, uv, labels, np.atleast_1d(bound))
+    return certs[0] if len(certs) == 1 else certs
+
+
+def test_square_is_certified_and_its_summary_is_json():
+    c = one(*square(), 1.0)
+    assert c.certified and c.overlap_free and c.crossings == 0 and c.flipped == 0
+    assert c.reason == "" and c.faces == 2
+    assert c.max_distortion == pytest.approx(1.0) and c.mean_distortion == pytest.approx(1.0)
+    s = json.loads(json.dumps(c.summary(), allow_nan=False))
+    assert s["overlap_free"] is True and s["crossings"] == 0
+
+
+def test_annulus_hole_inside_is_overlap_free_and_boundary_has_two_loops():
+    V, F, uv = annulus()
+    c = one(V, F, uv, 2.0)
+    assert c.certified and c.overlap_free
+    bd = uv_boundary(F, uv, np.zeros(len(F), int))
+    assert len(bd.p) == 32                      # 16 outer + 16 inner edges, nothing interior
+    # outer counter-clockwise, hole clockwise: the shoelace sums are +area(outer), -area(hole)
+    area2 = np.cross(bd.p, bd.q)
+    outer = np.linalg.norm(bd.p, axis=1) > 1.5
+    assert area2[outer].sum() > 0 > area2[~outer].sum()
+
+
+def test_seam_with_equal_uvs_is_interior_and_slit_is_boundary():
+    V, F, uv = square()
+    assert len(uv_boundary(F, uv, [0, 0]).p) == 4
+    # Give the diagonal two different UVs on its two faces (a slit): 6 boundary edges.
+    uv2 = uv.copy()
+    uv2[1] += [0.0, 0.5]
+    bd = uv_boundary(F, uv2, [0, 0])
+    assert len(bd.p) == 6
+
+
+def test_figure8_strip_is_not_overlap_free_and_the_independent_test_agrees():
+    V, F, uv = figure8_uv()
+    c = one(V, F, uv, 50.0)
+    assert c.flipped == 0 and c.max_distortion < 50
+    assert not c.overlap_free and c.crossings > 0 and not c.certified
+    assert "crosses itself" in c.reason
+    assert len(overlapping_triangle_pairs(uv)) > 0
+
+
+@pytest.mark.parametrize("turns, overlaps", [(0.8, False), (2.5, True)])
+def test_spiral_overlap_matches_independent_test(turns, overlaps):
+    V, F, uv = spiral_uv(turns)
+    c = one(V, F, uv, 100.0)
+    assert c.flipped == 0
+    assert c.overlap_free == (not overlaps)
+    assert (len(overlapping_triangle_pairs(uv)) > 0) == overlaps
+
+
+def test_float32_storage_is_measured_as_stored():
+    V, F, uv = annulus()
+    c64 = one(V, F, uv, 2.0)
+    c32 = one(V, F, uv.astype(np.float32), 2.0)
+    assert c32.certified and c32.overlap_free
+    D32 = c32.max_distortion
+    assert D32 != c64.max_distortion and D32 == pytest.approx(c64.max_distortion, rel=1e-5)
+    # a bound at the exact float64 maximum does not survive float32 storage when it rises
+    tight = one(V, F, uv.astype(np.float32), c64.max_distortion * (1 - 1e-3))
+    assert not tight.certified and "max distortion" in tight.reason and tight.overlap_free
+
+
+def test_flipped_face_fails_with_reason():
+    V, F, uv = square()
+    uv[1] = uv[1][::-1]
+    c = one(V, F, uv, 10.0)
+    assert not c.certified and c.flipped == 1 and "flipped" in c.reason
+
+
+def test_island_nested_inside_itself_without_crossing_is_caught():
+    # Two squares with one label: the small one lies inside the big one, no boundary crossing.
+    V, F, uv = square()
+    F2 = np.concatenate([F, F + 4])
+    uv2 = np.concatenate([uv * 3, uv + 1.0])
+    ov = island_overlaps(F2, uv2, np.zeros(4, int))
+    assert ov.crossings[0] == 0 and ov.bad_loops[0] == 1 and not ov.overlap_free[0]
+    assert len(overlapping_triangle_pairs(uv2)) > 0
+    # apart, the two squares are one overlap-free island
+    uv3 = np.concatenate([uv, uv + 2.0])
+    assert island_overlaps(F2, uv3, np.zeros(4, int)).overlap_free[0]
+
+
+def test_layout_overlaps_between_islands():
+    V, F, uv = annulus()
+    lab = np.r_[np.zeros(len(F), int), np.ones(len(F), int)]
+    both = lambda b: np.concatenate([uv, b])
+    assert layout_overlaps(both(uv + 0.5), lab).tolist() == [[0, 1]]     # boundaries cross
+    assert layout_overlaps(both(uv + 5.0), lab).tolist() == []           # apart
+    assert layout_overlaps(both(uv * 0.3), lab).tolist() == []           # inside the hole
+    assert layout_overlaps(both(uv * 3.0), lab).tolist() == []           # around it, in its hole
+    inside = uv * 0.1 + [1.5, 0.0]                                         # inside the ring
+    assert layout_overlaps(both(inside), lab).tolist() == [[0, 1]]
+    assert len(overlapping_triangle_pairs(both(inside))) > 0
+
+
+def test_totals_use_area_weighted_mean():
+    V, F, uv = square()
+    V2 = np.concatenate([V, V * [2, 1, 1]])
+    F2 = np.concatenate([F, F + 4])
+    uv2 = np.concatenate([uv, uv + 3])           # second island: stretched 2x in 3D -> D = 2
+    certs = certify_islands(V2, F2, uv2, [0, 0, 1, 1], [5.0, 5.0])
+    t = certificate_totals(certs)
+    assert t["certified"] == 2 and t["overlapping"] == 0
+    assert t["mean_distortion"] == pytest.approx((1 * 1.0 + 2 * 2.0) / 3)
+    assert t["max_distortion"] == pytest.approx(2.0)
+
+
+def test_unlabelled_and_nonfinite_faces():
+    V, F, uv = square()
+    uv[0, 0] = np.nan
+    c = one(V, F, uv, 5.0)
+    assert not c.certified and c.flipped == 1
+    certs = certify_islands(V, F, square()[2], [-1, 0], [5.0])
+    assert certs[0].certified and certs[0].faces == 1
+
+
+# ---- the issue's shapes through bd_uv.unwrap, then certify / cut ---------------------------------
+
+from overlap_shapes import folded_strip, helicoid_ribbon, spiral_strip  # noqa: E402
+
+import bd_uv  # noqa: E402
+from bd_uv.cut import split_overlapping  # noqa: E402
+from bd_uv.layout import stored_layout  # noqa: E402
+
+
+@pytest.mark.parametrize("shape", [helicoid_ribbon, spiral_strip, folded_strip])
+def test_unwrapped_shapes_are_never_certified_with_an_overlap(shape):
+    V, F = shape()
+    res = bd_uv.unwrap(V, F, bound=5.0)
+    assert [r.status for r in res.islands] == ["certified"]
+    C = res.islands[0].bound_certified
+    cert = certify_islands(V, F, res.corner_uv, res.face_island, [C])[0]
+    overlapping = overlapping_triangle_pairs(res.corner_uv)
+    assert cert.overlap_free == (len(overlapping) == 0)
+    if cert.certified:
+        assert len(overlapping) == 0
+        return
+    # not certified: it must be for its overlap (the unwrap's own figures hold), and cut it
+    assert cert.flipped == 0 and cert.max_distortion <= C * (1 + 1e-6) and cert.crossings > 0
+    pieces, cut = split_overlapping(V, F, res.corner_uv, np.arange(len(F)))
+    assert len(pieces) >= 2 and len(cut) > 0
+    assert np.array_equal(np.sort(np.concatenate(pieces)), np.arange(len(F)))
+    lab = np.full(len(F), -1)
+    for i, p in enumerate(pieces):
+        lab[p] = i
+    for c, p in zip(certify_islands(V, F, res.corner_uv, lab, [C] * len(pieces)), pieces):
+        assert c.certified and c.overlap_free
+        assert len(overlapping_triangle_pairs(res.corner_uv[p])) == 0
+    # the cut edges are mesh edges joining two different pieces
+    E = {tuple(sorted(e)) for f in F for e in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0]))}
+    assert all(tuple(sorted(e)) in E for e in cut.tolist())
+    faces_at = [set(np.flatnonzero((F == a).any(1) & (F == b).any(1))) for a, b in cut.tolist()]
+    assert all(len({lab[f] for f in fs}) == 2 for fs in faces_at)
+
+
+def test_stored_layout_cuts_packs_and_recertifies():
+    V, F = helicoid_ribbon()
+    res = bd_uv.unwrap(V, F, bound=5.0)
+    lay = stored_layout(V, F, res, pack=True, cut=True, dtype=np.float32)
+    t = lay.totals()
+    assert t["overlapping_unwrapped"] == 1 and t["cut_islands"] == 1 and t["cut_edges"] > 0
+    assert t["certified"] == t["islands"] >= 2 and t["layout_overlaps"] == 0
+    assert (lay.face_island >= 0).all() and lay.corner_uv.min() >= 0 and lay.corner_uv.max() <= 1
+    assert np.array_equal(lay.corner_uv, lay.corner_uv.astype(np.float32))   # as stored
+    assert len(overlapping_triangle_pairs(lay.corner_uv)) == 0
+    (e,) = lay.island_entries(res)
+    assert e["status"] == "certified" and e["overlap_free"] and e["pieces"] >= 2
+    assert e["crossings"] > 0 and len(e["cut_edges"]) == t["cut_edges"]
+    json.dumps(e, allow_nan=False)
+    # refusing the cut: the island fails and nothing is written
+    lay = stored_layout(V, F, res, pack=True, cut=False)
+    (e,) = lay.island_entries(res)
+    assert e["status"] == "failed" and e["overlap_free"] is False
+    assert "crosses itself" in e["message"] and (lay.face_island == -1).all()
+    uv, F_uv = lay.vertex_uv(F)
+    assert len(uv) == 0 and (F_uv == -1).all()
