@@ -506,22 +506,31 @@ def run_batch(args):
 
     def build(final=False):
         items = [e for entries in results if entries for e in entries]
-        return batch_report(items, options, time.perf_counter() - t0, files=files,
+        now = time.perf_counter()
+        return batch_report(items, options, now - t0, files=files,
                             interrupted=interrupted, running=not final,
-                            resumed=[results[i] for i in sorted(carried)], **setup)
+                            resumed=[results[i] for i in sorted(carried)],
+                            files_run=sum(r is not None for r in results) - len(carried),
+                            startup=(ready[0] if ready else now) - t0,
+                            working=(last[0] if last else now) - (ready[0] if ready else now),
+                            **setup)
 
     ledger = Ledger(report_path, build)
     ledger.start([(os.path.abspath(tasks[i].path), results[i]) for i in sorted(carried)])
     progress = Progress(len(todo), weight=sum(_size(tasks[i].path) for i in todo))
 
     def on_done(i, entries, attempts):
+        last[:] = [time.perf_counter()]
         results[i] = entries
         ledger.record(os.path.abspath(tasks[i].path), entries)
         progress.advance("\n".join(item_line(e) for e in entries),
                          [e["status"] for e in entries], _size(tasks[i].path))
 
+    ready, last = [], []
+
     def on_start(workers):
         setup["jobs"] = workers
+        ready.append(time.perf_counter())
 
     if carried:
         print(f"--resume: {len(carried)} file(s) already certified with these options, "
@@ -542,7 +551,9 @@ def run_batch(args):
           + (f", {s['resumed']} file(s) kept from the earlier run" if carried else "")
           + f"; {s['overlapping_islands']} overlapping island(s), "
             f"{s['layout_overlaps']} overlapping island pair(s)"
-          + f"; {s['seconds']:.1f} s on {s['jobs']} {setup['scheduler']} worker(s): "
+          + f"; {s['seconds']:.1f} s"
+          + (f" ({s['startup_seconds']:.1f} s to start)" if args.scheduler else "")
+          + f" on {s['jobs']} {setup['scheduler']} worker(s): "
           f"{s['files_per_minute']:.1f} files/min, {s['faces_per_minute']:.0f} faces/min; "
           f"report: {report_path}")
     if interrupted:
@@ -551,23 +562,31 @@ def run_batch(args):
 
 
 def batch_report(items, options, wall, jobs, files, interrupted=False, running=False,
-                 resumed=(), scheduler="pool"):
+                 resumed=(), scheduler="pool", files_run=None, startup=0.0, working=None):
     """The JSON report: options, a summary and one entry per mesh (file or .blend object).
 
-    ``resumed`` are the entry lists of the files kept from an earlier run by ``--resume``; the
-    throughput (files and faces per minute of ``wall``) counts only the files run this time.
+    ``resumed`` are the entry lists of the files kept from an earlier run by ``--resume``. The
+    throughput (files and faces per minute) counts only the ``files_run`` files run this time
+    (default: every file with an entry, less those resumed), over the ``working`` seconds from
+    the workers being ready to the last file done (default: ``wall`` less the ``startup``
+    seconds spent before the workers were ready: starting a LocalCluster, connecting).
     """
     from . import __version__
     count = {k: sum(e["status"] == k for e in items) for k in ("certified", "partial", "failed")}
     seen = {e["input"] for e in items}
     kept = {id(e) for entries in resumed for e in entries}
     ran = [e for e in items if id(e) not in kept]
-    minutes = max(wall, 1e-9) / 60.0
+    working = wall - startup if working is None else working
+    minutes = max(working, 1e-9) / 60.0
+    if files_run is None:
+        files_run = len({e["input"] for e in ran})
     return {"tool": "bd_uv batch", "version": __version__, "options": options,
             "summary": {"files": len(files), "meshes": len(items), **count,
                         "not_run": sum(os.path.abspath(f) not in seen for f in files),
                         "resumed": len(resumed), "seconds": round(wall, 3),
-                        "files_per_minute": round(len({e["input"] for e in ran}) / minutes, 2),
+                        "startup_seconds": round(startup, 3),
+                        "working_seconds": round(working, 3),
+                        "files_per_minute": round(files_run / minutes, 2),
                         "faces_per_minute": round(sum(e["faces"] or 0 for e in ran) / minutes),
                         "overlapping_islands": sum(e.get("overlapping") or 0 for e in items),
                         "layout_overlaps": sum(e.get("layout_overlaps") or 0 for e in items),

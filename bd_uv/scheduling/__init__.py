@@ -13,3 +13,6 @@ from .ledger import Ledger, options_sha256, read_previous, reusable
 from .pool import crashed_entry, run_pool
 from .progress import Progress
 from .worker import FileLimits, run_file
+
+__all__ = ["FileLimits", "Ledger", "Progress", "atomic_path", "crashed_entry", "file_sha256",
+           "options_sha256", "read_previous", "reusable", "run_file", "run_pool"]

@@ -80,13 +80,15 @@ class Ledger:
     ----------
     report_path : str
     build : callable() -> dict, the full report from what is finished so far
-    every : float, seconds between rewrites of the report while the batch runs
+    every : float, seconds between rewrites of the report while the batch runs; at least 20
+        times the last rewrite's duration, so a report of many thousand files costs at most 5 %
+        of the driver's time
     """
 
     def __init__(self, report_path, build, every=2.0):
         self.path, self.build, self.every = report_path, build, every
         self.journal = journal_path(report_path)
-        self.last = time.monotonic()
+        self.last, self.cost = time.monotonic(), 0.0
         os.makedirs(os.path.dirname(os.path.abspath(report_path)), exist_ok=True)
 
     def start(self, carried):
@@ -100,14 +102,16 @@ class Ledger:
         """A file finished: append it to the journal now, and rewrite the report if it is due."""
         self._fh.write(json.dumps({"input": path, "entries": entries}) + "\n")
         self._fh.flush()
-        if time.monotonic() - self.last >= self.every:
+        if time.monotonic() - self.last >= max(self.every, 20 * self.cost):
             self.write(self.build())
 
     def write(self, report):
         """Replace the report file with ``report``, atomically."""
+        t0 = time.monotonic()
         with atomic_path(self.path) as tmp, open(tmp, "w", encoding="utf-8") as fh:
             json.dump(report, fh, indent=2)
         self.last = time.monotonic()
+        self.cost = self.last - t0
 
     def finish(self, report):
         """Write the final report; the journal is no longer needed."""

@@ -102,3 +102,34 @@ def test_killed_batch_resumes_without_recomputing_certified_outputs(tmp_path):
     again = json.loads((out / "report.json").read_text())
     assert again["summary"]["resumed"] == len(files) - 2
     assert {n: os.stat(e["output"]).st_mtime_ns for n, e in items.items() if e["output"]} == mtimes
+
+
+def test_previous_entries_merge_report_and_journal_and_skip_a_cut_line(tmp_path):
+    """The journal's lines override the report's items; a last line cut short by a kill is
+    ignored; a file is reusable only with the same input bytes, options and output bytes."""
+    from bd_uv.scheduling import options_sha256, read_previous, reusable
+    src, out = tmp_path / "a.off", tmp_path / "a.obj"
+    src.write_text("OFF\n")
+    out.write_text("v 0 0 0\n")
+    key = options_sha256({"bound": 3.0}, None)
+    entry = {"input": str(src), "output": str(out), "status": "certified", "png": None,
+             "input_sha256": file_sha256(src), "options_sha256": key,
+             "output_sha256": file_sha256(out)}
+    report = tmp_path / "report.json"
+    report.write_text(json.dumps({"items": [dict(entry, status="failed"),
+                                            {"input": "/x/b.off", "status": "certified"}]}))
+    line = json.dumps({"input": str(src), "entries": [entry]})
+    (tmp_path / "report.json.journal").write_text(line + "\n" + line[:40])
+    previous = read_previous(str(report))
+    assert previous == {str(src): [entry], "/x/b.off": [{"input": "/x/b.off",
+                                                          "status": "certified"}]}
+    task = batch.FileTask(str(src), str(out))
+    assert reusable(task, previous[str(src)], key)
+    assert not reusable(task, previous[str(src)], options_sha256({"bound": 4.0}, None))
+    assert not reusable(batch.FileTask(str(src), str(out), str(tmp_path / "a.png")),
+                        previous[str(src)], key)                   # the picture is missing
+    out.write_text("v 0 0 1\n")
+    assert not reusable(task, previous[str(src)], key)             # the output changed
+    out.write_text("v 0 0 0\n")
+    src.write_text("OFF\n\n")
+    assert not reusable(task, previous[str(src)], key)             # the input changed
