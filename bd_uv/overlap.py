@@ -119,8 +119,21 @@ def _cross(u, v):
     return u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
 
 
+def _orient(a, b, c):
+    """Twice the signed area of (a, b, c) and a bound on its rounding error (Shewchuk's
+    ``ccwerrboundA`` is 3.3e-16 times the same sum; 1e-15 leaves room)."""
+    l = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1])
+    r = (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    return l - r, 1e-15 * (np.abs(l) + np.abs(r))
+
+
 def touching_pairs(p, q, group=None):
     """Pairs of segments that intersect or touch, each pair once (i < j).
+
+    Bounding-box candidates come from ``shapely.STRtree``; each candidate is decided by the four
+    orientation signs in float64 when all four are clear of their rounding error bound, and by
+    GEOS's robust predicate otherwise (touching, collinear and near-degenerate pairs). Segments
+    with an identical end touch.
 
     Parameters
     ----------
@@ -135,26 +148,37 @@ def touching_pairs(p, q, group=None):
     (k,2) int64
     """
     import shapely
+    p = np.asarray(p, dtype=np.float64)
+    q = np.asarray(q, dtype=np.float64)
     if len(p) < 2:
         return np.zeros((0, 2), dtype=np.int64)
     geoms = shapely.linestrings(np.stack([p, q], axis=1))
     if group is None:
-        tree = shapely.STRtree(geoms)
-        i, j = tree.query(geoms, predicate="intersects")
-    else:
+        boxes = geoms
+    else:  # boxes moved apart island by island: candidates only within one island
         lo, hi = np.minimum(p, q), np.maximum(p, q)
         span = float(np.max(hi) - np.min(lo)) + 1.0
         pad = 1e-9 * span                      # far above the rounding of the moved boxes
         off = np.asarray(group, dtype=np.float64) * (4.0 * span)
         boxes = shapely.box(lo[:, 0] - pad + off, lo[:, 1] - pad, hi[:, 0] + pad + off,
                             hi[:, 1] + pad)
-        i, j = shapely.STRtree(boxes).query(boxes)
-        keep = i < j
-        i, j = i[keep], j[keep]
-        hit = shapely.intersects(geoms[i], geoms[j])
-        i, j = i[hit], j[hit]
+    i, j = shapely.STRtree(boxes).query(boxes)
     keep = i < j
-    return np.stack([i[keep], j[keep]], axis=1).astype(np.int64)
+    i, j = i[keep].astype(np.int64), j[keep].astype(np.int64)
+    a, b, c, d = p[i], q[i], p[j], q[j]
+    shared = np.zeros(len(i), dtype=bool)
+    for x, y in ((a, c), (a, d), (b, c), (b, d)):
+        shared |= np.all(x == y, axis=1)
+    o1, e1 = _orient(a, b, c)
+    o2, e2 = _orient(a, b, d)
+    o3, e3 = _orient(c, d, a)
+    o4, e4 = _orient(c, d, b)
+    clear = (np.abs(o1) > e1) & (np.abs(o2) > e2) & (np.abs(o3) > e3) & (np.abs(o4) > e4)
+    meets = shared | (clear & (np.sign(o1) != np.sign(o2)) & (np.sign(o3) != np.sign(o4)))
+    unsure = ~shared & ~clear
+    if unsure.any():
+        meets[unsure] = shapely.intersects(geoms[i[unsure]], geoms[j[unsure]])
+    return np.stack([i[meets], j[meets]], axis=1)
 
 
 def crossing_pairs(bd, pairs):

@@ -247,3 +247,43 @@ def test_a_cut_never_splits_a_polygon():
     assert all(r.status == "certified" and r.overlap_free for r in res.islands)
     assert len(res.islands) >= 2
     assert np.all(res.face_island[:h] == res.face_island[h:])
+
+
+def test_touching_pairs_is_exact_on_degenerate_integer_segments():
+    """Integer grid segments (many collinear, touching and shared-end pairs) against an exact
+    integer brute force."""
+    from bd_uv.overlap import touching_pairs
+    rng = np.random.default_rng(3)
+    P = rng.integers(0, 6, (150, 2, 2))
+    P = P[np.any(P[:, 0] != P[:, 1], axis=1)]
+
+    def orient(a, b, c):
+        v = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+        return (v > 0) - (v < 0)
+
+    def on(a, b, c):  # c on segment ab, given collinear
+        return (min(a[0], b[0]) <= c[0] <= max(a[0], b[0])
+                and min(a[1], b[1]) <= c[1] <= max(a[1], b[1]))
+
+    def meet(s, t):
+        a, b, c, d = s[0].tolist(), s[1].tolist(), t[0].tolist(), t[1].tolist()
+        o1, o2, o3, o4 = orient(a, b, c), orient(a, b, d), orient(c, d, a), orient(c, d, b)
+        if o1 != o2 and o3 != o4 and 0 not in (o1, o2, o3, o4):
+            return True
+        return (o1 == 0 and on(a, b, c)) or (o2 == 0 and on(a, b, d)) \
+            or (o3 == 0 and on(c, d, a)) or (o4 == 0 and on(c, d, b))
+
+    want = {(i, j) for i in range(len(P)) for j in range(i + 1, len(P)) if meet(P[i], P[j])}
+    scale = 2.0 ** -7 * 3.0  # exact in binary, small coordinates
+    got = touching_pairs(P[:, 0] * scale + 0.5, P[:, 1] * scale + 0.5)
+    got_int = touching_pairs(P[:, 0].astype(float), P[:, 1].astype(float))
+    assert {tuple(x) for x in got_int.tolist()} == want
+    assert {tuple(x) for x in got.tolist()} == want
+    # searched group by group (one group here, then every segment its own group but two)
+    grouped = touching_pairs(P[:, 0] * scale + 0.5, P[:, 1] * scale + 0.5,
+                             np.zeros(len(P), dtype=np.int64))
+    assert {tuple(x) for x in grouped.tolist()} == want
+    alone = np.arange(len(P))
+    alone[1] = 0
+    assert {tuple(x) for x in touching_pairs(P[:, 0] * 1.0, P[:, 1] * 1.0, alone).tolist()} \
+        == want & {(0, 1)}
