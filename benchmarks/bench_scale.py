@@ -76,6 +76,7 @@ def table(rows, families):
            "peak - base | max D | mean D | flips | load | notes |",
            "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---|"]
     abf = {r.mesh: r for r in rows if r.key == "blender-abf" and not r.error}
+    lscm_of = {r.mesh: r for r in rows if r.key == "blender-lscm" and not r.error}
     for r in rows:
         a = abf.get(r.mesh)
         tr = r.seconds / a.seconds if a and np.isfinite(r.seconds) else None
@@ -84,6 +85,11 @@ def table(rows, families):
         notes = ([f"ERROR {r.error}"] if r.error else []) + ([r.note] if r.note else [])
         if r.cached:
             notes.append("cached peer result")
+        lscm = lscm_of.get(r.mesh)
+        if (r.key == "blender-abf" and lscm is not None and not r.error
+                and (r.max_d, r.mean_d, r.flips) == (lscm.max_d, lscm.mean_d, lscm.flips)):
+            notes.append("same distortion as Blender LSCM to the last digit: Blender falls back "
+                         "to LSCM when ABF does not converge")
         out.append(f"| {r.mesh} | {r.faces} | {METHODS[r.key][0]} | {fmt_s(r.seconds)} | "
                    f"{'-' if tr is None else f'{tr:.2f}'} | {fmt_mb(r.rss_peak_mb)} | "
                    f"{'-' if mr is None else f'{mr:.2f}'} | {fmt_mb(added)} | {fmt(r.max_d)} | "
