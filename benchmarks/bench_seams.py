@@ -65,42 +65,8 @@ def run_xatlas(V, F):
 
 def run_smart(V, F, angle=66.0):
     """``bpy.ops.uv.smart_project(angle_limit=66 degrees, island_margin=0)`` on the whole mesh."""
-    bpy = peers._bpy_setup()
-    mesh = bpy.data.meshes.new("bench")
-    mesh.from_pydata(V.tolist(), [], F.tolist())
-    mesh.update()
-    obj = bpy.data.objects.new("bench", mesh)
-    bpy.context.scene.collection.objects.link(obj)
-    try:
-        bpy.context.view_layer.update()
-        for other in bpy.context.scene.objects:
-            other.select_set(other == obj)
-        bpy.context.view_layer.objects.active = obj
-        mesh.uv_layers.new(name="UVMap")
-        bpy.ops.object.mode_set(mode="EDIT")
-        bpy.ops.mesh.select_all(action="SELECT")
-        t0 = time.perf_counter()
-        result = bpy.ops.uv.smart_project(angle_limit=math.radians(angle), island_margin=0.0)
-        seconds = time.perf_counter() - t0
-        bpy.ops.object.mode_set(mode="OBJECT")
-        if result != {"FINISHED"}:
-            raise RuntimeError(f"bpy.ops.uv.smart_project returned {result}")
-        nl, npoly = len(mesh.loops), len(mesh.polygons)
-        loop_uv = np.empty(2 * nl, dtype=np.float32)
-        mesh.uv_layers["UVMap"].data.foreach_get("uv", loop_uv)
-        loop_vert = np.empty(nl, dtype=np.int32)
-        mesh.loops.foreach_get("vertex_index", loop_vert)
-        loop_start = np.empty(npoly, dtype=np.int32)
-        mesh.polygons.foreach_get("loop_start", loop_start)
-        corners = loop_start[:, None] + np.arange(3)[None, :]
-        if npoly != len(F) or not np.array_equal(loop_vert[corners], F):
-            raise RuntimeError("Blender reordered the triangles or their corners")
-        return loop_uv.reshape(-1, 2).astype(np.float64)[corners], seconds, ""
-    finally:
-        if bpy.context.object is not None and bpy.context.object.mode != "OBJECT":
-            bpy.ops.object.mode_set(mode="OBJECT")
-        bpy.data.objects.remove(obj)
-        bpy.data.meshes.remove(mesh)
+    return peers.blender_operator(V, F, lambda bpy: bpy.ops.uv.smart_project(
+        angle_limit=math.radians(angle), island_margin=0.0))
 
 
 def chart_stats(V, F, corner_uv):

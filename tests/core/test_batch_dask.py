@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 
 from bd_uv import batch
+from test_batch import read_obj
 from helpers import load_off, reference_distortion
 
 distributed = pytest.importorskip("distributed")
@@ -63,21 +64,6 @@ def asset_folder(folder, big=10, small=30, seed=0):
                                       "3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n")
     (folder / "broken.ply").write_text("ply\nformat ascii 1.0\nelement vertex 3\nend_header\n")
     return sorted(folder.iterdir())
-
-
-def read_obj(path):
-    """(V, F, corner_uv) of an OBJ with ``f v/vt`` faces."""
-    v, vt, fv, ft = [], [], [], []
-    for line in open(path):
-        p = line.split()
-        if p and p[0] == "v":
-            v.append([float(t) for t in p[1:4]])
-        elif p and p[0] == "vt":
-            vt.append([float(t) for t in p[1:3]])
-        elif p and p[0] == "f":
-            fv.append([int(t.split("/")[0]) - 1 for t in p[1:]])
-            ft.append([int(t.split("/")[1]) - 1 for t in p[1:]])
-    return np.array(v), np.array(fv), np.array(vt)[np.array(ft)]
 
 
 def by_input(report_path):
