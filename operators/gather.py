@@ -122,12 +122,15 @@ def gather(objects, *, pin_unselected_uvs=False, use_object_scale=True, need_uvs
 
 
 def unwrap_arguments(batch, *, method, bound, minimise, raise_bound, bound_limit, frames,
-                     overlap="cut", boundary="free"):
-    """Positional and keyword arguments of ``bd_uv.unwrap`` for ``batch``."""
+                     overlap="cut", boundary="free", stretch=None):
+    """Positional and keyword arguments of ``bd_uv.unwrap`` for ``batch`` (``stretch`` S: Limit
+    Stretch, singular values within [1/S, S])."""
     kwargs = dict(seams=batch.seams, method=method, bound="auto" if minimise else float(bound),
                   frames=frames, raise_bound=raise_bound, bound_limit=float(bound_limit),
                   overlap=overlap, boundary=boundary,
                   face_groups=batch.tri_polygons)  # an overlap cut never splits a polygon
+    if stretch is not None:
+        kwargs["stretch"] = float(stretch)
     if len(batch.pin_corners):
         kwargs.update(pin_corners=batch.pin_corners, pin_uv=batch.pin_uv)
     if frames == "input-uv":

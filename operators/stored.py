@@ -16,10 +16,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..bd_uv.certificate import RTOL
 from ..bd_uv.certificate import certify_islands as _core_certify
+from ..bd_uv.geometry import face_areas
+from ..bd_uv.metrics import face_jacobians, signed_uv_areas
 from ..bd_uv.overlap import layout_overlaps as _core_layout_overlaps
 
-__all__ = ["STORAGE_RTOL", "StoredIsland", "certify_islands", "check_stored", "layout_overlaps"]
+__all__ = ["STORAGE_RTOL", "StoredIsland", "certify_islands", "check_stored", "layout_overlaps",
+           "island_singular_values"]
 
 # Minimise only: an island certified at the exact float64 maximum of its solve measures a little
 # more once its UVs are rounded to float32 (Suzanne's 100 Smart-UV islands with the core before
@@ -81,9 +85,52 @@ class StoredIsland:
     overlap_free: bool
     reason: str
     failed_as_solved: bool = False
+    min_singular: float = float("nan")
+    max_singular: float = float("nan")
 
 
-def check_stored(V, F, corner_uv, face_island, islands, solved_uv=None):
+def island_singular_values(V, F, corner_uv, face_island, n, normalized):
+    """Smallest and largest singular value of the faces' maps, per island (Lipman 2012, eqs.
+    4.7-4.8: ``gamma = |alpha| - |beta|``, ``Gamma = |alpha| + |beta|``).
+
+    Parameters
+    ----------
+    V : (n_v,3) float, F : (m,3) int, corner_uv : (m,3,2) float
+    face_island : (m,) int
+        Island of each face, -1 for faces left out.
+    n : int
+        Number of islands.
+    normalized : (n,) bool
+        Islands measured at their own scale (UV area scaled to their 3D area, as the core does
+        for islands with fewer than two pinned vertices: packing scales them); the others against
+        the 3D geometry.
+
+    Returns
+    -------
+    lo, hi : (n,) float64
+        ``min gamma`` and ``max Gamma`` over each island's faces (NaN for an island without
+        faces; ``lo`` is negative when a face is flipped).
+    """
+    face_island = np.asarray(face_island, dtype=np.int64)
+    on = face_island >= 0
+    lab = face_island[on]
+    alpha, beta = face_jacobians(V, F[on], np.asarray(corner_uv, np.float64)[on])
+    a, b = np.abs(alpha), np.abs(beta)
+    area3d = np.bincount(lab, weights=face_areas(V, F[on]), minlength=n)
+    area_uv = np.bincount(lab, weights=np.abs(signed_uv_areas(corner_uv[on])), minlength=n)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = np.where(np.asarray(normalized, bool), np.sqrt(area3d / area_uv), 1.0)
+    lo = np.full(n, np.inf)
+    hi = np.full(n, -np.inf)
+    np.minimum.at(lo, lab, (a - b) * scale[lab])
+    np.maximum.at(hi, lab, (a + b) * scale[lab])
+    empty = np.bincount(lab, minlength=n) == 0
+    lo[empty] = hi[empty] = np.nan
+    return lo, hi
+
+
+def check_stored(V, F, corner_uv, face_island, islands, solved_uv=None, stretch=None,
+                 normalized=None):
     """Certify each island of a stored layout with its own bound (float32 UVs, after packing).
 
     Parameters
@@ -101,6 +148,12 @@ def check_stored(V, F, corner_uv, face_island, islands, solved_uv=None):
     solved_uv : (m,3,2) float, optional
         The UVs as solved (float64, before packing). An island that fails as stored is checked
         on them too, to tell whether storing (float32, packing) broke it or it failed already.
+    stretch : float S, optional
+        Limit Stretch: an island is certified only with every face's singular values in
+        [1/S, S] (Lipman 2012, section 6.3), measured as the core measures them.
+    normalized : (len(islands),) bool, optional
+        Islands whose singular values are measured at their own scale (see
+        :func:`island_singular_values`); all by default.
 
     Returns
     -------
@@ -137,10 +190,20 @@ def check_stored(V, F, corner_uv, face_island, islands, solved_uv=None):
         before = _certify_some(V, F, np.asarray(solved_uv, dtype=np.float64), compact, failing,
                                bounds)
         as_solved = {j for j, c in zip(failing, before) if not c.certified}
-    return [StoredIsland(int(labels[j]), bool(c.certified), float(bounds[j]),
-                         float(c.max_distortion), float(c.mean_distortion), int(c.flipped),
-                         bool(c.overlap_free), str(c.reason or ""), j in as_solved)
-            for j, c in enumerate(certs)]
+    norm = np.ones(len(labels), bool) if normalized is None else \
+        np.asarray(normalized, bool)[labels]
+    lo, hi = island_singular_values(V, F, corner_uv, compact, len(labels), norm)
+    out = []
+    for j, c in enumerate(certs):
+        ok, reason = bool(c.certified), str(c.reason or "")
+        if ok and stretch is not None and not (lo[j] >= (1.0 - RTOL) / stretch
+                                               and hi[j] <= stretch * (1.0 + RTOL)):
+            ok, reason = False, (f"singular values {lo[j]:.6g} to {hi[j]:.6g} outside "
+                                 f"[{1.0 / stretch:.6g}, {stretch:g}]")
+        out.append(StoredIsland(int(labels[j]), ok, float(bounds[j]), float(c.max_distortion),
+                                float(c.mean_distortion), int(c.flipped), bool(c.overlap_free),
+                                reason, j in as_solved, float(lo[j]), float(hi[j])))
+    return out
 
 
 def layout_overlaps(corner_uv, face_island, F):

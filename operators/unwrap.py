@@ -77,9 +77,14 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
     boundary: EnumProperty(name="Boundary", items=_BOUNDARY, default='free')
     stretch: FloatProperty(name="Limit Stretch", default=2.0, min=1.0, soft_min=1.1,
                            soft_max=10.0,
-                           description="Add Where Needed: largest stretch allowed on any face, "
-                           "with each chart scaled to its 3D area (both singular values within "
-                           "[1/S, S])")
+                           description="Largest stretch allowed on any face, with each chart "
+                           "scaled to its 3D area (both singular values within [1/S, S]; S must be "
+                           "at least the square root of C). Add Where Needed always limits it; "
+                           "with Marked seams, turn on Limit Stretch")
+    limit_stretch: BoolProperty(name="Limit Stretch", default=False,
+                                description="Marked seams: also bound every face's singular "
+                                "values to [1/S, S] (Lipman 2012, section 6.3), keeping texel "
+                                "density even; BD-LSCM, a bound C and a free boundary only")
     bound: FloatProperty(name="Bound C", default=5.0, min=1.0001, soft_min=1.05, soft_max=50.0,
                          description="Largest conformal distortion allowed on any face")
     minimise: BoolProperty(name="Minimise", default=False,
@@ -127,6 +132,15 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
         else:
             layout.prop(self, "overlap")
             layout.prop(self, "boundary")
+            row = layout.row(heading="Limit Stretch")
+            row.prop(self, "limit_stretch", text="")
+            sub = row.row()
+            sub.active = self.limit_stretch
+            sub.prop(self, "stretch", text="")
+        if self.seams == 'AUTO' or self.limit_stretch:
+            problem = self._stretch_problem()
+            if problem:
+                layout.label(text=problem, icon='ERROR')
         layout.prop(self, "minimise")
         row = layout.row()
         row.active = not self.minimise
@@ -168,6 +182,10 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
         except session.UserError as error:
             self.report({'WARNING'}, str(error))
             return None
+        problem = self._stretch_problem() if self.limit_stretch else ""
+        if problem:
+            self.report({'WARNING'}, problem)
+            return None
         if self.boundary != 'free' and (self.minimise or self.frames == 'input-uv'):
             self.report({'WARNING'}, "A fixed boundary needs a bound C and the Auto frames: turn "
                         "off Minimise and From Current UVs, or set Boundary to Free")
@@ -175,8 +193,19 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
         args, kwargs = session.unwrap_arguments(
             batch, method=self.method, bound=self.bound, minimise=self.minimise,
             raise_bound=self.raise_bound, bound_limit=self.bound_limit, frames=self.frames,
-            overlap='cut' if self.overlap == 'CUT' else 'fail', boundary=self.boundary)
+            overlap='cut' if self.overlap == 'CUT' else 'fail', boundary=self.boundary,
+            stretch=self.stretch if self.limit_stretch else None)
         return batch, False, args, kwargs
+
+    def _stretch_problem(self):
+        """Why Limit Stretch cannot run with these options ("" when it can)."""
+        if self.seams == 'MARKED' and (self.method != 'lscm' or self.minimise
+                                       or self.boundary != 'free'):
+            return ("Limit Stretch needs BD-LSCM, a bound C (Minimise off) and Boundary Free")
+        if self.stretch ** 2 < self.bound * (1 - 1e-12) and not self.minimise:
+            return (f"Limit Stretch {self.stretch:g} cannot hold with C = {self.bound:g}: "
+                    f"raise it to at least sqrt(C) = {self.bound ** 0.5:.4g} or lower C")
+        return ""
 
     def _failed(self, error):
         """Report an exception from the core; nothing has been written."""
@@ -203,6 +232,7 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
         written (with a WARNING saying why; no seam is marked then)."""
         auto = solved if isinstance(solved, auto_seams.AutoSeams) else None
         result = auto.result if auto is not None else solved
+        stretch = self.stretch if auto is not None or self.limit_stretch else None
         with object_mode(context):
             written = session.write_back(batch, result)
         verified = None
@@ -210,8 +240,9 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
             if self.pack:
                 session.pack(context, written, self.margin, self.pack_shape)
             with object_mode(context):
-                verified = session.verify_written(batch, result, written)
-        summary = session.summarise(batch, result, written, seconds, verified, packed=self.pack)
+                verified = session.verify_written(batch, result, written, stretch)
+        summary = session.summarise(batch, result, written, seconds, verified, packed=self.pack,
+                                    stretch=stretch)
         if auto is not None and summary.written:
             with object_mode(context):
                 marked = session.mark_seams(batch, written, auto.added)

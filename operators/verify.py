@@ -52,13 +52,23 @@ def _restore(ob, part, w, undo):
     mesh.update()
 
 
-def verify_written(batch, result, written):
+def _normalized(part, islands, n):
+    """(n,) bool: islands with fewer than two pinned vertices in ``part`` (the core scales those
+    to their 3D area and measures their stretch at that scale)."""
+    corners = part.arrays.pin_corners
+    pairs = np.unique(np.stack([islands[corners // 3], part.arrays.F.ravel()[corners]], 1),
+                      axis=0).reshape(-1, 2)
+    return np.bincount(pairs[:, 0], minlength=n) < 2
+
+
+def verify_written(batch, result, written, stretch=None):
     """Re-certify what is stored now (float32 UVs, after packing) and put back what fails.
 
     Each written island is certified again from the UV map as Blender holds it, with its own
     bound, by :func:`stored.check_stored` (the core's one certificate). An island that fails
     gets its previous UVs back; on a mesh that had no UV map the created map is removed when
-    nothing is left on it. Object Mode.
+    nothing is left on it. Object Mode. With ``stretch`` (Limit Stretch) an island is kept only
+    with every face's singular values in [1/S, S] as stored.
 
     Returns
     -------
@@ -73,11 +83,12 @@ def verify_written(batch, result, written):
         uv = mesh_data.loop_uvs(ob.data, uv_name)[part.arrays.tri_loops].astype(np.float64)
         islands = result.face_island[part.faces]
         labels = np.where(w.faces, islands, -1)
+        n = len(result.islands)
         checks = stored.check_stored(part.arrays.V, part.arrays.F, uv, labels, result.islands,
-                                     solved_uv=result.corner_uv[part.faces])
+                                     solved_uv=result.corner_uv[part.faces], stretch=stretch,
+                                     normalized=_normalized(part, islands, n))
         P = part.arrays.V[part.arrays.F]
         area = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
-        n = len(result.islands)
         on = labels >= 0
         island_area = np.bincount(labels[on], weights=area[on], minlength=n)
         pairs = np.unique(np.stack([labels[on], part.arrays.tri_poly[on]], 1), axis=0)
