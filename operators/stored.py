@@ -118,12 +118,12 @@ def island_singular_values(V, F, corner_uv, face_island, n, normalized):
     a, b = np.abs(alpha), np.abs(beta)
     area3d = np.bincount(lab, weights=face_areas(V, F[on]), minlength=n)
     area_uv = np.bincount(lab, weights=np.abs(signed_uv_areas(corner_uv[on])), minlength=n)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        scale = np.where(np.asarray(normalized, bool), np.sqrt(area3d / area_uv), 1.0)
     lo = np.full(n, np.inf)
     hi = np.full(n, -np.inf)
-    np.minimum.at(lo, lab, (a - b) * scale[lab])
-    np.maximum.at(hi, lab, (a + b) * scale[lab])
+    with np.errstate(divide="ignore", invalid="ignore"):  # a collapsed island measures NaN
+        scale = np.where(np.asarray(normalized, bool), np.sqrt(area3d / area_uv), 1.0)
+        np.minimum.at(lo, lab, (a - b) * scale[lab])
+        np.maximum.at(hi, lab, (a + b) * scale[lab])
     empty = np.bincount(lab, minlength=n) == 0
     lo[empty] = hi[empty] = np.nan
     return lo, hi
