@@ -2,13 +2,15 @@
 
 ``mesh_data`` is the only module converting between ``bpy`` and numpy; ``worker`` runs the
 solve in a background thread without ``bpy``; ``session`` is one unwrap (gather, write back,
-pack, report) shared by the operator's synchronous and background paths.
+pack, report) shared by the operator's synchronous and background paths; ``background`` is
+those two paths for the deform and improve operators, whose bpy-free work is in ``uv_deform``
+and ``planar``.
 """
 import bpy
 
-from . import display, properties, unwrap
+from . import deform, display, properties, unwrap
 
-classes = (*properties.classes, *unwrap.classes, *display.classes)
+classes = (*properties.classes, *unwrap.classes, *display.classes, *deform.classes)
 
 
 def register():

@@ -1,10 +1,12 @@
-"""Menu entries: UV > Unwrap beside Blender's own methods.
+"""Menu entries: UV > Unwrap beside Blender's own methods; UV > Bounded Distortion Deform with the
+distortion tools; Mesh > Clean Up > Improve Triangles (Bounded Distortion) in Edit Mode.
 
 ``IMAGE_MT_uvs_unwrap`` is the UV editor's UV > Unwrap menu, which the 3D View's U menu embeds
 since Blender 4.3; before that the 3D View uses ``VIEW3D_MT_uv_map``.
 """
 import bpy
 
+from ..operators.deform import UV_OT_bd_deform
 from ..operators.display import UV_OT_bd_select_distorted, UV_OT_bd_show_distortion
 from ..operators.unwrap import UV_OT_bd_unwrap
 
@@ -21,6 +23,8 @@ def draw_distortion_entries(self, context):
     layout.separator()
     layout.operator(UV_OT_bd_show_distortion.bl_idname)
     layout.operator(UV_OT_bd_select_distorted.bl_idname)
+    layout.operator_context = 'INVOKE_DEFAULT'  # the background path, Esc cancels
+    layout.operator(UV_OT_bd_deform.bl_idname)
 
 
 # From 4.3 the 3D View's U menu (VIEW3D_MT_uv_map) draws IMAGE_MT_uvs_unwrap's contents.

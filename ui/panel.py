@@ -1,6 +1,8 @@
-"""UV editor sidebar (N panel), "BD-UV" tab: the last unwrap's result and the distortion tools."""
+"""UV editor sidebar (N panel), "BD-UV" tab: unwrap and deform, the last result and the distortion
+tools."""
 import bpy
 
+from ..operators.deform import UV_OT_bd_deform
 from ..operators.display import UV_OT_bd_select_distorted, UV_OT_bd_show_distortion
 from ..operators.unwrap import UV_OT_bd_unwrap
 
@@ -13,7 +15,9 @@ class IMAGE_PT_bd_uv_result(bpy.types.Panel):
 
     def draw(self, context):
         layout = self.layout
-        layout.operator(UV_OT_bd_unwrap.bl_idname, text="Unwrap")
+        row = layout.row(align=True)
+        row.operator(UV_OT_bd_unwrap.bl_idname, text="Unwrap")
+        row.operator(UV_OT_bd_deform.bl_idname, text="Deform")
         last = context.window_manager.bd_uv_last_result
         box = layout.box()
         if not last.valid:

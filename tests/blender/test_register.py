@@ -7,7 +7,7 @@ from conftest import bpy, load_addon, load_submodule
 
 
 CLASS_NAMES = ("UV_OT_bd_unwrap", "UV_OT_bd_show_distortion", "UV_OT_bd_select_distorted",
-               "IMAGE_PT_bd_uv_result", "BDUV_PG_last_result")
+               "UV_OT_bd_deform", "IMAGE_PT_bd_uv_result", "BDUV_PG_last_result")
 
 
 def _footprint():
@@ -48,6 +48,9 @@ class FakeLayout:
     def box(self, **kwargs):
         return self
 
+    def row(self, **kwargs):
+        return self
+
 
 def test_register_unregister_leaves_nothing_behind(empty_scene):
     addon = load_addon()
@@ -57,7 +60,7 @@ def test_register_unregister_leaves_nothing_behind(empty_scene):
         addon.register()
         names, ops, props, menus = _footprint()
         assert set(CLASS_NAMES) <= names
-        assert ops == {"bd_unwrap", "bd_show_distortion", "bd_select_distorted"}
+        assert ops == {"bd_unwrap", "bd_show_distortion", "bd_select_distorted", "bd_deform"}
         assert props == {"bd_uv_last_result"}
         assert menus != before[3]
         addon.unregister()
@@ -92,5 +95,6 @@ def test_panel_shows_the_last_result(addon):
     assert labels == ["BD-LSCM: 3 islands, 1 failed", "Max distortion 2.312",
                       "Mean distortion 1.250", "Certified C 5", "Flipped 0", "Time 1.75 s"]
     ops = [c[1] for c in fake.layout.calls if c[0] == "operator"]
-    assert ops == ["uv.bd_unwrap", "uv.bd_show_distortion", "uv.bd_select_distorted"]
+    assert ops == ["uv.bd_unwrap", "uv.bd_deform", "uv.bd_show_distortion",
+                   "uv.bd_select_distorted"]
     assert np.isclose(last.max_distortion, 2.3125)
