@@ -8,9 +8,10 @@ and ``planar``.
 """
 import bpy
 
-from . import deform, display, properties, unwrap
+from . import deform, display, improve, properties, unwrap
 
-classes = (*properties.classes, *unwrap.classes, *display.classes, *deform.classes)
+classes = (*properties.classes, *unwrap.classes, *display.classes, *deform.classes,
+           *improve.classes)
 
 
 def register():

@@ -7,6 +7,7 @@ and what is refused: :mod:`.uv_deform`). Only islands certified again from the U
 kept: 0 flipped faces, max distortion <= C against the rest shape, an overlap-free boundary and
 every pinned UV bit for bit where it was; any other island gets its UVs back. One undo step.
 """
+import re
 from dataclasses import dataclass
 
 import numpy as np
@@ -211,10 +212,13 @@ def _summary(batch, result, written, skipped, checks, seconds):
         parts.append(f"{label} deform: nothing deformed")
     for r in [r for r in result.islands if r.status != "certified"][:8]:
         text = r.message
-        if r.bad_faces is not None and len(r.bad_faces):
-            where = batch.polygons(r.bad_faces)
-            text += " (faces " + "; ".join(
-                f"{', '.join(str(int(p)) for p in polys[:8])}" for polys in where.values()) + ")"
+        if r.bad_faces is not None and len(r.bad_faces):  # triangles -> Blender's faces
+            polys = np.concatenate(list(batch.polygons(r.bad_faces).values()))
+            listed = ", ".join(str(int(p)) for p in polys[:8]) + (
+                f", ... ({len(polys)} in all)" if len(polys) > 8 else "")
+            text = re.sub(r"^\d+ flipped or zero-area faces",
+                          f"{len(polys)} flipped or zero-area face{'s' if len(polys) != 1 else ''}"
+                          f" (faces {listed})", text)
         parts.append(f"{name(r)} left as it was: {text}")
     for c in back:
         parts.append(f"{name(result.islands[c.island])} put back as it was: its stored UVs fail "

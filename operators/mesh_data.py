@@ -29,6 +29,10 @@ __all__ = [
     "set_selection",
     "select_polygons",
     "mark_seams",
+    "vertex_positions",
+    "set_vertex_positions",
+    "polygon_sizes",
+    "vertices_of_polygons",
 ]
 
 
@@ -376,3 +380,33 @@ def mark_seams(mesh, vertex_pairs):
         mesh.edges.foreach_set("use_seam", seam | hit)
         mesh.update()
     return new
+
+
+def vertex_positions(mesh):
+    """(n,3) float32 positions of every vertex of ``mesh`` (Object Mode)."""
+    _require_object_mode(mesh)
+    return _get(mesh.vertices, "co", np.float32, len(mesh.vertices), 3)
+
+
+def set_vertex_positions(mesh, vertices, co):
+    """Set the positions of the (k,) Blender ``vertices`` to (k,3) ``co`` (stored as float32);
+    every other vertex keeps its position bit for bit (Object Mode)."""
+    _require_object_mode(mesh)
+    all_co = vertex_positions(mesh)
+    all_co[np.asarray(vertices, dtype=np.int64)] = np.asarray(co, dtype=np.float64).reshape(-1, 3)
+    mesh.vertices.foreach_set("co", all_co.ravel())
+    mesh.update()
+
+
+def polygon_sizes(mesh):
+    """(P,) int: corners of each polygon (3 for a triangle)."""
+    return _get(mesh.polygons, "loop_total", np.int32, len(mesh.polygons)).astype(np.int64)
+
+
+def vertices_of_polygons(mesh, poly_mask):
+    """(n,) bool: vertices used by a polygon in the (P,) bool ``poly_mask`` (Object Mode)."""
+    _require_object_mode(mesh)
+    loop_vert = _get(mesh.loops, "vertex_index", np.int32, len(mesh.loops))
+    out = np.zeros(len(mesh.vertices), dtype=bool)
+    out[loop_vert[np.repeat(np.asarray(poly_mask, bool), polygon_sizes(mesh))]] = True
+    return out

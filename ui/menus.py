@@ -8,6 +8,7 @@ import bpy
 
 from ..operators.deform import UV_OT_bd_deform
 from ..operators.display import UV_OT_bd_select_distorted, UV_OT_bd_show_distortion
+from ..operators.improve import MESH_OT_bd_improve
 from ..operators.unwrap import UV_OT_bd_unwrap
 
 
@@ -27,6 +28,13 @@ def draw_distortion_entries(self, context):
     layout.operator(UV_OT_bd_deform.bl_idname)
 
 
+def draw_improve_entry(self, context):
+    layout = self.layout
+    layout.separator()
+    layout.operator_context = 'INVOKE_DEFAULT'
+    layout.operator(MESH_OT_bd_improve.bl_idname)
+
+
 # From 4.3 the 3D View's U menu (VIEW3D_MT_uv_map) draws IMAGE_MT_uvs_unwrap's contents.
 U_MENU_EMBEDS_UNWRAP = (4, 3, 0)
 
@@ -42,6 +50,7 @@ def _menus():
     uvs_menu = getattr(bpy.types, "IMAGE_MT_uvs", None)
     if uvs_menu is not None:
         pairs.append((uvs_menu, draw_distortion_entries))
+    pairs.append((bpy.types.VIEW3D_MT_edit_mesh_clean, draw_improve_entry))
     return pairs
 
 

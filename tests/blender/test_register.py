@@ -7,7 +7,8 @@ from conftest import bpy, load_addon, load_submodule
 
 
 CLASS_NAMES = ("UV_OT_bd_unwrap", "UV_OT_bd_show_distortion", "UV_OT_bd_select_distorted",
-               "UV_OT_bd_deform", "IMAGE_PT_bd_uv_result", "BDUV_PG_last_result")
+               "UV_OT_bd_deform", "MESH_OT_bd_improve", "IMAGE_PT_bd_uv_result",
+               "BDUV_PG_last_result")
 
 
 def _footprint():
@@ -16,10 +17,12 @@ def _footprint():
     ours = (*load_submodule("operators").classes, *load_submodule("ui").classes,
             load_submodule("ui.panel").IMAGE_PT_bd_uv_result)
     names |= {cls.__name__ for cls in ours if cls.is_registered}
-    ops = {n for n in dir(bpy.ops.uv) if n.startswith("bd_")}
+    ops = {n for n in dir(bpy.ops.uv) if n.startswith("bd_")} | {
+        f"mesh.{n}" for n in dir(bpy.ops.mesh) if n.startswith("bd_")}
     props = {n for n in ("bd_uv_last_result",) if hasattr(bpy.types.WindowManager, n)}
     menus = {}
-    for menu_name in ("IMAGE_MT_uvs_unwrap", "VIEW3D_MT_uv_map", "IMAGE_MT_uvs"):
+    for menu_name in ("IMAGE_MT_uvs_unwrap", "VIEW3D_MT_uv_map", "IMAGE_MT_uvs",
+                      "VIEW3D_MT_edit_mesh_clean"):
         menu = getattr(bpy.types, menu_name, None)
         if menu is not None and hasattr(menu, "_dyn_ui_initialize"):
             menus[menu_name] = [f.__module__ for f in menu._dyn_ui_initialize()]
@@ -60,7 +63,8 @@ def test_register_unregister_leaves_nothing_behind(empty_scene):
         addon.register()
         names, ops, props, menus = _footprint()
         assert set(CLASS_NAMES) <= names
-        assert ops == {"bd_unwrap", "bd_show_distortion", "bd_select_distorted", "bd_deform"}
+        assert ops == {"bd_unwrap", "bd_show_distortion", "bd_select_distorted", "bd_deform",
+                       "mesh.bd_improve"}
         assert props == {"bd_uv_last_result"}
         assert menus != before[3]
         addon.unregister()
