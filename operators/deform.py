@@ -1,7 +1,8 @@
 """``uv.bd_deform``: move pinned UVs, run it, and the rest of each UV island follows within C.
 
-Per UV island of the selected faces, the pinned UVs are handles kept exactly where they are and
-the other UVs are re-solved by ``bd_uv.deform`` (Lipman 2012, section 6.1) so that every face
+Per UV island of the selected faces, the pinned UVs (and the UVs the selection shares with
+unselected faces, so the island does not tear) are handles kept exactly where they are and the
+other UVs are re-solved by ``bd_uv.deform`` (Lipman 2012, section 6.1) so that every face
 keeps its conformal distortion against the current layout within C with no flip (the rest shape
 and what is refused: :mod:`.uv_deform`). Only islands certified again from the UVs as stored are
 kept: 0 flipped faces, max distortion <= C against the rest shape, an overlap-free boundary and
@@ -71,17 +72,22 @@ class UV_OT_bd_deform(BackgroundSolve, bpy.types.Operator):
                         raise gather.UserError(f"{ob.name} has no UV map to deform: unwrap it "
                                                "first")
                 batch = gather.gather(objects, need_uvs=True)
+                # UVs the selection shares with unselected faces are held, or the island tears.
+                held = [_shared_corners(bpy.data.objects[p.object_name], p.arrays)
+                        + 3 * p.faces.start for p in batch.parts]
         except gather.UserError as error:
             self.report({'WARNING'}, str(error))
             return None
+        pins = np.union1d(batch.pin_corners, np.concatenate(held)).astype(np.int64)
         kwargs = dict(method=self.method, bound=float(self.bound), frames=self.frames)
-        return batch, uv_deform.deform_islands, (batch.V, batch.F, batch.initial_uv,
-                                                 batch.pin_corners), kwargs
+        state = (batch, pins, batch.initial_uv.reshape(-1, 2)[pins])
+        return state, uv_deform.deform_islands, (batch.V, batch.F, batch.initial_uv, pins), kwargs
 
-    def _finish(self, context, batch, result, seconds):
+    def _finish(self, context, state, result, seconds):
+        batch, pins, pin_uv = state
         with object_mode(context):
             written, skipped = _write(batch, result)
-            checks = _verify(batch, result, written)
+            checks = _verify(batch, result, written, pins, pin_uv)
         message, level = _summary(batch, result, written, skipped, checks, seconds)
         self.report({level}, message)
         kept = any(w.any() for w in written)
@@ -128,13 +134,32 @@ def _write(batch, result):
     return written, skipped
 
 
-def _verify(batch, result, written):
+def _shared_corners(ob, arrays):
+    """(k,) flat corner indices of ``arrays`` (the selected triangles) whose UV vertex (mesh
+    vertex and UV) an unselected or hidden face of ``ob`` uses too (Object Mode)."""
+    full = mesh_data.mesh_arrays(ob, uv_name=arrays.uv_name)
+    other = ~np.isin(full.tri_poly, arrays.tri_poly)
+    if not other.any():
+        return np.zeros(0, dtype=np.int64)
+    mine = np.column_stack([arrays.vertices[arrays.F].reshape(-1),
+                            arrays.corner_uv.reshape(-1, 2)])
+    theirs = np.column_stack([full.vertices[full.F[other]].reshape(-1),
+                              full.corner_uv[other].reshape(-1, 2)])
+    _, inverse = np.unique(np.vstack([mine, theirs]), axis=0, return_inverse=True)
+    inverse = inverse.reshape(-1)
+    return np.flatnonzero(np.isin(inverse[:len(mine)], inverse[len(mine):])).astype(np.int64)
+
+
+def _verify(batch, result, written, pins, pin_uv):
     """Certify every written island again from the UVs as stored, against its rest shape, and
     give the failing ones their UVs back (Object Mode).
 
+    ``pins`` (p,) flat corner indices of the batch held where they were, ``pin_uv`` (p,2)
+    their UVs: every one must be stored bit for bit.
+
     Returns
     -------
-    list of bd_uv.Certificate, one per written island (``island`` relabelled: see ``.labels``)
+    list of _Check, one per written island
     """
     stored = np.full_like(result.corner_uv, np.nan)
     labels = np.full(len(batch.F), -1, dtype=np.int64)
@@ -156,11 +181,10 @@ def _verify(batch, result, written):
     rest[cv[on].ravel(), :2] = result.rest_uv[on].reshape(-1, 2)
     checks = bd_uv.certify_islands(rest, cv, stored, compact, np.full(len(ids), result.bound))
     # Every pinned UV where it was, bit for bit.
-    pins = batch.pin_corners
     moved = np.zeros(len(ids), dtype=bool)
     pin_faces = pins // 3
     on_pin = compact[pin_faces] >= 0
-    off = (stored.reshape(-1, 2)[pins[on_pin]] != batch.pin_uv[on_pin]).any(axis=1)
+    off = (stored.reshape(-1, 2)[pins[on_pin]] != pin_uv[on_pin]).any(axis=1)
     moved[compact[pin_faces[on_pin]][off]] = True
     out = []
     for j, c in enumerate(checks):
@@ -207,7 +231,7 @@ def _summary(batch, result, written, skipped, checks, seconds):
         handles = sum(result.islands[c.island].handles for c in ok)
         parts.append(f"{label} deform: {len(ok)} island{'s' if len(ok) != 1 else ''}, max "
                      f"distortion {_down(worst)} \u2264 {_up(result.bound)} against the current "
-                     f"layout, 0 flipped, {handles} pinned UVs met, {seconds:.1f} s")
+                     f"layout, 0 flipped, {handles} handles met, {seconds:.1f} s")
     else:
         parts.append(f"{label} deform: nothing deformed")
     for r in [r for r in result.islands if r.status != "certified"][:8]:

@@ -5,7 +5,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from conftest import bpy, loop_uv_array, set_mode
+from conftest import bpy, loop_uv_array, select_polygons, set_mode
 
 N = 8            # quads per side of the plate
 TURN = np.pi / 3  # the hole's pins are turned by this and shifted
@@ -206,3 +206,24 @@ def test_background_job_solves_and_cancels(addon):
     failed = job.start().wait()
     assert isinstance(failed, worker.Failed)
     assert isinstance(failed.error, bd_uv.CancelledError)
+
+
+def test_uvs_shared_with_unselected_faces_are_held(addon):
+    obj, loop_vert, rim, _ = _plate_with_hole()
+    mesh = obj.data
+    before = _turn_rim(obj, rim)
+    centre = np.array([p.center[:2] for p in mesh.polygons])
+    keep = (centre[:, 0] > 0.5) & (centre[:, 1] > 0.5)  # a corner of the plate stays unselected
+    select_polygons(obj, ~keep)
+    set_mode(obj, 'EDIT')
+    assert bpy.ops.uv.bd_deform('EXEC_DEFAULT') == {'FINISHED'}
+    set_mode(obj, 'OBJECT')
+    after = loop_uv_array(mesh)
+    poly_of_loop = np.repeat(np.arange(len(mesh.polygons)),
+                             [p.loop_total for p in mesh.polygons])
+    unselected = keep[poly_of_loop]
+    assert np.array_equal(after[unselected], before[unselected])
+    assert not np.array_equal(after[~unselected], before[~unselected])
+    # No tear: every vertex's loops still share one UV.
+    for v in np.unique(loop_vert[unselected]):
+        assert len(np.unique(after[loop_vert == v], axis=0)) == 1
