@@ -234,7 +234,17 @@ def _summary(batch, result, written, skipped, checks, seconds):
                      f"layout, 0 flipped, {handles} handles met, {seconds:.1f} s")
     else:
         parts.append(f"{label} deform: nothing deformed")
-    for r in [r for r in result.islands if r.status != "certified"][:8]:
+    refused = [r for r in result.islands if r.status != "certified"]
+    unpinned = [r for r in refused if r.handles < 2]
+    if len(unpinned) == 1:
+        parts.append(f"{name(unpinned[0])} left as it was: {unpinned[0].message}")
+    elif unpinned:  # one clause for them all: selecting every island is common
+        listed = ", ".join(str(r.index) for r in unpinned[:8]) + (
+            f", ... ({len(unpinned)} in all)" if len(unpinned) > 8 else "")
+        parts.append(f"{len(unpinned)} islands with fewer than two pinned UVs left as they were "
+                     f"(islands {listed}): pin at least two UVs per island, move them and deform "
+                     "again")
+    for r in [r for r in refused if r.handles >= 2][:8]:
         text = r.message
         if r.bad_faces is not None and len(r.bad_faces):  # triangles -> Blender's faces
             polys = np.concatenate(list(batch.polygons(r.bad_faces).values()))
