@@ -159,8 +159,12 @@ def _write_and_check(sel, improved):
                 f"({int((area <= 0).sum())} turned over, max distortion {D[movable].max():.4g} "
                 f"against {worst:.4g} before)"), False
     lower = 100.0 * (1.0 - D.max() / res.max_before)
-    return (f"{name}: {before} \u2192 {_up(D.max())} ({lower:.0f}% lower), {len(ids)} interior "
-            "vertices moved within the plane, boundary unchanged, 0 flipped"), True
+    # As the command line says it: a face with all three corners on the boundary cannot change.
+    held = "" if D[movable].max() == D.max() else (
+        f" (faces with an interior vertex {_down(worst)} \u2192 {_up(D[movable].max())}; the "
+        "max is a face with all corners on the boundary)")
+    return (f"{name}: {before} \u2192 {_up(D.max())} ({lower:.0f}% lower){held}, {len(ids)} "
+            "interior vertices moved within the plane, boundary unchanged, 0 flipped"), True
 
 
 classes = (MESH_OT_bd_improve,)

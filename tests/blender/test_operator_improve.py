@@ -130,3 +130,29 @@ def test_background_job_solves_refuses_and_cancels(addon):
     job.cancel()
     failed = job.start().wait()
     assert isinstance(failed, worker.Failed) and isinstance(failed.error, bd_uv.CancelledError)
+
+
+def test_a_boundary_only_face_holding_the_max_is_named(addon):
+    """A flat ear (all three corners on the boundary) cannot change: the report gives the faces
+    with an interior vertex apart, as the command line does."""
+    t = np.arange(6) * np.pi / 3
+    P = np.column_stack([np.cos(t), np.sin(t), np.zeros(6)])
+    ear = 0.5 * (P[0] + P[1]) * 1.05  # just outside the edge 0-1: a flat triangle
+    P = np.vstack([P, [[0.3, -0.2, 0.0]], ear])  # 6: an off-centre interior vertex, 7: the ear
+    F = [[6, i, (i + 1) % 6] for i in range(6)] + [[0, 7, 1]]
+    mesh = bpy.data.meshes.new("ear")
+    mesh.from_pydata(P.tolist(), [], F)
+    obj = bpy.data.objects.new("ear", mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    D0, det0 = _distortion(obj)
+    if (det0 < 0).any():  # the ear's corner order: counter-clockwise like the rest
+        mesh.polygons[6].flip()
+        D0, det0 = _distortion(obj)
+    assert (det0 > 0).all() and D0.argmax() == 6
+    _edit_all(obj)
+    assert bpy.ops.mesh.bd_improve('EXEC_DEFAULT') == {'FINISHED'}
+    set_mode(obj, 'OBJECT')
+    D1, det1 = _distortion(obj)
+    report = bpy.context.window_manager.bd_uv_last_result.report
+    assert (det1 > 0).all() and D1[6] == D0[6] and D1[:6].max() < D0[:6].max()
+    assert "faces with an interior vertex" in report and "all corners on the boundary" in report
