@@ -189,7 +189,8 @@ def _verify(batch, result, written, pins, pin_uv):
     out = []
     for j, c in enumerate(checks):
         out.append(_Check(int(ids[j]), bool(c.certified and not moved[j]),
-                          float(c.max_distortion), int(c.flipped), c.reason or ("a pinned UV moved" if moved[j] else "")))
+                          float(c.max_distortion), int(c.flipped),
+                          c.reason or ("a pinned UV moved" if moved[j] else "")))
     failed = np.zeros(len(ids) + 1, dtype=bool)
     failed[[j for j, c in enumerate(out) if not c.certified]] = True
     undo = failed[compact]

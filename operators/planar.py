@@ -102,7 +102,8 @@ def flat_plane(P, F, tolerance):
 
 def _signed_areas(X, F):
     a, b, c = X[F[:, 0]], X[F[:, 1]], X[F[:, 2]]
-    return 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+    return 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1])
+                  - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
 
 
 def plane_coordinates(P, plane):

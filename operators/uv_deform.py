@@ -116,7 +116,8 @@ def uv_islands(F, corner_uv):
 
 def _signed_areas(P, tris):
     a, b, c = P[tris[:, 0]], P[tris[:, 1]], P[tris[:, 2]]
-    return 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
+    return 0.5 * ((b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1])
+                  - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]))
 
 
 def rest_shape(P3, tris, uv, pinned):

@@ -227,3 +227,26 @@ def test_uvs_shared_with_unselected_faces_are_held(addon):
     # No tear: every vertex's loops still share one UV.
     for v in np.unique(loop_vert[unselected]):
         assert len(np.unique(after[loop_vert == v], axis=0)) == 1
+
+
+def test_an_island_failing_the_post_write_check_is_put_back(addon, monkeypatch):
+    """The stored UVs are certified again (here: a certificate that always fails); the island
+    gets the UVs it had before the operator, bit for bit."""
+    import dataclasses
+    from conftest import load_submodule
+    bd_uv = load_submodule("bd_uv")
+    real = bd_uv.certify_islands
+
+    def failing(*args, **kwargs):
+        return [dataclasses.replace(c, certified=False, reason="made to fail")
+                for c in real(*args, **kwargs)]
+
+    monkeypatch.setattr(bd_uv, "certify_islands", failing)
+    obj, _, rim, _ = _plate_with_hole()
+    moved = _turn_rim(obj, rim)
+    set_mode(obj, 'EDIT')
+    assert bpy.ops.uv.bd_deform('EXEC_DEFAULT') == {'CANCELLED'}
+    report = bpy.context.window_manager.bd_uv_last_result.report
+    assert "island 0 of Grid (60 faces) put back as it was" in report and "made to fail" in report
+    set_mode(obj, 'OBJECT')
+    assert np.array_equal(loop_uv_array(obj.data), moved)
