@@ -20,7 +20,7 @@ from ..metrics import face_jacobians
 from ..mesh import check_arrays, islands
 from ..unwrapping.results import UnwrapResult
 from ..unwrapping.unwrap import unwrap
-from .charts import boundary_crossings, chart_maps
+from .charts import boundary_crossings, chart_maps, piece_stretch
 from .cut_graph import cut_graph
 from .edges import edge_table
 from .split import fiedler_split
@@ -31,6 +31,11 @@ MAX_ROUNDS = 60
 MARGIN = 0.98
 # Passes that split charts the certified map leaves beyond S.
 FINISH_ROUNDS = 4
+# Levels a failing chart is split at once while its restricted map still breaks S.
+SPLIT_DEPTH = 4
+# ... while the restricted map's stretch exceeds S by this factor (a piece's own map is better
+# than the restriction of its chart's map: nearer S it is left to its own map).
+DEEPER = 4.0
 # Rounds of pairwise merging (each merges a matching of neighbouring charts).
 MERGE_ROUNDS = 15
 # Matchings of neighbouring chart pairs tested together in one merging round.
@@ -165,11 +170,48 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n):
                   and cm.crossings[j] == 0)
             if ok or len(c.faces) < 2:
                 frozen[c.faces] = True
-            elif _split_faces(c.faces, E, cut, A, cen):
+            elif _split_deep(c.faces, cm.sigma[cm.foff[j]:cm.foff[j + 1]], E, cut, A, cen, S):
                 changed = True
             else:
                 frozen[c.faces] = True
     return changed
+
+
+def _split_deep(faces, sigma, E, cut, A, cen, S):
+    """Split a chart whose conformal map fails, and split its pieces again while the chart's
+    map restricted to a piece (``piece_stretch``: no new solve) still breaks S.
+
+    A piece whose restricted map passes is left for the next round to map on its own; the
+    restriction saves the rounds (and solves) a chart far beyond S would take one split at a
+    time. Pieces on flipped faces of the chart's map are left to their own map too.
+
+    Parameters
+    ----------
+    faces : (k,) int64, sorted global face ids of the chart
+    sigma : (k,2) float64, its map's singular values per face (``ChartMaps.sigma``)
+
+    Returns
+    -------
+    bool, whether the chart was split
+    """
+    stack = [faces]
+    split = False
+    for _ in range(SPLIT_DEPTH):
+        nxt = []
+        for f in stack:
+            sides = _bisect(f, E, cut, A, cen)
+            if sides is None:
+                continue
+            split = True
+            for piece in sides:
+                st = piece_stretch(sigma[np.searchsorted(faces, piece)], A[piece],
+                                   np.zeros(len(piece), np.int64), 1)[0]
+                if np.isfinite(st) and st > DEEPER * S * MARGIN and len(piece) > 1:
+                    nxt.append(piece)
+        stack = nxt
+        if not stack:
+            break
+    return split
 
 
 def _edge_weight(E, pairs, n):
@@ -179,6 +221,16 @@ def _edge_weight(E, pairs, n):
 
 def _split_faces(faces, E, cut, A, cen):
     """Split a chart (global face ids) by ``fiedler_split``; mark the new seams. True if split."""
+    return _bisect(faces, E, cut, A, cen) is not None
+
+
+def _bisect(faces, E, cut, A, cen):
+    """Split a chart (sorted global face ids) by ``fiedler_split`` and mark the new seams.
+
+    Returns
+    -------
+    (faces_a, faces_b) sorted global face ids of the two sides, or None when not split
+    """
     m = len(E.face_edges)
     local = np.full(m, -1, dtype=np.int64)
     local[faces] = np.arange(len(faces))
@@ -189,10 +241,12 @@ def _split_faces(faces, E, cut, A, cen):
     fe, pairs = fe[inside], np.stack([la[inside], lb[inside]], axis=1)
     side = fiedler_split(A[faces], cen[faces], pairs, E.length[fe], E.cost[fe])
     if side is None:
-        return False
+        return None
     new = fe[side[pairs[:, 0]] != side[pairs[:, 1]]]
+    if len(new) == 0:
+        return None
     cut[new] = True
-    return len(new) > 0
+    return faces[side], faces[~side]
 
 
 def _merge(V, F, E, cut, original, invalid, S, rounds=None):

@@ -8,11 +8,17 @@ itself (so the flip-free map of the disk is injective).
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from ..energies import jacobian_operators
-from ..frames import _solve_fixed
 from ..geometry import face_areas, local_coordinates
 from ..unwrapping.batched import _far_pairs
+
+try:  # LDL^T with AMD ordering; SuperLU without it
+    import qdldl
+except ImportError:  # pragma: no cover - exercised where qdldl is absent
+    qdldl = None
 
 
 @dataclass(frozen=True)
@@ -27,6 +33,10 @@ class ChartMaps:
     stretch : (f,) float64, ``max(sigma_1, 1/sigma_2)`` per face (inf when flipped)
     max_distortion, max_stretch : (k,) float64 per chart
     crossings : (k,) int64, pairs of boundary edges of the chart that cross in UV
+    sigma : (f,2) float64, singular values ``(|alpha|+|beta|, |alpha|-|beta|)`` per face (the
+        second <= 0 when flipped), each chart scaled to its 3D area: any union of a chart's faces
+        scaled to its own area has the stretch ``max(s sigma_1, 1/(s sigma_2))`` with one
+        factor ``s`` (see ``piece_stretch``)
     """
     uv: np.ndarray
     voff: np.ndarray
@@ -36,6 +46,7 @@ class ChartMaps:
     max_distortion: np.ndarray
     max_stretch: np.ndarray
     crossings: np.ndarray
+    sigma: np.ndarray
 
 
 def chart_maps(V, charts):
@@ -66,7 +77,7 @@ def chart_maps(V, charts):
     ops = jacobian_operators(Z, tris, n)
     Q = (ops.Bre.T.multiply(ops.area) @ ops.Bre + ops.Bim.T.multiply(ops.area) @ ops.Bim).tocsc()
     idx = _far_pairs(P, charts, voff)
-    u = _solve_fixed(Q, n, idx, np.tile(np.array([0.0, 1.0], dtype=np.complex128), k))
+    u = _solve_pinned(Q, n, idx, np.tile(np.array([0.0, 1.0], dtype=np.complex128), k))
     # Scale each chart so its UV area equals its (unit-normalised) 3D area: sigma are then the
     # singular values of the map with the chart at its 3D size.
     e1 = u[tris[:, 1]] - u[tris[:, 0]]
@@ -89,7 +100,90 @@ def chart_maps(V, charts):
     maxS = np.maximum.reduceat(St, foff[:-1])
     uv = u * np.sqrt(area)[vert_c]
     cross = boundary_crossings(uv, [c.loops[0] + voff[j] for j, c in enumerate(charts)])
-    return ChartMaps(uv, voff, foff, D, St, maxD, maxS, cross)
+    return ChartMaps(uv, voff, foff, D, St, maxD, maxS, cross, np.stack([a + b, a - b], axis=1))
+
+
+def piece_stretch(sigma, area3, label, k):
+    """Stretch of the conformal map of a chart restricted to pieces of it, each piece scaled
+    to its own 3D area (no new solve: the restriction of a conformal map is one of the piece).
+
+    Parameters
+    ----------
+    sigma : (f,2) float64, the chart's singular values per face (``ChartMaps.sigma``)
+    area3 : (f,) float64, 3D face areas
+    label : (f,) int64, piece of each face in 0..k-1
+    k : int
+
+    Returns
+    -------
+    (k,) float64, ``max(s sigma_1, 1/(s sigma_2))`` over each piece's faces with
+    ``s = sqrt(sum area3 / sum area3 sigma_1 sigma_2)`` (inf where a face is flipped)
+    """
+    uv_area = np.bincount(label, area3 * sigma[:, 0] * sigma[:, 1], minlength=k)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        s = np.sqrt(np.bincount(label, area3, minlength=k) / uv_area)[label]
+        st = np.where(sigma[:, 1] > 0, np.maximum(s * sigma[:, 0], 1.0 / (s * sigma[:, 1])),
+                      np.inf)
+    st[~np.isfinite(st)] = np.inf
+    out = np.full(k, -np.inf)
+    np.maximum.at(out, label, st)
+    return out
+
+
+def spd_solver(A):
+    """Factor a sparse symmetric positive definite matrix once; return its solve.
+
+    LDL^T with an AMD ordering (qdldl), about twice as fast as SuperLU on the LSCM and dual
+    Laplacian systems here; SuperLU with a symmetric ordering where qdldl is missing or the
+    factorisation breaks down.
+
+    Parameters
+    ----------
+    A : (N,N) sparse, symmetric positive definite
+
+    Returns
+    -------
+    callable((N,) float64) -> (N,) float64
+
+    Raises
+    ------
+    RuntimeError when the matrix is singular
+    """
+    if qdldl is not None:
+        try:
+            return qdldl.Solver(sp.triu(A, format="csc"), upper=True).solve
+        except ValueError:  # zero pivot: let SuperLU (with pivoting) try
+            pass
+    lu = spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
+    return lu.solve
+
+
+def _solve_pinned(Q, n, idx, val):
+    """Minimise ``x^T Q x`` over x = [Re u; Im u] (2n) with vertices ``idx`` fixed to ``val``.
+
+    Parameters
+    ----------
+    Q : (2n,2n) sparse symmetric positive semi-definite (the LSCM energy)
+    n : int
+    idx : (p,) int64, pinned vertices; val : (p,) complex128, their positions
+
+    Returns
+    -------
+    u : (n,) complex128
+    """
+    idx = np.asarray(idx, dtype=np.int64)
+    fixed = np.concatenate([idx, idx + n])
+    xval = np.concatenate([val.real, val.imag])
+    free = np.ones(2 * n, dtype=bool)
+    free[fixed] = False
+    Q = sp.csc_matrix(Q)
+    Qf = Q[free]
+    rhs = -(Qf[:, fixed] @ xval)
+    solve = spd_solver(Qf[:, free])
+    x = np.empty(2 * n)
+    x[fixed] = xval
+    x[free] = solve(rhs)
+    return x[:n] + 1j * x[n:]
 
 
 def boundary_crossings(uv, loops):

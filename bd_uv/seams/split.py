@@ -1,8 +1,9 @@
 """Splitting a chart in two along its cheapest neck (spectral bisection with a Cheeger sweep)."""
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import breadth_first_order, connected_components, maximum_flow
+
+from .charts import spd_solver
 
 # Neither side of a split may hold less than this share of the chart's area.
 MIN_SIDE = 0.05
@@ -108,13 +109,13 @@ def _fiedler_vector(pairs, w, mass, centroid, iters=12):
                        (np.concatenate([pairs[:, 0], pairs[:, 1], idx]),
                         np.concatenate([pairs[:, 1], pairs[:, 0], idx]))), shape=(k, k))
     try:
-        lu = spla.splu(K, permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
+        solve = spd_solver(K)
     except RuntimeError:
         return None
     total = mass.sum()
     for _ in range(iters):
         x = x - (mass @ x) / total
-        x = lu.solve(mass * x)
+        x = solve(mass * x)
         x /= max(np.sqrt(mass @ x ** 2), 1e-300)
     return x - (mass @ x) / total
 
