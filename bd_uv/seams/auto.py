@@ -13,8 +13,8 @@ import time
 
 import numpy as np
 
-from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, SolverError,
-                      TopologyError)
+from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, OverlapError,
+                      SolverError, TopologyError)
 from ..geometry import face_areas
 from ..metrics import face_jacobians
 from ..mesh import check_arrays, islands
@@ -23,7 +23,7 @@ from ..unwrapping.unwrap import unwrap
 from .charts import boundary_crossings, chart_maps, piece_stretch
 from .cut_graph import cut_graph
 from .edges import edge_table
-from .split import fiedler_split
+from .split import _quantize, fiedler_split
 from .topology import charts, cut_mesh
 
 MAX_ROUNDS = 60
@@ -107,27 +107,48 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             break
     if merge:
         _merge(V, F, E, cut, original, invalid, S)
-    result = unwrap(V, F, seams=E.ends[cut], bound=C, raise_bound=False, **unwrap_options)
-    for _ in range(FINISH_ROUNDS):
+    # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
+    # along whatever edges separate the overlap) and is split like the others; only the last
+    # round lets ``unwrap`` cut what still overlaps.
+    result = unwrap(V, F, seams=E.ends[cut], bound=C, raise_bound=False,
+                    overlap="cut" if FINISH_ROUNDS == 0 else "fail", **unwrap_options)
+    for finish in range(FINISH_ROUNDS):
         # Charts the certified map leaves beyond S or crossing itself are split again and only
         # their faces unwrapped anew.
         st, cr = _measure(V, F, E, cut, result)
         bad = [r for r, s, c in zip(result.islands, st, cr)
                if len(r.faces) > 1 and ((r.status == "certified" and (s > S * (1 + 1e-9) or c))
-                                        or isinstance(r.error, (InfeasibleError, SolverError)))]
+                                        or isinstance(r.error, (InfeasibleError, SolverError,
+                                                                OverlapError)))]
         if not bad:
             break
         frozen[:] = True
-        for r in bad:
+        group = np.full(m, -1, dtype=np.int64)
+        for g, r in enumerate(bad):
             frozen[r.faces] = False
+            group[r.faces] = g
             _split_faces(r.faces, E, cut, A, cen)
-        sub = np.flatnonzero(~frozen)
         for _ in range(MAX_ROUNDS):
             if not _refine(V, F, E, cut, frozen, A, cen, C, S, n):
                 break
+        if merge:
+            # The pieces may now merge with their neighbours (never with each other).
+            _merge(V, F, E, cut, original, invalid, S, group=group)
+        # Unwrap anew every chart holding a piece (with the neighbours it took in).
+        redo = np.zeros(m, dtype=bool)
+        for c in charts(F, E, cut):
+            if (group[c.faces] >= 0).any():
+                redo[c.faces] = True
+        sub = np.flatnonzero(redo)
         Fc, voc = cut_mesh(F, E, cut, sub)
-        part = unwrap(V[voc], Fc[sub], bound=C, raise_bound=False, **unwrap_options)
+        part = unwrap(V[voc], Fc[sub], bound=C, raise_bound=False,
+                      overlap="cut" if finish == FINISH_ROUNDS - 1 else "fail", **unwrap_options)
         result = _splice(result, part, sub, voc, m)
+    # Edges ``unwrap`` cut (overlaps left after the last round) are seams too.
+    for r in result.islands:
+        if r.cut_edges is not None and len(r.cut_edges):
+            k = E.keys(r.cut_edges, n)
+            cut[k[k >= 0]] = True
     st, cr = _measure(V, F, E, cut, result)
     result = dataclasses.replace(result, seconds=time.perf_counter() - t0)
     added = E.ends[cut & ~original]
@@ -249,11 +270,17 @@ def _bisect(faces, E, cut, A, cen):
     return faces[side], faces[~side]
 
 
-def _merge(V, F, E, cut, original, invalid, S, rounds=None):
+def _merge(V, F, E, cut, original, invalid, S, rounds=None, group=None):
     """Merge neighbouring charts pairwise while the union's conformal map still passes.
 
     Each round tests a matching of neighbouring pairs (longest shared seam first) in one
     batched solve; a pair that fails is not tried again while both charts stay as they are.
+
+    Parameters
+    ----------
+    group : (m,) int64, optional: only pairs with a chart in a group (>= 0) are tried, and
+        never two charts of one group (the pieces of a chart split because its certified map
+        failed: their union is that chart again)
     """
     tried = set()
     chs = charts(F, E, cut)
@@ -266,6 +293,9 @@ def _merge(V, F, E, cut, original, invalid, S, rounds=None):
         inner = (E.faces[:, 1] >= 0) & cut & ~original
         la, lb = label[E.faces[inner, 0]], label[E.faces[inner, 1]]
         diff = (la != lb) & good[la] & good[lb]
+        if group is not None:
+            ga, gb = group[E.faces[inner, 0]], group[E.faces[inner, 1]]
+            diff &= ((ga >= 0) | (gb >= 0)) & (ga != gb)
         if not diff.any():
             return
         ei = np.flatnonzero(inner)[diff]
@@ -277,7 +307,7 @@ def _merge(V, F, E, cut, original, invalid, S, rounds=None):
         # layer; every layer's unions are tested in one batched solve.
         used = np.zeros((MERGE_LAYERS, len(chs)), dtype=bool)
         layers = [[] for _ in range(MERGE_LAYERS)]
-        for p in np.argsort(-shared):
+        for p in np.lexsort((uk, -_quantize(shared))):
             x, y = divmod(int(uk[p]), len(chs))
             if (ident[x], ident[y]) in tried:
                 continue
@@ -307,7 +337,7 @@ def _merge(V, F, E, cut, original, invalid, S, rounds=None):
         fes = [np.unique(E.face_edges[c.faces].ravel()) for c, _ in disks]
         gain = np.array([E.length[fe[cut[fe] & ~t[fe]]].sum() for fe, (_, t) in zip(fes, disks)])
         unions = []
-        for j in np.argsort(-gain):
+        for j in np.lexsort((np.arange(len(gain)), -_quantize(gain))):
             c, trial = disks[j]
             two = np.unique(label[c.faces])
             if not ok[j] or merged[two].any():
@@ -360,7 +390,9 @@ def _splice(result, part, sub, voc, m):
     redo = np.zeros(m, dtype=bool)
     redo[sub] = True
     keep = [r for r in result.islands if not redo[r.faces[0]]]
-    new = [dataclasses.replace(r, faces=sub[r.faces], vertices=voc[r.vertices])
+    new = [dataclasses.replace(r, faces=sub[r.faces], vertices=voc[r.vertices],
+                               cut_edges=None if r.cut_edges is None
+                               else voc[np.asarray(r.cut_edges, np.int64).reshape(-1, 2)])
            for r in part.islands]
     isl = sorted(keep + new, key=lambda r: int(r.faces.min()))
     isl = [dataclasses.replace(r, index=j) for j, r in enumerate(isl)]

@@ -202,9 +202,14 @@ def boundary_crossings(uv, loops):
     (k,) int64, crossing pairs per loop
     """
     k = len(loops)
-    if k == 0:
-        return np.zeros(0, np.int64)
-    lens = np.array([len(lp) for lp in loops])
+    lens = np.array([len(lp) for lp in loops], dtype=np.int64)
+    if k == 0 or lens.sum() == 0:
+        return np.zeros(k, np.int64)
+    if (lens == 0).any():                   # empty loops: none of their edges cross
+        out = np.zeros(k, np.int64)
+        some = np.flatnonzero(lens > 0)
+        out[some] = boundary_crossings(uv, [loops[j] for j in some])
+        return out
     owner = np.repeat(np.arange(k), lens)
     a_idx = np.concatenate(loops)
     start = np.concatenate([[0], np.cumsum(lens)[:-1]])

@@ -40,7 +40,9 @@ def fiedler_split(face_area, centroid, pairs, edge_len, edge_cost):
     x = _fiedler_vector(pairs, w, face_area, centroid)
     if x is None:
         return None
-    order = np.argsort(x, kind="stable")
+    # Rounded (then by face): the order, and so the cut, does not hang on the last bits of
+    # x, which differ between runs with the memory layout (BLAS kernels).
+    order = np.lexsort((np.arange(k), _quantize(x)))
     rank = np.empty(k, dtype=np.int64)
     rank[order] = np.arange(k)
     lo = np.minimum(rank[pairs[:, 0]], rank[pairs[:, 1]])
@@ -55,7 +57,7 @@ def fiedler_split(face_area, centroid, pairs, edge_len, edge_cost):
     score = np.where(small >= MIN_SIDE * total, cut / np.maximum(small, 1e-300), np.inf)
     if not np.isfinite(score).any():
         score = cut / np.maximum(small, 1e-300)
-    t = int(np.argmin(score)) + 1
+    t = int(np.argmin(_quantize(score))) + 1
     side = rank < t
     side = _snap(side, pairs, c)
     raw = side.copy()
@@ -98,9 +100,12 @@ def _fiedler_vector(pairs, w, mass, centroid, iters=12):
     x : (k,) float64, or None when the system cannot be factored
     """
     c = centroid - np.average(centroid, axis=0, weights=mass)
-    _, _, vt = np.linalg.svd(c * np.sqrt(mass)[:, None], full_matrices=False)
-    x = c @ vt[0]
     k = len(mass)
+    x = c @ _principal_axis(c, mass)
+    # A small fixed perturbation (the same for the same chart): on a symmetric chart the
+    # Fiedler vector is not unique, and inverse iteration would otherwise pick a direction
+    # out of the rounding noise.
+    x = x + 1e-3 * max(np.abs(x).max(), 1e-300) * np.random.default_rng(k).standard_normal(k)
     deg = np.bincount(pairs.ravel(), np.repeat(w, 2), minlength=k)   # pairs.ravel(): row-major
     shift = 1e-8 * deg.mean() / mass.mean()
     # L + shift M from triplets in one go: off-diagonal -w, diagonal degree + shift * mass.
@@ -118,6 +123,51 @@ def _fiedler_vector(pairs, w, mass, centroid, iters=12):
         x = solve(mass * x)
         x /= max(np.sqrt(mass @ x ** 2), 1e-300)
     return x - (mass @ x) / total
+
+
+def _principal_axis(c, mass):
+    """The chart's longest principal axis, chosen the same way in every run.
+
+    Where the two (or three) largest principal moments agree to 1e-6 (a chart symmetric about
+    an axis) the axis is any direction of their plane and an SVD returns one picked by rounding
+    noise: then take the first face's direction projected onto that plane.
+
+    Parameters
+    ----------
+    c : (k,3) float64, face centroids about their weighted mean; mass : (k,) float64
+
+    Returns
+    -------
+    (3,) float64, unit axis, oriented so the first face lies on its non-negative side
+    """
+    cov = (c * mass[:, None]).T @ c
+    w, vec = np.linalg.eigh(cov)
+    w, vec = w[::-1], vec[:, ::-1]
+    top = w >= w[0] * (1.0 - 1e-6)
+    axis = vec[:, 0]
+    if top.sum() > 1:
+        span = vec[:, top]
+        for f in range(len(c)):           # the first face off the plane's normal
+            a = span @ (span.T @ c[f])
+            if np.linalg.norm(a) > 1e-6 * np.sqrt(max(w[0], 1e-300) / mass.sum()):
+                axis = a / np.linalg.norm(a)
+                break
+    first = np.flatnonzero(np.abs(c @ axis) > 1e-9 * np.abs(c @ axis).max(initial=0.0))
+    if len(first) and c[first[0]] @ axis < 0:
+        axis = -axis
+    return axis
+
+
+def _quantize(x, digits=9):
+    """``x`` rounded to ``10**-digits`` of its largest finite magnitude (ties then broken by
+    index, the same in every run)."""
+    x = np.asarray(x, dtype=np.float64)
+    fin = np.isfinite(x)
+    scale = np.abs(x[fin]).max(initial=0.0)
+    if scale == 0:
+        return x
+    q = scale * 10.0 ** -digits
+    return np.where(fin, np.round(x / q) * q, x)
 
 
 def _snap(side, pairs, cost, rings=BAND_RINGS):

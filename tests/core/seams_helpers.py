@@ -99,8 +99,11 @@ def chart_topology(tris):
     return chi, loops
 
 
-def boundary_self_crossings(uv, tris):
-    """Pairs of non-adjacent boundary edges of a chart that intersect in UV (brute force)."""
+def boundary_self_crossings(uv, tris, touching=False):
+    """Pairs of non-adjacent boundary edges of a chart that intersect in UV (brute force).
+
+    With ``touching``, also pairs that only touch or lie on each other (the two sides of a slit
+    mapped onto one segment: the boundary is not injective there either)."""
     a = tris.ravel()
     b = np.roll(tris, -1, axis=1).ravel()
     half = set(zip(a.tolist(), b.tolist()))
@@ -114,6 +117,11 @@ def boundary_self_crossings(uv, tris):
     d1, d2 = orient(P2, Q2, P1), orient(P2, Q2, Q1)
     d3, d4 = orient(P1, Q1, P2), orient(P1, Q1, Q2)
     cross = (d1 * d2 < 0) & (d3 * d4 < 0)
+    if touching:
+        lo1, hi1 = np.minimum(P1, Q1), np.maximum(P1, Q1)
+        lo2, hi2 = np.minimum(P2, Q2), np.maximum(P2, Q2)
+        boxes = np.all((lo1 <= hi2) & (lo2 <= hi1), axis=-1)
+        cross = (d1 * d2 <= 0) & (d3 * d4 <= 0) & boxes
     shared = ((bnd[:, None, 0] == bnd[None, :, 0]) | (bnd[:, None, 0] == bnd[None, :, 1]) |
               (bnd[:, None, 1] == bnd[None, :, 0]) | (bnd[:, None, 1] == bnd[None, :, 1]))
     return int(np.triu(cross & ~shared, 1).sum())
