@@ -125,3 +125,44 @@ def boundary_self_crossings(uv, tris, touching=False):
     shared = ((bnd[:, None, 0] == bnd[None, :, 0]) | (bnd[:, None, 0] == bnd[None, :, 1]) |
               (bnd[:, None, 1] == bnd[None, :, 0]) | (bnd[:, None, 1] == bnd[None, :, 1]))
     return int(np.triu(cross & ~shared, 1).sum())
+
+
+def uv_sphere(segments=16, rings=8, flip=()):
+    """A closed UV sphere of quads (two triangles each) and two triangle fans at the poles.
+
+    Parameters
+    ----------
+    flip : iterable of quad ids whose other diagonal is used
+
+    Returns
+    -------
+    V : (n,3), F : (m,3) outward oriented
+    poly : (m,) int64, the polygon (quad or pole triangle) of each triangle
+    """
+    th = np.pi * np.arange(1, rings) / rings                 # ring latitudes (no poles)
+    ph = 2 * np.pi * np.arange(segments) / segments
+    T, P = np.meshgrid(th, ph, indexing="ij")
+    V = np.concatenate([[[0.0, 0.0, 1.0]],
+                        np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)],
+                                 -1).reshape(-1, 3),
+                        [[0.0, 0.0, -1.0]]])
+    ring = 1 + np.arange((rings - 1) * segments).reshape(rings - 1, segments)
+    south = len(V) - 1
+    j = np.arange(segments)
+    tris, poly = [], []
+    top = np.stack([np.zeros(segments, np.int64), ring[0, j], ring[0, (j + 1) % segments]], 1)
+    tris.append(top)
+    poly.append(np.arange(segments))
+    a, b = ring[:-1, j], ring[1:, j]
+    c, d = ring[1:, (j + 1) % segments], ring[:-1, (j + 1) % segments]
+    a, b, c, d = (x.ravel() for x in (a, b, c, d))
+    q = np.arange(len(a))
+    other = np.isin(q, list(flip))
+    t1 = np.where(other[:, None], np.stack([a, b, d], 1), np.stack([a, b, c], 1))
+    t2 = np.where(other[:, None], np.stack([b, c, d], 1), np.stack([a, c, d], 1))
+    tris += [t1, t2]
+    poly += [segments + q, segments + q]
+    bot = np.stack([np.full(segments, south), ring[-1, (j + 1) % segments], ring[-1, j]], 1)
+    tris.append(bot)
+    poly.append(segments + len(a) + np.arange(segments))
+    return V, np.concatenate(tris).astype(np.int64), np.concatenate(poly).astype(np.int64)
