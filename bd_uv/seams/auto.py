@@ -43,7 +43,8 @@ MERGE_LAYERS = 1
 
 
 def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merge=True,
-                method="lscm", frames="auto", cone="soc", progress=None, cancel=None):
+                method="lscm", frames="auto", cone="soc", progress=None, cancel=None,
+                polygons=None):
     """Unwrap with seams added where needed: every chart a disk, certified at C, stretch <= S.
 
     Parameters
@@ -58,10 +59,16 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     merge : bool, merge neighbouring charts while their union passes
     method, frames, cone, progress, cancel : as for ``bd_uv.unwrap``, which certifies the charts
         (with ``raise_bound=False``: a chart that cannot be certified at C is split further)
+    polygons : (m,) int array, optional, the polygon (quad, n-gon) each triangle comes from:
+        no seam is added inside a polygon (along a diagonal), so every chart is a union of whole
+        polygons, as a UV map of the polygon mesh (Blender's) can hold it. Splits, cuts and
+        merges work on whole polygons; ``unwrap`` gets them as its ``face_groups``. A marked
+        seam along a diagonal is refused.
 
     Raises
     ------
-    ValueError for a bound or stretch below 1, CancelledError when cancelled
+    ValueError for a bound or stretch below 1, a wrong ``polygons`` or a marked seam inside a
+    polygon; CancelledError when cancelled
 
     Returns
     -------
@@ -81,12 +88,24 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
                           cancel=cancel)
     E = edge_table(V, F, face_groups)
     n, m = len(V), len(F)
+    poly, diag = _polygons(polygons, E, m)
+    if poly is not None:
+        unwrap_options["face_groups"] = poly
     cut = np.zeros(len(E.ends), dtype=bool)
     if seams is not None and len(seams):
         k = E.keys(seams, n)
         cut[k[k >= 0]] = True
     cut[E.faces[:, 1] < 0] = False
+    if (cut & diag).any():
+        raise ValueError(f"{int((cut & diag).sum())} marked seam(s) run inside a polygon (between "
+                         "two triangles of one polygon): a seam must be a polygon edge")
     original = cut.copy()
+    # Seams merging keeps: the marked ones and, once cut, material boundaries.
+    keep = original.copy()
+    if face_groups is not None:
+        g = np.asarray(face_groups)
+        inner = E.faces[:, 1] >= 0
+        keep[inner] |= g[E.faces[inner, 0]] != g[E.faces[inner, 1]]
     A = face_areas(V, F)
     cen = V[F].mean(axis=1)
     # Islands the seams cannot fix (non-manifold, degenerate, ...) are left to ``unwrap`` to
@@ -102,11 +121,11 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             raise CancelledError("cancelled while placing seams")
         if progress is not None:
             progress(0.0, f"seams: round {rounds}, {int(frozen.sum())}/{m} faces in charts")
-        changed = _refine(V, F, E, cut, frozen, A, cen, C, S, n)
+        changed = _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag)
         if not changed:
             break
     if merge:
-        _merge(V, F, E, cut, original, invalid, S)
+        _merge(V, F, E, cut, keep, invalid, S)
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last
     # round lets ``unwrap`` cut what still overlaps.
@@ -127,13 +146,13 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         for g, r in enumerate(bad):
             frozen[r.faces] = False
             group[r.faces] = g
-            _split_faces(r.faces, E, cut, A, cen)
+            _split_faces(np.sort(r.faces), E, cut, A, cen, poly)
         for _ in range(MAX_ROUNDS):
-            if not _refine(V, F, E, cut, frozen, A, cen, C, S, n):
+            if not _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag):
                 break
         if merge:
             # The pieces may now merge with their neighbours (never with each other).
-            _merge(V, F, E, cut, original, invalid, S, group=group)
+            _merge(V, F, E, cut, keep, invalid, S, group=group)
         # Unwrap anew every chart holding a piece (with the neighbours it took in).
         redo = np.zeros(m, dtype=bool)
         for c in charts(F, E, cut):
@@ -161,7 +180,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     return result, added, info
 
 
-def _refine(V, F, E, cut, frozen, A, cen, C, S, n):
+def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None):
     """One top-down round over the charts not yet accepted; True when a seam was added."""
     sub = np.flatnonzero(~frozen)
     if len(sub) == 0:
@@ -170,16 +189,18 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n):
     changed = False
     for c in chs:
         if c.kind == "open":                # handles, or several boundary loops
-            w = lambda pairs, _v=c.vertices: _edge_weight(E, _v[pairs], n)
+            w = lambda pairs, _v=c.vertices: _edge_weight(E, _v[pairs], n, diag)
             g = cut_graph(c.tris, len(c.vertices), w)
             k = E.keys(c.vertices[g], n) if len(g) else np.zeros(0, np.int64)
             k = k[k >= 0]
+            if diag is not None:            # never inside a polygon (the split below instead)
+                k = k[~diag[k]]
             if len(k) and not cut[k].all():
                 cut[k] = True
                 changed = True
                 continue
         if c.kind in ("open", "sphere"):    # a sphere: split along its neck
-            if _split_faces(c.faces, E, cut, A, cen):
+            if _split_faces(c.faces, E, cut, A, cen, poly):
                 changed = True
             else:
                 frozen[c.faces] = True
@@ -191,14 +212,15 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n):
                   and cm.crossings[j] == 0)
             if ok or len(c.faces) < 2:
                 frozen[c.faces] = True
-            elif _split_deep(c.faces, cm.sigma[cm.foff[j]:cm.foff[j + 1]], E, cut, A, cen, S):
+            elif _split_deep(c.faces, cm.sigma[cm.foff[j]:cm.foff[j + 1]], E, cut, A, cen, S,
+                             poly):
                 changed = True
             else:
                 frozen[c.faces] = True
     return changed
 
 
-def _split_deep(faces, sigma, E, cut, A, cen, S):
+def _split_deep(faces, sigma, E, cut, A, cen, S, poly=None):
     """Split a chart whose conformal map fails, and split its pieces again while the chart's
     map restricted to a piece (``piece_stretch``: no new solve) still breaks S.
 
@@ -220,7 +242,7 @@ def _split_deep(faces, sigma, E, cut, A, cen, S):
     for _ in range(SPLIT_DEPTH):
         nxt = []
         for f in stack:
-            sides = _bisect(f, E, cut, A, cen)
+            sides = _bisect(f, E, cut, A, cen, poly)
             if sides is None:
                 continue
             split = True
@@ -235,18 +257,41 @@ def _split_deep(faces, sigma, E, cut, A, cen, S):
     return split
 
 
-def _edge_weight(E, pairs, n):
+def _edge_weight(E, pairs, n, diag=None):
+    """Cost of cutting each vertex pair (length times crease discount; inside a polygon, a
+    million times that, so cut graphs run along polygon edges)."""
     k = E.keys(pairs, n)
-    return np.where(k >= 0, E.length[k] * E.cost[k], np.inf)
+    w = np.where(k >= 0, E.length[k] * E.cost[k], np.inf)
+    if diag is not None:
+        w = np.where((k >= 0) & diag[np.maximum(k, 0)], 1e6 * w, w)
+    return w
 
 
-def _split_faces(faces, E, cut, A, cen):
+def _polygons(polygons, E, m):
+    """Checked polygon ids (m,) int64 (None without) and the edges inside a polygon (e,) bool."""
+    diag = np.zeros(len(E.ends), dtype=bool)
+    if polygons is None:
+        return None, diag
+    poly = np.asarray(polygons)
+    if poly.shape != (m,) or not np.issubdtype(poly.dtype, np.integer):
+        raise ValueError(f"polygons must be ({m},) integers, one polygon id per triangle, got "
+                         f"shape {poly.shape} of {poly.dtype}")
+    poly = poly.astype(np.int64)
+    inner = E.faces[:, 1] >= 0
+    diag[inner] = poly[E.faces[inner, 0]] == poly[E.faces[inner, 1]]
+    return poly, diag
+
+
+def _split_faces(faces, E, cut, A, cen, poly=None):
     """Split a chart (global face ids) by ``fiedler_split``; mark the new seams. True if split."""
-    return _bisect(faces, E, cut, A, cen) is not None
+    return _bisect(faces, E, cut, A, cen, poly) is not None
 
 
-def _bisect(faces, E, cut, A, cen):
+def _bisect(faces, E, cut, A, cen, poly=None):
     """Split a chart (sorted global face ids) by ``fiedler_split`` and mark the new seams.
+
+    With ``poly`` (polygon of each face) the split runs on the polygons (each one node of the
+    dual graph, its area and area-weighted centroid), so no polygon is cut.
 
     Returns
     -------
@@ -260,7 +305,19 @@ def _bisect(faces, E, cut, A, cen):
     la, lb = local[E.faces[fe, 0]], local[E.faces[fe, 1]]
     inside = (la >= 0) & (lb >= 0)
     fe, pairs = fe[inside], np.stack([la[inside], lb[inside]], axis=1)
-    side = fiedler_split(A[faces], cen[faces], pairs, E.length[fe], E.cost[fe])
+    if poly is None:
+        side = fiedler_split(A[faces], cen[faces], pairs, E.length[fe], E.cost[fe])
+    else:
+        _, pid = np.unique(poly[faces], return_inverse=True)
+        pid = pid.ravel()
+        pa, pb = pid[pairs[:, 0]], pid[pairs[:, 1]]
+        across = pa != pb
+        mass = np.bincount(pid, A[faces])
+        pcen = np.stack([np.bincount(pid, A[faces] * cen[faces, d]) for d in range(3)], 1)
+        pcen /= np.maximum(mass, 1e-300)[:, None]
+        side = fiedler_split(mass, pcen, np.stack([pa[across], pb[across]], axis=1),
+                             E.length[fe[across]], E.cost[fe[across]])
+        side = None if side is None else side[pid]
     if side is None:
         return None
     new = fe[side[pairs[:, 0]] != side[pairs[:, 1]]]
@@ -270,20 +327,23 @@ def _bisect(faces, E, cut, A, cen):
     return faces[side], faces[~side]
 
 
-def _merge(V, F, E, cut, original, invalid, S, rounds=None, group=None):
+def _merge(V, F, E, cut, keep, invalid, S, rounds=None, group=None):
     """Merge neighbouring charts pairwise while the union's conformal map still passes.
 
-    Each round tests a matching of neighbouring pairs (longest shared seam first) in one
+    Each round tests a matching of neighbouring pairs (dearest shared seam first: length times
+    cost, so seams along creases are the last to go) in one
     batched solve; a pair that fails is not tried again while both charts stay as they are.
 
     Parameters
     ----------
+    keep : (e,) bool, seams never removed (marked seams, material boundaries)
     group : (m,) int64, optional: only pairs with a chart in a group (>= 0) are tried, and
         never two charts of one group (the pieces of a chart split because its certified map
         failed: their union is that chart again)
     """
     tried = set()
     chs = charts(F, E, cut)
+    original = keep
     for _ in range(MERGE_ROUNDS if rounds is None else rounds):
         label = np.empty(len(F), dtype=np.int64)
         for j, c in enumerate(chs):
@@ -302,8 +362,8 @@ def _merge(V, F, E, cut, original, invalid, S, rounds=None, group=None):
         la, lb = np.minimum(la[diff], lb[diff]), np.maximum(la[diff], lb[diff])
         uk, inv = np.unique(la * len(chs) + lb, return_inverse=True)
         inv = inv.ravel()
-        shared = np.bincount(inv, E.length[ei])
-        # Matchings ("layers"): longest shared seam first, each chart in at most one pair of a
+        shared = np.bincount(inv, E.length[ei] * E.cost[ei])
+        # Matchings ("layers"): dearest shared seam first, each chart in at most one pair of a
         # layer; every layer's unions are tested in one batched solve.
         used = np.zeros((MERGE_LAYERS, len(chs)), dtype=bool)
         layers = [[] for _ in range(MERGE_LAYERS)]
@@ -333,9 +393,10 @@ def _merge(V, F, E, cut, original, invalid, S, rounds=None, group=None):
         cm = chart_maps(V, [c for c, _ in disks])
         ok = np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN) & (cm.crossings == 0)
         merged = np.zeros(len(chs), dtype=bool)
-        # Accept passing unions, longest shared seam first, each chart merged once per round.
+        # Accept passing unions, dearest removed seam first, each chart merged once per round.
         fes = [np.unique(E.face_edges[c.faces].ravel()) for c, _ in disks]
-        gain = np.array([E.length[fe[cut[fe] & ~t[fe]]].sum() for fe, (_, t) in zip(fes, disks)])
+        gain = np.array([(E.length * E.cost)[fe[cut[fe] & ~t[fe]]].sum()
+                         for fe, (_, t) in zip(fes, disks)])
         unions = []
         for j in np.lexsort((np.arange(len(gain)), -_quantize(gain))):
             c, trial = disks[j]
