@@ -23,7 +23,7 @@ from ..unwrapping.unwrap import unwrap
 from .charts import boundary_crossings, chart_maps, piece_stretch
 from .cut_graph import cut_graph
 from .edges import edge_table
-from .split import _quantize, fiedler_split
+from .split import _quantize, fiedler_split_many
 from .topology import charts, cut_mesh
 
 MAX_ROUNDS = 60
@@ -146,7 +146,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         for g, r in enumerate(bad):
             frozen[r.faces] = False
             group[r.faces] = g
-            _split_faces(np.sort(r.faces), E, cut, A, cen, poly)
+        _bisect([np.sort(r.faces) for r in bad], E, cut, A, cen, poly)
         for _ in range(MAX_ROUNDS):
             if not _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag):
                 break
@@ -181,12 +181,17 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
 
 
 def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None):
-    """One top-down round over the charts not yet accepted; True when a seam was added."""
+    """One top-down round over the charts not yet accepted; True when a seam was added.
+
+    Handles are cut first; the charts to split (closed spheres, open charts no cut graph
+    changes, disks whose map fails) are all split in one batch (``_split_deep``).
+    """
     sub = np.flatnonzero(~frozen)
     if len(sub) == 0:
         return False
     chs = charts(F, E, cut, sub)
     changed = False
+    todo = []                               # (faces, the map's sigma per face or None)
     for c in chs:
         if c.kind == "open":                # handles, or several boundary loops
             w = lambda pairs, _v=c.vertices: _edge_weight(E, _v[pairs], n, diag)
@@ -200,10 +205,7 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None):
                 changed = True
                 continue
         if c.kind in ("open", "sphere"):    # a sphere: split along its neck
-            if _split_faces(c.faces, E, cut, A, cen, poly):
-                changed = True
-            else:
-                frozen[c.faces] = True
+            todo.append((c.faces, None))
     disks = [c for c in chs if c.kind == "disk"]
     if disks:
         cm = chart_maps(V, disks)
@@ -212,45 +214,53 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None):
                   and cm.crossings[j] == 0)
             if ok or len(c.faces) < 2:
                 frozen[c.faces] = True
-            elif _split_deep(c.faces, cm.sigma[cm.foff[j]:cm.foff[j + 1]], E, cut, A, cen, S,
-                             poly):
-                changed = True
             else:
-                frozen[c.faces] = True
+                todo.append((c.faces, cm.sigma[cm.foff[j]:cm.foff[j + 1]]))
+    if todo:
+        split = _split_deep(todo, E, cut, A, cen, S, poly)
+        for (faces, _), done in zip(todo, split):
+            if not done:
+                frozen[faces] = True
+        changed |= bool(split.any())
     return changed
 
 
-def _split_deep(faces, sigma, E, cut, A, cen, S, poly=None):
-    """Split a chart whose conformal map fails, and split its pieces again while the chart's
-    map restricted to a piece (``piece_stretch``: no new solve) still breaks S.
+def _split_deep(todo, E, cut, A, cen, S, poly=None):
+    """Split charts, and split their pieces again while a chart's conformal map restricted to a
+    piece (``piece_stretch``: no new solve) still breaks S by the factor ``DEEPER``.
 
-    A piece whose restricted map passes is left for the next round to map on its own; the
+    A piece whose restricted map is nearer S is left for the next round to map on its own; the
     restriction saves the rounds (and solves) a chart far beyond S would take one split at a
-    time. Pieces on flipped faces of the chart's map are left to their own map too.
+    time. Pieces on flipped faces of the chart's map are left to their own map too. Every
+    level splits all its pieces in one batch (``_bisect``).
 
     Parameters
     ----------
-    faces : (k,) int64, sorted global face ids of the chart
-    sigma : (k,2) float64, its map's singular values per face (``ChartMaps.sigma``)
+    todo : list of (faces (k,) int64 sorted global face ids, sigma (k,2) float64 or None): the
+        charts, with their map's singular values per face (``ChartMaps.sigma``); None: split
+        once
 
     Returns
     -------
-    bool, whether the chart was split
+    (len(todo),) bool, whether each chart was split
     """
-    stack = [faces]
-    split = False
+    split = np.zeros(len(todo), dtype=bool)
+    stack = [(faces, j) for j, (faces, _) in enumerate(todo)]
     for _ in range(SPLIT_DEPTH):
+        sides = _bisect([f for f, _ in stack], E, cut, A, cen, poly)
         nxt = []
-        for f in stack:
-            sides = _bisect(f, E, cut, A, cen, poly)
-            if sides is None:
+        for (f, j), two in zip(stack, sides):
+            if two is None:
                 continue
-            split = True
-            for piece in sides:
+            split[j] = True
+            faces, sigma = todo[j]
+            if sigma is None:
+                continue
+            for piece in two:
                 st = piece_stretch(sigma[np.searchsorted(faces, piece)], A[piece],
                                    np.zeros(len(piece), np.int64), 1)[0]
                 if np.isfinite(st) and st > DEEPER * S * MARGIN and len(piece) > 1:
-                    nxt.append(piece)
+                    nxt.append((piece, j))
         stack = nxt
         if not stack:
             break
@@ -282,49 +292,62 @@ def _polygons(polygons, E, m):
     return poly, diag
 
 
-def _split_faces(faces, E, cut, A, cen, poly=None):
-    """Split a chart (global face ids) by ``fiedler_split``; mark the new seams. True if split."""
-    return _bisect(faces, E, cut, A, cen, poly) is not None
-
-
-def _bisect(faces, E, cut, A, cen, poly=None):
-    """Split a chart (sorted global face ids) by ``fiedler_split`` and mark the new seams.
+def _bisect(pieces, E, cut, A, cen, poly=None):
+    """Split charts by ``fiedler_split_many`` (all at once) and mark the new seams.
 
     With ``poly`` (polygon of each face) the split runs on the polygons (each one node of the
     dual graph, its area and area-weighted centroid), so no polygon is cut.
 
+    Parameters
+    ----------
+    pieces : list of (k_i,) int64, sorted global face ids of disjoint charts
+
     Returns
     -------
-    (faces_a, faces_b) sorted global face ids of the two sides, or None when not split
+    list of (faces_a, faces_b) sorted global face ids of the two sides, or None where a chart
+    is not split
     """
+    out = [None] * len(pieces)
+    if not pieces:
+        return out
     m = len(E.face_edges)
+    sizes = np.array([len(f) for f in pieces], dtype=np.int64)
+    fa = np.concatenate(pieces)
+    owner = np.repeat(np.arange(len(pieces)), sizes)
     local = np.full(m, -1, dtype=np.int64)
-    local[faces] = np.arange(len(faces))
-    fe = np.unique(E.face_edges[faces].ravel())
+    local[fa] = np.arange(len(fa))
+    fe = np.unique(E.face_edges[fa].ravel())
     fe = fe[(E.faces[fe, 1] >= 0) & ~cut[fe]]
     la, lb = local[E.faces[fe, 0]], local[E.faces[fe, 1]]
     inside = (la >= 0) & (lb >= 0)
-    fe, pairs = fe[inside], np.stack([la[inside], lb[inside]], axis=1)
+    inside[inside] = owner[la[inside]] == owner[lb[inside]]
+    fe, la, lb = fe[inside], la[inside], lb[inside]
+    # Nodes: the faces, or the polygons (grouped by chart either way).
     if poly is None:
-        side = fiedler_split(A[faces], cen[faces], pairs, E.length[fe], E.cost[fe])
+        node = np.arange(len(fa))
+        mass, pcen = A[fa], cen[fa]
     else:
-        _, pid = np.unique(poly[faces], return_inverse=True)
-        pid = pid.ravel()
-        pa, pb = pid[pairs[:, 0]], pid[pairs[:, 1]]
-        across = pa != pb
-        mass = np.bincount(pid, A[faces])
-        pcen = np.stack([np.bincount(pid, A[faces] * cen[faces, d]) for d in range(3)], 1)
+        key = owner * (int(poly.max()) + 1) + poly[fa]
+        _, node = np.unique(key, return_inverse=True)
+        node = node.ravel()
+        mass = np.bincount(node, A[fa])
+        pcen = np.stack([np.bincount(node, A[fa] * cen[fa, d]) for d in range(3)], 1)
         pcen /= np.maximum(mass, 1e-300)[:, None]
-        side = fiedler_split(mass, pcen, np.stack([pa[across], pb[across]], axis=1),
-                             E.length[fe[across]], E.cost[fe[across]])
-        side = None if side is None else side[pid]
-    if side is None:
-        return None
-    new = fe[side[pairs[:, 0]] != side[pairs[:, 1]]]
-    if len(new) == 0:
-        return None
-    cut[new] = True
-    return faces[side], faces[~side]
+    nowner = np.zeros(len(mass), dtype=np.int64)
+    nowner[node] = owner
+    offsets = np.searchsorted(nowner, np.arange(len(pieces) + 1))
+    na, nb = node[la], node[lb]
+    across = na != nb
+    side, split = fiedler_split_many(mass, pcen, offsets, np.stack([na[across], nb[across]], 1),
+                                     E.length[fe[across]], E.cost[fe[across]])
+    fside = side[node]
+    new = fe[fside[la] != fside[lb]]
+    cut[new[split[owner[local[E.faces[new, 0]]]]]] = True
+    for j in np.flatnonzero(split):
+        f = pieces[j]
+        sj = fside[local[f]]
+        out[j] = (f[sj], f[~sj])
+    return out
 
 
 def _merge(V, F, E, cut, keep, invalid, S, rounds=None, group=None):
