@@ -233,9 +233,10 @@ def boundary_crossings(uv, loops):
     inside = (cx <= x1[:, None]) & (cy <= y1[:, None])
     sid = np.broadcast_to(np.arange(len(p))[:, None], cx.shape)[inside]
     cx, cy = cx[inside], cy[inside]
-    cell = np.stack([owner[sid], cx, cy], axis=1)
-    _, cell_id = np.unique(cell, axis=0, return_inverse=True)
-    cell_id = cell_id.ravel()
+    # One int64 key per (loop, cell): cells per loop are at most about its edge count squared.
+    cx, cy = cx - cx.min(), cy - cy.min()
+    ny = int(cy.max()) + 1
+    cell_id = (owner[sid] * (int(cx.max()) + 1) + cx) * ny + cy
     order = np.argsort(cell_id, kind="stable")
     cell_id, sid = cell_id[order], sid[order]
     bounds = np.flatnonzero(np.diff(cell_id)) + 1
@@ -249,10 +250,11 @@ def boundary_crossings(uv, loops):
     j = sid[starts[grp] + r % sizes[grp]]
     keep = i < j
     i, j = i[keep], j[keep]
-    pair = np.unique(np.stack([i, j], axis=1), axis=0)
+    nseg = len(p)
+    pair = np.unique(i * nseg + j)
     if len(pair) == 0:
         return np.zeros(k, np.int64)
-    i, j = pair[:, 0], pair[:, 1]
+    i, j = pair // nseg, pair % nseg
     adjacent = (nxt[i] == j) | (nxt[j] == i)
     i, j = i[~adjacent], j[~adjacent]
     hit = _segments_cross(p[i], q[i], p[j], q[j])
