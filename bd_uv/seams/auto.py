@@ -38,6 +38,9 @@ SPLIT_DEPTH = 4
 DEEPER = 4.0
 # Rounds of pairwise merging (each merges a matching of neighbouring charts).
 MERGE_ROUNDS = 15
+# A union whose conformal map stretches beyond this many S: the charts around its two are not
+# tried together again.
+HOPELESS = 1.5
 # Matchings of neighbouring chart pairs tested together in one merging round.
 MERGE_LAYERS = 1
 
@@ -365,6 +368,9 @@ def _merge(V, F, E, cut, keep, invalid, S, rounds=None, group=None):
         failed: their union is that chart again)
     """
     tried = set()
+    # A face of each of two charts whose union was far beyond S: charts holding them are not
+    # tried together again (a union of larger charts around them fares no better).
+    far_a, far_b = [], []
     chs = charts(F, E, cut)
     original = keep
     for _ in range(MERGE_ROUNDS if rounds is None else rounds):
@@ -386,13 +392,15 @@ def _merge(V, F, E, cut, keep, invalid, S, rounds=None, group=None):
         uk, inv = np.unique(la * len(chs) + lb, return_inverse=True)
         inv = inv.ravel()
         shared = np.bincount(inv, E.length[ei] * E.cost[ei])
+        fa, fb = label[np.array(far_a, np.int64)], label[np.array(far_b, np.int64)]
+        hopeless = np.isin(uk, np.minimum(fa, fb) * len(chs) + np.maximum(fa, fb))
         # Matchings ("layers"): dearest shared seam first, each chart in at most one pair of a
         # layer; every layer's unions are tested in one batched solve.
         used = np.zeros((MERGE_LAYERS, len(chs)), dtype=bool)
         layers = [[] for _ in range(MERGE_LAYERS)]
         for p in np.lexsort((uk, -_quantize(shared))):
             x, y = divmod(int(uk[p]), len(chs))
-            if (ident[x], ident[y]) in tried:
+            if (ident[x], ident[y]) in tried or hopeless[p]:
                 continue
             free = np.flatnonzero(~used[:, x] & ~used[:, y])
             if len(free) == 0:
@@ -415,6 +423,10 @@ def _merge(V, F, E, cut, keep, invalid, S, rounds=None, group=None):
             continue
         cm = chart_maps(V, [c for c, _ in disks])
         ok = np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN) & (cm.crossings == 0)
+        for j in np.flatnonzero(~(cm.max_stretch <= HOPELESS * S)):
+            x, y = np.unique(label[disks[j][0].faces])
+            far_a.append(int(chs[x].faces[0]))
+            far_b.append(int(chs[y].faces[0]))
         merged = np.zeros(len(chs), dtype=bool)
         # Accept passing unions, dearest removed seam first, each chart merged once per round.
         fes = [np.unique(E.face_edges[c.faces].ravel()) for c, _ in disks]
