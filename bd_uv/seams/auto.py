@@ -5,8 +5,13 @@ sphere and a disk whose conformal map breaks a bound are split along their cheap
 (``fiedler_split``), until every chart's conformal map (LSCM) is flip-free with stretch within S
 and a boundary that does not cross itself. Then bottom-up: neighbouring charts are merged while
 the union still passes. ``bd_uv.unwrap`` finally certifies every chart at C (bending the few
-whose conformal map exceeds C), and any chart the certified map leaves beyond S or crossing
-itself is split again.
+whose conformal map exceeds C), and any chart the certified map leaves beyond S, crossing
+itself or overlapping is split again (its pieces may merge with their neighbours).
+
+Each round splits all its charts in one batch (``fiedler_split_many``), a chart far beyond S
+several levels at once (``_split_deep``). With ``polygons`` the charts are unions of whole
+polygons. Every decision on floats is made on rounded values with ties broken by index, so the
+same input gives the same charts in every run and process.
 """
 import dataclasses
 import time
