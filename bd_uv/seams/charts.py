@@ -11,8 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..energies import jacobian_operators
-from ..geometry import face_areas, local_coordinates
+from ..geometry import face_areas, gradient_operators, local_coordinates
 from ..unwrapping.batched import _far_pairs
 
 try:  # LDL^T with AMD ordering; SuperLU without it
@@ -74,10 +73,14 @@ def chart_maps(V, charts):
     area = np.bincount(face_c, A3, minlength=k)
     Z = local_coordinates(P, tris) / np.sqrt(area)[face_c][:, None]
     n = len(P)
-    ops = jacobian_operators(Z, tris, n)
-    Q = (ops.Bre.T.multiply(ops.area) @ ops.Bre + ops.Bim.T.multiply(ops.area) @ ops.Bim).tocsc()
+    # alpha = sum_k ca_k u_k and beta = sum_k cb_k u_k per face (eq. 4.19 with u complex:
+    # Re a = (u_x + v_y)/2, Im a = (v_x - u_y)/2, Re b = (u_x - v_y)/2, Im b = (v_x + u_y)/2).
+    G = gradient_operators(Z)
+    ca = 0.5 * (G[:, 0] - 1j * G[:, 1])
+    cb = 0.5 * (G[:, 0] + 1j * G[:, 1])
+    zarea = 0.5 * np.abs(((Z[:, 1] - Z[:, 0]).conj() * (Z[:, 2] - Z[:, 0])).imag)
     idx = _far_pairs(P, charts, voff)
-    u = _solve_pinned(Q, n, idx, np.tile(np.array([0.0, 1.0], dtype=np.complex128), k))
+    u = _lscm_pinned(cb, zarea, tris, n, idx, np.tile(np.array([0.0, 1.0], np.complex128), k))
     # Scale each chart so its UV area equals its (unit-normalised) 3D area: sigma are then the
     # singular values of the map with the chart at its 3D size.
     e1 = u[tris[:, 1]] - u[tris[:, 0]]
@@ -87,9 +90,8 @@ def chart_maps(V, charts):
         s = np.sqrt(1.0 / np.abs(uv_area))
     s[~np.isfinite(s)] = 1.0
     u = u * s[vert_c]
-    x = np.concatenate([u.real, u.imag])
-    a = np.abs(ops.Are @ x + 1j * (ops.Aim @ x))
-    b = np.abs(ops.Bre @ x + 1j * (ops.Bim @ x))
+    a = np.abs(np.einsum("fk,fk->f", ca, u[tris]))
+    b = np.abs(np.einsum("fk,fk->f", cb, u[tris]))
     with np.errstate(invalid="ignore", divide="ignore"):
         ok = a > b
         D = np.where(ok, (a + b) / (a - b), np.inf)
@@ -158,31 +160,43 @@ def spd_solver(A):
     return lu.solve
 
 
-def _solve_pinned(Q, n, idx, val):
-    """Minimise ``x^T Q x`` over x = [Re u; Im u] (2n) with vertices ``idx`` fixed to ``val``.
+def _lscm_pinned(cb, area, tris, n, idx, val):
+    """LSCM (minimise ``sum_f area_f |beta_f|^2``) with vertices ``idx`` fixed to ``val``.
+
+    The energy is ``u^H H u`` with ``H = sum_f area_f cb_f^* cb_f^T`` (n x n Hermitian); on
+    x = [Re u; Im u] it is ``x^T Q x`` with ``Q = [[Re H, -Im H], [Im H, Re H]]``, assembled
+    here straight from the faces (no operator products) on the free unknowns only.
 
     Parameters
     ----------
-    Q : (2n,2n) sparse symmetric positive semi-definite (the LSCM energy)
-    n : int
+    cb : (f,3) complex128, beta's coefficient of each corner; area : (f,) float64
+    tris : (f,3) int64 into n vertices
     idx : (p,) int64, pinned vertices; val : (p,) complex128, their positions
 
     Returns
     -------
     u : (n,) complex128
     """
+    j = np.repeat(tris, 3, axis=1).ravel()
+    k = np.tile(tris, (1, 3)).ravel()
+    h = (area[:, None, None] * cb.conj()[:, :, None] * cb[:, None, :]).ravel()
+    rows = np.concatenate([j, j, j + n, j + n])
+    cols = np.concatenate([k, k + n, k, k + n])
+    vals = np.concatenate([h.real, -h.imag, h.imag, h.real])
     idx = np.asarray(idx, dtype=np.int64)
     fixed = np.concatenate([idx, idx + n])
-    xval = np.concatenate([val.real, val.imag])
+    xval = np.zeros(2 * n)
+    xval[fixed] = np.concatenate([val.real, val.imag])
     free = np.ones(2 * n, dtype=bool)
     free[fixed] = False
-    Q = sp.csc_matrix(Q)
-    Qf = Q[free]
-    rhs = -(Qf[:, fixed] @ xval)
-    solve = spd_solver(Qf[:, free])
-    x = np.empty(2 * n)
-    x[fixed] = xval
-    x[free] = solve(rhs)
+    pos = np.cumsum(free) - 1
+    nf = int(free.sum())
+    fr, fc = free[rows], free[cols]
+    rhs = -np.bincount(pos[rows[fr & ~fc]], vals[fr & ~fc] * xval[cols[fr & ~fc]], nf)
+    both = fr & fc
+    A = sp.csc_matrix((vals[both], (pos[rows[both]], pos[cols[both]])), shape=(nf, nf))
+    x = xval.copy()
+    x[free] = spd_solver(A)(rhs)
     return x[:n] + 1j * x[n:]
 
 
