@@ -1,13 +1,13 @@
 """``uv.bd_unwrap`` with Seams "Add Where Needed": ``bd_uv.seams.unwrap_auto`` for Blender meshes.
 
-The core cuts the triangles Blender hands it (``mesh.loop_triangles``), so it may cut along the
-diagonal of a quad or n-gon. A Blender UV map cannot hold that: the polygon's triangles share the
-loops at the diagonal's ends, one UV each, and a diagonal is no edge that could be marked as a
-seam. :func:`solve` therefore keeps every polygon whole: when the core's charts split a polygon,
-each such polygon goes to the chart holding most of its area, the seams become the (real) edges
-between the relabelled charts, and ``bd_uv.unwrap`` certifies those charts at C again. Any chart
-that still gives one Blender loop two UVs after that (e.g. an overlap cut through a polygon) is
-failed, never written.
+The core works on the triangles Blender hands it (``mesh.loop_triangles``). A Blender UV map
+cannot hold a cut along the diagonal of a quad or n-gon: the polygon's triangles share the loops
+at the diagonal's ends, one UV each, and a diagonal is no edge that could be marked as a seam.
+:func:`solve` therefore passes the polygon of every triangle to the core
+(``unwrap_auto(polygons=)``), whose charts are then unions of whole polygons, certified as
+returned on these very triangles. The seams are searched on quads triangulated one fixed way
+(:func:`canonical_quads`), so a mesh gets the same seams in every session. Any chart that would
+still give one Blender loop two UVs is failed, never written.
 
 No ``bpy``: numpy and ``bd_uv`` only (tested without Blender; runs in the background job).
 """
@@ -18,14 +18,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .. import bd_uv
 from ..bd_uv.seams import edge_table, unwrap_auto
 
 # Rounds of giving split polygons to one chart and certifying the charts again.
 REPAIR_ROUNDS = 3
 
 __all__ = ["AutoSeams", "solve", "whole_polygons", "split_polygons", "torn_loops",
-           "whole_polygon_labels"]
+           "whole_polygon_labels", "canonical_quads", "canonical_triangles"]
 
 
 @dataclass(frozen=True)
@@ -41,15 +40,11 @@ class AutoSeams:
         different polygons (smaller index first).
     charts : int
         Islands of ``result``.
-    repaired : int
-        Polygons the core's charts had split (or cut along a diagonal) and that were given
-        to one chart.
     """
 
     result: object
     added: np.ndarray
     charts: int
-    repaired: int = 0
 
 
 def split_polygons(face_island, tri_poly):
@@ -155,31 +150,116 @@ def solve(V, F, *, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0, face
     AutoSeams
     """
     V = np.asarray(V, np.float64)
-    F = np.asarray(F, np.int64)
     tri_poly = np.asarray(tri_poly, np.int64)
+    F = np.asarray(F, np.int64)
     seams = np.zeros((0, 2), np.int64) if seams is None else np.asarray(seams, np.int64)
-    options = dict(method=method, frames=frames, progress=progress, cancel=cancel)
-    result, added, _ = unwrap_auto(V, F, seams=seams, bound=float(bound), stretch=float(stretch),
-                                   face_groups=face_groups, **options)
     E = edge_table(V, F)
     marked = _edge_mask(E, seams, len(V))
-    cut = marked | _edge_mask(E, added, len(V))
-    result, cut, repaired = _repair(
-        V, F, E, tri_poly, result, cut, marked,
-        lambda pairs: bd_uv.unwrap(V, F, seams=pairs, bound=float(bound), raise_bound=False,
-                                   face_groups=tri_poly, **options))
+    # A marked seam inside a polygon cannot exist in Blender (no such edge); drop any anyway.
+    seams = E.ends[marked & ~_diagonals(E, tri_poly)]
+    options = dict(bound=float(bound), stretch=float(stretch), face_groups=face_groups,
+                   polygons=tri_poly, method=method, frames=frames, progress=progress,
+                   cancel=cancel)
+    # The seams are searched on quads triangulated the same way in every session (the same
+    # seams every run), then the charts they make are certified on Blender's own triangles
+    # (those its UV map is drawn and checked on): seams are polygon edges, the same on both.
+    # That second pass adds a seam only where a chart fails on Blender's triangles.
+    Fc, order, poly = canonical_triangles(V, F, tri_poly, np.asarray(tri_loops, np.int64))
+    search = dict(options, polygons=poly,
+                  face_groups=None if face_groups is None else np.asarray(face_groups)[order])
+    _, found, _ = unwrap_auto(V, Fc, seams=seams, **search)
+    keep = np.concatenate([seams, found]) if len(found) else seams
+    result, added, _ = unwrap_auto(V, F, seams=keep, **options)
+    added = np.concatenate([found, added]) if len(added) else found
+    # The marked seams are exactly where the UVs are cut: the seams added (also those inside a
+    # chart, e.g. a handle's cut) and the real edges between charts.
     inner = E.faces[:, 1] >= 0
-    diagonal = _diagonals(E, tri_poly)
-    # The pieces an overlap cut made in the last round are islands of their own: mark the real
-    # edges between islands too, so the marked seams are exactly where the UVs are cut.
     island = result.face_island
-    across = np.zeros(len(E.ends), dtype=bool)
-    across[inner] = island[E.faces[inner, 0]] != island[E.faces[inner, 1]]
-    cut |= across & ~diagonal
-    added = E.ends[cut & ~marked]
+    cut = _edge_mask(E, added, len(V))
+    cut[inner] |= island[E.faces[inner, 0]] != island[E.faces[inner, 1]]
+    added = E.ends[cut & ~_diagonals(E, tri_poly) & ~marked]
     result = _fail_torn(result, np.asarray(tri_loops, np.int64))
-    return AutoSeams(result, np.asarray(added, np.int64).reshape(-1, 2), len(result.islands),
-                     repaired)
+    return AutoSeams(result, np.asarray(added, np.int64).reshape(-1, 2), len(result.islands))
+
+
+def canonical_triangles(V, F, tri_poly, tri_loops):
+    """The batch's triangles in an order and numbering fixed by the vertices alone.
+
+    Blender numbers the polygons (and loops, and triangles) of the same mesh differently from
+    one session to the next (a new UV sphere, say): quads split by :func:`canonical_quads`,
+    each triangle rotated to start at its smallest vertex id (orientation kept), triangles
+    sorted by their vertex ids, polygons numbered in that order.
+
+    Returns
+    -------
+    Fc : (m,3) int64, the triangles in canonical order
+    order : (m,) int64, ``Fc[i]`` is (the canonical split of) triangle ``order[i]``
+    poly : (m,) int64, polygon of each canonical triangle, numbered from 0 in order
+    """
+    Fc, _ = canonical_quads(V, F, tri_poly, tri_loops)
+    r = np.argmin(Fc, axis=1)
+    Fc = np.take_along_axis(Fc, (r[:, None] + np.arange(3)) % 3, axis=1)
+    order = np.lexsort((Fc[:, 2], Fc[:, 1], Fc[:, 0]))
+    _, first, inv = np.unique(tri_poly[order], return_index=True, return_inverse=True)
+    rank = np.empty(len(first), dtype=np.int64)
+    rank[np.argsort(first)] = np.arange(len(first))
+    return Fc[order], order, rank[inv.ravel()]
+
+
+def canonical_quads(V, F, tri_poly, tri_loops):
+    """Every quad split along the same diagonal whatever Blender chose: the shorter one (to
+    1e-9 of the quad's size), on a tie the one through the quad's smallest vertex id, the other
+    where that one would fold the quad (a concave quad). Blender picks the diagonal of a
+    symmetric quad by rounding noise, differently from one session to the next.
+
+    Parameters
+    ----------
+    V : (n,3) float64; F : (m,3) int64; tri_poly : (m,) int64; tri_loops : (m,3) int64, the
+        Blender loop of each corner (a polygon's loops are consecutive, in polygon order)
+
+    Returns
+    -------
+    F, tri_loops : (m,3) int64, the same triangles except in quads (two triangles per polygon)
+    """
+    order = np.argsort(tri_poly, kind="stable")
+    count = np.bincount(tri_poly)
+    pair = (count[tri_poly[order]] == 2)
+    first = order[pair][0::2]
+    second = order[pair][1::2]
+    if len(first) == 0:
+        return F, tri_loops
+    loops = np.concatenate([tri_loops[first], tri_loops[second]], axis=1)
+    verts = np.concatenate([F[first], F[second]], axis=1)
+    srt = np.argsort(loops, axis=1, kind="stable")
+    ls = np.take_along_axis(loops, srt, axis=1)
+    vs = np.take_along_axis(verts, srt, axis=1)
+    # Two triangles of a quad share two corners: 4 distinct loops, in polygon order.
+    uniq = np.concatenate([np.ones((len(ls), 1), bool), ls[:, 1:] != ls[:, :-1]], axis=1)
+    quad = uniq.sum(axis=1) == 4
+    ql = ls[quad][uniq[quad]].reshape(-1, 4)
+    qv = vs[quad][uniq[quad]].reshape(-1, 4)
+    P = V[qv]
+    d02 = np.linalg.norm(P[:, 2] - P[:, 0], axis=1)
+    d13 = np.linalg.norm(P[:, 3] - P[:, 1], axis=1)
+    size = np.maximum(d02, d13)
+    tie = np.abs(d13 - d02) <= 1e-9 * size
+    low = np.argmin(qv, axis=1) % 2 == 1            # the smallest vertex on diagonal 1-3
+    use13 = np.where(tie, low, d13 < d02)
+
+    def folds(a, b, c, d):            # triangles (a,b,c) and (a,c,d) facing apart
+        n1 = np.cross(P[:, b] - P[:, a], P[:, c] - P[:, a])
+        n2 = np.cross(P[:, c] - P[:, a], P[:, d] - P[:, a])
+        return np.einsum("ij,ij->i", n1, n2) <= 0
+    use13 = np.where(folds(0, 1, 2, 3), True, np.where(folds(1, 2, 3, 0), False, use13))
+    c0 = np.where(use13[:, None], [1, 2, 3], [0, 1, 2])
+    c1 = np.where(use13[:, None], [1, 3, 0], [0, 2, 3])
+    F, tri_loops = F.copy(), tri_loops.copy()
+    fa, fb = first[quad], second[quad]
+    F[fa] = np.take_along_axis(qv, c0, axis=1)
+    F[fb] = np.take_along_axis(qv, c1, axis=1)
+    tri_loops[fa] = np.take_along_axis(ql, c0, axis=1)
+    tri_loops[fb] = np.take_along_axis(ql, c1, axis=1)
+    return F, tri_loops
 
 
 def _edge_mask(E, pairs, n):

@@ -3,7 +3,7 @@ from .auto import unwrap_auto
 from .charts import boundary_crossings, chart_maps
 from .cut_graph import cut_graph
 from .edges import edge_table
-from .split import fiedler_split
+from .split import fiedler_split, fiedler_split_many
 
 __all__ = ["unwrap_auto", "boundary_crossings", "chart_maps", "cut_graph", "edge_table",
-           "fiedler_split"]
+           "fiedler_split", "fiedler_split_many"]

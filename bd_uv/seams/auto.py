@@ -5,25 +5,30 @@ sphere and a disk whose conformal map breaks a bound are split along their cheap
 (``fiedler_split``), until every chart's conformal map (LSCM) is flip-free with stretch within S
 and a boundary that does not cross itself. Then bottom-up: neighbouring charts are merged while
 the union still passes. ``bd_uv.unwrap`` finally certifies every chart at C (bending the few
-whose conformal map exceeds C), and any chart the certified map leaves beyond S or crossing
-itself is split again.
+whose conformal map exceeds C), and any chart the certified map leaves beyond S, crossing
+itself or overlapping is split again (its pieces may merge with their neighbours).
+
+Each round splits all its charts in one batch (``fiedler_split_many``), a chart far beyond S
+several levels at once (``_split_deep``). With ``polygons`` the charts are unions of whole
+polygons. Every decision on floats is made on rounded values with ties broken by index, so the
+same input gives the same charts in every run and process.
 """
 import dataclasses
 import time
 
 import numpy as np
 
-from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, SolverError,
-                      TopologyError)
+from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, OverlapError,
+                      SolverError, TopologyError)
 from ..geometry import face_areas
 from ..metrics import face_jacobians
 from ..mesh import check_arrays, islands
 from ..unwrapping.results import UnwrapResult
 from ..unwrapping.unwrap import unwrap
-from .charts import boundary_crossings, chart_maps
+from .charts import boundary_crossings, chart_maps, piece_stretch
 from .cut_graph import cut_graph
 from .edges import edge_table
-from .split import fiedler_split
+from .split import _quantize, fiedler_split_many
 from .topology import charts, cut_mesh
 
 MAX_ROUNDS = 60
@@ -31,14 +36,23 @@ MAX_ROUNDS = 60
 MARGIN = 0.98
 # Passes that split charts the certified map leaves beyond S.
 FINISH_ROUNDS = 4
+# Levels a failing chart is split at once while its restricted map still breaks S.
+SPLIT_DEPTH = 4
+# ... while the restricted map's stretch exceeds S by this factor (a piece's own map is better
+# than the restriction of its chart's map: nearer S it is left to its own map).
+DEEPER = 4.0
 # Rounds of pairwise merging (each merges a matching of neighbouring charts).
 MERGE_ROUNDS = 15
+# A union whose conformal map stretches beyond this many S: the charts around its two are not
+# tried together again.
+HOPELESS = 1.5
 # Matchings of neighbouring chart pairs tested together in one merging round.
 MERGE_LAYERS = 1
 
 
 def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merge=True,
-                method="lscm", frames="auto", cone="soc", progress=None, cancel=None):
+                method="lscm", frames="auto", cone="soc", progress=None, cancel=None,
+                polygons=None):
     """Unwrap with seams added where needed: every chart a disk, certified at C, stretch <= S.
 
     Parameters
@@ -53,10 +67,16 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     merge : bool, merge neighbouring charts while their union passes
     method, frames, cone, progress, cancel : as for ``bd_uv.unwrap``, which certifies the charts
         (with ``raise_bound=False``: a chart that cannot be certified at C is split further)
+    polygons : (m,) int array, optional, the polygon (quad, n-gon) each triangle comes from:
+        no seam is added inside a polygon (along a diagonal), so every chart is a union of whole
+        polygons, as a UV map of the polygon mesh (Blender's) can hold it. Splits, cuts and
+        merges work on whole polygons; ``unwrap`` gets them as its ``face_groups``. A marked
+        seam along a diagonal is refused.
 
     Raises
     ------
-    ValueError for a bound or stretch below 1, CancelledError when cancelled
+    ValueError for a bound or stretch below 1, a wrong ``polygons`` or a marked seam inside a
+    polygon; CancelledError when cancelled
 
     Returns
     -------
@@ -76,12 +96,24 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
                           cancel=cancel)
     E = edge_table(V, F, face_groups)
     n, m = len(V), len(F)
+    poly, diag = _polygons(polygons, E, m)
+    if poly is not None:
+        unwrap_options["face_groups"] = poly
     cut = np.zeros(len(E.ends), dtype=bool)
     if seams is not None and len(seams):
         k = E.keys(seams, n)
         cut[k[k >= 0]] = True
     cut[E.faces[:, 1] < 0] = False
+    if (cut & diag).any():
+        raise ValueError(f"{int((cut & diag).sum())} marked seam(s) run inside a polygon (between "
+                         "two triangles of one polygon): a seam must be a polygon edge")
     original = cut.copy()
+    # Seams merging keeps: the marked ones and, once cut, material boundaries.
+    keep = original.copy()
+    if face_groups is not None:
+        g = np.asarray(face_groups)
+        inner = E.faces[:, 1] >= 0
+        keep[inner] |= g[E.faces[inner, 0]] != g[E.faces[inner, 1]]
     A = face_areas(V, F)
     cen = V[F].mean(axis=1)
     # Islands the seams cannot fix (non-manifold, degenerate, ...) are left to ``unwrap`` to
@@ -97,32 +129,53 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             raise CancelledError("cancelled while placing seams")
         if progress is not None:
             progress(0.0, f"seams: round {rounds}, {int(frozen.sum())}/{m} faces in charts")
-        changed = _refine(V, F, E, cut, frozen, A, cen, C, S, n)
+        changed = _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag)
         if not changed:
             break
     if merge:
-        _merge(V, F, E, cut, original, invalid, S)
-    result = unwrap(V, F, seams=E.ends[cut], bound=C, raise_bound=False, **unwrap_options)
-    for _ in range(FINISH_ROUNDS):
+        _merge(V, F, E, cut, keep, invalid, S)
+    # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
+    # along whatever edges separate the overlap) and is split like the others; only the last
+    # round lets ``unwrap`` cut what still overlaps.
+    result = unwrap(V, F, seams=E.ends[cut], bound=C, raise_bound=False,
+                    overlap="cut" if FINISH_ROUNDS == 0 else "fail", **unwrap_options)
+    for finish in range(FINISH_ROUNDS):
         # Charts the certified map leaves beyond S or crossing itself are split again and only
         # their faces unwrapped anew.
         st, cr = _measure(V, F, E, cut, result)
         bad = [r for r, s, c in zip(result.islands, st, cr)
                if len(r.faces) > 1 and ((r.status == "certified" and (s > S * (1 + 1e-9) or c))
-                                        or isinstance(r.error, (InfeasibleError, SolverError)))]
+                                        or isinstance(r.error, (InfeasibleError, SolverError,
+                                                                OverlapError)))]
         if not bad:
             break
         frozen[:] = True
-        for r in bad:
+        group = np.full(m, -1, dtype=np.int64)
+        for g, r in enumerate(bad):
             frozen[r.faces] = False
-            _split_faces(r.faces, E, cut, A, cen)
-        sub = np.flatnonzero(~frozen)
+            group[r.faces] = g
+        _bisect([np.sort(r.faces) for r in bad], E, cut, A, cen, poly)
         for _ in range(MAX_ROUNDS):
-            if not _refine(V, F, E, cut, frozen, A, cen, C, S, n):
+            if not _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag):
                 break
+        if merge:
+            # The pieces may now merge with their neighbours (never with each other).
+            _merge(V, F, E, cut, keep, invalid, S, group=group)
+        # Unwrap anew every chart holding a piece (with the neighbours it took in).
+        redo = np.zeros(m, dtype=bool)
+        for c in charts(F, E, cut):
+            if (group[c.faces] >= 0).any():
+                redo[c.faces] = True
+        sub = np.flatnonzero(redo)
         Fc, voc = cut_mesh(F, E, cut, sub)
-        part = unwrap(V[voc], Fc[sub], bound=C, raise_bound=False, **unwrap_options)
+        part = unwrap(V[voc], Fc[sub], bound=C, raise_bound=False,
+                      overlap="cut" if finish == FINISH_ROUNDS - 1 else "fail", **unwrap_options)
         result = _splice(result, part, sub, voc, m)
+    # Edges ``unwrap`` cut (overlaps left after the last round) are seams too.
+    for r in result.islands:
+        if r.cut_edges is not None and len(r.cut_edges):
+            k = E.keys(r.cut_edges, n)
+            cut[k[k >= 0]] = True
     st, cr = _measure(V, F, E, cut, result)
     result = dataclasses.replace(result, seconds=time.perf_counter() - t0)
     added = E.ends[cut & ~original]
@@ -135,28 +188,32 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     return result, added, info
 
 
-def _refine(V, F, E, cut, frozen, A, cen, C, S, n):
-    """One top-down round over the charts not yet accepted; True when a seam was added."""
+def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None):
+    """One top-down round over the charts not yet accepted; True when a seam was added.
+
+    Handles are cut first; the charts to split (closed spheres, open charts no cut graph
+    changes, disks whose map fails) are all split in one batch (``_split_deep``).
+    """
     sub = np.flatnonzero(~frozen)
     if len(sub) == 0:
         return False
     chs = charts(F, E, cut, sub)
     changed = False
+    todo = []                               # (faces, the map's sigma per face or None)
     for c in chs:
         if c.kind == "open":                # handles, or several boundary loops
-            w = lambda pairs, _v=c.vertices: _edge_weight(E, _v[pairs], n)
+            w = lambda pairs, _v=c.vertices: _edge_weight(E, _v[pairs], n, diag)
             g = cut_graph(c.tris, len(c.vertices), w)
             k = E.keys(c.vertices[g], n) if len(g) else np.zeros(0, np.int64)
             k = k[k >= 0]
+            if diag is not None:            # never inside a polygon (the split below instead)
+                k = k[~diag[k]]
             if len(k) and not cut[k].all():
                 cut[k] = True
                 changed = True
                 continue
         if c.kind in ("open", "sphere"):    # a sphere: split along its neck
-            if _split_faces(c.faces, E, cut, A, cen):
-                changed = True
-            else:
-                frozen[c.faces] = True
+            todo.append((c.faces, None))
     disks = [c for c in chs if c.kind == "disk"]
     if disks:
         cm = chart_maps(V, disks)
@@ -165,44 +222,162 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n):
                   and cm.crossings[j] == 0)
             if ok or len(c.faces) < 2:
                 frozen[c.faces] = True
-            elif _split_faces(c.faces, E, cut, A, cen):
-                changed = True
             else:
-                frozen[c.faces] = True
+                todo.append((c.faces, cm.sigma[cm.foff[j]:cm.foff[j + 1]]))
+    if todo:
+        split = _split_deep(todo, E, cut, A, cen, S, poly)
+        for (faces, _), done in zip(todo, split):
+            if not done:
+                frozen[faces] = True
+        changed |= bool(split.any())
     return changed
 
 
-def _edge_weight(E, pairs, n):
+def _split_deep(todo, E, cut, A, cen, S, poly=None):
+    """Split charts, and split their pieces again while a chart's conformal map restricted to a
+    piece (``piece_stretch``: no new solve) still breaks S by the factor ``DEEPER``.
+
+    A piece whose restricted map is nearer S is left for the next round to map on its own; the
+    restriction saves the rounds (and solves) a chart far beyond S would take one split at a
+    time. Pieces on flipped faces of the chart's map are left to their own map too. Every
+    level splits all its pieces in one batch (``_bisect``).
+
+    Parameters
+    ----------
+    todo : list of (faces (k,) int64 sorted global face ids, sigma (k,2) float64 or None): the
+        charts, with their map's singular values per face (``ChartMaps.sigma``); None: split
+        once
+
+    Returns
+    -------
+    (len(todo),) bool, whether each chart was split
+    """
+    split = np.zeros(len(todo), dtype=bool)
+    stack = [(faces, j) for j, (faces, _) in enumerate(todo)]
+    for _ in range(SPLIT_DEPTH):
+        sides = _bisect([f for f, _ in stack], E, cut, A, cen, poly)
+        nxt = []
+        for (f, j), two in zip(stack, sides):
+            if two is None:
+                continue
+            split[j] = True
+            faces, sigma = todo[j]
+            if sigma is None:
+                continue
+            for piece in two:
+                st = piece_stretch(sigma[np.searchsorted(faces, piece)], A[piece],
+                                   np.zeros(len(piece), np.int64), 1)[0]
+                if np.isfinite(st) and st > DEEPER * S * MARGIN and len(piece) > 1:
+                    nxt.append((piece, j))
+        stack = nxt
+        if not stack:
+            break
+    return split
+
+
+def _edge_weight(E, pairs, n, diag=None):
+    """Cost of cutting each vertex pair (length times crease discount; inside a polygon, a
+    million times that, so cut graphs run along polygon edges)."""
     k = E.keys(pairs, n)
-    return np.where(k >= 0, E.length[k] * E.cost[k], np.inf)
+    w = np.where(k >= 0, E.length[k] * E.cost[k], np.inf)
+    if diag is not None:
+        w = np.where((k >= 0) & diag[np.maximum(k, 0)], 1e6 * w, w)
+    return w
 
 
-def _split_faces(faces, E, cut, A, cen):
-    """Split a chart (global face ids) by ``fiedler_split``; mark the new seams. True if split."""
+def _polygons(polygons, E, m):
+    """Checked polygon ids (m,) int64 (None without) and the edges inside a polygon (e,) bool."""
+    diag = np.zeros(len(E.ends), dtype=bool)
+    if polygons is None:
+        return None, diag
+    poly = np.asarray(polygons)
+    if poly.shape != (m,) or not np.issubdtype(poly.dtype, np.integer):
+        raise ValueError(f"polygons must be ({m},) integers, one polygon id per triangle, got "
+                         f"shape {poly.shape} of {poly.dtype}")
+    poly = poly.astype(np.int64)
+    inner = E.faces[:, 1] >= 0
+    diag[inner] = poly[E.faces[inner, 0]] == poly[E.faces[inner, 1]]
+    return poly, diag
+
+
+def _bisect(pieces, E, cut, A, cen, poly=None):
+    """Split charts by ``fiedler_split_many`` (all at once) and mark the new seams.
+
+    With ``poly`` (polygon of each face) the split runs on the polygons (each one node of the
+    dual graph, its area and area-weighted centroid), so no polygon is cut.
+
+    Parameters
+    ----------
+    pieces : list of (k_i,) int64, sorted global face ids of disjoint charts
+
+    Returns
+    -------
+    list of (faces_a, faces_b) sorted global face ids of the two sides, or None where a chart
+    is not split
+    """
+    out = [None] * len(pieces)
+    if not pieces:
+        return out
     m = len(E.face_edges)
+    sizes = np.array([len(f) for f in pieces], dtype=np.int64)
+    fa = np.concatenate(pieces)
+    owner = np.repeat(np.arange(len(pieces)), sizes)
     local = np.full(m, -1, dtype=np.int64)
-    local[faces] = np.arange(len(faces))
-    fe = np.unique(E.face_edges[faces].ravel())
+    local[fa] = np.arange(len(fa))
+    fe = np.unique(E.face_edges[fa].ravel())
     fe = fe[(E.faces[fe, 1] >= 0) & ~cut[fe]]
     la, lb = local[E.faces[fe, 0]], local[E.faces[fe, 1]]
     inside = (la >= 0) & (lb >= 0)
-    fe, pairs = fe[inside], np.stack([la[inside], lb[inside]], axis=1)
-    side = fiedler_split(A[faces], cen[faces], pairs, E.length[fe], E.cost[fe])
-    if side is None:
-        return False
-    new = fe[side[pairs[:, 0]] != side[pairs[:, 1]]]
-    cut[new] = True
-    return len(new) > 0
+    inside[inside] = owner[la[inside]] == owner[lb[inside]]
+    fe, la, lb = fe[inside], la[inside], lb[inside]
+    # Nodes: the faces, or the polygons (grouped by chart either way).
+    if poly is None:
+        node = np.arange(len(fa))
+        mass, pcen = A[fa], cen[fa]
+    else:
+        key = owner * (int(poly.max()) + 1) + poly[fa]
+        _, node = np.unique(key, return_inverse=True)
+        node = node.ravel()
+        mass = np.bincount(node, A[fa])
+        pcen = np.stack([np.bincount(node, A[fa] * cen[fa, d]) for d in range(3)], 1)
+        pcen /= np.maximum(mass, 1e-300)[:, None]
+    nowner = np.zeros(len(mass), dtype=np.int64)
+    nowner[node] = owner
+    offsets = np.searchsorted(nowner, np.arange(len(pieces) + 1))
+    na, nb = node[la], node[lb]
+    across = na != nb
+    side, split = fiedler_split_many(mass, pcen, offsets, np.stack([na[across], nb[across]], 1),
+                                     E.length[fe[across]], E.cost[fe[across]])
+    fside = side[node]
+    new = fe[fside[la] != fside[lb]]
+    cut[new[split[owner[local[E.faces[new, 0]]]]]] = True
+    for j in np.flatnonzero(split):
+        f = pieces[j]
+        sj = fside[local[f]]
+        out[j] = (f[sj], f[~sj])
+    return out
 
 
-def _merge(V, F, E, cut, original, invalid, S, rounds=None):
+def _merge(V, F, E, cut, keep, invalid, S, rounds=None, group=None):
     """Merge neighbouring charts pairwise while the union's conformal map still passes.
 
-    Each round tests a matching of neighbouring pairs (longest shared seam first) in one
+    Each round tests a matching of neighbouring pairs (dearest shared seam first: length times
+    cost, so seams along creases are the last to go) in one
     batched solve; a pair that fails is not tried again while both charts stay as they are.
+
+    Parameters
+    ----------
+    keep : (e,) bool, seams never removed (marked seams, material boundaries)
+    group : (m,) int64, optional: only pairs with a chart in a group (>= 0) are tried, and
+        never two charts of one group (the pieces of a chart split because its certified map
+        failed: their union is that chart again)
     """
     tried = set()
+    # A face of each of two charts whose union was far beyond S: charts holding them are not
+    # tried together again (a union of larger charts around them fares no better).
+    far_a, far_b = [], []
     chs = charts(F, E, cut)
+    original = keep
     for _ in range(MERGE_ROUNDS if rounds is None else rounds):
         label = np.empty(len(F), dtype=np.int64)
         for j, c in enumerate(chs):
@@ -212,20 +387,25 @@ def _merge(V, F, E, cut, original, invalid, S, rounds=None):
         inner = (E.faces[:, 1] >= 0) & cut & ~original
         la, lb = label[E.faces[inner, 0]], label[E.faces[inner, 1]]
         diff = (la != lb) & good[la] & good[lb]
+        if group is not None:
+            ga, gb = group[E.faces[inner, 0]], group[E.faces[inner, 1]]
+            diff &= ((ga >= 0) | (gb >= 0)) & (ga != gb)
         if not diff.any():
             return
         ei = np.flatnonzero(inner)[diff]
         la, lb = np.minimum(la[diff], lb[diff]), np.maximum(la[diff], lb[diff])
         uk, inv = np.unique(la * len(chs) + lb, return_inverse=True)
         inv = inv.ravel()
-        shared = np.bincount(inv, E.length[ei])
-        # Matchings ("layers"): longest shared seam first, each chart in at most one pair of a
+        shared = np.bincount(inv, E.length[ei] * E.cost[ei])
+        fa, fb = label[np.array(far_a, np.int64)], label[np.array(far_b, np.int64)]
+        hopeless = np.isin(uk, np.minimum(fa, fb) * len(chs) + np.maximum(fa, fb))
+        # Matchings ("layers"): dearest shared seam first, each chart in at most one pair of a
         # layer; every layer's unions are tested in one batched solve.
         used = np.zeros((MERGE_LAYERS, len(chs)), dtype=bool)
         layers = [[] for _ in range(MERGE_LAYERS)]
-        for p in np.argsort(-shared):
+        for p in np.lexsort((uk, -_quantize(shared))):
             x, y = divmod(int(uk[p]), len(chs))
-            if (ident[x], ident[y]) in tried:
+            if (ident[x], ident[y]) in tried or hopeless[p]:
                 continue
             free = np.flatnonzero(~used[:, x] & ~used[:, y])
             if len(free) == 0:
@@ -248,12 +428,17 @@ def _merge(V, F, E, cut, original, invalid, S, rounds=None):
             continue
         cm = chart_maps(V, [c for c, _ in disks])
         ok = np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN) & (cm.crossings == 0)
+        for j in np.flatnonzero(~(cm.max_stretch <= HOPELESS * S)):
+            x, y = np.unique(label[disks[j][0].faces])
+            far_a.append(int(chs[x].faces[0]))
+            far_b.append(int(chs[y].faces[0]))
         merged = np.zeros(len(chs), dtype=bool)
-        # Accept passing unions, longest shared seam first, each chart merged once per round.
+        # Accept passing unions, dearest removed seam first, each chart merged once per round.
         fes = [np.unique(E.face_edges[c.faces].ravel()) for c, _ in disks]
-        gain = np.array([E.length[fe[cut[fe] & ~t[fe]]].sum() for fe, (_, t) in zip(fes, disks)])
+        gain = np.array([(E.length * E.cost)[fe[cut[fe] & ~t[fe]]].sum()
+                         for fe, (_, t) in zip(fes, disks)])
         unions = []
-        for j in np.argsort(-gain):
+        for j in np.lexsort((np.arange(len(gain)), -_quantize(gain))):
             c, trial = disks[j]
             two = np.unique(label[c.faces])
             if not ok[j] or merged[two].any():
@@ -306,7 +491,9 @@ def _splice(result, part, sub, voc, m):
     redo = np.zeros(m, dtype=bool)
     redo[sub] = True
     keep = [r for r in result.islands if not redo[r.faces[0]]]
-    new = [dataclasses.replace(r, faces=sub[r.faces], vertices=voc[r.vertices])
+    new = [dataclasses.replace(r, faces=sub[r.faces], vertices=voc[r.vertices],
+                               cut_edges=None if r.cut_edges is None
+                               else voc[np.asarray(r.cut_edges, np.int64).reshape(-1, 2)])
            for r in part.islands]
     isl = sorted(keep + new, key=lambda r: int(r.faces.min()))
     isl = [dataclasses.replace(r, index=j) for j, r in enumerate(isl)]

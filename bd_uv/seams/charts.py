@@ -8,11 +8,16 @@ itself (so the flip-free map of the disk is injective).
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
-from ..energies import jacobian_operators
-from ..frames import _solve_fixed
-from ..geometry import face_areas, local_coordinates
+from ..geometry import face_areas, gradient_operators, local_coordinates
 from ..unwrapping.batched import _far_pairs
+
+try:  # LDL^T with AMD ordering; SuperLU without it
+    import qdldl
+except ImportError:  # pragma: no cover - exercised where qdldl is absent
+    qdldl = None
 
 
 @dataclass(frozen=True)
@@ -27,6 +32,10 @@ class ChartMaps:
     stretch : (f,) float64, ``max(sigma_1, 1/sigma_2)`` per face (inf when flipped)
     max_distortion, max_stretch : (k,) float64 per chart
     crossings : (k,) int64, pairs of boundary edges of the chart that cross in UV
+    sigma : (f,2) float64, singular values ``(|alpha|+|beta|, |alpha|-|beta|)`` per face (the
+        second <= 0 when flipped), each chart scaled to its 3D area: any union of a chart's faces
+        scaled to its own area has the stretch ``max(s sigma_1, 1/(s sigma_2))`` with one
+        factor ``s`` (see ``piece_stretch``)
     """
     uv: np.ndarray
     voff: np.ndarray
@@ -36,6 +45,7 @@ class ChartMaps:
     max_distortion: np.ndarray
     max_stretch: np.ndarray
     crossings: np.ndarray
+    sigma: np.ndarray
 
 
 def chart_maps(V, charts):
@@ -63,10 +73,14 @@ def chart_maps(V, charts):
     area = np.bincount(face_c, A3, minlength=k)
     Z = local_coordinates(P, tris) / np.sqrt(area)[face_c][:, None]
     n = len(P)
-    ops = jacobian_operators(Z, tris, n)
-    Q = (ops.Bre.T.multiply(ops.area) @ ops.Bre + ops.Bim.T.multiply(ops.area) @ ops.Bim).tocsc()
+    # alpha = sum_k ca_k u_k and beta = sum_k cb_k u_k per face (eq. 4.19 with u complex:
+    # Re a = (u_x + v_y)/2, Im a = (v_x - u_y)/2, Re b = (u_x - v_y)/2, Im b = (v_x + u_y)/2).
+    G = gradient_operators(Z)
+    ca = 0.5 * (G[:, 0] - 1j * G[:, 1])
+    cb = 0.5 * (G[:, 0] + 1j * G[:, 1])
+    zarea = 0.5 * np.abs(((Z[:, 1] - Z[:, 0]).conj() * (Z[:, 2] - Z[:, 0])).imag)
     idx = _far_pairs(P, charts, voff)
-    u = _solve_fixed(Q, n, idx, np.tile(np.array([0.0, 1.0], dtype=np.complex128), k))
+    u = _lscm_pinned(cb, zarea, tris, n, idx, np.tile(np.array([0.0, 1.0], np.complex128), k))
     # Scale each chart so its UV area equals its (unit-normalised) 3D area: sigma are then the
     # singular values of the map with the chart at its 3D size.
     e1 = u[tris[:, 1]] - u[tris[:, 0]]
@@ -76,9 +90,8 @@ def chart_maps(V, charts):
         s = np.sqrt(1.0 / np.abs(uv_area))
     s[~np.isfinite(s)] = 1.0
     u = u * s[vert_c]
-    x = np.concatenate([u.real, u.imag])
-    a = np.abs(ops.Are @ x + 1j * (ops.Aim @ x))
-    b = np.abs(ops.Bre @ x + 1j * (ops.Bim @ x))
+    a = np.abs(np.einsum("fk,fk->f", ca, u[tris]))
+    b = np.abs(np.einsum("fk,fk->f", cb, u[tris]))
     with np.errstate(invalid="ignore", divide="ignore"):
         ok = a > b
         D = np.where(ok, (a + b) / (a - b), np.inf)
@@ -89,7 +102,102 @@ def chart_maps(V, charts):
     maxS = np.maximum.reduceat(St, foff[:-1])
     uv = u * np.sqrt(area)[vert_c]
     cross = boundary_crossings(uv, [c.loops[0] + voff[j] for j, c in enumerate(charts)])
-    return ChartMaps(uv, voff, foff, D, St, maxD, maxS, cross)
+    return ChartMaps(uv, voff, foff, D, St, maxD, maxS, cross, np.stack([a + b, a - b], axis=1))
+
+
+def piece_stretch(sigma, area3, label, k):
+    """Stretch of the conformal map of a chart restricted to pieces of it, each piece scaled
+    to its own 3D area (no new solve: the restriction of a conformal map is one of the piece).
+
+    Parameters
+    ----------
+    sigma : (f,2) float64, the chart's singular values per face (``ChartMaps.sigma``)
+    area3 : (f,) float64, 3D face areas
+    label : (f,) int64, piece of each face in 0..k-1
+    k : int
+
+    Returns
+    -------
+    (k,) float64, ``max(s sigma_1, 1/(s sigma_2))`` over each piece's faces with
+    ``s = sqrt(sum area3 / sum area3 sigma_1 sigma_2)`` (inf where a face is flipped)
+    """
+    uv_area = np.bincount(label, area3 * sigma[:, 0] * sigma[:, 1], minlength=k)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        s = np.sqrt(np.bincount(label, area3, minlength=k) / uv_area)[label]
+        st = np.where(sigma[:, 1] > 0, np.maximum(s * sigma[:, 0], 1.0 / (s * sigma[:, 1])),
+                      np.inf)
+    st[~np.isfinite(st)] = np.inf
+    out = np.full(k, -np.inf)
+    np.maximum.at(out, label, st)
+    return out
+
+
+def spd_solver(A):
+    """Factor a sparse symmetric positive definite matrix once; return its solve.
+
+    LDL^T with an AMD ordering (qdldl), about twice as fast as SuperLU on the LSCM and dual
+    Laplacian systems here; SuperLU with a symmetric ordering where qdldl is missing or the
+    factorisation breaks down.
+
+    Parameters
+    ----------
+    A : (N,N) sparse, symmetric positive definite
+
+    Returns
+    -------
+    callable((N,) float64) -> (N,) float64
+
+    Raises
+    ------
+    RuntimeError when the matrix is singular
+    """
+    if qdldl is not None:
+        try:
+            return qdldl.Solver(sp.triu(A, format="csc"), upper=True).solve
+        except ValueError:  # zero pivot: let SuperLU (with pivoting) try
+            pass
+    lu = spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
+    return lu.solve
+
+
+def _lscm_pinned(cb, area, tris, n, idx, val):
+    """LSCM (minimise ``sum_f area_f |beta_f|^2``) with vertices ``idx`` fixed to ``val``.
+
+    The energy is ``u^H H u`` with ``H = sum_f area_f cb_f^* cb_f^T`` (n x n Hermitian); on
+    x = [Re u; Im u] it is ``x^T Q x`` with ``Q = [[Re H, -Im H], [Im H, Re H]]``, assembled
+    here straight from the faces (no operator products) on the free unknowns only.
+
+    Parameters
+    ----------
+    cb : (f,3) complex128, beta's coefficient of each corner; area : (f,) float64
+    tris : (f,3) int64 into n vertices
+    idx : (p,) int64, pinned vertices; val : (p,) complex128, their positions
+
+    Returns
+    -------
+    u : (n,) complex128
+    """
+    j = np.repeat(tris, 3, axis=1).ravel()
+    k = np.tile(tris, (1, 3)).ravel()
+    h = (area[:, None, None] * cb.conj()[:, :, None] * cb[:, None, :]).ravel()
+    rows = np.concatenate([j, j, j + n, j + n])
+    cols = np.concatenate([k, k + n, k, k + n])
+    vals = np.concatenate([h.real, -h.imag, h.imag, h.real])
+    idx = np.asarray(idx, dtype=np.int64)
+    fixed = np.concatenate([idx, idx + n])
+    xval = np.zeros(2 * n)
+    xval[fixed] = np.concatenate([val.real, val.imag])
+    free = np.ones(2 * n, dtype=bool)
+    free[fixed] = False
+    pos = np.cumsum(free) - 1
+    nf = int(free.sum())
+    fr, fc = free[rows], free[cols]
+    rhs = -np.bincount(pos[rows[fr & ~fc]], vals[fr & ~fc] * xval[cols[fr & ~fc]], nf)
+    both = fr & fc
+    A = sp.csc_matrix((vals[both], (pos[rows[both]], pos[cols[both]])), shape=(nf, nf))
+    x = xval.copy()
+    x[free] = spd_solver(A)(rhs)
+    return x[:n] + 1j * x[n:]
 
 
 def boundary_crossings(uv, loops):
@@ -108,9 +216,14 @@ def boundary_crossings(uv, loops):
     (k,) int64, crossing pairs per loop
     """
     k = len(loops)
-    if k == 0:
-        return np.zeros(0, np.int64)
-    lens = np.array([len(lp) for lp in loops])
+    lens = np.array([len(lp) for lp in loops], dtype=np.int64)
+    if k == 0 or lens.sum() == 0:
+        return np.zeros(k, np.int64)
+    if (lens == 0).any():                   # empty loops: none of their edges cross
+        out = np.zeros(k, np.int64)
+        some = np.flatnonzero(lens > 0)
+        out[some] = boundary_crossings(uv, [loops[j] for j in some])
+        return out
     owner = np.repeat(np.arange(k), lens)
     a_idx = np.concatenate(loops)
     start = np.concatenate([[0], np.cumsum(lens)[:-1]])
@@ -134,9 +247,10 @@ def boundary_crossings(uv, loops):
     inside = (cx <= x1[:, None]) & (cy <= y1[:, None])
     sid = np.broadcast_to(np.arange(len(p))[:, None], cx.shape)[inside]
     cx, cy = cx[inside], cy[inside]
-    cell = np.stack([owner[sid], cx, cy], axis=1)
-    _, cell_id = np.unique(cell, axis=0, return_inverse=True)
-    cell_id = cell_id.ravel()
+    # One int64 key per (loop, cell): cells per loop are at most about its edge count squared.
+    cx, cy = cx - cx.min(), cy - cy.min()
+    ny = int(cy.max()) + 1
+    cell_id = (owner[sid] * (int(cx.max()) + 1) + cx) * ny + cy
     order = np.argsort(cell_id, kind="stable")
     cell_id, sid = cell_id[order], sid[order]
     bounds = np.flatnonzero(np.diff(cell_id)) + 1
@@ -150,10 +264,11 @@ def boundary_crossings(uv, loops):
     j = sid[starts[grp] + r % sizes[grp]]
     keep = i < j
     i, j = i[keep], j[keep]
-    pair = np.unique(np.stack([i, j], axis=1), axis=0)
+    nseg = len(p)
+    pair = np.unique(i * nseg + j)
     if len(pair) == 0:
         return np.zeros(k, np.int64)
-    i, j = pair[:, 0], pair[:, 1]
+    i, j = pair // nseg, pair % nseg
     adjacent = (nxt[i] == j) | (nxt[j] == i)
     i, j = i[~adjacent], j[~adjacent]
     hit = _segments_cross(p[i], q[i], p[j], q[j])

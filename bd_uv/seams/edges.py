@@ -7,6 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+# Dihedral turn from which a concave edge gets its full discount (half the cost).
+CONCAVE_FULL = np.radians(5.0)
 
 @dataclass(frozen=True)
 class EdgeTable:
@@ -50,7 +52,8 @@ def edge_table(V, F, face_groups=None, crease_angle=np.radians(30.0)):
     -------
     EdgeTable
         ``cost = exp(-theta / crease_angle)`` with ``theta`` the angle between the two face
-        normals, halved again on concave edges (the seam hides in the fold).
+        normals, halved again on concave edges (the seam hides in the fold; the discount grows to a
+        half over the first ``CONCAVE_FULL`` of turn).
     """
     n, m = len(V), len(F)
     a = F.ravel()
@@ -73,12 +76,18 @@ def edge_table(V, F, face_groups=None, crease_angle=np.radians(30.0)):
     N /= np.maximum(np.linalg.norm(N, axis=1, keepdims=True), 1e-300)
     cost = np.ones(e)
     f0, f1 = faces[two, 0], faces[two, 1]
-    cosang = np.clip(np.einsum("ij,ij->i", N[f0], N[f1]), -1.0, 1.0)
-    theta = np.arccos(cosang)
-    # Concave when the opposite vertex of f1 lies above f0's plane.
-    opp = F[f1][np.arange(len(f1)), np.argmax(~np.isin(F[f1], ends[two]), axis=1)]
+    # atan2 rather than arccos: exact near 0, where arccos turns rounding noise into angles.
+    theta = np.arctan2(np.linalg.norm(np.cross(N[f0], N[f1]), axis=1),
+                       np.einsum("ij,ij->i", N[f0], N[f1]))
+    # Concave when the opposite vertex of f1 lies above f0's plane. The discount grows with the
+    # angle (full from CONCAVE_FULL on): on a flat edge (a planar quad's diagonal) the side is
+    # rounding noise, which must not halve the cost of one run and not the next.
+    Ff1 = F[f1]
+    off_edge = (Ff1 != ends[two, :1]) & (Ff1 != ends[two, 1:])
+    opp = Ff1[np.arange(len(f1)), np.argmax(off_edge, axis=1)]
     concave = np.einsum("ij,ij->i", V[opp] - P[two, 0], N[f0]) > 0
-    c = np.exp(-theta / crease_angle) * np.where(concave, 0.5, 1.0)
+    half = np.where(concave, 0.5 * np.minimum(theta / CONCAVE_FULL, 1.0), 0.0)
+    c = np.exp(-theta / crease_angle) * (1.0 - half)
     if face_groups is not None:
         g = np.asarray(face_groups)
         c = np.where(g[f0] != g[f1], min(c.min(initial=1.0), np.exp(-np.pi / crease_angle)), c)

@@ -1,8 +1,9 @@
 """Splitting a chart in two along its cheapest neck (spectral bisection with a Cheeger sweep)."""
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 from scipy.sparse.csgraph import breadth_first_order, connected_components, maximum_flow
+
+from .charts import spd_solver
 
 # Neither side of a split may hold less than this share of the chart's area.
 MIN_SIDE = 0.05
@@ -31,34 +32,84 @@ def fiedler_split(face_area, centroid, pairs, edge_len, edge_cost):
     -------
     side : (k,) bool, or None when the chart cannot be split
     """
-    k = len(face_area)
-    if k < 2 or len(pairs) == 0:
-        return None
+    side, split = fiedler_split_many(face_area, centroid, np.array([0, len(face_area)]),
+                                     np.asarray(pairs, np.int64).reshape(-1, 2), edge_len,
+                                     edge_cost)
+    return side if split[0] else None
+
+
+def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost):
+    """``fiedler_split`` of many charts at once: one block-diagonal factorisation, every step
+    vectorised over the charts (the same cut for each chart as alone, up to rounding).
+
+    Parameters
+    ----------
+    face_area : (k,) float64, centroid : (k,3) float64, the nodes of all charts, chart by chart
+    offsets : (g+1,) int64, chart j owns nodes ``offsets[j]:offsets[j+1]``
+    pairs : (e,2) int64, node pairs (within one chart) sharing an edge that may be cut
+    edge_len, edge_cost : (e,) float64
+
+    Returns
+    -------
+    side : (k,) bool
+    split : (g,) bool, whether each chart was split (else its ``side`` means nothing)
+    """
+    k, g = len(face_area), len(offsets) - 1
+    size = np.diff(offsets)
+    group = np.repeat(np.arange(g), size)
+    split = np.zeros(g, dtype=bool)
+    side = np.zeros(k, dtype=bool)
+    if k == 0 or len(pairs) == 0:
+        return side, split
+    pg = group[pairs[:, 0]]
+    npairs = np.bincount(pg, minlength=g)
+    live = (size >= 2) & (npairs > 0)
     d = np.linalg.norm(centroid[pairs[:, 0]] - centroid[pairs[:, 1]], axis=1)
-    w = edge_len * edge_cost / np.maximum(d, 1e-12 * edge_len.mean())
-    x = _fiedler_vector(pairs, w, face_area, centroid)
+    mean_len = np.bincount(pg, edge_len, g) / np.maximum(npairs, 1)
+    w = edge_len * edge_cost / np.maximum(d, 1e-12 * mean_len[pg])
+    x = _fiedler_many(pairs, w, face_area, centroid, offsets, group)
     if x is None:
-        return None
-    order = np.argsort(x, kind="stable")
-    rank = np.empty(k, dtype=np.int64)
-    rank[order] = np.arange(k)
-    lo = np.minimum(rank[pairs[:, 0]], rank[pairs[:, 1]])
-    hi = np.maximum(rank[pairs[:, 0]], rank[pairs[:, 1]])
-    # Edge (f,g) is cut by prefixes of t faces with lo < t <= hi.
+        return side, split
+    # Sweep per chart: order by rounded x (ties by node), prefixes of 1..k_j-1 nodes.
+    start = offsets[:-1]
+    scale = np.zeros(g)
+    np.maximum.at(scale, group, np.abs(x))
+    q = np.maximum(scale * 1e-9, 1e-300)[group]
+    order = np.lexsort((np.arange(k), np.round(x / q), group))
+    pos = np.empty(k, dtype=np.int64)
+    pos[order] = np.arange(k)
+    rank = pos - start[group]
     c = edge_len * edge_cost
+    lo = np.minimum(pos[pairs[:, 0]], pos[pairs[:, 1]])
+    hi = np.maximum(pos[pairs[:, 0]], pos[pairs[:, 1]])
     diff = np.bincount(lo + 1, c, minlength=k + 1) - np.bincount(hi + 1, c, minlength=k + 1)
-    cut = np.cumsum(diff)[1:k]                 # prefixes of 1..k-1 faces
-    A = np.cumsum(face_area[order])[:-1]
-    total = face_area.sum()
-    small = np.minimum(A, total - A)
-    score = np.where(small >= MIN_SIDE * total, cut / np.maximum(small, 1e-300), np.inf)
-    if not np.isfinite(score).any():
-        score = cut / np.maximum(small, 1e-300)
-    t = int(np.argmin(score)) + 1
-    side = rank < t
-    side = _snap(side, pairs, c)
+    cutw = np.cumsum(diff)                 # cutw[start_j + t]: prefix of t nodes of chart j
+    acum = np.cumsum(face_area[order])
+    base = np.concatenate([[0.0], acum])[start]
+    total = np.bincount(group, face_area, g)
+    p = np.arange(k)
+    t = rank[order]                        # = p - start[group[order]]: nodes before p
+    gp = group[order]
+    valid = t >= 1                         # prefix of t >= 1 nodes, t <= k_j - 1
+    A = acum[p - 1] - base[gp]             # area of the first t nodes
+    A = np.where(valid, A, 0.0)
+    small = np.minimum(A, total[gp] - A)
+    raw_score = np.where(valid, cutw[p] / np.maximum(small, 1e-300), np.inf)
+    score = np.where(small >= MIN_SIDE * total[gp], raw_score, np.inf)
+    none = np.bincount(gp, np.isfinite(score), g) == 0
+    score = np.where(none[gp], raw_score, score)
+    sscale = np.zeros(g)
+    fin = np.isfinite(score)
+    np.maximum.at(sscale, gp[fin], np.abs(score[fin]))
+    sq = np.maximum(sscale * 1e-9, 1e-300)[gp]
+    best = np.lexsort((p, np.where(fin, np.round(score / sq), np.inf), gp))
+    first = best[np.r_[True, gp[best][1:] != gp[best][:-1]]]
+    tg = np.zeros(g, dtype=np.int64)
+    tg[gp[first]] = t[first]
+    side = rank < tg[group]
+    side = _snap_many(side, pairs, c, group, g)
     raw = side.copy()
-    # Majority filter: a face with two or three neighbours across moves over (never two
+    # Majority filter: a node with two or three neighbours across moves over (never two
     # neighbours at once, which could leave a checkerboard), a few passes.
     for _ in range(4):
         other = side[pairs[:, 0]] != side[pairs[:, 1]]
@@ -68,70 +119,87 @@ def fiedler_split(face_area, centroid, pairs, edge_len, edge_cost):
         if not move.any():
             break
         side = side ^ move
-    # Pieces cut off from their side's bulk (a few faces) go to the other side.
+    # Pieces cut off from their side's bulk (a few nodes) go to the other side; a chart left
+    # all on one side keeps its snapped cut.
     same = side[pairs[:, 0]] == side[pairs[:, 1]]
-    g = sp.coo_array((np.ones(int(same.sum())), (pairs[same, 0], pairs[same, 1])), shape=(k, k))
-    _, comp = connected_components(g, directed=False)
-    size = np.bincount(comp)
-    side = side ^ (size[comp] < max(3, 0.02 * k))
-    if side.all() or not side.any():
-        side = raw
-    return side
+    gr = sp.coo_array((np.ones(int(same.sum())), (pairs[same, 0], pairs[same, 1])), shape=(k, k))
+    _, comp = connected_components(gr, directed=False)
+    csize = np.bincount(comp)
+    side = side ^ (csize[comp] < np.maximum(3, 0.02 * size)[group])
+    ones = np.bincount(group, side, g)
+    uniform = (ones == 0) | (ones == size)
+    side = np.where(uniform[group], raw, side)
+    ones = np.bincount(group, side, g)
+    split = live & (ones > 0) & (ones < size)
+    return side, split
 
 
-def _fiedler_vector(pairs, w, mass, centroid, iters=12):
-    """Approximate Fiedler vector of ``L x = lambda M x`` by inverse iteration.
+def _fiedler_many(pairs, w, mass, centroid, offsets, group, iters=12):
+    """Approximate Fiedler vectors of ``L x = lambda M x``, each chart's own, by inverse
+    iteration on the block-diagonal Laplacian (one sparse factorisation for all charts).
 
-    Starts from the faces' coordinate along the chart's principal axis (already a smooth
-    ordering along its longest extent), deflates the constant vector (M-orthogonally) each step;
-    a dozen steps with one sparse factorisation are enough for a sweep cut.
+    Each chart starts from its faces' coordinate along its principal axis (already a smooth
+    ordering along its longest extent) plus a small fixed perturbation, and is deflated of
+    its constant vector (M-orthogonally) each step; a dozen steps are enough for a sweep cut.
 
     Parameters
     ----------
     pairs : (e,2) int64, w : (e,) float64, the graph's edges and weights (Laplacian L)
-    mass : (k,) float64 > 0
-    centroid : (k,3) float64
+    mass : (k,) float64 > 0, centroid : (k,3) float64
+    offsets : (g+1,) int64, group : (k,) int64, the chart of each node
 
     Returns
     -------
     x : (k,) float64, or None when the system cannot be factored
     """
-    c = centroid - np.average(centroid, axis=0, weights=mass)
-    _, _, vt = np.linalg.svd(c * np.sqrt(mass)[:, None], full_matrices=False)
-    x = c @ vt[0]
-    k = len(mass)
-    deg = np.bincount(pairs.ravel(), np.repeat(w, 2), minlength=k)   # pairs.ravel(): row-major
-    shift = 1e-8 * deg.mean() / mass.mean()
-    # L + shift M from triplets in one go: off-diagonal -w, diagonal degree + shift * mass.
+    g, k = len(offsets) - 1, len(mass)
+    total = np.bincount(group, mass, g)
+    mean = np.stack([np.bincount(group, mass * centroid[:, i], g) for i in range(3)], 1)
+    c = centroid - (mean / np.maximum(total, 1e-300)[:, None])[group]
+    axes = np.stack([_principal_axis(c[offsets[j]:offsets[j + 1]],
+                                     mass[offsets[j]:offsets[j + 1]])
+                     if offsets[j + 1] > offsets[j] else np.array([1.0, 0.0, 0.0])
+                     for j in range(g)])
+    x = np.einsum("ij,ij->i", c, axes[group])
+    scale = np.zeros(g)
+    np.maximum.at(scale, group, np.abs(x))
+    noise = np.concatenate([np.random.default_rng(int(n)).standard_normal(int(n))
+                            for n in np.diff(offsets)])
+    x = x + 1e-3 * np.maximum(scale, 1e-300)[group] * noise
+    deg = np.bincount(pairs.ravel(), np.repeat(w, 2), minlength=k)
+    cnt = np.maximum(np.bincount(group, minlength=g), 1)
+    shift = 1e-8 * (np.bincount(group, deg, g) / cnt) / np.maximum(total / cnt, 1e-300)
     idx = np.arange(k)
-    K = sp.csc_matrix((np.concatenate([-w, -w, deg + shift * mass]),
+    K = sp.csc_matrix((np.concatenate([-w, -w, deg + shift[group] * mass]),
                        (np.concatenate([pairs[:, 0], pairs[:, 1], idx]),
                         np.concatenate([pairs[:, 1], pairs[:, 0], idx]))), shape=(k, k))
     try:
-        lu = spla.splu(K, permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
+        solve = spd_solver(K)
     except RuntimeError:
         return None
-    total = mass.sum()
+    tot = np.maximum(total, 1e-300)[group]
     for _ in range(iters):
-        x = x - (mass @ x) / total
-        x = lu.solve(mass * x)
-        x /= max(np.sqrt(mass @ x ** 2), 1e-300)
-    return x - (mass @ x) / total
+        x = x - np.bincount(group, mass * x, g)[group] / tot
+        x = solve(mass * x)
+        x = x / np.maximum(np.sqrt(np.bincount(group, mass * x ** 2, g)), 1e-300)[group]
+    return x - np.bincount(group, mass * x, g)[group] / tot
 
 
-def _snap(side, pairs, cost, rings=BAND_RINGS):
-    """Move a two-way cut to the cheapest one within a band of faces around it (s-t min cut).
+def _snap_many(side, pairs, cost, group, g, rings=BAND_RINGS):
+    """Move each chart's two-way cut to the cheapest one within a band of faces around it.
 
-    The faces more than ``rings`` dual steps from the cut keep their side (they are the source
-    and the sink); inside the band the cut is free, so it runs along creases (cheap edges) and
-    takes the shortest route, straight where the mesh has a straight edge loop, rather than the
-    level set's staircase.
+    The faces more than ``rings`` dual steps from the cut keep their side (the source and the
+    sink); inside the band the cut is free, so it runs along creases (cheap edges) and takes the
+    shortest route, straight where the mesh has a straight edge loop, rather than the level
+    set's staircase. All charts go into one s-t min cut: they share only the source and the
+    sink, so each gets its own minimum cut (the source side reachable in the residual graph is
+    the unique smallest one).
 
     Parameters
     ----------
-    side : (k,) bool
-    pairs : (e,2) int64, neighbouring faces
+    side : (k,) bool, pairs : (e,2) int64 neighbouring nodes (within a chart)
     cost : (e,) float64 > 0, the seam cost of each shared edge (length times crease discount)
+    group : (k,) int64 chart of each node, g : int charts
 
     Returns
     -------
@@ -146,19 +214,23 @@ def _snap(side, pairs, cost, rings=BAND_RINGS):
     band[pairs[across].ravel()] = True
     for _ in range(rings):
         band |= (A @ band.astype(np.float64)) > 0
-    if band.all():
+    src = ~band & side
+    snk = ~band & ~side
+    active = (np.bincount(group, src, g) > 0) & (np.bincount(group, snk, g) > 0)
+    if not active.any():
         return side
-    # Graph: faces 0..k-1, source k (side True outside the band), sink k+1.
-    scale = 1e4 / max(cost.max(), 1e-300)    # integer capacities, sums within int32
-    cap = np.maximum(np.round(cost * scale), 1).astype(np.int64)
-    src_f = np.flatnonzero(~band & side)
-    snk_f = np.flatnonzero(~band & ~side)
-    if len(src_f) == 0 or len(snk_f) == 0:
-        return side
-    inf = min(int(cap.sum()) + 1, 2 ** 30)
-    rows = np.concatenate([pairs[:, 0], pairs[:, 1], np.full(len(src_f), k), snk_f])
-    cols = np.concatenate([pairs[:, 1], pairs[:, 0], src_f, np.full(len(snk_f), k + 1)])
-    vals = np.concatenate([cap, cap, np.full(len(src_f), inf), np.full(len(snk_f), inf)])
+    pg = group[pairs[:, 0]]
+    cmax = np.zeros(g)
+    np.maximum.at(cmax, pg, cost)
+    cap = np.maximum(np.round(cost * (1e4 / np.maximum(cmax, 1e-300))[pg]), 1).astype(np.int64)
+    on = active[pg]
+    inf = np.minimum(np.bincount(pg[on], cap[on], g) + 1, 2 ** 30).astype(np.int64)
+    src_f = np.flatnonzero(src & active[group])
+    snk_f = np.flatnonzero(snk & active[group])
+    pa, pb, cp = pairs[on, 0], pairs[on, 1], cap[on]
+    rows = np.concatenate([pa, pb, np.full(len(src_f), k), snk_f])
+    cols = np.concatenate([pb, pa, src_f, np.full(len(snk_f), k + 1)])
+    vals = np.concatenate([cp, cp, inf[group[src_f]], inf[group[snk_f]]])
     G = sp.csr_matrix(sp.coo_array((vals, (rows, cols)), shape=(k + 2, k + 2)))
     G.sum_duplicates()
     G.data = np.minimum(G.data, 2 ** 30).astype(np.int32)
@@ -169,4 +241,49 @@ def _snap(side, pairs, cost, rings=BAND_RINGS):
     reach = breadth_first_order(residual, k, directed=True, return_predecessors=False)
     new = np.zeros(k + 2, dtype=bool)
     new[reach] = True
-    return new[:k]
+    return np.where(active[group], new[:k], side)
+
+
+def _principal_axis(c, mass):
+    """The chart's longest principal axis, chosen the same way in every run.
+
+    Where the two (or three) largest principal moments agree to 1e-6 (a chart symmetric about
+    an axis) the axis is any direction of their plane and an SVD returns one picked by rounding
+    noise: then take the first face's direction projected onto that plane.
+
+    Parameters
+    ----------
+    c : (k,3) float64, face centroids about their weighted mean; mass : (k,) float64
+
+    Returns
+    -------
+    (3,) float64, unit axis, oriented so the first face lies on its non-negative side
+    """
+    cov = (c * mass[:, None]).T @ c
+    w, vec = np.linalg.eigh(cov)
+    w, vec = w[::-1], vec[:, ::-1]
+    top = w >= w[0] * (1.0 - 1e-6)
+    axis = vec[:, 0]
+    if top.sum() > 1:
+        span = vec[:, top]
+        for f in range(len(c)):           # the first face off the plane's normal
+            a = span @ (span.T @ c[f])
+            if np.linalg.norm(a) > 1e-6 * np.sqrt(max(w[0], 1e-300) / mass.sum()):
+                axis = a / np.linalg.norm(a)
+                break
+    first = np.flatnonzero(np.abs(c @ axis) > 1e-9 * np.abs(c @ axis).max(initial=0.0))
+    if len(first) and c[first[0]] @ axis < 0:
+        axis = -axis
+    return axis
+
+
+def _quantize(x, digits=9):
+    """``x`` rounded to ``10**-digits`` of its largest finite magnitude (ties then broken by
+    index, the same in every run)."""
+    x = np.asarray(x, dtype=np.float64)
+    fin = np.isfinite(x)
+    scale = np.abs(x[fin]).max(initial=0.0)
+    if scale == 0:
+        return x
+    q = scale * 10.0 ** -digits
+    return np.where(fin, np.round(x / q) * q, x)

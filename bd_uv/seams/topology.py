@@ -54,8 +54,9 @@ def cut_mesh(F, E, cut, faces=None):
     else:
         mask = np.zeros(m, dtype=bool)
         mask[faces] = True
-        edges = np.unique(E.face_edges[faces].ravel())
-        edges = edges[(E.faces[edges, 1] >= 0) & ~cut[edges]]
+        on = np.zeros(len(E.ends), dtype=bool)
+        on[E.face_edges[faces].ravel()] = True
+        edges = np.flatnonzero(on & (E.faces[:, 1] >= 0) & ~cut)
         edges = edges[mask[E.faces[edges, 0]] & mask[E.faces[edges, 1]]]
     f0, f1 = E.faces[edges, 0], E.faces[edges, 1]
     rows, cols = [], []
@@ -96,17 +97,24 @@ def charts(F, E, cut, faces=None):
     T = Fc[faces]
     # Compact the cut vertices used; faces connected through a shared cut vertex (a corner
     # glued across an uncut edge) form one chart.
-    ids, tri = np.unique(T, return_inverse=True)
-    tri = tri.reshape(-1, 3)
+    used = np.zeros(len(voc), dtype=bool)
+    used[T.ravel()] = True
+    ids = np.flatnonzero(used)
+    compact = np.cumsum(used) - 1
+    tri = compact[T]
     nv, k = len(ids), len(faces)
     rows = np.repeat(np.arange(k), 3)
     g = sp.coo_array((np.ones(3 * k), (rows, k + tri.ravel())), shape=(k + nv, k + nv))
     n_c, comp = connected_components(g, directed=False)
     fl, vl = comp[:k], comp[k:]
-    # Half-edges without a reverse are on the boundary.
+    # Boundary half-edges: on a seam, on the mesh boundary, or next to a face not asked for
+    # (the half-edge F[f,j] -> F[f,j+1] runs along edge E.face_edges[f,j]).
     a, b = tri.ravel(), np.roll(tri, -1, axis=1).ravel()
-    fwd = a * nv + b
-    bnd = ~np.isin(fwd, b * nv + a)
+    inset = np.zeros(len(F), dtype=bool)
+    inset[faces] = True
+    fe = E.face_edges[faces].ravel()
+    f0, f1 = E.faces[fe, 0], E.faces[fe, 1]
+    bnd = cut[fe] | (f1 < 0) | ~inset[f0] | ~inset[np.maximum(f1, 0)]
     nb = np.bincount(fl[rows[bnd]], minlength=n_c)
     nf = np.bincount(fl, minlength=n_c)
     nvc = np.bincount(vl, minlength=n_c)
@@ -115,9 +123,9 @@ def charts(F, E, cut, faces=None):
     ba, bb = a[bnd], b[bnd]
     gb = sp.coo_array((np.ones(len(ba)), (ba, bb)), shape=(nv, nv)).tocsr()
     _, lab = connected_components(gb, directed=False)
-    loop_ids = np.unique(lab[ba])
-    n_loops = np.bincount(vl[ba[np.unique(lab[ba], return_index=True)[1]]], minlength=n_c)
-    del loop_ids
+    rep_v = np.full(nv, -1, dtype=np.int64)
+    rep_v[lab[ba]] = ba                     # a boundary vertex of each loop
+    n_loops = np.bincount(vl[rep_v[rep_v >= 0]], minlength=n_c)
     # Group faces and vertices by chart.
     forder = np.argsort(fl, kind="stable")
     fb = np.searchsorted(fl[forder], np.arange(n_c + 1))

@@ -65,7 +65,8 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
         pieces (islands of their own, ``cut_edges`` naming the mesh edges cut), or fail it with
         ``OverlapError``
     face_groups : (m,) int array, optional, a group per face (the polygon each triangle comes
-        from): a cut never separates faces of one group
+        from): a cut never separates faces of one group (with seams="auto", no seam is added
+        inside a group either)
     stretch : float S, with seams="auto": every chart's singular values within [1/S, S] (UV area =
         3D area); default 2
     boundary : "free" | "circle" | "rectangle" | "pinned", where each island's outer boundary
@@ -94,14 +95,14 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
                              "boundary='free' there")
         if bound == "auto":
             raise ValueError("seams='auto' needs a numeric bound C")
-        if (pin_corners is not None and len(pin_corners)) or frames == "input-uv" \
-                or face_groups is not None:
-            raise ValueError("seams='auto' does not take pins, the current UVs or face_groups: "
-                             "call bd_uv.seams.unwrap_auto for material groups, or mark seams")
+        if (pin_corners is not None and len(pin_corners)) or frames == "input-uv":
+            raise ValueError("seams='auto' does not take pins or the current UVs: call "
+                             "bd_uv.seams.unwrap_auto for material groups, or mark seams")
         from ..seams import unwrap_auto  # the seams package builds on this module
+        # face_groups (polygons) are kept whole by the seams added too: unwrap_auto's polygons.
         return unwrap_auto(V, F, bound=bound, stretch=2.0 if stretch is None else stretch,
                            method=method, frames=frames, cone=cone, progress=progress,
-                           cancel=cancel)[0]
+                           cancel=cancel, polygons=face_groups)[0]
     if boundary not in BOUNDARIES:
         raise ValueError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}")
     if boundary != "free" and bound == "auto":

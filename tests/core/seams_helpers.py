@@ -99,8 +99,11 @@ def chart_topology(tris):
     return chi, loops
 
 
-def boundary_self_crossings(uv, tris):
-    """Pairs of non-adjacent boundary edges of a chart that intersect in UV (brute force)."""
+def boundary_self_crossings(uv, tris, touching=False):
+    """Pairs of non-adjacent boundary edges of a chart that intersect in UV (brute force).
+
+    With ``touching``, also pairs that only touch or lie on each other (the two sides of a slit
+    mapped onto one segment: the boundary is not injective there either)."""
     a = tris.ravel()
     b = np.roll(tris, -1, axis=1).ravel()
     half = set(zip(a.tolist(), b.tolist()))
@@ -114,6 +117,52 @@ def boundary_self_crossings(uv, tris):
     d1, d2 = orient(P2, Q2, P1), orient(P2, Q2, Q1)
     d3, d4 = orient(P1, Q1, P2), orient(P1, Q1, Q2)
     cross = (d1 * d2 < 0) & (d3 * d4 < 0)
+    if touching:
+        lo1, hi1 = np.minimum(P1, Q1), np.maximum(P1, Q1)
+        lo2, hi2 = np.minimum(P2, Q2), np.maximum(P2, Q2)
+        boxes = np.all((lo1 <= hi2) & (lo2 <= hi1), axis=-1)
+        cross = (d1 * d2 <= 0) & (d3 * d4 <= 0) & boxes
     shared = ((bnd[:, None, 0] == bnd[None, :, 0]) | (bnd[:, None, 0] == bnd[None, :, 1]) |
               (bnd[:, None, 1] == bnd[None, :, 0]) | (bnd[:, None, 1] == bnd[None, :, 1]))
     return int(np.triu(cross & ~shared, 1).sum())
+
+
+def uv_sphere(segments=16, rings=8, flip=()):
+    """A closed UV sphere of quads (two triangles each) and two triangle fans at the poles.
+
+    Parameters
+    ----------
+    flip : iterable of quad ids whose other diagonal is used
+
+    Returns
+    -------
+    V : (n,3), F : (m,3) outward oriented
+    poly : (m,) int64, the polygon (quad or pole triangle) of each triangle
+    """
+    th = np.pi * np.arange(1, rings) / rings                 # ring latitudes (no poles)
+    ph = 2 * np.pi * np.arange(segments) / segments
+    T, P = np.meshgrid(th, ph, indexing="ij")
+    V = np.concatenate([[[0.0, 0.0, 1.0]],
+                        np.stack([np.sin(T) * np.cos(P), np.sin(T) * np.sin(P), np.cos(T)],
+                                 -1).reshape(-1, 3),
+                        [[0.0, 0.0, -1.0]]])
+    ring = 1 + np.arange((rings - 1) * segments).reshape(rings - 1, segments)
+    south = len(V) - 1
+    j = np.arange(segments)
+    tris, poly = [], []
+    top = np.stack([np.zeros(segments, np.int64), ring[0, j], ring[0, (j + 1) % segments]], 1)
+    tris.append(top)
+    poly.append(np.arange(segments))
+    a, b = ring[:-1, j], ring[1:, j]
+    c, d = ring[1:, (j + 1) % segments], ring[:-1, (j + 1) % segments]
+    a, b, c, d = (x.ravel() for x in (a, b, c, d))
+    q = np.arange(len(a))
+    other = np.isin(q, list(flip))
+    t1 = np.where(other[:, None], np.stack([a, b, d], 1), np.stack([a, b, c], 1))
+    t2 = np.where(other[:, None], np.stack([b, c, d], 1), np.stack([a, c, d], 1))
+    tris += [t1, t2]
+    poly += [segments + q, segments + q]
+    bot = np.stack([np.full(segments, south), ring[-1, (j + 1) % segments], ring[-1, j]], 1)
+    tris.append(bot)
+    poly.append(segments + len(a) + np.arange(segments))
+    return V, np.concatenate(tris).astype(np.int64), np.concatenate(poly).astype(np.int64)
