@@ -34,8 +34,10 @@ def bound_arg(text):
 def add_solver_options(p):
     """Options shared by ``unwrap`` and ``batch``."""
     p.add_argument("--method", choices=METHODS, default="lscm",
-                   help="energy: BD-LSCM (default), BD-ARAP, BD-Dirichlet or BD-Biharmonic "
-                        "(eq. 6.1, meant for --boundary circle|rectangle|pinned)")
+                   help="energy: BD-LSCM (default), BD-ARAP, BD-Dirichlet, BD-Biharmonic "
+                        "(eq. 6.1, meant for --boundary circle|rectangle|pinned) or the L1 stretch "
+                        "energy sum (|alpha| + |beta|) Area (free boundary: scale held at the 3D "
+                        "area)")
     p.add_argument("--bound", type=bound_arg, default=5.0,
                    help="conformal distortion bound C >= 1, or 'auto' to minimise it (default 5)")
     p.add_argument("--frames", choices=FRAMES, default="auto",
@@ -50,8 +52,10 @@ def add_solver_options(p):
                    help="seconds per island for --bound auto (default 120)")
     p.add_argument("--stretch", type=float, default=None, metavar="S",
                    help="every face's singular values within [1/S, S] at its island's own scale "
-                        "(UV area = 3D area; Lipman 2012, section 6.3): with --seams auto "
-                        "(default 2 there) and with a numeric --bound for BD-LSCM")
+                        "(UV area = 3D area; Lipman 2012, section 6.3), with every --method; with "
+                        "--boundary circle|rectangle|pinned relative to the 3D geometry (the "
+                        "target gives the scale); with --bound auto: the smallest C within S; "
+                        "--seams auto: 2 by default")
     p.add_argument("--boundary", choices=BOUNDARIES, default="free",
                    help="each island's outer boundary: free (default), on a circle, on a rectangle "
                         "(corners at the four boundary vertices nearest a right angle, or four "

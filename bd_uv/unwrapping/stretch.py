@@ -1,0 +1,174 @@
+"""Stretch bounds in an island's search (Lipman 2012, section 6.3, eqs. 6.3-6.4).
+
+Every face's singular values within [1/S, S] together with the conformal bound C, as certified
+from the final UVs (``IslandProblem.stretch_range``: at the island's own scale, UV area = 3D area,
+when fewer than two pins fix it; else relative to the 3D geometry).
+
+- ``bounded_stretch``: the start when it fits; projection iterations with singular-value bounds,
+  polished by a conic solve; a conic solve with the stretch rows when the projection stalls;
+- ``stretch_solve``: that conic solve (``spaces.stretch_space`` rows with the scale held by
+  ``IslandProblem.hold_scale``);
+- ``minimise_stretch``: ``bound="auto"`` with S, bisection on C.
+"""
+import time
+
+import numpy as np
+
+from ..errors import InfeasibleError
+from ..frames import frames_from_map
+from ..solvers.projection import ProjectionSolver
+from .initial import start_map
+from .problem import STORE_HEADROOM, STRETCH_MARGIN_SOLVE, solve_bound
+from .strategies import (ALWAYS_SOLVED, AUTO_FLOOR, AUTO_MAX_SOLVES, AUTO_TOLERANCE, DESCENT,
+                         MAX_RESETS, POLISH_AREA, fits)
+
+# Projection iterations bound the singular values by [m/S, S/m] with this m: the result is
+# certified at its own final scale, which the iterations move.
+STRETCH_MARGIN = 1.03
+# A conic solve whose result misses [1/S, S] at its own scale is repeated with the margin grown by
+# the miss, at most this many times (plus MAX_RESETS frame resets after infeasible solves).
+STRETCH_RETRIES = 3
+
+
+def stretch_solve(prob, frames, u_ref, C, S, report):
+    """Minimise the island's energy over F_C with the singular-value rows of section 6.3
+    (``spaces.stretch_space``: eq. 6.3 as a cone, the lower bound as a cone given the frames).
+
+    The bounds are relative to the scale the certificate measures: with fewer than two pins the
+    island's scale is held by ``IslandProblem.hold_scale`` (area-weighted mean of Re(w alpha) = 1
+    on the unit-area island) and the bounds are ``[m/S, S/m]``; the UV area that the certificate
+    rescales by is not linear in the map, so when the result misses [1/S, S] at its own scale the
+    margin m grows by the miss and the solve is repeated (``STRETCH_RETRIES``). With two or more
+    pins the bounds are absolute (relative to the 3D geometry), as the certificate measures them.
+    An infeasible or uncertified solve resets the frames from its last iterate (eq. 4.21).
+
+    Parameters
+    ----------
+    prob : IslandProblem
+    frames : sequence of (k,) complex unit frames to start from, tried in turn
+    u_ref : (nv,) complex, a map giving the anchor position and the LSCM weights
+    C : float, S : float
+
+    Returns
+    -------
+    (nv,) complex map certified to be within C and S (``within``), or None
+    """
+    prob.hold_scale(u_ref)
+    k = np.sqrt(prob.area3d) if len(prob.pin_idx) >= 2 else 1.0
+    best, best_e = None, np.inf
+    for w0 in frames:
+        m, w = STRETCH_MARGIN_SOLVE, w0
+        for _ in range(STRETCH_RETRIES + MAX_RESETS):
+            prob.stretch = (k * m / S, k * S / m)
+            report(0.5, f"solving at C = {C:.3g} with stretch {S:.3g}")
+            u, _ = prob.solve(w, C)
+            if u is None:
+                break
+            if prob.within(u, C, S):
+                e = prob.energy_of(u, w)
+                if e < best_e:
+                    best, best_e = u, e
+                break
+            if prob.check(u, C)[0] and np.all(np.abs(prob.beta(u)) < np.abs(prob.alpha(u))):
+                lo, hi = prob.stretch_range(u)
+                m *= max(hi * (1 + STORE_HEADROOM) / S, 1.0 / (S * lo * (1 - STORE_HEADROOM)),
+                         1.0) * 1.002
+                if m * m > S * S / C:  # [m/S, S/m] can no longer hold C: give up these frames
+                    break
+            else:
+                w = frames_from_map(prob.alpha(u))
+        if best is not None:
+            break
+    prob.stretch = None
+    return best
+
+
+def bounded_stretch(prob, start, C, S, report, flags=None):
+    """A map within C whose singular values lie in [1/S, S] (section 6.3) as certified: the start
+    when it already does; else projection iterations with the singular-value bounds (Kovalsky et
+    al. 2015 with Lipman 2012, section 6.3), polished by a conic solve with the stretch rows
+    (``stretch_solve``) when they changed more than POLISH_AREA of the island, and a conic solve
+    when they stall (from the start's, the stalled iterate's and the harmonic map's frames).
+    BD-Dirichlet and the L1 stretch energy are always solved (their result is the energy's
+    optimum). Returns (u, C, name)."""
+    solved = prob.method in ALWAYS_SOLVED
+    if not solved and start.u is not None and np.isfinite(start.D) and fits(start, C):
+        if prob.within(start.u, C, S):
+            if flags is not None:
+                flags.append("initial_map")
+            return start.u, C, start.name
+    if len(prob.pin_idx) >= prob.nv:
+        raise InfeasibleError(f"island {prob.island.index}: every vertex is pinned and the pins "
+                              f"break the bounds C = {C:g}, S = {S:g}", prob.island.index)
+    k = np.sqrt(prob.area3d) if len(prob.pin_idx) >= 2 else 1.0
+    fixed = prob.pin_idx if len(prob.pin_idx) else prob.island.loops[0][:1]
+    solver = ProjectionSolver(prob.ops, prob.nv, fixed, tris=prob.island.tris)
+    starts = [start] if start.u is not None else []
+    harmonic = start_map(prob, "harmonic", None, report)
+    starts.append(harmonic)
+    projected, tried = None, []
+    t = time.perf_counter()
+    try:
+        for st in starts if not solved else []:
+            report(0.2, f"bending into C = {C:.3g}, stretch {S:.3g}")
+            values = prob.pin_val if len(prob.pin_idx) else st.u[fixed]
+            # margins: the result is measured again at its own scale, which the iterations move
+            res = solver.project(st.u, solve_bound(C), values, smin=k * STRETCH_MARGIN / S,
+                                 smax=k * S / STRETCH_MARGIN, max_iter=400, cancel=prob.cancel)
+            prob.iterations += res.iterations
+            if res.all_converged and prob.within(res.u, C, S):
+                projected = (res.u, st)
+                break
+            if res.u is not None and np.all(np.isfinite(res.u)):
+                tried.append(frames_from_map(prob.alpha(res.u)))
+    finally:
+        prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
+    if projected is not None:
+        u, st = projected
+        D0, D = prob.face_distortion(st.u), prob.face_distortion(u)
+        changed = ~(np.abs(D - D0) <= 0.01 * D0)
+        if prob.method != "lscm" or \
+                np.sum(prob.ops.area[changed]) <= POLISH_AREA * prob.ops.area.sum():
+            if flags is not None:
+                flags.append("projected")
+            return u, C, st.name
+        us = stretch_solve(prob, [harmonic.frames], harmonic.u, C, S, report)
+        if us is not None and prob.mean_distortion(us) < prob.mean_distortion(u):
+            return us, C, st.name
+        if flags is not None:
+            flags.append("projected")
+        return u, C, st.name
+    frames = [st.frames for st in starts] + tried
+    ref = start.u if start.u is not None and np.isfinite(start.D) else harmonic.u
+    us = stretch_solve(prob, frames, ref, C, S, report)
+    if us is not None:
+        return us, C, start.name if start.u is not None else harmonic.name
+    raise InfeasibleError(f"island {prob.island.index}: no map found within C = {C:g} and stretch "
+                          f"S = {S:g}; raise S or C, or let bd-uv add seams (seams='auto')",
+                          prob.island.index)
+
+
+def minimise_stretch(prob, start, S, budget, flags, report, t0):
+    """``bound="auto"`` with a stretch bound: the smallest C (bisection, Algorithm 1's outer loop)
+    for which a map with singular values in [1/S, S] (section 6.3) is found.
+
+    The first map is ``bounded_stretch`` at C = S^2 (the largest distortion singular values in
+    [1/S, S] allow); then ``stretch_solve`` at C between 1 and the best certified distortion,
+    frames from the best map, until the interval is within AUTO_TOLERANCE, AUTO_MAX_SOLVES solves
+    or the time budget. Returns (u, its max distortion, name of the start)."""
+    u, _, name = bounded_stretch(prob, start, S * S, S, report, flags)
+    best, hi, lo = u, prob.distortion(u), 1.0
+    while prob.solves < AUTO_MAX_SOLVES and hi - lo > AUTO_TOLERANCE * (hi - 1.0) + AUTO_FLOOR:
+        if prob.solves and budget is not None and time.perf_counter() - t0 > budget:
+            flags.append("time_budget_exhausted")
+            break
+        C = 0.5 * (lo + hi) if lo > 1.0 else 1.0 + (hi - 1.0) * (1.0 - DESCENT)
+        report(0.1 + 0.8 * prob.solves / AUTO_MAX_SOLVES,
+               f"minimising C with stretch {S:.3g}: {lo:.3g} < C* <= {hi:.4g}")
+        un = stretch_solve(prob, [frames_from_map(prob.alpha(best))], best, C, S, report)
+        D = prob.distortion(un) if un is not None else np.inf
+        if un is not None and D < hi:
+            best, hi = un, D
+        else:
+            lo = C
+    return best, hi, name
