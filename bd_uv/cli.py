@@ -59,7 +59,7 @@ def add_solver_options(p):
     p.add_argument("--boundary", choices=BOUNDARIES, default="free",
                    help="each island's outer boundary: free (default), on a circle, on a rectangle "
                         "(corners at the four boundary vertices nearest a right angle, or four "
-                        "pinned ones) or on the polygon of its pinned UVs; holes stay free; the "
+                        "pinned ones) or on the polygon of its pinned UVs; holes stay holes; the "
                         "report says bijective: true when Theorems 5.1/5.2's premises hold")
 
 

@@ -1,8 +1,9 @@
 """One island mapped with its outer boundary fixed on a circle, a rectangle or its pinned polygon.
 
 Lipman 2012, section 5: an orientation-preserving map that takes the boundary one-to-one onto a
-simple polygon is a bijection onto it (Theorem 5.1), also with holes, which stay free, once every
-loop's image is simple and nested rightly (Theorem 5.2). ``boundary.boundary_targets`` places the
+simple polygon is a bijection onto it (Theorem 5.1), also with holes once every loop's image is
+simple and nested rightly (Theorem 5.2); the solve fills the holes with triangles held
+orientation-preserving, so that holds by construction. ``boundary.boundary_targets`` places the
 outer boundary, ``boundary.fixed_boundary_map`` minimises the energy over F_C (eqs. 4.15-4.18) with
 those targets (and the island's other pins) held fixed; the caller certifies the result from its
 final UVs like every island (``unwrap._finish``), and ``with_premises`` then checks Theorems

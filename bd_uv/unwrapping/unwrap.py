@@ -82,7 +82,8 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
         goes (Lipman 2012, section 5; ``boundary.boundary_targets``): free (the default), on a
         circle or a rectangle of the island's 3D area (rectangle corners at the four boundary
         vertices nearest a right angle, or at four pinned ones), or on the polygon of its pinned
-        boundary vertices (at least 3); holes stay free. Needs a numeric bound; frames come
+        boundary vertices (at least 3); holes stay holes (filled for the solve with triangles held
+        orientation-preserving: a bijection by Theorem 5.1). Needs a numeric bound; frames come
         from a Tutte embedding ("auto" or "harmonic"). Each such island reports ``bijective``.
     progress : callable(fraction, message), optional
     cancel : object with ``is_set()``, optional
