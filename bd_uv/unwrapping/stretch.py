@@ -20,13 +20,13 @@ from ..solvers.projection import ProjectionSolver
 from .initial import start_map
 from .problem import STORE_HEADROOM, STRETCH_MARGIN_SOLVE, solve_bound
 from .strategies import (ALWAYS_SOLVED, AUTO_FLOOR, AUTO_MAX_SOLVES, AUTO_TOLERANCE, DESCENT,
-                         MAX_RESETS, POLISH_AREA, fits)
+                         POLISH_AREA, fits)
 
 # Projection iterations bound the singular values by [m/S, S/m] with this m: the result is
 # certified at its own final scale, which the iterations move.
 STRETCH_MARGIN = 1.03
 # A conic solve whose result misses [1/S, S] at its own scale is repeated with the margin grown by
-# the miss, at most this many times (plus MAX_RESETS frame resets after infeasible solves).
+# the miss, at most this many times per frames tried.
 STRETCH_RETRIES = 3
 
 
@@ -40,7 +40,8 @@ def stretch_solve(prob, frames, u_ref, C, S, report):
     rescales by is not linear in the map, so when the result misses [1/S, S] at its own scale the
     margin m grows by the miss and the solve is repeated (``STRETCH_RETRIES``). With two or more
     pins the bounds are absolute (relative to the 3D geometry), as the certificate measures them.
-    An infeasible or uncertified solve resets the frames from its last iterate (eq. 4.21).
+    An inexact solve resets the frames from its last iterate once (eq. 4.21); an infeasible one
+    moves on to the next frames.
 
     Parameters
     ----------
@@ -55,28 +56,28 @@ def stretch_solve(prob, frames, u_ref, C, S, report):
     """
     prob.hold_scale(u_ref)
     k = np.sqrt(prob.area3d) if len(prob.pin_idx) >= 2 else 1.0
-    best, best_e = None, np.inf
+    best = None
     for w0 in frames:
-        m, w = STRETCH_MARGIN_SOLVE, w0
-        for _ in range(STRETCH_RETRIES + MAX_RESETS):
+        m, w, reset = STRETCH_MARGIN_SOLVE, w0, False
+        for _ in range(STRETCH_RETRIES + 2):
             prob.stretch = (k * m / S, k * S / m)
             report(0.5, f"solving at C = {C:.3g} with stretch {S:.3g}")
-            u, _ = prob.solve(w, C)
-            if u is None:
-                break
+            u, outcome = prob.solve(w, C)
             if prob.within(u, C, S):
-                e = prob.energy_of(u, w)
-                if e < best_e:
-                    best, best_e = u, e
+                best = u
                 break
-            if prob.check(u, C)[0] and np.all(np.abs(prob.beta(u)) < np.abs(prob.alpha(u))):
+            if outcome == "solved" and prob.check(u, C)[0]:
+                # within C but not within S at its own scale: narrow the solve's bounds
                 lo, hi = prob.stretch_range(u)
                 m *= max(hi * (1 + STORE_HEADROOM) / S, 1.0 / (S * lo * (1 - STORE_HEADROOM)),
                          1.0) * 1.002
-                if m * m > S * S / C:  # [m/S, S/m] can no longer hold C: give up these frames
+                if m >= S:  # [m/S, S/m] is empty
                     break
+            elif outcome == "inexact" and u is not None and not reset:
+                # an inexact iterate may still give better frames (eq. 4.21); an infeasible not
+                reset, w = True, frames_from_map(prob.alpha(u))
             else:
-                w = frames_from_map(prob.alpha(u))
+                break
         if best is not None:
             break
     prob.stretch = None
