@@ -271,13 +271,24 @@ class IslandProblem:
         if self.cancel is not None and self.cancel.is_set():
             raise Cancelled
         t = time.perf_counter()
-        nv = self.nv
         if len(self.free) == 0:
-            x = np.zeros(2 * nv)
-            x[self.fixed] = self.xfix
-            return x[:nv] + 1j * x[nv:], "solved"
+            return self._pinned_map(), "solved"
         P, q, _ = self._energy(w)
-        P, q = P * self.scale, q * self.scale
+        A, b, cones = self._space(w, C)
+        extra = 0
+        if self.method == "stretch-l1":  # epigraph unknowns after the 2nv vertex coordinates
+            _, q, A, b, cones = stretch_l1_program(self.ops, A, b, cones)
+            extra = A.shape[1] - 2 * self.nv
+            P = sp.csc_array((A.shape[1], A.shape[1]))
+            q = q / float(self.ops.area.sum())
+        x, outcome = self._solve_reduced(P * self.scale, q * self.scale, A, b, cones, t, extra)
+        if x is None:
+            return None, outcome
+        return x[:self.nv] + 1j * x[self.nv:2 * self.nv], outcome
+
+    def _space(self, w, C):
+        """F_C's rows (eqs. 4.15-4.18) at ``solve_bound(C)``, with the stretch rows (section
+        6.3) and the scale row when set. Returns (A, b, cones)."""
         Cs = solve_bound(C)
         A, b, cones = bounded_distortion_space(self.ops, w, Cs, self.sigma, self.cone)
         if self.stretch is not None:
@@ -286,14 +297,21 @@ class IslandProblem:
         if self.fix_scale:
             Az, bz, cz = mean_scale_row(self.ops, w)
             A, b, cones = sp.vstack([Az, A]).tocsc(), np.concatenate([bz, b]), cz + cones
-        fr, fx = self.free, self.fixed
-        extra = 0
-        if self.method == "stretch-l1":
-            _, q_all, A, b, cones = stretch_l1_program(self.ops, A, b, cones)
-            extra = A.shape[1] - 2 * nv
-            P = sp.csc_array((2 * nv + extra, 2 * nv + extra))
-            q = q_all / float(self.ops.area.sum())
-            fr = np.concatenate([fr, np.arange(2 * nv, 2 * nv + extra)])
+        return A, b, cones
+
+    def _pinned_map(self):
+        x = np.zeros(2 * self.nv)
+        x[self.fixed] = self.xfix
+        return x[:self.nv] + 1j * x[self.nv:]
+
+    def _solve_reduced(self, P, q, A, b, cones, t, extra=0):
+        """Solve the conic program with the anchors substituted; ``extra`` trailing unknowns (after
+        the 2nv vertex coordinates) stay free. Counts the solve. Returns (x or None, outcome)."""
+        n = 2 * self.nv
+        fr = np.concatenate([self.free, np.arange(n, n + extra)])
+        fx = self.fixed
+        P = sp.csc_array(P)
+        A = sp.csc_array(A)
         Pff = P[:, fr][fr]
         qf = q[fr] + P[fr][:, fx] @ self.xfix
         Af = A[:, fr]
@@ -309,8 +327,7 @@ class IslandProblem:
             raise Cancelled
         if sol.x is None:
             return None, sol.outcome
-        x = np.zeros(2 * nv + extra)
+        x = np.zeros(n + extra)
         x[fx] = self.xfix
         x[fr] = sol.x
-        return x[:nv] + 1j * x[nv:2 * nv], sol.outcome
-
+        return x, sol.outcome

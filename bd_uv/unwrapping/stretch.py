@@ -19,8 +19,7 @@ from ..frames import frames_from_map
 from ..solvers.projection import ProjectionSolver
 from .initial import start_map
 from .problem import STORE_HEADROOM, STRETCH_MARGIN_SOLVE, solve_bound
-from .strategies import (ALWAYS_SOLVED, AUTO_FLOOR, AUTO_MAX_SOLVES, AUTO_TOLERANCE, DESCENT,
-                         POLISH_AREA, fits)
+from .strategies import ALWAYS_SOLVED, AUTO_MAX_SOLVES, DESCENT, POLISH_AREA, fits
 
 # Projection iterations bound the singular values by [m/S, S/m] with this m: the result is
 # certified at its own final scale, which the iterations move.
@@ -28,6 +27,10 @@ STRETCH_MARGIN = 1.03
 # A conic solve whose result misses [1/S, S] at its own scale is repeated with the margin grown by
 # the miss, at most this many times per frames tried.
 STRETCH_RETRIES = 3
+# bound="auto" with S: bisection on C stops when C_right - C_left <= AUTO_TOLERANCE (C_right - 1)
+# + AUTO_FLOOR (relative to C - 1: near C = 1 a 1 % tolerance on C is most of what is left).
+AUTO_TOLERANCE = 0.02
+AUTO_FLOOR = 5e-4
 
 
 def stretch_solve(prob, frames, u_ref, C, S, report):
