@@ -284,6 +284,8 @@ def _script_options(options):
         out += ["--time-budget", str(options["time_budget"])]
     if options.get("boundary", "free") != "free":
         out += ["--boundary", options["boundary"]]
+    if options.get("stretch") is not None:
+        out += ["--stretch", str(options["stretch"])]
     return out
 
 

@@ -70,7 +70,8 @@ def solver_kwargs(args):
                   time_budget=args.time_budget if args.bound == "auto" else None)
     if args.boundary != "free":  # absent by default: options hashed by --resume stay the same
         kwargs["boundary"] = args.boundary
-    if args.stretch is not None and args.seams != "auto":
+    # getattr: scripts/bd_uv_batch.py shares these options but has no --seams
+    if args.stretch is not None and getattr(args, "seams", None) != "auto":
         kwargs["stretch"] = args.stretch
     return kwargs
 

@@ -133,6 +133,25 @@ def stretch_space(ops, w, C, smin, smax, faces=None):
             [("soc", 3)] * (2 * nf))
 
 
+def stretch_conformal_bound(C, smin, smax, room=1.2):
+    """The conformal bound to combine with ``stretch_space(smin, smax)`` for a requested C.
+
+    Eq. 6.3 bounds ``Gamma_j`` through ``|alpha_j| + k Re(w_j alpha_j) <= smax``: it charges the
+    largest ``|beta_j|`` that C allows (k of eq. 4.15), so with C close to ``R = smax / smin``
+    (the paper's restriction ``S / s >= C``, section 6.3) a face is left almost no room for its
+    scale (S = 1.015, C = 1.03: a bent grid has no map there). Any smaller C is a subset of F_C,
+    so C is lowered to ``max(sqrt(R), R / room)``: R split evenly between the conformal bound and
+    the scale when R is small, and at least a factor ``room`` of R left to the scale otherwise.
+    The map is still certified at the requested C.
+
+    Returns
+    -------
+    float, 1 <= result <= C
+    """
+    R = smax / smin
+    return float(max(1.0, min(C, max(np.sqrt(R), R / room))))
+
+
 def mean_scale_row(ops, w, value=1.0):
     """One equality row fixing the area-weighted mean of ``Re(w_j alpha_j)`` to ``value``.
 

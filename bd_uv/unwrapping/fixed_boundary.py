@@ -17,6 +17,7 @@ from ..bijectivity import bijectivity_premises
 from ..boundary import SHAPES, boundary_targets, fixed_boundary_map
 from ..errors import CancelledError, InfeasibleError
 from ..metrics import conformal_distortion
+from ..spaces import stretch_conformal_bound
 from .problem import STORE_HEADROOM, Cancelled, IslandProblem
 from .strategies import RAISE_FACTOR, guaranteed_bound
 
@@ -99,18 +100,20 @@ def fixed_boundary_island(island, V, pins, shape, method, bound, raise_bound, bo
         report(0.2, f"solving with the boundary on a {shape} at C = {C:.3g}")
         try:
             res = fixed_boundary_map(prob.V, island.tris, island.loops, all_idx, all_uv,
-                                     method=method, bound=C, cone=cone, cancel=cancel,
-                                     stretch=st)
+                                     method=method, cone=cone, cancel=cancel, stretch=st,
+                                     bound=C if st is None else stretch_conformal_bound(C, *st))
             break
         except CancelledError:
             raise Cancelled from None
         except InfeasibleError as exc:
-            top = bound_limit if stretch is None else min(bound_limit, stretch * stretch)
-            if stretch is not None and raise_bound and C * RAISE_FACTOR > top:
+            # with S, a C above what the singular values allow (S^2) cannot help
+            top = bound_limit if st is None else \
+                min(bound_limit, stretch_conformal_bound(st[1] / st[0], *st))
+            if st is not None and raise_bound and C >= top:
                 raise InfeasibleError(f"island {island.index}: {exc} with stretch S = "
-                                      f"{stretch:g} (C tried up to {C:g}; S^2 = "
-                                      f"{stretch * stretch:g} is the most it can help); raise S "
-                                      "or choose another boundary", island.index) from None
+                                      f"{stretch:g} (C tried up to {C:g}, which S leaves room "
+                                      "for); raise S or choose another boundary",
+                                      island.index) from None
             if not raise_bound or C * RAISE_FACTOR > bound_limit:
                 raise InfeasibleError(f"island {island.index}: {exc}"
                                       + ("" if not raise_bound else

@@ -131,7 +131,7 @@ class IslandProblem:
         if S is None:
             return True
         lo, hi = self.stretch_range(u)
-        return lo * (1 + STORE_HEADROOM) >= 1.0 / S and hi * (1 + STORE_HEADROOM) <= S
+        return lo >= (1 + STORE_HEADROOM) / S and hi * (1 + STORE_HEADROOM) <= S
 
     def face_distortion(self, u):
         """Conformal distortion per face (eq. 4.9); inf where a face flips or collapses."""

@@ -16,6 +16,7 @@ from ..errors import InfeasibleError
 from ..frames import frames_from_map
 from ..solvers.flip_free import flip_free_map
 from ..solvers.projection import ProjectionSolver
+from ..spaces import stretch_conformal_bound
 from .initial import Start, start_map
 from .problem import SOLVE_MARGIN, STORE_HEADROOM, STRETCH_MARGIN_SOLVE, solve_bound
 
@@ -289,16 +290,18 @@ def arap(prob, u, C, report, S=None):
         prob.set_anchors(prob.pin_idx, prob.pin_val)
     prob.weights = None
     prob.sigma = 1e-3 * float(np.median(np.abs(prob.alpha(u))))
+    Cs = C
     if S is not None:
         k = np.sqrt(prob.area3d) if len(prob.pin_idx) >= 2 else 1.0
         prob.fix_scale = len(prob.pin_idx) < 2
         prob.stretch = (k * STRETCH_MARGIN_SOLVE / S, k * S / STRETCH_MARGIN_SOLVE)
+        Cs = stretch_conformal_bound(C, STRETCH_MARGIN_SOLVE / S, S / STRETCH_MARGIN_SOLVE)
     prev = None
     for i in range(MAX_RESETS + 1):
         w = frames_from_map(prob.alpha(u))
         prob.scale = 1.0 / max(prob.energy_of(u, w), 1e-6)
         report(0.9, f"BD-ARAP iteration {i + 1}")
-        un, _ = prob.solve(w, C)
+        un, _ = prob.solve(w, Cs)
         if not prob.within(un, C, S):
             break
         e = prob.energy_of(un, w)

@@ -17,6 +17,7 @@ import numpy as np
 from ..errors import InfeasibleError
 from ..frames import frames_from_map
 from ..solvers.projection import ProjectionSolver
+from ..spaces import stretch_conformal_bound
 from .initial import start_map
 from .problem import STORE_HEADROOM, STRETCH_MARGIN_SOLVE, solve_bound
 from .strategies import ALWAYS_SOLVED, AUTO_MAX_SOLVES, DESCENT, POLISH_AREA, fits
@@ -43,6 +44,8 @@ def stretch_solve(prob, frames, u_ref, C, S, report):
     rescales by is not linear in the map, so when the result misses [1/S, S] at its own scale the
     margin m grows by the miss and the solve is repeated (``STRETCH_RETRIES``). With two or more
     pins the bounds are absolute (relative to the 3D geometry), as the certificate measures them.
+    The conformal rows use ``spaces.stretch_conformal_bound`` (C lowered when S leaves the scale
+    no room); the result is certified at C.
     An inexact solve resets the frames from its last iterate once (eq. 4.21); an infeasible one
     moves on to the next frames.
 
@@ -65,14 +68,14 @@ def stretch_solve(prob, frames, u_ref, C, S, report):
         for _ in range(STRETCH_RETRIES + 2):
             prob.stretch = (k * m / S, k * S / m)
             report(0.5, f"solving at C = {C:.3g} with stretch {S:.3g}")
-            u, outcome = prob.solve(w, C)
+            u, outcome = prob.solve(w, stretch_conformal_bound(C, m / S, S / m))
             if prob.within(u, C, S):
                 best = u
                 break
             if outcome == "solved" and prob.check(u, C)[0]:
                 # within C but not within S at its own scale: narrow the solve's bounds
                 lo, hi = prob.stretch_range(u)
-                m *= max(hi * (1 + STORE_HEADROOM) / S, 1.0 / (S * lo * (1 - STORE_HEADROOM)),
+                m *= max(hi * (1 + STORE_HEADROOM) / S, (1 + STORE_HEADROOM) / (S * lo),
                          1.0) * 1.002
                 if m >= S:  # [m/S, S/m] is empty
                     break
@@ -112,13 +115,16 @@ def bounded_stretch(prob, start, C, S, report, flags=None):
     starts.append(harmonic)
     projected, tried = None, []
     t = time.perf_counter()
+    # S close to 1 leaves the projection's own margins (1 % each side) no room: conic solve only
+    pm = min(STRETCH_MARGIN, S ** 0.25)
+    project = not solved and (pm / S) * 1.011 <= (S / pm) * 0.989
     try:
-        for st in starts if not solved else []:
+        for st in starts if project else []:
             report(0.2, f"bending into C = {C:.3g}, stretch {S:.3g}")
             values = prob.pin_val if len(prob.pin_idx) else st.u[fixed]
             # margins: the result is measured again at its own scale, which the iterations move
-            res = solver.project(st.u, solve_bound(C), values, smin=k * STRETCH_MARGIN / S,
-                                 smax=k * S / STRETCH_MARGIN, max_iter=400, cancel=prob.cancel)
+            res = solver.project(st.u, solve_bound(C), values, smin=k * pm / S, smax=k * S / pm,
+                                 max_iter=400, cancel=prob.cancel)
             prob.iterations += res.iterations
             if res.all_converged and prob.within(res.u, C, S):
                 projected = (res.u, st)

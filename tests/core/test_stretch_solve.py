@@ -107,3 +107,19 @@ def test_refused_combinations_say_why(nefertiti):
         bd_uv.unwrap(V, F, bound="auto", stretch=2.0, boundary="circle")
     with pytest.raises(ValueError, match=">= 1"):
         bd_uv.unwrap(V, F, bound="auto", stretch=0.5)
+
+
+def test_s_close_to_one_leaves_the_scale_room():
+    """S = 1.015 with C = 1.03 (S^2 = 1.030): eq. 6.3 charges the largest |beta| that C allows,
+    so at C itself a bent grid has no map; the solve lowers its conformal bound
+    (``spaces.stretch_conformal_bound``) and the result is certified at C and S."""
+    V, F = grid(7, 6)
+    V[:, 0], V[:, 1] = 2 * V[:, 0] - 1, 2.5 * V[:, 1] - 1       # [-1, 1]^2, like Blender's grid
+    V[:, 2] = 0.3 * np.sin(1.7 * V[:, 0]) * np.cos(1.3 * V[:, 1])
+    free = bd_uv.unwrap(V, F, bound=1.03)
+    s = np.linalg.svd(reference_jacobians(V, F, free.corner_uv), compute_uv=False)
+    assert s.max() / s.min() > 1.015 ** 2 * 0.99   # the conformal map's scale varies
+    for method in ("lscm", "stretch-l1"):
+        res = bd_uv.unwrap(V, F, bound=1.03, stretch=1.015, method=method)
+        assert res.islands[0].status == "certified", res.islands[0].message
+        svd_check(V, F, res.corner_uv, 1.03, 1.015)
