@@ -148,7 +148,7 @@ def bounded_stretch(prob, start, C, S, report, flags=None):
         if flags is not None:
             flags.append("projected")
         return u, C, st.name
-    frames = [st.frames for st in starts] + tried
+    frames = ([start.frames] if start.u is None else []) + [st.frames for st in starts] + tried
     ref = start.u if start.u is not None and np.isfinite(start.D) else harmonic.u
     us = stretch_solve(prob, frames, ref, C, S, report)
     if us is not None:
