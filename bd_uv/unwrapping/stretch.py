@@ -20,7 +20,8 @@ from ..solvers.projection import ProjectionSolver
 from ..spaces import stretch_conformal_bound
 from .initial import start_map
 from .problem import STORE_HEADROOM, STRETCH_MARGIN_SOLVE, solve_bound
-from .strategies import ALWAYS_SOLVED, AUTO_MAX_SOLVES, DESCENT, POLISH_AREA, fits
+from .strategies import (ALWAYS_SOLVED, AUTO_MAX_SOLVES, DESCENT, IMPROVEMENT, MAX_RESETS,
+                         POLISH_AREA, fits)
 
 # Projection iterations bound the singular values by [m/S, S/m] with this m: the result is
 # certified at its own final scale, which the iterations move.
@@ -152,10 +153,33 @@ def bounded_stretch(prob, start, C, S, report, flags=None):
     ref = start.u if start.u is not None and np.isfinite(start.D) else harmonic.u
     us = stretch_solve(prob, frames, ref, C, S, report)
     if us is not None:
+        if solved:
+            us = reset_frames(prob, us, C, S, report)
         return us, C, start.name if start.u is not None else harmonic.name
     raise InfeasibleError(f"island {prob.island.index}: no map found within C = {C:g} and stretch "
                           f"S = {S:g}; raise S or C, or let bd-uv add seams (seams='auto')",
                           prob.island.index)
+
+
+def reset_frames(prob, u, C, S, report):
+    """Frame resets (eq. 4.21) after a certified stretch solve, while the energy drops by more
+    than IMPROVEMENT (at most MAX_RESETS), as BD-Dirichlet does without S: the last solve's
+    frames are only the start's. Returns the map of lowest energy within C and S."""
+    e = prob.energy_of(u, frames_from_map(prob.alpha(u)))
+    for i in range(MAX_RESETS):
+        report(0.8, f"resetting frames ({i + 1})")
+        un = stretch_solve(prob, [frames_from_map(prob.alpha(u))], u, C, S, report)
+        if un is None:
+            break
+        en = prob.energy_of(un, frames_from_map(prob.alpha(un)))
+        if en < e:
+            u, improved = un, e - en > IMPROVEMENT * abs(e)
+            e = en
+            if not improved:
+                break
+        else:
+            break
+    return u
 
 
 def minimise_stretch(prob, start, S, budget, flags, report, t0):
