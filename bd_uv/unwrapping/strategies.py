@@ -274,8 +274,8 @@ def descend(prob, u, report, max_iter=40):
 def arap(prob, u, C, report, S=None):
     """BD-ARAP: minimise the ARAP energy over F_C with frames from the previous map, resetting
     the frames while the energy improves (section 6.1, "As-rigid-as-possible"). With a stretch
-    bound S the rows of section 6.3 are added (``stretch_solve``'s scale and margins) and each
-    iterate must pass them as certified (``within``)."""
+    bound S the rows of section 6.3 are added (``stretch.stretch_solve``'s scale and margins) and
+    each iterate must pass them as certified (``IslandProblem.within``)."""
     if len(prob.pin_idx) < 2:
         # ARAP has an absolute scale: start from the map scaled to the 3D area, one anchor.
         scale = np.sqrt(1.0 / uv_area(u, prob.island.tris))
