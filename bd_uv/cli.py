@@ -34,8 +34,10 @@ def bound_arg(text):
 def add_solver_options(p):
     """Options shared by ``unwrap`` and ``batch``."""
     p.add_argument("--method", choices=METHODS, default="lscm",
-                   help="energy: BD-LSCM (default), BD-ARAP, BD-Dirichlet or BD-Biharmonic "
-                        "(eq. 6.1, meant for --boundary circle|rectangle|pinned)")
+                   help="energy: BD-LSCM (default), BD-ARAP, BD-Dirichlet, BD-Biharmonic "
+                        "(eq. 6.1, meant for --boundary circle|rectangle|pinned) or the L1 stretch "
+                        "energy sum (|alpha| + |beta|) Area (free boundary: scale held at the 3D "
+                        "area)")
     p.add_argument("--bound", type=bound_arg, default=5.0,
                    help="conformal distortion bound C >= 1, or 'auto' to minimise it (default 5)")
     p.add_argument("--frames", choices=FRAMES, default="auto",
@@ -50,12 +52,14 @@ def add_solver_options(p):
                    help="seconds per island for --bound auto (default 120)")
     p.add_argument("--stretch", type=float, default=None, metavar="S",
                    help="every face's singular values within [1/S, S] at its island's own scale "
-                        "(UV area = 3D area; Lipman 2012, section 6.3): with --seams auto "
-                        "(default 2 there) and with a numeric --bound for BD-LSCM")
+                        "(UV area = 3D area; Lipman 2012, section 6.3), with every --method; with "
+                        "--boundary circle|rectangle|pinned relative to the 3D geometry (the "
+                        "target gives the scale); with --bound auto: the smallest C within S; "
+                        "--seams auto: 2 by default")
     p.add_argument("--boundary", choices=BOUNDARIES, default="free",
                    help="each island's outer boundary: free (default), on a circle, on a rectangle "
                         "(corners at the four boundary vertices nearest a right angle, or four "
-                        "pinned ones) or on the polygon of its pinned UVs; holes stay free; the "
+                        "pinned ones) or on the polygon of its pinned UVs; holes stay holes; the "
                         "report says bijective: true when Theorems 5.1/5.2's premises hold")
 
 
@@ -66,7 +70,8 @@ def solver_kwargs(args):
                   time_budget=args.time_budget if args.bound == "auto" else None)
     if args.boundary != "free":  # absent by default: options hashed by --resume stay the same
         kwargs["boundary"] = args.boundary
-    if args.stretch is not None and args.seams != "auto":
+    # getattr: scripts/bd_uv_batch.py shares these options but has no --seams
+    if args.stretch is not None and getattr(args, "seams", None) != "auto":
         kwargs["stretch"] = args.stretch
     return kwargs
 

@@ -27,6 +27,9 @@ SOLVE_MARGIN = 2e-3     # solve at a C slightly below the bound so certification
 MAX_RESETS = 4          # frame resets after the first feasible solve
 MAX_RETRIES = 4         # frame resets from an infeasible solve's last iterate
 IMPROVEMENT = 0.01      # keep resetting frames while the energy drops by more than this fraction
+# Faces marked ``loose`` (the triangles filling an island's holes, ``boundary.fixed_boundary_map``)
+# are held in F_C at this C only: they need only stay orientation-preserving (Theorem 5.1).
+LOOSE_BOUND = 1e4
 
 
 @dataclass(frozen=True)
@@ -61,7 +64,7 @@ def planar_operators(Z, tris, nv):
 
 
 def solve_with_handles(ops, idx, val, w, C, method, sigma, stretch=None, cone="soc",
-                       cancel=None, fix_scale=False):
+                       cancel=None, fix_scale=False, loose=None):
     """Minimise an energy over F_C (optionally with stretch bounds) with vertices held fixed.
 
     Parameters
@@ -77,6 +80,8 @@ def solve_with_handles(ops, idx, val, w, C, method, sigma, stretch=None, cone="s
     cancel : object with ``is_set()``, optional
     fix_scale : bool, add ``spaces.mean_scale_row`` (area-weighted mean of Re(w alpha) = 1), for
         free-boundary islands whose stretch is measured after scaling to UV area = 3D area
+    loose : (k,) bool, optional, faces held at LOOSE_BOUND instead of C and without stretch
+        bounds (triangles that need only stay orientation-preserving)
 
     Returns
     -------
@@ -88,9 +93,12 @@ def solve_with_handles(ops, idx, val, w, C, method, sigma, stretch=None, cone="s
     fixed = np.concatenate([idx, idx + nv])
     xfix = np.concatenate([val.real, val.imag])
     free = np.setdiff1d(np.arange(2 * nv), fixed)
+    if loose is not None:
+        C = np.where(loose, LOOSE_BOUND, C)
     A, b, cones = bounded_distortion_space(ops, w, C, sigma, cone)
     if stretch is not None:
-        As, bs, cs = stretch_space(ops, w, C, *stretch)
+        As, bs, cs = stretch_space(ops, w, C, *stretch,
+                                   faces=None if loose is None else ~loose)
         A = sp.vstack([A, As]).tocsc()
         b, cones = np.concatenate([b, bs]), cones + cs
     if fix_scale:
@@ -129,13 +137,16 @@ def solve_with_handles(ops, idx, val, w, C, method, sigma, stretch=None, cone="s
     return x[:nv] + 1j * x[nv:2 * nv], sol
 
 
-def map_distortion(ops, u):
-    """Max conformal distortion (eq. 4.9) of a map u (nv,) complex; inf if any face flips."""
+def map_distortion(ops, u, loose=None):
+    """Max conformal distortion (eq. 4.9) of a map u (nv,) complex; inf if any face flips.
+    Faces marked ``loose`` (k,) bool count only for flips."""
     x = np.concatenate([u.real, u.imag])
     a = np.abs(ops.Are @ x + 1j * (ops.Aim @ x))
     b = np.abs(ops.Bre @ x + 1j * (ops.Bim @ x))
     if not np.all(a > b):
         return np.inf
+    if loose is not None:
+        a, b = a[~loose], b[~loose]
     return float(np.max((a + b) / (a - b)))
 
 
@@ -157,7 +168,7 @@ def alpha_of(ops, u):
 
 
 def bounded_with_resets(ops, idx, val, w, C, method, sigma, stretch=None, cone="soc",
-                        cancel=None, max_resets=MAX_RESETS, fix_scale=False):
+                        cancel=None, max_resets=MAX_RESETS, fix_scale=False, loose=None):
     """Solve over F_C, resetting frames (eq. 4.21) after infeasible solves and after solutions.
 
     Lipman 2012, section 4 ("Resetting the frame-field and iterating") and section 6, step 4.
@@ -173,16 +184,18 @@ def bounded_with_resets(ops, idx, val, w, C, method, sigma, stretch=None, cone="
     best, best_e, solves, iterations, retries, resets = None, np.inf, 0, 0, 0, 0
     while True:
         u, sol = solve_with_handles(ops, idx, val, w, Csolve, method, sigma, stretch, cone, cancel,
-                                    fix_scale)
+                                    fix_scale, loose)
         solves += 1
         iterations += sol.iterations
         if sol.outcome == "cancelled":
             raise CancelledError("deformation cancelled")
-        ok = u is not None and map_distortion(ops, u) <= C
+        ok = u is not None and map_distortion(ops, u, loose) <= C
         if ok and stretch is not None:
             x = np.concatenate([u.real, u.imag])
             a = np.abs(ops.Are @ x + 1j * (ops.Aim @ x))
             b = np.abs(ops.Bre @ x + 1j * (ops.Bim @ x))
+            if loose is not None:
+                a, b = a[~loose], b[~loose]
             ok = bool(np.all(a - b >= stretch[0] * (1 - 1e-9)) and
                       np.all(a + b <= stretch[1] * (1 + 1e-9)))
         if ok:

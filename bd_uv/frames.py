@@ -80,6 +80,36 @@ def _loop_lengths(Z, tris, nv, loop):
     return np.asarray(E[loop, nxt]).ravel()
 
 
+def hole_fans(Z, tris, nv, holes):
+    """Triangles filling each hole: a fan around a new centre vertex (ids nv, nv + 1, ...).
+
+    Parameters
+    ----------
+    Z : (k,3) complex local corner coordinates, tris : (k,3) int, nv : int
+    holes : sequence of (b,) int hole loops, each running with the island's faces on its left
+        (``bijectivity.oriented_loop``), so the fan faces are oriented like the island's
+
+    Returns
+    -------
+    Z_fill : (q,3) complex, each fan face as an isosceles triangle on its hole edge (height from
+        the radius of a circle of the hole's perimeter), tris_fill : (q,3) int64, q = sum of b
+    """
+    E = _edge_length_lookup(Z, tris, nv)
+    E = E + E.T
+    extra_Z, extra_T = [], []
+    for h, loop in enumerate(holes):
+        c = nv + h
+        nxt = np.roll(loop, -1)
+        # Boundary edge loop -> nxt runs along the island; the fan face (nxt, loop, c) is
+        # oriented like the island's faces. Its shape: an isosceles triangle on the edge.
+        le = np.asarray(E[loop, nxt]).ravel()
+        radius = max(le.sum() / (2 * np.pi), 1e-300)
+        height = np.sqrt(np.maximum(radius ** 2 - (le / 2) ** 2, (0.1 * le) ** 2))
+        extra_Z.append(np.stack([np.zeros_like(le), le + 0j, le / 2 + 1j * height], 1))
+        extra_T.append(np.stack([nxt, loop, np.full(len(loop), c)], 1))
+    return np.concatenate(extra_Z), np.concatenate(extra_T).astype(np.int64)
+
+
 def harmonic_map(Z, tris, nv, loops):
     """Flip-free harmonic embedding onto a disk (Tutte/Floater, mean-value weights).
 
@@ -96,21 +126,9 @@ def harmonic_map(Z, tris, nv, loops):
     # Mean-value weights per corner: w_ij += tan(theta_i / 2) / |e_ij|.
     ZZ, TT, n_all = Z, tris, nv
     if holes:
-        extra_Z, extra_T = [], []
-        E = _edge_length_lookup(Z, tris, nv)
-        E = E + E.T
-        for h, loop in enumerate(holes):
-            c = nv + h
-            nxt = np.roll(loop, -1)
-            # Boundary edge loop -> nxt runs along the island; the fan face (nxt, loop, c) is
-            # oriented like the island's faces. Its shape: an isosceles triangle on the edge.
-            le = np.asarray(E[loop, nxt]).ravel()
-            radius = max(le.sum() / (2 * np.pi), 1e-300)
-            height = np.sqrt(np.maximum(radius ** 2 - (le / 2) ** 2, (0.1 * le) ** 2))
-            extra_Z.append(np.stack([np.zeros_like(le), le + 0j, le / 2 + 1j * height], 1))
-            extra_T.append(np.stack([nxt, loop, np.full(len(loop), c)], 1))
-        ZZ = np.concatenate([Z] + extra_Z)
-        TT = np.concatenate([tris] + extra_T)
+        extra_Z, extra_T = hole_fans(Z, tris, nv, holes)
+        ZZ = np.concatenate([Z, extra_Z])
+        TT = np.concatenate([tris, extra_T])
         n_all = nv + len(holes)
     ang = _corner_angles(ZZ)
     t = np.tan(ang / 2)

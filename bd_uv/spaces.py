@@ -22,8 +22,14 @@ from .energies import rotated_alpha
 
 
 def cone_factor(C):
-    """k = (C-1)/(C+1) of eq. 4.15."""
+    """k = (C-1)/(C+1) of eq. 4.15 (C a float, or (k,) per face)."""
+    C = np.asarray(C, dtype=np.float64) if np.ndim(C) else float(C)
     return (C - 1.0) / (C + 1.0)
+
+
+def _scaled_rows(k, M):
+    """Row j of sparse M times k_j (k a scalar or (rows,))."""
+    return k * M if np.ndim(k) == 0 else (sp.diags(k) @ M).tocsr()
 
 
 def bounded_distortion_space(ops, w, C, sigma, cone="soc"):
@@ -33,7 +39,7 @@ def bounded_distortion_space(ops, w, C, sigma, cone="soc"):
     ----------
     ops : energies.JacobianOperators
     w : (k,) complex unit frames
-    C : float >= 1, the distortion bound
+    C : float >= 1, the distortion bound, or (k,) one per face
     sigma : float > 0, lower bound on Re(w alpha) (eq. 4.17 as r >= sigma)
     cone : "soc" or "linf"
 
@@ -49,15 +55,15 @@ def bounded_distortion_space(ops, w, C, sigma, cone="soc"):
     b = [np.full(nf, -sigma)]
     if cone == "soc":
         # (k Ra x, Bre x, Bim x) in SOC(3), interleaved per face: s = 0 - (-[...] x)
-        stack = sp.vstack([k * Ra, ops.Bre, ops.Bim]).tocsr()
+        stack = sp.vstack([_scaled_rows(k, Ra), ops.Bre, ops.Bim]).tocsr()
         perm = np.arange(3 * nf).reshape(3, nf).T.ravel()
         blocks.append(-stack[perm])
         b.append(np.zeros(3 * nf))
         cones = [("nonneg", nf)] + [("soc", 3)] * nf
     elif cone == "linf":
-        kk = k / np.sqrt(2.0)
+        kR = _scaled_rows(k / np.sqrt(2.0), Ra)
         # kk Ra x -/+ Bre x >= 0 and the same for Bim
-        rows = [kk * Ra - ops.Bre, kk * Ra + ops.Bre, kk * Ra - ops.Bim, kk * Ra + ops.Bim]
+        rows = [kR - ops.Bre, kR + ops.Bre, kR - ops.Bim, kR + ops.Bim]
         blocks.extend(-r for r in rows)
         b.append(np.zeros(4 * nf))
         cones = [("nonneg", 5 * nf)]
@@ -82,7 +88,7 @@ def check_stretch(C, S):
                          f"S >= sqrt(C) = {np.sqrt(C):.4g} or lower C")
 
 
-def stretch_space(ops, w, C, smin, smax):
+def stretch_space(ops, w, C, smin, smax, faces=None):
     """Conic rows bounding every face's singular values: ``smin <= gamma_j <= Gamma_j <= smax``.
 
     Lipman 2012, section 6.3. With ``r_j = Re(w_j alpha_j)`` and ``k = (C-1)/(C+1)``:
@@ -101,25 +107,49 @@ def stretch_space(ops, w, C, smin, smax):
     ----------
     ops : energies.JacobianOperators
     w : (k,) complex unit frames
-    C : float >= 1, the conformal bound the rows are combined with
+    C : float >= 1, the conformal bound the rows are combined with, or (k,) one per face
     smin, smax : float, 0 <= smin <= smax, in the units of the geometry ``ops`` was built on
+    faces : (f,) int or bool mask, optional, the faces bounded (default all)
 
     Returns
     -------
-    A : (6k, 2nv) csc, b : (6k,), cones : list of ("soc", 3), 2k entries
+    A : (6f, 2nv) csc, b : (6f,), cones : list of ("soc", 3), 2f entries
     """
     k = cone_factor(C)
     Ra, _ = rotated_alpha(ops, w)
+    Are, Aim, Bre, Bim = ops.Are, ops.Aim, ops.Bre, ops.Bim
+    if faces is not None:
+        Ra, Are, Aim, Bre, Bim = (M[faces] for M in (Ra, Are, Aim, Bre, Bim))
+        k = k if np.ndim(k) == 0 else k[faces]
     nf = Ra.shape[0]
     perm = np.arange(3 * nf).reshape(3, nf).T.ravel()
     # (6.3): s = [smax, 0, 0] - [k Ra; -Are; -Aim] x  in SOC(3), interleaved per face
-    up = sp.vstack([k * Ra, -ops.Are, -ops.Aim]).tocsr()[perm]
+    up = sp.vstack([_scaled_rows(k, Ra), -Are, -Aim]).tocsr()[perm]
     b_up = np.concatenate([np.full(nf, float(smax)), np.zeros(2 * nf)])[perm]
     # lower: s = [-smin, 0, 0] - [-Ra; -Bre; -Bim] x  in SOC(3)
-    lo = sp.vstack([-Ra, -ops.Bre, -ops.Bim]).tocsr()[perm]
+    lo = sp.vstack([-Ra, -Bre, -Bim]).tocsr()[perm]
     b_lo = np.concatenate([np.full(nf, -float(smin)), np.zeros(2 * nf)])[perm]
     return (sp.vstack([up, lo]).tocsc(), np.concatenate([b_up, b_lo]),
             [("soc", 3)] * (2 * nf))
+
+
+def stretch_conformal_bound(C, smin, smax, room=1.2):
+    """The conformal bound to combine with ``stretch_space(smin, smax)`` for a requested C.
+
+    Eq. 6.3 bounds ``Gamma_j`` through ``|alpha_j| + k Re(w_j alpha_j) <= smax``: it charges the
+    largest ``|beta_j|`` that C allows (k of eq. 4.15), so with C close to ``R = smax / smin``
+    (the paper's restriction ``S / s >= C``, section 6.3) a face is left almost no room for its
+    scale (S = 1.015, C = 1.03: a bent grid has no map there). Any smaller C is a subset of F_C,
+    so C is lowered to ``max(sqrt(R), R / room)``: R split evenly between the conformal bound and
+    the scale when R is small, and at least a factor ``room`` of R left to the scale otherwise.
+    The map is still certified at the requested C.
+
+    Returns
+    -------
+    float, 1 <= result <= C
+    """
+    R = smax / smin
+    return float(max(1.0, min(C, max(np.sqrt(R), R / room))))
 
 
 def mean_scale_row(ops, w, value=1.0):

@@ -1,8 +1,9 @@
 """One island mapped with its outer boundary fixed on a circle, a rectangle or its pinned polygon.
 
 Lipman 2012, section 5: an orientation-preserving map that takes the boundary one-to-one onto a
-simple polygon is a bijection onto it (Theorem 5.1), also with holes, which stay free, once every
-loop's image is simple and nested rightly (Theorem 5.2). ``boundary.boundary_targets`` places the
+simple polygon is a bijection onto it (Theorem 5.1), also with holes once every loop's image is
+simple and nested rightly (Theorem 5.2); the solve fills the holes with triangles held
+orientation-preserving, so that holds by construction. ``boundary.boundary_targets`` places the
 outer boundary, ``boundary.fixed_boundary_map`` minimises the energy over F_C (eqs. 4.15-4.18) with
 those targets (and the island's other pins) held fixed; the caller certifies the result from its
 final UVs like every island (``unwrap._finish``), and ``with_premises`` then checks Theorems
@@ -16,7 +17,8 @@ from ..bijectivity import bijectivity_premises
 from ..boundary import SHAPES, boundary_targets, fixed_boundary_map
 from ..errors import CancelledError, InfeasibleError
 from ..metrics import conformal_distortion
-from .problem import Cancelled, IslandProblem
+from ..spaces import stretch_conformal_bound
+from .problem import STORE_HEADROOM, Cancelled, IslandProblem
 from .strategies import RAISE_FACTOR, guaranteed_bound
 
 BOUNDARIES = ("free",) + SHAPES
@@ -24,10 +26,11 @@ FRAMES_NAME = "harmonic"  # fixed_boundary_map's frames: the Tutte embedding, tu
 # When faces with all three corners pinned force C above the bound, the first C tried is this much
 # above the smallest that admits them (a solve with that face exactly on its cone is fragile).
 FORCED_HEADROOM = 1.02
+STRETCH_HEADROOM = 1.0 + 4 * STORE_HEADROOM
 
 
 def fixed_boundary_island(island, V, pins, shape, method, bound, raise_bound, bound_limit, cone,
-                          cancel, report):
+                          cancel, report, stretch=None):
     """Map one island with its outer boundary on ``shape``; raise C when F_C is empty.
 
     Parameters
@@ -38,13 +41,16 @@ def fixed_boundary_island(island, V, pins, shape, method, bound, raise_bound, bo
         boundary define the rectangle's corners or the pinned polygon (``boundary_targets``) and
         are otherwise replaced by the targets; the island's other pins are kept exactly
     shape : "circle" | "rectangle" | "pinned"
-    method : an energy of ``energies.energy`` ("lscm", "arap", "dirichlet", "biharmonic")
+    method : an energy of ``deform.METHODS`` ("lscm", "arap", "dirichlet", "biharmonic",
+        "stretch-l1")
     bound : float >= 1, the conformal bound C
     raise_bound : bool, multiply C by ``strategies.RAISE_FACTOR`` while no map is found
     bound_limit : float, the largest C tried
     cone : "soc" | "linf"
     cancel : object with ``is_set()`` or None
     report : callable(fraction, message)
+    stretch : float S, optional: every face's singular values within [1/S, S] relative to the 3D
+        geometry (section 6.3; the target gives the scale); C is then raised up to S^2 at most
 
     Returns
     -------
@@ -72,6 +78,9 @@ def fixed_boundary_island(island, V, pins, shape, method, bound, raise_bound, bo
     all_idx = np.concatenate([idx, prob.pin_idx[keep]])
     all_uv = np.concatenate([uv, own[keep]])
     C, flags = float(bound), []
+    # Section 6.3 relative to the 3D geometry: the target gives the scale (circle and rectangle
+    # have the island's 3D area). Solved a little inside [1/S, S] so the stored UVs still pass.
+    st = None if stretch is None else (STRETCH_HEADROOM / stretch, stretch / STRETCH_HEADROOM)
     if shape != "pinned" and not keep.all():
         flags.append("boundary_pins_moved")  # on the circle/rectangle, not at their pinned UVs
     forced = forced_distortion(prob.V, island.tris, all_idx, all_uv)
@@ -91,11 +100,20 @@ def fixed_boundary_island(island, V, pins, shape, method, bound, raise_bound, bo
         report(0.2, f"solving with the boundary on a {shape} at C = {C:.3g}")
         try:
             res = fixed_boundary_map(prob.V, island.tris, island.loops, all_idx, all_uv,
-                                     method=method, bound=C, cone=cone, cancel=cancel)
+                                     method=method, cone=cone, cancel=cancel, stretch=st,
+                                     bound=C if st is None else stretch_conformal_bound(C, *st))
             break
         except CancelledError:
             raise Cancelled from None
         except InfeasibleError as exc:
+            # with S, a C above what the singular values allow (S^2) cannot help
+            top = bound_limit if st is None else \
+                min(bound_limit, stretch_conformal_bound(st[1] / st[0], *st))
+            if st is not None and raise_bound and C >= top:
+                raise InfeasibleError(f"island {island.index}: {exc} with stretch S = "
+                                      f"{stretch:g} (C tried up to {C:g}, which S leaves room "
+                                      "for); raise S or choose another boundary",
+                                      island.index) from None
             if not raise_bound or C * RAISE_FACTOR > bound_limit:
                 raise InfeasibleError(f"island {island.index}: {exc}"
                                       + ("" if not raise_bound else

@@ -10,13 +10,14 @@ import dataclasses
 import time
 
 import numpy as np
+import scipy.sparse as sp
 
-from ..energies import energy, jacobian_operators
+from ..energies import energy, jacobian_operators, stretch_l1_program
 from ..errors import InfeasibleError, SolverError
 from ..frames import _far_pair, frames_from_map, lscm_map
 from ..geometry import face_areas, local_coordinates
 from ..solvers import conic
-from ..spaces import bounded_distortion_space
+from ..spaces import bounded_distortion_space, mean_scale_row, stretch_space
 
 SOLVE_MARGIN = 2e-3      # solve at a C slightly below the bound so certification has headroom
 # Relative headroom a certified bound keeps above the map's float64 distortion, so that the UVs
@@ -28,6 +29,11 @@ def solve_bound(C):
     """The C a solve uses for a requested bound C: a little below it (SOLVE_MARGIN on C - 1, and
     STORE_HEADROOM relative), never below 1."""
     return max(1.0, min(1.0 + (C - 1.0) * (1.0 - SOLVE_MARGIN), C / (1.0 + STORE_HEADROOM)))
+
+
+# With stretch bounds (section 6.3) a conic solve bounds the singular values by [m/S, S/m] at the
+# held scale, first with this m (``stretch.stretch_solve`` grows it when the result misses).
+STRETCH_MARGIN_SOLVE = 1.005
 
 
 class Cancelled(Exception):
@@ -42,7 +48,7 @@ class IslandProblem:
     island : mesh.Island
     V : (n,3) float64, the whole mesh's vertices
     pins : (corners (p,), uv (p,2)), the whole mesh's pinned corners
-    method : "lscm" | "arap" | "dirichlet"
+    method : "lscm" | "arap" | "dirichlet" | "biharmonic" | "stretch-l1"
     cone : "soc" | "linf"
     cancel : object with ``is_set()`` or None
     """
@@ -62,6 +68,11 @@ class IslandProblem:
         self.sigma = 1.0
         self.scale = 1.0
         self.weights = None
+        # Section 6.3: (smin, smax) bounds on every face's singular values in the normalised
+        # geometry, or None; with ``fix_scale`` the area-weighted mean of Re(w alpha) is held at 1
+        # (``spaces.mean_scale_row``) instead of a second anchor fixing the scale.
+        self.stretch = None
+        self.fix_scale = False
         self.set_anchors(self.pin_idx if len(self.pin_idx) else np.array([0]),
                          self.pin_val if len(self.pin_idx) else np.array([0j]))
         self.solves = 0
@@ -100,6 +111,29 @@ class IslandProblem:
     def beta(self, u):
         x = np.concatenate([u.real, u.imag])
         return self.ops.Bre @ x + 1j * (self.ops.Bim @ x)
+
+    def stretch_range(self, u):
+        """(smallest sigma_2, largest sigma_1) of a map as the certificate measures them (Lipman
+        2012, eqs. 4.7-4.8, 6.3-6.4): relative to the island's own scale (UV area = 3D area)
+        when the map is scaled afterwards (fewer than two pins), else relative to the 3D geometry
+        (the pins give the scale; ``alpha`` is taken on the unit-area copy of the island)."""
+        a, b = np.abs(self.alpha(u)), np.abs(self.beta(u))
+        area = self.ops.area
+        if len(self.pin_idx) >= 2:
+            s = np.sqrt(self.area3d)
+        else:
+            s = np.sqrt(max(float(np.sum(area * (a * a - b * b)) / np.sum(area)), 1e-300))
+        return float(np.min(a - b)) / s, float(np.max(a + b)) / s
+
+    def within(self, u, C, S=None):
+        """Whether a map passes the certificate's tests here: no flip, distortion <= C, and (with
+        S) singular values in [1/S, S] with room for storing the UVs (STORE_HEADROOM)."""
+        if u is None or not self.check(u, C)[0]:
+            return False
+        if S is None:
+            return True
+        lo, hi = self.stretch_range(u)
+        return lo >= (1 + STORE_HEADROOM) / S and hi * (1 + STORE_HEADROOM) <= S
 
     def face_distortion(self, u):
         """Conformal distortion per face (eq. 4.9); inf where a face flips or collapses."""
@@ -180,6 +214,8 @@ class IslandProblem:
         self._scale_objective(us, w0)
 
     def _energy(self, w):
+        if self.method == "stretch-l1":  # linear objective over epigraph variables: see solve
+            return sp.csc_array((2 * self.nv, 2 * self.nv)), np.zeros(2 * self.nv), 0.0
         ops = self.ops if self.weights is None else dataclasses.replace(
             self.ops, area=self.ops.area * self.weights)
         return energy(self.method, ops, w)
@@ -188,9 +224,11 @@ class IslandProblem:
         P, q, const = self._energy(w)
         x = np.concatenate([u.real, u.imag])
         e0 = 0.5 * x @ (P @ x) + q @ x + const
-        self.scale = 1.0 / max(abs(e0), 1e-12)
+        self.scale = 1.0 / max(abs(e0), 1e-12) if self.method != "stretch-l1" else 1.0
 
     def energy_of(self, u, w):
+        if self.method == "stretch-l1":
+            return float(np.sum(self.ops.area * (np.abs(self.alpha(u)) + np.abs(self.beta(u)))))
         P, q, const = self._energy(w)
         x = np.concatenate([u.real, u.imag])
         return float(0.5 * x @ (P @ x) + q @ x + const)
@@ -204,20 +242,78 @@ class IslandProblem:
                                "L-infinity space, or report the mesh", self.island.index)
         return None
 
+    def hold_scale(self, u_start):
+        """Formulation for stretch bounds and the L1 stretch energy on a free boundary: one anchor
+        vertex (or the user's pins) and the island's scale held by ``spaces.mean_scale_row``
+        (area-weighted mean of Re(w alpha) = 1 on the unit-area island: UV area close to 3D
+        area, where the singular values are certified). Two anchors would fix the scale too, but
+        at the start map's, which may be the wrong one for the bounds. With two or more pins the
+        pins give the scale and nothing is added.
+        """
+        a = np.abs(self.alpha(u_start))
+        typical = float(np.median(a))
+        if len(self.pin_idx) >= 2:
+            self.set_anchors(self.pin_idx, self.pin_val)
+            self.fix_scale = False
+        else:
+            idx = self.pin_idx if len(self.pin_idx) else np.array([0])
+            val = self.pin_val if len(self.pin_idx) else u_start[:1]
+            self.set_anchors(idx, val)
+            self.fix_scale = True
+        self.sigma = min(1e-3 * typical, 0.5 * float(a.min())) if typical > 0 else 1e-12
+        if self.method == "lscm":
+            self.weights = 1.0 / np.maximum(a, 1e-6 * typical)
+        self._scale_objective(u_start, frames_from_map(self.alpha(u_start)))
+
     def solve(self, w, C):
-        """Minimise the energy over F_C with frames w. Returns (u or None, outcome)."""
+        """Minimise the energy over F_C with frames w (eqs. 4.15-4.18), with the stretch rows of
+        section 6.3 (eqs. 6.3-6.4, ``spaces.stretch_space``) when ``self.stretch`` is set and the
+        scale row when ``self.fix_scale``; the L1 stretch energy ("stretch-l1") as a cone
+        program (``energies.stretch_l1_program``). Returns (u or None, outcome)."""
         if self.cancel is not None and self.cancel.is_set():
             raise Cancelled
         t = time.perf_counter()
-        nv = self.nv
         if len(self.free) == 0:
-            x = np.zeros(2 * nv)
-            x[self.fixed] = self.xfix
-            return x[:nv] + 1j * x[nv:], "solved"
+            return self._pinned_map(), "solved"
         P, q, _ = self._energy(w)
-        P, q = P * self.scale, q * self.scale
-        A, b, cones = bounded_distortion_space(self.ops, w, solve_bound(C), self.sigma, self.cone)
-        fr, fx = self.free, self.fixed
+        A, b, cones = self._space(w, C)
+        extra = 0
+        if self.method == "stretch-l1":  # epigraph unknowns after the 2nv vertex coordinates
+            _, q, A, b, cones = stretch_l1_program(self.ops, A, b, cones)
+            extra = A.shape[1] - 2 * self.nv
+            P = sp.csc_array((A.shape[1], A.shape[1]))
+            q = q / float(self.ops.area.sum())
+        x, outcome = self._solve_reduced(P * self.scale, q * self.scale, A, b, cones, t, extra)
+        if x is None:
+            return None, outcome
+        return x[:self.nv] + 1j * x[self.nv:2 * self.nv], outcome
+
+    def _space(self, w, C):
+        """F_C's rows (eqs. 4.15-4.18) at ``solve_bound(C)``, with the stretch rows (section
+        6.3) and the scale row when set. Returns (A, b, cones)."""
+        Cs = solve_bound(C)
+        A, b, cones = bounded_distortion_space(self.ops, w, Cs, self.sigma, self.cone)
+        if self.stretch is not None:
+            As, bs, cs = stretch_space(self.ops, w, Cs, *self.stretch)
+            A, b, cones = sp.vstack([A, As]).tocsc(), np.concatenate([b, bs]), cones + cs
+        if self.fix_scale:
+            Az, bz, cz = mean_scale_row(self.ops, w)
+            A, b, cones = sp.vstack([Az, A]).tocsc(), np.concatenate([bz, b]), cz + cones
+        return A, b, cones
+
+    def _pinned_map(self):
+        x = np.zeros(2 * self.nv)
+        x[self.fixed] = self.xfix
+        return x[:self.nv] + 1j * x[self.nv:]
+
+    def _solve_reduced(self, P, q, A, b, cones, t, extra=0):
+        """Solve the conic program with the anchors substituted; ``extra`` trailing unknowns (after
+        the 2nv vertex coordinates) stay free. Counts the solve. Returns (x or None, outcome)."""
+        n = 2 * self.nv
+        fr = np.concatenate([self.free, np.arange(n, n + extra)])
+        fx = self.fixed
+        P = sp.csc_array(P)
+        A = sp.csc_array(A)
         Pff = P[:, fr][fr]
         qf = q[fr] + P[fr][:, fx] @ self.xfix
         Af = A[:, fr]
@@ -233,8 +329,7 @@ class IslandProblem:
             raise Cancelled
         if sol.x is None:
             return None, sol.outcome
-        x = np.zeros(2 * nv)
+        x = np.zeros(n + extra)
         x[fx] = self.xfix
         x[fr] = sol.x
-        return x[:nv] + 1j * x[nv:], sol.outcome
-
+        return x, sol.outcome

@@ -16,8 +16,9 @@ from ..errors import InfeasibleError
 from ..frames import frames_from_map
 from ..solvers.flip_free import flip_free_map
 from ..solvers.projection import ProjectionSolver
+from ..spaces import stretch_conformal_bound
 from .initial import Start, start_map
-from .problem import SOLVE_MARGIN, STORE_HEADROOM, solve_bound
+from .problem import SOLVE_MARGIN, STORE_HEADROOM, STRETCH_MARGIN_SOLVE, solve_bound
 
 RAISE_FACTOR = 1.5      # C grows by this factor when infeasible
 MAX_RESETS = 3          # frame resets after the first feasible solve (BD-Dirichlet, BD-ARAP)
@@ -37,8 +38,8 @@ DESCENT = 0.15
 # the island's area (measured: three_peaks 10 % at C = 5, mannequin-devil 0.3 %, lion-head at C = 2
 # 0.2 %: a local bend leaves the conformal map's distortion elsewhere, which a solve cannot lower).
 POLISH_AREA = 0.05
-# Stretch bounds are projected onto [m/S, S/m]: the result is certified at its own final scale.
-STRETCH_MARGIN = 1.03
+# Energies whose result is always the solve's optimum: no start is kept as it is, no projection.
+ALWAYS_SOLVED = ("dirichlet", "stretch-l1")
 
 _WHY = {"infeasible": "the space is empty for these frames",
         "inexact": "the solver did not converge", "error": "the solver failed",
@@ -59,64 +60,22 @@ def guaranteed_bound(D0):
 def formulate(prob, start):
     """Set up the island's formulation from its start map (see ``IslandProblem.anchor_to``)."""
     u = start.u if start.u is not None else prob.fallback_map()
-    if prob.method == "dirichlet":
+    if prob.method == "stretch-l1":
+        prob.hold_scale(u)  # the L1 stretch energy shrinks the map to a point unless held
+    elif prob.method == "dirichlet":
         prob.floor_scale(u, start.frames)
     else:
         prob.anchor_to(u)
 
 
-def stretch_range(prob, u):
-    """(smallest sigma_2, largest sigma_1) of a map relative to its own scale (UV area = 3D
-    area), Lipman 2012 eqs. 4.7-4.8, 6.3-6.4."""
-    a, b = np.abs(prob.alpha(u)), np.abs(prob.beta(u))
-    area = prob.ops.area
-    s = np.sqrt(max(float(np.sum(area * (a * a - b * b)) / np.sum(area)), 1e-300))
-    return float(np.min(a - b)) / s, float(np.max(a + b)) / s
-
-
-def bounded_stretch(prob, start, C, S, report):
-    """A map within C whose singular values lie in [1/S, S] at the island's own scale: the start
-    when it already does, else projection iterations with the singular-value bounds (Kovalsky et
-    al. 2015 with Lipman 2012, section 6.3), from the start and, if that stalls, from the harmonic
-    map. Returns (u, C, name)."""
-    if start.u is not None and np.isfinite(start.D) and fits(start, C):
-        lo, hi = stretch_range(prob, start.u)
-        if lo * (1 + STORE_HEADROOM) >= 1.0 / S and hi * (1 + STORE_HEADROOM) <= S:
-            return start.u, C, start.name
-    if len(prob.pin_idx) >= prob.nv:
-        raise InfeasibleError(f"island {prob.island.index}: every vertex is pinned and the pins "
-                              f"break the bounds C = {C:g}, S = {S:g}", prob.island.index)
-    fixed = prob.pin_idx if len(prob.pin_idx) else prob.island.loops[0][:1]
-    solver = ProjectionSolver(prob.ops, prob.nv, fixed, tris=prob.island.tris)
-    starts = [start] if start.u is not None else []
-    starts.append(start_map(prob, "harmonic", None, report))
-    t = time.perf_counter()
-    try:
-        for st in starts:
-            report(0.2, f"bending into C = {C:.3g}, stretch {S:.3g}")
-            values = prob.pin_val if len(prob.pin_idx) else st.u[fixed]
-            # margins: the result is measured again at its own scale, which the iterations move
-            res = solver.project(st.u, solve_bound(C), values, smin=STRETCH_MARGIN / S,
-                                 smax=S / STRETCH_MARGIN, max_iter=400, cancel=prob.cancel)
-            prob.iterations += res.iterations
-            if res.all_converged and prob.check(res.u, C)[0]:
-                lo, hi = stretch_range(prob, res.u)
-                if lo >= 1.0 / S and hi <= S:
-                    return res.u, C, st.name
-    finally:
-        prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
-    raise InfeasibleError(f"island {prob.island.index}: no map found within C = {C:g} and stretch "
-                          f"S = {S:g}; raise S or C, or let bd-uv add seams (seams='auto')",
-                          prob.island.index)
-
-
 def bounded(prob, start, C, raise_bound, limit, flags, report):
     """A certified-to-be map within C. Returns (u, C, name of the start it came from)."""
     isl = prob.island
-    if prob.method != "dirichlet" and fits(start, C):
+    solved = prob.method in ALWAYS_SOLVED
+    if not solved and fits(start, C):
         flags.append("initial_map")  # the start already fits: nothing to bend
         return start.u, C, start.name
-    if prob.method != "dirichlet" and start.u is not None and C > 1.0:
+    if not solved and start.u is not None and C > 1.0:
         bent = bend(prob, start, C, report, flags)
         if bent is not None:
             return bent, C, start.name
@@ -130,7 +89,7 @@ def bounded(prob, start, C, raise_bound, limit, flags, report):
         ok, D = prob.check(u, C)
         if ok:
             best = (u, C, start.name)
-            if prob.method != "dirichlet":
+            if not solved:
                 # BD-LSCM: frame resets lower the energy but measured higher mean distortion
                 # (three_peaks 1.378 -> 1.397 over 5 resets), so one solve is the answer.
                 return best
@@ -312,9 +271,11 @@ def descend(prob, u, report, max_iter=40):
     return best
 
 
-def arap(prob, u, C, report):
+def arap(prob, u, C, report, S=None):
     """BD-ARAP: minimise the ARAP energy over F_C with frames from the previous map, resetting
-    the frames while the energy improves (section 6.1, "As-rigid-as-possible")."""
+    the frames while the energy improves (section 6.1, "As-rigid-as-possible"). With a stretch
+    bound S the rows of section 6.3 are added (``stretch.stretch_solve``'s scale and margins) and
+    each iterate must pass them as certified (``IslandProblem.within``)."""
     if len(prob.pin_idx) < 2:
         # ARAP has an absolute scale: start from the map scaled to the 3D area, one anchor.
         scale = np.sqrt(1.0 / uv_area(u, prob.island.tris))
@@ -329,19 +290,26 @@ def arap(prob, u, C, report):
         prob.set_anchors(prob.pin_idx, prob.pin_val)
     prob.weights = None
     prob.sigma = 1e-3 * float(np.median(np.abs(prob.alpha(u))))
+    Cs = C
+    if S is not None:
+        k = np.sqrt(prob.area3d) if len(prob.pin_idx) >= 2 else 1.0
+        prob.fix_scale = len(prob.pin_idx) < 2
+        prob.stretch = (k * STRETCH_MARGIN_SOLVE / S, k * S / STRETCH_MARGIN_SOLVE)
+        Cs = stretch_conformal_bound(C, STRETCH_MARGIN_SOLVE / S, S / STRETCH_MARGIN_SOLVE)
     prev = None
     for i in range(MAX_RESETS + 1):
         w = frames_from_map(prob.alpha(u))
         prob.scale = 1.0 / max(prob.energy_of(u, w), 1e-6)
         report(0.9, f"BD-ARAP iteration {i + 1}")
-        un, _ = prob.solve(w, C)
-        if un is None or not prob.check(un, C)[0]:
+        un, _ = prob.solve(w, Cs)
+        if not prob.within(un, C, S):
             break
         e = prob.energy_of(un, w)
         u = un
         if prev is not None and prev - e <= IMPROVEMENT * abs(prev):
             break
         prev = e
+    prob.stretch, prob.fix_scale = None, False
     return u
 
 

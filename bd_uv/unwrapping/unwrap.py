@@ -24,13 +24,14 @@ from ..mesh import check_arrays, islands as split_islands
 from ..metrics import certify, mean_distortion, singular_values
 from ..spaces import check_stretch
 from . import strategies
+from . import stretch as stretch_search
 from .batched import conformal_islands
 from .fixed_boundary import BOUNDARIES, FRAMES_NAME, fixed_boundary_island, with_premises
 from .initial import start_map
 from .problem import STORE_HEADROOM, Cancelled, IslandProblem
 from .results import IslandResult, UnwrapResult
 
-METHODS = ("lscm", "arap", "dirichlet", "biharmonic")
+METHODS = ("lscm", "arap", "dirichlet", "biharmonic", "stretch-l1")
 FRAMES = ("auto", "harmonic", "conformal", "input-uv", "constant")
 HIGH_DISTORTION = 50.0  # certified bounds above this get a "high_distortion" flag and a hint
 
@@ -50,9 +51,14 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
         (``bd_uv.seams.unwrap_auto``, which also takes existing seams to keep)
     pin_corners : (p,) int array, optional, flat corner indices (face * 3 + corner)
     pin_uv : (p,2) float array, optional, the UV of each pinned corner (kept exactly)
-    method : "lscm" | "arap" | "dirichlet" | "biharmonic" (eq. 6.1; with boundary="free" it is
-        held at two boundary vertices of the start map, and its mean distortion is higher than
-        BD-LSCM's: it is meant for a fixed boundary)
+    method : "lscm" | "arap" | "dirichlet" | "biharmonic" | "stretch-l1". BD-Biharmonic (eq. 6.1)
+        with boundary="free" is held at two boundary vertices of the start map, and its mean
+        distortion is higher than BD-LSCM's: it is meant for a fixed boundary. "stretch-l1" is the
+        L1 stretch energy sum_j (|alpha_j| + |beta_j|) Area_j (section 6.1, a second-order cone
+        objective); with a free boundary it would shrink the island to a point, so the island's
+        scale is held (area-weighted mean of Re(w alpha) = 1 on the unit-area island, one anchor
+        vertex; ``IslandProblem.hold_scale``); with two or more pins or a fixed boundary they
+        give the scale
     bound : float >= 1 or "auto"
     frames : "auto" | "harmonic" | "conformal" | "input-uv" | "constant"
     initial_uv : (m,3,2) float array, optional, per-corner UVs (needed for frames="input-uv":
@@ -67,13 +73,18 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
     face_groups : (m,) int array, optional, a group per face (the polygon each triangle comes
         from): a cut never separates faces of one group (with seams="auto", no seam is added
         inside a group either)
-    stretch : float S, with seams="auto": every chart's singular values within [1/S, S] (UV area =
-        3D area); default 2
+    stretch : float S >= sqrt(C), optional: every face's singular values within [1/S, S]
+        (section 6.3, eqs. 6.3-6.4), certified from the final UVs (``min_singular``,
+        ``max_singular``): relative to the island's own scale (UV area = 3D area) with a free
+        boundary and fewer than two pins, else relative to the 3D geometry (pins or the fixed
+        boundary give the scale). Every method; with bound="auto" the smallest C within S is
+        sought (free boundary only). With seams="auto": every chart within S; default 2 there
     boundary : "free" | "circle" | "rectangle" | "pinned", where each island's outer boundary
         goes (Lipman 2012, section 5; ``boundary.boundary_targets``): free (the default), on a
         circle or a rectangle of the island's 3D area (rectangle corners at the four boundary
         vertices nearest a right angle, or at four pinned ones), or on the polygon of its pinned
-        boundary vertices (at least 3); holes stay free. Needs a numeric bound; frames come
+        boundary vertices (at least 3); holes stay holes (filled for the solve with triangles held
+        orientation-preserving: a bijection by Theorem 5.1). Needs a numeric bound; frames come
         from a Tutte embedding ("auto" or "harmonic"). Each such island reports ``bijective``.
     progress : callable(fraction, message), optional
     cancel : object with ``is_set()``, optional
@@ -112,9 +123,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
         raise ValueError(f"boundary={boundary!r} takes its frames from a Tutte embedding onto the "
                          f"boundary (frames 'auto' or 'harmonic'), got frames={frames!r}")
     if stretch is not None:
-        if bound == "auto" or method != "lscm" or boundary != "free":
-            raise ValueError("stretch= needs a numeric bound, method='lscm' and a free boundary")
-        check_stretch(float(bound), stretch)
+        check_stretch(1.0 if bound == "auto" else float(bound), stretch)
     t0 = time.perf_counter()
     _check_options(method, frames, bound, bound_limit, cone)
     if overlap not in ("cut", "fail"):
@@ -314,14 +323,14 @@ def _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_boun
         try:
             prob, u, C, flags = fixed_boundary_island(island, V, pins, boundary, method, bound,
                                                       raise_bound, bound_limit, cone, cancel,
-                                                      report)
+                                                      report, stretch)
         except IslandError as exc:
             exc.island = island.index
             return with_premises(_failed(island, exc, t0, bound, FRAMES_NAME), island)
         except BDError as exc:
             err = SolverError(f"island {island.index}: {exc}", island.index)
             return with_premises(_failed(island, err, t0, bound, FRAMES_NAME), island)
-        return with_premises(_finish(prob, u, C, bound, FRAMES_NAME, flags, t0), island)
+        return with_premises(_finish(prob, u, C, bound, FRAMES_NAME, flags, t0, stretch), island)
     try:
         prob = IslandProblem(island, V, pins, method, cone, cancel)
         start = start_map(prob, frames, initial_uv, report, lscm=lscm)
@@ -333,16 +342,20 @@ def _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_boun
                        bound)
     flags = []
     try:
-        if bound == "auto":
+        if bound == "auto" and stretch is not None:
+            u, C, name = stretch_search.minimise_stretch(prob, start, stretch, time_budget,
+                                                         flags, report, t0)
+        elif bound == "auto":
             u, C, name = strategies.minimise(prob, start, bound_limit, time_budget, flags, report,
                                              t0)
         elif stretch is not None:
-            u, C, name = strategies.bounded_stretch(prob, start, float(bound), stretch, report)
+            u, C, name = stretch_search.bounded_stretch(prob, start, float(bound), stretch,
+                                                        report, flags)
         else:
             u, C, name = strategies.bounded(prob, start, float(bound), raise_bound, bound_limit,
                                             flags, report)
         if method == "arap" and u is not None:
-            u = strategies.arap(prob, u, C, report)
+            u = strategies.arap(prob, u, C, report, stretch)
     except IslandError as exc:
         return _failed(island, exc, t0, bound, start.name, flags, prob.timings)
     return _finish(prob, u, C, bound, name, flags, t0, stretch)

@@ -238,3 +238,45 @@ def test_script_runs_from_the_installed_extension(scene_blend, tmp_path, linux_e
         D, det, _, uv = measured(bpy.data.objects["Grid"])
         assert np.all(det > 0) and D.max() <= 3.0 * (1 + 1e-5), how
         assert uv[PINNED_LOOP].tobytes() == np.array(PINNED_UV, np.float32).tobytes(), how
+
+
+def test_stretch_and_method_reach_the_script(scene_blend, tmp_path):
+    """``--stretch`` and ``--method`` go through ``python -m bd_uv batch`` to the .blend script
+    (``--stretch`` was dropped there before): the bent grid's map breaks S = 1.015 without it;
+    with it every object's singular values, measured here on the saved UVs at its island's own
+    scale (UV area = 3D area), stay within [1/S, S]."""
+    src = tmp_path / "in"
+    src.mkdir()
+    shutil.copy(scene_blend, src / "scene.blend")
+    S, C = 1.015, 1.03
+
+    def run(out, *extra):
+        proc = subprocess.run([sys.executable, "-m", "bd_uv", "batch", str(src), "-o", str(out),
+                               "--jobs", "1", "--bound", str(C), "--method", "stretch-l1",
+                               "--no-pack", *extra], capture_output=True, text=True,
+                              cwd=REPO_ROOT)
+        assert proc.returncode == 0, proc.stdout + proc.stderr
+        return json.loads((out / "report.json").read_text())
+
+    free = {e["object"]: e["islands"][0] for e in run(tmp_path / "free")["items"]}
+    assert free["Grid"]["max_singular"] > S
+    rep = run(tmp_path / "out", "--stretch", str(S))
+    assert rep["options"]["stretch"] == S and rep["options"]["method"] == "stretch-l1"
+    bpy.ops.wm.open_mainfile(filepath=str(tmp_path / "out" / "scene.blend"))
+    for e in rep["items"]:
+        obj = bpy.data.objects[e["object"]]
+        D, det, areas, _ = measured(obj)
+        assert e["status"] == "certified" and np.all(det > 0) and D.max() <= C * (1 + 1e-5)
+        V, tris, corner = _raw(obj)
+        P, T = (V * np.abs(np.array(obj.scale)))[tris], corner.astype(np.float64)
+        e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
+        x = e1 / np.linalg.norm(e1, axis=1)[:, None]
+        y = np.cross(np.cross(e1, e2), e1)
+        y /= np.linalg.norm(y, axis=1)[:, None]
+        E0 = np.stack([np.stack([np.einsum("ij,ij->i", e1, x), np.einsum("ij,ij->i", e1, y)], 1),
+                       np.stack([np.einsum("ij,ij->i", e2, x), np.einsum("ij,ij->i", e2, y)], 1)],
+                      2)
+        J = np.stack([T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]], 2) @ np.linalg.inv(E0)
+        s = np.linalg.svd(J, compute_uv=False)
+        k = np.sqrt(areas.sum() / np.sum(np.linalg.det(J) * areas))  # one island each (one pin)
+        assert s[:, 1].min() * k >= (1 - 1e-4) / S and s[:, 0].max() * k <= S * (1 + 1e-4)

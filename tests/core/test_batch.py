@@ -4,6 +4,7 @@ Outputs are read back with a reader written here and checked by an independent d
 (``helpers.reference_distortion``: numpy SVD of each face's Jacobian).
 """
 import argparse
+import importlib.util
 import io
 import json
 import os
@@ -168,8 +169,8 @@ def test_no_input_files_is_a_usage_error(tmp_path, capsys):
 
 
 def test_blend_without_bpy_is_a_failed_entry(tmp_path, monkeypatch):
-    real = batch.importlib.util.find_spec
-    monkeypatch.setattr(batch.importlib.util, "find_spec",
+    real = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
                         lambda name, *a: None if name == "bpy" else real(name, *a))
     (tmp_path / "s.blend").write_bytes(b"BLENDER")
     shutil.copy(os.path.join(DATA, "nefertiti.off"), tmp_path / "n.off")

@@ -236,17 +236,21 @@ def test_holes_stay_free_inside_the_target(shape):
     assert uv_area(res.corner_uv) < area_3d(V, F) * (1 + 1e-9)
 
 
-def test_a_hole_pushed_through_the_boundary_is_not_called_bijective():
-    """A disk's boundary on a rectangle with free holes: locally injective within C, but a hole
-    crosses the outer boundary, so Theorem 5.2's premises fail; the island is cut into
-    overlap-free pieces (or fails with overlap='fail'), never reported bijective."""
-    V, F, _ = holed_domain("circle")
-    res = bd_uv.unwrap(V, F, boundary="rectangle", bound=5.0)
-    assert res.certified and len(res.islands) > 1
-    assert all(r.bijective is False and "cut" in r.flags for r in res.islands)
-    assert len(overlapping_triangle_pairs(res.corner_uv[res.face_island == 0])) == 0
-    r = bd_uv.unwrap(V, F, boundary="rectangle", bound=5.0, overlap="fail").islands[0]
-    assert r.status == "failed" and r.bijective is False and "crosses itself" in r.message
+def test_a_hole_stays_a_hole_under_a_rectangle():
+    """A disk's boundary on a rectangle with two holes: before the holes were filled during the
+    solve, a hole crossed the outer boundary here (Theorem 5.2's premises failed, the island was
+    cut). Filled with orientation-preserving triangles, the disk maps bijectively (Theorem 5.1),
+    so the holes stay inside: one bijective island, 0 overlapping pairs."""
+    V, F, outer = holed_domain("circle")
+    for overlap in ("cut", "fail"):
+        res = bd_uv.unwrap(V, F, boundary="rectangle", bound=5.0, overlap=overlap)
+        (r,) = res.islands
+        assert res.certified and r.bijective is True and "cut" not in r.flags
+        check_bijective_disk(V, F, res.corner_uv, 5.0)
+    uv = vertex_uv(V, F, res.corner_uv)
+    hole = np.setdiff1d(boundary_vertices(F), outer)
+    lo, hi = uv[outer].min(0), uv[outer].max(0)
+    assert np.all((uv[hole] > lo) & (uv[hole] < hi))
 
 
 def test_every_island_gets_its_own_circle(nefertiti):

@@ -1,0 +1,197 @@
+"""Folder mode: which files a batch takes, where their outputs go, and one file's work.
+
+``input_files`` and ``plan`` turn the command line's inputs into :class:`FileTask` s;
+``_unwrap_file`` is what a worker runs for one file (read, unwrap, write the OBJ and PNG; a .blend
+goes through the Blender script, ``_unwrap_blend``); ``run_tasks`` hands the files out, largest
+first, to a local pool or a Dask cluster (``bd_uv.scheduling``).
+"""
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+import traceback
+from dataclasses import dataclass
+
+from ..errors import BDError
+from ..meshio import load_mesh, write_obj
+from ..scheduling.atomic import atomic_path
+from .jobs import Job, failed_entry, unwrap_job
+
+MESH_SUFFIXES = (".obj", ".off", ".ply")
+BLEND_SUFFIX = ".blend"
+# The Blender script of the extension: next to bd_uv/ in a clone or an installed extension; a pip
+# install of bd-uv has only the core, so .blend files there need BD_UV_BLENDER_SCRIPT.
+SCRIPT = os.environ.get("BD_UV_BLENDER_SCRIPT") or os.path.join(
+    os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "scripts",
+    "bd_uv_batch.py")
+
+
+@dataclass(frozen=True)
+class FileTask:
+    """One input file and where its outputs go."""
+    path: str
+    output: str
+    png: str = None
+
+
+def _unwrap_file(task, options, seams_mode):
+    """Worker: read ``task.path``, unwrap, write the OBJ (and PNG). Returns the report entries."""
+    t0 = time.perf_counter()
+    base = {"input": os.path.abspath(task.path), "object": None, "output": None}
+    try:
+        if task.path.lower().endswith(BLEND_SUFFIX):
+            return _unwrap_blend(task, options, base)
+        mesh = load_mesh(task.path)
+        seams = None
+        if seams_mode == "uv" or (seams_mode in (None, "auto") and mesh.corner_uv is not None):
+            if mesh.corner_uv is None:
+                raise BDError(f"{task.path} has no UVs, so --seams uv has nothing to cut along")
+            seams = mesh.uv_seams()
+        job = Job(mesh.name, mesh.V, mesh.F, seams=seams, corner_uv=mesh.corner_uv)
+        result = unwrap_job(job, options, png=task.png)
+        entry = {**base, **result.entry}
+        if entry["status"] != "failed":
+            uv, F_uv = result.layout.vertex_uv(mesh.F)
+            with atomic_path(task.output) as tmp:
+                write_obj(tmp, mesh.V, mesh.F, uv, F_uv)
+            entry["output"] = os.path.abspath(task.output)
+        return [entry]
+    except Exception as exc:  # one bad file never stops the rest: everything goes in its entry
+        entry = failed_entry(os.path.splitext(os.path.basename(task.path))[0],
+                             type(exc).__name__, str(exc),
+                             seconds=round(time.perf_counter() - t0, 4), **base)
+        if not isinstance(exc, (BDError, OSError)):
+            entry["traceback"] = traceback.format_exc()
+        return [entry]
+
+
+def _unwrap_blend(task, options, base):
+    """A .blend goes through the Blender script in a child process (it needs ``bpy``)."""
+    if importlib.util.find_spec("bpy") is None:
+        raise BDError(f"{task.path}: reading .blend files needs the bpy module "
+                      "(pip install bpy) or Blender itself: blender -b FILE --python "
+                      "scripts/bd_uv_batch.py -- ...")
+    if not os.path.isfile(SCRIPT):
+        raise BDError(f"{task.path}: reading .blend files needs the extension's "
+                      f"scripts/bd_uv_batch.py, not found at {SCRIPT}: set "
+                      "BD_UV_BLENDER_SCRIPT to it (a pip-installed bd-uv has only the core)")
+    with tempfile.TemporaryDirectory() as tmp:
+        report = os.path.join(tmp, "report.json")
+        cmd = [sys.executable, SCRIPT, task.path, "--", "--output", task.output,
+               "--report", report, *_script_options(options)]
+        if task.png:
+            cmd += ["--png", os.path.dirname(task.png), "--png-prefix",
+                    os.path.splitext(os.path.basename(task.png))[0] + "-"]
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+        if not os.path.exists(report):
+            tail = (proc.stderr or proc.stdout).strip().splitlines()[-5:]
+            raise BDError(f"{task.path}: the Blender script failed (exit {proc.returncode}): "
+                          + " | ".join(tail))
+        with open(report, encoding="utf-8") as fh:
+            items = json.load(fh)["items"]
+    if not items:
+        raise BDError(f"{task.path} holds no mesh object with faces")
+    return [{**base, **item, "input": base["input"]} for item in items]
+
+
+def _script_options(options):
+    """``options`` (unwrap keyword arguments) as the Blender script's command-line flags."""
+    out = ["--method", options["method"], "--bound", str(options["bound"]),
+           "--frames", options["frames"], "--bound-limit", str(options["bound_limit"]),
+           "--cone", options["cone"]]
+    if not options["raise_bound"]:
+        out.append("--no-raise")
+    if options.get("time_budget") is not None:
+        out += ["--time-budget", str(options["time_budget"])]
+    if options.get("boundary", "free") != "free":
+        out += ["--boundary", options["boundary"]]
+    if options.get("stretch") is not None:
+        out += ["--stretch", str(options["stretch"])]
+    return out
+
+
+def input_files(paths):
+    """Expand folders (not recursively) into their OBJ/OFF/PLY/.blend files, sorted by name.
+
+    Files named explicitly are kept whatever their suffix (they fail in the report if unreadable);
+    hidden files (such as an unfinished output's temporary name) are not taken from folders.
+    """
+    suffixes = MESH_SUFFIXES + (BLEND_SUFFIX,)
+    files = []
+    for p in paths:
+        if os.path.isdir(p):
+            files += sorted(os.path.join(p, f) for f in os.listdir(p)
+                            if f.lower().endswith(suffixes) and not f.startswith(".")
+                            and os.path.isfile(os.path.join(p, f)))
+        else:
+            files.append(p)
+    return files
+
+
+def plan(files, out_dir, png_dir=None):
+    """A :class:`FileTask` per file; two inputs never share an output name."""
+    tasks, used = [], set()
+    for path in files:
+        stem, ext = os.path.splitext(os.path.basename(path))
+        out_ext = BLEND_SUFFIX if ext.lower() == BLEND_SUFFIX else ".obj"
+        name, k = stem, 1
+        while name.lower() in used:
+            name = f"{stem}_{ext.lstrip('.').lower()}" if k == 1 else f"{stem}-{k}"
+            k += 1
+        used.add(name.lower())
+        tasks.append(FileTask(path, os.path.join(out_dir, name + out_ext),
+                              os.path.join(png_dir, name + ".png") if png_dir else None))
+    return tasks
+
+
+def run_tasks(tasks, options, seams_mode=None, jobs=1, on_done=None, scheduler=None,
+              limits=None, retries=2, order=None, on_start=None):
+    """Run every task: in a local pool of ``jobs`` processes (in this process when 1), or on a
+    Dask cluster when ``scheduler`` is given (an address, or "local" for a LocalCluster of
+    ``jobs`` workers). Files are handed out largest first.
+
+    A worker that dies (crash, out of memory) has its file run again on another worker up to
+    ``retries`` times; then the file fails (``WorkerCrashed``) and the batch goes on.
+
+    Parameters
+    ----------
+    on_done : callable(i, entries, attempts), as each file finishes, in this process
+    limits : scheduling.FileLimits, per-file time and memory limits, or None
+    order : indices of ``tasks`` to run, or None for all (largest first either way)
+
+    Returns
+    -------
+    entries : list of list of dict, per task (in task order; None for tasks not run)
+    """
+    from ..scheduling import run_pool
+    results = [None] * len(tasks)
+
+    def done(i, entries, attempts):
+        if attempts > 1:
+            for e in entries:
+                e["attempts"] = attempts
+        results[i] = entries
+        if on_done is not None:
+            on_done(i, entries, attempts)
+
+    order = range(len(tasks)) if order is None else order
+    order = sorted(order, key=lambda i: -_size(tasks[i].path))
+    if scheduler:
+        from ..scheduling.cluster import run_dask
+        run_dask(tasks, order, options, seams_mode, scheduler, jobs, done, limits, retries,
+                 on_start=on_start)
+    else:
+        if on_start is not None:
+            on_start(jobs)
+        run_pool(tasks, order, options, seams_mode, jobs, done, limits, retries)
+    return results
+
+
+def _size(path):
+    try:
+        return os.path.getsize(path)
+    except OSError:
+        return 0
