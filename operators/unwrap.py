@@ -34,6 +34,12 @@ _METHODS = (
      "Conformal, with a certified distortion bound"),
     ('arap', "BD-ARAP", "As-rigid-as-possible energy: keeps areas and lengths too, within the "
      "same certified bound"),
+    ('dirichlet', "BD-Dirichlet", "Dirichlet (harmonic) energy within the bound: smooth, meant "
+     "for a fixed boundary (Circle, Rectangle, Pinned Polygon)"),
+    ('biharmonic', "BD-Biharmonic", "Biharmonic energy (Lipman 2012, eq. 6.1): smoother than "
+     "Dirichlet, meant for a fixed boundary"),
+    ('stretch-l1', "BD-L1 Stretch", "Sum of each face's singular values by area (section 6.1): "
+     "evens out texel density within the bound"),
 )
 _SEAMS = (
     ('MARKED', "Marked", "Cut along the marked seams only: every island must be a disk"),
@@ -84,7 +90,7 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
     limit_stretch: BoolProperty(name="Limit Stretch", default=False,
                                 description="Marked seams: also bound every face's singular "
                                 "values to [1/S, S] (Lipman 2012, section 6.3), keeping texel "
-                                "density even; BD-LSCM, a bound C and a free boundary only")
+                                "density even; Minimise only with Boundary Free")
     bound: FloatProperty(name="Bound C", default=5.0, min=1.0001, soft_min=1.05, soft_max=50.0,
                          description="Largest conformal distortion allowed on any face")
     minimise: BoolProperty(name="Minimise", default=False,
@@ -199,9 +205,8 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
 
     def _stretch_problem(self):
         """Why Limit Stretch cannot run with these options ("" when it can)."""
-        if self.seams == 'MARKED' and (self.method != 'lscm' or self.minimise
-                                       or self.boundary != 'free'):
-            return ("Limit Stretch needs BD-LSCM, a bound C (Minimise off) and Boundary Free")
+        if self.seams == 'MARKED' and self.minimise and self.boundary != 'free':
+            return "Limit Stretch with Minimise needs Boundary Free"
         if self.stretch ** 2 < self.bound * (1 - 1e-12) and not self.minimise:
             return (f"Limit Stretch {self.stretch:g} cannot hold with C = {self.bound:g}: "
                     f"raise it to at least sqrt(C) = {self.bound ** 0.5:.4g} or lower C")

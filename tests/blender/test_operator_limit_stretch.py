@@ -4,6 +4,7 @@ options Limit Stretch cannot take are refused with the UVs untouched."""
 import re
 
 import numpy as np
+import pytest
 
 from conftest import bpy, loop_uv_array, set_mode
 
@@ -80,11 +81,27 @@ def test_stretch_below_sqrt_c_is_refused_and_nothing_changes(addon):
     _edit_all(obj)
     assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=4.0, limit_stretch=True,
                                 stretch=1.5) == {'CANCELLED'}
-    for options in (dict(method='arap'), dict(minimise=True), dict(boundary='circle')):
-        assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=2.0, limit_stretch=True, stretch=2.0,
-                                    **options) == {'CANCELLED'}
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=2.0, limit_stretch=True, stretch=2.0,
+                                minimise=True, boundary='circle') == {'CANCELLED'}
     set_mode(obj, 'OBJECT')
     assert loop_uv_array(obj.data).tobytes() == before
+
+
+@pytest.mark.parametrize("S, options", [(1.9, dict(method='arap')),
+                                        (1.9, dict(method='stretch-l1')),
+                                        (3.0, dict(method='dirichlet', boundary='rectangle')),
+                                        (3.0, dict(method='biharmonic', boundary='rectangle')),
+                                        (1.9, dict(minimise=True))])
+def test_limit_stretch_with_every_method_and_boundary(addon, S, options):
+    obj = _dome(6)
+    _edit_all(obj)
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=3.0, limit_stretch=True, stretch=S,
+                                **options) == {'FINISHED'}
+    set_mode(obj, 'OBJECT')
+    s = _singular_values(obj)
+    assert s.max() <= S * (1 + SLACK) and s.min() >= (1 - SLACK) / S
+    assert (s[:, 0] / s[:, 1]).max() <= 3.0 * (1 + SLACK)
+    assert f"within [{1 / S:.4g}, {S:g}]" in bpy.context.window_manager.bd_uv_last_result.report
 
 
 def test_stretch_message_names_sqrt_c(addon):
