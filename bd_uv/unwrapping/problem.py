@@ -10,13 +10,14 @@ import dataclasses
 import time
 
 import numpy as np
+import scipy.sparse as sp
 
 from ..energies import energy, jacobian_operators
 from ..errors import InfeasibleError, SolverError
 from ..frames import _far_pair, frames_from_map, lscm_map
 from ..geometry import face_areas, local_coordinates
 from ..solvers import conic
-from ..spaces import bounded_distortion_space
+from ..spaces import bounded_distortion_space, distortion_epigraph_space
 
 SOLVE_MARGIN = 2e-3      # solve at a C slightly below the bound so certification has headroom
 # Relative headroom a certified bound keeps above the map's float64 distortion, so that the UVs
@@ -209,15 +210,58 @@ class IslandProblem:
         if self.cancel is not None and self.cancel.is_set():
             raise Cancelled
         t = time.perf_counter()
-        nv = self.nv
         if len(self.free) == 0:
-            x = np.zeros(2 * nv)
-            x[self.fixed] = self.xfix
-            return x[:nv] + 1j * x[nv:], "solved"
+            return self._pinned_map(), "solved"
         P, q, _ = self._energy(w)
-        P, q = P * self.scale, q * self.scale
         A, b, cones = bounded_distortion_space(self.ops, w, solve_bound(C), self.sigma, self.cone)
-        fr, fx = self.free, self.fixed
+        x, outcome = self._solve_reduced(P * self.scale, q * self.scale, A, b, cones, t)
+        if x is None:
+            return None, outcome
+        return x[:self.nv] + 1j * x[self.nv:], outcome
+
+    def ratio_step(self, u, eps):
+        """One Dinkelbach step lowering the max conformal distortion of a flip-free map ``u``.
+
+        Minimises ``t + eps k E(u')`` over maps u' with ``|beta_j| <= k Re(w_j alpha_j) + g_j t``,
+        ``-k <= t <= 0`` (``spaces.distortion_epigraph_space``): frames w and scales
+        ``g = |alpha|`` from ``u`` (eq. 4.21: ``Re(w alpha) = |alpha|`` there), k its max ratio
+        ``|beta| / |alpha|`` (eqs. 4.9, 4.15), E the island's energy scaled to 1 at the anchor
+        map, anchors as ``anchor_to`` set them. ``u`` with ``t = 0`` is feasible, so the program
+        is never empty; the energy term keeps faces away from the max near the energy's optimum
+        (a low mean distortion). Returns (u' or None, outcome); certify u' from its UVs.
+        """
+        if self.cancel is not None and self.cancel.is_set():
+            raise Cancelled
+        t = time.perf_counter()
+        if len(self.free) == 0:
+            return self._pinned_map(), "solved"
+        a = self.alpha(u)
+        g = np.abs(a)
+        k = float(np.max(np.abs(self.beta(u)) / g))
+        w = frames_from_map(a)
+        A, b, cones = distortion_epigraph_space(self.ops, w, k, g, self.cone)
+        P, q, _ = self._energy(w)
+        n = 2 * self.nv
+        P = sp.block_diag([P * (self.scale * eps * k), sp.csc_array((1, 1))], format="csc")
+        q = np.concatenate([q * (self.scale * eps * k), [1.0]])  # + t
+        x, outcome = self._solve_reduced(P, q, A, b, cones, t, extra=1)
+        if x is None:
+            return None, outcome
+        return x[:self.nv] + 1j * x[self.nv:n], outcome
+
+    def _pinned_map(self):
+        x = np.zeros(2 * self.nv)
+        x[self.fixed] = self.xfix
+        return x[:self.nv] + 1j * x[self.nv:]
+
+    def _solve_reduced(self, P, q, A, b, cones, t, extra=0):
+        """Solve the conic program with the anchors substituted; ``extra`` trailing unknowns (after
+        the 2nv vertex coordinates) stay free. Counts the solve. Returns (x or None, outcome)."""
+        n = 2 * self.nv
+        fr = np.concatenate([self.free, np.arange(n, n + extra)])
+        fx = self.fixed
+        P = sp.csc_array(P)
+        A = sp.csc_array(A)
         Pff = P[:, fr][fr]
         qf = q[fr] + P[fr][:, fx] @ self.xfix
         Af = A[:, fr]
@@ -233,8 +277,7 @@ class IslandProblem:
             raise Cancelled
         if sol.x is None:
             return None, sol.outcome
-        x = np.zeros(2 * nv)
+        x = np.zeros(n + extra)
         x[fx] = self.xfix
         x[fr] = sol.x
-        return x[:nv] + 1j * x[nv:], sol.outcome
-
+        return x, sol.outcome
