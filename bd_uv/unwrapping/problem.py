@@ -23,6 +23,12 @@ SOLVE_MARGIN = 2e-3      # solve at a C slightly below the bound so certificatio
 # Relative headroom a certified bound keeps above the map's float64 distortion, so that the UVs
 # still pass when stored as float32 (Blender) or packed into the unit square.
 STORE_HEADROOM = 2e-4
+RATIO_MAX_ITER = 12  # a Dinkelbach step's map is certified whatever the solver's status: 12 Clarabel
+# iterations gave lion-head 1.650 then 1.590 (80: 1.650, 1.600; 8 or 10: stalls at 1.64), and
+# loose tolerances stop earlier with the same map (mushroom: 8 iterations instead of 12, C 1.10996
+# instead of 1.10995).
+RATIO_TOL_GAP = 1e-3
+RATIO_TOL_FEAS = 1e-4
 
 
 def solve_bound(C):
@@ -228,13 +234,17 @@ class IslandProblem:
         ``|beta| / |alpha|`` (eqs. 4.9, 4.15), E the island's energy scaled to 1 at the anchor
         map, anchors as ``anchor_to`` set them. ``u`` with ``t = 0`` is feasible, so the program
         is never empty; the energy term keeps faces away from the max near the energy's optimum
-        (a low mean distortion). Returns (u' or None, outcome); certify u' from its UVs.
+        (a low mean distortion).
+
+        Returns (u' or None, outcome, C_model): C_model is the max distortion the program promises
+        with u's scales, ``(1 + k + t) / (1 - k - t)``; certify u' from its UVs (its actual max
+        is C_model when no face's scale changed, above it as far as the scales grew).
         """
         if self.cancel is not None and self.cancel.is_set():
             raise Cancelled
         t = time.perf_counter()
         if len(self.free) == 0:
-            return self._pinned_map(), "solved"
+            return self._pinned_map(), "solved", np.nan
         a = self.alpha(u)
         g = np.abs(a)
         k = float(np.max(np.abs(self.beta(u)) / g))
@@ -244,17 +254,19 @@ class IslandProblem:
         n = 2 * self.nv
         P = sp.block_diag([P * (self.scale * eps * k), sp.csc_array((1, 1))], format="csc")
         q = np.concatenate([q * (self.scale * eps * k), [1.0]])  # + t
-        x, outcome = self._solve_reduced(P, q, A, b, cones, t, extra=1)
+        x, outcome = self._solve_reduced(P, q, A, b, cones, t, extra=1, max_iter=RATIO_MAX_ITER,
+                                         tol_gap=RATIO_TOL_GAP, tol_feas=RATIO_TOL_FEAS)
         if x is None:
-            return None, outcome
-        return x[:self.nv] + 1j * x[self.nv:n], outcome
+            return None, outcome, np.nan
+        kt = k + x[n]
+        return x[:self.nv] + 1j * x[self.nv:n], outcome, (1.0 + kt) / (1.0 - kt)
 
     def _pinned_map(self):
         x = np.zeros(2 * self.nv)
         x[self.fixed] = self.xfix
         return x[:self.nv] + 1j * x[self.nv:]
 
-    def _solve_reduced(self, P, q, A, b, cones, t, extra=0):
+    def _solve_reduced(self, P, q, A, b, cones, t, extra=0, **settings):
         """Solve the conic program with the anchors substituted; ``extra`` trailing unknowns (after
         the 2nv vertex coordinates) stay free. Counts the solve. Returns (x or None, outcome)."""
         n = 2 * self.nv
@@ -267,7 +279,7 @@ class IslandProblem:
         Af = A[:, fr]
         bf = b - A[:, fx] @ self.xfix
         self.timings["setup"] += time.perf_counter() - t
-        sol = conic.solve_conic(Pff, qf, Af, bf, cones, cancel=self.cancel)
+        sol = conic.solve_conic(Pff, qf, Af, bf, cones, cancel=self.cancel, **settings)
         self.timings["solve"] += sol.seconds
         self.solves += 1
         self.iterations += sol.iterations

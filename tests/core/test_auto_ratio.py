@@ -78,10 +78,11 @@ def test_ratio_steps_are_feasible_and_lower_the_max():
     prob, u = _problem(V, F)
     D = _max_distortion(prob, u)
     for _ in range(3):
-        un, outcome = prob.ratio_step(u, 0.3)
+        un, outcome, model = prob.ratio_step(u, 0.3)
         assert outcome == "solved"
         Dn = _max_distortion(prob, un)
         assert Dn <= D * (1 + 1e-9)
+        assert 1.0 <= model <= D * (1 + 1e-9)   # t <= 0: the program never promises worse
         assert Dn == pytest.approx(prob.distortion(un), rel=1e-9)
         u, D = un, Dn
     assert prob.solves == 3 and prob.outcomes == ["solved"] * 3
