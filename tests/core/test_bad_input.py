@@ -784,20 +784,22 @@ def test_solver_exception_fails_the_island_not_the_call(monkeypatch):
 # ---------------------------------------------------------------------------------------------
 
 def test_zero_time_budget_still_returns_a_certified_map():
-    """No time at all: the certified initial map (or one solve's result) comes back, flagged."""
-    V, F = nefertiti()
+    """No time at all: the certified initial map (or one solve's result) comes back, flagged.
+    (A bumpy patch whose full run takes two Dinkelbach steps.)"""
+    V, F = grid(8, 8, bump=0.3)
     res = unwrap_checked(V, F, bound="auto", time_budget=0.0)
     (isl,) = res.islands
     assert isl.status == "certified" and "time_budget_exhausted" in isl.flags
     # the certified bound keeps a little room above the map's distortion for float32 storage
-    assert isl.max_distortion <= isl.bound_certified <= isl.max_distortion * 1.001
+    # (0.02 %), rounded up to 4 significant digits (at most 1e-3 more for a C below 10)
+    assert isl.max_distortion <= isl.bound_certified <= isl.max_distortion * 1.0002 + 1e-3
 
 
 def test_time_budget_running_out_returns_the_best_found_so_far(monkeypatch):
     """A clock that advances one second per conic solve and stands still otherwise: a budget of
     n - 1.5 s lets exactly n - 1 of the n solves of the full run go, whatever the machine's
     speed."""
-    V, F = nefertiti()
+    V, F = grid(8, 8, bump=0.3)
     full = unwrap_checked(V, F, bound="auto")
     n = full.islands[0].solves
     assert n >= 2
