@@ -136,7 +136,7 @@ class IslandProblem:
         """The conformal map, for a formulation when the start gives frames only."""
         isl = self.island
         pins = (self.pin_idx, self.pin_val) if len(self.pin_idx) >= 2 else None
-        return lscm_map(self.Z, isl.tris, self.nv, isl.loops, pins)
+        return lscm_map(self.Z, isl.tris, self.nv, isl.loops, pins, ops=self.ops)
 
     # -- formulations --------------------------------------------------------------------------
     def set_anchors(self, idx, val):
