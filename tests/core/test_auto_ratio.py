@@ -15,6 +15,8 @@ import bd_uv
 from bd_uv.frames import frames_from_map
 from bd_uv.mesh import islands
 from bd_uv.spaces import distortion_epigraph_space
+from bd_uv.unwrapping import strategies
+from bd_uv.unwrapping.initial import Start
 from bd_uv.unwrapping.problem import IslandProblem
 
 from helpers import grid, load_off, reference_distortion
@@ -138,3 +140,36 @@ def test_cancel_during_a_ratio_step():
     with pytest.raises(bd_uv.CancelledError):
         bd_uv.unwrap(V, F, bound="auto", cancel=ev, progress=progress)
     assert any("minimising C: C*" in m for m in seen)
+
+
+def test_frames_only_start_searches_a_first_map_then_steps():
+    """A start with frames but no map (nothing to descend from): ``first_certified`` solves F_C
+    at C = 5 (or the limit), then Dinkelbach steps lower the bound; the map is certified."""
+    V, F = load_off("nefertiti.off")
+    isl = islands(V, F)[0]
+    for limit in (1000.0, 2.0):
+        prob = IslandProblem(isl, V, NO_PINS, "lscm", "soc", None)
+        w = frames_from_map(prob.alpha(prob.fallback_map()))
+        flags = []
+        u, C, name = strategies.minimise(prob, Start(None, w, "frames", np.inf), limit, None,
+                                         flags, lambda *a: None, 0.0)
+        D = _max_distortion(prob, u)
+        assert name == "frames" and flags == []
+        assert D == pytest.approx(C, rel=1e-9) and D < 1.3
+        assert prob.outcomes[0] == "solved" and prob.solves >= 2   # the search, then a step
+
+
+def test_best_along_finds_the_lowest_max_on_the_segment():
+    """Golden section along a step: an overshooting step (three times a Dinkelbach step) comes
+    back near the step itself; never above the segment's end, and a scan of the segment finds
+    nothing much lower."""
+    V, F = load_off("nefertiti.off")
+    prob, u0 = _problem(V, F)
+    u1, _, _ = prob.ratio_step(u0, 0.3)
+    far = u0 + 3.0 * (u1 - u0)
+    u = strategies.best_along(prob, u0, far)
+    D = _max_distortion(prob, u)
+    assert D <= _max_distortion(prob, far)
+    scan = min(_max_distortion(prob, u0 + s * (far - u0)) for s in np.linspace(0, 1, 61))
+    assert D <= scan * (1 + 1e-3)
+    assert D < _max_distortion(prob, u0)
