@@ -173,3 +173,19 @@ def test_best_along_finds_the_lowest_max_on_the_segment():
     scan = min(_max_distortion(prob, u0 + s * (far - u0)) for s in np.linspace(0, 1, 61))
     assert D <= scan * (1 + 1e-3)
     assert D < _max_distortion(prob, u0)
+
+
+def test_lower_mean_keeps_the_bound_and_lowers_the_mean():
+    """A min-max step without energy (eps = 0) raises the mean; one energy solve at the bound the
+    step's map certifies brings it down without raising the max beyond the solve margin."""
+    V, F = load_off("nefertiti.off")
+    prob, u0 = _problem(V, F)
+    u1, outcome, _ = prob.ratio_step(u0, 0.0)
+    D1 = _max_distortion(prob, u1)
+    mean1 = prob.mean_distortion(u1)
+    assert outcome == "solved" and mean1 > prob.mean_distortion(u0)
+    flags = []
+    u, D = strategies.lower_mean(prob, (u1, D1), None, flags, lambda *a: None, 0.0)
+    assert prob.solves == 2 and flags == []
+    assert _max_distortion(prob, u) == pytest.approx(D, rel=1e-9)
+    assert D <= strategies.guaranteed_bound(D1) and prob.mean_distortion(u) < mean1
