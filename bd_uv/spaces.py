@@ -153,7 +153,8 @@ def distortion_epigraph_space(ops, w, k, g, cone="soc"):
     one always-feasible program (the current map with ``t = 0``); its map's actual max ratio is
     the next ``k``. ``t <= 0`` and the cone give ``Re(w_j alpha_j) >= -g_j t / k >= 0``, so the
     rows of eq. 4.16-4.17 are not needed; a collapsed face fails certification like a flipped one.
-    ``cone="linf"`` uses eq. 4.22's rows with the same right-hand side.
+    ``cone="linf"`` uses eq. 4.22's rows with the same right-hand side (then the current map is
+    feasible at ``t = 0`` when k is its max of ``sqrt(2) max(|Re beta|, |Im beta|) / g``).
 
     Parameters
     ----------

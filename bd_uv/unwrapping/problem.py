@@ -231,7 +231,8 @@ class IslandProblem:
         Minimises ``t + eps k E(u')`` over maps u' with ``|beta_j| <= k Re(w_j alpha_j) + g_j t``,
         ``-k <= t <= 0`` (``spaces.distortion_epigraph_space``): frames w and scales
         ``g = |alpha|`` from ``u`` (eq. 4.21: ``Re(w alpha) = |alpha|`` there), k its max ratio
-        ``|beta| / |alpha|`` (eqs. 4.9, 4.15), E the island's energy scaled to 1 at the anchor
+        ``|beta| / |alpha|`` (eqs. 4.9, 4.15; with ``cone="linf"`` the ratio of eq. 4.22's
+        ``sqrt(2) max(|Re beta|, |Im beta|)``), E the island's energy scaled to 1 at the anchor
         map, anchors as ``anchor_to`` set them. ``u`` with ``t = 0`` is feasible, so the program
         is never empty; the energy term keeps faces away from the max near the energy's optimum
         (a low mean distortion).
@@ -245,9 +246,13 @@ class IslandProblem:
         t = time.perf_counter()
         if len(self.free) == 0:
             return self._pinned_map(), "solved", np.nan
-        a = self.alpha(u)
+        a, b = self.alpha(u), self.beta(u)
         g = np.abs(a)
-        k = float(np.max(np.abs(self.beta(u)) / g))
+        # the measure the rows bound (eq. 4.15, or 4.22's sqrt(2) max(|Re|, |Im|) >= |beta|), so
+        # that u with t = 0 is feasible
+        size = (np.abs(b) if self.cone != "linf"
+                else np.sqrt(2.0) * np.maximum(np.abs(b.real), np.abs(b.imag)))
+        k = float(np.max(size / g))
         w = frames_from_map(a)
         A, b, cones = distortion_epigraph_space(self.ops, w, k, g, self.cone)
         P, q, _ = self._energy(w)
