@@ -30,7 +30,7 @@ def frames_from_map(alpha):
     return w
 
 
-def lscm_map(Z, tris, nv, loops, pins=None):
+def lscm_map(Z, tris, nv, loops, pins=None, ops=None):
     """Least-squares conformal map (Levy et al. 2002), the free-boundary conformal initial map.
 
     Parameters
@@ -41,12 +41,14 @@ def lscm_map(Z, tris, nv, loops, pins=None):
     loops : sequence of (b,) int arrays, boundary loops (longest first)
     pins : tuple (idx (p,) int, uv (p,) complex), optional. Without at least two pins, the two
         boundary vertices farthest apart are fixed at 0 and 1.
+    ops : energies.JacobianOperators of (Z, tris, nv), optional (built here when not given)
 
     Returns
     -------
     u : (nv,) complex128
     """
-    ops = jacobian_operators(Z, tris, nv)
+    if ops is None:
+        ops = jacobian_operators(Z, tris, nv)
     W = sp.diags(ops.area)
     Q = (ops.Bre.T @ W @ ops.Bre + ops.Bim.T @ W @ ops.Bim).tocsc()
     if pins is not None and len(pins[0]) >= 2:

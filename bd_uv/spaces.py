@@ -168,3 +168,55 @@ def mean_scale_row(ops, w, value=1.0):
     Ra, _ = rotated_alpha(ops, w)
     row = sp.csr_array(ops.area[None, :] @ Ra) / ops.area.sum()
     return row.tocsc(), np.array([float(value)]), [("zero", 1)]
+
+
+def distortion_epigraph_space(ops, w, k, g, cone="soc"):
+    """Constraint blocks of one Dinkelbach step for the smallest max conformal distortion.
+
+    Minimising the max of the ratios ``|beta_j| / Re(w_j alpha_j)`` (eq. 4.15 read as
+    ``k_j = (C_j - 1)/(C_j + 1)``) is a generalised fractional program. The normalised Dinkelbach
+    step of Crouzeix, Ferland & Schaible (1985, "An algorithm for generalized fractional
+    programs", JOTA 47) minimises, with the current map's ratio ``k`` and scales ``g_j``,
+
+        t  subject to  |beta_j| <= k Re(w_j alpha_j) + g_j t,   -k <= t <= 0,
+
+    one always-feasible program (the current map with ``t = 0``); its map's actual max ratio is
+    the next ``k``. ``t <= 0`` and the cone give ``Re(w_j alpha_j) >= -g_j t / k >= 0``, so the
+    rows of eq. 4.16-4.17 are not needed; a collapsed face fails certification like a flipped one.
+    ``cone="linf"`` uses eq. 4.22's rows with the same right-hand side (then the current map is
+    feasible at ``t = 0`` when k is its max of ``sqrt(2) max(|Re beta|, |Im beta|) / g``).
+
+    Parameters
+    ----------
+    ops : energies.JacobianOperators
+    w : (m,) complex unit frames
+    k : float > 0, the current max ratio (C - 1)/(C + 1)
+    g : (m,) float > 0, each face's Re(w_j alpha_j) in the current map
+    cone : "soc" or "linf"
+
+    Returns
+    -------
+    A : (rows, 2nv + 1) csc (the last column is t), b : (rows,), cones : list of (kind, dim)
+    """
+    Ra, _ = rotated_alpha(ops, w)
+    nf, n = Ra.shape
+    gcol = sp.csr_array((g, (np.arange(nf), np.zeros(nf, np.int64))), shape=(nf, 1))
+    zcol = sp.csr_array((nf, 1))
+    # -k <= t <= 0:  s = k + t >= 0 and s = -t >= 0
+    t_rows = sp.csr_array(([-1.0, 1.0], ([0, 1], [n, n])), shape=(2, n + 1))
+    lhs = sp.hstack([k * Ra, gcol])                  # k Re(w alpha) + g t
+    if cone == "soc":
+        # (k Re + g t, Re beta, Im beta) in SOC(3), interleaved per face
+        stack = sp.vstack([lhs, sp.hstack([ops.Bre, zcol]), sp.hstack([ops.Bim, zcol])]).tocsr()
+        perm = np.arange(3 * nf).reshape(3, nf).T.ravel()
+        A = sp.vstack([t_rows, -stack[perm]])
+        cones = [("nonneg", 2)] + [("soc", 3)] * nf
+    elif cone == "linf":
+        half = lhs / np.sqrt(2.0)
+        Bre, Bim = sp.hstack([ops.Bre, zcol]), sp.hstack([ops.Bim, zcol])
+        A = sp.vstack([t_rows] + [-(half + sgn * B) for B in (Bre, Bim) for sgn in (-1.0, 1.0)])
+        cones = [("nonneg", 2 + 4 * nf)]
+    else:
+        raise ValueError(f"unknown cone {cone!r}: use 'soc' or 'linf'")
+    b = np.concatenate([[k, 0.0], np.zeros(A.shape[0] - 2)])
+    return sp.csc_array(A), b, cones

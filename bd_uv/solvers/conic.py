@@ -47,7 +47,8 @@ _OUTCOME = {
 }
 
 
-def solve_conic(P, q, A, b, cones, cancel=None, max_iter=MAX_ITER):
+def solve_conic(P, q, A, b, cones, cancel=None, max_iter=MAX_ITER, tol_gap=TOL_GAP,
+                tol_feas=TOL_FEAS):
     """Minimise ``x^T P x / 2 + q^T x`` subject to ``A x + s = b``, ``s`` in the cones.
 
     Parameters
@@ -59,6 +60,7 @@ def solve_conic(P, q, A, b, cones, cancel=None, max_iter=MAX_ITER):
     cones : list of (kind, dim), kind in {"zero", "nonneg", "soc"}
     cancel : object with is_set(), optional; checked by Clarabel's termination callback
     max_iter : int
+    tol_gap, tol_feas : float, Clarabel's gap (absolute and relative) and feasibility tolerances
 
     Returns
     -------
@@ -70,9 +72,9 @@ def solve_conic(P, q, A, b, cones, cancel=None, max_iter=MAX_ITER):
     settings = clarabel.DefaultSettings()
     settings.verbose = False
     settings.max_iter = int(max_iter)
-    settings.tol_gap_abs = TOL_GAP
-    settings.tol_gap_rel = TOL_GAP
-    settings.tol_feas = TOL_FEAS
+    settings.tol_gap_abs = float(tol_gap)
+    settings.tol_gap_rel = float(tol_gap)
+    settings.tol_feas = float(tol_feas)
     settings.iterative_refinement_enable = False
     settings.presolve_enable = False
     settings.direct_solve_method = "qdldl"

@@ -77,7 +77,7 @@ def start_map(prob, frames, initial_uv, report, lscm=None):
         if lscm is None:
             report(0.02, "conformal initial map")
             pins = (prob.pin_idx, prob.pin_val) if npins >= 2 else None
-            lscm = lscm_map(prob.Z, isl.tris, prob.nv, isl.loops, pins)
+            lscm = lscm_map(prob.Z, isl.tris, prob.nv, isl.loops, pins, ops=prob.ops)
         u = place(lscm)  # when it flips (D = inf), the strategies bend it or replace it
         return Start(u, frames_from_map(prob.alpha(u)), "conformal", guaranteed(u))
     report(0.04, "harmonic initial map")

@@ -17,12 +17,19 @@ from ..errors import InfeasibleError, SolverError
 from ..frames import _far_pair, frames_from_map, lscm_map
 from ..geometry import face_areas, local_coordinates
 from ..solvers import conic
-from ..spaces import bounded_distortion_space, mean_scale_row, stretch_space
+from ..spaces import (bounded_distortion_space, distortion_epigraph_space, mean_scale_row,
+                      stretch_space)
 
 SOLVE_MARGIN = 2e-3      # solve at a C slightly below the bound so certification has headroom
 # Relative headroom a certified bound keeps above the map's float64 distortion, so that the UVs
 # still pass when stored as float32 (Blender) or packed into the unit square.
 STORE_HEADROOM = 2e-4
+RATIO_MAX_ITER = 12  # a Dinkelbach step's map is certified whatever the solver's status: 12 Clarabel
+# iterations gave lion-head 1.650 then 1.590 (80: 1.650, 1.600; 8 or 10: stalls at 1.64), and
+# loose tolerances stop earlier with the same map (mushroom: 8 iterations instead of 12, C 1.10996
+# instead of 1.10995).
+RATIO_TOL_GAP = 1e-3
+RATIO_TOL_FEAS = 1e-4
 
 
 def solve_bound(C):
@@ -163,7 +170,7 @@ class IslandProblem:
         """The conformal map, for a formulation when the start gives frames only."""
         isl = self.island
         pins = (self.pin_idx, self.pin_val) if len(self.pin_idx) >= 2 else None
-        return lscm_map(self.Z, isl.tris, self.nv, isl.loops, pins)
+        return lscm_map(self.Z, isl.tris, self.nv, isl.loops, pins, ops=self.ops)
 
     # -- formulations --------------------------------------------------------------------------
     def set_anchors(self, idx, val):
@@ -301,12 +308,53 @@ class IslandProblem:
             A, b, cones = sp.vstack([Az, A]).tocsc(), np.concatenate([bz, b]), cz + cones
         return A, b, cones
 
+    def ratio_step(self, u, eps):
+        """One Dinkelbach step lowering the max conformal distortion of a flip-free map ``u``.
+
+        Minimises ``t + eps k E(u')`` over maps u' with ``|beta_j| <= k Re(w_j alpha_j) + g_j t``,
+        ``-k <= t <= 0`` (``spaces.distortion_epigraph_space``): frames w and scales
+        ``g = |alpha|`` from ``u`` (eq. 4.21: ``Re(w alpha) = |alpha|`` there), k its max ratio
+        ``|beta| / |alpha|`` (eqs. 4.9, 4.15; with ``cone="linf"`` the ratio of eq. 4.22's
+        ``sqrt(2) max(|Re beta|, |Im beta|)``), E the island's energy scaled to 1 at the anchor
+        map, anchors as ``anchor_to`` set them. ``u`` with ``t = 0`` is feasible, so the program
+        is never empty; the energy term keeps faces away from the max near the energy's optimum
+        (a low mean distortion).
+
+        Returns (u' or None, outcome, C_model): C_model is the max distortion the program promises
+        with u's scales, ``(1 + k + t) / (1 - k - t)``; certify u' from its UVs (its actual max
+        is C_model when no face's scale changed, above it as far as the scales grew).
+        """
+        if self.cancel is not None and self.cancel.is_set():
+            raise Cancelled
+        t = time.perf_counter()
+        if len(self.free) == 0:
+            return self._pinned_map(), "solved", np.nan
+        a, b = self.alpha(u), self.beta(u)
+        g = np.abs(a)
+        # the measure the rows bound (eq. 4.15, or 4.22's sqrt(2) max(|Re|, |Im|) >= |beta|), so
+        # that u with t = 0 is feasible
+        size = (np.abs(b) if self.cone != "linf"
+                else np.sqrt(2.0) * np.maximum(np.abs(b.real), np.abs(b.imag)))
+        k = float(np.max(size / g))
+        w = frames_from_map(a)
+        A, b, cones = distortion_epigraph_space(self.ops, w, k, g, self.cone)
+        P, q, _ = self._energy(w)
+        n = 2 * self.nv
+        P = sp.block_diag([P * (self.scale * eps * k), sp.csc_array((1, 1))], format="csc")
+        q = np.concatenate([q * (self.scale * eps * k), [1.0]])  # + t
+        x, outcome = self._solve_reduced(P, q, A, b, cones, t, extra=1, max_iter=RATIO_MAX_ITER,
+                                         tol_gap=RATIO_TOL_GAP, tol_feas=RATIO_TOL_FEAS)
+        if x is None:
+            return None, outcome, np.nan
+        kt = k + x[n]
+        return x[:self.nv] + 1j * x[self.nv:n], outcome, (1.0 + kt) / (1.0 - kt)
+
     def _pinned_map(self):
         x = np.zeros(2 * self.nv)
         x[self.fixed] = self.xfix
         return x[:self.nv] + 1j * x[self.nv:]
 
-    def _solve_reduced(self, P, q, A, b, cones, t, extra=0):
+    def _solve_reduced(self, P, q, A, b, cones, t, extra=0, **settings):
         """Solve the conic program with the anchors substituted; ``extra`` trailing unknowns (after
         the 2nv vertex coordinates) stay free. Counts the solve. Returns (x or None, outcome)."""
         n = 2 * self.nv
@@ -319,7 +367,7 @@ class IslandProblem:
         Af = A[:, fr]
         bf = b - A[:, fx] @ self.xfix
         self.timings["setup"] += time.perf_counter() - t
-        sol = conic.solve_conic(Pff, qf, Af, bf, cones, cancel=self.cancel)
+        sol = conic.solve_conic(Pff, qf, Af, bf, cones, cancel=self.cancel, **settings)
         self.timings["solve"] += sol.seconds
         self.solves += 1
         self.iterations += sol.iterations

@@ -784,20 +784,25 @@ def test_solver_exception_fails_the_island_not_the_call(monkeypatch):
 # ---------------------------------------------------------------------------------------------
 
 def test_zero_time_budget_still_returns_a_certified_map():
-    """No time at all: the certified initial map (or one solve's result) comes back, flagged."""
-    V, F = nefertiti()
+    """No time at all: the certified initial map (or one solve's result) comes back, flagged.
+    (A bumpy patch whose full run takes two Dinkelbach steps.)"""
+    V, F = grid(8, 8, bump=0.3)
     res = unwrap_checked(V, F, bound="auto", time_budget=0.0)
     (isl,) = res.islands
     assert isl.status == "certified" and "time_budget_exhausted" in isl.flags
     # the certified bound keeps a little room above the map's distortion for float32 storage
-    assert isl.max_distortion <= isl.bound_certified <= isl.max_distortion * 1.001
+    # (0.02 %), rounded up to 4 significant digits (at most 1e-3 more for a C below 10)
+    assert isl.max_distortion <= isl.bound_certified <= isl.max_distortion * 1.0002 + 1e-3
 
 
 def test_time_budget_running_out_returns_the_best_found_so_far(monkeypatch):
     """A clock that advances one second per conic solve and stands still otherwise: a budget of
-    2.5 s lets exactly three solves run, whatever the machine's speed."""
-    V, F = nefertiti()
+    n - 1.5 s lets exactly n - 1 of the n solves of the full run go, whatever the machine's
+    speed."""
+    V, F = grid(8, 8, bump=0.3)
     full = unwrap_checked(V, F, bound="auto")
+    n = full.islands[0].solves
+    assert n >= 2
     clock = [0.0]
     real = bd_uv.solvers.conic.solve_conic
 
@@ -809,10 +814,10 @@ def test_time_budget_running_out_returns_the_best_found_so_far(monkeypatch):
     for module in (PIPELINE, bd_uv.unwrapping.strategies):
         monkeypatch.setattr(module, "time",
                             types.SimpleNamespace(perf_counter=now, monotonic=now, time=now))
-    res = unwrap_checked(V, F, bound="auto", time_budget=2.5)
+    res = unwrap_checked(V, F, bound="auto", time_budget=n - 1.5)
     (isl,) = res.islands
     assert isl.status == "certified" and "time_budget_exhausted" in isl.flags
-    assert isl.solves == 3 < full.islands[0].solves
+    assert isl.solves == n - 1
     assert "time_budget_exhausted" not in full.islands[0].flags
     assert isl.bound_certified >= full.islands[0].bound_certified
 
