@@ -42,7 +42,11 @@ def _extension_package():
     otherwise the root imported here under the name ``bd_uv_ext``."""
     init = os.path.join(ROOT, "__init__.py")
     for module in list(sys.modules.values()):
-        if os.path.abspath(getattr(module, "__file__", None) or "") == init:
+        # Only a package will do: a test runner may also have imported the root __init__.py as
+        # a plain module (pytest names it "__init__" when the checkout folder's name is no
+        # identifier), and its submodules cannot be imported through that.
+        if (os.path.abspath(getattr(module, "__file__", None) or "") == init
+                and getattr(module, "__path__", None)):
             return module
     # Blender puts the extensions' wheels (scipy, clarabel) on sys.path at start-up; add them here
     # too in case this extension is installed but not enabled.
