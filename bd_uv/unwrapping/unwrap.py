@@ -363,10 +363,15 @@ def _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_boun
 
 def certified_bound(max_distortion):
     """The bound ``bound="auto"`` reports for a map: its max distortion with STORE_HEADROOM,
-    rounded up to 4 significant digits, so the UVs still pass as stored (float32, packed)."""
+    with C - 1 rounded up to 4 significant digits (1.03633 for 1.036117, 3.858 for 3.8563), so the
+    UVs still pass as stored (float32, packed) and a C close to 1 keeps the precision it was
+    minimised to (the search's tolerance is relative to C - 1 too)."""
     c = max_distortion * (1.0 + STORE_HEADROOM)
-    digits = 3 - int(math.floor(math.log10(c)))
-    return math.ceil(c * 10 ** digits) / 10 ** digits
+    excess = c - 1.0
+    if not excess > 0.0:
+        return c
+    digits = 3 - int(math.floor(math.log10(excess)))
+    return 1.0 + math.ceil(excess * 10 ** digits) / 10 ** digits
 
 
 def _finish(prob, u, C, bound, frames_name, flags, t0, stretch=None):
