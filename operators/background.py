@@ -6,7 +6,8 @@ An operator mixing in :class:`BackgroundSolve` defines
   (it reads the meshes: Object Mode inside);
 - ``_finish(context, state, result, seconds)`` -> the operator's return set (write, check,
   report);
-- ``JOB`` (text for the status bar, e.g. "Bounded Distortion deform").
+- ``JOB`` (text for the status bar, e.g. "Bounded Distortion deform") and, optionally,
+  ``CANCELLED`` (the report when Esc or a cancel stops it; by default "<JOB> cancelled: ...").
 
 ``execute()`` solves here and now (scripts, the redo panel, tests); ``invoke()`` runs
 ``solve(*args, **kwargs, progress=..., cancel=...)`` in a :class:`~.worker.UnwrapJob` thread
@@ -30,11 +31,15 @@ def has_event_loop(context):
 
 class BackgroundSolve:
     JOB = "Bounded Distortion"
+    CANCELLED = None
+
+    def _cancelled(self):
+        return self.CANCELLED or f"{self.JOB} cancelled: mesh and UVs unchanged"
 
     def _failed(self, error):
         """Report an exception from the solve; nothing has been written."""
         if isinstance(error, bd_uv.CancelledError):
-            self.report({'WARNING'}, f"{self.JOB} cancelled: mesh and UVs unchanged")
+            self.report({'WARNING'}, self._cancelled())
         elif isinstance(error, bd_uv.BDError):
             self.report({'WARNING'}, str(error))
         elif isinstance(error, ValueError):
@@ -87,7 +92,7 @@ class BackgroundSolve:
         if event.type == 'ESC' and event.value == 'PRESS':
             self._job.cancel()  # the thread stops at its next checkpoint; its result is dropped
             self._end_modal(context)
-            self.report({'WARNING'}, f"{self.JOB} cancelled: mesh and UVs unchanged")
+            self.report({'WARNING'}, self._cancelled())
             return {'CANCELLED'}
         if event.type != 'TIMER':
             return {'PASS_THROUGH'}

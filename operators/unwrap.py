@@ -2,31 +2,26 @@
 
 ``execute()`` solves synchronously (scripts, the redo panel, tests); ``invoke()`` solves in a
 background :class:`~.worker.UnwrapJob`, polls it from a modal timer, shows progress in the status
-bar, and Esc cancels leaving mesh and UVs exactly as they were. Both end in ``_finish`` (write
-back, pack, colour, report) so they cannot drift apart.
+bar, and Esc cancels leaving mesh and UVs exactly as they were (both from
+:class:`~.background.BackgroundSolve`). Both end in ``_finish`` (write back, pack, colour, report)
+so they cannot drift apart.
 """
 import dataclasses
 import functools
-import time
 
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty
 
 from .. import bd_uv
 from . import auto_seams, session
+from .background import BackgroundSolve
 from .editmode import edit_mesh_objects, object_mode
-from .worker import Failed, UnwrapJob
 
 # The background job's solve function (tests substitute a gated one to control timing).
 SOLVE = bd_uv.unwrap
 # ... and with Seams "Add Where Needed".
 AUTO_SOLVE = auto_seams.solve
 
-
-
-def has_event_loop(context):
-    """Whether modal timers will fire (not so in background mode or without a window)."""
-    return context.window is not None and not bpy.app.background
 
 
 _METHODS = (
@@ -69,13 +64,15 @@ _FRAMES = (
 )
 
 
-class UV_OT_bd_unwrap(bpy.types.Operator):
+class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
     """Unwrap the selected faces with a certified bound on conformal distortion and no flipped
     faces (Bounded Distortion Mapping Spaces, Lipman 2012)"""
 
     bl_idname = "uv.bd_unwrap"
     bl_label = "Bounded Distortion"
     bl_options = {'REGISTER', 'UNDO'}
+    JOB = "Bounded Distortion unwrap"
+    CANCELLED = "Unwrap cancelled: mesh and UVs unchanged"
 
     method: EnumProperty(name="Method", items=_METHODS, default='lscm')
     seams: EnumProperty(name="Seams", items=_SEAMS, default='MARKED')
@@ -168,6 +165,18 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
 
     # -- shared --------------------------------------------------------------------------------
     def _prepare(self, context):
+        """``BackgroundSolve``'s (state, solve, args, kwargs): the batch, and ``auto_seams.solve``
+        (Seams "Add Where Needed") or ``bd_uv.unwrap`` with every polygon kept in one island (the
+        core's overlap cut may split one); None after reporting why not."""
+        gathered = self._gather(context)
+        if gathered is None:
+            return None
+        batch, auto, args, kwargs = gathered
+        solve = AUTO_SOLVE if auto else functools.partial(auto_seams.whole_polygons, SOLVE,
+                                                          **session.polygon_ids(batch))
+        return batch, solve, args, kwargs
+
+    def _gather(self, context):
         """Gather the batch, whether the seams are added (``auto_seams.solve``) and the solve's
         arguments, or report why not (returns None). With Seams "Add Where Needed" C is not
         raised: a chart that cannot be certified at C is cut further."""
@@ -212,19 +221,6 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
                     f"raise it to at least sqrt(C) = {self.bound ** 0.5:.4g} or lower C")
         return ""
 
-    def _failed(self, error):
-        """Report an exception from the core; nothing has been written."""
-        if isinstance(error, bd_uv.CancelledError):
-            self.report({'WARNING'}, "Unwrap cancelled: mesh and UVs unchanged")
-        elif isinstance(error, bd_uv.BDError):
-            # The user's mesh needs work: a WARNING, so a script looping over objects goes on.
-            self.report({'WARNING'}, str(error))
-        elif isinstance(error, ValueError):
-            self.report({'ERROR'}, str(error))
-        else:
-            raise error
-        return {'CANCELLED'}
-
     def _finish(self, context, batch, solved, seconds):
         """Write, pack, re-certify what is stored (putting back what fails), mark the added
         seams, colour, report.
@@ -268,73 +264,6 @@ class UV_OT_bd_unwrap(bpy.types.Operator):
         session.store(context.window_manager, summary, batch.face_count)
         self.report({summary.level}, summary.message)
         return {'FINISHED'} if summary.written else {'CANCELLED'}
-
-    # -- synchronous ---------------------------------------------------------------------------
-    def execute(self, context):
-        prepared = self._prepare(context)
-        if prepared is None:
-            return {'CANCELLED'}
-        batch, auto, args, kwargs = prepared
-        start = time.perf_counter()
-        try:
-            result = AUTO_SOLVE(*args, **kwargs) if auto else auto_seams.whole_polygons(
-                bd_uv.unwrap, *args, **kwargs, **session.polygon_ids(batch))
-        except (bd_uv.BDError, ValueError) as error:
-            return self._failed(error)
-        return self._finish(context, batch, result, time.perf_counter() - start)
-
-    # -- background ----------------------------------------------------------------------------
-    def invoke(self, context, event):
-        if not has_event_loop(context):  # timers would never fire: solve here and now
-            return self.execute(context)
-        prepared = self._prepare(context)
-        if prepared is None:
-            return {'CANCELLED'}
-        self._batch, auto, args, kwargs = prepared
-        # Marked seams: every polygon kept in one island (the core's overlap cut may split one).
-        solve = AUTO_SOLVE if auto else functools.partial(auto_seams.whole_polygons, SOLVE,
-                                                          **session.polygon_ids(self._batch))
-        self._job = UnwrapJob(solve, *args, **kwargs).start()
-        wm = context.window_manager
-        self._timer = wm.event_timer_add(0.1, window=context.window)
-        wm.progress_begin(0, 100)
-        self._status(context, "starting")
-        wm.modal_handler_add(self)
-        return {'RUNNING_MODAL'}
-
-    def _status(self, context, message):
-        text = (f"Bounded Distortion unwrap: {self._job.fraction * 100:.0f}% {message}"
-                "  (Esc to cancel)")
-        if context.workspace is not None:
-            context.workspace.status_text_set(text)
-        context.window_manager.progress_update(int(self._job.fraction * 100))
-
-    def _end_modal(self, context):
-        wm = context.window_manager
-        wm.event_timer_remove(self._timer)
-        wm.progress_end()
-        if context.workspace is not None:
-            context.workspace.status_text_set(None)
-
-    def modal(self, context, event):
-        if event.type == 'ESC' and event.value == 'PRESS':
-            self._job.cancel()  # the thread stops at its next checkpoint; its result is dropped
-            self._end_modal(context)
-            self.report({'WARNING'}, "Unwrap cancelled: mesh and UVs unchanged")
-            return {'CANCELLED'}
-        if event.type != 'TIMER':
-            return {'PASS_THROUGH'}
-        outcome = self._job.poll()
-        if outcome is None:
-            self._status(context, self._job.status)
-            return {'PASS_THROUGH'}
-        self._end_modal(context)
-        if isinstance(outcome, Failed):
-            return self._failed(outcome.error)
-        if not edit_mesh_objects(context):
-            self.report({'WARNING'}, "Left Edit Mode while solving: nothing written")
-            return {'CANCELLED'}
-        return self._finish(context, self._batch, outcome.result, outcome.seconds)
 
 
 classes = (UV_OT_bd_unwrap,)

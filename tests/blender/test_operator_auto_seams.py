@@ -242,7 +242,9 @@ def _gated_auto(monkeypatch):
         return real(*args, **kwargs)
 
     monkeypatch.setattr(unwrap_module, "AUTO_SOLVE", solve)
-    monkeypatch.setattr(unwrap_module, "has_event_loop", lambda context: True)
+    # invoke() is BackgroundSolve.invoke: it asks the background module
+    monkeypatch.setattr(load_submodule("operators.background"), "has_event_loop",
+                        lambda context: True)
     return gate
 
 

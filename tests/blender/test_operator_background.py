@@ -47,9 +47,10 @@ def _operator(**props):
     op = types.SimpleNamespace(**defaults)
     op.reports = []
     op.report = lambda level, message: op.reports.append((set(level), message))
-    for name in ("_prepare", "_failed", "_finish", "_status", "_end_modal", "modal"):
+    for name in ("_prepare", "_gather", "_stretch_problem", "_failed", "_cancelled", "_finish",
+                 "_status", "_end_modal", "modal", "invoke", "execute"):
         setattr(op, name, types.MethodType(getattr(op_cls, name), op))
-    op.invoke = types.MethodType(op_cls.invoke, op)
+    op.JOB, op.CANCELLED = op_cls.JOB, op_cls.CANCELLED
     return op
 
 
@@ -70,7 +71,9 @@ def gated(monkeypatch):
 
     monkeypatch.setattr(unwrap_module, "SOLVE", solve)
     # Pretend there is an event loop, or invoke() would fall back to execute().
-    monkeypatch.setattr(unwrap_module, "has_event_loop", lambda context: True)
+    # invoke() is BackgroundSolve.invoke: it asks the background module
+    monkeypatch.setattr(load_submodule("operators.background"), "has_event_loop",
+                        lambda context: True)
     return gate
 
 

@@ -510,7 +510,9 @@ def test_background_path_puts_back_what_fails_as_stored(addon, monkeypatch):
     from test_operator_background import Context, _event, _invoke, _operator
 
     unwrap_module = load_submodule("operators.unwrap")
-    monkeypatch.setattr(unwrap_module, "has_event_loop", lambda context: True)
+    # invoke() is BackgroundSolve.invoke: it asks the background module
+    monkeypatch.setattr(load_submodule("operators.background"), "has_event_loop",
+                        lambda context: True)
     stored = load_submodule("operators.stored")
     monkeypatch.setattr(stored, "certify_islands",
                         _failing(stored, lambda F, k: np.ones(k, bool)))
