@@ -31,6 +31,8 @@ class ChartMaps:
     distortion : (f,) float64, conformal distortion per face (inf when flipped)
     stretch : (f,) float64, ``max(sigma_1, 1/sigma_2)`` per face (inf when flipped)
     max_distortion, max_stretch : (k,) float64 per chart
+    mean_distortion : (k,) float64, area-weighted mean conformal distortion per chart (inf
+        when a face is flipped)
     crossings : (k,) int64, pairs of boundary edges of the chart that cross in UV
     sigma : (f,2) float64, singular values ``(|alpha|+|beta|, |alpha|-|beta|)`` per face (the
         second <= 0 when flipped), each chart scaled to its 3D area: any union of a chart's faces
@@ -46,6 +48,7 @@ class ChartMaps:
     max_stretch: np.ndarray
     crossings: np.ndarray
     sigma: np.ndarray
+    mean_distortion: np.ndarray
 
 
 def chart_maps(V, charts):
@@ -100,9 +103,13 @@ def chart_maps(V, charts):
     St[~np.isfinite(St)] = np.inf
     maxD = np.maximum.reduceat(D, foff[:-1])
     maxS = np.maximum.reduceat(St, foff[:-1])
+    with np.errstate(invalid="ignore"):
+        meanD = np.bincount(face_c, A3 * D, minlength=k) / area
+    meanD[~np.isfinite(meanD)] = np.inf
     uv = u * np.sqrt(area)[vert_c]
     cross = boundary_crossings(uv, [c.loops[0] + voff[j] for j, c in enumerate(charts)])
-    return ChartMaps(uv, voff, foff, D, St, maxD, maxS, cross, np.stack([a + b, a - b], axis=1))
+    return ChartMaps(uv, voff, foff, D, St, maxD, maxS, cross, np.stack([a + b, a - b], axis=1),
+                     meanD)
 
 
 def piece_stretch(sigma, area3, label, k):
