@@ -170,11 +170,13 @@ def _fiedler_many(pairs, w, mass, centroid, offsets, group, iters=12):
     cnt = np.maximum(np.bincount(group, minlength=g), 1)
     shift = 1e-8 * (np.bincount(group, deg, g) / cnt) / np.maximum(total / cnt, 1e-300)
     idx = np.arange(k)
-    K = sp.csc_matrix((np.concatenate([-w, -w, deg + shift[group] * mass]),
-                       (np.concatenate([pairs[:, 0], pairs[:, 1], idx]),
-                        np.concatenate([pairs[:, 1], pairs[:, 0], idx]))), shape=(k, k))
+    # Upper triangle only (the factorisation reads no more).
+    K = sp.csc_matrix((np.concatenate([-w, deg + shift[group] * mass]),
+                       (np.concatenate([pairs.min(axis=1), idx]),
+                        np.concatenate([pairs.max(axis=1), idx]))), shape=(k, k))
+    K.sum_duplicates()
     try:
-        solve = spd_solver(K)
+        solve = spd_solver(K, upper=True)
     except RuntimeError:
         return None
     tot = np.maximum(total, 1e-300)[group]
