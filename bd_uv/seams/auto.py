@@ -3,7 +3,7 @@
 Top-down: a chart that is not a disk is opened by its handle cuts (``cut_graph``), a closed
 sphere and a disk whose conformal map breaks a bound are split along their cheapest neck
 (``fiedler_split``), until every chart's conformal map (LSCM) is flip-free with stretch within S,
-an area-weighted mean conformal distortion within ``MEAN`` and a boundary that does not cross
+an area-weighted mean conformal distortion within ``mean_cap(C)`` and a boundary that does not cross
 itself. Then bottom-up: neighbouring charts are merged while
 the union still passes. ``bd_uv.unwrap`` finally certifies every chart at C (bending the few
 whose conformal map exceeds C), and any chart the certified map leaves beyond S, crossing
@@ -38,9 +38,16 @@ MARGIN = 0.98
 # Area-weighted mean conformal distortion a chart's conformal map may have (the result's mean
 # is the area-weighted mean of its charts'): on coarse curved meshes a map within C and S can
 # still average far above 1 (each vertex's angle defect is flattened into a few large faces:
-# an 80-face icosphere in two charts averaged 1.23, a 16-sided cylinder 1.32). 1.07 keeps the
-# coarse test meshes' results at <= 1.065 with seams within xatlas's; 1.05 cost them more seam.
-MEAN = 1.07
+# an 80-face icosphere in two charts averaged 1.23, a 16-sided cylinder 1.32). ``mean_cap``:
+# 1 + MEAN_SLOPE for C <= 2, growing with a looser bound. 0.07 keeps the coarse test meshes'
+# results at <= 1.065 with seams within xatlas's; 0.05 cost them more seam.
+MEAN_SLOPE = 0.07
+
+
+def mean_cap(C):
+    """The largest area-weighted mean conformal distortion a chart's map may have at bound C:
+    ``1 + MEAN_SLOPE * max(C - 1, 1)`` (1.07 at C = 2; a looser C relaxes it in proportion)."""
+    return 1.0 + MEAN_SLOPE * max(float(C) - 1.0, 1.0)
 # Passes that split charts the certified map leaves beyond S.
 FINISH_ROUNDS = 4
 # Levels a failing chart is split at once while its restricted map still breaks S.
@@ -67,7 +74,9 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     V : (n,3) float array
     F : (m,3) int array
     seams : (s,2) int array, optional, vertex pairs of existing seams (all kept)
-    bound : float, C: conformal distortion of every face at most C (Lipman 2012, eq. 4.9)
+    bound : float, C: conformal distortion of every face at most C (Lipman 2012, eq. 4.9);
+        every chart's conformal map also averages (area-weighted) at most ``mean_cap(C)``
+        (1.07 at C = 2), so coarse meshes keep a low mean too
     stretch : float, S: every face's singular values within [1/S, S] with each chart scaled to
         its 3D area (section 6.3's bounds, ``max(sigma_1, 1/sigma_2) <= S``)
     face_groups : (m,) int array, optional, material per face: seams prefer group boundaries
@@ -140,7 +149,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         if not changed:
             break
     if merge:
-        _merge(V, F, E, cut, keep, invalid, S)
+        _merge(V, F, E, cut, keep, invalid, S, C)
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last
     # round lets ``unwrap`` cut what still overlaps.
@@ -167,7 +176,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
                 break
         if merge:
             # The pieces may now merge with their neighbours (never with each other).
-            _merge(V, F, E, cut, keep, invalid, S, group=group)
+            _merge(V, F, E, cut, keep, invalid, S, C, group=group)
         # Unwrap anew every chart holding a piece (with the neighbours it took in).
         redo = np.zeros(m, dtype=bool)
         for c in charts(F, E, cut):
@@ -224,9 +233,10 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None):
     disks = [c for c in chs if c.kind == "disk"]
     if disks:
         cm = chart_maps(V, disks)
+        cap = mean_cap(C)
         for j, c in enumerate(disks):
             ok = (np.isfinite(cm.max_distortion[j]) and cm.max_stretch[j] <= S * MARGIN
-                  and cm.crossings[j] == 0 and cm.mean_distortion[j] <= MEAN)
+                  and cm.crossings[j] == 0 and cm.mean_distortion[j] <= cap)
             if ok or len(c.faces) < 2:
                 frozen[c.faces] = True
             else:
@@ -365,7 +375,7 @@ def _bisect(pieces, E, cut, A, cen, poly=None):
     return out
 
 
-def _merge(V, F, E, cut, keep, invalid, S, rounds=None, group=None):
+def _merge(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None):
     """Merge neighbouring charts pairwise while the union's conformal map still passes.
 
     Each round tests a matching of neighbouring pairs (dearest shared seam first: length times
@@ -375,6 +385,8 @@ def _merge(V, F, E, cut, keep, invalid, S, rounds=None, group=None):
     Parameters
     ----------
     keep : (e,) bool, seams never removed (marked seams, material boundaries)
+    S, C : float, a union passes with stretch within ``MARGIN`` S, mean distortion within
+        ``mean_cap(C)``, no flipped face and no boundary crossing
     group : (m,) int64, optional: only pairs with a chart in a group (>= 0) are tried, and
         never two charts of one group (the pieces of a chart split because its certified map
         failed: their union is that chart again)
@@ -435,7 +447,7 @@ def _merge(V, F, E, cut, keep, invalid, S, rounds=None, group=None):
             continue
         cm = chart_maps(V, [c for c, _ in disks])
         ok = (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
-              & (cm.crossings == 0) & (cm.mean_distortion <= MEAN))
+              & (cm.crossings == 0) & (cm.mean_distortion <= mean_cap(C)))
         for j in np.flatnonzero(~(cm.max_stretch <= HOPELESS * S)):
             x, y = np.unique(label[disks[j][0].faces])
             far_a.append(int(chs[x].faces[0]))
