@@ -44,3 +44,46 @@ def test_coarse_closed_mesh_mean_distortion(name):
     assert mean <= 1.10, f"{name}: area-weighted mean distortion {mean:.4f}"
     # Still few charts: a closed mesh needs at least two (or its handle cuts), not dozens.
     assert 1 <= len(res.islands) <= 8
+
+
+def _bad_meshes():
+    """An icosphere spoiled in each way ``mesh.islands`` refuses."""
+    V, F = _trimesh(trimesh.creation.icosphere(subdivisions=1))
+    flipped = F.copy()
+    flipped[0] = flipped[0, ::-1]
+    nan = V.copy()
+    nan[0] = np.nan
+    mid = V[F[0, :2]].mean(axis=0, keepdims=True)
+    return {
+        "duplicate": (V, np.concatenate([F, F[:1]])),
+        "duplicate reversed": (V, np.concatenate([F, F[:1, ::-1]])),
+        "flipped": (V, flipped),
+        "nan": (nan, F),
+        "degenerate": (np.concatenate([V, mid]), np.concatenate([F, [[F[0, 0], F[0, 1], len(V)]]])),
+    }
+
+
+@pytest.mark.parametrize("name", sorted(_bad_meshes()))
+def test_search_leaves_invalid_islands_to_unwrap(name):
+    """The search skips ``mesh.islands`` only on a mesh valid everywhere: a spoiled one still
+    gets its island error (and no chart of it is certified)."""
+    from bd_uv.geometry import face_areas
+    from bd_uv.mesh import islands
+    from bd_uv.seams.auto import _valid_everywhere
+    from bd_uv.seams.edges import edge_table
+    V, F = _bad_meshes()[name]
+    assert not _valid_everywhere(V, F, edge_table(V, F), face_areas(V, F))
+    with np.errstate(all="ignore"):
+        errors = {type(i.error) for i in islands(V, F) if i.error is not None}
+        res, added, info = unwrap_auto(V, F, bound=C, stretch=S)
+    assert not res.certified
+    assert {type(r.error) for r in res.islands if r.error is not None} & errors
+
+
+def test_validity_screen_passes_the_clean_meshes():
+    from bd_uv.geometry import face_areas
+    from bd_uv.seams.auto import _valid_everywhere
+    from bd_uv.seams.edges import edge_table
+    for name, make in MESHES.items():
+        V, F = make()
+        assert _valid_everywhere(V, F, edge_table(V, F), face_areas(V, F)), name
