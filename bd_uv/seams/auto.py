@@ -157,16 +157,18 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     # round lets ``unwrap`` cut what still overlaps.
     result = unwrap(V, F, seams=E.ends[cut], bound=C, raise_bound=False,
                     overlap="cut" if FINISH_ROUNDS == 0 else "fail", **unwrap_options)
+    measured = None                         # (st, cr) of ``result`` on the current cut
     for finish in range(FINISH_ROUNDS):
         # Charts the certified map leaves beyond S or crossing itself are split again and only
         # their faces unwrapped anew.
-        st, cr = _measure(V, F, E, cut, result)
+        st, cr = measured = _measure(V, F, E, cut, result)
         bad = [r for r, s, c in zip(result.islands, st, cr)
                if len(r.faces) > 1 and ((r.status == "certified" and (s > S * (1 + 1e-9) or c))
                                         or isinstance(r.error, (InfeasibleError, SolverError,
                                                                 OverlapError)))]
         if not bad:
             break
+        measured = None
         frozen[:] = True
         group = np.full(m, -1, dtype=np.int64)
         for g, r in enumerate(bad):
@@ -194,7 +196,8 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         if r.cut_edges is not None and len(r.cut_edges):
             k = E.keys(r.cut_edges, n)
             cut[k[k >= 0]] = True
-    st, cr = _measure(V, F, E, cut, result)
+            measured = None
+    st, cr = measured if measured is not None else _measure(V, F, E, cut, result)
     result = dataclasses.replace(result, seconds=time.perf_counter() - t0)
     added = E.ends[cut & ~original]
     info = {"charts": len(result.islands),
