@@ -42,17 +42,9 @@ MARGIN = 0.98
 # 1 + MEAN_SLOPE for C <= 2, growing with a looser bound. 0.07 keeps the coarse test meshes'
 # results at <= 1.065 with seams within xatlas's; 0.05 cost them more seam.
 MEAN_SLOPE = 0.07
-
-
 # The charts of the given seams (the first round's) pass with a mean up to this share of
 # (mean_cap - 1) more: 1.0875 at C = 2.
 GIVEN_SLACK = 0.25
-
-
-def mean_cap(C):
-    """The largest area-weighted mean conformal distortion a chart's map may have at bound C:
-    ``1 + MEAN_SLOPE * max(C - 1, 1)`` (1.07 at C = 2; a looser C relaxes it in proportion)."""
-    return 1.0 + MEAN_SLOPE * max(float(C) - 1.0, 1.0)
 # Passes that split charts the certified map leaves beyond S.
 FINISH_ROUNDS = 4
 # Levels a failing chart is split at once while its restricted map still breaks S.
@@ -67,6 +59,12 @@ MERGE_ROUNDS = 15
 HOPELESS = 1.5
 # Matchings of neighbouring chart pairs tested together in one merging round.
 MERGE_LAYERS = 1
+
+
+def mean_cap(C):
+    """The largest area-weighted mean conformal distortion a chart's map may have at bound C:
+    ``1 + MEAN_SLOPE * max(C - 1, 1)`` (1.07 at C = 2; a looser C relaxes it in proportion)."""
+    return 1.0 + MEAN_SLOPE * max(float(C) - 1.0, 1.0)
 
 
 def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merge=True,
