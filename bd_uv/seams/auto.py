@@ -2,8 +2,9 @@
 
 Top-down: a chart that is not a disk is opened by its handle cuts (``cut_graph``), a closed
 sphere and a disk whose conformal map breaks a bound are split along their cheapest neck
-(``fiedler_split``), until every chart's conformal map (LSCM) is flip-free with stretch within S
-and a boundary that does not cross itself. Then bottom-up: neighbouring charts are merged while
+(``fiedler_split``), until every chart's conformal map (LSCM) is flip-free with stretch within S,
+an area-weighted mean conformal distortion within ``mean_cap(C)`` and a boundary that does not cross
+itself. Then bottom-up: neighbouring charts are merged while
 the union still passes. ``bd_uv.unwrap`` finally certifies every chart at C (bending the few
 whose conformal map exceeds C), and any chart the certified map leaves beyond S, crossing
 itself or overlapping is split again (its pieces may merge with their neighbours).
@@ -22,7 +23,7 @@ from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, Overla
                       SolverError, TopologyError)
 from ..geometry import face_areas
 from ..metrics import face_jacobians
-from ..mesh import check_arrays, islands
+from ..mesh import DEGENERATE_RATIO, check_arrays, islands
 from ..unwrapping.results import UnwrapResult
 from ..unwrapping.unwrap import unwrap
 from .charts import boundary_crossings, chart_maps, piece_stretch
@@ -34,6 +35,16 @@ from .topology import charts, cut_mesh
 MAX_ROUNDS = 60
 # Charts are accepted a little inside S: bending a map into C moves its stretch slightly.
 MARGIN = 0.98
+# Area-weighted mean conformal distortion a chart's conformal map may have (the result's mean
+# is the area-weighted mean of its charts'): on coarse curved meshes a map within C and S can
+# still average far above 1 (each vertex's angle defect is flattened into a few large faces:
+# an 80-face icosphere in two charts averaged 1.23, a 16-sided cylinder 1.32). ``mean_cap``:
+# 1 + MEAN_SLOPE for C <= 2, growing with a looser bound. 0.07 keeps the coarse test meshes'
+# results at <= 1.065 with seams within xatlas's; 0.05 cost them more seam.
+MEAN_SLOPE = 0.07
+# The charts of the given seams (the first round's) pass with a mean up to this share of
+# (mean_cap - 1) more: 1.0875 at C = 2.
+GIVEN_SLACK = 0.25
 # Passes that split charts the certified map leaves beyond S.
 FINISH_ROUNDS = 4
 # Levels a failing chart is split at once while its restricted map still breaks S.
@@ -50,6 +61,12 @@ HOPELESS = 1.5
 MERGE_LAYERS = 1
 
 
+def mean_cap(C):
+    """The largest area-weighted mean conformal distortion a chart's map may have at bound C:
+    ``1 + MEAN_SLOPE * max(C - 1, 1)`` (1.07 at C = 2; a looser C relaxes it in proportion)."""
+    return 1.0 + MEAN_SLOPE * max(float(C) - 1.0, 1.0)
+
+
 def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merge=True,
                 method="lscm", frames="auto", cone="soc", progress=None, cancel=None,
                 polygons=None):
@@ -60,7 +77,9 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     V : (n,3) float array
     F : (m,3) int array
     seams : (s,2) int array, optional, vertex pairs of existing seams (all kept)
-    bound : float, C: conformal distortion of every face at most C (Lipman 2012, eq. 4.9)
+    bound : float, C: conformal distortion of every face at most C (Lipman 2012, eq. 4.9);
+        every chart's conformal map also averages (area-weighted) at most ``mean_cap(C)``
+        (1.07 at C = 2), so coarse meshes keep a low mean too
     stretch : float, S: every face's singular values within [1/S, S] with each chart scaled to
         its 3D area (section 6.3's bounds, ``max(sigma_1, 1/sigma_2) <= S``)
     face_groups : (m,) int array, optional, material per face: seams prefer group boundaries
@@ -119,9 +138,11 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     # Islands the seams cannot fix (non-manifold, degenerate, ...) are left to ``unwrap`` to
     # report; the rest of the search works on charts of the validated mesh.
     frozen = np.zeros(m, dtype=bool)
-    for i in islands(V, F, E.ends[cut]):
-        if i.error is not None and not isinstance(i.error, (ClosedIslandError, TopologyError)):
-            frozen[i.faces] = True
+    if not _valid_everywhere(V, F, E, A):
+        for i in islands(V, F, E.ends[cut]):
+            if i.error is not None and not isinstance(i.error, (ClosedIslandError,
+                                                                TopologyError)):
+                frozen[i.faces] = True
     invalid = frozen.copy()
     rounds = 0
     for rounds in range(1, MAX_ROUNDS + 1):
@@ -129,26 +150,33 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             raise CancelledError("cancelled while placing seams")
         if progress is not None:
             progress(0.0, f"seams: round {rounds}, {int(frozen.sum())}/{m} faces in charts")
-        changed = _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag)
+        # The charts the given seams make (round 1) keep a looser mean: a chart found by a
+        # search on other triangles of the same polygons (the Blender operator's second pass)
+        # must not be cut again for triangulation noise in its mean.
+        changed = _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag,
+                          cap=mean_cap(C) + GIVEN_SLACK * (mean_cap(C) - 1.0)
+                          if rounds == 1 else mean_cap(C))
         if not changed:
             break
     if merge:
-        _merge(V, F, E, cut, keep, invalid, S)
+        _merge(V, F, E, cut, keep, invalid, S, C)
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last
     # round lets ``unwrap`` cut what still overlaps.
     result = unwrap(V, F, seams=E.ends[cut], bound=C, raise_bound=False,
                     overlap="cut" if FINISH_ROUNDS == 0 else "fail", **unwrap_options)
+    measured = None                         # (st, cr) of ``result`` on the current cut
     for finish in range(FINISH_ROUNDS):
         # Charts the certified map leaves beyond S or crossing itself are split again and only
         # their faces unwrapped anew.
-        st, cr = _measure(V, F, E, cut, result)
+        st, cr = measured = _measure(V, F, E, cut, result)
         bad = [r for r, s, c in zip(result.islands, st, cr)
                if len(r.faces) > 1 and ((r.status == "certified" and (s > S * (1 + 1e-9) or c))
                                         or isinstance(r.error, (InfeasibleError, SolverError,
                                                                 OverlapError)))]
         if not bad:
             break
+        measured = None
         frozen[:] = True
         group = np.full(m, -1, dtype=np.int64)
         for g, r in enumerate(bad):
@@ -160,7 +188,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
                 break
         if merge:
             # The pieces may now merge with their neighbours (never with each other).
-            _merge(V, F, E, cut, keep, invalid, S, group=group)
+            _merge(V, F, E, cut, keep, invalid, S, C, group=group)
         # Unwrap anew every chart holding a piece (with the neighbours it took in).
         redo = np.zeros(m, dtype=bool)
         for c in charts(F, E, cut):
@@ -176,7 +204,8 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         if r.cut_edges is not None and len(r.cut_edges):
             k = E.keys(r.cut_edges, n)
             cut[k[k >= 0]] = True
-    st, cr = _measure(V, F, E, cut, result)
+            measured = None
+    st, cr = measured if measured is not None else _measure(V, F, E, cut, result)
     result = dataclasses.replace(result, seconds=time.perf_counter() - t0)
     added = E.ends[cut & ~original]
     info = {"charts": len(result.islands),
@@ -188,11 +217,52 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     return result, added, info
 
 
-def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None):
+def _valid_everywhere(V, F, E, A):
+    """Whether no island can fail ``mesh.islands``' validation (whatever the seams), checked
+    on the whole mesh at once, so the search can skip ``islands`` (a few per cent of its time).
+
+    Conservative: every coordinate finite, no face of zero area by ``mesh.islands``' test, no
+    edge of three or more faces, every interior edge's two faces oriented alike, no two faces on
+    the same three vertices, every vertex a single fan of corners. Where any fails (even a
+    vertex fan ``mesh.islands`` would accept, joining two islands), ``islands`` decides.
+
+    Parameters
+    ----------
+    V : (n,3) float64, F : (m,3) int64, E : edges.EdgeTable, A : (m,) float64 face areas
+
+    Returns
+    -------
+    bool
+    """
+    P = V[F]
+    if not np.isfinite(P).all():
+        return False
+    lmax2 = np.max(np.sum((P - np.roll(P, -1, axis=1)) ** 2, axis=2), axis=1)
+    with np.errstate(invalid="ignore"):
+        if not np.all(2 * A > DEGENERATE_RATIO * lmax2):
+            return False
+    if (np.bincount(E.face_edges.ravel(), minlength=len(E.ends)) > 2).any():
+        return False
+    c = E.corners[E.faces[:, 1] >= 0]
+    nxt = lambda h: h - h % 3 + (h % 3 + 1) % 3
+    if np.any((nxt(c[:, 0, 0]) == c[:, 0, 1]) == (nxt(c[:, 1, 0]) == c[:, 1, 1])):
+        return False
+    # Two faces on the same vertices share all three edges: each edge leads to the other.
+    ef = E.faces[E.face_edges]                          # (m,3,2)
+    me = np.arange(len(F))[:, None]
+    other = np.where(ef[:, :, 0] == me, ef[:, :, 1], ef[:, :, 0])
+    if np.any((other[:, 0] >= 0) & (other[:, 0] == other[:, 1]) & (other[:, 1] == other[:, 2])):
+        return False
+    _, voc = cut_mesh(F, E, np.zeros(len(E.ends), dtype=bool))
+    return len(voc) == len(np.unique(F))
+
+
+def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None):
     """One top-down round over the charts not yet accepted; True when a seam was added.
 
     Handles are cut first; the charts to split (closed spheres, open charts no cut graph
-    changes, disks whose map fails) are all split in one batch (``_split_deep``).
+    changes, disks whose map fails) are all split in one batch (``_split_deep``). A disk passes
+    with a mean distortion up to ``cap`` (default ``mean_cap(C)``).
     """
     sub = np.flatnonzero(~frozen)
     if len(sub) == 0:
@@ -217,9 +287,10 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None):
     disks = [c for c in chs if c.kind == "disk"]
     if disks:
         cm = chart_maps(V, disks)
+        cap = mean_cap(C) if cap is None else cap
         for j, c in enumerate(disks):
             ok = (np.isfinite(cm.max_distortion[j]) and cm.max_stretch[j] <= S * MARGIN
-                  and cm.crossings[j] == 0)
+                  and cm.crossings[j] == 0 and cm.mean_distortion[j] <= cap)
             if ok or len(c.faces) < 2:
                 frozen[c.faces] = True
             else:
@@ -358,7 +429,7 @@ def _bisect(pieces, E, cut, A, cen, poly=None):
     return out
 
 
-def _merge(V, F, E, cut, keep, invalid, S, rounds=None, group=None):
+def _merge(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None):
     """Merge neighbouring charts pairwise while the union's conformal map still passes.
 
     Each round tests a matching of neighbouring pairs (dearest shared seam first: length times
@@ -368,6 +439,8 @@ def _merge(V, F, E, cut, keep, invalid, S, rounds=None, group=None):
     Parameters
     ----------
     keep : (e,) bool, seams never removed (marked seams, material boundaries)
+    S, C : float, a union passes with stretch within ``MARGIN`` S, mean distortion within
+        ``mean_cap(C)``, no flipped face and no boundary crossing
     group : (m,) int64, optional: only pairs with a chart in a group (>= 0) are tried, and
         never two charts of one group (the pieces of a chart split because its certified map
         failed: their union is that chart again)
@@ -427,7 +500,8 @@ def _merge(V, F, E, cut, keep, invalid, S, rounds=None, group=None):
                 return
             continue
         cm = chart_maps(V, [c for c, _ in disks])
-        ok = np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN) & (cm.crossings == 0)
+        ok = (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
+              & (cm.crossings == 0) & (cm.mean_distortion <= mean_cap(C)))
         for j in np.flatnonzero(~(cm.max_stretch <= HOPELESS * S)):
             x, y = np.unique(label[disks[j][0].faces])
             far_a.append(int(chs[x].faces[0]))

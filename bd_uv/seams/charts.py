@@ -31,6 +31,8 @@ class ChartMaps:
     distortion : (f,) float64, conformal distortion per face (inf when flipped)
     stretch : (f,) float64, ``max(sigma_1, 1/sigma_2)`` per face (inf when flipped)
     max_distortion, max_stretch : (k,) float64 per chart
+    mean_distortion : (k,) float64, area-weighted mean conformal distortion per chart (inf
+        when a face is flipped)
     crossings : (k,) int64, pairs of boundary edges of the chart that cross in UV
     sigma : (f,2) float64, singular values ``(|alpha|+|beta|, |alpha|-|beta|)`` per face (the
         second <= 0 when flipped), each chart scaled to its 3D area: any union of a chart's faces
@@ -46,6 +48,7 @@ class ChartMaps:
     max_stretch: np.ndarray
     crossings: np.ndarray
     sigma: np.ndarray
+    mean_distortion: np.ndarray
 
 
 def chart_maps(V, charts):
@@ -100,9 +103,13 @@ def chart_maps(V, charts):
     St[~np.isfinite(St)] = np.inf
     maxD = np.maximum.reduceat(D, foff[:-1])
     maxS = np.maximum.reduceat(St, foff[:-1])
+    with np.errstate(invalid="ignore"):
+        meanD = np.bincount(face_c, A3 * D, minlength=k) / area
+    meanD[~np.isfinite(meanD)] = np.inf
     uv = u * np.sqrt(area)[vert_c]
     cross = boundary_crossings(uv, [c.loops[0] + voff[j] for j, c in enumerate(charts)])
-    return ChartMaps(uv, voff, foff, D, St, maxD, maxS, cross, np.stack([a + b, a - b], axis=1))
+    return ChartMaps(uv, voff, foff, D, St, maxD, maxS, cross, np.stack([a + b, a - b], axis=1),
+                     meanD)
 
 
 def piece_stretch(sigma, area3, label, k):
@@ -132,7 +139,7 @@ def piece_stretch(sigma, area3, label, k):
     return out
 
 
-def spd_solver(A):
+def spd_solver(A, upper=False):
     """Factor a sparse symmetric positive definite matrix once; return its solve.
 
     LDL^T with an AMD ordering (qdldl), about twice as fast as SuperLU on the LSCM and dual
@@ -141,7 +148,9 @@ def spd_solver(A):
 
     Parameters
     ----------
-    A : (N,N) sparse, symmetric positive definite
+    A : (N,N) sparse, symmetric positive definite; with ``upper`` only its upper triangle
+        (diagonal included), in canonical CSC form (no duplicate entries)
+    upper : bool
 
     Returns
     -------
@@ -153,9 +162,11 @@ def spd_solver(A):
     """
     if qdldl is not None:
         try:
-            return qdldl.Solver(sp.triu(A, format="csc"), upper=True).solve
+            return qdldl.Solver(A if upper else sp.triu(A, format="csc"), upper=True).solve
         except ValueError:  # zero pivot: let SuperLU (with pivoting) try
             pass
+    if upper:
+        A = A + sp.triu(A, k=1, format="csc").T
     lu = spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
     return lu.solve
 
@@ -164,8 +175,10 @@ def _lscm_pinned(cb, area, tris, n, idx, val):
     """LSCM (minimise ``sum_f area_f |beta_f|^2``) with vertices ``idx`` fixed to ``val``.
 
     The energy is ``u^H H u`` with ``H = sum_f area_f cb_f^* cb_f^T`` (n x n Hermitian); on
-    x = [Re u; Im u] it is ``x^T Q x`` with ``Q = [[Re H, -Im H], [Im H, Re H]]``, assembled
-    here straight from the faces (no operator products) on the free unknowns only.
+    x = [Re u; Im u] it is ``x^T Q x`` with ``Q = [[Re H, -Im H], [Im H, Re H]]``. Only Q's upper
+    triangle on the free unknowns is assembled, straight from the faces (no operator products):
+    the diagonal blocks' entries with row <= column and the whole block ``-Im H`` (less its
+    zero diagonal). The pinned values enter the right-hand side as ``-[Re; Im](H u_pinned)``.
 
     Parameters
     ----------
@@ -180,24 +193,31 @@ def _lscm_pinned(cb, area, tris, n, idx, val):
     j = np.repeat(tris, 3, axis=1).ravel()
     k = np.tile(tris, (1, 3)).ravel()
     h = (area[:, None, None] * cb.conj()[:, :, None] * cb[:, None, :]).ravel()
-    rows = np.concatenate([j, j, j + n, j + n])
-    cols = np.concatenate([k, k + n, k, k + n])
-    vals = np.concatenate([h.real, -h.imag, h.imag, h.real])
     idx = np.asarray(idx, dtype=np.int64)
-    fixed = np.concatenate([idx, idx + n])
-    xval = np.zeros(2 * n)
-    xval[fixed] = np.concatenate([val.real, val.imag])
-    free = np.ones(2 * n, dtype=bool)
-    free[fixed] = False
-    pos = np.cumsum(free) - 1
-    nf = int(free.sum())
-    fr, fc = free[rows], free[cols]
-    rhs = -np.bincount(pos[rows[fr & ~fc]], vals[fr & ~fc] * xval[cols[fr & ~fc]], nf)
-    both = fr & fc
-    A = sp.csc_matrix((vals[both], (pos[rows[both]], pos[cols[both]])), shape=(nf, nf))
-    x = xval.copy()
-    x[free] = spd_solver(A)(rhs)
-    return x[:n] + 1j * x[n:]
+    u0 = np.zeros(n, dtype=np.complex128)
+    u0[idx] = val
+    hu = h * u0[k]
+    rhs_c = -(np.bincount(j, hu.real, n) + 1j * np.bincount(j, hu.imag, n))
+    pinned = np.zeros(n, dtype=bool)
+    pinned[idx] = True
+    pos = np.cumsum(~pinned) - 1
+    nf = int(n - pinned.sum())
+    both = ~pinned[j] & ~pinned[k]
+    diag = j == k
+    up = both & (j <= k)
+    off = both & ~diag
+    pj, pk = pos[j], pos[k]
+    rows = np.concatenate([pj[up], pj[off], pj[up] + nf])
+    cols = np.concatenate([pk[up], pk[off] + nf, pk[up] + nf])
+    vals = np.concatenate([h.real[up], -h.imag[off], h.real[up]])
+    A = sp.csc_matrix((vals, (rows, cols)), shape=(2 * nf, 2 * nf))
+    A.sum_duplicates()
+    free = ~pinned
+    rhs = np.concatenate([rhs_c.real[free], rhs_c.imag[free]])
+    x = spd_solver(A, upper=True)(rhs)
+    u = u0.copy()
+    u[free] = x[:nf] + 1j * x[nf:]
+    return u
 
 
 def boundary_crossings(uv, loops):

@@ -21,12 +21,15 @@ class EdgeTable:
     length : (e,) float64, 3D length
     cost : (e,) float64, seam cost per unit length in (0, 1]: 1 on flat edges, lower on creases
     face_edges : (m,3) int64, edge of each face corner's outgoing half-edge F[f,k] -> F[f,k+1]
+    corners : (e,2,2) int64, ``corners[e,s,t]``: the corner (``3 f + k``) of ``ends[e,t]`` in
+        ``faces[e,s]`` (-1 where there is no such face)
     """
     ends: np.ndarray
     faces: np.ndarray
     length: np.ndarray
     cost: np.ndarray
     face_edges: np.ndarray
+    corners: np.ndarray
 
     def keys(self, pairs, n):
         """Edge index of each vertex pair (s,2), -1 where the pair is not an edge."""
@@ -92,4 +95,12 @@ def edge_table(V, F, face_groups=None, crease_angle=np.radians(30.0)):
         g = np.asarray(face_groups)
         c = np.where(g[f0] != g[f1], min(c.min(initial=1.0), np.exp(-np.pi / crease_angle)), c)
     cost[two] = np.maximum(c, 1e-3)
-    return EdgeTable(ends, faces, length, cost, inv.reshape(m, 3))
+    # Corners of each edge's ends in its faces: its half-edge h runs corner h -> the next one.
+    corners = np.full((e, 2, 2), -1, dtype=np.int64)
+    for s_, h in ((0, order[first]), (1, order[first[two] + 1])):
+        sel = slice(None) if s_ == 0 else two
+        nxt = h - h % 3 + (h % 3 + 1) % 3
+        forward = a[h] == ends[sel, 0]
+        corners[sel, s_, 0] = np.where(forward, h, nxt)
+        corners[sel, s_, 1] = np.where(forward, nxt, h)
+    return EdgeTable(ends, faces, length, cost, inv.reshape(m, 3), corners)

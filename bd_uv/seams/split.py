@@ -156,10 +156,7 @@ def _fiedler_many(pairs, w, mass, centroid, offsets, group, iters=12):
     total = np.bincount(group, mass, g)
     mean = np.stack([np.bincount(group, mass * centroid[:, i], g) for i in range(3)], 1)
     c = centroid - (mean / np.maximum(total, 1e-300)[:, None])[group]
-    axes = np.stack([_principal_axis(c[offsets[j]:offsets[j + 1]],
-                                     mass[offsets[j]:offsets[j + 1]])
-                     if offsets[j + 1] > offsets[j] else np.array([1.0, 0.0, 0.0])
-                     for j in range(g)])
+    axes = _principal_axes(c, mass, offsets, group)
     x = np.einsum("ij,ij->i", c, axes[group])
     scale = np.zeros(g)
     np.maximum.at(scale, group, np.abs(x))
@@ -170,11 +167,13 @@ def _fiedler_many(pairs, w, mass, centroid, offsets, group, iters=12):
     cnt = np.maximum(np.bincount(group, minlength=g), 1)
     shift = 1e-8 * (np.bincount(group, deg, g) / cnt) / np.maximum(total / cnt, 1e-300)
     idx = np.arange(k)
-    K = sp.csc_matrix((np.concatenate([-w, -w, deg + shift[group] * mass]),
-                       (np.concatenate([pairs[:, 0], pairs[:, 1], idx]),
-                        np.concatenate([pairs[:, 1], pairs[:, 0], idx]))), shape=(k, k))
+    # Upper triangle only (the factorisation reads no more).
+    K = sp.csc_matrix((np.concatenate([-w, deg + shift[group] * mass]),
+                       (np.concatenate([pairs.min(axis=1), idx]),
+                        np.concatenate([pairs.max(axis=1), idx]))), shape=(k, k))
+    K.sum_duplicates()
     try:
-        solve = spd_solver(K)
+        solve = spd_solver(K, upper=True)
     except RuntimeError:
         return None
     tot = np.maximum(total, 1e-300)[group]
@@ -242,6 +241,42 @@ def _snap_many(side, pairs, cost, group, g, rings=BAND_RINGS):
     new = np.zeros(k + 2, dtype=bool)
     new[reach] = True
     return np.where(active[group], new[:k], side)
+
+
+def _principal_axes(c, mass, offsets, group):
+    """``_principal_axis`` of every chart at once (one batched eigen-decomposition); charts
+    whose two largest moments tie go through ``_principal_axis`` one by one.
+
+    Parameters
+    ----------
+    c : (k,3) float64, node centroids about their chart's weighted mean; mass : (k,) float64
+    offsets : (g+1,) int64, group : (k,) int64, the chart of each node
+
+    Returns
+    -------
+    (g,3) float64 unit axes ((1,0,0) for an empty chart)
+    """
+    g = len(offsets) - 1
+    cov = np.empty((g, 3, 3))
+    for a in range(3):
+        for b in range(a, 3):
+            cov[:, a, b] = cov[:, b, a] = np.bincount(group, mass * c[:, a] * c[:, b], g)
+    w, vec = np.linalg.eigh(cov)
+    axes = vec[:, :, 2].copy()
+    proj = np.einsum("ij,ij->i", c, axes[group])
+    big = np.zeros(g)
+    np.maximum.at(big, group, np.abs(proj))
+    on = np.flatnonzero(np.abs(proj) > 1e-9 * big[group])
+    _, first = np.unique(group[on], return_index=True)
+    first = on[first]
+    flip = np.zeros(g, dtype=bool)
+    flip[group[first]] = proj[first] < 0
+    axes[flip] *= -1
+    size = np.diff(offsets)
+    axes[size == 0] = (1.0, 0.0, 0.0)
+    for j in np.flatnonzero((w[:, 1] >= w[:, 2] * (1.0 - 1e-6)) & (size > 0)):
+        axes[j] = _principal_axis(c[offsets[j]:offsets[j + 1]], mass[offsets[j]:offsets[j + 1]])
+    return axes
 
 
 def _principal_axis(c, mass):

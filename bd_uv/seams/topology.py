@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components, depth_first_order
+from scipy.sparse.csgraph import connected_components
 
 
 @dataclass(frozen=True)
@@ -58,12 +58,8 @@ def cut_mesh(F, E, cut, faces=None):
         on[E.face_edges[faces].ravel()] = True
         edges = np.flatnonzero(on & (E.faces[:, 1] >= 0) & ~cut)
         edges = edges[mask[E.faces[edges, 0]] & mask[E.faces[edges, 1]]]
-    f0, f1 = E.faces[edges, 0], E.faces[edges, 1]
-    rows, cols = [], []
-    for end in (0, 1):
-        v = E.ends[edges, end]
-        rows.append(f0 * 3 + np.argmax(F[f0] == v[:, None], axis=1))
-        cols.append(f1 * 3 + np.argmax(F[f1] == v[:, None], axis=1))
+    cn = E.corners[edges]
+    rows, cols = [cn[:, 0, 0], cn[:, 0, 1]], [cn[:, 1, 0], cn[:, 1, 1]]
     # Only the corners of the faces asked for take part: number them 0..3k-1.
     corners = np.flatnonzero(np.repeat(mask, 3))
     pos = np.full(3 * m, -1, dtype=np.int64)
@@ -133,19 +129,62 @@ def charts(F, E, cut, faces=None):
     vb = np.searchsorted(vl[vorder], np.arange(n_c + 1))
     local = np.empty(nv, dtype=np.int64)
     local[vorder] = np.arange(nv) - vb[vl[vorder]]
+    disk = (nb > 0) & (chi == 1) & (n_loops == 1)
+    loops = _disk_loops(ba, bb, vl, disk, nv)
     out = []
     for c in range(n_c):
         fi = forder[fb[c]:fb[c + 1]]
         vi = vorder[vb[c]:vb[c + 1]]
-        if nb[c] == 0:
-            kind = "sphere" if chi[c] == 2 else "open"
+        if disk[c]:
+            kind = "disk"
         else:
-            kind = "disk" if (chi[c] == 1 and n_loops[c] == 1) else "open"
-        loops = ()
-        if kind == "disk":
-            start = int(ba[np.argmax(vl[ba] == c)])
-            loops = (local[depth_first_order(gb, start, directed=True,
-                                             return_predecessors=False)],)
-        out.append(Chart(faces[fi], voc[ids[vi]], local[tri[fi]], loops, kind))
+            kind = "sphere" if (nb[c] == 0 and chi[c] == 2) else "open"
+        out.append(Chart(faces[fi], voc[ids[vi]], local[tri[fi]],
+                         (local[loops[c]],) if disk[c] else (), kind))
     out.sort(key=lambda ch: int(ch.faces[0]))
     return out
+
+
+def _disk_loops(ba, bb, vl, disk, nv):
+    """The boundary loop of every disk chart at once, by list ranking (pointer doubling).
+
+    Each boundary vertex of a disk has one outgoing boundary half-edge (a cut vertex is one
+    fan of corners), so a disk's boundary is one cycle; it is read from its first vertex in
+    ``ba`` order, following the half-edges.
+
+    Parameters
+    ----------
+    ba, bb : (b,) int64, boundary half-edges ``ba -> bb`` (cut vertex ids, all charts)
+    vl : (nv,) int64, chart of each cut vertex
+    disk : (n_c,) bool
+
+    Returns
+    -------
+    dict chart -> (L,) int64 cut vertex ids of its loop in order
+    """
+    sel = disk[vl[ba]]
+    sa, sb = ba[sel], bb[sel]
+    if len(sa) == 0:
+        return {}
+    cs = vl[sa]
+    charts_, first = np.unique(cs, return_index=True)
+    nxt = np.arange(nv)
+    nxt[sa] = sb
+    pred = np.full(nv, -1, dtype=np.int64)
+    pred[sb] = sa
+    term = pred[sa[first]]                  # each loop ends just before its start
+    nxt[term] = term
+    r = np.zeros(nv, dtype=np.int64)
+    r[sa] = 1
+    r[term] = 0
+    while True:
+        s_ = nxt[sa]
+        if np.all(nxt[s_] == s_):
+            r[sa] = r[sa] + r[s_] * (s_ != sa)
+            break
+        r[sa], nxt[sa] = r[sa] + r[s_], nxt[s_]
+    # r: steps to the loop's end; the start has the most.
+    order = np.lexsort((-r[sa], cs))
+    bounds = np.searchsorted(cs[order], charts_)
+    ends = np.append(bounds[1:], len(order))
+    return {int(c): sa[order[b:e]] for c, b, e in zip(charts_, bounds, ends)}
