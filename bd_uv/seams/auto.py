@@ -4,10 +4,11 @@ Top-down: a chart that is not a disk is opened by its handle cuts (``cut_graph``
 sphere and a disk whose conformal map breaks a bound are split along their cheapest neck
 (``fiedler_split``), until every chart's conformal map (LSCM) is flip-free with stretch within S,
 an area-weighted mean conformal distortion within ``mean_cap(C)`` and a boundary that does not cross
-itself. Then bottom-up: neighbouring charts are merged while
-the union still passes. ``bd_uv.unwrap`` finally certifies every chart at C (bending the few
-whose conformal map exceeds C), and any chart the certified map leaves beyond S, crossing
-itself or overlapping is split again (its pieces may merge with their neighbours).
+itself. Then bottom-up (``merge.merge_charts``): neighbouring charts are merged while the union
+still passes. ``bd_uv.unwrap`` finally certifies every chart at C (bending the few whose
+conformal map exceeds C), and any chart the certified map leaves beyond S, crossing itself or
+overlapping (``measure.measure_charts``) is split again (its pieces may merge with their
+neighbours).
 
 Each round splits all its charts in one batch (``fiedler_split_many``), a chart far beyond S
 several levels at once (``_split_deep``). With ``polygons`` the charts are unions of whole
@@ -22,26 +23,17 @@ import numpy as np
 from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, OverlapError,
                       SolverError, TopologyError)
 from ..geometry import face_areas
-from ..metrics import face_jacobians
 from ..mesh import DEGENERATE_RATIO, check_arrays, islands
-from ..unwrapping.results import UnwrapResult
 from ..unwrapping.unwrap import unwrap
-from .charts import boundary_crossings, chart_maps, piece_stretch
+from .charts import MARGIN, chart_maps, mean_cap, piece_stretch
 from .cut_graph import cut_graph
 from .edges import edge_table
-from .split import _quantize, fiedler_split_many
+from .measure import measure_charts, splice
+from .merge import merge_charts
+from .split import fiedler_split_many
 from .topology import charts, cut_mesh
 
 MAX_ROUNDS = 60
-# Charts are accepted a little inside S: bending a map into C moves its stretch slightly.
-MARGIN = 0.98
-# Area-weighted mean conformal distortion a chart's conformal map may have (the result's mean
-# is the area-weighted mean of its charts'): on coarse curved meshes a map within C and S can
-# still average far above 1 (each vertex's angle defect is flattened into a few large faces:
-# an 80-face icosphere in two charts averaged 1.23, a 16-sided cylinder 1.32). ``mean_cap``:
-# 1 + MEAN_SLOPE for C <= 2, growing with a looser bound. 0.07 keeps the coarse test meshes'
-# results at <= 1.065 with seams within xatlas's; 0.05 cost them more seam.
-MEAN_SLOPE = 0.07
 # The charts of the given seams (the first round's) pass with a mean up to this share of
 # (mean_cap - 1) more: 1.0875 at C = 2.
 GIVEN_SLACK = 0.25
@@ -52,21 +44,6 @@ SPLIT_DEPTH = 4
 # ... while the restricted map's stretch exceeds S by this factor (a piece's own map is better
 # than the restriction of its chart's map: nearer S it is left to its own map).
 DEEPER = 4.0
-# Rounds of pairwise merging (each merges a matching of neighbouring charts).
-MERGE_ROUNDS = 15
-# A union whose conformal map stretches beyond this many S: the charts around its two are not
-# tried together again.
-HOPELESS = 1.5
-# Matchings of neighbouring chart pairs tested together in one merging round.
-MERGE_LAYERS = 1
-
-
-def mean_cap(C):
-    """The largest area-weighted mean conformal distortion a chart's map may have at bound C:
-    ``1 + MEAN_SLOPE * max(C - 1, 1)`` (1.07 at C = 2; a looser C relaxes it in proportion)."""
-    return 1.0 + MEAN_SLOPE * max(float(C) - 1.0, 1.0)
-
-
 def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merge=True,
                 method="lscm", frames="auto", cone="soc", progress=None, cancel=None,
                 polygons=None):
@@ -159,7 +136,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         if not changed:
             break
     if merge:
-        _merge(V, F, E, cut, keep, invalid, S, C)
+        merge_charts(V, F, E, cut, keep, invalid, S, C)
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last
     # round lets ``unwrap`` cut what still overlaps.
@@ -169,7 +146,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     for finish in range(FINISH_ROUNDS):
         # Charts the certified map leaves beyond S or crossing itself are split again and only
         # their faces unwrapped anew.
-        st, cr = measured = _measure(V, F, E, cut, result)
+        st, cr = measured = measure_charts(V, F, E, cut, result)
         bad = [r for r, s, c in zip(result.islands, st, cr)
                if len(r.faces) > 1 and ((r.status == "certified" and (s > S * (1 + 1e-9) or c))
                                         or isinstance(r.error, (InfeasibleError, SolverError,
@@ -188,7 +165,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
                 break
         if merge:
             # The pieces may now merge with their neighbours (never with each other).
-            _merge(V, F, E, cut, keep, invalid, S, C, group=group)
+            merge_charts(V, F, E, cut, keep, invalid, S, C, group=group)
         # Unwrap anew every chart holding a piece (with the neighbours it took in).
         redo = np.zeros(m, dtype=bool)
         for c in charts(F, E, cut):
@@ -198,14 +175,14 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         Fc, voc = cut_mesh(F, E, cut, sub)
         part = unwrap(V[voc], Fc[sub], bound=C, raise_bound=False,
                       overlap="cut" if finish == FINISH_ROUNDS - 1 else "fail", **unwrap_options)
-        result = _splice(result, part, sub, voc, m)
+        result = splice(result, part, sub, voc, m)
     # Edges ``unwrap`` cut (overlaps left after the last round) are seams too.
     for r in result.islands:
         if r.cut_edges is not None and len(r.cut_edges):
             k = E.keys(r.cut_edges, n)
             cut[k[k >= 0]] = True
             measured = None
-    st, cr = measured if measured is not None else _measure(V, F, E, cut, result)
+    st, cr = measured if measured is not None else measure_charts(V, F, E, cut, result)
     result = dataclasses.replace(result, seconds=time.perf_counter() - t0)
     added = E.ends[cut & ~original]
     info = {"charts": len(result.islands),
@@ -429,163 +406,3 @@ def _bisect(pieces, E, cut, A, cen, poly=None):
     return out
 
 
-def _merge(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None):
-    """Merge neighbouring charts pairwise while the union's conformal map still passes.
-
-    Each round tests a matching of neighbouring pairs (dearest shared seam first: length times
-    cost, so seams along creases are the last to go) in one
-    batched solve; a pair that fails is not tried again while both charts stay as they are.
-
-    Parameters
-    ----------
-    keep : (e,) bool, seams never removed (marked seams, material boundaries)
-    S, C : float, a union passes with stretch within ``MARGIN`` S, mean distortion within
-        ``mean_cap(C)``, no flipped face and no boundary crossing
-    group : (m,) int64, optional: only pairs with a chart in a group (>= 0) are tried, and
-        never two charts of one group (the pieces of a chart split because its certified map
-        failed: their union is that chart again)
-    """
-    tried = set()
-    # A face of each of two charts whose union was far beyond S: charts holding them are not
-    # tried together again (a union of larger charts around them fares no better).
-    far_a, far_b = [], []
-    chs = charts(F, E, cut)
-    original = keep
-    for _ in range(MERGE_ROUNDS if rounds is None else rounds):
-        label = np.empty(len(F), dtype=np.int64)
-        for j, c in enumerate(chs):
-            label[c.faces] = j
-        ident = [(int(c.faces[0]), len(c.faces)) for c in chs]
-        good = np.array([c.kind == "disk" and not invalid[c.faces[0]] for c in chs])
-        inner = (E.faces[:, 1] >= 0) & cut & ~original
-        la, lb = label[E.faces[inner, 0]], label[E.faces[inner, 1]]
-        diff = (la != lb) & good[la] & good[lb]
-        if group is not None:
-            ga, gb = group[E.faces[inner, 0]], group[E.faces[inner, 1]]
-            diff &= ((ga >= 0) | (gb >= 0)) & (ga != gb)
-        if not diff.any():
-            return
-        ei = np.flatnonzero(inner)[diff]
-        la, lb = np.minimum(la[diff], lb[diff]), np.maximum(la[diff], lb[diff])
-        uk, inv = np.unique(la * len(chs) + lb, return_inverse=True)
-        inv = inv.ravel()
-        shared = np.bincount(inv, E.length[ei] * E.cost[ei])
-        fa, fb = label[np.array(far_a, np.int64)], label[np.array(far_b, np.int64)]
-        hopeless = np.isin(uk, np.minimum(fa, fb) * len(chs) + np.maximum(fa, fb))
-        # Matchings ("layers"): dearest shared seam first, each chart in at most one pair of a
-        # layer; every layer's unions are tested in one batched solve.
-        used = np.zeros((MERGE_LAYERS, len(chs)), dtype=bool)
-        layers = [[] for _ in range(MERGE_LAYERS)]
-        for p in np.lexsort((uk, -_quantize(shared))):
-            x, y = divmod(int(uk[p]), len(chs))
-            if (ident[x], ident[y]) in tried or hopeless[p]:
-                continue
-            free = np.flatnonzero(~used[:, x] & ~used[:, y])
-            if len(free) == 0:
-                continue
-            used[free[0], [x, y]] = True
-            layers[free[0]].append(p)
-            tried.add((ident[x], ident[y]))
-        disks = []
-        for lay, chosen in enumerate(layers):
-            if not chosen:
-                continue
-            trial = cut.copy()
-            trial[ei[np.isin(inv, chosen)]] = False
-            faces = np.flatnonzero(used[lay][label])
-            disks += [(c, trial) for c in charts(F, E, trial, faces)
-                      if c.kind == "disk" and len(np.unique(label[c.faces])) == 2]
-        if not disks:
-            if not any(layers):
-                return
-            continue
-        cm = chart_maps(V, [c for c, _ in disks])
-        ok = (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
-              & (cm.crossings == 0) & (cm.mean_distortion <= mean_cap(C)))
-        for j in np.flatnonzero(~(cm.max_stretch <= HOPELESS * S)):
-            x, y = np.unique(label[disks[j][0].faces])
-            far_a.append(int(chs[x].faces[0]))
-            far_b.append(int(chs[y].faces[0]))
-        merged = np.zeros(len(chs), dtype=bool)
-        # Accept passing unions, dearest removed seam first, each chart merged once per round.
-        fes = [np.unique(E.face_edges[c.faces].ravel()) for c, _ in disks]
-        gain = np.array([(E.length * E.cost)[fe[cut[fe] & ~t[fe]]].sum()
-                         for fe, (_, t) in zip(fes, disks)])
-        unions = []
-        for j in np.lexsort((np.arange(len(gain)), -_quantize(gain))):
-            c, trial = disks[j]
-            two = np.unique(label[c.faces])
-            if not ok[j] or merged[two].any():
-                continue
-            merged[two] = True
-            fe = fes[j]
-            cut[fe[cut[fe] & ~trial[fe]]] = False
-            unions.append(c)
-        # The charts after this round: the unions (as found on the trial cut, which agrees with
-        # the new cut on their faces) and every chart not merged, as they were.
-        chs = sorted([c for j, c in enumerate(chs) if not merged[j]] + unions,
-                     key=lambda ch: int(ch.faces[0]))
-
-
-def _measure(V, F, E, cut, result):
-    """Per island of a result: max stretch and boundary self-crossings from its final UVs."""
-    isl = {int(c.faces[0]): c for c in charts(F, E, cut)}
-    rs = [r for r in result.islands if r.uv is not None and r.status == "certified"]
-    st = np.full(len(result.islands), np.nan)
-    cr = np.zeros(len(result.islands), dtype=np.int64)
-    if not rs:
-        return st.tolist(), cr.tolist()
-    nvs = np.array([len(r.vertices) for r in rs])
-    nfs = np.array([len(r.tris) for r in rs])
-    voff = np.concatenate([[0], np.cumsum(nvs)])
-    foff = np.concatenate([[0], np.cumsum(nfs)])
-    fc = np.repeat(np.arange(len(rs)), nfs)
-    P = V[np.concatenate([r.vertices for r in rs])]
-    uv = np.concatenate([r.uv for r in rs])
-    tris = np.concatenate([r.tris for r in rs]) + voff[fc][:, None]
-    corner = uv[tris]
-    alpha, beta = face_jacobians(P, tris, corner)
-    a, b = np.abs(alpha), np.abs(beta)
-    e1 = corner[:, 1] - corner[:, 0]
-    e2 = corner[:, 2] - corner[:, 0]
-    uv_area = np.bincount(fc, 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]), len(rs))
-    s = np.sqrt(np.bincount(fc, face_areas(P, tris), len(rs)) / np.maximum(uv_area, 1e-300))[fc]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        fs = np.where(a > b, np.maximum(s * (a + b), 1.0 / (s * (a - b))), np.inf)
-    idx = np.array([r.index for r in rs])
-    st[idx] = np.maximum.reduceat(fs, foff[:-1])
-    z = uv[:, 0] + 1j * uv[:, 1]
-    cr[idx] = boundary_crossings(z, [_loop(isl.get(int(r.faces.min())), r) + voff[j]
-                                     for j, r in enumerate(rs)])
-    return st.tolist(), cr.tolist()
-
-
-def _splice(result, part, sub, voc, m):
-    """``result`` with the islands on faces ``sub`` replaced by ``part`` (unwrapped on F[sub])."""
-    redo = np.zeros(m, dtype=bool)
-    redo[sub] = True
-    keep = [r for r in result.islands if not redo[r.faces[0]]]
-    new = [dataclasses.replace(r, faces=sub[r.faces], vertices=voc[r.vertices],
-                               cut_edges=None if r.cut_edges is None
-                               else voc[np.asarray(r.cut_edges, np.int64).reshape(-1, 2)])
-           for r in part.islands]
-    isl = sorted(keep + new, key=lambda r: int(r.faces.min()))
-    isl = [dataclasses.replace(r, index=j) for j, r in enumerate(isl)]
-    corner_uv = result.corner_uv.copy()
-    corner_uv[sub] = part.corner_uv
-    face_island = np.empty(m, dtype=np.int64)
-    for r in isl:
-        face_island[r.faces] = r.index
-    return UnwrapResult(corner_uv, face_island, isl, result.seconds + part.seconds, result.method)
-
-
-
-def _loop(chart, r):
-    """The boundary loop of ``chart`` in the vertex ids of the unwrap result ``r`` (same chart)."""
-    if chart is None or not chart.loops or len(chart.faces) != len(r.faces):
-        return np.zeros(0, dtype=np.int64)
-    # Same faces, vertices numbered differently: map chart vertex -> result vertex by corner.
-    pos = np.searchsorted(chart.faces, r.faces)
-    ids = np.full(len(chart.vertices), -1, dtype=np.int64)
-    ids[chart.tris[pos].ravel()] = r.tris.ravel()
-    return ids[chart.loops[0]]

@@ -1,0 +1,115 @@
+"""Bottom-up: neighbouring charts merged pairwise while the union's conformal map still passes
+(``charts.chart_maps``: flip-free, stretch within S, mean within ``charts.mean_cap(C)``, boundary
+not crossing itself)."""
+import numpy as np
+
+from .charts import MARGIN, chart_maps, mean_cap
+from .split import _quantize
+from .topology import charts
+
+# Rounds of pairwise merging (each merges a matching of neighbouring charts).
+MERGE_ROUNDS = 15
+# A union whose conformal map stretches beyond this many S: the charts around its two are not
+# tried together again.
+HOPELESS = 1.5
+# Matchings of neighbouring chart pairs tested together in one merging round.
+MERGE_LAYERS = 1
+
+
+
+def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None):
+    """Merge neighbouring charts pairwise while the union's conformal map still passes.
+
+    Each round tests a matching of neighbouring pairs (dearest shared seam first: length times
+    cost, so seams along creases are the last to go) in one
+    batched solve; a pair that fails is not tried again while both charts stay as they are.
+
+    Parameters
+    ----------
+    keep : (e,) bool, seams never removed (marked seams, material boundaries)
+    S, C : float, a union passes with stretch within ``MARGIN`` S, mean distortion within
+        ``mean_cap(C)``, no flipped face and no boundary crossing
+    group : (m,) int64, optional: only pairs with a chart in a group (>= 0) are tried, and
+        never two charts of one group (the pieces of a chart split because its certified map
+        failed: their union is that chart again)
+    """
+    tried = set()
+    # A face of each of two charts whose union was far beyond S: charts holding them are not
+    # tried together again (a union of larger charts around them fares no better).
+    far_a, far_b = [], []
+    chs = charts(F, E, cut)
+    original = keep
+    for _ in range(MERGE_ROUNDS if rounds is None else rounds):
+        label = np.empty(len(F), dtype=np.int64)
+        for j, c in enumerate(chs):
+            label[c.faces] = j
+        ident = [(int(c.faces[0]), len(c.faces)) for c in chs]
+        good = np.array([c.kind == "disk" and not invalid[c.faces[0]] for c in chs])
+        inner = (E.faces[:, 1] >= 0) & cut & ~original
+        la, lb = label[E.faces[inner, 0]], label[E.faces[inner, 1]]
+        diff = (la != lb) & good[la] & good[lb]
+        if group is not None:
+            ga, gb = group[E.faces[inner, 0]], group[E.faces[inner, 1]]
+            diff &= ((ga >= 0) | (gb >= 0)) & (ga != gb)
+        if not diff.any():
+            return
+        ei = np.flatnonzero(inner)[diff]
+        la, lb = np.minimum(la[diff], lb[diff]), np.maximum(la[diff], lb[diff])
+        uk, inv = np.unique(la * len(chs) + lb, return_inverse=True)
+        inv = inv.ravel()
+        shared = np.bincount(inv, E.length[ei] * E.cost[ei])
+        fa, fb = label[np.array(far_a, np.int64)], label[np.array(far_b, np.int64)]
+        hopeless = np.isin(uk, np.minimum(fa, fb) * len(chs) + np.maximum(fa, fb))
+        # Matchings ("layers"): dearest shared seam first, each chart in at most one pair of a
+        # layer; every layer's unions are tested in one batched solve.
+        used = np.zeros((MERGE_LAYERS, len(chs)), dtype=bool)
+        layers = [[] for _ in range(MERGE_LAYERS)]
+        for p in np.lexsort((uk, -_quantize(shared))):
+            x, y = divmod(int(uk[p]), len(chs))
+            if (ident[x], ident[y]) in tried or hopeless[p]:
+                continue
+            free = np.flatnonzero(~used[:, x] & ~used[:, y])
+            if len(free) == 0:
+                continue
+            used[free[0], [x, y]] = True
+            layers[free[0]].append(p)
+            tried.add((ident[x], ident[y]))
+        disks = []
+        for lay, chosen in enumerate(layers):
+            if not chosen:
+                continue
+            trial = cut.copy()
+            trial[ei[np.isin(inv, chosen)]] = False
+            faces = np.flatnonzero(used[lay][label])
+            disks += [(c, trial) for c in charts(F, E, trial, faces)
+                      if c.kind == "disk" and len(np.unique(label[c.faces])) == 2]
+        if not disks:
+            if not any(layers):
+                return
+            continue
+        cm = chart_maps(V, [c for c, _ in disks])
+        ok = (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
+              & (cm.crossings == 0) & (cm.mean_distortion <= mean_cap(C)))
+        for j in np.flatnonzero(~(cm.max_stretch <= HOPELESS * S)):
+            x, y = np.unique(label[disks[j][0].faces])
+            far_a.append(int(chs[x].faces[0]))
+            far_b.append(int(chs[y].faces[0]))
+        merged = np.zeros(len(chs), dtype=bool)
+        # Accept passing unions, dearest removed seam first, each chart merged once per round.
+        fes = [np.unique(E.face_edges[c.faces].ravel()) for c, _ in disks]
+        gain = np.array([(E.length * E.cost)[fe[cut[fe] & ~t[fe]]].sum()
+                         for fe, (_, t) in zip(fes, disks)])
+        unions = []
+        for j in np.lexsort((np.arange(len(gain)), -_quantize(gain))):
+            c, trial = disks[j]
+            two = np.unique(label[c.faces])
+            if not ok[j] or merged[two].any():
+                continue
+            merged[two] = True
+            fe = fes[j]
+            cut[fe[cut[fe] & ~trial[fe]]] = False
+            unions.append(c)
+        # The charts after this round: the unions (as found on the trial cut, which agrees with
+        # the new cut on their faces) and every chart not merged, as they were.
+        chs = sorted([c for j, c in enumerate(chs) if not merged[j]] + unions,
+                     key=lambda ch: int(ch.faces[0]))
