@@ -34,15 +34,10 @@ import time
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from . import cones as cones_
 from .conic import ConicSolution
-
-try:  # qdldl: LDL^T with AMD ordering, numeric refactorisation on a fixed pattern
-    import qdldl
-except ImportError:  # pragma: no cover - exercised where qdldl is absent
-    qdldl = None
+from .factor import RefactorSPD
 
 MAX_ITER = 80
 TOL_GAP = 1e-6      # relative duality gap s^T z (conic.TOL_GAP is also absolute: see GAP_FLOOR)
@@ -60,38 +55,16 @@ STALL_INFEAS = 5    # ... or this many while b'z < 0 (a suspected infeasibility,
 REG = 1e-11         # static regularisation of H, relative to its largest diagonal entry
 
 
-class _Factor:
-    """Factorisation of the SPD matrix H on a fixed upper-triangular CSC pattern."""
-
-    def __init__(self, backend):
-        if backend == "auto":
-            backend = "qdldl" if qdldl is not None else "splu"
-        if backend == "qdldl" and qdldl is None:
-            raise ImportError("qdldl is not installed")
-        if backend not in ("qdldl", "splu"):
-            raise ValueError(f"unknown backend {backend!r}: use 'qdldl', 'splu' or 'auto'")
-        self.backend = backend
-        self.solver = None
-        self.seconds = 0.0
-        self.count = 0
-
-    def factor(self, Hu):
-        """Factorise from the upper triangle ``Hu`` (CSC; the pattern is fixed after the first)."""
-        t = time.perf_counter()
-        if self.backend == "qdldl":
-            if self.solver is None:
-                self.solver = qdldl.Solver(Hu, upper=True)
-            else:
-                self.solver.update(Hu, upper=True)
-        else:
-            full = Hu + sp.triu(Hu, 1, format="csc").T
-            self.solver = spla.splu(full.tocsc(), permc_spec="MMD_AT_PLUS_A",
-                                    options={"SymmetricMode": True})
-        self.seconds += time.perf_counter() - t
-        self.count += 1
-
-    def solve(self, r):
-        return self.solver.solve(r)
+def _canonical(P, A):
+    """A as CSR and the upper triangle of P as CSC, duplicates summed and indices sorted: the
+    form whose pattern ``SchurIPM`` compares and analyses."""
+    Ar = sp.csr_matrix(A)
+    Ar.sum_duplicates()
+    Ar.sort_indices()
+    Pu = sp.csc_matrix(sp.triu(sp.csc_matrix(P), format="csc"))
+    Pu.sum_duplicates()
+    Pu.sort_indices()
+    return Ar, Pu
 
 
 class SchurIPM:
@@ -193,15 +166,10 @@ class SchurIPM:
         targets.append(inv[offs[-3]:offs[-2]])
         self.target_all = np.concatenate(targets)
         self.diag_pos = inv[offs[-2]:]
-        self.factor = _Factor(self.backend)
+        self.factor = RefactorSPD(self.backend)
 
     def _same_pattern(self, P, A, cones):
-        Ar = sp.csr_matrix(A)
-        Ar.sum_duplicates()
-        Ar.sort_indices()
-        Pu = sp.csc_matrix(sp.triu(sp.csc_matrix(P), format="csc"))
-        Pu.sum_duplicates()
-        Pu.sort_indices()
+        Ar, Pu = _canonical(P, A)
         same = (list(cones) == self.cones.key
                 and Ar.shape == (self.cones.m, self.n)
                 and np.array_equal(Ar.indptr, self.A_indptr)
@@ -262,12 +230,7 @@ class SchurIPM:
         same, Ar, Pu = self._same_pattern(P, A, cones)
         if not same:
             self._analyse(P, A, cones)
-            Ar = sp.csr_matrix(A)
-            Ar.sum_duplicates()
-            Ar.sort_indices()
-            Pu = sp.csc_matrix(sp.triu(sp.csc_matrix(P), format="csc"))
-            Pu.sum_duplicates()
-            Pu.sort_indices()
+            Ar, Pu = _canonical(P, A)
         try:
             with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
                 res = self._run(Pu, np.asarray(q, np.float64), Ar, np.asarray(b, np.float64),
