@@ -23,9 +23,9 @@ import numpy as np
 from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, OverlapError,
                       SolverError, TopologyError)
 from ..geometry import face_areas
-from ..mesh import DEGENERATE_RATIO, check_arrays, islands
-from ..unwrapping.unwrap import unwrap
-from .charts import MARGIN, chart_maps, mean_cap, piece_stretch
+from ..mesh import DEGENERATE_RATIO, Island, check_arrays, islands
+from ..unwrapping.unwrap import _check_options, _pins, unwrap, unwrap_islands
+from .charts import MARGIN, chart_maps, face_geometry, mean_cap, piece_stretch
 from .cut_graph import cut_graph
 from .edges import edge_table
 from .measure import measure_charts, splice
@@ -88,6 +88,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     if not (C >= 1.0 and S >= 1.0):
         raise ValueError(f"seams='auto' needs a bound C >= 1 and a stretch S >= 1, not {bound!r}, "
                          f"{stretch!r}")
+    _check_options(method, frames, C, 1000.0, cone)
     unwrap_options = dict(method=method, frames=frames, cone=cone, progress=progress,
                           cancel=cancel)
     E = edge_table(V, F, face_groups)
@@ -121,6 +122,8 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
                                                                 TopologyError)):
                 frozen[i.faces] = True
     invalid = frozen.copy()
+    known = {}                              # conformal maps of charts that passed, by faces
+    geom = face_geometry(V, F)
     rounds = 0
     for rounds in range(1, MAX_ROUNDS + 1):
         if cancel is not None and cancel.is_set():
@@ -132,16 +135,16 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         # must not be cut again for triangulation noise in its mean.
         changed = _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag,
                           cap=mean_cap(C) + GIVEN_SLACK * (mean_cap(C) - 1.0)
-                          if rounds == 1 else mean_cap(C))
+                          if rounds == 1 else mean_cap(C), known=known, geom=geom)
         if not changed:
             break
     if merge:
-        merge_charts(V, F, E, cut, keep, invalid, S, C)
+        merge_charts(V, F, E, cut, keep, invalid, S, C, known=known, geom=geom)
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last
     # round lets ``unwrap`` cut what still overlaps.
-    result = unwrap(V, F, seams=E.ends[cut], bound=C, raise_bound=False,
-                    overlap="cut" if FINISH_ROUNDS == 0 else "fail", **unwrap_options)
+    result = _unwrap_charts(V, F, E, cut, C, known, not invalid.any(),
+                            "cut" if FINISH_ROUNDS == 0 else "fail", unwrap_options)
     measured = None                         # (st, cr) of ``result`` on the current cut
     for finish in range(FINISH_ROUNDS):
         # Charts the certified map leaves beyond S or crossing itself are split again and only
@@ -161,11 +164,11 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             group[r.faces] = g
         _bisect([np.sort(r.faces) for r in bad], E, cut, A, cen, poly)
         for _ in range(MAX_ROUNDS):
-            if not _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag):
+            if not _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag, geom=geom):
                 break
         if merge:
             # The pieces may now merge with their neighbours (never with each other).
-            merge_charts(V, F, E, cut, keep, invalid, S, C, group=group)
+            merge_charts(V, F, E, cut, keep, invalid, S, C, group=group, geom=geom)
         # Unwrap anew every chart holding a piece (with the neighbours it took in).
         redo = np.zeros(m, dtype=bool)
         for c in charts(F, E, cut):
@@ -192,6 +195,31 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             "max_stretch": st, "crossings": cr, "rounds": rounds,
             "seconds": result.seconds}
     return result, added, info
+
+
+def _unwrap_charts(V, F, E, cut, C, known, valid, overlap, options):
+    """``unwrap`` of the mesh cut along ``cut`` at C (``raise_bound=False``), the conformal
+    maps in ``known`` (charts that passed) certified rather than solved again.
+
+    Where the mesh is ``valid`` (``_valid_everywhere``, nothing frozen as invalid) and every
+    chart is a disk, the charts are the islands ``mesh.islands`` would find (numbered alike), so
+    they go to ``unwrap_islands`` as they are; otherwise ``unwrap`` finds and checks them.
+    """
+    chs = charts(F, E, cut) if valid else []
+    if not valid or any(c.kind != "disk" for c in chs):
+        return unwrap(V, F, seams=E.ends[cut], bound=C, raise_bound=False, overlap=overlap,
+                      **options)
+    isl = [Island(j, c.faces, c.vertices, c.tris, c.loops) for j, c in enumerate(chs)]
+    conformal = {}
+    for j, c in enumerate(chs):
+        u = known.get(c.faces.tobytes())
+        if u is not None:
+            conformal[j] = u
+    o = dict(options)
+    return unwrap_islands(V, F, isl, _pins(None, None, len(F)), o.pop("method"), C,
+                          o.pop("frames"), None, False, 1000.0, o.pop("cone"), None, overlap,
+                          o.pop("face_groups", None), None, "free", o.pop("progress"),
+                          o.pop("cancel"), conformal=conformal)
 
 
 def _valid_everywhere(V, F, E, A):
@@ -234,12 +262,14 @@ def _valid_everywhere(V, F, E, A):
     return len(voc) == len(np.unique(F))
 
 
-def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None):
+def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None, known=None,
+            geom=None):
     """One top-down round over the charts not yet accepted; True when a seam was added.
 
     Handles are cut first; the charts to split (closed spheres, open charts no cut graph
     changes, disks whose map fails) are all split in one batch (``_split_deep``). A disk passes
-    with a mean distortion up to ``cap`` (default ``mean_cap(C)``).
+    with a mean distortion up to ``cap`` (default ``mean_cap(C)``); its conformal map goes into
+    ``known`` (``ChartMaps.remember``).
     """
     sub = np.flatnonzero(~frozen)
     if len(sub) == 0:
@@ -263,12 +293,14 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=Non
             todo.append((c.faces, None))
     disks = [c for c in chs if c.kind == "disk"]
     if disks:
-        cm = chart_maps(V, disks)
+        cm = chart_maps(V, disks, geom)
         cap = mean_cap(C) if cap is None else cap
+        ok = (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
+              & (cm.crossings == 0) & (cm.mean_distortion <= cap))
+        if known is not None:
+            cm.remember(disks, ok, known)
         for j, c in enumerate(disks):
-            ok = (np.isfinite(cm.max_distortion[j]) and cm.max_stretch[j] <= S * MARGIN
-                  and cm.crossings[j] == 0 and cm.mean_distortion[j] <= cap)
-            if ok or len(c.faces) < 2:
+            if ok[j] or len(c.faces) < 2:
                 frozen[c.faces] = True
             else:
                 todo.append((c.faces, cm.sigma[cm.foff[j]:cm.foff[j + 1]]))

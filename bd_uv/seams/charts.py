@@ -12,6 +12,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..geometry import face_areas, gradient_operators, local_coordinates
+from ..solvers.threads import halves, map_blocks
 from ..unwrapping.batched import _far_pairs
 
 try:  # LDL^T with AMD ordering; SuperLU without it
@@ -30,6 +31,9 @@ MARGIN = 0.98
 # 1 + MEAN_SLOPE for C <= 2, growing with a looser bound. 0.07 keeps the coarse test meshes'
 # results at <= 1.065 with seams within xatlas's; 0.05 cost them more seam.
 MEAN_SLOPE = 0.07
+# Charts of one solve are split into two systems factored side by side (``solvers.threads``)
+# when each holds at least this many vertices (below it, the split costs more than it saves).
+PARALLEL_VERTICES = 1500
 
 
 def mean_cap(C):
@@ -56,6 +60,8 @@ class ChartMaps:
         second <= 0 when flipped), each chart scaled to its 3D area: any union of a chart's faces
         scaled to its own area has the stretch ``max(s sigma_1, 1/(s sigma_2))`` with one
         factor ``s`` (see ``piece_stretch``)
+    u : (nv,) complex128, every chart's map as solved: unit-area normalisation, its two
+        ``_far_pairs`` vertices at 0 and 1 (as ``unwrapping.batched.conformal_islands`` solves it)
     """
     uv: np.ndarray
     voff: np.ndarray
@@ -67,15 +73,50 @@ class ChartMaps:
     crossings: np.ndarray
     sigma: np.ndarray
     mean_distortion: np.ndarray
+    u: np.ndarray = None
+
+    def remember(self, charts, passed, known):
+        """Put the maps of the charts that ``passed`` into ``known`` (sorted faces' bytes ->
+        map), for the final unwrap to certify rather than solve again."""
+        for j in np.flatnonzero(passed):
+            known[charts[j].faces.tobytes()] = self.u[self.voff[j]:self.voff[j + 1]]
 
 
-def chart_maps(V, charts):
+@dataclass(frozen=True)
+class FaceGeometry:
+    """What ``chart_maps`` needs of each face, computed once per mesh (the seam search maps the
+    same faces again in every round).
+
+    Attributes
+    ----------
+    area : (m,) float64, 3D area
+    ca, cb : (m,3) complex128, alpha's and beta's coefficient of each corner (eq. 4.19) in the
+        face's local frame at its 3D size
+    zarea : (m,) float64, the area as the local frame measures it
+    """
+    area: np.ndarray
+    ca: np.ndarray
+    cb: np.ndarray
+    zarea: np.ndarray
+
+
+def face_geometry(V, F):
+    """``FaceGeometry`` of every face of (V, F)."""
+    Z = local_coordinates(V, F)
+    G = gradient_operators(Z)
+    zarea = 0.5 * np.abs(((Z[:, 1] - Z[:, 0]).conj() * (Z[:, 2] - Z[:, 0])).imag)
+    return FaceGeometry(face_areas(V, F), 0.5 * (G[:, 0] - 1j * G[:, 1]),
+                        0.5 * (G[:, 0] + 1j * G[:, 1]), zarea)
+
+
+def chart_maps(V, charts, geom=None):
     """LSCM of every chart in one block-diagonal solve, with per-face distortion and stretch.
 
     Parameters
     ----------
     V : (n,3) float64
     charts : list of mesh.Island, each valid with exactly one boundary loop
+    geom : FaceGeometry of the mesh the charts' faces index, optional (else computed here)
 
     Returns
     -------
@@ -90,18 +131,33 @@ def chart_maps(V, charts):
     vert_c = np.repeat(np.arange(k), nvs)
     P = V[np.concatenate([c.vertices for c in charts])]
     tris = np.concatenate([c.tris for c in charts]) + voff[face_c][:, None]
-    A3 = face_areas(P, tris)
-    area = np.bincount(face_c, A3, minlength=k)
-    Z = local_coordinates(P, tris) / np.sqrt(area)[face_c][:, None]
     n = len(P)
     # alpha = sum_k ca_k u_k and beta = sum_k cb_k u_k per face (eq. 4.19 with u complex:
-    # Re a = (u_x + v_y)/2, Im a = (v_x - u_y)/2, Re b = (u_x - v_y)/2, Im b = (v_x + u_y)/2).
-    G = gradient_operators(Z)
-    ca = 0.5 * (G[:, 0] - 1j * G[:, 1])
-    cb = 0.5 * (G[:, 0] + 1j * G[:, 1])
-    zarea = 0.5 * np.abs(((Z[:, 1] - Z[:, 0]).conj() * (Z[:, 2] - Z[:, 0])).imag)
+    # Re a = (u_x + v_y)/2, Im a = (v_x - u_y)/2, Re b = (u_x - v_y)/2, Im b = (v_x + u_y)/2),
+    # each chart scaled to unit area (coefficients grow by sqrt(area), areas shrink by it).
+    if geom is None:
+        geom = face_geometry(P, tris)
+        faces = np.arange(len(tris))
+    else:
+        faces = np.concatenate([c.faces for c in charts])
+    A3 = geom.area[faces]
+    area = np.bincount(face_c, A3, minlength=k)
+    root = np.sqrt(area)[face_c][:, None]
+    ca, cb = geom.ca[faces] * root, geom.cb[faces] * root
+    zarea = geom.zarea[faces] / area[face_c]
     idx = _far_pairs(P, charts, voff)
-    u = _lscm_pinned(cb, zarea, tris, n, idx, np.tile(np.array([0.0, 1.0], np.complex128), k))
+    val = np.tile(np.array([0.0, 1.0], np.complex128), k)
+    j = halves(nvs, PARALLEL_VERTICES)
+    if j is None:
+        u = _lscm_pinned(cb, zarea, tris, n, idx, val)
+    else:                   # two runs of charts, factored side by side (one system each)
+        def run(r):
+            (a, b), (fa, fb) = r, (foff[r[0]], foff[r[1]])
+            return _lscm_pinned(cb[fa:fb], zarea[fa:fb], tris[fa:fb] - voff[a],
+                                int(voff[b] - voff[a]), idx[2 * a:2 * b] - voff[a],
+                                val[2 * a:2 * b])
+        u = np.concatenate(map_blocks(run, [(0, j), (j, k)]))
+    u_solved = u
     # Scale each chart so its UV area equals its (unit-normalised) 3D area: sigma are then the
     # singular values of the map with the chart at its 3D size.
     e1 = u[tris[:, 1]] - u[tris[:, 0]]
@@ -127,7 +183,7 @@ def chart_maps(V, charts):
     uv = u * np.sqrt(area)[vert_c]
     cross = boundary_crossings(uv, [c.loops[0] + voff[j] for j, c in enumerate(charts)])
     return ChartMaps(uv, voff, foff, D, St, maxD, maxS, cross, np.stack([a + b, a - b], axis=1),
-                     meanD)
+                     meanD, u_solved)
 
 
 def piece_stretch(sigma, area3, label, k):

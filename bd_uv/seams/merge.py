@@ -17,7 +17,8 @@ MERGE_LAYERS = 1
 
 
 
-def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None):
+def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, known=None,
+                 geom=None):
     """Merge neighbouring charts pairwise while the union's conformal map still passes.
 
     Each round tests a matching of neighbouring pairs (dearest shared seam first: length times
@@ -32,6 +33,9 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None):
     group : (m,) int64, optional: only pairs with a chart in a group (>= 0) are tried, and
         never two charts of one group (the pieces of a chart split because its certified map
         failed: their union is that chart again)
+    known : dict, optional: the conformal maps of the unions that pass go in
+        (``ChartMaps.remember``)
+    geom : charts.FaceGeometry of (V, F), optional
     """
     tried = set()
     # A face of each of two charts whose union was far beyond S: charts holding them are not
@@ -87,9 +91,11 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None):
             if not any(layers):
                 return
             continue
-        cm = chart_maps(V, [c for c, _ in disks])
+        cm = chart_maps(V, [c for c, _ in disks], geom)
         ok = (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
               & (cm.crossings == 0) & (cm.mean_distortion <= mean_cap(C)))
+        if known is not None:
+            cm.remember([c for c, _ in disks], ok, known)
         for j in np.flatnonzero(~(cm.max_stretch <= HOPELESS * S)):
             x, y = np.unique(label[disks[j][0].faces])
             far_a.append(int(chs[x].faces[0]))

@@ -19,7 +19,7 @@ from .problem import STORE_HEADROOM
 from .results import IslandResult
 
 
-def conformal_islands(V, islands, C):
+def conformal_islands(V, islands, C, known=None):
     """Conformal maps of many islands in one solve, and the results of those that fit C.
 
     Parameters
@@ -27,6 +27,9 @@ def conformal_islands(V, islands, C):
     V : (n,3) float64
     islands : list of mesh.Island, valid (no error), without pins
     C : float, the bound
+    known : dict island index -> (nv,) complex128, optional, conformal maps already solved the
+        same way (unit-area normalisation, ``_far_pairs`` pinned at 0 and 1): not solved again.
+        They are certified like the others, from the final UVs.
 
     Returns
     -------
@@ -52,11 +55,23 @@ def conformal_islands(V, islands, C):
     Z = local_coordinates(P, tris) / np.sqrt(area)[face_isl][:, None]
     n = len(verts)
     ops = jacobian_operators(Z, tris, n)
-    W = ops.area
-    Q = (ops.Bre.T.multiply(W) @ ops.Bre + ops.Bim.T.multiply(W) @ ops.Bim).tocsc()
-    idx = _far_pairs(P, islands, voff)
-    val = np.tile(np.array([0.0, 1.0], dtype=np.complex128), k)
-    u = _solve_fixed(Q, n, idx, val)
+    known = {} if known is None else known
+    have = np.array([i.index in known for i in islands], dtype=bool)
+    if have.all():
+        u = np.concatenate([np.asarray(known[i.index], dtype=np.complex128) for i in islands])
+    else:
+        # The islands not known are solved together (one block system on their vertices).
+        W = ops.area
+        Q = (ops.Bre.T.multiply(W) @ ops.Bre + ops.Bim.T.multiply(W) @ ops.Bim).tocsc()
+        idx = _far_pairs(P, islands, voff)
+        val = np.tile(np.array([0.0, 1.0], dtype=np.complex128), k)
+        if have.any():          # known islands' vertices are all fixed at their known map
+            kv = np.flatnonzero(have[vert_isl])
+            kidx = np.concatenate([known[i.index] for i, h in zip(islands, have) if h])
+            own = ~have[np.repeat(np.arange(k), 2)]
+            idx = np.concatenate([idx[own], kv])
+            val = np.concatenate([val[own], kidx])
+        u = _solve_fixed(Q, n, idx, val)
     x = np.concatenate([u.real, u.imag])
     a = np.abs(ops.Are @ x + 1j * (ops.Aim @ x))
     b = np.abs(ops.Bre @ x + 1j * (ops.Bim @ x))

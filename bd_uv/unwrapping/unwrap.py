@@ -135,7 +135,33 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
             raise ValueError("frames='input-uv' needs initial_uv (m,3,2)")
         initial_uv = np.asarray(initial_uv, dtype=np.float64).reshape(m, 3, 2)
     pins = _pins(pin_corners, pin_uv, m)
-    isl = split_islands(V, F, seams)
+    return unwrap_islands(V, F, split_islands(V, F, seams), pins, method, bound, frames,
+                          initial_uv, raise_bound, bound_limit, cone, time_budget, overlap,
+                          face_groups, stretch, boundary, progress, cancel, t0=t0)
+
+
+def unwrap_islands(V, F, isl, pins, method, bound, frames, initial_uv, raise_bound, bound_limit,
+                   cone, time_budget, overlap, face_groups, stretch, boundary, progress, cancel,
+                   conformal=None, t0=None):
+    """``unwrap`` on islands already found (``mesh.islands``, or charts of a validated mesh).
+
+    Parameters
+    ----------
+    V, F : checked arrays; isl : list of mesh.Island numbered 0.. by their smallest face
+    pins : (corners (p,), uv (p,2)) as ``_pins`` returns; the other options as ``unwrap``'s,
+        already checked
+    conformal : dict island index -> (nv,) complex128, optional: the island's free-boundary
+        conformal map as ``batched.conformal_islands`` would solve it (unit-area normalisation,
+        ``_far_pairs`` pinned at 0 and 1), already known (the seam search's chart maps); only
+        used where the batched path would solve it. Everything is certified from the final UVs
+        as ever.
+
+    Returns
+    -------
+    UnwrapResult
+    """
+    t0 = time.perf_counter() if t0 is None else t0
+    m = len(F)
     total = float(m)
     done = 0.0
     results = []
@@ -144,7 +170,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
     for island in isl:
         face_island[island.faces] = island.index
     batch, starts = ({}, {}) if boundary != "free" or stretch is not None else \
-        _batched(V, isl, pins, face_island, method, bound, frames, progress, cancel)
+        _batched(V, isl, pins, face_island, method, bound, frames, progress, cancel, conformal)
     for island in isl:
         share = len(island.faces) / total
 
@@ -294,7 +320,7 @@ def _failed(island, error, t0, bound, frames_name="", flags=(), timings=None):
                         timings=timings or {})
 
 
-def _batched(V, isl, pins, face_island, method, bound, frames, progress, cancel):
+def _batched(V, isl, pins, face_island, method, bound, frames, progress, cancel, conformal=None):
     """Solve every island that can go through ``batched.conformal_islands`` at once: valid,
     unpinned, BD-LSCM at a fixed bound from the conformal start. Returns (results by island index,
     conformal starts of the islands that did not fit)."""
@@ -304,13 +330,14 @@ def _batched(V, isl, pins, face_island, method, bound, frames, progress, cancel)
     if len(pins[0]):
         pinned[np.unique(face_island[pins[0] // 3])] = True
     todo = [i for i in isl if i.error is None and not pinned[i.index]]
-    if len(todo) < 2:
+    known = conformal is not None and len(todo) > 0 and all(i.index in conformal for i in todo)
+    if len(todo) < 2 and not known:
         return {}, {}
     if progress is not None:
         progress(0.01, f"conformal maps of {len(todo)} islands")
     if cancel is not None and cancel.is_set():
         raise CancelledError("unwrap cancelled; nothing was changed")
-    return conformal_islands(V, todo, float(bound))
+    return conformal_islands(V, todo, float(bound), conformal)
 
 
 def _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_bound, bound_limit,
