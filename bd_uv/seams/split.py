@@ -222,25 +222,33 @@ def _snap_many(side, pairs, cost, group, g, rings=BAND_RINGS):
     cmax = np.zeros(g)
     np.maximum.at(cmax, pg, cost)
     cap = np.maximum(np.round(cost * (1e4 / np.maximum(cmax, 1e-300))[pg]), 1).astype(np.int64)
-    on = active[pg]
-    inf = np.minimum(np.bincount(pg[on], cap[on], g) + 1, 2 ** 30).astype(np.int64)
-    src_f = np.flatnonzero(src & active[group])
-    snk_f = np.flatnonzero(snk & active[group])
-    pa, pb, cp = pairs[on, 0], pairs[on, 1], cap[on]
-    rows = np.concatenate([pa, pb, np.full(len(src_f), k), snk_f])
-    cols = np.concatenate([pb, pa, src_f, np.full(len(snk_f), k + 1)])
-    vals = np.concatenate([cp, cp, inf[group[src_f]], inf[group[snk_f]]])
-    G = sp.csr_matrix(sp.coo_array((vals, (rows, cols)), shape=(k + 2, k + 2)))
+    # The flow runs on the band only: every chart's source faces are contracted into the source
+    # and its sink faces into the sink (they are joined to them by uncuttable edges), which
+    # leaves the minimum cut, and the smallest source side, as they are.
+    live = band & active[group]
+    nb = int(live.sum())
+    node = np.full(k, -1, dtype=np.int64)
+    node[live] = np.arange(nb)
+    node[src & active[group]] = nb
+    node[snk & active[group]] = nb + 1
+    na, nb_ = node[pairs[:, 0]], node[pairs[:, 1]]
+    on = (na >= 0) & (nb_ >= 0) & (na != nb_) & ((na < nb) | (nb_ < nb))
+    pa, pb, cp = na[on], nb_[on], cap[on]
+    G = sp.csr_matrix(sp.coo_array((np.concatenate([cp, cp]),
+                                    (np.concatenate([pa, pb]), np.concatenate([pb, pa]))),
+                                   shape=(nb + 2, nb + 2)))
     G.sum_duplicates()
     G.data = np.minimum(G.data, 2 ** 30).astype(np.int32)
-    flow = maximum_flow(G, k, k + 1).flow
+    flow = maximum_flow(G, nb, nb + 1).flow
     residual = (G - flow).tocsr()
     residual.data = (residual.data > 0).astype(np.float64)
     residual.eliminate_zeros()
-    reach = breadth_first_order(residual, k, directed=True, return_predecessors=False)
-    new = np.zeros(k + 2, dtype=bool)
+    reach = breadth_first_order(residual, nb, directed=True, return_predecessors=False)
+    new = np.zeros(nb + 2, dtype=bool)
     new[reach] = True
-    return np.where(active[group], new[:k], side)
+    out = side.copy()
+    out[live] = new[:nb]
+    return out
 
 
 def _principal_axes(c, mass, offsets, group):
