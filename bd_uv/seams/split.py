@@ -3,12 +3,16 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order, connected_components, maximum_flow
 
+from ..solvers.threads import halves, map_blocks
 from .charts import spd_solver
 
 # Neither side of a split may hold less than this share of the chart's area.
 MIN_SIDE = 0.05
 # Dual rings on each side of a sweep cut within which the min cut may move it.
 BAND_RINGS = 4
+# Charts of one batch are split into two systems factored side by side when each holds at
+# least this many nodes.
+PARALLEL_NODES = 1500
 
 
 def fiedler_split(face_area, centroid, pairs, edge_len, edge_cost):
@@ -135,6 +139,25 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost)
 
 
 def _fiedler_many(pairs, w, mass, centroid, offsets, group, iters=12):
+    """``_fiedler_block`` of all charts; two runs of charts factor side by side when each is
+    large enough (``solvers.threads``; each chart's vector is its own either way)."""
+    j = halves(np.diff(offsets), PARALLEL_NODES)
+    if j is None:
+        return _fiedler_block(pairs, w, mass, centroid, offsets, group, iters)
+    cut = offsets[j]
+    first = pairs[:, 0] < cut
+
+    def run(r):
+        sel, lo, hi, a, b = r
+        return _fiedler_block(pairs[sel] - lo, w[sel], mass[lo:hi], centroid[lo:hi],
+                              offsets[a:b + 1] - lo, group[lo:hi] - a, iters)
+    xs = map_blocks(run, [(first, 0, cut, 0, j), (~first, cut, len(mass), j, len(offsets) - 1)])
+    if any(x is None for x in xs):
+        return None
+    return np.concatenate(xs)
+
+
+def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12):
     """Approximate Fiedler vectors of ``L x = lambda M x``, each chart's own, by inverse
     iteration on the block-diagonal Laplacian (one sparse factorisation for all charts).
 
@@ -205,14 +228,15 @@ def _snap_many(side, pairs, cost, group, g, rings=BAND_RINGS):
     (k,) bool
     """
     k = len(side)
-    A = sp.coo_array((np.ones(2 * len(pairs)), (np.concatenate([pairs[:, 0], pairs[:, 1]]),
-                                                np.concatenate([pairs[:, 1], pairs[:, 0]]))),
-                     shape=(k, k)).tocsr()
     across = side[pairs[:, 0]] != side[pairs[:, 1]]
     band = np.zeros(k, dtype=bool)
     band[pairs[across].ravel()] = True
-    for _ in range(rings):
-        band |= (A @ band.astype(np.float64)) > 0
+    p0, p1 = pairs[:, 0], pairs[:, 1]
+    for _ in range(rings):              # one dual ring more on each side
+        grow = band.copy()
+        grow[p1[band[p0]]] = True
+        grow[p0[band[p1]]] = True
+        band = grow
     src = ~band & side
     snk = ~band & ~side
     active = (np.bincount(group, src, g) > 0) & (np.bincount(group, snk, g) > 0)
