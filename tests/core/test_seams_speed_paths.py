@@ -1,0 +1,142 @@
+"""The paths that make ``seams="auto"`` faster must not change what it certifies.
+
+- ``solvers.threads``: blocks factored side by side give each block's own result, in order;
+- ``chart_maps`` of two runs of charts (threads) equals the one-system solve;
+- ``unwrap_islands`` with the search's known conformal maps certifies what ``unwrap`` certifies,
+  and a wrong "known" map is not trusted: the UVs written are certified from scratch here.
+"""
+import numpy as np
+import pytest
+
+from bd_uv.mesh import islands
+from bd_uv.seams import unwrap_auto
+from bd_uv.seams import charts as charts_mod
+from bd_uv.seams.edges import edge_table
+from bd_uv.seams.topology import charts
+from bd_uv.solvers import threads
+from bd_uv.unwrapping.unwrap import _pins, unwrap, unwrap_islands
+from helpers import reference_distortion
+from seams_helpers import face_singular_values, torus, uv_sphere
+
+
+def test_map_blocks_keeps_order_and_each_result(monkeypatch):
+    monkeypatch.setenv("BD_UV_THREADS", "2")
+    out = threads.map_blocks(lambda x: x * x, range(7))
+    assert out == [x * x for x in range(7)]
+    monkeypatch.setenv("BD_UV_THREADS", "1")
+    assert threads.map_blocks(lambda x: -x, [3, 4]) == [-3, -4]
+
+
+def test_map_blocks_raises_after_every_block_finished(monkeypatch):
+    monkeypatch.setenv("BD_UV_THREADS", "2")
+    finished = []
+
+    def work(x):
+        if x == 0:
+            raise ValueError("block 0")
+        finished.append(x)
+        return x
+    with pytest.raises(ValueError, match="block 0"):
+        threads.map_blocks(work, [0, 1, 2])
+    assert sorted(finished) == [1, 2]
+
+
+def test_halves_balances_work_and_refuses_small_or_single(monkeypatch):
+    monkeypatch.setenv("BD_UV_THREADS", "2")
+    assert threads.halves([5, 5, 5, 5], least=1) == 2
+    j = threads.halves([100, 1, 1, 98], least=10)
+    assert j in (1, 2) and min(sum([100, 1, 1, 98][:j]), sum([100, 1, 1, 98][j:])) >= 98
+    assert threads.halves([100, 3], least=10) is None      # the smaller run is too small
+    assert threads.halves([100], least=1) is None
+    monkeypatch.setenv("BD_UV_THREADS", "1")
+    assert threads.halves([5, 5, 5, 5], least=1) is None
+
+
+def _sphere_charts():
+    """The disk charts ``seams='auto'`` makes of a 32x16 UV sphere."""
+    V, F, _ = uv_sphere(32, 16)
+    _, added, _ = unwrap_auto(V, F, bound=1.5, stretch=1.5)
+    E = edge_table(V, F)
+    cut = np.zeros(len(E.ends), dtype=bool)
+    k = E.keys(added, len(V))
+    cut[k[k >= 0]] = True
+    chs = [c for c in charts(F, E, cut) if c.kind == "disk"]
+    assert len(chs) >= 2
+    return V, F, chs
+
+
+def test_chart_maps_in_two_threads_equal_one_system(monkeypatch):
+    V, F, chs = _sphere_charts()
+    monkeypatch.setenv("BD_UV_THREADS", "1")
+    one = charts_mod.chart_maps(V, chs)
+    monkeypatch.setenv("BD_UV_THREADS", "2")
+    monkeypatch.setattr(charts_mod, "PARALLEL_VERTICES", 1)
+    assert threads.halves([len(c.vertices) for c in chs], 1) is not None
+    two = charts_mod.chart_maps(V, chs)
+    np.testing.assert_allclose(two.u, one.u, atol=1e-9)
+    np.testing.assert_allclose(two.max_stretch, one.max_stretch, rtol=1e-9)
+    np.testing.assert_allclose(two.mean_distortion, one.mean_distortion, rtol=1e-9)
+    # And with the mesh's face geometry computed once (the search's path).
+    three = charts_mod.chart_maps(V, chs, charts_mod.face_geometry(V, F))
+    np.testing.assert_allclose(three.u, one.u, atol=1e-9)
+
+
+def _islands_of(V, F, E, cut):
+    isl = islands(V, F, E.ends[cut])
+    chs = charts(F, E, cut)
+    # The charts are the islands mesh.islands finds, numbered and ordered alike.
+    assert [c.faces.tolist() for c in chs] == [i.faces.tolist() for i in isl]
+    assert [c.vertices.tolist() for c in chs] == [i.vertices.tolist() for i in isl]
+    return isl, chs
+
+
+def _certify(V, F, res, C):
+    """0 flips, max <= C from the stored corner UVs (numpy SVD), every face mapped."""
+    assert np.all(np.isfinite(res.corner_uv))
+    D, flipped = reference_distortion(V, F, res.corner_uv)
+    _, s2, _ = face_singular_values(V, F, res.corner_uv)
+    assert not flipped.any() and np.all(s2 > 0), "a flipped or degenerate face"
+    assert D.max() <= C * (1 + 1e-9)
+    return D
+
+
+def test_known_maps_certify_what_unwrap_certifies():
+    V, F, _, _ = torus(nu=24, nv=10)
+    res0, added, _ = unwrap_auto(V, F, bound=2.0, stretch=2.0)
+    E = edge_table(V, F)
+    cut = np.zeros(len(E.ends), dtype=bool)
+    k = E.keys(added, len(V))
+    cut[k[k >= 0]] = True
+    isl, chs = _islands_of(V, F, E, cut)
+    cm = charts_mod.chart_maps(V, chs)
+    known = {j: cm.u[cm.voff[j]:cm.voff[j + 1]] for j in range(len(chs))}
+    args = (_pins(None, None, len(F)), "lscm", 2.0, "auto", None, False, 1000.0, "soc", None,
+            "fail", None, None, "free", None, None)
+    fast = unwrap_islands(V, F, isl, *args, conformal=known)
+    ref = unwrap(V, F, seams=E.ends[cut], bound=2.0, raise_bound=False, overlap="fail")
+    assert fast.certified and ref.certified
+    Df, Dr = _certify(V, F, fast, 2.0), _certify(V, F, ref, 2.0)
+    np.testing.assert_allclose(Df, Dr, rtol=1e-7)
+    assert all(r.overlap_free for r in fast.islands)
+
+
+def test_a_wrong_known_map_is_not_trusted():
+    V, F, _, _ = torus(nu=24, nv=10)
+    _, added, _ = unwrap_auto(V, F, bound=2.0, stretch=2.0)
+    E = edge_table(V, F)
+    cut = np.zeros(len(E.ends), dtype=bool)
+    k = E.keys(added, len(V))
+    cut[k[k >= 0]] = True
+    isl, chs = _islands_of(V, F, E, cut)
+    cm = charts_mod.chart_maps(V, chs)
+    # Mirrored maps: every face flipped. They must be replaced, never written as they are.
+    known = {j: np.conj(cm.u[cm.voff[j]:cm.voff[j + 1]]) for j in range(len(chs))}
+    args = (_pins(None, None, len(F)), "lscm", 2.0, "auto", None, False, 1000.0, "soc", None,
+            "fail", None, None, "free", None, None)
+    res = unwrap_islands(V, F, isl, *args, conformal=known)
+    for r in res.islands:
+        if r.status == "certified":
+            _certify(V, F[r.faces], type("R", (), {"corner_uv": res.corner_uv[r.faces]}), 2.0)
+        else:
+            assert np.all(np.isnan(res.corner_uv[r.faces]))
+    assert any(r.status == "certified" for r in res.islands)
