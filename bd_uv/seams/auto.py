@@ -293,8 +293,8 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=Non
             todo.append((c.faces, None))
     disks = [c for c in chs if c.kind == "disk"]
     if disks:
-        cm = chart_maps(V, disks, geom)
         cap = mean_cap(C) if cap is None else cap
+        cm = chart_maps(V, disks, geom, limits=(S * MARGIN, cap))
         ok = (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
               & (cm.crossings == 0) & (cm.mean_distortion <= cap))
         if known is not None:

@@ -55,7 +55,8 @@ class ChartMaps:
     max_distortion, max_stretch : (k,) float64 per chart
     mean_distortion : (k,) float64, area-weighted mean conformal distortion per chart (inf
         when a face is flipped)
-    crossings : (k,) int64, pairs of boundary edges of the chart that cross in UV
+    crossings : (k,) int64, pairs of boundary edges of the chart that cross in UV (-1: not
+        counted, see ``chart_maps``' limits)
     sigma : (f,2) float64, singular values ``(|alpha|+|beta|, |alpha|-|beta|)`` per face (the
         second <= 0 when flipped), each chart scaled to its 3D area: any union of a chart's faces
         scaled to its own area has the stretch ``max(s sigma_1, 1/(s sigma_2))`` with one
@@ -92,12 +93,13 @@ class FaceGeometry:
     area : (m,) float64, 3D area
     ca, cb : (m,3) complex128, alpha's and beta's coefficient of each corner (eq. 4.19) in the
         face's local frame at its 3D size
-    zarea : (m,) float64, the area as the local frame measures it
+    h : (m,3,3) complex128, the face's term ``area cb^* cb^T`` of the LSCM energy ``u^H H u``
+        (the same at any scale of the chart: the coefficients grow as the area shrinks)
     """
     area: np.ndarray
     ca: np.ndarray
     cb: np.ndarray
-    zarea: np.ndarray
+    h: np.ndarray
 
 
 def face_geometry(V, F):
@@ -105,11 +107,12 @@ def face_geometry(V, F):
     Z = local_coordinates(V, F)
     G = gradient_operators(Z)
     zarea = 0.5 * np.abs(((Z[:, 1] - Z[:, 0]).conj() * (Z[:, 2] - Z[:, 0])).imag)
-    return FaceGeometry(face_areas(V, F), 0.5 * (G[:, 0] - 1j * G[:, 1]),
-                        0.5 * (G[:, 0] + 1j * G[:, 1]), zarea)
+    cb = 0.5 * (G[:, 0] + 1j * G[:, 1])
+    h = zarea[:, None, None] * cb.conj()[:, :, None] * cb[:, None, :]
+    return FaceGeometry(face_areas(V, F), 0.5 * (G[:, 0] - 1j * G[:, 1]), cb, h)
 
 
-def chart_maps(V, charts, geom=None):
+def chart_maps(V, charts, geom=None, limits=None):
     """LSCM of every chart in one block-diagonal solve, with per-face distortion and stretch.
 
     Parameters
@@ -117,6 +120,9 @@ def chart_maps(V, charts, geom=None):
     V : (n,3) float64
     charts : list of mesh.Island, each valid with exactly one boundary loop
     geom : FaceGeometry of the mesh the charts' faces index, optional (else computed here)
+    limits : (stretch, mean) floats, optional: count boundary crossings only for the charts
+        whose map is flip-free with max stretch and mean distortion within them (the others fail
+        anyway); their ``crossings`` are -1
 
     Returns
     -------
@@ -144,18 +150,17 @@ def chart_maps(V, charts, geom=None):
     area = np.bincount(face_c, A3, minlength=k)
     root = np.sqrt(area)[face_c][:, None]
     ca, cb = geom.ca[faces] * root, geom.cb[faces] * root
-    zarea = geom.zarea[faces] / area[face_c]
+    h = geom.h[faces]
     idx = _far_pairs(P, charts, voff)
     val = np.tile(np.array([0.0, 1.0], np.complex128), k)
     j = halves(nvs, PARALLEL_VERTICES)
     if j is None:
-        u = _lscm_pinned(cb, zarea, tris, n, idx, val)
+        u = _lscm_pinned(h, tris, n, idx, val)
     else:                   # two runs of charts, factored side by side (one system each)
         def run(r):
             (a, b), (fa, fb) = r, (foff[r[0]], foff[r[1]])
-            return _lscm_pinned(cb[fa:fb], zarea[fa:fb], tris[fa:fb] - voff[a],
-                                int(voff[b] - voff[a]), idx[2 * a:2 * b] - voff[a],
-                                val[2 * a:2 * b])
+            return _lscm_pinned(h[fa:fb], tris[fa:fb] - voff[a], int(voff[b] - voff[a]),
+                                idx[2 * a:2 * b] - voff[a], val[2 * a:2 * b])
         u = np.concatenate(map_blocks(run, [(0, j), (j, k)]))
     u_solved = u
     # Scale each chart so its UV area equals its (unit-normalised) 3D area: sigma are then the
@@ -181,7 +186,12 @@ def chart_maps(V, charts, geom=None):
         meanD = np.bincount(face_c, A3 * D, minlength=k) / area
     meanD[~np.isfinite(meanD)] = np.inf
     uv = u * np.sqrt(area)[vert_c]
-    cross = boundary_crossings(uv, [c.loops[0] + voff[j] for j, c in enumerate(charts)])
+    if limits is None:
+        cross = boundary_crossings(uv, [c.loops[0] + voff[j] for j, c in enumerate(charts)])
+    else:
+        ask = np.flatnonzero(np.isfinite(maxD) & (maxS <= limits[0]) & (meanD <= limits[1]))
+        cross = np.full(k, -1, dtype=np.int64)
+        cross[ask] = boundary_crossings(uv, [charts[j].loops[0] + voff[j] for j in ask])
     return ChartMaps(uv, voff, foff, D, St, maxD, maxS, cross, np.stack([a + b, a - b], axis=1),
                      meanD, u_solved)
 
@@ -245,48 +255,53 @@ def spd_solver(A, upper=False):
     return lu.solve
 
 
-def _lscm_pinned(cb, area, tris, n, idx, val):
+def _lscm_pinned(h, tris, n, idx, val):
     """LSCM (minimise ``sum_f area_f |beta_f|^2``) with vertices ``idx`` fixed to ``val``.
 
-    The energy is ``u^H H u`` with ``H = sum_f area_f cb_f^* cb_f^T`` (n x n Hermitian); on
-    x = [Re u; Im u] it is ``x^T Q x`` with ``Q = [[Re H, -Im H], [Im H, Re H]]``. Only Q's upper
-    triangle on the free unknowns is assembled, straight from the faces (no operator products):
-    the diagonal blocks' entries with row <= column and the whole block ``-Im H`` (less its
-    zero diagonal). The pinned values enter the right-hand side as ``-[Re; Im](H u_pinned)``.
+    The energy is ``u^H H u`` with ``H = sum_f h_f`` (n x n Hermitian, ``h_f = area_f cb_f^*
+    cb_f^T``); on x = [Re u; Im u] it is ``x^T Q x`` with ``Q = [[Re H, -Im H], [Im H, Re H]]``.
+    H's entries are summed first (the diagonal per vertex, the rest per edge), then only Q's upper
+    triangle on the free unknowns is written: the two ``Re H`` blocks' diagonal and upper entries
+    and the whole block ``-Im H`` (H's diagonal is real). The pinned values enter the right-hand
+    side as ``-[Re; Im](H u_pinned)``.
 
     Parameters
     ----------
-    cb : (f,3) complex128, beta's coefficient of each corner; area : (f,) float64
-    tris : (f,3) int64 into n vertices
+    h : (f,3,3) complex128, each face's term of H; tris : (f,3) int64 into n vertices
     idx : (p,) int64, pinned vertices; val : (p,) complex128, their positions
 
     Returns
     -------
     u : (n,) complex128
     """
-    j = np.repeat(tris, 3, axis=1).ravel()
-    k = np.tile(tris, (1, 3)).ravel()
-    h = (area[:, None, None] * cb.conj()[:, :, None] * cb[:, None, :]).ravel()
     idx = np.asarray(idx, dtype=np.int64)
-    u0 = np.zeros(n, dtype=np.complex128)
-    u0[idx] = val
-    hu = h * u0[k]
-    rhs_c = -(np.bincount(j, hu.real, n) + 1j * np.bincount(j, hu.imag, n))
     pinned = np.zeros(n, dtype=bool)
     pinned[idx] = True
+    u0 = np.zeros(n, dtype=np.complex128)
+    u0[idx] = val
+    flat = tris.ravel()
+    hu = np.einsum("fab,fb->fa", h, u0[tris]).ravel()
+    rhs_c = -(np.bincount(flat, hu.real, n) + 1j * np.bincount(flat, hu.imag, n))
     pos = np.cumsum(~pinned) - 1
     nf = int(n - pinned.sum())
-    both = ~pinned[j] & ~pinned[k]
-    diag = j == k
-    up = both & (j <= k)
-    off = both & ~diag
-    pj, pk = pos[j], pos[k]
-    rows = np.concatenate([pj[up], pj[off], pj[up] + nf])
-    cols = np.concatenate([pk[up], pk[off] + nf, pk[up] + nf])
-    vals = np.concatenate([h.real[up], -h.imag[off], h.real[up]])
+    diag = np.bincount(flat, np.einsum("faa->fa", h).real.ravel(), n)
+    # One entry per face side (j, k), summed per edge {lo, hi}: Re H and Im H[lo, hi].
+    J, K = tris, tris[:, [1, 2, 0]]
+    hjk = h[:, [0, 1, 2], [1, 2, 0]].ravel()
+    lo, hi = np.minimum(J, K).ravel(), np.maximum(J, K).ravel()
+    im = np.where((J < K).ravel(), hjk.imag, -hjk.imag)
+    edge, inv = np.unique(lo * n + hi, return_inverse=True)
+    inv = inv.ravel()
+    re_e, im_e = np.bincount(inv, hjk.real, len(edge)), np.bincount(inv, im, len(edge))
+    lo, hi = edge // n, edge % n
+    on = ~pinned[lo] & ~pinned[hi]
+    pl, ph, re_e, im_e = pos[lo[on]], pos[hi[on]], re_e[on], im_e[on]
+    free = np.flatnonzero(~pinned)
+    pd = pos[free]
+    rows = np.concatenate([pd, pl, pd + nf, pl + nf, pl, ph])
+    cols = np.concatenate([pd, ph, pd + nf, ph + nf, ph + nf, pl + nf])
+    vals = np.concatenate([diag[free], re_e, diag[free], re_e, -im_e, im_e])
     A = sp.csc_matrix((vals, (rows, cols)), shape=(2 * nf, 2 * nf))
-    A.sum_duplicates()
-    free = ~pinned
     rhs = np.concatenate([rhs_c.real[free], rhs_c.imag[free]])
     x = spd_solver(A, upper=True)(rhs)
     u = u0.copy()

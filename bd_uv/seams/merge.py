@@ -91,7 +91,7 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
             if not any(layers):
                 return
             continue
-        cm = chart_maps(V, [c for c, _ in disks], geom)
+        cm = chart_maps(V, [c for c, _ in disks], geom, limits=(S * MARGIN, mean_cap(C)))
         ok = (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
               & (cm.crossings == 0) & (cm.mean_distortion <= mean_cap(C)))
         if known is not None:
