@@ -23,6 +23,8 @@ class EdgeTable:
     face_edges : (m,3) int64, edge of each face corner's outgoing half-edge F[f,k] -> F[f,k+1]
     corners : (e,2,2) int64, ``corners[e,s,t]``: the corner (``3 f + k``) of ``ends[e,t]`` in
         ``faces[e,s]`` (-1 where there is no such face)
+    fans : Fans or None, the corners around each vertex in order (None where the mesh is not
+        an oriented manifold: then cuts are found by a graph search)
     """
     ends: np.ndarray
     faces: np.ndarray
@@ -30,6 +32,7 @@ class EdgeTable:
     cost: np.ndarray
     face_edges: np.ndarray
     corners: np.ndarray
+    fans: object = None
 
     def keys(self, pairs, n):
         """Edge index of each vertex pair (s,2), -1 where the pair is not an edge."""
@@ -103,4 +106,67 @@ def edge_table(V, F, face_groups=None, crease_angle=np.radians(30.0)):
         forward = a[h] == ends[sel, 0]
         corners[sel, s_, 0] = np.where(forward, h, nxt)
         corners[sel, s_, 1] = np.where(forward, nxt, h)
-    return EdgeTable(ends, faces, length, cost, inv.reshape(m, 3), corners)
+    face_edges = inv.reshape(m, 3)
+    return EdgeTable(ends, faces, length, cost, face_edges, corners,
+                     _fans(F, face_edges, faces, ends, corners))
+
+
+@dataclass(frozen=True)
+class Fans:
+    """The corners around every vertex, in turn (an oriented manifold mesh).
+
+    Corner ``c`` (``3 f + k``) turns to ``next[c]``, the same vertex's corner in the face across
+    the edge ``F[f,k] -> F[f,k+1]`` (``edge[c]``), -1 on the mesh boundary. ``order`` lists
+    all corners fan by fan, each fan from its first corner (a boundary vertex's fan starts
+    where the boundary does; a closed fan at its smallest corner); ``first[i]`` marks the
+    start of a fan in ``order`` and ``ring[i]`` a closed fan's start (its last corner turns
+    back to it).
+    """
+    next: np.ndarray
+    edge: np.ndarray
+    order: np.ndarray
+    first: np.ndarray
+    ring: np.ndarray
+
+
+def _fans(F, face_edges, faces, ends, corners):
+    """``Fans`` of the mesh, or None where it is not an oriented manifold (an edge with three
+    faces, two faces running an edge the same way, a corner reached twice)."""
+    m = len(F)
+    c = np.arange(3 * m)
+    edge = face_edges.ravel()
+    v = F.ravel()
+    side = (faces[edge, 0] != c // 3).astype(np.int64)
+    end = (ends[edge, 0] != v).astype(np.int64)
+    nxt = corners[edge, 1 - side, end]
+    on = nxt >= 0
+    count = np.bincount(edge, minlength=len(ends))
+    # Oriented: across every interior edge the two faces run it in opposite directions (one
+    # starts it at each end), so each corner is turned to from at most one corner.
+    if (count > 2).any() or (np.bincount(edge, end, len(ends))[count == 2] != 1).any() \
+            or (v[nxt[on]] != v[on]).any():
+        return None
+    prev = np.full(3 * m, -1, dtype=np.int64)
+    prev[nxt[on]] = c[on]
+    steps = int(np.ceil(np.log2(max(int(np.bincount(v).max(initial=1)), 2)))) + 1
+    # Closed fans: the smallest corner of each cycle becomes its start.
+    fwd = np.where(on, nxt, c)
+    low, p = c.copy(), fwd.copy()
+    for _ in range(steps):
+        low = np.minimum(low, low[p])
+        p = p[p]
+    p = np.where(prev >= 0, prev, c)
+    for _ in range(steps):
+        p = p[p]
+    ring = prev[p] >= 0                     # never reaches a corner without a predecessor
+    start = np.where(ring, low, p)
+    # Rank of each corner in its fan: steps back to the start (list ranking).
+    p = np.where((prev >= 0) & (c != start), prev, c)
+    rank = (p != c).astype(np.int64)
+    for _ in range(steps):
+        rank = rank + rank[p]
+        p = p[p]
+    order = np.lexsort((rank, start))
+    first = np.r_[True, start[order][1:] != start[order][:-1]]
+    return Fans(nxt, edge, order, first, first & ring[order])
+

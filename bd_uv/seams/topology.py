@@ -49,29 +49,69 @@ def cut_mesh(F, E, cut, faces=None):
     """
     m = len(F)
     if faces is None:
-        edges = np.flatnonzero((E.faces[:, 1] >= 0) & ~cut)
         mask = np.ones(m, dtype=bool)
     else:
         mask = np.zeros(m, dtype=bool)
         mask[faces] = True
+    # Only the corners of the faces asked for take part.
+    corners = np.flatnonzero(np.repeat(mask, 3))
+    if E.fans is not None:
+        corner = _fan_runs(E.fans, cut, mask)[corners]
+    else:                                   # not an oriented manifold: a graph search
         on = np.zeros(len(E.ends), dtype=bool)
-        on[E.face_edges[faces].ravel()] = True
+        on[E.face_edges[mask].ravel()] = True
         edges = np.flatnonzero(on & (E.faces[:, 1] >= 0) & ~cut)
         edges = edges[mask[E.faces[edges, 0]] & mask[E.faces[edges, 1]]]
-    cn = E.corners[edges]
-    rows, cols = [cn[:, 0, 0], cn[:, 0, 1]], [cn[:, 1, 0], cn[:, 1, 1]]
-    # Only the corners of the faces asked for take part: number them 0..3k-1.
-    corners = np.flatnonzero(np.repeat(mask, 3))
-    pos = np.full(3 * m, -1, dtype=np.int64)
-    pos[corners] = np.arange(len(corners))
-    rows, cols = pos[np.concatenate(rows)], pos[np.concatenate(cols)]
-    g = sp.coo_array((np.ones(len(rows)), (rows, cols)), shape=(len(corners), len(corners)))
-    _, corner = connected_components(g, directed=False)
+        cn = E.corners[edges]
+        rows, cols = [cn[:, 0, 0], cn[:, 0, 1]], [cn[:, 1, 0], cn[:, 1, 1]]
+        pos = np.full(3 * m, -1, dtype=np.int64)
+        pos[corners] = np.arange(len(corners))
+        rows, cols = pos[np.concatenate(rows)], pos[np.concatenate(cols)]
+        g = sp.coo_array((np.ones(len(rows)), (rows, cols)), shape=(len(corners), len(corners)))
+        _, corner = connected_components(g, directed=False)
     voc = np.empty(corner.max() + 1 if len(corner) else 0, dtype=np.int64)
     voc[corner] = F.ravel()[corners]
     Fc = np.full(3 * m, -1, dtype=np.int64)
     Fc[corners] = corner
     return Fc.reshape(m, 3), voc
+
+
+def _fan_runs(fans, cut, mask):
+    """Cut vertex of every corner from the fans: the corners around a vertex split into runs
+    at every cut edge and every face not asked for, each run one cut vertex.
+
+    Runs are numbered by their smallest corner, as a graph search over the corners would number
+    its components (so the charts come out the same either way).
+
+    Parameters
+    ----------
+    fans : edges.Fans, cut : (e,) bool, mask : (m,) bool faces asked for
+
+    Returns
+    -------
+    (3m,) int64, each corner's cut vertex, 0.. in the order of their smallest corner (meaningless
+    on corners of faces not asked for)
+    """
+    c = fans.order
+    nx = fans.next[c]
+    # Whether position i turns to the next corner of its fan (or a ring's last to its first).
+    joined = (nx >= 0) & ~cut[fans.edge[c]] & mask[c // 3] & mask[np.maximum(nx, 0) // 3]
+    new = fans.first.copy()
+    new[1:] |= ~joined[:-1]
+    starts = np.flatnonzero(new)
+    low = np.minimum.reduceat(c, starts)
+    run = np.cumsum(new) - 1
+    # A closed fan whose last corner turns back to its first: its first and last runs are one.
+    fan_first = np.flatnonzero(fans.first)
+    fan_last = np.append(fan_first[1:] - 1, len(c) - 1)
+    join = fans.ring[fan_first] & joined[fan_last] & (run[fan_first] != run[fan_last])
+    a, b = run[fan_first[join]], run[fan_last[join]]
+    low[a] = low[b] = np.minimum(low[a], low[b])
+    label = np.empty(len(c), dtype=np.int64)
+    label[c] = low[run]
+    used = np.zeros(len(c), dtype=bool)
+    used[label[np.repeat(mask, 3)]] = True
+    return (np.cumsum(used) - 1)[label]
 
 
 def charts(F, E, cut, faces=None):

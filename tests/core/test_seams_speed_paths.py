@@ -140,3 +140,34 @@ def test_a_wrong_known_map_is_not_trusted():
         else:
             assert np.all(np.isnan(res.corner_uv[r.faces]))
     assert any(r.status == "certified" for r in res.islands)
+
+
+def test_fan_runs_give_the_graph_search_cut_mesh_and_charts():
+    """Cut vertices read off the fans (no graph search) equal the corner graph's components,
+    numbering and chart order included, for random cuts and face subsets of closed, open and
+    genus-1 meshes; a mesh that is not an oriented manifold has no fans."""
+    import dataclasses
+    from bd_uv.seams.topology import cut_mesh
+    rng = np.random.default_rng(7)
+    Vt, Ft, _, _ = torus(nu=20, nv=8)
+    Vs, Fs, _ = uv_sphere(12, 6)
+    Vo, Fo = Vs, Fs[Vs[Fs].mean(axis=1)[:, 2] < 0.5]      # an open cap (boundary fans)
+    for V, F in ((Vt, Ft), (Vs, Fs), (Vo, Fo)):
+        E = edge_table(V, F)
+        assert E.fans is not None
+        E0 = dataclasses.replace(E, fans=None)
+        for trial in range(12):
+            cut = rng.random(len(E.ends)) < (0.0, 0.05, 0.3, 0.8)[trial % 4]
+            faces = None if trial % 3 == 0 else np.sort(
+                rng.choice(len(F), int(rng.integers(1, len(F))), replace=False))
+            a, b = cut_mesh(F, E, cut, faces), cut_mesh(F, E0, cut, faces)
+            assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+            ca, cb = charts(F, E, cut, faces), charts(F, E0, cut, faces)
+            assert [(c.faces.tolist(), c.vertices.tolist(), c.tris.tolist(), c.kind,
+                     [lp.tolist() for lp in c.loops]) for c in ca] == \
+                [(c.faces.tolist(), c.vertices.tolist(), c.tris.tolist(), c.kind,
+                  [lp.tolist() for lp in c.loops]) for c in cb]
+    # Two faces running their shared edge the same way: not oriented, no fans.
+    F2 = np.array([[0, 1, 2], [0, 1, 3]])
+    V2 = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0.1]], dtype=float)
+    assert edge_table(V2, F2).fans is None
