@@ -10,8 +10,10 @@ from .topology import charts
 # Rounds of pairwise merging (each merges a matching of neighbouring charts).
 MERGE_ROUNDS = 15
 # A union whose conformal map stretches beyond this many S: the charts around its two are not
-# tried together again.
-HOPELESS = 1.5
+# tried together again (a larger union around them rarely stretches less). 1.1 rather than 1.5:
+# 10 % less time on dino and fandisk for one chart more or less (dino 34 -> 36, camel 28 -> 29,
+# armadillo 42 -> 41; seams within 2 %).
+HOPELESS = 1.1
 # Matchings of neighbouring chart pairs tested together in one merging round.
 MERGE_LAYERS = 1
 
