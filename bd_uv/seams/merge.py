@@ -69,54 +69,59 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
         # Matchings ("layers"): dearest shared seam first, each chart in at most one pair of a
         # layer; every layer's unions are tested in one batched solve.
         used = np.zeros((MERGE_LAYERS, len(chs)), dtype=bool)
+        busy = [set() for _ in range(MERGE_LAYERS)]       # the charts of each layer's pairs
         layers = [[] for _ in range(MERGE_LAYERS)]
-        for p in np.lexsort((uk, -_quantize(shared))):
-            x, y = divmod(int(uk[p]), len(chs))
-            if (ident[x], ident[y]) in tried or hopeless[p]:
+        ukl, hl = uk.tolist(), hopeless.tolist()
+        for p in np.lexsort((uk, -_quantize(shared))).tolist():
+            x, y = divmod(ukl[p], len(chs))
+            if hl[p] or (ident[x], ident[y]) in tried:
                 continue
-            free = np.flatnonzero(~used[:, x] & ~used[:, y])
-            if len(free) == 0:
+            lay = next((i for i in range(MERGE_LAYERS)
+                        if x not in busy[i] and y not in busy[i]), None)
+            if lay is None:
                 continue
-            used[free[0], [x, y]] = True
-            layers[free[0]].append(p)
+            busy[lay].update((x, y))
+            layers[lay].append(p)
             tried.add((ident[x], ident[y]))
-        disks = []
+        disks = []                          # (union chart, trial cut, its pair's index in uk)
         for lay, chosen in enumerate(layers):
             if not chosen:
                 continue
+            used[lay, list(busy[lay])] = True
             trial = cut.copy()
             trial[ei[np.isin(inv, chosen)]] = False
             faces = np.flatnonzero(used[lay][label])
-            disks += [(c, trial) for c in charts(F, E, trial, faces)
-                      if c.kind == "disk" and len(np.unique(label[c.faces])) == 2]
+            for c in charts(F, E, trial, faces):
+                lab = label[c.faces]
+                other = lab[lab != lab[0]]
+                if c.kind == "disk" and len(other):
+                    a, b = min(lab[0], other[0]), max(lab[0], other[0])
+                    disks.append((c, trial, int(np.searchsorted(uk, a * len(chs) + b))))
         if not disks:
             if not any(layers):
                 return
             continue
-        cm = chart_maps(V, [c for c, _ in disks], geom, limits=(S * MARGIN, mean_cap(C)))
+        cm = chart_maps(V, [c for c, _, _ in disks], geom, limits=(S * MARGIN, mean_cap(C)))
         ok = (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
               & (cm.crossings == 0) & (cm.mean_distortion <= mean_cap(C)))
         if known is not None:
-            cm.remember([c for c, _ in disks], ok, known)
+            cm.remember([c for c, _, _ in disks], ok, known)
+        pair = np.array([p for _, _, p in disks], dtype=np.int64)
+        px, py = uk[pair] // len(chs), uk[pair] % len(chs)
         for j in np.flatnonzero(~(cm.max_stretch <= HOPELESS * S)):
-            x, y = np.unique(label[disks[j][0].faces])
-            far_a.append(int(chs[x].faces[0]))
-            far_b.append(int(chs[y].faces[0]))
+            far_a.append(int(chs[px[j]].faces[0]))
+            far_b.append(int(chs[py[j]].faces[0]))
         merged = np.zeros(len(chs), dtype=bool)
-        # Accept passing unions, dearest removed seam first, each chart merged once per round.
-        fes = [np.unique(E.face_edges[c.faces].ravel()) for c, _ in disks]
-        gain = np.array([(E.length * E.cost)[fe[cut[fe] & ~t[fe]]].sum()
-                         for fe, (_, t) in zip(fes, disks)])
+        # Accept passing unions, dearest removed seam first (the pair's shared seam), each chart
+        # merged once per round.
+        gain = shared[pair]
         unions = []
         for j in np.lexsort((np.arange(len(gain)), -_quantize(gain))):
-            c, trial = disks[j]
-            two = np.unique(label[c.faces])
-            if not ok[j] or merged[two].any():
+            if not ok[j] or merged[px[j]] or merged[py[j]]:
                 continue
-            merged[two] = True
-            fe = fes[j]
-            cut[fe[cut[fe] & ~trial[fe]]] = False
-            unions.append(c)
+            merged[[px[j], py[j]]] = True
+            cut[ei[inv == pair[j]]] = False
+            unions.append(disks[j][0])
         # The charts after this round: the unions (as found on the trial cut, which agrees with
         # the new cut on their faces) and every chart not merged, as they were.
         chs = sorted([c for j, c in enumerate(chs) if not merged[j]] + unions,
