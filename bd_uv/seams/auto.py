@@ -336,20 +336,23 @@ def _split_deep(todo, E, cut, A, cen, S, poly=None):
     stack = [(faces, j) for j, (faces, _) in enumerate(todo)]
     for _ in range(SPLIT_DEPTH):
         sides = _bisect([f for f, _ in stack], E, cut, A, cen, poly)
-        nxt = []
+        pieces = []                         # (piece, chart) of charts with a map
         for (f, j), two in zip(stack, sides):
             if two is None:
                 continue
             split[j] = True
-            faces, sigma = todo[j]
-            if sigma is None:
-                continue
-            for piece in two:
-                st = piece_stretch(sigma[np.searchsorted(faces, piece)], A[piece],
-                                   np.zeros(len(piece), np.int64), 1)[0]
-                if np.isfinite(st) and st > DEEPER * S * MARGIN and len(piece) > 1:
-                    nxt.append((piece, j))
-        stack = nxt
+            if todo[j][1] is not None:
+                pieces += [(piece, j) for piece in two]
+        if not pieces:
+            break
+        # Every piece's restricted stretch at once.
+        sig = np.concatenate([todo[j][1][np.searchsorted(todo[j][0], piece)]
+                              for piece, j in pieces])
+        fa = np.concatenate([piece for piece, _ in pieces])
+        label = np.repeat(np.arange(len(pieces)), [len(piece) for piece, _ in pieces])
+        st = piece_stretch(sig, A[fa], label, len(pieces))
+        stack = [(piece, j) for (piece, j), s_ in zip(pieces, st)
+                 if np.isfinite(s_) and s_ > DEEPER * S * MARGIN and len(piece) > 1]
         if not stack:
             break
     return split
