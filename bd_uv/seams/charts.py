@@ -262,7 +262,7 @@ def _lscm_pinned(h, tris, n, idx, val):
     cb_f^T``); on x = [Re u; Im u] it is ``x^T Q x`` with ``Q = [[Re H, -Im H], [Im H, Re H]]``.
     H's entries are summed first (the diagonal per vertex, the rest per edge), then only Q's upper
     triangle on the free unknowns is written: the two ``Re H`` blocks' diagonal and upper entries
-    and the whole block ``-Im H`` (H's diagonal is real). The pinned values enter the right-hand
+    and the block ``-Im H`` (H's diagonal is real; off the boundary Im H vanishes). The pinned values enter the right-hand
     side as ``-[Re; Im](H u_pinned)``.
 
     Parameters
@@ -290,17 +290,22 @@ def _lscm_pinned(h, tris, n, idx, val):
     hjk = h[:, [0, 1, 2], [1, 2, 0]].ravel()
     lo, hi = np.minimum(J, K).ravel(), np.maximum(J, K).ravel()
     im = np.where((J < K).ravel(), hjk.imag, -hjk.imag)
-    edge, inv = np.unique(lo * n + hi, return_inverse=True)
+    edge, inv, count = np.unique(lo * n + hi, return_inverse=True, return_counts=True)
     inv = inv.ravel()
     re_e, im_e = np.bincount(inv, hjk.real, len(edge)), np.bincount(inv, im, len(edge))
     lo, hi = edge // n, edge % n
     on = ~pinned[lo] & ~pinned[hi]
-    pl, ph, re_e, im_e = pos[lo[on]], pos[hi[on]], re_e[on], im_e[on]
+    pl, ph, re_e = pos[lo[on]], pos[hi[on]], re_e[on]
+    # Im H is the signed area term: the two faces of an interior edge cancel (to rounding), so
+    # only boundary edges couple the real and imaginary parts. Leaving the interior zeros out
+    # keeps the two Laplacian blocks apart but for the boundary: half the fill to factor.
+    rim = on & (count == 1)
+    bl, bh, im_b = pos[lo[rim]], pos[hi[rim]], im_e[rim]
     free = np.flatnonzero(~pinned)
     pd = pos[free]
-    rows = np.concatenate([pd, pl, pd + nf, pl + nf, pl, ph])
-    cols = np.concatenate([pd, ph, pd + nf, ph + nf, ph + nf, pl + nf])
-    vals = np.concatenate([diag[free], re_e, diag[free], re_e, -im_e, im_e])
+    rows = np.concatenate([pd, pl, pd + nf, pl + nf, bl, bh])
+    cols = np.concatenate([pd, ph, pd + nf, ph + nf, bh + nf, bl + nf])
+    vals = np.concatenate([diag[free], re_e, diag[free], re_e, -im_b, im_b])
     A = sp.csc_matrix((vals, (rows, cols)), shape=(2 * nf, 2 * nf))
     rhs = np.concatenate([rhs_c.real[free], rhs_c.imag[free]])
     x = spd_solver(A, upper=True)(rhs)
