@@ -1,4 +1,6 @@
 """Splitting a chart in two along its cheapest neck (spectral bisection with a Cheeger sweep)."""
+import functools
+
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order, connected_components, maximum_flow
@@ -183,7 +185,8 @@ def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12):
     x = np.einsum("ij,ij->i", c, axes[group])
     scale = np.zeros(g)
     np.maximum.at(scale, group, np.abs(x))
-    noise = np.concatenate([np.random.default_rng(int(n)).standard_normal(int(n))
+    noise = np.concatenate([_noise(int(n)) if n <= 5000 else
+                            np.random.default_rng(int(n)).standard_normal(int(n))
                             for n in np.diff(offsets)])
     x = x + 1e-3 * np.maximum(scale, 1e-300)[group] * noise
     deg = np.bincount(pairs.ravel(), np.repeat(w, 2), minlength=k)
@@ -205,6 +208,15 @@ def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12):
         x = solve(mass * x)
         x = x / np.maximum(np.sqrt(np.bincount(group, mass * x ** 2, g)), 1e-300)[group]
     return x - np.bincount(group, mass * x, g)[group] / tot
+
+
+@functools.lru_cache(maxsize=512)
+def _noise(n):
+    """The fixed perturbation of an n-node chart's start vector (seeded by n, read-only; kept
+    for the small charts, which come back in every round: at most 512 x 5000 values)."""
+    x = np.random.default_rng(n).standard_normal(n)
+    x.flags.writeable = False
+    return x
 
 
 def _snap_many(side, pairs, cost, group, g, rings=BAND_RINGS):
