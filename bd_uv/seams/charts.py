@@ -34,6 +34,9 @@ MEAN_SLOPE = 0.07
 # Charts of one solve are split into two systems factored side by side (``solvers.threads``)
 # when each holds at least this many vertices (below it, the split costs more than it saves).
 PARALLEL_VERTICES = 1500
+# ``boundary_crossings`` tests every pair of a loop's edges when the loops have at most this many
+# pairs in all (else candidate pairs come from a grid).
+ALL_PAIRS = 20000
 
 
 def mean_cap(C):
@@ -344,6 +347,17 @@ def boundary_crossings(uv, loops):
     nxt = np.arange(len(a_idx)) + 1
     nxt[start + lens - 1] = start
     p, q = uv[a_idx], uv[a_idx[nxt]]
+    if int((lens * lens).sum()) <= ALL_PAIRS:
+        # Short loops: every pair of each loop's edges (fewer steps than the grid below; two
+        # edges that cross share a grid cell, so the count is the same).
+        reps = lens * lens
+        grp = np.repeat(np.arange(k), reps)
+        r = np.arange(int(reps.sum())) - np.repeat(np.cumsum(reps) - reps, reps)
+        i, j = start[grp] + r // lens[grp], start[grp] + r % lens[grp]
+        keep = (i < j) & (nxt[i] != j) & (nxt[j] != i)
+        i, j = i[keep], j[keep]
+        hit = _segments_cross(p[i], q[i], p[j], q[j])
+        return np.bincount(owner[i[hit]], minlength=k).astype(np.int64)
     seg = np.abs(q - p)
     # Cell size: the mean edge, or a quarter of the longest, so no edge spans more than 5 cells.
     longest = np.zeros(k)

@@ -171,3 +171,29 @@ def test_fan_runs_give_the_graph_search_cut_mesh_and_charts():
     F2 = np.array([[0, 1, 2], [0, 1, 3]])
     V2 = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0.1]], dtype=float)
     assert edge_table(V2, F2).fans is None
+
+
+def test_boundary_crossings_all_pairs_equals_the_grid(monkeypatch):
+    """Short loops test every pair of their edges; the count equals the grid's (random star
+    loops, some self-crossing, some random polygons), and a bow-tie counts 1."""
+    rng = np.random.default_rng(1)
+    for _ in range(120):
+        loops, pts, off = [], [], 0
+        for _ in range(int(rng.integers(1, 5))):
+            L = int(rng.integers(3, 50))
+            t = np.sort(rng.random(L)) * 2 * np.pi
+            z = (1 + rng.random(L) * rng.choice([0.0, 0.3, 1.5])) * np.exp(1j * t)
+            if rng.random() < 0.2:
+                z = rng.random(L) + 1j * rng.random(L)
+            pts.append(z)
+            loops.append(np.arange(off, off + L))
+            off += L
+        uv = np.concatenate(pts)
+        monkeypatch.setattr(charts_mod, "ALL_PAIRS", 10 ** 9)
+        every = charts_mod.boundary_crossings(uv, loops)
+        monkeypatch.setattr(charts_mod, "ALL_PAIRS", -1)
+        grid = charts_mod.boundary_crossings(uv, loops)
+        assert np.array_equal(every, grid)
+    bowtie = np.array([0, 1 + 1j, 1, 1j])      # edges 0 and 2 cross at (0.5, 0.5)
+    monkeypatch.setattr(charts_mod, "ALL_PAIRS", 10 ** 9)
+    assert charts_mod.boundary_crossings(bowtie, [np.arange(4)]).tolist() == [1]
