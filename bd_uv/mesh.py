@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components, depth_first_order
+from scipy.sparse.csgraph import connected_components
 
 from .errors import (ClosedIslandError, DegenerateFacesError, DuplicateFacesError,
                      InvalidMeshError, NonFiniteError, NonManifoldError, OrientationError,

@@ -1,6 +1,7 @@
 """Automatic seams: cut islands that cannot be certified as they are into certified disk charts."""
 from .auto import unwrap_auto
-from .charts import boundary_crossings, chart_maps
+from .charts import chart_maps
+from .crossings import boundary_crossings
 from .cut_graph import cut_graph
 from .edges import edge_table
 from .split import fiedler_split, fiedler_split_many

@@ -7,7 +7,7 @@ import numpy as np
 from ..geometry import face_areas
 from ..metrics import face_jacobians
 from ..unwrapping.results import UnwrapResult
-from .charts import boundary_crossings
+from .crossings import boundary_crossings
 from .topology import charts
 
 

@@ -10,16 +10,12 @@ With ``boundary`` other than "free", steps 1-2 are replaced by a solve with the 
 boundary fixed on a circle, a rectangle or its pinned polygon (``fixed_boundary``, section 5),
 certified the same way and checked for Theorems 5.1/5.2's premises (``bijective``).
 """
-import dataclasses
 import math
 import time
 
 import numpy as np
 
-from ..certificate import certify_islands
-from ..cut import split_overlapping
-from ..errors import (BDError, CancelledError, InvalidMeshError, IslandError, OverlapError,
-                      SolverError)
+from ..errors import BDError, CancelledError, InvalidMeshError, IslandError, SolverError
 from ..mesh import check_arrays, islands as split_islands
 from ..metrics import certify, mean_distortion, singular_values
 from ..spaces import check_stretch
@@ -28,6 +24,7 @@ from . import stretch as stretch_search
 from .batched import conformal_islands
 from .fixed_boundary import BOUNDARIES, FRAMES_NAME, fixed_boundary_island, with_premises
 from .initial import start_map
+from .overlap_certificate import overlap_certificate
 from .problem import STORE_HEADROOM, Cancelled, IslandProblem
 from .results import IslandResult, UnwrapResult
 
@@ -196,93 +193,11 @@ def unwrap_islands(V, F, isl, pins, method, bound, frames, initial_uv, raise_bou
         results.append(res)
         done += share
     pinned = set(face_island[pins[0] // 3].tolist())
-    results, face_island, corner_uv = _overlap_certificate(V, F, results, face_island, corner_uv,
+    results, face_island, corner_uv = overlap_certificate(V, F, results, face_island, corner_uv,
                                                            pinned, overlap == "cut", face_groups)
     if progress is not None:
         progress(1.0, "done")
     return UnwrapResult(corner_uv, face_island, results, time.perf_counter() - t0, method)
-
-
-def _overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True,
-                         face_groups=None):
-    """Certify every certified island one-to-one from its final UVs (Lipman 2012, Theorems 5.1,
-    5.2: simple, disjoint, rightly wound UV boundaries), and cut an island that overlaps itself
-    into overlap-free pieces (``cut.split_overlapping``: no UV moves, so each piece keeps its
-    distortion certificate). The pieces become islands of their own, numbered after the others;
-    unpinned pieces are moved to start at (0, 0) like every island; each piece names the mesh
-    edges cut (``cut_edges``) and carries the flag "cut".
-
-    Parameters
-    ----------
-    pinned : set of island indices with pins (their pieces stay where the pins put them)
-    cut : bool, cut an overlapping island (else it fails with OverlapError)
-
-    Returns
-    -------
-    results, face_island (m,), corner_uv (m,3,2)
-    """
-    ok = np.array([r.status == "certified" for r in results], dtype=bool)
-    if not ok.any():
-        return results, face_island, corner_uv
-    lab = np.where(ok[face_island], face_island, -1)
-    certs = certify_islands(V, F, corner_uv, lab, np.where(ok, [
-        r.bound_certified or 1.0 for r in results], 1.0))
-    out, extra = [], []
-    for r, c in zip(results, certs):
-        if r.status != "certified" or c.overlap_free:
-            out.append(dataclasses.replace(r, overlap_free=r.status == "certified"))
-            continue
-        if not cut:
-            err = OverlapError(f"island {r.index}: its UVs lie over themselves ({c.reason}); "
-                               "cut it into overlap-free pieces, mark seams, or put its boundary "
-                               "on a circle (boundary='circle': a bijection without new seams)",
-                               r.index, r.faces)
-            out.append(dataclasses.replace(r, status="failed", error=err, message=str(err),
-                                           uv=None, bijective=None if r.bijective is None
-                                           else False))
-            corner_uv[r.faces] = np.nan
-            continue
-        pieces, cut_edges = split_overlapping(V, F, corner_uv, r.faces, face_groups)
-        local = np.full(len(F), -1, dtype=np.int64)
-        local[r.faces] = np.arange(len(r.faces))
-        for n, faces in enumerate(pieces):
-            rows = local[faces]
-            vids, tris = np.unique(r.tris[rows], return_inverse=True)
-            uv = r.uv[vids]
-            if r.index not in pinned:
-                uv = uv - uv.min(axis=0)
-                corner_uv[faces] = uv[tris.reshape(-1, 3)]
-            index = r.index if n == 0 else len(results) + len(extra)
-            piece = dataclasses.replace(
-                r, index=index, faces=faces, vertices=r.vertices[vids],
-                tris=tris.reshape(-1, 3).astype(np.int64), uv=uv, distortion=r.distortion[rows],
-                max_distortion=float(np.max(r.distortion[rows])), overlap_free=True,
-                cut_edges=cut_edges, cut_from=r.index, flags=r.flags + ("cut",),
-                bijective=None if r.bijective is None else False,
-                message=(f"island {r.index} overlapped itself in UV and was cut into "
-                         f"{len(pieces)} overlap-free pieces along {len(cut_edges)} edges "
-                         f"(mark them as seams to keep the cut, or use boundary='circle' for "
-                         f"one bijective island); piece {n + 1}: {len(faces)} "
-                         f"faces, max distortion {np.max(r.distortion[rows]):.3f} <= "
-                         f"{r.bound_certified:.4g}"))
-            face_island[faces] = index
-            (out if n == 0 else extra).append(piece)
-    results = out + extra
-    cut = np.array(["cut" in r.flags for r in results], dtype=bool)
-    if cut.any():  # the pieces are certified again from their UVs, not assumed overlap-free
-        lab = np.where(cut[face_island], face_island, -1)
-        bounds = [r.bound_certified or 1.0 for r in results]
-        for c in certify_islands(V, F, corner_uv, lab, bounds):
-            if cut[c.island] and not c.certified:
-                r = results[c.island]
-                err = SolverError(f"island {r.index}: a piece cut from an overlapping island "
-                                  f"failed its certificate ({c.reason}); mark seams there",
-                                  r.index)
-                results[c.island] = dataclasses.replace(r, status="failed", error=err,
-                                                        message=str(err), overlap_free=False,
-                                                        uv=None)
-                corner_uv[r.faces] = np.nan
-    return results, face_island, corner_uv
 
 
 def _check_options(method, frames, bound, bound_limit, cone):

@@ -11,6 +11,7 @@ import pytest
 from bd_uv.mesh import islands
 from bd_uv.seams import unwrap_auto
 from bd_uv.seams import charts as charts_mod
+from bd_uv.seams import crossings
 from bd_uv.seams.edges import edge_table
 from bd_uv.seams.topology import charts
 from bd_uv.solvers import threads
@@ -189,11 +190,11 @@ def test_boundary_crossings_all_pairs_equals_the_grid(monkeypatch):
             loops.append(np.arange(off, off + L))
             off += L
         uv = np.concatenate(pts)
-        monkeypatch.setattr(charts_mod, "ALL_PAIRS", 10 ** 9)
-        every = charts_mod.boundary_crossings(uv, loops)
-        monkeypatch.setattr(charts_mod, "ALL_PAIRS", -1)
-        grid = charts_mod.boundary_crossings(uv, loops)
+        monkeypatch.setattr(crossings, "ALL_PAIRS", 10 ** 9)
+        every = crossings.boundary_crossings(uv, loops)
+        monkeypatch.setattr(crossings, "ALL_PAIRS", -1)
+        grid = crossings.boundary_crossings(uv, loops)
         assert np.array_equal(every, grid)
     bowtie = np.array([0, 1 + 1j, 1, 1j])      # edges 0 and 2 cross at (0.5, 0.5)
-    monkeypatch.setattr(charts_mod, "ALL_PAIRS", 10 ** 9)
-    assert charts_mod.boundary_crossings(bowtie, [np.arange(4)]).tolist() == [1]
+    monkeypatch.setattr(crossings, "ALL_PAIRS", 10 ** 9)
+    assert crossings.boundary_crossings(bowtie, [np.arange(4)]).tolist() == [1]
