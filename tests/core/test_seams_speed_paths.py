@@ -101,19 +101,29 @@ def _certify(V, F, res, C):
     return D
 
 
-def test_known_maps_certify_what_unwrap_certifies():
+# unwrap_islands' options after the islands: pins, method, bound, frames, initial_uv,
+# raise_bound, bound_limit, cone, time_budget, overlap, face_groups, stretch, boundary, progress,
+# cancel.
+OPTIONS = ("lscm", 2.0, "auto", None, False, 1000.0, "soc", None, "fail", None, None, "free",
+           None, None)
+
+
+def _torus_charts():
+    """A torus cut by seams='auto': its mesh, edge table, cut, islands and chart maps."""
     V, F, _, _ = torus(nu=24, nv=10)
-    res0, added, _ = unwrap_auto(V, F, bound=2.0, stretch=2.0)
+    _, added, _ = unwrap_auto(V, F, bound=2.0, stretch=2.0)
     E = edge_table(V, F)
     cut = np.zeros(len(E.ends), dtype=bool)
     k = E.keys(added, len(V))
     cut[k[k >= 0]] = True
     isl, chs = _islands_of(V, F, E, cut)
-    cm = charts_mod.chart_maps(V, chs)
-    known = {j: cm.u[cm.voff[j]:cm.voff[j + 1]] for j in range(len(chs))}
-    args = (_pins(None, None, len(F)), "lscm", 2.0, "auto", None, False, 1000.0, "soc", None,
-            "fail", None, None, "free", None, None)
-    fast = unwrap_islands(V, F, isl, *args, conformal=known)
+    return V, F, E, cut, isl, charts_mod.chart_maps(V, chs)
+
+
+def test_known_maps_certify_what_unwrap_certifies():
+    V, F, E, cut, isl, cm = _torus_charts()
+    known = {j: cm.u[cm.voff[j]:cm.voff[j + 1]] for j in range(len(isl))}
+    fast = unwrap_islands(V, F, isl, _pins(None, None, len(F)), *OPTIONS, conformal=known)
     ref = unwrap(V, F, seams=E.ends[cut], bound=2.0, raise_bound=False, overlap="fail")
     assert fast.certified and ref.certified
     Df, Dr = _certify(V, F, fast, 2.0), _certify(V, F, ref, 2.0)
@@ -122,19 +132,10 @@ def test_known_maps_certify_what_unwrap_certifies():
 
 
 def test_a_wrong_known_map_is_not_trusted():
-    V, F, _, _ = torus(nu=24, nv=10)
-    _, added, _ = unwrap_auto(V, F, bound=2.0, stretch=2.0)
-    E = edge_table(V, F)
-    cut = np.zeros(len(E.ends), dtype=bool)
-    k = E.keys(added, len(V))
-    cut[k[k >= 0]] = True
-    isl, chs = _islands_of(V, F, E, cut)
-    cm = charts_mod.chart_maps(V, chs)
+    V, F, E, cut, isl, cm = _torus_charts()
     # Mirrored maps: every face flipped. They must be replaced, never written as they are.
-    known = {j: np.conj(cm.u[cm.voff[j]:cm.voff[j + 1]]) for j in range(len(chs))}
-    args = (_pins(None, None, len(F)), "lscm", 2.0, "auto", None, False, 1000.0, "soc", None,
-            "fail", None, None, "free", None, None)
-    res = unwrap_islands(V, F, isl, *args, conformal=known)
+    known = {j: np.conj(cm.u[cm.voff[j]:cm.voff[j + 1]]) for j in range(len(isl))}
+    res = unwrap_islands(V, F, isl, _pins(None, None, len(F)), *OPTIONS, conformal=known)
     for r in res.islands:
         if r.status == "certified":
             _certify(V, F[r.faces], type("R", (), {"corner_uv": res.corner_uv[r.faces]}), 2.0)
