@@ -75,7 +75,7 @@ class ChartMaps:
     crossings: np.ndarray
     sigma: np.ndarray
     mean_distortion: np.ndarray
-    u: np.ndarray = None
+    u: np.ndarray
 
     def remember(self, charts, passed, known):
         """Put the maps of the charts that ``passed`` into ``known`` (sorted faces' bytes ->

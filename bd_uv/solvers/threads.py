@@ -10,6 +10,8 @@ import concurrent.futures as cf
 import os
 import threading
 
+import numpy as np
+
 _pool = None
 _lock = threading.Lock()
 
@@ -55,7 +57,6 @@ def halves(sizes, least):
     """
     if workers() < 2 or len(sizes) < 2:
         return None
-    import numpy as np
     c = np.cumsum(np.asarray(sizes, dtype=np.float64))
     j = int(np.argmin(np.abs(c[:-1] - c[-1] / 2))) + 1
     return j if min(c[j - 1], c[-1] - c[j - 1]) >= least else None
