@@ -72,3 +72,8 @@ class SolverError(IslandError):
 
 class OverlapError(IslandError):
     """The island's UVs lie over themselves (its UV boundary is not simple); cut it or mark seams."""
+
+
+class PackError(BDError):
+    """The charts cannot be packed with the options given (bad options, a chart larger than a
+    UDIM tile at the texel density asked for, or no layout that passes the layout certificate)."""
