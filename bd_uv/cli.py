@@ -76,15 +76,28 @@ def solver_kwargs(args):
     return kwargs
 
 
-LAYOUT_OPTIONS = ("pack", "cut", "margin")
+# The atlas packer's options (bd_uv.packing.PackOptions) as they appear in an options dict.
+PACK_OPTIONS = ("resolution", "padding_px", "texel_density", "rotate", "udim")
+LAYOUT_OPTIONS = ("pack", "cut", "margin") + PACK_OPTIONS
 
 
 def add_layout_options(p):
-    """How the UVs are stored (``unwrap`` and ``batch``): cut overlaps, pack, margin."""
+    """How the UVs are stored (``unwrap`` and ``batch``): cut overlaps, pack and its options."""
     p.add_argument("--no-pack", action="store_true",
                    help="keep each island at (0, 0) instead of packing them into the unit square")
-    p.add_argument("--margin", type=float, default=0.005,
-                   help="packing margin between islands, in the unit square (default 0.005)")
+    p.add_argument("--resolution", type=int, default=1024,
+                   help="texture size in texels the packing is measured at (default 1024)")
+    p.add_argument("--padding", type=float, default=4.0,
+                   help="least gap between two charts in texels at --resolution, half of it to "
+                        "the square's edge (default 4)")
+    p.add_argument("--texel-density", type=float, default=None,
+                   help="texels per scene unit for every chart (default: one density, as large "
+                        "as fits the square)")
+    p.add_argument("--rotate", choices=("none", "90", "any"), default="any",
+                   help="turns a chart may make when packed (never a mirror; default any)")
+    p.add_argument("--udim", action="store_true",
+                   help="with --texel-density: charts that do not fit tile 1001 spill into 1002, "
+                        "1003, ... (Blender's UDIM numbering)")
     p.add_argument("--overlap", choices=("cut", "fail"), default="cut",
                    help="an island whose UVs lie over themselves: cut it into overlap-free "
                         "pieces (default, the cut edges are reported), or fail it")
@@ -92,14 +105,20 @@ def add_layout_options(p):
 
 def layout_kwargs(args):
     """The :func:`bd_uv.layout.stored_layout` keyword arguments from parsed options."""
-    return dict(pack=not args.no_pack, cut=args.overlap == "cut", margin=args.margin)
+    return dict(pack=not args.no_pack, cut=args.overlap == "cut", resolution=args.resolution,
+                padding_px=args.padding, texel_density=args.texel_density, rotate=args.rotate,
+                udim=args.udim)
 
 
 def split_options(options):
     """(unwrap keyword arguments, stored_layout keyword arguments) of one options dict; without
     layout keys (the Blender script, which packs with Blender) nothing is cut or packed."""
     solve = {k: v for k, v in options.items() if k not in LAYOUT_OPTIONS}
-    layout = {k: options[k] for k in LAYOUT_OPTIONS if k in options}
+    layout = {k: options[k] for k in ("pack", "cut", "margin") if k in options}
+    atlas = {k: options[k] for k in PACK_OPTIONS if k in options}
+    if atlas and options.get("pack"):
+        from .packing import PackOptions
+        layout["pack_options"] = PackOptions(**atlas)
     if "cut" in layout:  # unwrap() itself cuts (or fails) an island whose UVs overlap
         solve["overlap"] = "cut" if layout["cut"] else "fail"
     layout.setdefault("pack", False)
@@ -128,6 +147,7 @@ class ProgressBar:
 
 
 def run_unwrap(args):
+    _, layout_options = split_options(layout_kwargs(args))   # bad packing options: before solving
     mesh = load_mesh(args.input)
     seams = None
     use_uv = args.seams == "uv" or (args.seams is None and mesh.corner_uv is not None)
@@ -150,12 +170,13 @@ def run_unwrap(args):
     else:
         res = unwrap(mesh.V, mesh.F, seams=seams, progress=ProgressBar(), overlap=args.overlap,
                      **kwargs)
-    layout = stored_layout(mesh.V, mesh.F, res, **layout_kwargs(args))
+    layout = stored_layout(mesh.V, mesh.F, res, **layout_options)
     uv, F_uv = layout.vertex_uv(mesh.F)
     write_obj(args.output, mesh.V, mesh.F, uv, F_uv)
     islands = layout.island_entries(res)
     report = {"input": os.path.abspath(args.input), **res.report(), "islands": islands,
-              "summary": layout.totals(), "layout_overlaps": layout.overlaps.tolist()}
+              "summary": layout.totals(), "layout_overlaps": layout.overlaps.tolist(),
+              "pack": layout.pack}
     if args.report:
         os.makedirs(os.path.dirname(os.path.abspath(args.report)), exist_ok=True)
         with open(args.report, "w", encoding="utf-8") as fh:
@@ -169,12 +190,20 @@ def run_unwrap(args):
             D[w] = conformal_distortion(mesh.V, mesh.F[w], layout.corner_uv[w])
         bound = layout.totals()["bound"] or (args.bound if args.bound != "auto" else None)
         uv_layout_png(args.png, layout.corner_uv, D, bound,
-                      layout.caption(mesh.name, args.method, res.seconds))
+                      layout.caption(mesh.name, args.method, res.seconds), **png_tiles(layout))
     _print_report(mesh.name, islands, layout, res.seconds, args, sys.stdout)
     failed = [e for e in islands if e["status"] != "certified"]
     for e in failed:
         print(f"error: {e['message']}", file=sys.stderr)
     return 0 if not failed else 1
+
+
+def png_tiles(layout):
+    """uv_layout_png's ``tiles`` and ``padding`` for a layout packed by the atlas packer."""
+    if not layout.pack:
+        return {}
+    return dict(tiles=layout.pack["tiles"],
+                padding=layout.pack["padding_px"] / layout.pack["resolution"])
 
 
 def core_cuts(islands):
@@ -216,6 +245,13 @@ def _print_report(name, islands, layout, seconds, args, out):
           f"{t['cut_edges'] + cut['edges']} edges), {t['layout_overlaps']} overlapping island pair(s)"
           f"{'' if layout.packed else ' (not packed)'}, {seconds:.2f} s -> {args.output}",
           file=out)
+    p = layout.pack
+    if p:
+        gap = "" if p["least_gap_px"] is None else f", least gap {p['least_gap_px']:.2f} px"
+        print(f"  packed: coverage {p['coverage']:.3f} at {p['resolution']} px{gap}, padding "
+              f"{p['padding_px']:g} px {'met' if p['certified'] else 'NOT met: ' + p['reason']}, "
+              f"tiles {', '.join(map(str, p['tiles']))}, {p['texel_density']:.4g} texels per "
+              f"unit, {p['seconds']:.2f} s", file=out)
     for e in islands:
         if e["status"] == "certified":
             cut = f", cut into {e['pieces']} pieces" if e["pieces"] > 1 else ""

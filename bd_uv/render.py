@@ -36,7 +36,8 @@ def wrap_caption(caption, size_px, font):
     return "\n".join(textwrap.fill(part, per_line) for part in caption.split("\n"))
 
 
-def uv_layout_png(path, corner_uv, distortion, bound, caption, size_px=1024, flipped=None):
+def uv_layout_png(path, corner_uv, distortion, bound, caption, size_px=1024, flipped=None,
+                  tiles=(), padding=0.0):
     """Write a ``size_px`` x ``size_px`` PNG of a UV layout coloured by conformal distortion.
 
     Parameters
@@ -57,6 +58,11 @@ def uv_layout_png(path, corner_uv, distortion, bound, caption, size_px=1024, fli
         Width and height of the PNG in pixels.
     flipped : (m,) bool array, optional
         Faces known to be flipped, drawn purple (otherwise non-finite faces are drawn yellow).
+    tiles : sequence of int, optional
+        UDIM tiles of a packed layout (1001: the unit square): each is outlined, with a dashed
+        line half the padding inside it.
+    padding : float
+        The packing's padding, in UV units.
 
     Returns
     -------
@@ -68,7 +74,7 @@ def uv_layout_png(path, corner_uv, distortion, bound, caption, size_px=1024, fli
     from matplotlib.collections import PolyCollection
     from matplotlib.colors import ListedColormap, Normalize
     from matplotlib.figure import Figure
-    from matplotlib.patches import Patch
+    from matplotlib.patches import Patch, Rectangle
 
     corner_uv = np.asarray(corner_uv, dtype=np.float64).reshape(-1, 3, 2)
     distortion = np.asarray(distortion, dtype=np.float64).reshape(-1)
@@ -97,6 +103,13 @@ def uv_layout_png(path, corner_uv, distortion, bound, caption, size_px=1024, fli
         ax.add_collection(polys)
         lo = corner_uv[drawn].reshape(-1, 2).min(axis=0)
         hi = corner_uv[drawn].reshape(-1, 2).max(axis=0)
+        for t in tiles:
+            u, v = (t - 1001) % 10, (t - 1001) // 10
+            ax.add_patch(Rectangle((u, v), 1, 1, fill=False, linewidth=1.0, edgecolor="black"))
+            h = 0.5 * padding
+            ax.add_patch(Rectangle((u + h, v + h), 1 - padding, 1 - padding, fill=False,
+                                   linewidth=0.6, linestyle="--", edgecolor="tab:blue"))
+            lo, hi = np.minimum(lo, (u, v)), np.maximum(hi, (u + 1, v + 1))
         pad = 0.02 * max(float((hi - lo).max()), 1e-12)
         ax.set_xlim(lo[0] - pad, hi[0] + pad)
         ax.set_ylim(lo[1] - pad, hi[1] + pad)

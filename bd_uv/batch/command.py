@@ -9,7 +9,9 @@ import os
 import sys
 import time
 
-from ..cli import add_layout_options, add_solver_options, layout_kwargs, solver_kwargs
+from ..cli import (add_layout_options, add_solver_options, layout_kwargs, solver_kwargs,
+                   split_options)
+from ..errors import BDError
 from ..scheduling.atomic import remove_stale
 from .files import _size, input_files, plan, run_tasks
 from .report import batch_report, item_line
@@ -109,6 +111,11 @@ def run_batch(args):
         os.makedirs(args.png, exist_ok=True)
     tasks = plan(files, args.output, args.png)
     options = {**solver_kwargs(args), **layout_kwargs(args)}
+    try:
+        split_options(options)       # bad packing options: said once, before any file runs
+    except BDError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     if args.seams == "auto":
         if args.bound == "auto":
             print("error: --seams auto needs a numeric --bound C", file=sys.stderr)

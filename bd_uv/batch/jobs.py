@@ -132,6 +132,8 @@ def unwrap_job(job, options, png=None):
     entry["status"] = "certified" if not bad else ("partial" if ok else "failed")
     entry.update(overlapping=t["overlapping_unwrapped"], cut_edges=t["cut_edges"],
                  layout_overlaps=t["layout_overlaps"])
+    if layout.pack:
+        entry["pack"] = layout.pack
     if ok:
         entry.update(bound_certified=max(e["bound_certified"] for e in ok),
                      max_distortion=t["max_distortion"], mean_distortion=_num(t["mean_distortion"]),
@@ -154,8 +156,10 @@ def entry_png(path, entry, corner_uv, distortion, options):
     from ..render import uv_layout_png
     entry["png"] = os.path.abspath(path)
     with atomic_path(path) as tmp:
+        p = entry.get("pack")
+        tiles = dict(tiles=p["tiles"], padding=p["padding_px"] / p["resolution"]) if p else {}
         uv_layout_png(tmp, corner_uv, distortion, entry["bound_certified"],
-                      caption(entry, options))
+                      caption(entry, options), **tiles)
 
 
 def caption(entry, options):
@@ -173,6 +177,12 @@ def caption(entry, options):
              + (f"{entry['overlapping']} overlapping island(s) cut along {entry['cut_edges']} "
                 "edges, " if entry.get("overlapping") else "")
              + f"{entry['seconds']:.2f} s"]
+    p = entry.get("pack")
+    if p:
+        gap = "" if p["least_gap_px"] is None else f", least gap {p['least_gap_px']:.2f} px"
+        lines.append(f"packed: coverage {p['coverage']:.3f} at {p['resolution']} px{gap} "
+                     f"(padding {p['padding_px']:g} px{'' if p['certified'] else ', NOT met'}), "
+                     f"tiles {', '.join(map(str, p['tiles']))}, {p['seconds']:.2f} s")
     if entry["status"] != "certified":
         lines.append(f"not certified: {entry['message']}"[:160])
     return "\n".join(lines)

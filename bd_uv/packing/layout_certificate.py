@@ -85,7 +85,8 @@ def layout_certificate(V, F, corner_uv, face_island, tile, resolution, padding_p
     V : (n,3) float array
     F : (m,3) int array
     corner_uv : (m,3,2) float array, UVs as stored
-    face_island : (m,) int array, chart of each face (-1: not in the layout)
+    face_island : (m,) int array, chart of each face (-1: not in the layout; a chart with no
+        face is left out)
     tile : (k,) int array, UDIM number of each chart's tile
     resolution : int, texels along a tile's side
     padding_px : float, the least gap asked for
@@ -120,8 +121,9 @@ def layout_certificate(V, F, corner_uv, face_island, tile, resolution, padding_p
     auv = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
     P3 = V[F[use]]
     a3 = 0.5 * np.linalg.norm(np.cross(P3[:, 1] - P3[:, 0], P3[:, 2] - P3[:, 0]), axis=1)
-    dens = np.sqrt(np.bincount(lab[use], auv, k) / np.bincount(lab[use], a3, k))
-    tiles = sorted(int(x) for x in np.unique(tile))
+    present = np.unique(lab[use])
+    dens = np.sqrt(np.bincount(lab[use], auv, k) / np.bincount(lab[use], a3, k))[present]
+    tiles = sorted(int(x) for x in np.unique(tile[present]))
     coverage = float(auv.sum() / len(tiles)) if tiles else 0.0
     reasons = []
     if not inside:
@@ -132,6 +134,6 @@ def layout_certificate(V, F, corner_uv, face_island, tile, resolution, padding_p
         reasons.append(f"least gap {gap:.3f} px < padding {padding_px:g} px")
     if edge < 0.5 * padding_px:
         reasons.append(f"a chart is {edge:.3f} px from its tile's edge < {0.5 * padding_px:g} px")
-    spread = float(dens.max() / dens.min()) if k else 1.0
+    spread = float(dens.max() / dens.min()) if len(dens) else 1.0
     return LayoutCertificate(not reasons, "; ".join(reasons), int(resolution), float(padding_px),
                              gap, float(edge), inside, overlaps, coverage, tiles, spread)
