@@ -2,3 +2,4 @@
 from .atlas import Packed, pack_islands
 from .layout_certificate import LayoutCertificate, layout_certificate, least_gaps
 from .options import ROTATIONS, PackOptions, udim_tile
+from .uv_islands import uv_islands

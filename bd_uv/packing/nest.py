@@ -76,21 +76,34 @@ def nest(outlines, height, separation, options):
     return Placement(angle, shift, float(sol.width))
 
 
-def least_squares(outlines, options):
+def least_squares(outlines, options, step=1.0):
     """Per outline, the side of the least square box holding it in an allowed orientation (any
-    angle: sampled every degree, so a hair above the least).
+    angle: sampled every ``step`` degrees, so a hair above the least), and that angle.
 
     Returns
     -------
-    (k,) float64
+    side : (k,) float64
+    angle : (k,) float64, degrees
     """
     angles = options.orientations()
-    R = rotations(np.arange(0.0, 90.0, 1.0) if angles is None else angles[:2])
-    out = np.zeros(len(outlines))
+    turns = np.arange(0.0, 90.0, step) if angles is None else np.asarray(angles[:2])
+    R = rotations(turns)
+    side, angle = np.zeros(len(outlines)), np.zeros(len(outlines))
     for i, xy in enumerate(outlines):  # per chart
         q = np.einsum("aij,nj->ani", R, xy)
-        out[i] = np.ptp(q, axis=1).max(axis=1).min()
-    return out
+        s = np.ptp(q, axis=1).max(axis=1)
+        side[i], angle[i] = s.min(), turns[np.argmin(s)]
+    return side, angle
+
+
+def single_layout(xy, options, tol):
+    """One chart alone: turned to its least square box, half the padding from the edges."""
+    _, angle = least_squares([xy], options, step=0.25)
+    q = xy @ rotations(angle)[0].T
+    lo, hi = q.min(axis=0), q.max(axis=0)
+    side = (float((hi - lo).max()) + 2 * tol) / (1 - options.padding)
+    edge = 0.5 * options.padding * side + tol
+    return Placement(angle, (edge - lo)[None, :], side), side
 
 
 def placed_bounds(outlines, placement):
@@ -132,7 +145,9 @@ def square_layout(outlines, options, tol):
     """
     area = sum(0.5 * abs(np.dot(xy[:, 0], np.roll(xy[:, 1], -1))
                          - np.dot(xy[:, 1], np.roll(xy[:, 0], -1))) for xy in outlines)
-    widest = float(least_squares(outlines, options).max())
+    if len(outlines) == 1:
+        return (*single_layout(outlines[0], options, tol), 0)
+    widest = float(least_squares(outlines, options)[0].max())
     side = max(np.sqrt(area / DENSITY_GUESS), (widest + 2 * tol) / (1 - options.padding) * 1.01)
     best, solves = None, 0
     while solves < options.solves or (best is None and solves < options.solves + 8):
@@ -160,7 +175,7 @@ def tile_layouts(outlines, options, tol):
     """
     height, sep, over = _strip(1.0, options, tol)
     k = len(outlines)
-    big = np.flatnonzero(least_squares(outlines, options) > height - 2 * sep)
+    big = np.flatnonzero(least_squares(outlines, options)[0] > height - 2 * sep)
     if len(big):
         raise PackError(f"chart {big[0]} is larger than a {'UDIM tile' if options.udim else 'square'}"
                         f" at {options.texel_density:g} texels per unit: lower the texel density")
