@@ -44,6 +44,17 @@ def _areas(P):
     return 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
 
 
+def _hull_outline(tris):
+    """An outline holding every triangle of a chart whose boundary does not close into one ring
+    (a pinched or touching boundary, as other unwrappers make): the outer ring of the triangles'
+    union when it is one polygon, else the union's convex hull."""
+    import shapely
+    union = shapely.union_all(shapely.polygons(tris))
+    if union.geom_type == "Polygon":
+        return shapely.Polygon(union.exterior)
+    return shapely.convex_hull(union)
+
+
 def chart_outlines(V, F, corner_uv, face_island, n_charts, options, tol_px=TOL_PX):
     """Scale every chart to one density and find its outline.
 
@@ -95,9 +106,10 @@ def chart_outlines(V, F, corner_uv, face_island, n_charts, options, tol_px=TOL_P
     outlines, centre = [], np.zeros((n_charts, 2))
     for i in range(n_charts):  # per chart
         polys = shapely.get_parts(shapely.polygonize(segs[cuts[i]:cuts[i + 1]]))
-        if not len(polys):
-            raise PackError(f"chart {i} has no closed UV outline")
-        outer = shapely.Polygon(polys[np.argmax(shapely.area(polys))].exterior)
+        outer = shapely.Polygon(polys[np.argmax(shapely.area(polys))].exterior) if len(polys) \
+            else None
+        if outer is None or outer.area < 0.999 * A3[i]:
+            outer = _hull_outline(out[lab == i])
         ring = shapely.simplify(outer, tol, preserve_topology=True)
         xy = np.asarray(shapely.get_coordinates(shapely.orient_polygons(ring)))[:-1]
         lo, hi = xy.min(axis=0), xy.max(axis=0)
