@@ -80,3 +80,25 @@ def test_bd_pack_is_one_undo_step_in_the_uv_menu(addon):
     from bd_uv_addon.ui import menus
     assert any(draw is menus.draw_pack_entry and menu is bpy.types.IMAGE_MT_uvs
                for menu, draw in menus._menus())
+
+
+def test_unwrap_packs_with_the_atlas_packer_by_default(addon):
+    from conftest import add_suzanne_with_seams, triangle_distortion
+    from bd_uv_addon.bd_uv.packing import uv_islands
+    ob = add_suzanne_with_seams()
+    set_mode(ob, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=3.0) == {'FINISHED'}
+    set_mode(ob, 'OBJECT')
+    V, F, loops = triangles(ob)
+    uv = loop_uv_array(ob.data)[loops].astype(np.float64)
+    lab = uv_islands(F, uv)
+    assert lab.max() >= 2
+    D, det = triangle_distortion(V, F, uv)
+    assert (det > 0).all() and D.max() <= 3.0 * (1 + 1e-5)
+    assert uv.min() >= 2 / 1024 * (1 - 1e-4) and uv.max() <= 1 - 2 / 1024 * (1 - 1e-4)
+    pairs = overlapping_triangle_pairs(uv)
+    assert not np.any(lab[pairs[:, 0]] != lab[pairs[:, 1]])
+    assert least_gap(uv, lab, reach=8 / 1024) * 1024 >= 4 * (1 - 1e-4)
+    d = texel_densities(V, F, uv, lab)
+    assert np.allclose(d, np.median(d), rtol=1e-3)
