@@ -80,11 +80,13 @@ def pack_atlas(objects, polygons, options):
     return packed, cert, nl
 
 
-def pack_message(packed, cert, islands):
-    """The status-bar line of a packing."""
+def pack_message(packed, cert, islands, head=None):
+    """The status-bar line of a packing (``head``: its start, "Packed N islands: " by default)."""
     gap = "" if not np.isfinite(cert.least_gap_px) else f", least gap {cert.least_gap_px:.2f} px"
     tiles = ", ".join(map(str, cert.tiles))
-    return (f"Packed {islands} island{'s' if islands != 1 else ''}: coverage {cert.coverage:.3f} "
+    if head is None:
+        head = f"Packed {islands} island{'s' if islands != 1 else ''}: "
+    return (f"{head}coverage {cert.coverage:.3f} "
             f"at {cert.resolution} px{gap} (padding {cert.padding_px:g} px), tile"
             f"{'s' if len(cert.tiles) > 1 else ''} {tiles}, {packed.texel_density:.4g} texels per "
             f"unit, {packed.seconds:.2f} s")

@@ -194,7 +194,7 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
         except BDError as exc:
             session.pack(context, written, self.margin, 'AABB')
             return f"packed by Blender's packer: {exc}"
-        return pack_message(*done) if done is not None else ""
+        return pack_message(*done, head="packed: ") if done is not None else ""
 
     # -- shared --------------------------------------------------------------------------------
     def _prepare(self, context):
