@@ -205,11 +205,15 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
             self.report({'WARNING'}, "A fixed boundary needs a bound C and the Auto frames: turn "
                         "off Minimise and From Current UVs, or set Boundary to Free")
             return None
-        args, kwargs = session.unwrap_arguments(
-            batch, method=self.method, bound=self.bound, minimise=self.minimise,
-            raise_bound=self.raise_bound, bound_limit=self.bound_limit, frames=self.frames,
-            overlap='cut' if self.overlap == 'CUT' else 'fail', boundary=self.boundary,
-            stretch=self.stretch if self.limit_stretch else None)
+        try:
+            args, kwargs = session.unwrap_arguments(
+                batch, method=self.method, bound=self.bound, minimise=self.minimise,
+                raise_bound=self.raise_bound, bound_limit=self.bound_limit, frames=self.frames,
+                overlap='cut' if self.overlap == 'CUT' else 'fail', boundary=self.boundary,
+                stretch=self.stretch if self.limit_stretch else None)
+        except session.UserError as error:
+            self.report({'WARNING'}, str(error))
+            return None
         return batch, False, args, kwargs
 
     def _stretch_problem(self):

@@ -340,7 +340,8 @@ def main(argv):
     blends, rest = split_argv(argv)
     core, batch, arguments, mesh_data, session, stored = _import_addon()
     args = build_parser(arguments).parse_args(rest)
-    options = arguments.solver_kwargs(args)
+    # Blender packs (--pack): the core neither packs nor cuts what it stores.
+    options = batch.JobOptions(arguments.unwrap_options_of(args))
     if args.png and importlib.util.find_spec("matplotlib") is None:
         print("error: --png needs matplotlib, which this Python (Blender's own) does not have: "
               "install it into Blender's Python (<blender python> -m pip install matplotlib), "
