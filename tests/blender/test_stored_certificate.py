@@ -66,3 +66,41 @@ def test_failed_as_solved_tells_storage_from_the_solve():
     assert not by_storage.failed_as_solved                    # the solved UVs pass
     already, = stored.check_stored(V, F, broken, labels, islands, solved_uv=broken)
     assert not already.certified and already.failed_as_solved
+
+
+def test_the_operator_passes_unwrap_options_with_the_cores_defaults(addon, monkeypatch):
+    """uv.bd_unwrap's defaults are UnwrapOptions' (one place), and what reaches bd_uv.unwrap is
+    an UnwrapOptions made from the operator's settings; the UVs it writes are certified."""
+    from conftest import add_grid, bpy, loop_uv_array, set_mode, triangle_distortion
+    ops = load_submodule("operators.unwrap")
+    core = load_submodule("bd_uv")
+    defaults = core.UnwrapOptions()
+    props = ops.UV_OT_bd_unwrap.__annotations__
+    assert props["method"].keywords["default"] == defaults.method
+    assert props["bound"].keywords["default"] == defaults.bound
+    assert props["frames"].keywords["default"] == defaults.frames
+    assert props["raise_bound"].keywords["default"] == defaults.raise_bound
+    assert props["seams"].keywords["default"] == ('AUTO' if defaults.add_seams else 'MARKED')
+    seen = []
+
+    def recording(*args, **kwargs):
+        seen.append(kwargs["options"])
+        return core.unwrap(*args, **kwargs)
+    monkeypatch.setattr(ops, "SOLVE", recording)
+    obj = add_grid(5, 4)
+    set_mode(obj, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', seams='MARKED', bound=2.5, method='arap',
+                                raise_bound=False) == {'FINISHED'}
+    set_mode(obj, 'OBJECT')
+    (options,) = seen
+    assert isinstance(options, core.UnwrapOptions)
+    assert (options.bound, options.method, options.raise_bound, options.add_seams) == \
+        (2.5, "arap", False, False)
+    mesh = obj.data
+    mesh.calc_loop_triangles()
+    tris = np.array([t.vertices[:] for t in mesh.loop_triangles])
+    loops = np.array([t.loops[:] for t in mesh.loop_triangles])
+    V = np.array([v.co[:] for v in mesh.vertices])
+    D, det = triangle_distortion(V, tris, loop_uv_array(mesh)[loops])
+    assert (det > 0).all() and D.max() <= 2.5 * (1 + 1e-4)
