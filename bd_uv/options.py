@@ -32,7 +32,10 @@ class UnwrapOptions:
     add_seams : bool. False ("Marked"): cut along the given seams only, each island must be a
         disk; True ("Add Where Needed", ``seams="auto"``): keep them and add seams where an
         island cannot be certified as it is (``bd_uv.seams.unwrap_auto``: every chart a disk
-        within C and within ``stretch``; C is not raised there, a chart is cut further instead)
+        within C and within ``stretch``). There C is never raised (a chart that cannot be
+        certified is cut further), so ``raise_bound`` and ``bound_limit`` do not apply, and the
+        search decides ``overlap`` per round (a chart overlapping itself is split; only the
+        last round cuts)
     method : "lscm" | "arap" | "dirichlet" | "biharmonic" | "stretch-l1", the energy minimised in
         F_C (section 6.1; see ``bd_uv.unwrapping.unwrap``)
     bound : float >= 1 or "auto", C: every face's conformal distortion at most C (eq. 4.9);

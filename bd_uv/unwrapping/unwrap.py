@@ -19,7 +19,7 @@ from ..errors import (BDError, CancelledError, InvalidMeshError, IslandError, Op
                       SolverError)
 from ..mesh import check_arrays, islands as split_islands
 from ..metrics import certify, mean_distortion, singular_values
-from ..options import FRAMES, METHODS, unwrap_options  # noqa: F401 - FRAMES, METHODS re-exported
+from ..options import unwrap_options
 from . import strategies
 from . import stretch as stretch_search
 from .batched import conformal_islands
