@@ -112,7 +112,7 @@ class UnwrapOptions:
                 raise OptionError("add_seams", f"{auto} does not take pins or the current UVs: "
                                   "call bd_uv.seams.unwrap_auto for material groups, or mark "
                                   "seams")
-        if self.add_seams:  # the seam search's own S: any S >= 1 (charts within S and C)
+            # The seam search's own S: any S >= 1 (every chart within S and within C).
             if not (_number(self.seams_stretch) and 1.0 <= self.seams_stretch < math.inf):
                 raise OptionError("stretch", "stretch must be a finite number >= 1, got "
                                   f"{self.stretch!r}")
