@@ -77,3 +77,17 @@ class OverlapError(IslandError):
 class PackError(BDError):
     """The charts cannot be packed with the options given (bad options, a chart larger than a
     UDIM tile at the texel density asked for, or no layout that passes the layout certificate)."""
+
+
+class OptionError(BDError, ValueError):
+    """An unwrap option out of its range, or options that cannot go together
+    (``bd_uv.options.UnwrapOptions``). A ValueError too, as bad options always were.
+
+    Attributes
+    ----------
+    option : str, the option's name (the first one named when two cannot go together)
+    """
+
+    def __init__(self, option, message):
+        super().__init__(message)
+        self.option = option
