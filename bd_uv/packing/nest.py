@@ -177,8 +177,9 @@ def tile_layouts(outlines, options, tol):
     k = len(outlines)
     big = np.flatnonzero(least_squares(outlines, options)[0] > height - 2 * sep)
     if len(big):
-        raise PackError(f"chart {big[0]} is larger than a {'UDIM tile' if options.udim else 'square'}"
-                        f" at {options.texel_density:g} texels per unit: lower the texel density")
+        where = "UDIM tile" if options.udim else "square"
+        raise PackError(f"chart {big[0]} is larger than a {where} at {options.texel_density:g} "
+                        "texels per unit: lower the texel density")
     angle, shift, tile = np.zeros(k), np.zeros((k, 2)), np.full(k, -1, dtype=np.int64)
     todo, t, solves = np.arange(k), 0, 0
     while len(todo):

@@ -49,7 +49,8 @@ class PackOptions:
             raise PackError("UDIM tiles need a texel density: without one every chart is scaled "
                             "to fit tile 1001, so nothing would spill")
         if not (isinstance(self.solve_seconds, int) and self.solve_seconds >= 1):
-            raise PackError(f"solve_seconds must be a whole number >= 1, not {self.solve_seconds!r}")
+            raise PackError(f"solve_seconds must be a whole number >= 1, not "
+                            f"{self.solve_seconds!r}")
         if not (isinstance(self.solves, int) and self.solves >= 1):
             raise PackError(f"solves must be a whole number >= 1, not {self.solves!r}")
 
