@@ -58,7 +58,7 @@ def run_unwrap(args):
             print(f"error: --frames input-uv needs UVs in {args.input}", file=sys.stderr)
             return 2
         initial_uv = mesh.corner_uv
-    if options.add_seams:
+    if options.seams_mode == "auto":
         res = auto_seams(mesh, seams, options)
     else:
         res = unwrap(mesh.V, mesh.F, seams=seams, initial_uv=initial_uv, progress=ProgressBar(),
@@ -108,8 +108,8 @@ def core_cuts(islands):
 
 
 def auto_seams(mesh, seams, options):
-    """Seams added where needed (``options.add_seams``): ``seams`` (the file's UV seams, or
-    None) kept, more added; prints what was added."""
+    """Seams added where needed (``options.seams_mode == "auto"``): ``seams`` (the file's UV
+    seams, or None) kept, more added; prints what was added."""
     res, added, info = unwrap_auto(mesh.V, mesh.F, seams=seams, bound=options.bound,
                                    stretch=options.seams_stretch, method=options.method,
                                    frames=options.frames, cone=options.cone,
