@@ -2,7 +2,8 @@
 
 Any UV islands, bd-uv's or not, of the selected faces of every mesh in Edit Mode are packed
 together into one square (or UDIM tiles) by ``bd_uv.packing.pack_islands``: turns only, the
-padding in texels, one texel density. The UVs are written as float32 and the layout certificate
+padding in texels, one texel density; islands holding a pinned UV stay where they are and the
+others are packed beside them. The UVs are written as float32 and the layout certificate
 is measured on them as written; the status bar gets its figures. One undo step. ``pack_atlas``
 is also what ``uv.bd_unwrap`` packs with by default.
 """
@@ -33,11 +34,12 @@ def pack_atlas(objects, polygons, options):
 
     Returns
     -------
-    (Packed, LayoutCertificate, islands) or None when nothing was to pack. Raises
-    ``BDError`` (nothing written) when the islands cannot be packed: pinned UVs
-    among them, flipped faces, or a layout that fails its certificate.
+    (Packed, LayoutCertificate, islands) or None when nothing was to pack. Islands holding a
+    pinned UV stay where they are (they must lie in the unit square) and the others are packed
+    beside them. Raises ``BDError`` (nothing written) when the islands cannot be packed: flipped
+    faces, a pinned island outside the square, or a layout that fails its certificate.
     """
-    parts, Vs, Fs, uvs, labs, nv, nl = [], [], [], [], [], 0, 0
+    parts, Vs, Fs, uvs, labs, pins, nv, nl = [], [], [], [], [], [], 0, 0
     for ob, mask in zip(objects, polygons):
         if not mask.any():
             continue
@@ -45,14 +47,12 @@ def pack_atlas(objects, polygons, options):
         keep = mask[arrays.tri_poly]
         if arrays.corner_uv is None or not keep.any():
             continue
-        pinned = np.zeros(len(arrays.F) * 3, dtype=bool)
-        pinned[arrays.pin_corners] = True
-        if pinned.reshape(-1, 3)[keep].any():
-            raise PackError(
-                f"{ob.name}: islands with pinned UVs are selected; this packer does not pack "
-                "around pinned islands yet: unpin them, leave them unselected, or use Blender's "
-                "Pack Islands")
+        corner_pins = np.zeros(len(arrays.F) * 3, dtype=bool)
+        corner_pins[arrays.pin_corners] = True
+        pin_face = corner_pins.reshape(-1, 3)[keep].any(axis=1)
         lab = uv_islands(arrays.F[keep], arrays.corner_uv[keep])
+        has = lab >= 0
+        pins.append(np.bincount(lab[has], weights=pin_face[has], minlength=int(lab.max()) + 1) > 0)
         parts.append((ob, arrays, keep))
         Vs.append(arrays.V)
         Fs.append(arrays.F[keep] + nv)
@@ -63,7 +63,8 @@ def pack_atlas(objects, polygons, options):
     if not parts:
         return None
     V, F, uv, lab = map(np.concatenate, (Vs, Fs, uvs, labs))
-    packed = pack_islands(V, F, uv, lab, options)
+    pinned = np.concatenate(pins)
+    packed = pack_islands(V, F, uv, lab, options, pinned=pinned if pinned.any() else None)
     stored = packed.corner_uv.astype(np.float32)
     cert = layout_certificate(V, F, stored, lab, packed.tile, options.resolution,
                                             options.padding_px)

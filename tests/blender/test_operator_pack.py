@@ -60,15 +60,39 @@ def test_bd_pack_packs_blender_islands_as_certified(addon):
     assert np.allclose(J[good, 0, 0], J[good, 1, 1], atol=1e-3 * np.abs(J).max())
 
 
-def test_bd_pack_refuses_selected_pinned_islands_and_writes_nothing(addon):
+def test_bd_pack_keeps_pinned_islands_and_packs_the_rest_beside_them(addon):
+    from bd_uv_addon.bd_uv.packing import uv_islands
     ob = smart_suzanne()
     layer = ob.data.uv_layers.active
+    layer.pin_ensure()
+    layer.pin[0].value = True
+    V, F, loops = triangles(ob)
+    before = loop_uv_array(ob.data)[loops].astype(np.float64)
+    lab = uv_islands(F, before)
+    kept = lab == lab[np.flatnonzero((loops == 0).any(axis=1))[0]]   # the island of loop 0
+    set_mode(ob, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    assert bpy.ops.uv.bd_pack(padding=4.0) == {'FINISHED'}
+    set_mode(ob, 'OBJECT')
+    after = loop_uv_array(ob.data)[loops].astype(np.float64)
+    assert np.array_equal(after[kept], before[kept])                 # the pinned island stays
+    assert not np.array_equal(after[~kept], before[~kept])
+    pairs = overlapping_triangle_pairs(after)
+    assert not np.any(lab[pairs[:, 0]] != lab[pairs[:, 1]])
+    assert least_gap(after, lab, reach=8 / 1024) * 1024 >= 4 * (1 - 1e-4)
+
+
+def test_bd_pack_refuses_a_pinned_island_outside_the_square_and_writes_nothing(addon):
+    ob = smart_suzanne()
+    layer = ob.data.uv_layers.active
+    uv = loop_uv_array(ob.data) + 3.0                                # every island moved out
+    layer.uv.foreach_set("vector", uv.ravel())
     layer.pin_ensure()
     layer.pin[0].value = True
     before = loop_uv_array(ob.data).copy()
     set_mode(ob, 'EDIT')
     bpy.ops.mesh.select_all(action='SELECT')
-    with pytest.raises(RuntimeError, match="pinned UVs"):     # the ERROR report, CANCELLED
+    with pytest.raises(RuntimeError, match="outside the unit square"):  # ERROR, CANCELLED
         bpy.ops.uv.bd_pack()
     set_mode(ob, 'OBJECT')
     assert np.array_equal(loop_uv_array(ob.data), before)

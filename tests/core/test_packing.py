@@ -147,3 +147,36 @@ def test_uv_islands_follow_shared_uvs_not_shared_vertices():
     assert uv_islands(F, nan).tolist() == [-1, 0]
     V, F, uv, lab = chart_set("holes", 7, seed=1)
     assert np.array_equal(uv_islands(F, uv), lab)
+
+
+def test_pinned_charts_do_not_move_and_the_rest_pack_beside_them():
+    V, F, uv, lab = chart_set("boxes", 14, seed=7)
+    targets = {0: ((0.05, 0.05), 0.3), 1: ((0.6, 0.1), 0.25), 2: ((0.1, 0.7), 0.2)}
+    for c, (at, size) in targets.items():     # pinned charts put somewhere in the square
+        P = uv[lab == c]
+        lo, hi = P.reshape(-1, 2).min(0), P.reshape(-1, 2).max(0)
+        uv[lab == c] = (P - lo) * (size / (hi - lo).max()) + at
+    pinned = np.zeros(14, bool)
+    pinned[list(targets)] = True
+    options = PackOptions(resolution=512, padding_px=6, solves=1)
+    packed = pack_islands(V, F, uv, lab, options, pinned=pinned)
+    out = packed.corner_uv.astype(np.float32).astype(np.float64)
+    keep = pinned[lab]
+    assert np.array_equal(packed.corner_uv[keep], uv[keep])          # bit for bit
+    assert out.min() >= 0 and out.max() <= 1
+    pairs = overlapping_triangle_pairs(out)
+    assert not np.any(lab[pairs[:, 0]] != lab[pairs[:, 1]])
+    assert least_gap(out, lab, reach=12 / 512) * 512 >= 6 * (1 - 1e-4)
+    d = texel_densities(V, F, packed.corner_uv, lab)[~pinned]
+    assert np.allclose(d, d[0], rtol=1e-9)
+    J = chart_maps(uv[~keep], packed.corner_uv[~keep])
+    assert np.all(np.linalg.det(J) > 0)
+    cert = layout_certificate(V, F, out, lab, packed.tile, 512, 6)
+    assert cert.certified, cert.reason
+
+
+def test_pinned_chart_outside_the_square_is_a_clear_error():
+    V, F, uv, lab = chart_set("boxes", 4, seed=8)
+    pinned = np.array([True, False, False, False])
+    with pytest.raises(PackError, match="outside the unit square"):
+        pack_islands(V, F, uv + 10.0, lab, PackOptions(), pinned=pinned)
