@@ -22,7 +22,9 @@ class PackOptions:
         (Blender's numbering: tile 1001 + u + 10 v covers [u, u+1] x [v, v+1])
     solve_seconds : int, time given to each nesting solve (spyrrow counts in whole seconds)
     solves : int, nesting solves spent on finding the smallest square (at least 1)
-    seed : int, seed of the nesting heuristic (same seed, same charts: same layout)
+    seed : int, seed of the nesting heuristic. Its search is bounded in time, not in steps, so
+        two runs on the same charts can give different layouts (each one certified); measured:
+        suzanne's 27 charts, two runs, different placements
     """
     resolution: int = 1024
     padding_px: float = 4.0
