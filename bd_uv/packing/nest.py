@@ -134,9 +134,9 @@ def square_layout(outlines, options, tol):
     """The smallest square found that holds every outline with the padding.
 
     The padding scales with the square (it is in texels). Each solve packs a strip of height S
-    with the separation of a square ``HEADROOM`` S, so its layout (S tall, its width long) is a
-    square layout of side max(S, width) whenever that is at most ``HEADROOM`` S; the next height
-    is the geometric mean of the last height and width. With ``options.solves`` spent and no
+    with the separation of a square ``HEADROOM`` S, so its layout is a square layout of side the
+    placed outlines' larger extent (plus the edges) whenever that is at most ``HEADROOM`` S; the
+    next height is the geometric mean of the last height and the strip's width. With ``options.solves`` spent and no
     square found, heights keep growing until one is.
 
     Returns
@@ -154,10 +154,16 @@ def square_layout(outlines, options, tol):
         height, sep, over = _strip(side, options, tol, HEADROOM)
         pl = nest(outlines, height, sep, options)
         solves += 1
-        length = pl.width - 2 * over          # the layout's extent along the strip
-        square = max(side, length)
+        length = pl.width - 2 * over          # the strip's extent along it
+        # The square fits the placed outlines' own box (often smaller than the strip): its side
+        # S' leaves half the padding at S' plus tol to each edge; the separation, set for
+        # HEADROOM S, keeps the padding for any S' up to that.
+        lo, hi = placed_bounds(outlines, pl)
+        lo, hi = lo.min(axis=0), hi.max(axis=0)
+        square = (float((hi - lo).max()) + 2 * tol) / (1 - options.padding)
         if square <= HEADROOM * side and (best is None or square < best[1]):
-            best = (Placement(pl.angle, pl.shift - over, pl.width), square)
+            edge = 0.5 * options.padding * square + tol
+            best = (Placement(pl.angle, pl.shift - lo + edge, pl.width), square)
         side = float(np.sqrt(side * length)) * (0.99 if square <= HEADROOM * side else 1.0)
     if best is None:
         raise PackError("the nesting found no square layout for these charts")
