@@ -14,6 +14,7 @@ from .errors import (BDError, CancelledError, ClosedIslandError, DegenerateFaces
                      NonFiniteError, NonManifoldError, OrientationError, SolverError,
                      TopologyError)
 from .improve import ImproveResult, equilateral_distortion, improve
+from .live import LiveFrame, LiveSession, SessionClosedError
 from .metrics import (certify, conformal_distortion, face_jacobians, flipped_faces,
                       mean_distortion, signed_uv_areas, singular_values)
 from .mesh import Island, islands
