@@ -216,52 +216,54 @@ class LiveSession:
 
     def _solve(self, T):
         prev, cert, pins = self._U, self.cert, self.pins
-        # 1. The similarity of the pins: certified with the last frame.
+        # 1. The similarity of the pins applied to the last frame (certified with it).
         s, t = pin_similarity(prev[pins], T)
-        base, base_check = prev, None
+        moved = None
         if abs(s) > 0:
             moved = apply_similarity(prev, s, t)
             size = float(np.ptp(moved, axis=0).max())
             if np.all(np.hypot(*(moved[pins] - T).T) <= 1e-12 * size):
                 moved[pins] = T
+        start = (prev if moved is None else moved).copy()
+        start[pins] = T
+        # 2. The energy's steps, then, unless that is certified already, projection onto the
+        # bounded-distortion set; when the last frame fell short of its pins, the projection goes
+        # on from where it stopped.
+        ps = self._set
+        if self._work is not None and self._work_pins is ps:
+            U, its = self._work, 0
+            U[pins] = T
+            check = None
+        else:
+            U = ps.steps.iterate(self.method, start, self.energy_steps, self._cancel)
+            its = 1 if self.method == "dirichlet" else self.energy_steps
+            check = cert.check(U, prev)
+        self._work = None
+        if check is None or not check.certified:
+            r = ps.projection.project(U[:, 0] + 1j * U[:, 1], self.bound,
+                                      max_iter=self.max_iterations, stall=10,
+                                      cancel=self._cancel, last=True)
+            its += r.iterations
+            U = np.column_stack([r.u.real, r.u.imag])
+            U[pins] = T
+            check = cert.check(U, prev)
+        if check.certified:
+            return U, check, its
+        # 3. The nearest certified map on the segment from step 1's map (or the last frame).
+        self._work, self._work_pins = U, ps
+        base, base_check = prev, None
+        if moved is not None:
             c = cert.check(moved)
             if c.certified:
                 base, base_check = moved, c
         if base_check is None:
             base_check = cert.check(prev, prev)
-        if np.array_equal(base[pins], T):
-            start = base
-        else:
-            start = base.copy()
-            start[pins] = T
-        # 2. The energy's steps, then projection onto the bounded-distortion set; when the last
-        # frame fell short of its pins, the projection goes on from where it stopped.
-        ps = self._set
-        if self._work is not None and self._work_pins is ps:
-            U, its = self._work.copy(), 0
-            U[pins] = T
-        else:
-            U = ps.steps.iterate(self.method, start, self.energy_steps, self._cancel)
-            its = 1 if self.method == "dirichlet" else self.energy_steps
-        self._work = None
-        r = ps.projection.project(U[:, 0] + 1j * U[:, 1], self.bound,
-                                  max_iter=self.max_iterations, stall=10, cancel=self._cancel,
-                                  last=True)
-        its += r.iterations
-        cand = np.column_stack([r.u.real, r.u.imag])
-        cand[pins] = T
-        # 3. Certified as it is, or the nearest certified map on the segment from the base.
-        check = cert.check(cand, base)
-        if check.certified:
-            return cand, check, its
-        self._work, self._work_pins = cand, ps
-        lo, best, best_check = 0.0, base, base_check
-        hi = 1.0
+        lo, hi, best, best_check = 0.0, 1.0, base, base_check
         for _ in range(BISECTIONS):
             if self._cancel.is_set():
                 raise CancelledError("live frame cancelled")
             mid = 0.5 * (lo + hi)
-            trial = base + mid * (cand - base)
+            trial = base + mid * (U - base)
             c = cert.check(trial, base)
             if c.certified:
                 lo, best, best_check = mid, trial, c
