@@ -3,19 +3,20 @@
 
 Set up once per session: the rest shape, its per-face gradient operators and boundary loops (the
 frame certificate, ``certificate``), and per pin set one factorisation of the global matrix shared
-by the energy's local/global steps (``steps``) and the projection onto the bounded-distortion set
-(``solvers.projection``). A frame, for the pins' new targets:
+by the energy's local/global steps and the projection iterations (``steps``). A frame, for the
+pins' new targets:
 
 1. the last certified frame moved by the similarity that takes its pins nearest to the targets
-   (exact for two pins): certified as it is, since distortion and overlap are invariant under a
-   similarity; its pins are put on their targets exactly when the similarity meets them;
-2. from it, with the pins on their targets: a few local/global steps of the energy, then
-   projection iterations until every face is within C (projecting onto 0.9 C);
-3. the result is certified from its own coordinates; when it fails (or the iterations ran out),
-   the frame is the certified map nearest to it found on the segment from step 1's map (bisection):
-   the pins as close as it got, ``pin_error`` saying how close. The next call starts from that
-   frame, so a target held still keeps converging; no frame is ever uncertified, and none jumps
-   back to the rest shape.
+   (exact for two pins), its pins then put on their targets;
+2. from it, a few local/global steps of the energy; when that map is not certified, projection
+   iterations until every face is within C (projecting onto 0.9 C);
+3. the result is certified from its own coordinates. When it fails (or the iterations ran out),
+   the frame is the certified map nearest to it found on the segment from step 1's map (which
+   is certified whenever the last frame was: distortion and overlap do not change under a
+   similarity; it is checked all the same), by bisection: the pins as close as it got,
+   ``pin_error`` saying how close. The next call goes on projecting from where this one stopped,
+   so a target held still keeps converging; no frame is ever uncertified, and none jumps back to
+   the rest shape.
 """
 import threading
 import time
@@ -27,10 +28,11 @@ import scipy.sparse as sp
 
 from ..errors import (BDError, CancelledError, DegenerateFacesError,
                       InvalidMeshError, OverlapError)
-from ..solvers.projection import ProjectionSolver
+from ..solvers.factor import factor_spd
 from .certificate import FrameCertificate
 from .rest import conformal_rest
-from .steps import LIVE_METHODS, EnergySteps, apply_similarity, pin_similarity
+from .steps import (LIVE_METHODS, EnergySteps, apply_similarity, pin_similarity,
+                    project_frame)
 
 __all__ = ["LiveFrame", "LiveSession", "SessionClosedError"]
 
@@ -70,13 +72,14 @@ class LiveFrame:
 
 
 class _PinSet:
-    """What one pin set needs: the projection solver and the energy's steps, one factorisation."""
+    """What one pin set needs: the energy's and the projection's steps, one factorisation."""
 
-    def __init__(self, ops, n, F, pins, backend):
+    def __init__(self, G, area, pins, backend):
         self.pins = pins                                  # sorted, distinct
-        self.projection = ProjectionSolver(ops, n, pins, F, backend=backend)
-        self.steps = EnergySteps(self.projection.G, np.asarray(ops.area), pins,
-                                 self.projection.factorize())
+        self.steps = EnergySteps(G, area, pins, None)
+        t0 = time.perf_counter()
+        self.steps.solve, self.backend = factor_spd(self.steps.L_ff, backend)
+        self.factor_seconds = time.perf_counter() - t0
 
 
 class LiveSession:
@@ -180,7 +183,7 @@ class LiveSession:
         pins = pins.astype(np.int64)
         key = tuple(np.sort(pins))
         if key not in self._pin_sets:
-            self._pin_sets[key] = _PinSet(self.cert.ops, self.n, self.F, np.array(key),
+            self._pin_sets[key] = _PinSet(self.cert.G, self.cert.area, np.array(key),
                                           self.backend)
         self._set = self._pin_sets[key]
         self.pins = pins
@@ -240,11 +243,9 @@ class LiveSession:
             check = cert.check(U, prev)
         self._work = None
         if check is None or not check.certified:
-            r = ps.projection.project(U[:, 0] + 1j * U[:, 1], self.bound,
-                                      max_iter=self.max_iterations, stall=10,
-                                      cancel=self._cancel, last=True)
-            its += r.iterations
-            U = np.column_stack([r.u.real, r.u.imag])
+            U, _, n_it = project_frame(ps.steps, U, self.bound, self.max_iterations,
+                                       cancel=self._cancel)
+            its += n_it
             U[pins] = T
             check = cert.check(U, prev)
         if check.certified:

@@ -1,9 +1,12 @@
 """The steps of a live frame: the energy's local/global iterations with the pins held, and the
 similarity of the pins that is always feasible.
 
-The energies share one global matrix with the projection iterations (``solvers.projection``):
-``L = sum_j A_j G_j^T G_j``, the area-weighted Frobenius distance of each face's Jacobian to a
-target, so one factorisation per pin set serves both. Per method the local step's target is
+The energies share one global matrix with the projection iterations (Kovalsky, Galun and Lipman
+2015): ``L = sum_j A_j G_j^T G_j``, the area-weighted Frobenius distance of each face's Jacobian to
+a target, so one factorisation per pin set serves both. The projection here is that of
+``solvers.projection`` (the tangent step included) for one component with its pins held, lean
+enough for a frame: on a 10k-face disk the general solver's per-call set-up alone took about
+10 ms, a frame's budget being 33. Per method the local step's target is
 (Lipman 2012, section 6.1):
 
 - "arap": the rotation nearest each face's Jacobian, ``alpha / |alpha|`` (BD-ARAP);
@@ -15,8 +18,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import CancelledError
+from ..solvers.local_projection import project_singular_values
 
-__all__ = ["EnergySteps", "pin_similarity", "LIVE_METHODS"]
+__all__ = ["EnergySteps", "pin_similarity", "apply_similarity", "project_frame", "LIVE_METHODS"]
 
 LIVE_METHODS = ("arap", "lscm", "dirichlet")
 
@@ -29,11 +33,13 @@ class EnergySteps:
     G : (2k, n) csr, rows d/dx then d/dy of each face against the rest shape
     area : (k,) float64, rest areas
     pins : (p,) int64, distinct vertices held
-    solve : callable, back-solve with the global matrix over the free vertices (``factor_spd``)
+    solve : callable, back-solve with ``L_ff`` (``factor_spd``); may be set after construction
 
     Attributes
     ----------
     free : (n - p,) int64
+    L_ff : (n - p, n - p) csc, the global matrix over the free vertices, symmetric positive
+        definite; L_fF its columns of the pins
     """
 
     def __init__(self, G, area, pins, solve):
@@ -45,7 +51,9 @@ class EnergySteps:
         self.free = np.setdiff1d(np.arange(n), self.pins)
         W = sp.diags_array(self.area2[:, 0])
         L = (self.GT @ W @ self.G).tocsr()
-        self.L_fF = sp.csr_array(L[self.free][:, self.pins])
+        Lf = L[self.free]
+        self.L_ff = sp.csc_array(Lf[:, self.free])
+        self.L_fF = sp.csr_array(Lf[:, self.pins])
         self.solve = solve
 
     def targets(self, method, U):
@@ -98,3 +106,81 @@ def apply_similarity(U, s, t):
     """``s z + t`` applied to ``U`` (n,2); returns (n,2)."""
     z = s * (U[:, 0] + 1j * U[:, 1]) + t
     return np.column_stack([z.real, z.imag])
+
+
+def project_frame(steps, U, C, max_iter, margin=0.9, floor=1e-3, cancel=None):
+    """Projection iterations from ``U`` (n,2) onto the maps with every face within C, pins held
+    at ``U[pins]`` (Kovalsky et al. 2015: the local step is ``local_projection``, exact per face;
+    the global step one back-solve with the shared factorisation, accelerated by their tangent
+    step).
+
+    Parameters
+    ----------
+    steps : EnergySteps of the pin set
+    U : (n,2) float64, the start (may flip)
+    C : float > 1; the projection aims at ``max(1 + 1e-3, margin C)``
+    max_iter : int, global steps at most
+    floor : float, lower bound on sigma_2 relative to the map's scale (keeps faces from collapse)
+    cancel : object with ``is_set()``
+
+    Returns
+    -------
+    U : (n,2) float64, the first iterate with every face within C and none flipped, or the last
+    within : bool, iterations : int
+    """
+    U = np.array(U, dtype=np.float64, copy=True)
+    k, G = steps.k, steps.G
+    area = steps.area2[:k, 0]
+    kappa = max(1.0 + 1e-3, margin * C)
+    rhs_fixed = steps.L_fF @ U[steps.pins]
+    lo, prev_err = None, np.inf
+    for it in range(max_iter + 1):
+        R = G @ U
+        ux, uy, vx, vy = R[:k, 0], R[k:, 0], R[:k, 1], R[k:, 1]
+        are, aim, bre, bim = ux + vy, vx - uy, ux - vy, vx + uy       # 2 alpha, 2 beta
+        na, nb = 0.5 * np.hypot(are, aim), 0.5 * np.hypot(bre, bim)
+        s1, s2 = na + nb, na - nb
+        if np.all(s1 <= C * s2) and np.all(s2 > 0):
+            return U, True, it
+        if it == max_iter:
+            break
+        if cancel is not None and cancel.is_set():
+            raise CancelledError("live frame cancelled")
+        if lo is None:
+            scale = np.sqrt(max(float(np.sum(area * np.abs(s1 * s2))) / float(area.sum()),
+                                1e-300))
+            lo = np.full(k, floor * scale)
+        t1, t2, moved = project_singular_values(s1, s2, kappa, lo, np.inf)
+        m = np.flatnonzero(moved)
+        # The nearest allowed Jacobian keeps the phases of alpha and beta (a face with alpha = 0
+        # gets a real alpha, likewise beta).
+        with np.errstate(invalid="ignore", divide="ignore"):
+            fa = np.where(na[m] > 0, 0.25 * (t1[m] + t2[m]) / na[m], 0.0)
+            fb = np.where(nb[m] > 0, 0.25 * (t1[m] - t2[m]) / nb[m], 0.0)
+        pre = np.where(na[m] > 0, fa * are[m], 0.5 * (t1[m] + t2[m]))
+        pim = fa * aim[m]
+        qre = np.where(nb[m] > 0, fb * bre[m], 0.5 * (t1[m] - t2[m]))
+        qim = fb * bim[m]
+        N = np.zeros_like(R)                              # normal J - P on the moved faces
+        N[m, 0], N[k + m, 0] = ux[m] - (pre + qre), uy[m] - (qim - pim)
+        N[m, 1], N[k + m, 1] = vx[m] - (pim + qim), vy[m] - (pre - qre)
+        P = R - N
+        err = float(np.sum(steps.area2 * N * N))
+        # Global step, with the tangent step of Kovalsky et al. (the lifted map on the hyperplane
+        # through P orthogonal to N) unless the distance to the set grew: 4 columns, one solve.
+        GB = steps.GT @ np.concatenate([steps.area2 * P, N], axis=1)
+        B = GB[steps.free]
+        B[:, :2] -= rhs_fixed
+        X = steps.solve(B)
+        Xc = X[:, :2]
+        if err <= prev_err * (1 + 1e-12):
+            UF = U[steps.pins]
+            r = float(np.sum(N * P)) - float(np.sum(GB[steps.pins, 2:] * UF))
+            cxc = float(np.sum(B[:, 2:] * Xc))
+            cxn = float(np.sum(B[:, 2:] * X[:, 2:]))
+            lam = (cxc - r) / cxn if cxn != 0 else 0.0
+            if np.isfinite(lam):
+                Xc = Xc - lam * X[:, 2:]
+        prev_err = err
+        U[steps.free] = Xc
+    return U, False, max_iter

@@ -202,7 +202,7 @@ class ProjectionSolver:
     # -- the iterations -------------------------------------------------------------------------
     def project(self, u0, C, fixed_values=None, *, margin=0.9, smin=None, smax=None, scale=None,
                 stretch_margin=0.01, floor=1e-3, max_iter=200, stall=30, accelerate=True,
-                shrink=0.5, cancel=None, last=False):
+                shrink=0.5, cancel=None):
         """Iterate local projections and global back-solves until the map is within the bounds.
 
         Parameters
@@ -226,8 +226,6 @@ class ProjectionSolver:
             faces, they continue alone on a smaller system (factorised anew; the iterates are
             the same but for a restart of the acceleration)
         cancel : object with ``is_set()``, checked once per iteration -> ``CancelledError``
-        last : bool, an unconverged component returns its last iterate (to go on from it later,
-            as a live session does) instead of its least distorted one
 
         Returns
         -------
@@ -380,8 +378,7 @@ class ProjectionSolver:
             U[frozen_v] = U_saved[frozen_v]
             it += 1
         U[frozen_v] = U_saved[frozen_v]
-        if not last:
-            U[~done[self.component]] = U_best[~done[self.component]]
+        U[~done[self.component]] = U_best[~done[self.component]]
         u = U[:, 0] + 1j * U[:, 1]
         J = self.jacobians(U)
         a, b = self._alpha_beta(J)
