@@ -11,7 +11,8 @@ from .colors import distortion_colors
 from .deform import DeformResult, deform
 from .errors import (BDError, CancelledError, ClosedIslandError, DegenerateFacesError,
                      DuplicateFacesError, InfeasibleError, InvalidMeshError, IslandError,
-                     NonFiniteError, NonManifoldError, OrientationError, SolverError,
+                     NonFiniteError, NonManifoldError, OrientationError, OverlapError,
+                     SolverError,
                      TopologyError)
 from .improve import ImproveResult, equilateral_distortion, improve
 from .live import LiveFrame, LiveSession, SessionClosedError
