@@ -5,7 +5,8 @@ to one axis, Ctrl snaps it to 1/64), the other pinned UVs stay, and the island's
 with no flipped face, no overlap and every face's conformal distortion against the layout the drag
 started from within C (``bd_uv.LiveSession``). The solve runs off the UI thread
 (``live_edit.LiveWorker``): a target superseded while a frame is solved is dropped, and the UVs
-shown are always the newest certified frame. The header shows C, the max distortion and the pin
+shown are always the newest certified frame, the island drawn over them coloured by distortion
+(``live_overlay``). The header shows C, the max distortion and the pin
 error. Enter or left click confirms (one undo step, after the stored UVs pass the certificate
 again), Esc or right click puts every UV back bit for bit.
 
@@ -22,13 +23,14 @@ from bpy.props import EnumProperty, FloatProperty, FloatVectorProperty
 from .. import bd_uv
 from .edit_uvs import read_edit_uvs, write_loop_uvs
 from .live_edit import LiveInputError, LiveIsland, LiveWorker, grab_offset
+from .live_overlay import DistortionOverlay
 
 _METHODS = (
     ('arap', "BD-ARAP", "As-rigid-as-possible: keeps lengths and areas of the layout"),
     ('lscm', "BD-LSCM (ASAP)", "As-similar-as-possible: keeps angles"),
     ('dirichlet', "BD-Dirichlet", "Smoothest map (harmonic energy) within C"),
 )
-CONFIRM_WAIT = 10.0     # seconds to wait, on confirm, for the frame of the last target
+CONFIRM_WAIT = 2.0      # seconds to wait, on confirm, for the frame of the last target
 HOLD_FRAMES = 30        # execute(): frames at the target at most, until the pins meet it
 
 
@@ -64,6 +66,7 @@ class LiveDrag:
         self.axis, self.snap = None, False
         self.offset = np.zeros(2)
         self.seq = -1
+        self.overlay = None             # a DistortionOverlay when drawn in a window
 
     # -- event -> target -> frame -> UVs --------------------------------------------------------
     def move(self, mouse_uv):
@@ -89,7 +92,10 @@ class LiveDrag:
 
     def show(self, frame):
         """Write a certified frame's UVs to the island's loops."""
-        write_loop_uvs(self.obj, self.data, self.island.faces, self.island.corner_uvs(frame))
+        corner = self.island.corner_uvs(frame)
+        write_loop_uvs(self.obj, self.data, self.island.faces, corner)
+        if self.overlay is not None:
+            self.overlay.update(corner, frame.distortion, self.bound)
         self.frame = frame
 
     def header(self):
@@ -132,6 +138,12 @@ class LiveDrag:
             self.worker.stop()
             self.worker = None
         self.restore()
+        self.end_overlay()
+
+    def end_overlay(self):
+        if self.overlay is not None:
+            self.overlay.remove()
+            self.overlay = None
 
     def restore(self):
         write_loop_uvs(self.obj, self.data, self.island.faces, self.original)
@@ -227,6 +239,11 @@ class UV_OT_bd_live(bpy.types.Operator):
             self.report({'WARNING'}, f"Bounded Distortion Live: {error}")
             return {'CANCELLED'}
         self._drag.start_mouse = self._uv(context, event)
+        try:
+            self._drag.overlay = DistortionOverlay()
+        except (ImportError, RuntimeError, SystemError, ValueError):
+            self._drag.overlay = None                   # no GPU context: the UVs alone
+        self._drag.show(self._drag.frame)
         wm = context.window_manager
         self._timer = wm.event_timer_add(0.01, window=context.window)
         wm.modal_handler_add(self)
@@ -254,6 +271,7 @@ class UV_OT_bd_live(bpy.types.Operator):
         return {'RUNNING_MODAL'}
 
     def _end(self, context, result, level, message):
+        self._drag.end_overlay()
         context.window_manager.event_timer_remove(self._timer)
         context.area.header_text_set(None)
         self.report(level, message)

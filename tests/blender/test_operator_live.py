@@ -127,3 +127,13 @@ def test_execute_drags_to_the_offset_and_refuses_without_a_selected_pin(addon):
     now, _ = _stored(obj)
     assert bpy.ops.uv.bd_live('EXEC_DEFAULT', offset=(0.2, 0.1)) == {'CANCELLED'}
     assert _stored(obj)[0].tobytes() == now.tobytes()
+
+
+def test_the_overlay_colours_each_triangle_by_its_distortion(addon):
+    overlay = load_submodule("operators.live_overlay")
+    corner = np.array([[[0, 0], [1, 0], [0, 1]], [[1, 0], [1, 1], [0, 1]]], float)
+    pos, col = overlay.overlay_arrays(corner, np.array([1.0, 4.0]), 4.0)
+    assert pos.shape == (6, 2) and np.array_equal(pos, corner.reshape(-1, 2).astype(np.float32))
+    assert col.shape == (6, 4) and np.all(col[:, 3] == overlay.ALPHA)
+    assert np.all(col[0] == col[1]) and np.all(col[3] == col[5])
+    assert not np.allclose(col[0, :3], col[3, :3])       # distortion 1 and C differ in colour
