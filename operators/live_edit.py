@@ -106,7 +106,7 @@ class LiveIsland:
         self.start = rest[self.pins].copy()
         self.rest_corner_uv = corner_uv[self.faces].copy()
         self.session = LiveSession(rest, self.tris, self.pins, bound=bound, method=method,
-                                   rest_uv=rest)
+                                   rest_uv=rest, storage=np.float32)   # as Blender stores UVs
         self.V = np.asarray(V, dtype=np.float64)
 
     def targets(self, offset):

@@ -97,6 +97,9 @@ class LiveSession:
     energy_steps : int, local/global steps of the energy per frame
     max_iterations : int, projection iterations per frame at most
     backend : factorisation backend (``solvers.factor.factor_spd``)
+    storage : None or a float dtype (``numpy.float32`` for Blender's UVs): every frame is rounded
+        to it before it is certified, so the frame is certified as it will be stored; targets
+        are rounded likewise (``pin_error`` is measured to the rounded targets)
 
     Attributes
     ----------
@@ -112,7 +115,7 @@ class LiveSession:
     """
 
     def __init__(self, V, F, pins, bound=5.0, method="arap", rest_uv=None, *, energy_steps=3,
-                 max_iterations=40, backend="auto"):
+                 max_iterations=40, backend="auto", storage=None):
         t0 = time.perf_counter()
         if method not in LIVE_METHODS:
             raise ValueError(f"method must be one of {LIVE_METHODS} for a live session, got "
@@ -151,18 +154,20 @@ class LiveSession:
         self.F, self.rest = F, rest
         self.energy_steps, self.max_iterations = int(energy_steps), int(max_iterations)
         self.backend = backend
+        self.storage = None if storage is None else np.dtype(storage)
         self.cert = FrameCertificate(rest, F, self.bound)
-        first = self.cert.check(rest)
+        start = self._stored(rest)
+        first = self.cert.check(start)
         if not first.certified:
             raise OverlapError("the rest shape overlaps itself: a live session starts from an "
                                "overlap-free island (cut it or mark seams)")
-        self._U = rest.copy()
+        self._U = start.copy()
         self._cancel = threading.Event()
         self._closed = False
         self._pin_sets = {}
         self._work = self._work_pins = None     # the uncertified iterate a short frame stopped at
         self.set_pins(pins)
-        self.frame = LiveFrame(rest.copy(), True, first.max_distortion, 0, 0, 0.0, 0.0, 0,
+        self.frame = LiveFrame(start.copy(), True, first.max_distortion, 0, 0, 0.0, 0.0, 0,
                                first.distortion)
         self.setup_seconds = time.perf_counter() - t0
 
@@ -206,6 +211,7 @@ class LiveSession:
         T = np.asarray(targets, dtype=np.float64)
         if T.shape != (len(self.pins), 2) or not np.all(np.isfinite(T)):
             raise ValueError(f"targets must be ({len(self.pins)}, 2) finite: one per pin")
+        T = self._stored(T)
         try:
             U, check, its = self._solve(T)
         except CancelledError:
@@ -217,6 +223,12 @@ class LiveSession:
                                time.perf_counter() - t0, its, check.distortion)
         return self.frame
 
+    def _stored(self, X):
+        """``X`` rounded to the storage dtype (as float64), or ``X`` itself."""
+        if self.storage is None:
+            return X
+        return X.astype(self.storage).astype(np.float64)
+
     def _solve(self, T):
         prev, cert, pins = self._U, self.cert, self.pins
         # 1. The similarity of the pins applied to the last frame (certified with it).
@@ -227,6 +239,7 @@ class LiveSession:
             size = float(np.ptp(moved, axis=0).max())
             if np.all(np.hypot(*(moved[pins] - T).T) <= 1e-12 * size):
                 moved[pins] = T
+            moved = self._stored(moved)
         start = (prev if moved is None else moved).copy()
         start[pins] = T
         # 2. The energy's steps, then, unless that is certified already, projection onto the
@@ -240,6 +253,8 @@ class LiveSession:
         else:
             U = ps.steps.iterate(self.method, start, self.energy_steps, self._cancel)
             its = 1 if self.method == "dirichlet" else self.energy_steps
+            U[pins] = T
+            U = self._stored(U)
             check = cert.check(U, prev)
         self._work = None
         if check is None or not check.certified:
@@ -247,6 +262,7 @@ class LiveSession:
                                        cancel=self._cancel)
             its += n_it
             U[pins] = T
+            U = self._stored(U)
             check = cert.check(U, prev)
         if check.certified:
             return U, check, its
@@ -264,7 +280,7 @@ class LiveSession:
             if self._cancel.is_set():
                 raise CancelledError("live frame cancelled")
             mid = 0.5 * (lo + hi)
-            trial = base + mid * (U - base)
+            trial = self._stored(base + mid * (U - base))
             c = cert.check(trial, base)
             if c.certified:
                 lo, best, best_check = mid, trial, c

@@ -166,3 +166,15 @@ def test_cancel_stops_the_next_update_and_keeps_the_last_frame():
 
 def test_the_live_core_does_not_import_blender():
     assert "bpy" not in sys.modules
+
+
+def test_frames_rounded_to_float32_are_certified_as_stored():
+    V, F = _disk_with_hole()
+    pins = [_near(V, [-0.7, 0.1]), _near(V, [0.7, -0.1])]
+    s = LiveSession(V, F, pins, bound=BOUND, storage=np.float32)
+    for T in _drag_targets(V[pins], steps=6):
+        fr = s.update(T)
+        assert np.array_equal(fr.uv.astype(np.float32).astype(np.float64), fr.uv)
+        _independent_check(V, fr, F, BOUND)
+        assert np.array_equal(fr.uv[pins], T.astype(np.float32).astype(np.float64))
+        assert fr.pin_error == 0
