@@ -11,9 +11,8 @@ from .colors import distortion_colors
 from .deform import DeformResult, deform
 from .errors import (BDError, CancelledError, ClosedIslandError, DegenerateFacesError,
                      DuplicateFacesError, InfeasibleError, InvalidMeshError, IslandError,
-                     NonFiniteError, NonManifoldError, OrientationError, OverlapError,
-                     SolverError,
-                     TopologyError)
+                     NonFiniteError, NonManifoldError, OptionError, OrientationError,
+                     OverlapError, SolverError, TopologyError)
 from .improve import ImproveResult, equilateral_distortion, improve
 from .live import LiveFrame, LiveSession, SessionClosedError
 from .metrics import (certify, conformal_distortion, face_jacobians, flipped_faces,
@@ -21,6 +20,8 @@ from .metrics import (certify, conformal_distortion, face_jacobians, flipped_fac
 from .mesh import Island, islands
 from .overlap import island_overlaps, layout_overlaps
 from .meshio import Mesh, load_mesh, write_obj
-from .unwrapping import IslandResult, UnwrapResult, unwrap
+from .options import UnwrapOptions
+from .api import unwrap
+from .unwrapping import IslandResult, UnwrapResult
 
 __version__ = "0.1.0"

@@ -26,8 +26,8 @@ import numpy as np
 from scipy.sparse.csgraph import connected_components
 import scipy.sparse as sp
 
-from ..errors import (BDError, CancelledError, DegenerateFacesError,
-                      InvalidMeshError, OverlapError)
+from ..errors import (BDError, CancelledError, DegenerateFacesError, InvalidMeshError,
+                      OptionError, OverlapError)
 from ..solvers.factor import factor_spd
 from .certificate import FrameCertificate
 from .rest import conformal_rest
@@ -111,17 +111,17 @@ class LiveSession:
     ------
     InvalidMeshError (shapes, indices, not one connected island), DegenerateFacesError (rest
     faces flipped or of zero area), OverlapError (a rest shape that overlaps itself),
-    InfeasibleError (no flip-free conformal rest shape), ValueError (options)
+    InfeasibleError (no flip-free conformal rest shape), OptionError (options; a ValueError)
     """
 
     def __init__(self, V, F, pins, bound=5.0, method="arap", rest_uv=None, *, energy_steps=3,
                  max_iterations=40, backend="auto", storage=None):
         t0 = time.perf_counter()
         if method not in LIVE_METHODS:
-            raise ValueError(f"method must be one of {LIVE_METHODS} for a live session, got "
+            raise OptionError("method", f"method must be one of {LIVE_METHODS} for a live session, got "
                              f"{method!r}")
         if not (isinstance(bound, (int, float)) and 1.0 < bound < np.inf):
-            raise ValueError(f"bound must be a finite number > 1, got {bound!r}")
+            raise OptionError("bound", f"bound must be a finite number > 1, got {bound!r}")
         V = np.asarray(V, dtype=np.float64)
         F = np.asarray(F)
         if V.ndim != 2 or V.shape[1] not in (2, 3) or F.ndim != 2 or F.shape[1] != 3 \
@@ -181,10 +181,10 @@ class LiveSession:
         pins = np.asarray(pins).ravel()
         if not np.issubdtype(pins.dtype, np.integer) or not len(pins) \
                 or len(np.unique(pins)) != len(pins) or pins.min() < 0 or pins.max() >= self.n:
-            raise ValueError(f"pins must be distinct vertex indices in 0..{self.n - 1}, at "
+            raise OptionError("pins", f"pins must be distinct vertex indices in 0..{self.n - 1}, at "
                              "least one")
         if len(pins) >= self.n:
-            raise ValueError("every vertex is pinned: nothing is free to follow the pins")
+            raise OptionError("pins", "every vertex is pinned: nothing is free to follow the pins")
         pins = pins.astype(np.int64)
         key = tuple(np.sort(pins))
         if key not in self._pin_sets:
@@ -203,14 +203,14 @@ class LiveSession:
 
         Raises
         ------
-        ValueError (targets' shape, non-finite), CancelledError (``cancel`` was called; the
+        OptionError (targets' shape, non-finite), CancelledError (``cancel`` was called; the
         session keeps its last frame), SessionClosedError
         """
         self._check_open()
         t0 = time.perf_counter()
         T = np.asarray(targets, dtype=np.float64)
         if T.shape != (len(self.pins), 2) or not np.all(np.isfinite(T)):
-            raise ValueError(f"targets must be ({len(self.pins)}, 2) finite: one per pin")
+            raise OptionError("targets", f"targets must be ({len(self.pins)}, 2) finite: one per pin")
         T = self._stored(T)
         try:
             U, check, its = self._solve(T)

@@ -140,12 +140,12 @@ def test_bad_input_is_refused_with_typed_errors_and_a_closed_session_says_so():
     flipped[:, 0] *= -1
     with pytest.raises(bd_uv.DegenerateFacesError):
         LiveSession(V, F, [0, 1], rest_uv=flipped)
-    with pytest.raises(ValueError):
+    with pytest.raises(bd_uv.OptionError, match="distinct"):
         LiveSession(V, F, [0, 0])
-    with pytest.raises(ValueError):
+    with pytest.raises(bd_uv.OptionError, match="method"):
         LiveSession(V, F, [0, 1], method="stretch-l1")
     s = LiveSession(V, F, [0, 1])
-    with pytest.raises(ValueError):
+    with pytest.raises(bd_uv.OptionError, match="one per pin"):
         s.update(np.zeros((3, 2)))
     s.close()
     with pytest.raises(SessionClosedError):
