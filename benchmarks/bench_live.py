@@ -22,7 +22,7 @@ median <= 100 ms and p95 <= 250 ms.
 
     python3.11 benchmarks/bench_live.py                      # the five disks and a 10k patch
     python3.11 benchmarks/bench_live.py --no-blender lion-head.off
-    python3.11 benchmarks/bench_live.py --big                # also mannequin-devil subdivided (103k)
+    python3.11 benchmarks/bench_live.py --big          # also mannequin-devil subdivided (103k)
 """
 from __future__ import annotations
 

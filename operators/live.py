@@ -13,8 +13,6 @@ again), Esc or right click puts every UV back bit for bit.
 Headless Blender has no event loop: ``LiveDrag`` and ``handle_event`` are the modal operator's
 whole step logic (event -> target -> frame -> written UVs) and the tests call them directly.
 """
-from __future__ import annotations
-
 import numpy as np
 
 import bpy

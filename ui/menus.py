@@ -1,5 +1,6 @@
-"""Menu entries: UV > Unwrap beside Blender's own methods; UV > Bounded Distortion Deform and Live with the
-distortion tools; Mesh > Clean Up > Improve Triangles (Bounded Distortion) in Edit Mode.
+"""Menu entries: UV > Unwrap beside Blender's own methods; UV > Bounded Distortion Deform and
+Bounded Distortion Live with the distortion tools; Mesh > Clean Up > Improve Triangles (Bounded
+Distortion) in Edit Mode.
 
 ``IMAGE_MT_uvs_unwrap`` is the UV editor's UV > Unwrap menu, which the 3D View's U menu embeds
 since Blender 4.3; before that the 3D View uses ``VIEW3D_MT_uv_map``.

@@ -118,8 +118,8 @@ class LiveSession:
                  max_iterations=40, backend="auto", storage=None):
         t0 = time.perf_counter()
         if method not in LIVE_METHODS:
-            raise OptionError("method", f"method must be one of {LIVE_METHODS} for a live session, got "
-                             f"{method!r}")
+            raise OptionError("method", f"method must be one of {LIVE_METHODS} for a live "
+                              f"session, got {method!r}")
         if not (isinstance(bound, (int, float)) and 1.0 < bound < np.inf):
             raise OptionError("bound", f"bound must be a finite number > 1, got {bound!r}")
         V = np.asarray(V, dtype=np.float64)
@@ -181,8 +181,8 @@ class LiveSession:
         pins = np.asarray(pins).ravel()
         if not np.issubdtype(pins.dtype, np.integer) or not len(pins) \
                 or len(np.unique(pins)) != len(pins) or pins.min() < 0 or pins.max() >= self.n:
-            raise OptionError("pins", f"pins must be distinct vertex indices in 0..{self.n - 1}, at "
-                             "least one")
+            raise OptionError("pins", "pins must be distinct vertex indices in "
+                              f"0..{self.n - 1}, at least one")
         if len(pins) >= self.n:
             raise OptionError("pins", "every vertex is pinned: nothing is free to follow the pins")
         pins = pins.astype(np.int64)
@@ -210,7 +210,8 @@ class LiveSession:
         t0 = time.perf_counter()
         T = np.asarray(targets, dtype=np.float64)
         if T.shape != (len(self.pins), 2) or not np.all(np.isfinite(T)):
-            raise OptionError("targets", f"targets must be ({len(self.pins)}, 2) finite: one per pin")
+            raise OptionError("targets", f"targets must be ({len(self.pins)}, 2) finite: one "
+                              "per pin")
         T = self._stored(T)
         try:
             U, check, its = self._solve(T)
