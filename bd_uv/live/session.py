@@ -158,6 +158,12 @@ class LiveSession:
         self.cert = FrameCertificate(rest, F, self.bound)
         start = self._stored(rest)
         first = self.cert.check(start)
+        if first.flipped or not first.max_distortion <= self.bound:
+            bad = np.flatnonzero(~(first.distortion <= self.bound))
+            raise DegenerateFacesError(
+                f"{len(bad)} faces of the rest shape flip or exceed C once rounded to "
+                f"{self.storage}: they are too small to store at this scale; rescale the UVs or "
+                "clean the mesh up", faces=bad)
         if not first.certified:
             raise OverlapError("the rest shape overlaps itself: a live session starts from an "
                                "overlap-free island (cut it or mark seams)")
