@@ -192,6 +192,7 @@ class LiveWorker:
                     return
                 seq, offset = self._pending
                 self._pending = None
+                self._busy = True
             try:
                 frame = self.island.frame_for(offset)
             except BDError as error:
@@ -202,5 +203,12 @@ class LiveWorker:
                     self._cond.notify_all()
                 return
             with self._cond:
-                self._done = (seq, frame)
+                self._busy = False
+                if self._done is None or seq > self._done[0]:
+                    self._done = (seq, frame)
                 self._cond.notify_all()
+
+    def _busy_started(self):
+        """True while a frame is being solved (for tests)."""
+        with self._cond:
+            return self._busy

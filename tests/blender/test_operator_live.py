@@ -137,3 +137,39 @@ def test_the_overlay_colours_each_triangle_by_its_distortion(addon):
     assert col.shape == (6, 4) and np.all(col[:, 3] == overlay.ALPHA)
     assert np.all(col[0] == col[1]) and np.all(col[3] == col[5])
     assert not np.allclose(col[0, :3], col[3, :3])       # distortion 1 and C differ in colour
+
+
+def test_the_worker_drops_targets_superseded_while_a_frame_is_solved(addon):
+    """Targets 1 and 2 arrive while target 0 is solved: only 0 and 3 are solved, and a frame
+    older than one already taken is never handed out."""
+    import threading
+    live_edit = load_submodule("operators.live_edit")
+
+    class SlowIsland:
+        def __init__(self):
+            self.release = threading.Event()
+            self.solved = []
+            self.session = type("S", (), {"cancel": lambda self: None})()
+
+        def frame_for(self, offset):
+            self.release.wait()
+            self.solved.append(float(offset[0]))
+            return f"frame {offset[0]:g}"
+
+    island = SlowIsland()
+    worker = live_edit.LiveWorker(island)
+    try:
+        assert worker.submit([0.0, 0.0]) == 0
+        while not worker._busy_started():
+            pass
+        for k in (1, 2, 3):
+            worker.submit([float(k), 0.0])
+        assert worker.dropped == 2
+        assert worker.take() is None
+        island.release.set()
+        assert worker.wait(3, timeout=10) == (3, "frame 3")
+        assert island.solved == [0.0, 3.0]
+        assert worker.take() is None                  # frame 0 is older than frame 3
+    finally:
+        island.release.set()
+        worker.stop()
