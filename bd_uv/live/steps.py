@@ -132,7 +132,6 @@ def project_frame(steps, U, C, max_iter, margin=0.9, floor=1e-3, cancel=None):
     k, G = steps.k, steps.G
     area = steps.area2[:k, 0]
     kappa = max(1.0 + 1e-3, margin * C)
-    rhs_fixed = steps.L_fF @ U[steps.pins]
     lo, prev_err = None, np.inf
     for it in range(max_iter + 1):
         R = G @ U
@@ -161,26 +160,31 @@ def project_frame(steps, U, C, max_iter, margin=0.9, floor=1e-3, cancel=None):
         pim = fa * aim[m]
         qre = np.where(nb[m] > 0, fb * bre[m], 0.5 * (t1[m] - t2[m]))
         qim = fb * bim[m]
-        N = np.zeros_like(R)                              # normal J - P on the moved faces
-        N[m, 0], N[k + m, 0] = ux[m] - (pre + qre), uy[m] - (qim - pim)
-        N[m, 1], N[k + m, 1] = vx[m] - (pim + qim), vy[m] - (pre - qre)
-        P = R - N
-        err = float(np.sum(steps.area2 * N * N))
+        # The normal N = J - P, non-zero on the moved faces only: rows m (d/dx) and k + m (d/dy).
+        rows = np.concatenate([m, k + m])
+        N = np.empty((len(rows), 2))
+        N[:len(m), 0], N[len(m):, 0] = ux[m] - (pre + qre), uy[m] - (qim - pim)
+        N[:len(m), 1], N[len(m):, 1] = vx[m] - (pim + qim), vy[m] - (pre - qre)
+        aN = steps.area2[rows] * N
+        err = float(np.sum(aN * N))
         # Global step, with the tangent step of Kovalsky et al. (the lifted map on the hyperplane
-        # through P orthogonal to N) unless the distance to the set grew: 4 columns, one solve.
-        GB = steps.GT @ np.concatenate([steps.area2 * P, N], axis=1)
+        # through P orthogonal to N) unless the distance to the set grew. With P = J - N the
+        # plain step is U_free - L_ff^-1 (G^T A N)_free, since G^T A J = L U: only the moved
+        # faces' rows of G are needed; 4 columns, one solve.
+        GmT = steps.G[rows].T
+        GB = GmT @ np.concatenate([aN, N], axis=1)        # (n, 4): G^T A N, G^T N
         B = GB[steps.free]
-        B[:, :2] -= rhs_fixed
-        X = steps.solve(B)
-        Xc = X[:, :2]
+        Y = steps.solve(B)
+        Xc = U[steps.free] - Y[:, :2]
         if err <= prev_err * (1 + 1e-12):
             UF = U[steps.pins]
-            r = float(np.sum(N * P)) - float(np.sum(GB[steps.pins, 2:] * UF))
+            nP = float(np.sum(N * (R[rows] - N)))
+            r = nP - float(np.sum(GB[steps.pins, 2:] * UF))
             cxc = float(np.sum(B[:, 2:] * Xc))
-            cxn = float(np.sum(B[:, 2:] * X[:, 2:]))
+            cxn = float(np.sum(B[:, 2:] * Y[:, 2:]))
             lam = (cxc - r) / cxn if cxn != 0 else 0.0
             if np.isfinite(lam):
-                Xc = Xc - lam * X[:, 2:]
+                Xc = Xc - lam * Y[:, 2:]
         prev_err = err
         U[steps.free] = Xc
     return U, False, max_iter
