@@ -172,3 +172,18 @@ def test_every_result_carries_its_overlap_test(annulus):
     V, F, H, P = annulus
     res = deform(V, F, H, P, method="arap", bound=5.0)
     assert res.overlap_free and not res.mended
+
+
+def test_cli_deform_refusing_an_overlap_exits_1_with_one_line(tmp_path):
+    V, F, near = _u_shape()
+    src = tmp_path / "u.obj"
+    bd_uv.write_obj(str(src), np.column_stack([V, 0 * V[:, 0]]), F)
+    hj = tmp_path / "handles.json"
+    H = [near([0.5, 2.0]), near([2.5, 2.0])]
+    hj.write_text(json.dumps({"vertices": H, "positions": [[3.0, 2.0], [2.5, 2.0]]}))
+    r = subprocess.run([sys.executable, "-m", "bd_uv", "deform", str(src), "-o",
+                        str(tmp_path / "out.obj"), "--handles", str(hj), "--method",
+                        "biharmonic", "--bound", "5"], capture_output=True, text=True)
+    assert r.returncode == 1
+    assert r.stderr.startswith("error: the deformation would lay the island over itself")
+    assert not (tmp_path / "out.obj").exists()
