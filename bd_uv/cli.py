@@ -76,6 +76,15 @@ def solver_kwargs(args):
     return kwargs
 
 
+def add_scene_options(p):
+    """Where a scene's new UVs go (``unwrap`` and ``batch``)."""
+    p.add_argument("--uv-set", type=int, default=0, metavar="N",
+                   help="glTF: write the UVs to TEXCOORD_N (default 0; e.g. 1 for a lightmap "
+                        "beside the artist's UVs)")
+    p.add_argument("--uv-name", default="st", metavar="NAME",
+                   help="USD: write the UVs to primvars:NAME (default st)")
+
+
 LAYOUT_OPTIONS = ("pack", "cut", "margin")
 
 
@@ -128,6 +137,12 @@ class ProgressBar:
 
 
 def run_unwrap(args):
+    from .scenes import BLENDER_SUFFIXES, SCENE_SUFFIXES, read_scene
+    ext = os.path.splitext(args.input)[1].lower()
+    if ext in SCENE_SUFFIXES or ext in BLENDER_SUFFIXES:
+        if ext in BLENDER_SUFFIXES:
+            read_scene(args.input)     # raises with the Blender command that handles the file
+        return run_scene_unwrap(args)
     mesh = load_mesh(args.input)
     seams = None
     use_uv = args.seams == "uv" or (args.seams is None and mesh.corner_uv is not None)
@@ -175,6 +190,44 @@ def run_unwrap(args):
     for e in failed:
         print(f"error: {e['message']}", file=sys.stderr)
     return 0 if not failed else 1
+
+
+def run_scene_unwrap(args):
+    """``unwrap`` of a glTF or USD scene: every mesh, the scene written whole to ``-o``."""
+    from .batch.scene_files import unwrap_scene_file
+    from .batch.report import item_line
+    from .scenes import GLTF_SUFFIXES, USD_SUFFIXES
+    ins, outs = (os.path.splitext(p)[1].lower() for p in (args.input, args.output))
+    for family in (GLTF_SUFFIXES, USD_SUFFIXES):
+        if (ins in family) != (outs in family):
+            print(f"error: {args.input} is written back as its own format: give -o a "
+                  f"{' or '.join(family if ins in family else ())} path, not {outs!r}",
+                  file=sys.stderr)
+            return 2
+    if args.seams == "auto" and args.bound == "auto":
+        print("error: --seams auto needs a numeric --bound C", file=sys.stderr)
+        return 2
+    options = {**solver_kwargs(args), **layout_kwargs(args)}
+    if args.seams == "auto":
+        options["auto_stretch"] = 2.0 if args.stretch is None else args.stretch
+    entries = unwrap_scene_file(args.input, args.output, options, args.seams, png=args.png,
+                                uv_set=args.uv_set, uv_name=args.uv_name)
+    report = {"input": os.path.abspath(args.input), "output": os.path.abspath(args.output),
+              "options": options, "meshes": entries}
+    if args.report:
+        os.makedirs(os.path.dirname(os.path.abspath(args.report)), exist_ok=True)
+        with open(args.report, "w", encoding="utf-8") as fh:
+            json.dump(report, fh, indent=2)
+    for e in entries:
+        print(item_line({**e, "input": None}))
+        for w in e.get("warnings", []):
+            print(f"  warning: {w}")
+    bad = [e for e in entries if e["status"] != "certified"]
+    for e in bad:
+        print(f"error: {e['name']}: {e['message']}", file=sys.stderr)
+    print(f"{len(entries) - len(bad)}/{len(entries)} mesh(es) certified and written -> "
+          f"{args.output}")
+    return 0 if not bad else 1
 
 
 def core_cuts(islands):
@@ -235,9 +288,13 @@ def build_parser():
                                      description="Certified bounded-distortion UV unwrapping "
                                                  "(Lipman 2012).")
     sub = parser.add_subparsers(dest="command", required=True)
-    p = sub.add_parser("unwrap", help="unwrap one mesh file (OBJ, OFF, PLY)")
-    p.add_argument("input", help="mesh file: .obj, .off or .ply")
-    p.add_argument("-o", "--output", required=True, help="output OBJ with UVs")
+    p = sub.add_parser("unwrap", help="unwrap one mesh file (OBJ, OFF, PLY) or scene (glTF, USD)")
+    p.add_argument("input", help="mesh file: .obj, .off or .ply; scene: .gltf, .glb, .usd, "
+                                 ".usda, .usdc, .usdz (FBX, Alembic, Collada, STL and .blend: "
+                                 "the answer gives the Blender command)")
+    p.add_argument("-o", "--output", required=True,
+                   help="output OBJ with UVs; for a scene, the scene written whole (same format)")
+    add_scene_options(p)
     add_solver_options(p)
     add_layout_options(p)
     p.add_argument("--seams", choices=("uv", "none", "auto"), default=None,

@@ -72,3 +72,12 @@ class SolverError(IslandError):
 
 class OverlapError(IslandError):
     """The island's UVs lie over themselves (its UV boundary is not simple); cut it or mark seams."""
+
+
+class SceneFileError(BDError):
+    """A scene file (glTF, USD) cannot be read or written as asked; the message names the file
+    and the node, mesh or prim concerned."""
+
+
+class MissingExtraError(BDError):
+    """A format needs an optional package that is not installed; the message names the extra."""

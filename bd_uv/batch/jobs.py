@@ -109,7 +109,7 @@ def unwrap_job(job, options, png=None):
             from ..seams import unwrap_auto
             res = unwrap_auto(job.V, job.F, seams=job.seams, bound=kwargs["bound"],
                               stretch=stretch, method=kwargs["method"], frames=kwargs["frames"],
-                              cone=kwargs["cone"])[0]
+                              cone=kwargs["cone"], polygons=job.face_groups)[0]
         else:
             res = unwrap(job.V, job.F, seams=job.seams, **kwargs)
         layout = stored_layout(job.V, job.F, res, **layout_options)
