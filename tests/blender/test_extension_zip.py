@@ -213,7 +213,11 @@ def test_bundled_wheels_are_the_ones_imported(installed):
     for name, (path, _version) in installed["modules"].items():
         assert pathlib.Path(path).is_relative_to(site), (name, path)
     # scipy built for this Python; numpy is Blender's (here: the environment's).
-    assert installed["modules"]["scipy"][1] == "1.15.3"
+    # requirements.txt pins scipy per Python (1.15.3 for 3.11, 1.17.1 for 3.13: numpy < 2.7)
+    pins = (pathlib.Path(__file__).resolve().parents[2] / "requirements.txt").read_text()
+    want = "1.17.1" if installed["python"] == "3.13" else "1.15.3"
+    assert f"scipy=={want}" in pins
+    assert installed["modules"]["scipy"][1] == want
     tag = installed["python"].replace(".", "")
     assert site.parts[-2] == f"python{installed['python']}"
     assert list((site / "scipy" / "_lib").glob(f"*.cpython-{tag}-*.so"))
