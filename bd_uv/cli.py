@@ -107,7 +107,8 @@ def layout_kwargs(args):
 def split_options(options):
     """(unwrap keyword arguments, stored_layout keyword arguments) of one options dict; without
     layout keys (the Blender script, which packs with Blender) nothing is cut or packed."""
-    solve = {k: v for k, v in options.items() if k not in LAYOUT_OPTIONS}
+    solve = {k: v for k, v in options.items()
+             if k not in LAYOUT_OPTIONS and k not in ("uv_set", "uv_name")}   # where, not how
     layout = {k: options[k] for k in LAYOUT_OPTIONS if k in options}
     if "cut" in layout:  # unwrap() itself cuts (or fails) an island whose UVs overlap
         solve["overlap"] = "cut" if layout["cut"] else "fail"

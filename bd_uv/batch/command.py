@@ -9,7 +9,8 @@ import os
 import sys
 import time
 
-from ..cli import add_layout_options, add_solver_options, layout_kwargs, solver_kwargs
+from ..cli import (add_layout_options, add_scene_options, add_solver_options, layout_kwargs,
+                   solver_kwargs)
 from ..scheduling.atomic import remove_stale
 from .files import _size, input_files, plan, run_tasks
 from .report import batch_report, item_line
@@ -18,15 +19,19 @@ from .report import batch_report, item_line
 def add_batch_parser(subparsers):
     """Add ``batch`` to ``python -m bd_uv``'s subcommands."""
     p = subparsers.add_parser(
-        "batch", help="unwrap every OBJ/OFF/PLY (and .blend) file of folders, in parallel",
-        description="Unwrap many files: one output per input (OBJ with UVs; .blend with the UV "
-                    "maps written), a JSON report, optional PNGs. Exit 0 only if every mesh was "
+        "batch", help="unwrap every mesh and scene file of folders, in parallel",
+        description="Unwrap many files: one output per input (OBJ with UVs for OBJ/OFF/PLY; "
+                    "glTF and USD scenes written whole; .blend, FBX, Alembic and Collada "
+                    "through Blender with the UV maps written, STL to .blend), a JSON report, "
+                    "optional PNGs. Exit 0 only if every mesh was "
                     "certified; a file that fails never stops the others.")
     p.add_argument("inputs", nargs="+", metavar="INPUT",
-                   help="mesh files or folders (their .obj/.off/.ply/.blend files, not recursive)")
+                   help="mesh or scene files, or folders (their .obj/.off/.ply/.gltf/.glb/.usd/"
+                        ".usda/.usdc/.usdz/.blend/.fbx/.abc/.dae/.stl files, not recursive)")
     p.add_argument("-o", "--output", required=True, metavar="OUT_DIR", help="output folder")
     add_solver_options(p)
     add_layout_options(p)
+    add_scene_options(p)
     p.add_argument("--seams", choices=("uv", "none", "auto"), default=None,
                    help="uv: cut where an OBJ's UVs are discontinuous (default when it has vt); "
                         "none: islands are the mesh's components; auto: add seams where needed")
@@ -101,7 +106,7 @@ def run_batch(args):
     from ..scheduling import FileLimits, Ledger, Progress, options_sha256, read_previous, reusable
     files = input_files(args.inputs)
     if not files:
-        print(f"error: no .obj/.off/.ply/.blend files in {' '.join(args.inputs)}",
+        print(f"error: no mesh or scene files in {' '.join(args.inputs)}",
               file=sys.stderr)
         return 2
     os.makedirs(args.output, exist_ok=True)
@@ -109,6 +114,9 @@ def run_batch(args):
         os.makedirs(args.png, exist_ok=True)
     tasks = plan(files, args.output, args.png)
     options = {**solver_kwargs(args), **layout_kwargs(args)}
+    from ..scenes import SCENE_SUFFIXES
+    if any(f.lower().endswith(SCENE_SUFFIXES) for f in files):   # where a scene's UVs go
+        options.update(uv_set=args.uv_set, uv_name=args.uv_name)
     if args.seams == "auto":
         if args.bound == "auto":
             print("error: --seams auto needs a numeric --bound C", file=sys.stderr)

@@ -22,6 +22,9 @@ from .jobs import Job, failed_entry, unwrap_job
 
 MESH_SUFFIXES = (".obj", ".off", ".ply")
 BLEND_SUFFIX = ".blend"
+# glTF and USD are read and written whole by bd_uv.scenes; FBX, Alembic, Collada and STL go
+# through the Blender script like a .blend (an STL, which stores no UVs, comes out as a .blend).
+from ..scenes import BLENDER_SUFFIXES, SCENE_SUFFIXES, blender_command  # noqa: E402
 # The Blender script of the extension: next to bd_uv/ in a clone or an installed extension; a pip
 # install of bd-uv has only the core, so .blend files there need BD_UV_BLENDER_SCRIPT.
 SCRIPT = os.environ.get("BD_UV_BLENDER_SCRIPT") or os.path.join(
@@ -42,8 +45,14 @@ def _unwrap_file(task, options, seams_mode):
     t0 = time.perf_counter()
     base = {"input": os.path.abspath(task.path), "object": None, "output": None}
     try:
-        if task.path.lower().endswith(BLEND_SUFFIX):
+        ext = os.path.splitext(task.path)[1].lower()
+        if ext in BLENDER_SUFFIXES:
             return _unwrap_blend(task, options, base)
+        if ext in SCENE_SUFFIXES:
+            from .scene_files import unwrap_scene_file
+            return unwrap_scene_file(task.path, task.output, options, seams_mode, png=task.png,
+                                     uv_set=options.get("uv_set", 0),
+                                     uv_name=options.get("uv_name", "st"), base=base)
         mesh = load_mesh(task.path)
         seams = None
         if seams_mode == "uv" or (seams_mode in (None, "auto") and mesh.corner_uv is not None):
@@ -69,11 +78,11 @@ def _unwrap_file(task, options, seams_mode):
 
 
 def _unwrap_blend(task, options, base):
-    """A .blend goes through the Blender script in a child process (it needs ``bpy``)."""
+    """A .blend (or FBX, Alembic, Collada, STL) goes through the Blender script in a child
+    process (it needs ``bpy``)."""
     if importlib.util.find_spec("bpy") is None:
-        raise BDError(f"{task.path}: reading .blend files needs the bpy module "
-                      "(pip install bpy) or Blender itself: blender -b FILE --python "
-                      "scripts/bd_uv_batch.py -- ...")
+        raise BDError(f"{task.path}: reading {os.path.splitext(task.path)[1]} files needs the bpy "
+                      f"module (pip install bpy) or Blender itself: {blender_command(task.path)}")
     if not os.path.isfile(SCRIPT):
         raise BDError(f"{task.path}: reading .blend files needs the extension's "
                       f"scripts/bd_uv_batch.py, not found at {SCRIPT}: set "
@@ -114,12 +123,13 @@ def _script_options(options):
 
 
 def input_files(paths):
-    """Expand folders (not recursively) into their OBJ/OFF/PLY/.blend files, sorted by name.
+    """Expand folders (not recursively) into their mesh and scene files (OBJ, OFF, PLY, glTF,
+    USD, and through Blender .blend, FBX, Alembic, Collada, STL), sorted by name.
 
     Files named explicitly are kept whatever their suffix (they fail in the report if unreadable);
     hidden files (such as an unfinished output's temporary name) are not taken from folders.
     """
-    suffixes = MESH_SUFFIXES + (BLEND_SUFFIX,)
+    suffixes = MESH_SUFFIXES + SCENE_SUFFIXES + BLENDER_SUFFIXES
     files = []
     for p in paths:
         if os.path.isdir(p):
@@ -136,7 +146,9 @@ def plan(files, out_dir, png_dir=None):
     tasks, used = [], set()
     for path in files:
         stem, ext = os.path.splitext(os.path.basename(path))
-        out_ext = BLEND_SUFFIX if ext.lower() == BLEND_SUFFIX else ".obj"
+        low = ext.lower()
+        out_ext = (BLEND_SUFFIX if low == ".stl" else low) if low in SCENE_SUFFIXES + \
+            BLENDER_SUFFIXES else ".obj"
         name, k = stem, 1
         while name.lower() in used:
             name = f"{stem}_{ext.lstrip('.').lower()}" if k == 1 else f"{stem}-{k}"

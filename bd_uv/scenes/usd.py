@@ -72,6 +72,9 @@ class UsdScene:
             raise SceneFileError(f"{path}: not a USD stage USD can open ({exc})") from exc
         if stage is None:
             raise SceneFileError(f"{path}: not a USD stage USD can open")
+        # what did not compose (a missing reference, payload or sublayer) is said on each mesh
+        errors = [f"composition: {e}" for e in getattr(stage, "GetCompositionErrors",
+                                                       lambda: [])()]
         meshes, parts = [], []
         for prim in stage.Traverse():
             if not prim.IsA(UsdGeom.Mesh):
@@ -79,7 +82,7 @@ class UsdScene:
             where = f"{path}: prim {prim.GetPath()}"
             m, part, info, warnings = _mesh_arrays(UsdGeom.Mesh(prim), where, uv_name, Usd)
             name = str(prim.GetPath())
-            meshes.append(SceneMesh(name, m, info, None, part["poly"], warnings))
+            meshes.append(SceneMesh(name, m, info, None, part["poly"], warnings + errors))
             parts.append(part)
         for proto in stage.GetPrototypes():
             meshes_in = [p for p in Usd.PrimRange(proto) if p.IsA(UsdGeom.Mesh)]
