@@ -190,3 +190,22 @@ def test_not_gltf_and_blender_only_formats(tmp_path, capsys):
     (tmp_path / "a.fbx").write_bytes(b"")
     assert main(["unwrap", str(tmp_path / "a.fbx"), "-o", str(tmp_path / "b.fbx")]) == 2
     assert "blender -b --python scripts/bd_uv_batch.py" in capsys.readouterr().err
+
+
+def test_a_missing_usd_extra_is_one_line_naming_it(tmp_path, monkeypatch, capsys):
+    import sys
+    monkeypatch.setitem(sys.modules, "pxr", None)          # as if usd-core were not installed
+    (tmp_path / "a.usda").write_text("#usda 1.0\n")
+    assert main(["unwrap", str(tmp_path / "a.usda"), "-o", str(tmp_path / "b.usda")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "pip install 'bd-uv[usd]'" in err[0]
+
+
+def test_core_imports_no_format_package(tmp_path):
+    import subprocess
+    import sys
+    code = ("import sys, bd_uv, bd_uv.cli, bd_uv.scenes, bd_uv.scenes.gltf; "
+            "print(sorted(m for m in ('pxr', 'bpy', 'pygltflib') if m in sys.modules))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         cwd=os.path.dirname(os.path.dirname(os.path.dirname(__file__))))
+    assert out.stdout.strip() == "[]", out.stderr
