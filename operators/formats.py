@@ -3,10 +3,9 @@ exporters, for ``scripts/bd_uv_batch.py``.
 
 A file is imported into an empty scene, its mesh objects are unwrapped like a .blend's, and the
 scene is exported to the same format with the new UV map (or saved as a .blend). What round-trips
-is what Blender's exporters write (see README.md, "Other formats through Blender"): FBX and
-Alembic keep every UV map by name (not seams or pins); Collada exists only in Blender 4.x (bpy
-5.0.1 has no Collada operators); STL stores no
-UVs, so an STL is saved as a .blend or exported to another format.
+is what Blender's exporters write (README.md, "Scene files"): FBX and Alembic keep every UV map by
+name (not seams or pins); Collada exists only in Blender 4.x (bpy 5.0.1 has no Collada
+operators); STL stores no UVs, so an STL is saved as a .blend or exported to another format.
 """
 import os
 
