@@ -99,7 +99,8 @@ def skinned_scene():
         "TEXCOORD_0": (np.stack([uv[:, 0], 1 - uv[:, 1]], 1), 5126, "VEC2", False),
         "TEXCOORD_1": (rng.random((n, 2)), 5126, "VEC2", False),
         "COLOR_0": (rng.integers(0, 256, (n, 4)), 5121, "VEC4", True),
-        "JOINTS_0": (rng.integers(0, 2, (n, 4)), 5121, "VEC4", False),
+        "JOINTS_0": (np.tile([0, 1, 0, 0], (n, 1)) ^ (np.arange(n)[:, None] % 2
+                                                         * [1, 1, 0, 0]), 5121, "VEC4", False),
         "WEIGHTS_0": (np.tile([0.75, 0.25, 0, 0], (n, 1)), 5126, "VEC4", False),
         "_HEAT": (rng.random((n, 1)), 5126, "SCALAR", False),
     }
