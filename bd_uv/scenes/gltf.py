@@ -2,7 +2,8 @@
 
 Reading: each mesh's triangle primitives (mode 4) become one unwrap problem in the mesh's own
 space (a mesh used by several nodes is unwrapped once); their positions are welded by exact value,
-so the file's vertex splits (hard normals, old seams) do not cut the surface; the UVs already in
+so the file's vertex splits (hard normals, old seams) do not cut the surface (parts that only touch
+at a point stay apart: ``weld.py``); the UVs already in
 the file (the set written, else ``TEXCOORD_0``) give the seams, as an OBJ's ``vt`` do. Lines,
 points, strips and fans pass through unchanged.
 
@@ -23,6 +24,7 @@ from ..errors import SceneFileError
 from ..meshio import Mesh
 from ..scheduling.atomic import atomic_path
 from . import SceneMesh
+from .weld import welded
 from .gltf_io import (ARRAY_BUFFER, COMPONENT_TYPE, ELEMENT_ARRAY_BUFFER, BufferWriter,
                       read_gltf, rebase_uris, write_glb, write_gltf_json)
 
@@ -219,9 +221,9 @@ def _mesh_arrays(gf, label, prims, uv_set, name):
     F = np.concatenate(Fs)
     if len(F) == 0:
         raise SceneFileError(f"{gf.path}: {label} has no triangles")
-    Vu, inv = np.unique(V, axis=0, return_inverse=True)
+    W, G = welded(V, F)
     corner_uv = np.concatenate(UVs) if UVs else None
-    return Mesh(Vu, inv.reshape(-1)[F], corner_uv, name), part
+    return Mesh(W, G, corner_uv, name), part
 
 
 def _patch_primitive(gf, mesh, j, corner_vertex, uv32, uv_set, writer, name):

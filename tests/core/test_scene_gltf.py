@@ -209,3 +209,19 @@ def test_core_imports_no_format_package(tmp_path):
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          cwd=os.path.dirname(os.path.dirname(os.path.dirname(__file__))))
     assert out.stdout.strip() == "[]", out.stderr
+
+
+def test_weld_joins_split_vertices_but_not_point_contacts():
+    from bd_uv.scenes.weld import welded
+    # two triangles sharing an edge, its vertices split (as an exporter does at a UV seam) ...
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.]])
+    F = np.array([[0, 1, 2], [3, 5, 4]])
+    W, G = welded(V, F)
+    assert len(W) == 4 and G[0, 1] == G[1, 0] and G[0, 2] == G[1, 2]
+    assert np.array_equal(W[G], V[F])                     # every corner keeps its position
+    # ... and a third triangle touching the first only at a point stays apart there
+    V2 = np.vstack([V, [[-1, 0, 0], [0, -1, 0]]])
+    F2 = np.vstack([F, [[0, 6, 7]]])
+    W2, G2 = welded(V2, F2)
+    assert G2[2, 0] != G2[0, 0] and np.array_equal(W2[G2], V2[F2])
+    assert len(W2) == 4 + 3
