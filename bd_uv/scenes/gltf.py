@@ -75,7 +75,8 @@ class GltfScene:
         paths = node_paths(doc)
         meshes, parts = [], []
         for mi, mesh in enumerate(doc.get("meshes", [])):
-            label = f"mesh {mi}" + (f" {mesh['name']!r}" if mesh.get("name") else "")
+            label = f"mesh {mi}" + (f" {mesh['name']!r}" if mesh.get("name") else "") + (
+                f" (node {', '.join(paths[mi])})" if paths.get(mi) else "")
             prims = [(j, p) for j, p in enumerate(mesh.get("primitives", []))
                      if p.get("mode", TRIANGLES) == TRIANGLES]
             warnings = [f"{label}: primitive {j} (mode {p['mode']}) is not a triangle list; "

@@ -166,9 +166,10 @@ def test_draco_primitive_is_refused_by_name(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("breakage,words", [
-    (lambda d: d["accessors"][1].update(count=10**6), ["'Rock'", "primitive 0", "indices"]),
+    (lambda d: d["accessors"][1].update(count=10**6),
+     ["'Rock'", "node /RockNode", "primitive 0", "indices"]),
     (lambda d: d["meshes"][0]["primitives"][0]["attributes"].update(POSITION=99),
-     ["'Rock'", "primitive 0", "accessor 99"]),
+     ["'Rock'", "node /RockNode", "primitive 0", "accessor 99"]),
 ])
 def test_malformed_file_names_the_mesh(tmp_path, capsys, breakage, words):
     b, _ = _one_mesh(tmp_path)
