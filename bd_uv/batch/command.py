@@ -9,8 +9,10 @@ import os
 import sys
 import time
 
-from ..cli import (add_layout_options, add_scene_options, add_solver_options, layout_kwargs,
-                   solver_kwargs)
+from ..arguments import (add_layout_options, add_scene_options, add_solver_options,
+                         layout_kwargs, solver_kwargs)
+from ..scenes import SCENE_SUFFIXES
+from ..scheduling import FileLimits, Ledger, Progress, options_sha256, read_previous, reusable
 from ..scheduling.atomic import remove_stale
 from .files import _size, input_files, plan, run_tasks
 from .report import batch_report, item_line
@@ -103,7 +105,6 @@ def _positive_int(text):
 
 def run_batch(args):
     """``python -m bd_uv batch``: returns the exit code (0: all certified, 1: some failed)."""
-    from ..scheduling import FileLimits, Ledger, Progress, options_sha256, read_previous, reusable
     files = input_files(args.inputs)
     if not files:
         print(f"error: no mesh or scene files in {' '.join(args.inputs)}",
@@ -114,7 +115,6 @@ def run_batch(args):
         os.makedirs(args.png, exist_ok=True)
     tasks = plan(files, args.output, args.png)
     options = {**solver_kwargs(args), **layout_kwargs(args)}
-    from ..scenes import SCENE_SUFFIXES
     if any(f.lower().endswith(SCENE_SUFFIXES) for f in files):   # where a scene's UVs go
         options.update(uv_set=args.uv_set, uv_name=args.uv_name)
     if args.seams == "auto":

@@ -17,14 +17,18 @@ from dataclasses import dataclass
 
 from ..errors import BDError
 from ..meshio import load_mesh, write_obj
+from ..scenes import BLENDER_SUFFIXES, SCENE_SUFFIXES, blender_command
+from ..scheduling import run_pool
 from ..scheduling.atomic import atomic_path
+from ..scheduling.cluster import run_dask
 from .jobs import Job, failed_entry, unwrap_job
+from .scene_files import unwrap_scene_file
 
 MESH_SUFFIXES = (".obj", ".off", ".ply")
 BLEND_SUFFIX = ".blend"
-# glTF and USD are read and written whole by bd_uv.scenes; FBX, Alembic, Collada and STL go
-# through the Blender script like a .blend (an STL, which stores no UVs, comes out as a .blend).
-from ..scenes import BLENDER_SUFFIXES, SCENE_SUFFIXES, blender_command  # noqa: E402
+# glTF and USD (SCENE_SUFFIXES) are read and written whole by bd_uv.scenes; FBX, Alembic, Collada
+# and STL (BLENDER_SUFFIXES) go through the Blender script like a .blend (an STL, which stores no
+# UVs, comes out as a .blend).
 # The Blender script of the extension: next to bd_uv/ in a clone or an installed extension; a pip
 # install of bd-uv has only the core, so .blend files there need BD_UV_BLENDER_SCRIPT.
 SCRIPT = os.environ.get("BD_UV_BLENDER_SCRIPT") or os.path.join(
@@ -49,7 +53,6 @@ def _unwrap_file(task, options, seams_mode):
         if ext in BLENDER_SUFFIXES:
             return _unwrap_blend(task, options, base)
         if ext in SCENE_SUFFIXES:
-            from .scene_files import unwrap_scene_file
             return unwrap_scene_file(task.path, task.output, options, seams_mode, png=task.png,
                                      uv_set=options.get("uv_set", 0),
                                      uv_name=options.get("uv_name", "st"), base=base)
@@ -178,7 +181,6 @@ def run_tasks(tasks, options, seams_mode=None, jobs=1, on_done=None, scheduler=N
     -------
     entries : list of list of dict, per task (in task order; None for tasks not run)
     """
-    from ..scheduling import run_pool
     results = [None] * len(tasks)
 
     def done(i, entries, attempts):
@@ -191,14 +193,15 @@ def run_tasks(tasks, options, seams_mode=None, jobs=1, on_done=None, scheduler=N
 
     order = range(len(tasks)) if order is None else order
     order = sorted(order, key=lambda i: -_size(tasks[i].path))
+    # The work of one file, looked up here at call time so that it can be replaced (tests).
+    work = _unwrap_file
     if scheduler:
-        from ..scheduling.cluster import run_dask
-        run_dask(tasks, order, options, seams_mode, scheduler, jobs, done, limits, retries,
+        run_dask(tasks, order, work, options, seams_mode, scheduler, jobs, done, limits, retries,
                  on_start=on_start)
     else:
         if on_start is not None:
             on_start(jobs)
-        run_pool(tasks, order, options, seams_mode, jobs, done, limits, retries)
+        run_pool(tasks, order, work, options, seams_mode, jobs, done, limits, retries)
     return results
 
 

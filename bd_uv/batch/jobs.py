@@ -12,12 +12,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..cli import split_options
+from ..api import unwrap
+from ..arguments import split_options
 from ..errors import BDError
 from ..layout import stored_layout
 from ..metrics import conformal_distortion
 from ..scheduling.atomic import atomic_path
-from ..unwrapping import unwrap
+from ..scheduling.entries import failed_entry
+from ..seams import unwrap_auto
 
 
 @dataclass(frozen=True)
@@ -63,13 +65,6 @@ class JobResult:
     layout: object = None
 
 
-def failed_entry(name, error, message, faces=None, seconds=None, **where):
-    """A report entry with nothing certified (``where``: input, object, output, ...)."""
-    return {**where, "name": name, "status": "failed", "faces": faces, "islands": [],
-            "bound_certified": None, "max_distortion": None, "mean_distortion": None,
-            "flipped": None, "seconds": seconds, "error": error, "message": message}
-
-
 def _num(x):
     return None if x is None or not np.isfinite(x) else float(x)
 
@@ -106,7 +101,6 @@ def unwrap_job(job, options, png=None):
             raise ValueError(f"{job.name} has no UVs to take frames from (--frames input-uv)")
         stretch = kwargs.pop("auto_stretch", None)
         if stretch is not None:     # --seams auto: the file's own seams are kept, more added
-            from ..seams import unwrap_auto
             res = unwrap_auto(job.V, job.F, seams=job.seams, bound=kwargs["bound"],
                               stretch=stretch, method=kwargs["method"], frames=kwargs["frames"],
                               cone=kwargs["cone"], polygons=job.face_groups)[0]

@@ -14,7 +14,8 @@ import numpy as np
 from ..certificate import certificate_totals
 from ..errors import BDError
 from ..scenes import Charts, read_scene
-from .jobs import Job, failed_entry, unwrap_job
+from ..scheduling.entries import failed_entry
+from .jobs import Job, unwrap_job
 
 
 def unwrap_scene_file(path, output, options, seams_mode=None, png=None, uv_set=0, uv_name="st",

@@ -7,54 +7,15 @@ the document it read with the new UVs and nothing else (STYLE.md item 16), retur
 as stored certify. ``bd_uv.batch.scene_files`` drives them.
 """
 import os
-from dataclasses import dataclass, field
-
-import numpy as np
 
 from ..errors import BDError, MissingExtraError
+from .model import Charts, SceneMesh  # noqa: F401  (the scene's meshes and what is written)
 
 GLTF_SUFFIXES = (".gltf", ".glb")
 USD_SUFFIXES = (".usd", ".usda", ".usdc", ".usdz")
 SCENE_SUFFIXES = GLTF_SUFFIXES + USD_SUFFIXES
 # Read and written by Blender's own importers and exporters (scripts/bd_uv_batch.py).
 BLENDER_SUFFIXES = (".fbx", ".abc", ".dae", ".stl", ".blend")
-
-
-@dataclass(frozen=True)
-class SceneMesh:
-    """One mesh of a scene, as the unwrap sees it.
-
-    Attributes
-    ----------
-    name : str, how the report names it (node paths, or the prim path)
-    mesh : bd_uv.meshio.Mesh, V (n,3) float64 welded, F (m,3) int64, corner_uv (m,3,2) of the
-        file's UVs (v upwards) or None
-    info : dict, JSON-ready facts for the report (mesh name, nodes, primitives, ...)
-    refused : str or None, why this mesh is left as it is (e.g. Draco-compressed)
-    face_groups : (m,) int64 polygon of each triangle (seams never cross one), or None
-    warnings : list of str
-    """
-    name: str
-    mesh: object
-    info: dict
-    refused: str = None
-    face_groups: np.ndarray = None
-    warnings: list = field(default_factory=list)
-
-
-@dataclass(frozen=True)
-class Charts:
-    """Certified UVs of one mesh to write.
-
-    Attributes
-    ----------
-    corner_uv : (m,3,2) float64, v upwards (Blender's convention), every face written
-    face_island : (m,) int64, stored island of each face
-    bounds : (k,) float64, the certified bound C of each stored island
-    """
-    corner_uv: np.ndarray
-    face_island: np.ndarray
-    bounds: np.ndarray
 
 
 def blender_command(path):

@@ -23,7 +23,7 @@ from ..certificate import certify_islands
 from ..errors import SceneFileError
 from ..meshio import Mesh
 from ..scheduling.atomic import atomic_path
-from . import SceneMesh
+from .model import SceneMesh
 from .weld import welded
 from .gltf_io import (ARRAY_BUFFER, COMPONENT_TYPE, ELEMENT_ARRAY_BUFFER, BufferWriter,
                       read_gltf, rebase_uris, write_glb, write_gltf_json)

@@ -25,7 +25,7 @@ from ..certificate import certify_islands
 from ..errors import SceneFileError
 from ..meshio import Mesh
 from ..scheduling.atomic import atomic_path
-from . import SceneMesh
+from .model import SceneMesh
 
 
 def _pxr():
