@@ -174,3 +174,48 @@ def test_malformed_stage_names_the_prim(tmp_path, capsys):
     (tmp_path / "junk.usda").write_text("this is not usd")
     with pytest.raises(SceneFileError, match="junk.usda"):
         read_scene(str(tmp_path / "junk.usda"))
+
+
+def test_holes_instances_and_points_only_time_sampled(tmp_path):
+    """A hole is not unwrapped (its corners get one value); a mesh inside an instanceable prim is
+    reported, not written; points with time samples only are unwrapped at the first sample."""
+    stage = Usd.Stage.CreateNew(str(tmp_path / "a.usda"))
+    V, counts, idx = quad_grid(5, 4, bump=False)
+    m = UsdGeom.Mesh.Define(stage, "/Holed")
+    m.CreatePointsAttr().Set(Vt.Vec3fArray.FromNumpy(V.astype(np.float32)), 1.0)
+    m.GetPointsAttr().Set(Vt.Vec3fArray.FromNumpy((2 * V).astype(np.float32)), 5.0)
+    m.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(counts.astype(np.int32)))
+    m.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(idx.astype(np.int32)))
+    m.CreateHoleIndicesAttr([5])                       # an interior quad
+    proto = stage.CreateClassPrim("/Proto")              # abstract: only its instance is seen
+    leaf = UsdGeom.Mesh.Define(stage, "/Proto/Leaf")
+    leaf.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(V.astype(np.float32)))
+    leaf.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(counts.astype(np.int32)))
+    leaf.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(idx.astype(np.int32)))
+    inst = stage.DefinePrim("/Inst")
+    inst.GetReferences().AddInternalReference("/Proto")
+    inst.SetInstanceable(True)
+    stage.GetRootLayer().Save()
+    assert proto
+    out = tmp_path / "b.usda"
+    assert main(["unwrap", str(tmp_path / "a.usda"), "-o", str(out), "--bound", "3",
+                 "--report", str(tmp_path / "r.json")]) == 1          # the instance is not done
+    entries = {e["name"]: e for e in json.loads((tmp_path / "r.json").read_text())["meshes"]}
+    holed = entries["/Holed"]
+    assert holed["status"] == "certified" and holed["faces"] == 2 * (len(counts) - 1)
+    assert any("time 1" in w for w in holed["warnings"])
+    (inst_entry,) = [e for p, e in entries.items() if p != "/Holed" and p != "/Proto/Leaf"]
+    assert "instanceable" in inst_entry["message"] and inst_entry["status"] == "failed"
+    stage_out = Usd.Stage.Open(str(out))
+    pv = UsdGeom.PrimvarsAPI(stage_out.GetPrimAtPath("/Holed")).GetPrimvar("st")
+    fv = np.asarray(pv.GetIndices()).reshape(-1, 4)
+    assert len(set(fv[5].tolist())) == 1                                 # the hole's corners
+    keep = np.ones(len(counts), bool)
+    keep[5] = False
+    uv = np.asarray(pv.Get(), np.float64)[fv[keep]]                      # (q,4,2) quads
+    P = np.asarray(V, np.float64)[idx.reshape(-1, 4)[keep]]
+    T = np.array([[0, 1, 2], [0, 2, 3]])
+    tri_uv = uv[:, T].reshape(-1, 3, 2)
+    D, flipped = reference_distortion(P[:, T].reshape(-1, 3), np.arange(3 * len(tri_uv))
+                                      .reshape(-1, 3), tri_uv)
+    assert not flipped.any() and D.max() <= holed["bound_certified"] * (1 + 1e-9)
