@@ -16,6 +16,7 @@ set are dropped with a warning (a viewer then derives MikkTSpace tangents, as gl
 New accessors are appended; everything else in the document is kept as read.
 """
 import os
+from urllib.parse import quote, unquote
 
 import numpy as np
 
@@ -107,6 +108,7 @@ class GltfScene:
         """
         gf, doc = self.gf, self.gf.doc
         out_dir = os.path.dirname(os.path.abspath(path))
+        inputs = input_files(doc, gf.path)
         rebase_uris(doc, os.path.dirname(os.path.abspath(gf.path)), out_dir)
         glb_out = path.lower().endswith(".glb")
         buffers = doc.setdefault("buffers", [])
@@ -122,10 +124,16 @@ class GltfScene:
         else:
             for i, b in enumerate(buffers):   # a GLB's own buffer becomes a file beside the .gltf
                 if "uri" not in b:
-                    b["uri"] = f"{stem}.bin" if i == 0 else f"{stem}.{i}.bin"
+                    b["uri"] = quote(f"{stem}.bd-uv-{i}.bin")
                     extra_files[b["uri"]] = gf.buffers[i]
-            buffers.append({"uri": f"{stem}.bd-uv.bin", "byteLength": 0})
+            buffers.append({"uri": quote(f"{stem}.bd-uv.bin"), "byteLength": 0})
             writer = BufferWriter(doc, len(buffers) - 1)
+        written = [path] + [os.path.join(out_dir, unquote(name)) for name in extra_files] + (
+            [] if glb_out else [os.path.join(out_dir, unquote(buffers[-1]["uri"]))])
+        clash = [w for w in written if os.path.realpath(w) in inputs]
+        if clash:
+            raise SceneFileError(f"{clash[0]} would overwrite a file {gf.path} uses; choose "
+                                 "another output name or folder")
         out = {}
         for k, ch in charts.items():
             out[k] = self._patch(k, ch, writer)
@@ -136,7 +144,7 @@ class GltfScene:
         else:
             extra_files[buffers[-1]["uri"]] = data
             for name, blob in extra_files.items():
-                with atomic_path(os.path.join(out_dir, name)) as tmp:
+                with atomic_path(os.path.join(out_dir, unquote(name))) as tmp:
                     with open(tmp, "wb") as fh:
                         fh.write(blob)
             with atomic_path(path) as tmp:
@@ -159,6 +167,18 @@ class GltfScene:
             warnings += _patch_primitive(self.gf, mesh, j, corner_vertex, uv32[lo:hi],
                                          self.uv_set, writer, sm.name)
         return certs, warnings
+
+
+def input_files(doc, path):
+    """Real paths of the file read and of every file its buffers and images name."""
+    folder = os.path.dirname(os.path.abspath(path))
+    out = {os.path.realpath(path)}
+    for key in ("buffers", "images"):
+        for item in doc.get(key, []):
+            uri = item.get("uri")
+            if uri and not uri.startswith("data:") and "://" not in uri:
+                out.add(os.path.realpath(os.path.join(folder, unquote(uri))))
+    return out
 
 
 def _refusal(gf, label, prims):

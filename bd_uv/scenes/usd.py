@@ -93,7 +93,10 @@ class UsdScene:
                     "not unwrapped: USD does not allow opinions on instance proxies; make the "
                     "prims not instanceable, or unwrap the referenced asset itself"))
                 parts.append(None)
-        return cls(path, uv_name, meshes, parts)
+        scene = cls(path, uv_name, meshes, parts)
+        scene.layers = {os.path.realpath(p) for p in (
+            layer.realPath for layer in stage.GetUsedLayers()) if p}
+        return scene
 
     def write(self, path, charts):
         """Write the output layer with the new primvar on every mesh in ``charts``.
@@ -103,6 +106,9 @@ class UsdScene:
         dict {mesh position: (list of Certificate of the UVs as stored, list of warnings)}
         """
         Sdf, Usd, UsdGeom, UsdUtils, Vt = _pxr()
+        if os.path.realpath(path) in self.layers | {os.path.realpath(self.path)}:
+            raise SceneFileError(f"{path} would overwrite a layer {self.path} uses; choose "
+                                 "another output name or folder")
         if not path.lower().endswith(".usdz"):
             with atomic_path(path) as tmp:
                 return self._write_layer(tmp, charts)

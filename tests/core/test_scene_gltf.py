@@ -226,3 +226,15 @@ def test_weld_joins_split_vertices_but_not_point_contacts():
     W2, G2 = welded(V2, F2)
     assert G2[2, 0] != G2[0, 0] and np.array_equal(W2[G2], V2[F2])
     assert len(W2) == 4 + 3
+
+
+def test_never_overwrites_a_file_the_input_uses(scene, tmp_path, capsys):
+    src, _, _ = scene
+    out = tmp_path / "out"
+    assert main(["unwrap", str(src / "scene.glb"), "-o", str(out / "o.gltf")]) == 0
+    assert sorted(os.listdir(out)) == ["o.bd-uv-0.bin", "o.bd-uv.bin", "o.gltf"]
+    shutil.copy(out / "o.gltf", out / "p.gltf")             # p.gltf uses o's .bin files
+    before = _digest(out)
+    assert main(["unwrap", str(out / "p.gltf"), "-o", str(out / "o.gltf")]) == 2
+    assert "o.bd-uv.bin would overwrite a file" in capsys.readouterr().err
+    assert _digest(out) == before

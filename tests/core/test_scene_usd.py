@@ -219,3 +219,11 @@ def test_holes_instances_and_points_only_time_sampled(tmp_path):
     D, flipped = reference_distortion(P[:, T].reshape(-1, 3), np.arange(3 * len(tri_uv))
                                       .reshape(-1, 3), tri_uv)
     assert not flipped.any() and D.max() <= holed["bound_certified"] * (1 + 1e-9)
+
+
+def test_never_overwrites_a_layer_the_input_uses(tmp_path, capsys):
+    shot, asset = build_stage(str(tmp_path))
+    before = _tree_digest(tmp_path)
+    assert main(["unwrap", shot, "-o", asset]) == 2
+    assert "would overwrite a layer" in capsys.readouterr().err
+    assert _tree_digest(tmp_path) == before
