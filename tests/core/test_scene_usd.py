@@ -8,15 +8,14 @@ import os
 import numpy as np
 import pytest
 
-pxr = pytest.importorskip("pxr")
-from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt  # noqa: E402
+from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt  # usd-core: requirements-dev.txt
 
-from bd_uv.cli import main  # noqa: E402
-from bd_uv.errors import SceneFileError  # noqa: E402
-from bd_uv.scenes import read_scene  # noqa: E402
-from helpers import reference_distortion  # noqa: E402
-from overlap_shapes import overlapping_triangle_pairs  # noqa: E402
-from usd_build import build_stage, quad_grid  # noqa: E402
+from bd_uv.cli import main
+from bd_uv.errors import SceneFileError
+from bd_uv.scenes import read_scene
+from helpers import reference_distortion
+from overlap_shapes import overlapping_triangle_pairs
+from usd_build import build_stage, quad_grid
 
 NEW = ("primvars:st", "primvars:st:indices")
 
