@@ -76,6 +76,20 @@ def add_scene_options(p):
                    help="USD: write the UVs to primvars:NAME (default st)")
 
 
+def scene_option_misuse(args, paths):
+    """An error message when ``--uv-set`` or ``--uv-name`` is given but no input is of the
+    format it applies to (an option is never accepted and ignored), else None."""
+    low = [p.lower() for p in paths]
+    if args.uv_set != 0 and not any(p.endswith((".gltf", ".glb")) for p in low):
+        return "--uv-set applies to glTF files (.gltf, .glb) only"
+    if args.uv_name != "st" and not any(p.endswith((".usd", ".usda", ".usdc", ".usdz"))
+                                        for p in low):
+        return "--uv-name applies to USD files (.usd, .usda, .usdc, .usdz) only"
+    if args.uv_set < 0:
+        return f"--uv-set must be 0 or more, not {args.uv_set}"
+    return None
+
+
 LAYOUT_OPTIONS = ("pack", "cut", "margin")
 
 

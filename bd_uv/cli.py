@@ -13,7 +13,8 @@ import numpy as np
 
 from .api import unwrap
 from .arguments import (add_layout_options, add_scene_options, add_solver_options,  # noqa: F401
-                        bound_arg, layout_kwargs, solver_kwargs, split_options)
+                        bound_arg, layout_kwargs, scene_option_misuse, solver_kwargs,
+                        split_options)
 from .batch import add_batch_parser
 from .batch.report import item_line
 from .batch.scene_files import unwrap_scene_file
@@ -46,6 +47,10 @@ class ProgressBar:
 
 
 def run_unwrap(args):
+    misuse = scene_option_misuse(args, [args.input])
+    if misuse:
+        print(f"error: {misuse}", file=sys.stderr)
+        return 2
     ext = os.path.splitext(args.input)[1].lower()
     if ext in SCENE_SUFFIXES or ext in BLENDER_SUFFIXES:
         if ext in BLENDER_SUFFIXES:

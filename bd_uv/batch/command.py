@@ -10,7 +10,7 @@ import sys
 import time
 
 from ..arguments import (add_layout_options, add_scene_options, add_solver_options,
-                         layout_kwargs, solver_kwargs)
+                         layout_kwargs, scene_option_misuse, solver_kwargs)
 from ..scenes import SCENE_SUFFIXES
 from ..scheduling import FileLimits, Ledger, Progress, options_sha256, read_previous, reusable
 from ..scheduling.atomic import remove_stale
@@ -109,6 +109,10 @@ def run_batch(args):
     if not files:
         print(f"error: no mesh or scene files in {' '.join(args.inputs)}",
               file=sys.stderr)
+        return 2
+    misuse = scene_option_misuse(args, files)
+    if misuse:
+        print(f"error: {misuse}", file=sys.stderr)
         return 2
     os.makedirs(args.output, exist_ok=True)
     if args.png:

@@ -238,3 +238,16 @@ def test_never_overwrites_a_file_the_input_uses(scene, tmp_path, capsys):
     assert main(["unwrap", str(out / "p.gltf"), "-o", str(out / "o.gltf")]) == 2
     assert "o.bd-uv.bin would overwrite a file" in capsys.readouterr().err
     assert _digest(out) == before
+
+
+def test_scene_options_are_never_ignored(scene, tmp_path, capsys):
+    src, _, _ = scene
+    obj = tmp_path / "a.obj"
+    obj.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    assert main(["unwrap", str(obj), "-o", str(tmp_path / "b.obj"), "--uv-set", "1"]) == 2
+    assert "--uv-set applies to glTF" in capsys.readouterr().err
+    assert main(["unwrap", str(src / "scene.glb"), "-o", str(tmp_path / "b.glb"),
+                 "--uv-name", "uv2"]) == 2
+    assert "--uv-name applies to USD" in capsys.readouterr().err
+    assert main(["batch", str(obj), "-o", str(tmp_path / "out"), "--uv-set", "2"]) == 2
+    assert not (tmp_path / "b.glb").exists()

@@ -226,3 +226,17 @@ def test_never_overwrites_a_layer_the_input_uses(tmp_path, capsys):
     assert main(["unwrap", shot, "-o", asset]) == 2
     assert "would overwrite a layer" in capsys.readouterr().err
     assert _tree_digest(tmp_path) == before
+
+
+def test_uv_name_writes_another_primvar_and_keeps_st(tmp_path):
+    shot, _ = build_stage(str(tmp_path / "in"))
+    out = tmp_path / "o.usda"
+    assert main(["unwrap", shot, "-o", str(out), "--bound", "3", "--uv-name", "lightmap"]) == 0
+    s_in, s_out = Usd.Stage.Open(shot), Usd.Stage.Open(str(out))
+    p_in = UsdGeom.PrimvarsAPI(s_in.GetPrimAtPath("/World/Panel"))
+    p_out = UsdGeom.PrimvarsAPI(s_out.GetPrimAtPath("/World/Panel"))
+    assert np.array_equal(np.asarray(p_in.GetPrimvar("st").Get()),
+                          np.asarray(p_out.GetPrimvar("st").Get()))
+    assert p_out.GetPrimvar("st").GetInterpolation() == UsdGeom.Tokens.vertex
+    lm = p_out.GetPrimvar("lightmap")
+    assert lm.GetInterpolation() == UsdGeom.Tokens.faceVarying and lm.IsIndexed()
