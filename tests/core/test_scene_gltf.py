@@ -251,3 +251,36 @@ def test_scene_options_are_never_ignored(scene, tmp_path, capsys):
     assert "--uv-name applies to USD" in capsys.readouterr().err
     assert main(["batch", str(obj), "-o", str(tmp_path / "out"), "--uv-set", "2"]) == 2
     assert not (tmp_path / "b.glb").exists()
+
+
+def test_primitives_sharing_accessors_unwrap_as_one_mesh(tmp_path):
+    """Two materials' primitives over one POSITION accessor: one welded surface, one chart
+    across both, each primitive rewritten on its own, every corner's position kept."""
+    b = Builder()
+    V, F, _ = seamed_grid()
+    pos = b.accessor(V.astype(np.float32), 5126, "VEC3", minmax=True)
+    half = len(F) // 2
+    prims = [{"attributes": {"POSITION": pos}, "material": k,
+              "indices": b.accessor(part.reshape(-1, 1), 5123, "SCALAR")}
+             for k, part in enumerate((F[:half], F[half:]))]
+    b.doc["meshes"] = [{"name": "Two", "primitives": prims}]
+    b.doc["nodes"] = [{"name": "N", "mesh": 0}]
+    b.doc["materials"] = [{"name": "a"}, {"name": "b"}]
+    b.write(str(tmp_path / "two.gltf"))
+    assert main(["unwrap", str(tmp_path / "two.gltf"), "-o", str(tmp_path / "o.glb"),
+                 "--seams", "none", "--report", str(tmp_path / "r.json")]) == 0
+    (entry,) = json.loads((tmp_path / "r.json").read_text())["meshes"]
+    r_in, r_out = Reader(str(tmp_path / "two.gltf")), Reader(str(tmp_path / "o.glb"))
+    p_out = r_out.doc["meshes"][0]["primitives"]
+    assert p_out[0]["attributes"]["POSITION"] != p_out[1]["attributes"]["POSITION"]
+    P, U = [], []
+    for p_i, p_o in zip(r_in.doc["meshes"][0]["primitives"], p_out):
+        assert np.array_equal(_corners(r_in, p_i, "POSITION"), _corners(r_out, p_o, "POSITION"))
+        P.append(_corners(r_out, p_o, "POSITION").astype(float))
+        U.append(_corners(r_out, p_o, "TEXCOORD_0").astype(float))
+    assert len(entry["islands"]) == 1          # welded (the split column too): one chart
+    P, U = np.concatenate(P).reshape(-1, 3, 3), np.concatenate(U).reshape(-1, 3, 2)
+    U[..., 1] = 1 - U[..., 1]
+    D, flipped = reference_distortion(P.reshape(-1, 3), np.arange(3 * len(P)).reshape(-1, 3), U)
+    assert not flipped.any() and D.max() <= entry["bound_certified"] * (1 + 1e-9)
+    assert len(overlapping_triangle_pairs(U)) == 0
