@@ -14,8 +14,9 @@ import numpy as np
 from .api import unwrap
 from .arguments import (add_layout_options, add_scene_options, add_solver_options,  # noqa: F401
                         bound_arg, layout_kwargs, scene_option_misuse, solver_kwargs,
-                        split_options)
+                        unwrap_options_of)
 from .batch import add_batch_parser
+from .batch.jobs import JobOptions
 from .batch.report import item_line
 from .batch.scene_files import unwrap_scene_file
 from .errors import BDError
@@ -56,28 +57,25 @@ def run_unwrap(args):
         if ext in BLENDER_SUFFIXES:
             read_scene(args.input)     # raises with the Blender command that handles the file
         return run_scene_unwrap(args)
+    options = unwrap_options_of(args)
     mesh = load_mesh(args.input)
-    seams = None
-    use_uv = args.seams == "uv" or (args.seams is None and mesh.corner_uv is not None)
-    if use_uv:
-        if mesh.corner_uv is None:
-            print(f"error: {args.input} has no UVs, so --seams uv has nothing to cut along",
-                  file=sys.stderr)
-            return 2
-        seams = mesh.uv_seams()
-    kwargs = solver_kwargs(args)
-    if args.frames == "input-uv":
+    if args.seams == "uv" and mesh.corner_uv is None:
+        print(f"error: {args.input} has no UVs, so --seams uv has nothing to cut along",
+              file=sys.stderr)
+        return 2
+    # The file's UV seams (when it has UVs), kept when seams are added too; none with --seams none.
+    seams = mesh.uv_seams() if args.seams != "none" and mesh.corner_uv is not None else None
+    initial_uv = None
+    if options.frames == "input-uv":
         if mesh.corner_uv is None:
             print(f"error: --frames input-uv needs UVs in {args.input}", file=sys.stderr)
             return 2
-        kwargs["initial_uv"] = mesh.corner_uv
-    if args.seams == "auto":
-        res = auto_seams(mesh, args, kwargs)
-        if res is None:
-            return 2
+        initial_uv = mesh.corner_uv
+    if options.seams_mode == "auto":
+        res = auto_seams(mesh, seams, options)
     else:
-        res = unwrap(mesh.V, mesh.F, seams=seams, progress=ProgressBar(), overlap=args.overlap,
-                     **kwargs)
+        res = unwrap(mesh.V, mesh.F, seams=seams, initial_uv=initial_uv, progress=ProgressBar(),
+                     options=options)
     layout = stored_layout(mesh.V, mesh.F, res, **layout_kwargs(args))
     uv, F_uv = layout.vertex_uv(mesh.F)
     write_obj(args.output, mesh.V, mesh.F, uv, F_uv)
@@ -114,16 +112,11 @@ def run_scene_unwrap(args):
                   f"{' or '.join(family if ins in family else ())} path, not {outs!r}",
                   file=sys.stderr)
             return 2
-    if args.seams == "auto" and args.bound == "auto":
-        print("error: --seams auto needs a numeric --bound C", file=sys.stderr)
-        return 2
-    options = {**solver_kwargs(args), **layout_kwargs(args)}
-    if args.seams == "auto":
-        options["auto_stretch"] = 2.0 if args.stretch is None else args.stretch
-    entries = unwrap_scene_file(args.input, args.output, options, args.seams, png=args.png,
-                                uv_set=args.uv_set, uv_name=args.uv_name)
+    options = JobOptions(unwrap_options_of(args), **layout_kwargs(args), uv_set=args.uv_set,
+                         uv_name=args.uv_name)
+    entries = unwrap_scene_file(args.input, args.output, options, args.seams, png=args.png)
     report = {"input": os.path.abspath(args.input), "output": os.path.abspath(args.output),
-              "options": options, "meshes": entries}
+              "options": options.as_dict(), "meshes": entries}
     if args.report:
         os.makedirs(os.path.dirname(os.path.abspath(args.report)), exist_ok=True)
         with open(args.report, "w", encoding="utf-8") as fh:
@@ -146,24 +139,17 @@ def core_cuts(islands):
     return {"islands": len(first), "edges": sum(first.values())}
 
 
-def auto_seams(mesh, args, kwargs):
-    """``--seams auto``: the file's UV seams (if any) kept, more added where needed."""
-    if args.bound == "auto":
-        print("error: --seams auto needs a numeric --bound C", file=sys.stderr)
-        return None
-    if args.boundary != "free":
-        print("error: --seams auto makes free-boundary charts; use --boundary free with it",
-              file=sys.stderr)
-        return None
-    seams = mesh.uv_seams() if mesh.corner_uv is not None else None
-    res, added, info = unwrap_auto(mesh.V, mesh.F, seams=seams, bound=args.bound,
-                                   stretch=2.0 if args.stretch is None else args.stretch,
-                                   method=args.method, frames=args.frames,
-                                   cone=args.cone, progress=ProgressBar())
+def auto_seams(mesh, seams, options):
+    """Seams added where needed (``options.seams_mode == "auto"``): ``seams`` (the file's UV
+    seams, or None) kept, more added; prints what was added."""
+    res, added, info = unwrap_auto(mesh.V, mesh.F, seams=seams, bound=options.bound,
+                                   stretch=options.seams_stretch, method=options.method,
+                                   frames=options.frames, cone=options.cone,
+                                   progress=ProgressBar())
     print(f"seams auto: {info['charts']} charts, {len(added)} edges added, seam length "
           f"{info['seam_length']:.4g} ({100 * info['seam_length'] / info['edge_length']:.2f}% of "
           f"all edge length), max stretch {max(info['max_stretch'], default=1.0):.3f} <= "
-          f"{2.0 if args.stretch is None else args.stretch:g}")
+          f"{options.seams_stretch:g}")
     return res
 
 

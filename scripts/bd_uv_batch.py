@@ -355,7 +355,8 @@ def main(argv):
     imported = [f for f in blends if not f.lower().endswith(".blend")] + (
         [args.input] if args.input else [])
     blends = [f for f in blends if f.lower().endswith(".blend")]
-    options = arguments.solver_kwargs(args)
+    # Blender packs (--pack): the core neither packs nor cuts what it stores.
+    options = batch.JobOptions(arguments.unwrap_options_of(args))
     if args.png and importlib.util.find_spec("matplotlib") is None:
         print("error: --png needs matplotlib, which this Python (Blender's own) does not have: "
               "install it into Blender's Python (<blender python> -m pip install matplotlib), "

@@ -10,11 +10,11 @@ import sys
 import time
 
 from ..arguments import (add_layout_options, add_scene_options, add_solver_options,
-                         layout_kwargs, scene_option_misuse, solver_kwargs)
-from ..scenes import SCENE_SUFFIXES
+                         layout_kwargs, scene_option_misuse, unwrap_options_of)
 from ..scheduling import FileLimits, Ledger, Progress, options_sha256, read_previous, reusable
 from ..scheduling.atomic import remove_stale
 from .files import _size, input_files, plan, run_tasks
+from .jobs import JobOptions
 from .report import batch_report, item_line
 
 
@@ -114,22 +114,12 @@ def run_batch(args):
     if misuse:
         print(f"error: {misuse}", file=sys.stderr)
         return 2
+    options = JobOptions(unwrap_options_of(args), **layout_kwargs(args), uv_set=args.uv_set,
+                         uv_name=args.uv_name)
     os.makedirs(args.output, exist_ok=True)
     if args.png:
         os.makedirs(args.png, exist_ok=True)
     tasks = plan(files, args.output, args.png)
-    options = {**solver_kwargs(args), **layout_kwargs(args)}
-    if any(f.lower().endswith(SCENE_SUFFIXES) for f in files):   # where a scene's UVs go
-        options.update(uv_set=args.uv_set, uv_name=args.uv_name)
-    if args.seams == "auto":
-        if args.bound == "auto":
-            print("error: --seams auto needs a numeric --bound C", file=sys.stderr)
-            return 2
-        if args.boundary != "free":
-            print("error: --seams auto makes free-boundary charts; use --boundary free with it",
-                  file=sys.stderr)
-            return 2
-        options["auto_stretch"] = 2.0 if args.stretch is None else args.stretch
     report_path = args.report or os.path.join(args.output, "report.json")
     collisions = [t for t in tasks if os.path.abspath(t.output) == os.path.abspath(t.path)]
     if collisions:

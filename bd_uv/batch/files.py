@@ -21,14 +21,11 @@ from ..scenes import BLENDER_SUFFIXES, SCENE_SUFFIXES, blender_command
 from ..scheduling import run_pool
 from ..scheduling.atomic import atomic_path
 from ..scheduling.cluster import run_dask
-from .jobs import Job, failed_entry, unwrap_job
+from .jobs import Job, JobOptions, failed_entry, unwrap_job
 from .scene_files import unwrap_scene_file
 
 MESH_SUFFIXES = (".obj", ".off", ".ply")
 BLEND_SUFFIX = ".blend"
-# glTF and USD (SCENE_SUFFIXES) are read and written whole by bd_uv.scenes; FBX, Alembic, Collada
-# and STL (BLENDER_SUFFIXES) go through the Blender script like a .blend (an STL, which stores no
-# UVs, comes out as a .blend).
 # The Blender script of the extension: next to bd_uv/ in a clone or an installed extension; a pip
 # install of bd-uv has only the core, so .blend files there need BD_UV_BLENDER_SCRIPT.
 SCRIPT = os.environ.get("BD_UV_BLENDER_SCRIPT") or os.path.join(
@@ -50,12 +47,11 @@ def _unwrap_file(task, options, seams_mode):
     base = {"input": os.path.abspath(task.path), "object": None, "output": None}
     try:
         ext = os.path.splitext(task.path)[1].lower()
-        if ext in BLENDER_SUFFIXES:
+        if ext in BLENDER_SUFFIXES:   # FBX, Alembic, Collada, STL too: Blender reads them
             return _unwrap_blend(task, options, base)
-        if ext in SCENE_SUFFIXES:
+        if ext in SCENE_SUFFIXES:     # glTF and USD: read and written whole by bd_uv.scenes
             return unwrap_scene_file(task.path, task.output, options, seams_mode, png=task.png,
-                                     uv_set=options.get("uv_set", 0),
-                                     uv_name=options.get("uv_name", "st"), base=base)
+                                     base=base)
         mesh = load_mesh(task.path)
         seams = None
         if seams_mode == "uv" or (seams_mode in (None, "auto") and mesh.corner_uv is not None):
@@ -110,18 +106,18 @@ def _unwrap_blend(task, options, base):
 
 
 def _script_options(options):
-    """``options`` (unwrap keyword arguments) as the Blender script's command-line flags."""
-    out = ["--method", options["method"], "--bound", str(options["bound"]),
-           "--frames", options["frames"], "--bound-limit", str(options["bound_limit"]),
-           "--cone", options["cone"]]
-    if not options["raise_bound"]:
+    """``options`` (JobOptions) as the Blender script's command-line flags."""
+    o = JobOptions.of(options).unwrap
+    out = ["--method", o.method, "--bound", str(o.bound), "--frames", o.frames,
+           "--bound-limit", str(o.bound_limit), "--cone", o.cone]
+    if not o.raise_bound:
         out.append("--no-raise")
-    if options.get("time_budget") is not None:
-        out += ["--time-budget", str(options["time_budget"])]
-    if options.get("boundary", "free") != "free":
-        out += ["--boundary", options["boundary"]]
-    if options.get("stretch") is not None:
-        out += ["--stretch", str(options["stretch"])]
+    if o.time_budget is not None:
+        out += ["--time-budget", str(o.time_budget)]
+    if o.boundary != "free":
+        out += ["--boundary", o.boundary]
+    if o.stretch is not None:
+        out += ["--stretch", str(o.stretch)]
     return out
 
 
@@ -149,7 +145,7 @@ def plan(files, out_dir, png_dir=None):
     tasks, used = [], set()
     for path in files:
         stem, ext = os.path.splitext(os.path.basename(path))
-        low = ext.lower()
+        low = ext.lower()   # a scene is written in its own format; an STL (no UVs) as a .blend
         out_ext = (BLEND_SUFFIX if low == ".stl" else low) if low in SCENE_SUFFIXES + \
             BLENDER_SUFFIXES else ".obj"
         name, k = stem, 1

@@ -15,21 +15,19 @@ from ..certificate import certificate_totals
 from ..errors import BDError
 from ..scenes import Charts, read_scene
 from ..scheduling.entries import failed_entry
-from .jobs import Job, unwrap_job
+from .jobs import Job, JobOptions, unwrap_job
 
 
-def unwrap_scene_file(path, output, options, seams_mode=None, png=None, uv_set=0, uv_name="st",
-                      base=None):
+def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=None):
     """Unwrap every mesh of ``path`` and write the scene to ``output``.
 
     Parameters
     ----------
     path, output : str, the scene file read and the one written (same family: glTF or USD)
-    options : dict, the unwrap and layout options (``solver_kwargs`` and ``layout_kwargs``)
+    options : JobOptions (or what ``JobOptions.of`` takes): the unwrap and layout options, and
+        where the UVs go (``uv_set``: glTF ``TEXCOORD_<uv_set>``; ``uv_name``: USD primvar)
     seams_mode : None | "uv" | "none" | "auto", as for OBJ files (the file's UVs give seams)
     png : str or None, ``png`` path pattern: ``<stem>-<k>.png`` per mesh is drawn beside it
-    uv_set : int, glTF ``TEXCOORD_<uv_set>`` written
-    uv_name : str, USD primvar written (``st``)
     base : dict, fields every entry starts with (input, object, output)
 
     Returns
@@ -39,7 +37,8 @@ def unwrap_scene_file(path, output, options, seams_mode=None, png=None, uv_set=0
     if os.path.abspath(path) == os.path.abspath(output):
         raise BDError(f"{output} would overwrite its input; choose another output")
     base = dict(base or {"input": os.path.abspath(path), "object": None, "output": None})
-    scene = read_scene(path, uv_set=uv_set, uv_name=uv_name)
+    options = JobOptions.of(options)
+    scene = read_scene(path, uv_set=options.uv_set, uv_name=options.uv_name)
     if not scene.meshes:
         raise BDError(f"{path} holds no triangle or polygon mesh")
     entries, charts = [], {}
