@@ -266,6 +266,7 @@ class UV_OT_bd_live(bpy.types.Operator):
             return self._end(context, {'FINISHED'} if ok else {'CANCELLED'},
                              {'INFO'} if ok else {'WARNING'}, message)
         context.area.header_text_set(drag.header())
+        context.area.tag_redraw()                       # the UVs and the overlay of a frame
         return {'RUNNING_MODAL'}
 
     def _end(self, context, result, level, message):
