@@ -15,9 +15,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from .energies import energy, jacobian_operators, stretch_l1_program
-from .errors import CancelledError, InfeasibleError, OverlapError
-from .live.drag import drag_to
-from .live.steps import LIVE_METHODS
+from .errors import CancelledError, InfeasibleError
+from .live.drag import mend_overlap
 from .overlap import island_overlaps
 from .frames import _solve_fixed, frames_from_map
 from .geometry import local_coordinates
@@ -317,36 +316,10 @@ def deform(V2, F, handles, positions, method="lscm", bound=5.0, frames="rest", p
     mended = False
     ov = island_overlaps(F, corner, np.zeros(len(F), dtype=np.int64), 1)
     if not ov.overlap_free[0]:
-        uv, D = _mend_overlap(V2, F, handles, positions, method, bound, stretch, cone, ov)
+        uv, D = mend_overlap(V2, F, handles, positions, method, bound, stretch, cone, ov)
         u = ((uv[:, 0] - c[0]) + 1j * (uv[:, 1] - c[1])) / s
         mended = True
     e = energy_value(method, ops, u, frames_from_map(alpha_of(ops, u)))
     return DeformResult(uv, D, float(D.max()), 0, float(bound), e, solves, iters,
                         time.perf_counter() - t0, True, mended)
 
-
-def _mend_overlap(V2, F, handles, positions, method, bound, stretch, cone, ov):
-    """The deformation laid the island over itself: drag the handles there in certified steps
-    (``live.drag``) and return its (uv (n,2), distortion (m,)), or raise ``OverlapError``."""
-    what = (f"the deformation would lay the island over itself ({int(ov.crossings[0])} crossing "
-            f"boundary segment pairs, {int(ov.bad_loops[0])} loops on the wrong side)")
-    if method not in LIVE_METHODS or stretch is not None or cone != "soc":
-        raise OverlapError(what + f"; it is mended only for methods {LIVE_METHODS} without "
-                           "stretch bounds: move the handles less or pin more of the boundary")
-    if bound <= 1.0:
-        raise OverlapError(what + "; raise C above 1 to mend it")
-    frame = drag_to(V2, F, handles, positions, method, float(bound))
-    if frame.pin_error > 0:
-        raise OverlapError(what + ", and no overlap-free map within C meets the handles "
-                           f"(dragging them there in certified steps got within "
-                           f"{frame.pin_error:.3g}): move the handles less, pin more of the "
-                           "boundary or raise C")
-    uv = frame.uv.copy()
-    uv[handles] = positions
-    corner = uv[F]
-    V3 = np.column_stack([V2, np.zeros(len(V2))])
-    D = conformal_distortion(V3, F, corner)
-    ok = island_overlaps(F, corner, np.zeros(len(F), dtype=np.int64), 1).overlap_free[0]
-    if flipped_faces(V3, F, corner).any() or not np.all(D <= bound) or not ok:
-        raise OverlapError(what + "; the mended map did not certify: move the handles less")
-    return uv, D
