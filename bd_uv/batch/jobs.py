@@ -83,12 +83,16 @@ class JobOptions:
     cut : bool, cut an island whose stored UVs lie over themselves into overlap-free pieces
     margin : float, the shelf packing margin in the unit square (without ``pack_options``)
     pack_options : bd_uv.PackOptions or None, pack with the atlas packer (the command line's)
+    uv_set : int, where a glTF scene's UVs go: ``TEXCOORD_<uv_set>`` (``bd_uv.scenes``)
+    uv_name : str, where a USD scene's UVs go: ``primvars:<uv_name>``
     """
     unwrap: UnwrapOptions = field(default_factory=UnwrapOptions)
     pack: bool = False
     cut: bool = False
     margin: float = MARGIN
     pack_options: PackOptions = None
+    uv_set: int = 0
+    uv_name: str = "st"
 
     @classmethod
     def of(cls, options):
@@ -105,7 +109,8 @@ class JobOptions:
         solve = {k: v for k, v in options.items() if k in OPTION_NAMES}
         if "cut" in options:  # unwrap() itself cuts (or fails) an island whose UVs overlap
             solve["overlap"] = "cut" if options["cut"] else "fail"
-        layout = {k: options[k] for k in ("pack", "cut", "margin") if k in options}
+        layout = {k: options[k] for k in ("pack", "cut", "margin", "uv_set", "uv_name")
+                  if k in options}
         atlas = {k: options[k] for k in PACK_FIELDS if k in options}
         if atlas and options.get("pack"):
             layout["pack_options"] = PackOptions(**atlas)
@@ -113,12 +118,14 @@ class JobOptions:
 
     def as_dict(self):
         """Every option, flat and JSON-able (the report's "options", the journal's hash)."""
+        scene = {"uv_set": self.uv_set, "uv_name": self.uv_name} if (
+            self.uv_set, self.uv_name) != (0, "st") else {}   # as before for other files
         out = {**self.unwrap.as_dict(), "pack": self.pack, "cut": self.cut}
         if self.pack_options is None:
             out["margin"] = self.margin
         else:
             out.update({k: getattr(self.pack_options, k) for k in PACK_FIELDS})
-        return out
+        return {**out, **scene}
 
 
 def _num(x):
