@@ -44,7 +44,8 @@ def add_solver_options(p):
                    help="frame field: auto (conformal map if flip-free, else harmonic), harmonic, "
                         "conformal, input-uv (the file's UVs, eq. 4.21), constant (planar meshes)")
     p.add_argument("--bound-limit", type=float, default=1000.0,
-                   help="raise C up to this limit when infeasible (default 1000)")
+                   help="raise C up to this limit when infeasible (default 1000; with --seams "
+                        "needed or auto C is never raised: such an island gets seams)")
     p.add_argument("--no-raise", action="store_true", help="fail instead of raising C")
     p.add_argument("--cone", choices=("soc", "linf"), default="soc",
                    help="space: F_C with second-order cones (default) or F_C^inf (eq. 4.22)")
@@ -63,6 +64,18 @@ def add_solver_options(p):
                         "report says bijective: true when Theorems 5.1/5.2's premises hold")
 
 
+def seams_mode(args):
+    """The seams mode of parsed options: ``--seams`` as given, else "needed" (the marked seams,
+    i.e. the file's UV seams, kept and seams added only where an island cannot be certified)
+    unless an option needs the islands as they are: ``--bound auto``, ``--frames input-uv`` or a
+    fixed ``--boundary`` (then the old default: the file's UV seams, or the components)."""
+    if args.seams is not None:
+        return args.seams
+    if args.bound == "auto" or args.frames == "input-uv" or args.boundary != "free":
+        return None
+    return "needed"
+
+
 def solver_kwargs(args):
     """The unwrap() keyword arguments from parsed options."""
     kwargs = dict(method=args.method, bound=args.bound, frames=args.frames,
@@ -71,7 +84,8 @@ def solver_kwargs(args):
     if args.boundary != "free":  # absent by default: options hashed by --resume stay the same
         kwargs["boundary"] = args.boundary
     # getattr: scripts/bd_uv_batch.py shares these options but has no --seams
-    if args.stretch is not None and getattr(args, "seams", None) != "auto":
+    mode = seams_mode(args) if hasattr(args, "seams") else None
+    if args.stretch is not None and mode not in ("auto", "needed"):
         kwargs["stretch"] = args.stretch
     return kwargs
 
@@ -130,7 +144,8 @@ class ProgressBar:
 def run_unwrap(args):
     mesh = load_mesh(args.input)
     seams = None
-    use_uv = args.seams == "uv" or (args.seams is None and mesh.corner_uv is not None)
+    mode = seams_mode(args)
+    use_uv = mode == "uv" or (mode in (None, "needed") and mesh.corner_uv is not None)
     if use_uv:
         if mesh.corner_uv is None:
             print(f"error: {args.input} has no UVs, so --seams uv has nothing to cut along",
@@ -143,10 +158,13 @@ def run_unwrap(args):
             print(f"error: --frames input-uv needs UVs in {args.input}", file=sys.stderr)
             return 2
         kwargs["initial_uv"] = mesh.corner_uv
-    if args.seams == "auto":
+    extra = {}
+    if mode == "auto":
         res = auto_seams(mesh, args, kwargs)
         if res is None:
             return 2
+    elif mode == "needed":
+        res, extra = needed_seams(mesh, seams, args)
     else:
         res = unwrap(mesh.V, mesh.F, seams=seams, progress=ProgressBar(), overlap=args.overlap,
                      **kwargs)
@@ -154,7 +172,7 @@ def run_unwrap(args):
     uv, F_uv = layout.vertex_uv(mesh.F)
     write_obj(args.output, mesh.V, mesh.F, uv, F_uv)
     islands = layout.island_entries(res)
-    report = {"input": os.path.abspath(args.input), **res.report(), "islands": islands,
+    report = {"input": os.path.abspath(args.input), **res.report(), **extra, "islands": islands,
               "summary": layout.totals(), "layout_overlaps": layout.overlaps.tolist()}
     if args.report:
         os.makedirs(os.path.dirname(os.path.abspath(args.report)), exist_ok=True)
@@ -207,6 +225,25 @@ def auto_seams(mesh, args, kwargs):
     return res
 
 
+def needed_seams(mesh, seams, args):
+    """The default (no ``--seams``): the file's UV seams kept, the mesh repaired where it is not
+    a manifold, seams added only to islands that cannot be certified at C
+    (``bd_uv.seams.needed.unwrap_needed``). Returns (result, report keys)."""
+    from .seams.needed import AUTO_BOUND, AUTO_STRETCH, unwrap_needed
+    stretch = AUTO_STRETCH if args.stretch is None else args.stretch
+    res, added, info = unwrap_needed(mesh.V, mesh.F, seams=seams, bound=args.bound,
+                                     stretch=stretch, method=args.method, frames=args.frames,
+                                     cone=args.cone, overlap=args.overlap,
+                                     progress=ProgressBar())
+    for note in info["repair"]:
+        print(f"repaired: {note}")
+    print(f"seams: {len(added)} added (on {info['seam_islands']} island(s) that could not be "
+          f"certified as they were, at C = {min(args.bound, AUTO_BOUND):g}, stretch <= "
+          f"{stretch:g}); they are the UV discontinuities of {args.output} and \"seams_added\" "
+          "in the report")
+    return res, {"seams_mode": "needed", "seams_added": added.tolist(), "repair": info["repair"]}
+
+
 def _print_report(name, islands, layout, seconds, args, out):
     t = layout.totals()
     cut = core_cuts(islands)
@@ -240,10 +277,15 @@ def build_parser():
     p.add_argument("-o", "--output", required=True, help="output OBJ with UVs")
     add_solver_options(p)
     add_layout_options(p)
-    p.add_argument("--seams", choices=("uv", "none", "auto"), default=None,
-                   help="uv: cut where the file's UVs are discontinuous (default when the OBJ "
-                        "has vt); none: islands are the mesh's components; auto: add seams "
-                        "where needed (closed, genus, over C or --stretch)")
+    p.add_argument("--seams", choices=("needed", "uv", "none", "auto"), default=None,
+                   help="needed (the default): keep the file's UV seams (if it has vt), repair "
+                        "non-manifold vertices and edges, flipped parts and duplicate faces, and "
+                        "add seams only to islands that cannot be certified at C as they are "
+                        "(their charts at C = min(C, 2) and --stretch, default 2); uv: cut where "
+                        "the file's UVs are discontinuous, nothing added; none: islands are the "
+                        "mesh's components; auto: search seams on every island (closed, genus, "
+                        "over C or --stretch). Without --seams, --bound auto, --frames input-uv "
+                        "and a fixed --boundary take the islands as they are (uv, or none)")
     p.add_argument("--report", help="write the JSON report here")
     p.add_argument("--png", help="write a picture of the UV layout coloured by distortion")
     p.set_defaults(func=run_unwrap)

@@ -60,12 +60,18 @@ class IslandResult:
 
 @dataclass(frozen=True)
 class UnwrapResult:
-    """UVs of a whole mesh; ``corner_uv`` is NaN on faces of failed islands."""
+    """UVs of a whole mesh; ``corner_uv`` is NaN on faces of failed islands.
+
+    ``duplicate_of`` (m,) int64 or None: for a face left out of the solve as a duplicate
+    (``bd_uv.repair``), the face it duplicates (-1 for the others). Such a face is in no
+    island's ``faces``; its ``face_island`` and corner UVs are its twin's.
+    """
     corner_uv: np.ndarray
     face_island: np.ndarray
     islands: list
     seconds: float
     method: str
+    duplicate_of: np.ndarray = None
 
     @property
     def certified(self):
