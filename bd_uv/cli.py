@@ -69,11 +69,16 @@ def seams_mode(args):
     i.e. the file's UV seams, kept and seams added only where an island cannot be certified)
     unless an option needs the islands as they are: ``--bound auto``, ``--frames input-uv`` or a
     fixed ``--boundary`` (then the old default: the file's UV seams, or the components)."""
+    fixed = args.bound == "auto" or args.frames == "input-uv" or args.boundary != "free"
+    if args.seams == "needed" and fixed:
+        raise SystemExit("error: --seams needed adds seams at a numeric --bound with --frames "
+                         "auto and --boundary free; for --bound auto, --frames input-uv or a "
+                         "fixed --boundary choose --seams uv or none")
+    if args.seams == "marked":      # scripts/bd_uv_batch.py: the marked seams only
+        return None
     if args.seams is not None:
         return args.seams
-    if args.bound == "auto" or args.frames == "input-uv" or args.boundary != "free":
-        return None
-    return "needed"
+    return None if fixed else "needed"
 
 
 def solver_kwargs(args):
@@ -87,6 +92,8 @@ def solver_kwargs(args):
     mode = seams_mode(args) if hasattr(args, "seams") else None
     if args.stretch is not None and mode not in ("auto", "needed"):
         kwargs["stretch"] = args.stretch
+    if mode == "needed":  # unwrap_job: unwrap_needed (charts the search cuts within this S)
+        kwargs["needed_stretch"] = 2.0 if args.stretch is None else args.stretch
     return kwargs
 
 

@@ -13,7 +13,7 @@ import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty
 
 from .. import bd_uv
-from . import auto_seams, session
+from . import auto_seams, needed_seams, session
 from .background import BackgroundSolve
 from .editmode import edit_mesh_objects, object_mode
 
@@ -21,6 +21,8 @@ from .editmode import edit_mesh_objects, object_mode
 SOLVE = bd_uv.unwrap
 # ... and with Seams "Add Where Needed".
 AUTO_SOLVE = auto_seams.solve
+# ... and with Seams "Add Where Needed" (the default).
+NEEDED_SOLVE = needed_seams.solve
 
 
 
@@ -37,10 +39,14 @@ _METHODS = (
      "evens out texel density within the bound"),
 )
 _SEAMS = (
+    ('NEEDED', "Add Where Needed", "Keep the marked seams; add seams (marked on the mesh) only "
+     "to islands that cannot be certified within C as they are (closed meshes, handles), their "
+     "charts within C 2 and Limit Stretch; non-manifold vertices and edges and flipped parts "
+     "are split. With Minimise, From Current UVs, a fixed Boundary or pinned UVs: as Marked"),
     ('MARKED', "Marked", "Cut along the marked seams only: every island must be a disk"),
-    ('AUTO', "Add Where Needed", "Keep the marked seams and add seams where an island cannot "
-     "be unwrapped within C and Limit Stretch (closed meshes, handles, too much distortion); "
-     "the added seams are marked on the mesh"),
+    ('AUTO', "Search All Islands", "Keep the marked seams and search seams on every island, "
+     "also those already certifiable, until every chart is within C and Limit Stretch; the "
+     "added seams are marked on the mesh"),
 )
 _OVERLAP = (
     ('CUT', "Cut Into Pieces", "An island whose UVs would lie over themselves is cut into "
@@ -75,7 +81,7 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
     CANCELLED = "Unwrap cancelled: mesh and UVs unchanged"
 
     method: EnumProperty(name="Method", items=_METHODS, default='lscm')
-    seams: EnumProperty(name="Seams", items=_SEAMS, default='MARKED')
+    seams: EnumProperty(name="Seams", items=_SEAMS, default='NEEDED')
     overlap: EnumProperty(name="Overlaps", items=_OVERLAP, default='CUT')
     boundary: EnumProperty(name="Boundary", items=_BOUNDARY, default='free')
     stretch: FloatProperty(name="Limit Stretch", default=2.0, min=1.0, soft_min=1.1,
@@ -138,7 +144,7 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
             row = layout.row(heading="Limit Stretch")
             row.prop(self, "limit_stretch", text="")
             sub = row.row()
-            sub.active = self.limit_stretch
+            sub.active = self.limit_stretch or self.seams == 'NEEDED'  # added charts: always
             sub.prop(self, "stretch", text="")
         if self.seams == 'AUTO' or self.limit_stretch:
             problem = self._stretch_problem()
@@ -150,7 +156,7 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
         row.prop(self, "bound")
         layout.prop(self, "raise_bound")
         row = layout.row()
-        row.active = self.raise_bound and not self.minimise and self.seams != 'AUTO'
+        row.active = self.raise_bound and not self.minimise and self.seams == 'MARKED'
         row.prop(self, "bound_limit")
         layout.prop(self, "frames")
         layout.prop(self, "use_object_scale")
@@ -172,9 +178,21 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
         if gathered is None:
             return None
         batch, auto, args, kwargs = gathered
-        solve = AUTO_SOLVE if auto else functools.partial(auto_seams.whole_polygons, SOLVE,
-                                                          **session.polygon_ids(batch))
+        if auto == 'NEEDED':
+            solve = functools.partial(NEEDED_SOLVE, unwrap=SOLVE)
+        elif auto:
+            solve = AUTO_SOLVE
+        else:
+            solve = functools.partial(auto_seams.whole_polygons, SOLVE,
+                                      **session.polygon_ids(batch))
         return batch, solve, args, kwargs
+
+    def _needed(self, batch):
+        """Whether Seams "Add Where Needed" applies: not with Minimise, From Current UVs, a
+        fixed Boundary or pinned UVs (seams added cannot keep those; the islands are then
+        taken as marked)."""
+        return (self.seams == 'NEEDED' and not self.minimise and self.frames != 'input-uv'
+                and self.boundary == 'free' and not len(batch.pin_corners))
 
     def _gather(self, context):
         """Gather the batch, whether the seams are added (``auto_seams.solve``) and the solve's
@@ -189,6 +207,13 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                                        use_object_scale=self.use_object_scale,
                                        need_uvs=(self.frames == 'input-uv'
                                                  and self.seams != 'AUTO'))
+            if self._needed(batch):
+                args, kwargs = session.auto_arguments(
+                    batch, method=self.method, bound=self.bound, minimise=False,
+                    stretch=self.stretch, frames=self.frames)
+                if self.limit_stretch:
+                    kwargs["marked_stretch"] = self.stretch
+                return batch, 'NEEDED', args, kwargs
             if self.seams == 'AUTO':
                 args, kwargs = session.auto_arguments(
                     batch, method=self.method, bound=self.bound, minimise=self.minimise,
@@ -233,7 +258,7 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
         written (with a WARNING saying why; no seam is marked then)."""
         auto = solved if isinstance(solved, auto_seams.AutoSeams) else None
         result = auto.result if auto is not None else solved
-        stretch = self.stretch if auto is not None or self.limit_stretch else None
+        stretch = self.stretch if self.seams == 'AUTO' or self.limit_stretch else None
         with object_mode(context):
             written = session.write_back(batch, result)
         verified = None
@@ -248,8 +273,10 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
             with object_mode(context):
                 marked = session.mark_seams(batch, written, auto.added)
             summary = dataclasses.replace(summary, message=(
-                f"{summary.message}; {marked} seam{'s' if marked != 1 else ''} added, "
-                f"{auto.charts} chart{'s' if auto.charts != 1 else ''}"))
+                f"{summary.message}; {marked} seam{'s' if marked != 1 else ''} added (marked on "
+                f"the mesh: UV Editor or Edit Mode edges), "
+                f"{auto.charts} chart{'s' if auto.charts != 1 else ''}"
+                + "".join(f"; {note}" for note in auto.notes)))
         elif summary.written:
             cut = session.overlap_cuts(result)
             if len(cut):  # an island that overlapped itself was cut: show the artist where

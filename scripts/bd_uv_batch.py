@@ -10,7 +10,9 @@ With the ``bpy`` module (``pip install bpy``)::
 
     python bd_uv_batch.py scene.blend -- [same options]
 
-Each object is unwrapped along its seams, keeping its pinned UVs exactly, with the object's scale
+Each object is unwrapped along its marked seams, with seams added (and marked) only on islands
+that cannot be certified as they are (``--seams needed``, the default; closed meshes need no
+seams marked first) and the mesh repaired where it is not a manifold, keeping its pinned UVs exactly, with the object's scale
 applied like the ``uv.bd_unwrap`` operator, and with ``--pack`` the islands are packed by Blender's
 Pack Islands as the operator does. Then each island is certified again from the UV map as it will
 be saved (float32, packed or not) with its own bound, and an island that fails is put back before
@@ -88,6 +90,11 @@ def build_parser(cli):
     p.add_argument("--objects", nargs="+", metavar="NAME",
                    help="mesh objects to unwrap (default: every mesh object with faces)")
     cli.add_solver_options(p)
+    p.add_argument("--seams", choices=("needed", "marked"), default=None,
+                   help="needed (the default): the marked seams kept, the mesh repaired where "
+                        "it is not a manifold, seams added (and marked) only on islands that "
+                        "cannot be certified as they are; marked: the marked seams only, every "
+                        "island must be a disk. Objects with pinned UVs are unwrapped as marked")
     p.add_argument("--uv-map", metavar="NAME",
                    help="UV map to read pins from and write (default: the active one; created "
                         "when missing)")
@@ -196,6 +203,9 @@ def unwrap_objects(objects, args, batch, options, mesh_data, session, source):
                     name, initial = layer.name, mesh_data.loop_uvs(ob.data, layer.name)
                 entry["uv_map"] = mesh_data.write_corner_uvs(
                     ob.data, name, arrays.tri_loops, result.corner_uv, ok)
+                if entry.get("seams_added"):  # where to see them: the mesh's marked seams
+                    entry["seams_marked"] = int(mesh_data.mark_seams(
+                        ob.data, arrays.vertices[np.asarray(entry["seams_added"])]).sum())
                 written.append(Written(entry, ob, arrays, ok, result.result, initial))
         except Exception as exc:  # one object never stops the others
             entry = batch.failed_entry(ob.name, type(exc).__name__, f"{ob.name}: {exc}",

@@ -46,7 +46,7 @@ def _unwrap_file(task, options, seams_mode):
             return _unwrap_blend(task, options, base)
         mesh = load_mesh(task.path)
         seams = None
-        if seams_mode == "uv" or (seams_mode in (None, "auto") and mesh.corner_uv is not None):
+        if seams_mode == "uv" or (seams_mode in (None, "auto", "needed") and mesh.corner_uv is not None):
             if mesh.corner_uv is None:
                 raise BDError(f"{task.path} has no UVs, so --seams uv has nothing to cut along")
             seams = mesh.uv_seams()

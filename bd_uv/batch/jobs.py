@@ -105,7 +105,19 @@ def unwrap_job(job, options, png=None):
         if kwargs.get("frames") == "input-uv" and job.corner_uv is None:
             raise ValueError(f"{job.name} has no UVs to take frames from (--frames input-uv)")
         stretch = kwargs.pop("auto_stretch", None)
-        if stretch is not None:     # --seams auto: the file's own seams are kept, more added
+        needed = kwargs.pop("needed_stretch", None)
+        if needed is not None and "pin_corners" in kwargs:
+            needed = None           # pinned UVs: the islands as marked (seams cannot keep pins)
+        extra = {}
+        if needed is not None:      # the default: repair, seams added only where needed
+            from ..seams.needed import unwrap_needed
+            res, added, info = unwrap_needed(
+                job.V, job.F, seams=job.seams, bound=kwargs["bound"], stretch=needed,
+                polygons=job.face_groups, method=kwargs["method"], frames=kwargs["frames"],
+                cone=kwargs["cone"], overlap=kwargs.get("overlap", "cut"))
+            extra = {"seams_mode": "needed", "seams_added": added.tolist(),
+                     "repair": info["repair"]}
+        elif stretch is not None:     # --seams auto: the file's own seams are kept, more added
             from ..seams import unwrap_auto
             res = unwrap_auto(job.V, job.F, seams=job.seams, bound=kwargs["bound"],
                               stretch=stretch, method=kwargs["method"], frames=kwargs["frames"],
@@ -129,6 +141,7 @@ def unwrap_job(job, options, png=None):
     if w.any():
         D[w] = conformal_distortion(job.V, np.asarray(job.F)[w], layout.corner_uv[w])
     entry["islands"] = islands
+    entry.update(extra)
     entry["status"] = "certified" if not bad else ("partial" if ok else "failed")
     entry.update(overlapping=t["overlapping_unwrapped"], cut_edges=t["cut_edges"],
                  layout_overlaps=t["layout_overlaps"])
