@@ -1,0 +1,147 @@
+"""Issue 20: ``uv.bd_unwrap`` with every option at its default, as a new user runs it.
+
+Each of Blender's primitives, a closed genus-2 mesh made by others (CGAL's ``eight.off``,
+``tests/data``) and meshes with a bow-tie vertex or an edge of three faces: FINISHED, and every
+face certified from the UVs as stored (float32): no flipped face, max distortion within the
+default C = 5, recomputed here from an SVD per triangle (``conftest.triangle_distortion``). A mesh
+whose marked seams already make certifiable disks (``uv.seams_from_islands``) gets no new seam.
+"""
+import pathlib
+
+import numpy as np
+import pytest
+
+from conftest import add_suzanne_with_seams, bpy, loop_uv_array, set_mode, triangle_distortion
+from test_bad_input_blender import _get, last, run
+from test_operator_unwrap import SLACK, _loop_triangles
+
+C = 5.0  # the operator's default bound
+DATA = pathlib.Path(__file__).resolve().parents[1] / "data"
+
+PRIMITIVES = {
+    "uv_sphere": lambda: bpy.ops.mesh.primitive_uv_sphere_add(),
+    "cube": lambda: bpy.ops.mesh.primitive_cube_add(),
+    "torus": lambda: bpy.ops.mesh.primitive_torus_add(),
+    "cylinder": lambda: bpy.ops.mesh.primitive_cylinder_add(),
+    "cone": lambda: bpy.ops.mesh.primitive_cone_add(),
+    "ico_sphere": lambda: bpy.ops.mesh.primitive_ico_sphere_add(),
+    "grid": lambda: bpy.ops.mesh.primitive_grid_add(),
+    "suzanne": lambda: bpy.ops.mesh.primitive_monkey_add(),
+}
+
+
+def _seams(mesh):
+    return _get(mesh.edges, "use_seam", bool, len(mesh.edges))
+
+
+def _unwrap_defaults(capsys, obj):
+    """Select every face in Edit Mode and run the operator with no options; Object Mode after.
+
+    Returns (result, reports)."""
+    set_mode(obj, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    result, reports = run(capsys)
+    set_mode(obj, 'OBJECT')
+    return result, reports
+
+
+def _certified_as_stored(obj, bound=C):
+    """Every triangle's stored UVs: none flipped, distortion <= bound (float32 slack). Returns
+    the max distortion."""
+    V, tris, loops, _ = _loop_triangles(obj)
+    uv = loop_uv_array(obj.data)[loops]                      # (m,3,2) float32 as stored
+    D, det = triangle_distortion(V, tris, uv)
+    assert (det > 0).all(), f"{int((det <= 0).sum())} flipped triangles"
+    assert D.max() <= bound * SLACK, D.max()
+    return float(D.max())
+
+
+def _from_arrays(name, V, F):
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata([tuple(v) for v in V], [], [tuple(int(i) for i in f) for f in F])
+    mesh.update()
+    obj = bpy.data.objects.new(name, mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    return obj
+
+
+@pytest.mark.parametrize("name", list(PRIMITIVES))
+def test_every_primitive_unwraps_with_the_defaults(addon, capsys, name):
+    PRIMITIVES[name]()
+    obj = bpy.context.active_object
+    seams_before = _seams(obj.data)
+    result, reports = _unwrap_defaults(capsys, obj)
+    assert result == {'FINISHED'}, reports
+    assert last().islands >= 1
+    _certified_as_stored(obj)
+    # Marked seams are kept; the report says how many were added (and they are marked).
+    seams_after = _seams(obj.data)
+    assert not (seams_before & ~seams_after).any()
+    added = int((seams_after & ~seams_before).sum())
+    assert f"{added} seam{'s' if added != 1 else ''} added" in reports[-1][1]
+
+
+def test_closed_genus_two_mesh_not_made_by_us(addon, capsys):
+    from conftest import load_addon
+    core = load_addon().bd_uv
+    mesh = core.load_mesh(str(DATA / "eight.off"))
+    obj = _from_arrays("eight", mesh.V, mesh.F)
+    result, reports = _unwrap_defaults(capsys, obj)
+    assert result == {'FINISHED'}, reports
+    _certified_as_stored(obj)
+    # A closed genus-2 surface cannot be unwrapped without seams: some were added and marked.
+    assert _seams(obj.data).sum() > 0
+
+
+def test_marked_seams_that_make_disks_get_no_new_seam(addon, capsys):
+    obj = add_suzanne_with_seams()      # Smart UV Project's islands as seams
+    before = _seams(obj.data)
+    assert before.sum() > 0
+    result, reports = _unwrap_defaults(capsys, obj)
+    assert result == {'FINISHED'}, reports
+    np.testing.assert_array_equal(_seams(obj.data), before)
+    assert "0 seams added" in reports[-1][1]
+    _certified_as_stored(obj)
+
+
+def _grid(nx, ny):
+    xs, ys = np.meshgrid(np.arange(nx + 1, dtype=float), np.arange(ny + 1, dtype=float),
+                         indexing="ij")
+    V = np.stack([xs.ravel(), ys.ravel(), 0.1 * np.sin(xs.ravel() + ys.ravel())], axis=1)
+    i = np.arange(nx)[:, None] * (ny + 1) + np.arange(ny)[None, :]
+    quads = np.stack([i, i + ny + 1, i + ny + 2, i + 1], axis=-1).reshape(-1, 4)
+    return V, quads
+
+
+def test_bowtie_vertex_is_split_and_every_face_certified(addon, capsys):
+    # A 4 x 3 grid whose corner vertices (0,0) and (4,0) are one vertex: two fans meet there
+    # while the faces stay one connected piece (a bow-tie inside one island).
+    V, Q = _grid(4, 3)
+    far = 4 * 4
+    Q[Q == far] = 0
+    obj = _from_arrays("bowtie", V, Q)
+    result, reports = _unwrap_defaults(capsys, obj)
+    assert result == {'FINISHED'}, reports
+    assert "non-manifold vertex" in reports[-1][1]
+    _certified_as_stored(obj)
+
+
+def test_edge_of_three_faces_is_cut_and_every_face_certified(addon, capsys):
+    V, Q = _grid(3, 3)
+    a, b = 5, 9                                # an inner edge of the grid: (1,1)-(2,1)
+    assert any(set((a, b)) <= set(q) for q in Q.tolist())
+    V = np.vstack([V, [[1.5, 1.0, 1.0]]])
+    faces = [tuple(q) for q in Q.tolist()] + [(a, b, len(V) - 1)]
+    mesh = bpy.data.meshes.new("fin")
+    mesh.from_pydata([tuple(v) for v in V], [], faces)
+    mesh.update()
+    obj = bpy.data.objects.new("fin", mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    result, reports = _unwrap_defaults(capsys, obj)
+    assert result == {'FINISHED'}, reports
+    assert "three or more faces" in reports[-1][1]
+    _certified_as_stored(obj)
+    # The edge of three faces is marked as a seam (where the artist sees the cut).
+    ends = np.sort(_get(obj.data.edges, "vertices", np.int32, len(obj.data.edges), 2), axis=1)
+    edge = np.flatnonzero((ends[:, 0] == a) & (ends[:, 1] == b))
+    assert _seams(obj.data)[edge].all()
