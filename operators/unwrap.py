@@ -70,6 +70,14 @@ _FRAMES = (
 )
 
 
+def _adds_seams(op, batch):
+    """Whether Seams "Add Where Needed" applies: not with Minimise, From Current UVs, a fixed
+    Boundary or pinned UVs (seams added cannot keep those; the islands are then taken as
+    marked)."""
+    return (op.seams == 'NEEDED' and not op.minimise and op.frames != 'input-uv'
+            and op.boundary == 'free' and not len(batch.pin_corners))
+
+
 class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
     """Unwrap the selected faces with a certified bound on conformal distortion and no flipped
     faces (Bounded Distortion Mapping Spaces, Lipman 2012)"""
@@ -187,12 +195,6 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                                       **session.polygon_ids(batch))
         return batch, solve, args, kwargs
 
-    def _needed(self, batch):
-        """Whether Seams "Add Where Needed" applies: not with Minimise, From Current UVs, a
-        fixed Boundary or pinned UVs (seams added cannot keep those; the islands are then
-        taken as marked)."""
-        return (self.seams == 'NEEDED' and not self.minimise and self.frames != 'input-uv'
-                and self.boundary == 'free' and not len(batch.pin_corners))
 
     def _gather(self, context):
         """Gather the batch, whether the seams are added (``auto_seams.solve``) and the solve's
@@ -207,7 +209,7 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                                        use_object_scale=self.use_object_scale,
                                        need_uvs=(self.frames == 'input-uv'
                                                  and self.seams != 'AUTO'))
-            if self._needed(batch):
+            if _adds_seams(self, batch):
                 args, kwargs = session.auto_arguments(
                     batch, method=self.method, bound=self.bound, minimise=False,
                     stretch=self.stretch, frames=self.frames)
@@ -269,7 +271,8 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                 verified = session.verify_written(batch, result, written, stretch)
         summary = session.summarise(batch, result, written, seconds, verified, packed=self.pack,
                                     stretch=stretch)
-        if auto is not None and summary.written:
+        if auto is not None and summary.written and (len(auto.added) or auto.notes
+                                                     or self.seams == 'AUTO'):
             with object_mode(context):
                 marked = session.mark_seams(batch, written, auto.added)
             summary = dataclasses.replace(summary, message=(
