@@ -90,7 +90,7 @@ def solver_kwargs(args):
         kwargs["boundary"] = args.boundary
     # getattr: scripts/bd_uv_batch.py shares these options but has no --seams
     mode = seams_mode(args) if hasattr(args, "seams") else None
-    if args.stretch is not None and mode not in ("auto", "needed"):
+    if args.stretch is not None and mode != "auto":  # "needed": on the marked islands too
         kwargs["stretch"] = args.stretch
     if mode == "needed":  # unwrap_job: unwrap_needed (charts the search cuts within this S)
         kwargs["needed_stretch"] = 2.0 if args.stretch is None else args.stretch
@@ -239,7 +239,8 @@ def needed_seams(mesh, seams, args):
     from .seams.needed import AUTO_BOUND, AUTO_STRETCH, unwrap_needed
     stretch = AUTO_STRETCH if args.stretch is None else args.stretch
     res, added, info = unwrap_needed(mesh.V, mesh.F, seams=seams, bound=args.bound,
-                                     stretch=stretch, method=args.method, frames=args.frames,
+                                     stretch=stretch, marked_stretch=args.stretch,
+                                     method=args.method, frames=args.frames,
                                      cone=args.cone, overlap=args.overlap,
                                      progress=ProgressBar())
     for note in info["repair"]:

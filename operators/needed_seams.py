@@ -19,15 +19,15 @@ import numpy as np
 
 from ..bd_uv.repair import repair_mesh
 from ..bd_uv.seams.measure import splice
-from ..bd_uv.seams.needed import AUTO_BOUND, NEEDS_SEAMS, _local_pairs, _to_input
+from ..bd_uv.seams.needed import AUTO_BOUND, _local_pairs, _to_input, needs_seams
 from . import auto_seams
 
 __all__ = ["solve"]
 
 
 def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0,
-          marked_stretch=None, face_groups=None, method="lscm", frames="auto", progress=None,
-          cancel=None):
+          marked_stretch=None, face_groups=None, method="lscm", frames="auto", overlap="cut",
+          progress=None, cancel=None):
     """Unwrap with seams added only where an island cannot be certified.
 
     Parameters
@@ -40,6 +40,8 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
     stretch : float, S of the charts the seams added make
     marked_stretch : float, optional, Limit Stretch of the islands the marked seams make
     face_groups : (m,) int, optional, material of each triangle (seams prefer its boundaries)
+    overlap : "cut" | "fail", an island of the marked seams whose map lies over itself: cut
+        (and, failing that, given seams) or left as it was and named (Overlaps "Keep as One")
     method, frames, progress, cancel : as for ``bd_uv.unwrap``
 
     Returns
@@ -63,10 +65,9 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
     else:
         extra = {} if marked_stretch is None else {"stretch": float(marked_stretch)}
         res = auto_seams.whole_polygons(unwrap, V2, F2, tri_poly=tp, tri_loops=tl, seams=seams2,
-                                        bound=float(bound), raise_bound=False, overlap="cut",
+                                        bound=float(bound), raise_bound=False, overlap=overlap,
                                         face_groups=tp, **extra, **options)
-        bad = [r for r in res.islands
-               if r.status != "certified" and isinstance(r.error, NEEDS_SEAMS)]
+        bad = [r for r in res.islands if r.status != "certified" and needs_seams(r, overlap)]
         if bad:
             sub = np.sort(np.concatenate([r.faces for r in bad]))
             voc, Fl = np.unique(F2[sub], return_inverse=True)

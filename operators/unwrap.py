@@ -108,7 +108,9 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                            description="Find the smallest certified bound instead (optimal "
                            "quasi-conformal map; slower)")
     raise_bound: BoolProperty(name="Raise C Automatically", default=True,
-                              description="When no map within C exists, raise C up to the limit")
+                              description="Seams Marked: when no map within C exists, raise C "
+                              "up to the limit (with Add Where Needed such an island gets seams "
+                              "instead, C is never raised)")
     bound_limit: FloatProperty(name="Limit", default=100.0, min=1.0001, soft_max=1000.0,
                                description="Largest bound tried when raising C")
     frames: EnumProperty(name="Frames", items=_FRAMES, default='auto')
@@ -162,7 +164,9 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
         row = layout.row()
         row.active = not self.minimise
         row.prop(self, "bound")
-        layout.prop(self, "raise_bound")
+        row = layout.row()
+        row.active = self.seams == 'MARKED' or self.minimise  # Add Where Needed: seams instead
+        row.prop(self, "raise_bound")
         row = layout.row()
         row.active = self.raise_bound and not self.minimise and self.seams == 'MARKED'
         row.prop(self, "bound_limit")
@@ -210,9 +214,13 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                                        need_uvs=(self.frames == 'input-uv'
                                                  and self.seams != 'AUTO'))
             if _adds_seams(self, batch):
+                problem = self._stretch_problem() if self.limit_stretch else ""
+                if problem:
+                    raise session.UserError(problem)
                 args, kwargs = session.auto_arguments(
                     batch, method=self.method, bound=self.bound, minimise=False,
                     stretch=self.stretch, frames=self.frames)
+                kwargs["overlap"] = 'cut' if self.overlap == 'CUT' else 'fail'
                 if self.limit_stretch:
                     kwargs["marked_stretch"] = self.stretch
                 return batch, 'NEEDED', args, kwargs
@@ -276,9 +284,9 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
             with object_mode(context):
                 marked = session.mark_seams(batch, written, auto.added)
             summary = dataclasses.replace(summary, message=(
-                f"{summary.message}; {marked} seam{'s' if marked != 1 else ''} added (marked on "
-                f"the mesh: UV Editor or Edit Mode edges), "
+                f"{summary.message}; {marked} seam{'s' if marked != 1 else ''} added, "
                 f"{auto.charts} chart{'s' if auto.charts != 1 else ''}"
+                + (" (see the marked seams in Edit Mode)" if marked else "")
                 + "".join(f"; {note}" for note in auto.notes)))
         elif summary.written:
             cut = session.overlap_cuts(result)

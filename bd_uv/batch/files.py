@@ -110,6 +110,7 @@ def _script_options(options):
         out += ["--boundary", options["boundary"]]
     if options.get("stretch") is not None:
         out += ["--stretch", str(options["stretch"])]
+    out += ["--seams", "needed" if "needed_stretch" in options else "marked"]
     return out
 
 

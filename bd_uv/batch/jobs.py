@@ -113,7 +113,7 @@ def unwrap_job(job, options, png=None):
             from ..seams.needed import unwrap_needed
             res, added, info = unwrap_needed(
                 job.V, job.F, seams=job.seams, bound=kwargs["bound"], stretch=needed,
-                polygons=job.face_groups, method=kwargs["method"], frames=kwargs["frames"],
+                marked_stretch=kwargs.get("stretch"), polygons=job.face_groups, method=kwargs["method"], frames=kwargs["frames"],
                 cone=kwargs["cone"], overlap=kwargs.get("overlap", "cut"))
             extra = {"seams_mode": "needed", "seams_added": added.tolist(),
                      "repair": info["repair"]}

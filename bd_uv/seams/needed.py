@@ -37,8 +37,16 @@ AUTO_STRETCH = 2.0
 NEEDS_SEAMS = (ClosedIslandError, TopologyError, InfeasibleError, SolverError, OverlapError)
 
 
+def needs_seams(island, overlap="cut"):
+    """Whether a failed ``IslandResult`` goes to the seam search: its error is one seams fix,
+    and not an overlap the caller asked to keep (``overlap="fail"``: named, not cut)."""
+    if overlap == "fail" and isinstance(island.error, OverlapError):
+        return False
+    return isinstance(island.error, NEEDS_SEAMS)
+
+
 def unwrap_needed(V, F, seams=None, bound=5.0, stretch=AUTO_STRETCH, auto_bound=AUTO_BOUND,
-                  polygons=None, method="lscm", frames="auto", cone="soc", overlap="cut",
+                  marked_stretch=None, polygons=None, method="lscm", frames="auto", cone="soc", overlap="cut",
                   repair=True, progress=None, cancel=None):
     """Unwrap with the marked seams, adding seams only to islands that cannot be certified.
 
@@ -51,8 +59,12 @@ def unwrap_needed(V, F, seams=None, bound=5.0, stretch=AUTO_STRETCH, auto_bound=
         certified map within C gets seams instead)
     stretch : float, S for the charts the seam search makes (``unwrap_auto``)
     auto_bound : float, C for those charts is ``min(bound, auto_bound)``
+    marked_stretch : float, optional, S for the islands the marked seams make too (``unwrap``'s
+        ``stretch``: Limit Stretch on every island)
     polygons : (m,) int array, optional, the polygon of each triangle (kept in one chart)
-    method, frames, cone, overlap, progress, cancel : as for ``bd_uv.unwrap``
+    method, frames, cone, progress, cancel : as for ``bd_uv.unwrap``
+    overlap : "cut" | "fail", an island whose map lies over itself: cut into pieces (and, when
+        that fails, given seams), or failed and named
     repair : bool, repair the mesh first (``repair.repair_mesh``); without, a messy island
         fails as it does in ``unwrap``
 
@@ -79,10 +91,10 @@ def unwrap_needed(V, F, seams=None, bound=5.0, stretch=AUTO_STRETCH, auto_bound=
     added = np.zeros((0, 2), dtype=np.int64)
     sent = 0
     if len(F2):
+        extra = {} if marked_stretch is None else {"stretch": float(marked_stretch)}
         res = unwrap(V2, F2, seams=seams2, bound=float(bound), raise_bound=False,
-                     overlap=overlap, face_groups=poly, **options)
-        bad = [r for r in res.islands
-               if r.status != "certified" and isinstance(r.error, NEEDS_SEAMS)]
+                     overlap=overlap, face_groups=poly, **extra, **options)
+        bad = [r for r in res.islands if r.status != "certified" and needs_seams(r, overlap)]
         if bad:
             sent = len(bad)
             sub = np.sort(np.concatenate([r.faces for r in bad]))

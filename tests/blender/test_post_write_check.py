@@ -116,7 +116,8 @@ def test_raised_bound_is_named_per_island(addon, capsys):
     obj = add_grid(6, 5)
     set_mode(obj, 'EDIT')
     bpy.ops.mesh.select_all(action='SELECT')
-    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=1.001, bound_limit=50.0) == {'FINISHED'}
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=1.001, bound_limit=50.0,
+                                seams='MARKED') == {'FINISHED'}
     last = bpy.context.window_manager.bd_uv_last_result
     m = re.search(r"; C raised from 1\.001: island 0 of Grid \(30 faces\) to ([\d.]+)$",
                   last.report)
@@ -148,7 +149,9 @@ def test_fin_is_named_in_polygons(addon, capsys):
     bmesh.update_edit_mesh(obj.data)
     bpy.ops.mesh.select_all(action='SELECT')
     capsys.readouterr()
-    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=3.0) == {'FINISHED'}
+    # Seams Marked refuses the fin's island (the default, Add Where Needed, cuts the edge:
+    # test_first_contact.py).
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=3.0, seams='MARKED') == {'FINISHED'}
     out = capsys.readouterr().out
     assert out.startswith("Warning: BD-LSCM: 1 island, "), out
     report = bpy.context.window_manager.bd_uv_last_result.report
@@ -372,8 +375,8 @@ def test_frames_from_current_uvs_keep_the_current_layout(addon):
 
 
 def test_batch_script_carries_on_past_a_closed_mesh_named_in_polygons(empty_scene, tmp_path):
-    """A closed cube among the objects: the script reports it (6 faces, not 12 triangles) and
-    goes on to unwrap and save the others."""
+    """A closed cube among the objects, with --seams marked: the script reports it (6 faces, not
+    12 triangles) and goes on to unwrap and save the others (the default adds its seams)."""
     import json
 
     grid = add_grid(4, 4)
@@ -384,7 +387,7 @@ def test_batch_script_carries_on_past_a_closed_mesh_named_in_polygons(empty_scen
     bpy.ops.wm.save_as_mainfile(filepath=str(blend))
     script = _load_script()
     assert script.main([str(script.__file__), str(blend), "--", "--output", str(out),
-                        "--report", str(report)]) == 1
+                        "--report", str(report), "--seams", "marked"]) == 1
     rep = {e["object"]: e for e in json.loads(report.read_text())["items"]}
     assert rep["Grid"]["status"] == "certified" and rep["Cube"]["status"] == "failed"
     assert rep["Cube"]["polygons"] == 6 and rep["Cube"]["islands"][0]["polygons"] == 6
