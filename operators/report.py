@@ -164,7 +164,10 @@ def summarise(batch, result, written, seconds, verified=None, packed=False, stre
             text = (f"its stored UVs fail the certificate ({why}); " + (
                 "packing shrank or moved it too far: unwrap it without packing" if packed
                 else "float32 storage changed it"))
-        parts.append(f"{_name(batch, result, c.stored.island, names)} put back as it was: {text}")
+        where = (f" (moved {c.moved_tiles} UV tile{'s' if c.moved_tiles != 1 else ''} right, "
+                 "off the written islands it lay over)" if c.moved_tiles else "")
+        parts.append(f"{_name(batch, result, c.stored.island, names)} put back as it was"
+                     f"{where}: {text}")
     if len(back) > LISTED:
         parts.append(f"{len(back) - LISTED} more islands put back as they were")
     n_overlaps = 0

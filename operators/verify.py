@@ -2,6 +2,7 @@
 those that fail get their previous UVs back."""
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import bpy
@@ -19,6 +20,7 @@ class Checked:
     area: float                # 3D area (weights the mean)
     stored: object             # stored.StoredIsland
     put_back: bool
+    moved_tiles: int = 0       # put back moved right by this many whole tiles, off the atlas
 
 
 @dataclass
@@ -32,24 +34,40 @@ class Verified:
 
 def _restore(ob, part, w, undo):
     """Give the triangles ``undo`` (m_i,) bool of ``part`` back the UVs they had; remove the map
-    ``write_back`` created when nothing written is left on it."""
+    ``write_back`` created when nothing written is left on it.
+
+    When the UVs put back would lie over the islands kept (a new map's default squares, or old
+    UVs under the packed atlas) they go back moved right by whole tiles, beside the atlas.
+
+    Returns
+    -------
+    int, the whole tiles the UVs put back were moved right by (0: exactly as they were)
+    """
     mesh = ob.data
+    kept = w.faces & ~undo
+    name = w.created_map or part.arrays.uv_name
+    if w.created_map:
+        layer = mesh.uv_layers.get(w.created_map)
+        if layer is None:
+            return 0
+        if not kept.any():
+            mesh.uv_layers.remove(layer)
+            mesh.update()
+            return 0
+    now = mesh_data.loop_uvs(mesh, name)
+    back = part.arrays.tri_loops[undo].ravel()
+    old = (w.initial_uv[back] if w.created_map
+           else np.asarray(part.arrays.corner_uv, np.float64)[undo].reshape(-1, 2))
+    tiles = stored.tiles_off(now[part.arrays.tri_loops[kept].ravel()], old)
     if not w.created_map:
+        shifted = np.asarray(part.arrays.corner_uv, np.float64) + np.array([tiles, 0.0])
         mesh_data.write_corner_uvs(mesh, part.arrays.uv_name, part.arrays.tri_loops,
-                                   part.arrays.corner_uv, undo)
-        return
-    layer = mesh.uv_layers.get(w.created_map)
-    if layer is None:
-        return
-    if not (w.faces & ~undo).any():
-        mesh.uv_layers.remove(layer)
-        mesh.update()
-        return
-    uv = mesh_data.loop_uvs(mesh, w.created_map)
-    loops = part.arrays.tri_loops[undo].ravel()
-    uv[loops] = w.initial_uv[loops]
-    layer.uv.foreach_set("vector", uv.ravel())
+                                   shifted if tiles else part.arrays.corner_uv, undo)
+        return tiles
+    now[back] = old + np.array([tiles, 0.0], dtype=now.dtype)
+    layer.uv.foreach_set("vector", now.ravel())
     mesh.update()
+    return tiles
 
 
 def _normalized(part, islands, n):
@@ -100,7 +118,10 @@ def verify_written(batch, result, written, stretch=None):
                                float(island_area[c.island]), c, not c.certified)
                        for c in checks)
         if undo.any():
-            _restore(ob, part, w, undo)
+            tiles = _restore(ob, part, w, undo)
+            if tiles:
+                checked[-len(checks):] = [dataclasses.replace(c, moved_tiles=tiles)
+                                          if c.put_back else c for c in checked[-len(checks):]]
             w.faces = w.faces & ~undo
             labels = np.where(w.faces, islands, -1)
         if len(np.unique(labels[labels >= 0])) > 1:

@@ -251,23 +251,37 @@ def pack(written, session, margin, shape):
             layers.active = layers[active]
 
 
-def _put_back(w, undo, mesh_data):
+def _put_back(w, undo, mesh_data, stored):
     """Give the triangles ``undo`` (m,) bool their UVs from before the unwrap; a map created
-    here is restored to what it held, or removed when nothing written is left on it."""
+    here is restored to what it held, or removed when nothing written is left on it. UVs that
+    would lie over the islands kept go back moved right by whole tiles (``stored.tiles_off``).
+
+    Returns
+    -------
+    int, the whole tiles they were moved by (0: exactly as they were)
+    """
     mesh, name = w.ob.data, w.entry["uv_map"]
-    if w.initial_uv is None:
-        mesh_data.write_corner_uvs(mesh, name, w.arrays.tri_loops, w.arrays.corner_uv, undo)
-        return
-    if not (w.ok & ~undo).any():
+    kept = w.ok & ~undo
+    if w.initial_uv is not None and not kept.any():
         mesh.uv_layers.remove(mesh.uv_layers[name])
         mesh.update()
         w.entry["uv_map"] = None
-        return
-    uv = mesh_data.loop_uvs(mesh, name)
+        return 0
+    now = mesh_data.loop_uvs(mesh, name)
     loops = w.arrays.tri_loops[undo].ravel()
-    uv[loops] = w.initial_uv[loops]
-    mesh.uv_layers[name].uv.foreach_set("vector", uv.ravel())
+    old = (w.initial_uv[loops] if w.initial_uv is not None
+           else np.asarray(w.arrays.corner_uv, np.float64)[undo].reshape(-1, 2))
+    tiles = stored.tiles_off(now[w.arrays.tri_loops[kept].ravel()], old)
+    if w.initial_uv is None:
+        shift = np.array([tiles, 0.0])
+        mesh_data.write_corner_uvs(mesh, name, w.arrays.tri_loops,
+                                   w.arrays.corner_uv + shift if tiles else w.arrays.corner_uv,
+                                   undo)
+        return tiles
+    now[loops] = old + np.array([tiles, 0.0], dtype=now.dtype)
+    mesh.uv_layers[name].uv.foreach_set("vector", now.ravel())
     mesh.update()
+    return tiles
 
 
 def check_saved(written, mesh_data, stored, packed):
@@ -299,7 +313,14 @@ def check_saved(written, mesh_data, stored, packed):
                            message=f"island {c.island}: put back as it was, its saved UVs fail "
                                    f"the certificate ({c.reason}; {cause})")
         if undo.any():
-            _put_back(w, undo, mesh_data)
+            tiles = _put_back(w, undo, mesh_data, stored)
+            if tiles:
+                for isl in entry["islands"]:
+                    c = by_index.get(isl["island"])
+                    if c is not None and not c.certified:
+                        isl["message"] += (f"; moved {tiles} UV tile(s) right, off the saved "
+                                           "islands it lay over")
+                        isl["moved_tiles"] = tiles
             w.ok = w.ok & ~undo
         kept = [c for c in checks if c.certified]
         P = arrays.V[arrays.F]

@@ -232,8 +232,15 @@ def test_operator_puts_back_islands_on_a_mesh_without_uv_map(addon, monkeypatch)
     total = np.array([p.loop_total for p in mesh.polygons])
     first = np.repeat(np.arange(len(mesh.polygons)) < 16, total)
     uv = loop_uv_array(mesh)
-    put_back = first if np.array_equal(uv[first], initial[first]) else ~first
-    assert np.array_equal(uv[put_back], initial[put_back])
+    # The island put back gets what the fresh map held, moved right by whole UV tiles: a fresh
+    # map's squares would lie over the island kept (issue 20).
+    shift = [uv[m] - initial[m] for m in (first, ~first)]
+    put_back = first if np.all(shift[0] == shift[0][0]) else ~first
+    tiles = (uv[put_back] - initial[put_back])[0]
+    assert np.all(uv[put_back] - initial[put_back] == tiles)
+    assert tiles[1] == 0 and tiles[0] >= 1 and tiles[0] == int(tiles[0])
+    assert uv[put_back][:, 0].min() >= uv[~put_back][:, 0].max()
+    assert "moved" in last.report and "off the written islands" in last.report, last.report
     kept = ~put_back
     assert not np.array_equal(uv[kept], initial[kept])
     kept_poly = np.flatnonzero(np.array([kept[p.loop_start] for p in mesh.polygons]))
