@@ -11,121 +11,16 @@ import time
 
 import numpy as np
 
+from .api import unwrap
+from .arguments import (add_layout_options, add_solver_options, bound_arg,  # noqa: F401
+                        layout_kwargs, seams_mode, solver_kwargs, split_options)
+from .batch import add_batch_parser
 from .errors import BDError
 from .layout import stored_layout
 from .meshio import load_mesh, write_obj
-from .unwrapping import FRAMES, METHODS, unwrap
-from .unwrapping.fixed_boundary import BOUNDARIES
-
-
-def bound_arg(text):
-    """``C`` (a number >= 1) or ``auto``."""
-    if text == "auto":
-        return "auto"
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"bound must be a number >= 1 or 'auto', not {text!r}")
-    if not value >= 1.0:
-        raise argparse.ArgumentTypeError(f"bound must be >= 1, not {value:g}")
-    return value
-
-
-def add_solver_options(p):
-    """Options shared by ``unwrap`` and ``batch``."""
-    p.add_argument("--method", choices=METHODS, default="lscm",
-                   help="energy: BD-LSCM (default), BD-ARAP, BD-Dirichlet, BD-Biharmonic "
-                        "(eq. 6.1, meant for --boundary circle|rectangle|pinned) or the L1 stretch "
-                        "energy sum (|alpha| + |beta|) Area (free boundary: scale held at the 3D "
-                        "area)")
-    p.add_argument("--bound", type=bound_arg, default=5.0,
-                   help="conformal distortion bound C >= 1, or 'auto' to minimise it (default 5)")
-    p.add_argument("--frames", choices=FRAMES, default="auto",
-                   help="frame field: auto (conformal map if flip-free, else harmonic), harmonic, "
-                        "conformal, input-uv (the file's UVs, eq. 4.21), constant (planar meshes)")
-    p.add_argument("--bound-limit", type=float, default=1000.0,
-                   help="raise C up to this limit when infeasible (default 1000; with --seams "
-                        "needed or auto C is never raised: such an island gets seams)")
-    p.add_argument("--no-raise", action="store_true", help="fail instead of raising C")
-    p.add_argument("--cone", choices=("soc", "linf"), default="soc",
-                   help="space: F_C with second-order cones (default) or F_C^inf (eq. 4.22)")
-    p.add_argument("--time-budget", type=float, default=120.0,
-                   help="seconds per island for --bound auto (default 120)")
-    p.add_argument("--stretch", type=float, default=None, metavar="S",
-                   help="every face's singular values within [1/S, S] at its island's own scale "
-                        "(UV area = 3D area; Lipman 2012, section 6.3), with every --method; with "
-                        "--boundary circle|rectangle|pinned relative to the 3D geometry (the "
-                        "target gives the scale); with --bound auto: the smallest C within S; "
-                        "--seams auto: 2 by default")
-    p.add_argument("--boundary", choices=BOUNDARIES, default="free",
-                   help="each island's outer boundary: free (default), on a circle, on a rectangle "
-                        "(corners at the four boundary vertices nearest a right angle, or four "
-                        "pinned ones) or on the polygon of its pinned UVs; holes stay holes; the "
-                        "report says bijective: true when Theorems 5.1/5.2's premises hold")
-
-
-def seams_mode(args):
-    """The seams mode of parsed options: ``--seams`` as given, else "needed" (the marked seams,
-    i.e. the file's UV seams, kept and seams added only where an island cannot be certified)
-    unless an option needs the islands as they are: ``--bound auto``, ``--frames input-uv`` or a
-    fixed ``--boundary`` (then the old default: the file's UV seams, or the components)."""
-    fixed = args.bound == "auto" or args.frames == "input-uv" or args.boundary != "free"
-    if args.seams == "needed" and fixed:
-        raise SystemExit("error: --seams needed adds seams at a numeric --bound with --frames "
-                         "auto and --boundary free; for --bound auto, --frames input-uv or a "
-                         "fixed --boundary choose --seams uv or none")
-    if args.seams == "marked":      # scripts/bd_uv_batch.py: the marked seams only
-        return None
-    if args.seams is not None:
-        return args.seams
-    return None if fixed else "needed"
-
-
-def solver_kwargs(args):
-    """The unwrap() keyword arguments from parsed options."""
-    kwargs = dict(method=args.method, bound=args.bound, frames=args.frames,
-                  bound_limit=args.bound_limit, raise_bound=not args.no_raise, cone=args.cone,
-                  time_budget=args.time_budget if args.bound == "auto" else None)
-    if args.boundary != "free":  # absent by default: options hashed by --resume stay the same
-        kwargs["boundary"] = args.boundary
-    # getattr: scripts/bd_uv_batch.py shares these options but has no --seams
-    mode = seams_mode(args) if hasattr(args, "seams") else None
-    if args.stretch is not None and mode != "auto":  # "needed": on the marked islands too
-        kwargs["stretch"] = args.stretch
-    if mode == "needed":  # unwrap_job: unwrap_needed (charts the search cuts within this S)
-        kwargs["needed_stretch"] = 2.0 if args.stretch is None else args.stretch
-    return kwargs
-
-
-LAYOUT_OPTIONS = ("pack", "cut", "margin")
-
-
-def add_layout_options(p):
-    """How the UVs are stored (``unwrap`` and ``batch``): cut overlaps, pack, margin."""
-    p.add_argument("--no-pack", action="store_true",
-                   help="keep each island at (0, 0) instead of packing them into the unit square")
-    p.add_argument("--margin", type=float, default=0.005,
-                   help="packing margin between islands, in the unit square (default 0.005)")
-    p.add_argument("--overlap", choices=("cut", "fail"), default="cut",
-                   help="an island whose UVs lie over themselves: cut it into overlap-free "
-                        "pieces (default, the cut edges are reported), or fail it")
-
-
-def layout_kwargs(args):
-    """The :func:`bd_uv.layout.stored_layout` keyword arguments from parsed options."""
-    return dict(pack=not args.no_pack, cut=args.overlap == "cut", margin=args.margin)
-
-
-def split_options(options):
-    """(unwrap keyword arguments, stored_layout keyword arguments) of one options dict; without
-    layout keys (the Blender script, which packs with Blender) nothing is cut or packed."""
-    solve = {k: v for k, v in options.items() if k not in LAYOUT_OPTIONS}
-    layout = {k: options[k] for k in LAYOUT_OPTIONS if k in options}
-    if "cut" in layout:  # unwrap() itself cuts (or fails) an island whose UVs overlap
-        solve["overlap"] = "cut" if layout["cut"] else "fail"
-    layout.setdefault("pack", False)
-    layout.setdefault("cut", False)
-    return solve, layout
+from .planar_cli import add_planar_parsers
+from .seams import unwrap_auto
+from .seams.needed import AUTO_BOUND, AUTO_STRETCH, unwrap_needed
 
 
 class ProgressBar:
@@ -219,7 +114,6 @@ def auto_seams(mesh, args, kwargs):
         print("error: --seams auto makes free-boundary charts; use --boundary free with it",
               file=sys.stderr)
         return None
-    from .seams import unwrap_auto
     seams = mesh.uv_seams() if mesh.corner_uv is not None else None
     res, added, info = unwrap_auto(mesh.V, mesh.F, seams=seams, bound=args.bound,
                                    stretch=2.0 if args.stretch is None else args.stretch,
@@ -236,7 +130,6 @@ def needed_seams(mesh, seams, args):
     """The default (no ``--seams``): the file's UV seams kept, the mesh repaired where it is not
     a manifold, seams added only to islands that cannot be certified at C
     (``bd_uv.seams.needed.unwrap_needed``). Returns (result, report keys)."""
-    from .seams.needed import AUTO_BOUND, AUTO_STRETCH, unwrap_needed
     stretch = AUTO_STRETCH if args.stretch is None else args.stretch
     res, added, info = unwrap_needed(mesh.V, mesh.F, seams=seams, bound=args.bound,
                                      stretch=stretch, marked_stretch=args.stretch,
@@ -297,9 +190,7 @@ def build_parser():
     p.add_argument("--report", help="write the JSON report here")
     p.add_argument("--png", help="write a picture of the UV layout coloured by distortion")
     p.set_defaults(func=run_unwrap)
-    from .batch import add_batch_parser  # batch builds on this module's options
     add_batch_parser(sub)
-    from .planar_cli import add_planar_parsers
     add_planar_parsers(sub)
     return parser
 

@@ -9,7 +9,8 @@ import os
 import sys
 import time
 
-from ..cli import add_layout_options, add_solver_options, layout_kwargs, solver_kwargs
+from ..arguments import add_layout_options, add_solver_options, layout_kwargs, solver_kwargs
+from ..scheduling import FileLimits, Ledger, Progress, options_sha256, read_previous, reusable
 from ..scheduling.atomic import remove_stale
 from .files import _size, input_files, plan, run_tasks
 from .report import batch_report, item_line
@@ -100,7 +101,6 @@ def _positive_int(text):
 
 def run_batch(args):
     """``python -m bd_uv batch``: returns the exit code (0: all certified, 1: some failed)."""
-    from ..scheduling import FileLimits, Ledger, Progress, options_sha256, read_previous, reusable
     files = input_files(args.inputs)
     if not files:
         print(f"error: no .obj/.off/.ply/.blend files in {' '.join(args.inputs)}",

@@ -17,7 +17,9 @@ from dataclasses import dataclass
 
 from ..errors import BDError
 from ..meshio import load_mesh, write_obj
+from ..scheduling import run_pool
 from ..scheduling.atomic import atomic_path
+from ..scheduling.cluster import run_dask
 from .jobs import Job, failed_entry, unwrap_job
 
 MESH_SUFFIXES = (".obj", ".off", ".ply")
@@ -167,7 +169,6 @@ def run_tasks(tasks, options, seams_mode=None, jobs=1, on_done=None, scheduler=N
     -------
     entries : list of list of dict, per task (in task order; None for tasks not run)
     """
-    from ..scheduling import run_pool
     results = [None] * len(tasks)
 
     def done(i, entries, attempts):
@@ -180,14 +181,15 @@ def run_tasks(tasks, options, seams_mode=None, jobs=1, on_done=None, scheduler=N
 
     order = range(len(tasks)) if order is None else order
     order = sorted(order, key=lambda i: -_size(tasks[i].path))
+    # The work of one file, looked up here at call time so that it can be replaced (tests).
+    work = _unwrap_file
     if scheduler:
-        from ..scheduling.cluster import run_dask
-        run_dask(tasks, order, options, seams_mode, scheduler, jobs, done, limits, retries,
+        run_dask(tasks, order, work, options, seams_mode, scheduler, jobs, done, limits, retries,
                  on_start=on_start)
     else:
         if on_start is not None:
             on_start(jobs)
-        run_pool(tasks, order, options, seams_mode, jobs, done, limits, retries)
+        run_pool(tasks, order, work, options, seams_mode, jobs, done, limits, retries)
     return results
 
 

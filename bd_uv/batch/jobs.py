@@ -12,12 +12,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..cli import split_options
+from ..api import unwrap
+from ..arguments import split_options
 from ..errors import BDError
 from ..layout import stored_layout
 from ..metrics import conformal_distortion
 from ..scheduling.atomic import atomic_path
-from ..unwrapping import unwrap
+from ..scheduling.entries import failed_entry
+from ..seams import unwrap_auto
+from ..seams.needed import unwrap_needed
 
 
 @dataclass(frozen=True)
@@ -63,13 +66,6 @@ class JobResult:
     layout: object = None
 
 
-def failed_entry(name, error, message, faces=None, seconds=None, **where):
-    """A report entry with nothing certified (``where``: input, object, output, ...)."""
-    return {**where, "name": name, "status": "failed", "faces": faces, "islands": [],
-            "bound_certified": None, "max_distortion": None, "mean_distortion": None,
-            "flipped": None, "seconds": seconds, "error": error, "message": message}
-
-
 def _num(x):
     return None if x is None or not np.isfinite(x) else float(x)
 
@@ -110,15 +106,14 @@ def unwrap_job(job, options, png=None):
             needed = None           # pinned UVs: the islands as marked (seams cannot keep pins)
         extra = {}
         if needed is not None:      # the default: repair, seams added only where needed
-            from ..seams.needed import unwrap_needed
             res, added, info = unwrap_needed(
                 job.V, job.F, seams=job.seams, bound=kwargs["bound"], stretch=needed,
-                marked_stretch=kwargs.get("stretch"), polygons=job.face_groups, method=kwargs["method"], frames=kwargs["frames"],
-                cone=kwargs["cone"], overlap=kwargs.get("overlap", "cut"))
+                marked_stretch=kwargs.get("stretch"), polygons=job.face_groups,
+                method=kwargs["method"], frames=kwargs["frames"], cone=kwargs["cone"],
+                overlap=kwargs.get("overlap", "cut"))
             extra = {"seams_mode": "needed", "seams_added": added.tolist(),
                      "repair": info["repair"]}
         elif stretch is not None:     # --seams auto: the file's own seams are kept, more added
-            from ..seams import unwrap_auto
             res = unwrap_auto(job.V, job.F, seams=job.seams, bound=kwargs["bound"],
                               stretch=stretch, method=kwargs["method"], frames=kwargs["frames"],
                               cone=kwargs["cone"])[0]

@@ -43,9 +43,8 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
     ----------
     V : (n,3) float array
     F : (m,3) int array
-    seams : (s,2) int array, optional, vertex pairs of the edges to cut along; or "auto": cut
-        every island that cannot be certified as it is into certified disk charts
-        (``bd_uv.seams.unwrap_auto``, which also takes existing seams to keep)
+    seams : (s,2) int array, optional, vertex pairs of the edges to cut along ("auto" is
+        ``bd_uv.unwrap``'s: ``bd_uv.api``)
     pin_corners : (p,) int array, optional, flat corner indices (face * 3 + corner)
     pin_uv : (p,2) float array, optional, the UV of each pinned corner (kept exactly)
     method : "lscm" | "arap" | "dirichlet" | "biharmonic" | "stretch-l1". BD-Biharmonic (eq. 6.1)
@@ -75,7 +74,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
         ``max_singular``): relative to the island's own scale (UV area = 3D area) with a free
         boundary and fewer than two pins, else relative to the 3D geometry (pins or the fixed
         boundary give the scale). Every method; with bound="auto" the smallest C within S is
-        sought (free boundary only). With seams="auto": every chart within S; default 2 there
+        sought (free boundary only)
     boundary : "free" | "circle" | "rectangle" | "pinned", where each island's outer boundary
         goes (Lipman 2012, section 5; ``boundary.boundary_targets``): free (the default), on a
         circle or a rectangle of the island's 3D area (rectangle corners at the four boundary
@@ -96,21 +95,8 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
     CancelledError when cancelled.
     """
     if isinstance(seams, str):
-        if seams != "auto":
-            raise ValueError(f"seams must be vertex pairs or 'auto', got {seams!r}")
-        if boundary != "free":
-            raise ValueError("seams='auto' makes free-boundary charts; boundary= needs "
-                             "boundary='free' there")
-        if bound == "auto":
-            raise ValueError("seams='auto' needs a numeric bound C")
-        if (pin_corners is not None and len(pin_corners)) or frames == "input-uv":
-            raise ValueError("seams='auto' does not take pins or the current UVs: call "
-                             "bd_uv.seams.unwrap_auto for material groups, or mark seams")
-        from ..seams import unwrap_auto  # the seams package builds on this module
-        # face_groups (polygons) are kept whole by the seams added too: unwrap_auto's polygons.
-        return unwrap_auto(V, F, bound=bound, stretch=2.0 if stretch is None else stretch,
-                           method=method, frames=frames, cone=cone, progress=progress,
-                           cancel=cancel, polygons=face_groups)[0]
+        raise ValueError(f"seams must be vertex pairs here, got {seams!r}: seams='auto' is "
+                         "bd_uv.unwrap's (the seam search, bd_uv.seams, builds on this function)")
     if boundary not in BOUNDARIES:
         raise ValueError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}")
     if boundary != "free" and bound == "auto":

@@ -22,7 +22,7 @@ from unwrap_contract import (DATA, assert_unchanged, distortion_and_flips, read_
                              unwrap_checked)
 
 # The module that defines unwrap() (bd_uv/unwrapping/unwrap.py): found from the function, not by name.
-PIPELINE = sys.modules[bd_uv.unwrap.__module__]
+PIPELINE = sys.modules[bd_uv.unwrapping.unwrap.__module__]
 
 
 # ---------------------------------------------------------------------------------------------
