@@ -157,3 +157,42 @@ def test_edge_of_three_faces_is_cut_and_every_face_certified(addon, capsys):
                         2).reshape(-1, 2), axis=1)
     edge = np.flatnonzero((ends[:, 0] == a) & (ends[:, 1] == b))
     assert _seams(obj.data)[edge].all()
+
+
+def _revolution_patch(nu, nv, radius, height, offset):
+    """A quad patch (nu x nv quads) around the z axis, not closed in u (an open patch, as the
+    Utah teapot's), vertex (i, j) at offset + i * (nv + 1) + j."""
+    u, v = np.meshgrid(np.linspace(0, 0.999, nu + 1), np.linspace(0, 1, nv + 1), indexing="ij")
+    a, r = 2 * np.pi * u.ravel(), radius(v.ravel())
+    P = np.stack([r * np.cos(a), r * np.sin(a), height(v.ravel(), a)], 1)
+    i = (np.arange(nu)[:, None] * (nv + 1) + np.arange(nv)[None, :]).ravel()
+    return P, np.stack([i, i + nv + 1, i + nv + 2, i + 1], 1) + offset
+
+
+def test_island_put_back_never_lies_over_the_written_atlas(addon, capsys):
+    # Three open quad patches like the teapot's: a body, a lid whose first ring has a radius of
+    # 1e-7 (faces far below what float32 UVs resolve at the packed scale: the lid cannot be
+    # stored certified) and a handle-like strip. On a mesh with no UV map, the lid's UVs "as they
+    # were" are the new map's default squares, all over the atlas: they go back moved right by
+    # whole tiles, and the report says so.
+    body, qb = _revolution_patch(24, 16, lambda v: 1.5 + 0.5 * np.sin(np.pi * v),
+                                 lambda v, a: 2 * v, 0)
+    lid, ql = _revolution_patch(16, 12, lambda v: 1e-7 + (0.8 - 1e-7) * v ** 2,
+                                lambda v, a: 2.5 - 0.5 * v + 0.05 * np.sin(8 * a) * v, len(body))
+    V = np.vstack([body, lid])
+    obj = _from_arrays("pot", V, np.vstack([qb, ql]))
+    result, reports = _unwrap_defaults(capsys, obj)
+    assert result == {'FINISHED'}, reports
+    level, message = reports[-1]
+    Vt, tris, loops, poly = _loop_triangles(obj)
+    uv = loop_uv_array(obj.data)[loops].astype(np.float64)
+    lid_tris = poly >= len(qb)
+    D, det = triangle_distortion(Vt, tris, uv)
+    if "put back" not in message:       # a future fix may store the lid certified: all good then
+        _certified_as_stored(obj)
+        return
+    assert level == 'WARNING' and "moved 1 UV tile right" in message, message
+    back = uv[:, :, 0].min(axis=1) >= 1.0
+    assert np.array_equal(back, lid_tris)                    # exactly the lid went back
+    assert uv[~back][:, :, 0].max() <= 1.0                   # the atlas stays in its tile
+    assert (det[~back] > 0).all() and D[~back].max() <= C * SLACK
