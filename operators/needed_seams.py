@@ -19,7 +19,7 @@ import numpy as np
 
 from ..bd_uv.repair import repair_mesh
 from ..bd_uv.seams.measure import splice
-from ..bd_uv.seams.needed import AUTO_BOUND, _local_pairs, _to_input, needs_seams
+from ..bd_uv.seams.needed import AUTO_BOUND, needs_seams, pairs_in, result_on_input
 from . import auto_seams
 
 __all__ = ["solve"]
@@ -73,12 +73,12 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
             voc, Fl = np.unique(F2[sub], return_inverse=True)
             groups = None if face_groups is None else np.asarray(face_groups)[keep][sub]
             auto = auto_seams.solve(V2[voc], Fl.reshape(-1, 3), tri_poly=tp[sub],
-                                    tri_loops=tl[sub], seams=_local_pairs(seams2, voc),
+                                    tri_loops=tl[sub], seams=pairs_in(seams2, voc),
                                     bound=min(float(bound), AUTO_BOUND), stretch=float(stretch),
                                     face_groups=groups, **options)
             res = splice(res, auto.result, sub, voc, len(F2))
             added = voc[auto.added]
-    result = _to_input(res, rep, F, method)
+    result = result_on_input(res, rep, F, method)
     added = rep.vertex_source[added] if len(added) else added
     cuts = [p for p in (added, rep.nonmanifold_edges, rep.orientation_edges) if len(p)]
     added = (np.unique(np.sort(np.concatenate(cuts), axis=1), axis=0) if cuts

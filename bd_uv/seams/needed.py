@@ -46,8 +46,8 @@ def needs_seams(island, overlap="cut"):
 
 
 def unwrap_needed(V, F, seams=None, bound=5.0, stretch=AUTO_STRETCH, auto_bound=AUTO_BOUND,
-                  marked_stretch=None, polygons=None, method="lscm", frames="auto", cone="soc", overlap="cut",
-                  repair=True, progress=None, cancel=None):
+                  marked_stretch=None, polygons=None, method="lscm", frames="auto", cone="soc",
+                  overlap="cut", repair=True, progress=None, cancel=None):
     """Unwrap with the marked seams, adding seams only to islands that cannot be certified.
 
     Parameters
@@ -100,7 +100,7 @@ def unwrap_needed(V, F, seams=None, bound=5.0, stretch=AUTO_STRETCH, auto_bound=
             sub = np.sort(np.concatenate([r.faces for r in bad]))
             voc, Fl = np.unique(F2[sub], return_inverse=True)
             Fl = Fl.reshape(-1, 3)
-            local = _local_pairs(seams2, voc)
+            local = pairs_in(seams2, voc)
             part, found, _ = unwrap_auto(V2[voc], Fl, seams=local,
                                          bound=min(float(bound), float(auto_bound)),
                                          stretch=float(stretch),
@@ -109,7 +109,7 @@ def unwrap_needed(V, F, seams=None, bound=5.0, stretch=AUTO_STRETCH, auto_bound=
             added = voc[found]
     else:
         res = UnwrapResult(np.zeros((0, 3, 2)), np.zeros(0, np.int64), [], 0.0, method)
-    result = _to_input(res, rep, np.asarray(F, np.int64), method) if rep is not None else res
+    result = result_on_input(res, rep, np.asarray(F, np.int64), method) if rep is not None else res
     if rep is not None and len(added):
         added = rep.vertex_source[added]
     added = np.unique(np.sort(added, axis=1), axis=0) if len(added) else added.reshape(0, 2)
@@ -118,9 +118,9 @@ def unwrap_needed(V, F, seams=None, bound=5.0, stretch=AUTO_STRETCH, auto_bound=
     return result, added.astype(np.int64), info
 
 
-def _local_pairs(pairs, voc):
-    """(s,2) vertex pairs renumbered into the sorted vertex subset ``voc`` (pairs outside it
-    dropped)."""
+def pairs_in(pairs, voc):
+    """(s,2) vertex pairs renumbered into the sorted vertex subset ``voc`` (k,) (pairs outside
+    it dropped); None when there are none."""
     if pairs is None or not len(pairs):
         return None
     pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
@@ -130,8 +130,10 @@ def _local_pairs(pairs, voc):
     return pos[inside]
 
 
-def _to_input(res, rep, F, method):
-    """``res`` (on the repaired mesh) as a result over the input faces ``F`` (m,3) and vertices."""
+def result_on_input(res, rep, F, method):
+    """``res`` (an UnwrapResult on ``rep``, a ``repair.Repair``) as a result over the input
+    faces ``F`` (m,3) and vertices: duplicates given their twin's island and corner UVs
+    (``duplicate_of``), zero-area faces one failed island (``DegenerateFacesError``)."""
     m = len(F)
     src = rep.vertex_source
     islands = [dataclasses.replace(
