@@ -80,24 +80,32 @@ class Repair:
         out = np.stack([np.minimum(a[hit], b[hit]), np.maximum(a[hit], b[hit])], axis=1)
         return np.unique(out, axis=0) if len(out) else out.reshape(0, 2)
 
-    def notes(self):
-        """One sentence per kind of defect found and what was done about it (list of str)."""
+    def notes(self, indices=True, count=len):
+        """One sentence per kind of defect found and what was done about it (list of str).
+
+        With ``indices=False`` (the Blender operator, whose users count polygons, not these
+        triangles) the sentences give counts only, and zero-area faces, which the result names
+        as a failed island, are left out; ``count(faces)`` counts input faces (the operator:
+        the polygons they belong to)."""
         out = []
         dup = np.flatnonzero(self.twin >= 0)
+
+        def which(kind, ids):
+            return f" ({kind} {ids})" if indices else ""
         if len(self.split_vertices):
             out.append(f"{len(self.split_vertices)} non-manifold vertex(es) split into one "
-                       f"vertex per fan (vertices {_some(self.split_vertices)})")
+                       f"vertex per fan" + which("vertices", _some(self.split_vertices)))
         if len(self.nonmanifold_edges):
             out.append(f"{len(self.nonmanifold_edges)} edge(s) shared by three or more faces cut "
-                       f"as seams (edges {_pairs(self.nonmanifold_edges)})")
+                       f"as seams" + which("edges", _pairs(self.nonmanifold_edges)))
         if len(self.orientation_edges):
             out.append(f"{len(self.orientation_edges)} edge(s) between faces oriented against "
-                       f"each other cut as seams: each oriented part is its own chart (edges "
-                       f"{_pairs(self.orientation_edges)})")
+                       f"each other cut as seams: each oriented part is its own chart"
+                       + which("edges", _pairs(self.orientation_edges)))
         if len(dup):
-            out.append(f"{len(dup)} duplicate face(s) left out of the solve, given their twin's "
-                       f"UVs (faces {_some(dup)})")
-        if len(self.zero_area):
+            out.append(f"{count(dup)} duplicate face(s) left out of the solve, given their twin's "
+                       f"UVs" + which("faces", _some(dup)))
+        if len(self.zero_area) and indices:
             out.append(f"{len(self.zero_area)} zero-area face(s) cannot be certified: their UVs "
                        f"are left as they were (faces {_some(self.zero_area)})")
         return out

@@ -3,9 +3,9 @@ only to the islands that cannot be certified as they are, a messy mesh repaired 
 
 1. ``bd_uv.repair.repair_mesh``: bow-tie vertices split per fan, edges of three or more faces and
    edges between oppositely oriented parts cut (marked as seams afterwards, so the artist sees
-   them), zero-area faces left out (named in the report, their UVs untouched). Duplicate faces
-   are kept as faces here (Blender polygons of their own): the edges they share with their twin
-   are cut like any non-manifold edge, so each becomes a chart of its own;
+   them), zero-area faces left out (named in the report, their UVs untouched), duplicate faces
+   left out of the solve and written with their twin's UVs (``verify.verify_written`` checks
+   them through their twin);
 2. the islands of the marked seams are unwrapped as Seams "Marked" does
    (:func:`auto_seams.whole_polygons` of ``bd_uv.unwrap``) at C, C never raised;
 3. the islands that fail (closed, handles, no map within C, overlapping themselves) go to
@@ -53,7 +53,7 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
     F = np.asarray(F, np.int64)
     tri_poly = np.asarray(tri_poly, np.int64)
     tri_loops = np.asarray(tri_loops, np.int64)
-    rep = repair_mesh(V, F, keep_duplicates=True)
+    rep = repair_mesh(V, F)
     V2, F2, keep = rep.V, rep.F, rep.faces
     tp, tl = tri_poly[keep], tri_loops[keep]
     seams2 = rep.seams(seams)
@@ -84,4 +84,5 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
     added = (np.unique(np.sort(np.concatenate(cuts), axis=1), axis=0) if cuts
              else np.zeros((0, 2), dtype=np.int64))
     charts = sum(1 for r in result.islands if r.status == "certified")
-    return auto_seams.AutoSeams(result, added, charts, tuple(rep.notes()))
+    return auto_seams.AutoSeams(result, added, charts, tuple(rep.notes(
+        indices=False, count=lambda tris: len(np.unique(tri_poly[tris])))))

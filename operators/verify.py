@@ -70,6 +70,17 @@ def _restore(ob, part, w, undo):
     return tiles
 
 
+def _twins(result, part):
+    """(m_i,) int64: for each triangle of ``part`` left out of the solve as a duplicate
+    (``UnwrapResult.duplicate_of``), its twin's index in ``part``; -1 for the others."""
+    m = part.faces.stop - part.faces.start
+    dup_of = getattr(result, "duplicate_of", None)
+    if dup_of is None:
+        return np.full(m, -1, dtype=np.int64)
+    twin = np.asarray(dup_of, dtype=np.int64)[part.faces]
+    return np.where(twin >= 0, twin - part.faces.start, -1)
+
+
 def _normalized(part, islands, n):
     """(n,) bool: islands with fewer than two pinned vertices in ``part`` (the core scales those
     to their 3D area and measures their stretch at that scale)."""
@@ -100,7 +111,9 @@ def verify_written(batch, result, written, stretch=None):
         uv_name = w.created_map or part.arrays.uv_name
         uv = mesh_data.loop_uvs(ob.data, uv_name)[part.arrays.tri_loops].astype(np.float64)
         islands = result.face_island[part.faces]
-        labels = np.where(w.faces, islands, -1)
+        twin = _twins(result, part)
+        dup = twin >= 0      # duplicate faces: stored with their twin's UVs, checked through it
+        labels = np.where(w.faces & ~dup, islands, -1)
         n = len(result.islands)
         checks = stored.check_stored(part.arrays.V, part.arrays.F, uv, labels, result.islands,
                                      solved_uv=result.corner_uv[part.faces], stretch=stretch,
@@ -114,6 +127,7 @@ def verify_written(batch, result, written, stretch=None):
         failed = np.zeros(n + 1, dtype=bool)  # the last entry: faces not written (label -1)
         failed[[c.island for c in checks if not c.certified]] = True
         undo = failed[labels]
+        undo[dup] = undo[twin[dup]] & w.faces[dup]   # a duplicate goes back with its twin
         checked.extend(Checked(part.object_name, int(island_polygons[c.island]),
                                float(island_area[c.island]), c, not c.certified)
                        for c in checks)
@@ -123,7 +137,7 @@ def verify_written(batch, result, written, stretch=None):
                 checked[-len(checks):] = [dataclasses.replace(c, moved_tiles=tiles)
                                           if c.put_back else c for c in checked[-len(checks):]]
             w.faces = w.faces & ~undo
-            labels = np.where(w.faces, islands, -1)
+            labels = np.where(w.faces & ~dup, islands, -1)
         if len(np.unique(labels[labels >= 0])) > 1:
             overlaps[part.object_name] = stored.layout_overlaps(uv, labels, part.arrays.F)
     return Verified(checked, overlaps)

@@ -196,3 +196,21 @@ def test_island_put_back_never_lies_over_the_written_atlas(addon, capsys):
     assert np.array_equal(back, lid_tris)                    # exactly the lid went back
     assert uv[~back][:, :, 0].max() <= 1.0                   # the atlas stays in its tile
     assert (det[~back] > 0).all() and D[~back].max() <= C * SLACK
+
+
+def test_duplicate_polygon_gets_its_twins_uvs(addon, capsys):
+    # Two quads of a strip, the first one given twice (same vertices, same order).
+    V = np.array([(0, 0, 0), (1, 0, 0), (2, 0, 0), (0, 1, 0), (1, 1, 0.2), (2, 1, 0)], float)
+    obj = _from_arrays("dup", V, np.array([(0, 1, 4, 3), (1, 2, 5, 4), (0, 1, 4, 3)]))
+    result, reports = _unwrap_defaults(capsys, obj)
+    assert result == {'FINISHED'}, reports
+    assert "1 duplicate face(s)" in reports[-1][1], reports
+    _certified_as_stored(obj)
+    mesh = obj.data
+    uv = loop_uv_array(mesh)
+    loop_vert = _get(mesh.loops, "vertex_index", np.int32, len(mesh.loops))
+    first, third = mesh.polygons[0], mesh.polygons[2]
+    def by_vertex(p):
+        return {int(loop_vert[i]): tuple(uv[i]) for i in range(p.loop_start,
+                                                                p.loop_start + p.loop_total)}
+    assert by_vertex(first) == by_vertex(third)
