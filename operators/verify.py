@@ -30,6 +30,8 @@ class Verified:
 
     islands: list                                   # of Checked
     overlaps: dict = field(default_factory=dict)    # object name -> island pairs (k,2), or None
+    moved: dict = field(default_factory=dict)       # object name -> whole tiles its faces not
+                                                    # written (new map) were moved right by
 
 
 def _restore(ob, part, w, undo):
@@ -103,10 +105,11 @@ def verify_written(batch, result, written, stretch=None):
     -------
     Verified
     """
-    checked, overlaps = [], {}
+    checked, overlaps, moved = [], {}, {}
     for part, w in zip(batch.parts, written):
         if w.skipped or not w.faces.any():
             continue
+        never = ~w.faces          # not written at all (failed islands, zero-area faces)
         ob = bpy.data.objects.get(part.object_name)
         uv_name = w.created_map or part.arrays.uv_name
         uv = mesh_data.loop_uvs(ob.data, uv_name)[part.arrays.tri_loops].astype(np.float64)
@@ -138,6 +141,30 @@ def verify_written(batch, result, written, stretch=None):
                                           if c.put_back else c for c in checked[-len(checks):]]
             w.faces = w.faces & ~undo
             labels = np.where(w.faces & ~dup, islands, -1)
+        if w.created_map and w.faces.any() and never.any():
+            tiles = _move_off_atlas(ob.data, w, part, never)
+            if tiles:
+                moved[part.object_name] = tiles
         if len(np.unique(labels[labels >= 0])) > 1:
             overlaps[part.object_name] = stored.layout_overlaps(uv, labels, part.arrays.F)
-    return Verified(checked, overlaps)
+    return Verified(checked, overlaps, moved)
+
+
+def _move_off_atlas(mesh, w, part, never):
+    """On a map ``write_back`` created, the triangles ``never`` (m_i,) bool that were not
+    written hold the new map's default squares, all over the written islands: move their loops
+    (those no written triangle shares) right by whole tiles (``stored.tiles_off``).
+
+    Returns
+    -------
+    int, the tiles moved (0: nothing lay over the written islands)
+    """
+    uv = mesh_data.loop_uvs(mesh, w.created_map)
+    kept = part.arrays.tri_loops[w.faces].ravel()
+    back = np.setdiff1d(part.arrays.tri_loops[never].ravel(), kept)
+    tiles = stored.tiles_off(uv[kept], uv[back])
+    if tiles:
+        uv[back] += np.array([tiles, 0.0], dtype=uv.dtype)
+        mesh.uv_layers[w.created_map].uv.foreach_set("vector", uv.ravel())
+        mesh.update()
+    return tiles

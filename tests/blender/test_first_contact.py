@@ -214,3 +214,27 @@ def test_duplicate_polygon_gets_its_twins_uvs(addon, capsys):
         return {int(loop_vert[i]): tuple(uv[i]) for i in range(p.loop_start,
                                                                 p.loop_start + p.loop_total)}
     assert by_vertex(first) == by_vertex(third)
+
+
+def test_zero_area_face_is_named_and_kept_off_the_atlas(addon, capsys):
+    # Two quads and a triangle on three collinear points (zero area), no UV map yet.
+    V = np.array([(0, 0, 0), (1, 0, 0), (2, 0, 0), (0, 1, 0), (1, 1, 0.2), (2, 1, 0),
+                  (0.5, 0, 0)], float)
+    mesh = bpy.data.meshes.new("zero")
+    mesh.from_pydata([tuple(v) for v in V], [], [(0, 1, 4, 3), (1, 2, 5, 4), (0, 6, 1)])
+    mesh.update()
+    obj = bpy.data.objects.new("zero", mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    result, reports = _unwrap_defaults(capsys, obj)
+    assert result == {'FINISHED'}, reports
+    level, message = reports[-1]
+    assert level == 'WARNING' and "zero-area" in message and "faces 2" in message, message
+    uv = loop_uv_array(obj.data)
+    tri = obj.data.polygons[2]
+    quads = np.arange(tri.loop_start)
+    # The zero-area face holds the new map's default UVs, moved right by whole tiles: off the
+    # quads, which are certified as stored.
+    assert uv[tri.loop_start:tri.loop_start + 3, 0].min() >= uv[quads, 0].max()
+    Vt, tris, loops, poly = _loop_triangles(obj)
+    D, det = triangle_distortion(Vt, tris[poly < 2], uv[loops[poly < 2]])
+    assert (det > 0).all() and D.max() <= C * SLACK
