@@ -11,14 +11,15 @@ from .colors import distortion_colors
 from .deform import DeformResult, deform
 from .errors import (BDError, CancelledError, ClosedIslandError, DegenerateFacesError,
                      DuplicateFacesError, InfeasibleError, InvalidMeshError, IslandError,
-                     NonFiniteError, NonManifoldError, OrientationError, SolverError,
-                     TopologyError)
+                     NonFiniteError, NonManifoldError, OptionError, OrientationError,
+                     SolverError, TopologyError)
 from .improve import ImproveResult, equilateral_distortion, improve
 from .metrics import (certify, conformal_distortion, face_jacobians, flipped_faces,
                       mean_distortion, signed_uv_areas, singular_values)
 from .mesh import Island, islands
 from .overlap import island_overlaps, layout_overlaps
 from .meshio import Mesh, load_mesh, write_obj
+from .options import UnwrapOptions
 from .api import unwrap
 from .unwrapping import IslandResult, UnwrapResult
 

@@ -13,14 +13,14 @@ import numpy as np
 
 from .api import unwrap
 from .arguments import (add_layout_options, add_solver_options, bound_arg,  # noqa: F401
-                        layout_kwargs, seams_mode, solver_kwargs, split_options)
+                        layout_kwargs, solver_kwargs, unwrap_options_of)
 from .batch import add_batch_parser
 from .errors import BDError
 from .layout import stored_layout
 from .meshio import load_mesh, write_obj
 from .planar_cli import add_planar_parsers
 from .seams import unwrap_auto
-from .seams.needed import AUTO_BOUND, AUTO_STRETCH, unwrap_needed
+from .seams.needed import AUTO_BOUND
 
 
 class ProgressBar:
@@ -44,37 +44,32 @@ class ProgressBar:
 
 
 def run_unwrap(args):
+    options = unwrap_options_of(args)
     mesh = load_mesh(args.input)
-    seams = None
-    mode = seams_mode(args)
-    use_uv = mode == "uv" or (mode in (None, "needed") and mesh.corner_uv is not None)
-    if use_uv:
-        if mesh.corner_uv is None:
-            print(f"error: {args.input} has no UVs, so --seams uv has nothing to cut along",
-                  file=sys.stderr)
-            return 2
-        seams = mesh.uv_seams()
-    kwargs = solver_kwargs(args)
-    if args.frames == "input-uv":
+    if args.seams == "uv" and mesh.corner_uv is None:
+        print(f"error: {args.input} has no UVs, so --seams uv has nothing to cut along",
+              file=sys.stderr)
+        return 2
+    # The file's UV seams (when it has UVs), kept when seams are added too; none with --seams none.
+    seams = mesh.uv_seams() if args.seams != "none" and mesh.corner_uv is not None else None
+    initial_uv = None
+    if options.frames == "input-uv":
         if mesh.corner_uv is None:
             print(f"error: --frames input-uv needs UVs in {args.input}", file=sys.stderr)
             return 2
-        kwargs["initial_uv"] = mesh.corner_uv
-    extra = {}
-    if mode == "auto":
-        res = auto_seams(mesh, args, kwargs)
-        if res is None:
-            return 2
-    elif mode == "needed":
-        res, extra = needed_seams(mesh, seams, args)
+        initial_uv = mesh.corner_uv
+    if options.seams_mode == "auto":
+        res = auto_seams(mesh, seams, options)
     else:
-        res = unwrap(mesh.V, mesh.F, seams=seams, progress=ProgressBar(), overlap=args.overlap,
-                     **kwargs)
+        res = unwrap(mesh.V, mesh.F, seams=seams, initial_uv=initial_uv, progress=ProgressBar(),
+                     options=options)
+    if options.seams_mode == "needed":
+        _print_needed(res, options, args.output)
     layout = stored_layout(mesh.V, mesh.F, res, **layout_kwargs(args))
     uv, F_uv = layout.vertex_uv(mesh.F)
     write_obj(args.output, mesh.V, mesh.F, uv, F_uv)
     islands = layout.island_entries(res)
-    report = {"input": os.path.abspath(args.input), **res.report(), **extra, "islands": islands,
+    report = {"input": os.path.abspath(args.input), **res.report(), "islands": islands,
               "summary": layout.totals(), "layout_overlaps": layout.overlaps.tolist()}
     if args.report:
         os.makedirs(os.path.dirname(os.path.abspath(args.report)), exist_ok=True)
@@ -105,44 +100,29 @@ def core_cuts(islands):
     return {"islands": len(first), "edges": sum(first.values())}
 
 
-def auto_seams(mesh, args, kwargs):
-    """``--seams auto``: the file's UV seams (if any) kept, more added where needed."""
-    if args.bound == "auto":
-        print("error: --seams auto needs a numeric --bound C", file=sys.stderr)
-        return None
-    if args.boundary != "free":
-        print("error: --seams auto makes free-boundary charts; use --boundary free with it",
-              file=sys.stderr)
-        return None
-    seams = mesh.uv_seams() if mesh.corner_uv is not None else None
-    res, added, info = unwrap_auto(mesh.V, mesh.F, seams=seams, bound=args.bound,
-                                   stretch=2.0 if args.stretch is None else args.stretch,
-                                   method=args.method, frames=args.frames,
-                                   cone=args.cone, progress=ProgressBar())
+def _print_needed(res, options, output):
+    """What the default seams mode repaired and added (``bd_uv.seams.needed``)."""
+    for note in res.repair:
+        print(f"repaired: {note}")
+    n = len(res.seams_added)
+    print(f"seams: {n} added, only on islands that could not be certified as they were (their "
+          f"charts at C = {min(float(options.bound), AUTO_BOUND):g}, stretch <= "
+          f"{options.seams_stretch:g})" + (f"; they are UV discontinuities of {output} and "
+                                          "\"seams_added\" in the report" if n else ""))
+
+
+def auto_seams(mesh, seams, options):
+    """Seams added where needed (``options.seams_mode == "auto"``): ``seams`` (the file's UV
+    seams, or None) kept, more added; prints what was added."""
+    res, added, info = unwrap_auto(mesh.V, mesh.F, seams=seams, bound=options.bound,
+                                   stretch=options.seams_stretch, method=options.method,
+                                   frames=options.frames, cone=options.cone,
+                                   progress=ProgressBar())
     print(f"seams auto: {info['charts']} charts, {len(added)} edges added, seam length "
           f"{info['seam_length']:.4g} ({100 * info['seam_length'] / info['edge_length']:.2f}% of "
           f"all edge length), max stretch {max(info['max_stretch'], default=1.0):.3f} <= "
-          f"{2.0 if args.stretch is None else args.stretch:g}")
+          f"{options.seams_stretch:g}")
     return res
-
-
-def needed_seams(mesh, seams, args):
-    """The default (no ``--seams``): the file's UV seams kept, the mesh repaired where it is not
-    a manifold, seams added only to islands that cannot be certified at C
-    (``bd_uv.seams.needed.unwrap_needed``). Returns (result, report keys)."""
-    stretch = AUTO_STRETCH if args.stretch is None else args.stretch
-    res, added, info = unwrap_needed(mesh.V, mesh.F, seams=seams, bound=args.bound,
-                                     stretch=stretch, marked_stretch=args.stretch,
-                                     method=args.method, frames=args.frames,
-                                     cone=args.cone, overlap=args.overlap,
-                                     progress=ProgressBar())
-    for note in info["repair"]:
-        print(f"repaired: {note}")
-    print(f"seams: {len(added)} added (on {info['seam_islands']} island(s) that could not be "
-          f"certified as they were, at C = {min(args.bound, AUTO_BOUND):g}, stretch <= "
-          f"{stretch:g}); they are the UV discontinuities of {args.output} and \"seams_added\" "
-          "in the report")
-    return res, {"seams_mode": "needed", "seams_added": added.tolist(), "repair": info["repair"]}
 
 
 def _print_report(name, islands, layout, seconds, args, out):
@@ -182,11 +162,11 @@ def build_parser():
                    help="needed (the default): keep the file's UV seams (if it has vt), repair "
                         "non-manifold vertices and edges, flipped parts and duplicate faces, and "
                         "add seams only to islands that cannot be certified at C as they are "
-                        "(their charts at C = min(C, 2) and --stretch, default 2); uv: cut where "
-                        "the file's UVs are discontinuous, nothing added; none: islands are the "
-                        "mesh's components; auto: search seams on every island (closed, genus, "
-                        "over C or --stretch). Without --seams, --bound auto, --frames input-uv "
-                        "and a fixed --boundary take the islands as they are (uv, or none)")
+                        "(their charts at C = min(C, 2) within --stretch, default 2); uv: cut "
+                        "where the file's UVs are discontinuous, nothing added; none: islands "
+                        "are the mesh's components; auto: search seams on every island (closed, "
+                        "genus, over C or --stretch). Without --seams, --bound auto, --frames "
+                        "input-uv and a fixed --boundary take the islands as they are")
     p.add_argument("--report", help="write the JSON report here")
     p.add_argument("--png", help="write a picture of the UV layout coloured by distortion")
     p.set_defaults(func=run_unwrap)

@@ -72,3 +72,17 @@ class SolverError(IslandError):
 
 class OverlapError(IslandError):
     """The island's UVs lie over themselves (its UV boundary is not simple); cut it or mark seams."""
+
+
+class OptionError(BDError, ValueError):
+    """An unwrap option out of its range, or options that cannot go together
+    (``bd_uv.options.UnwrapOptions``). A ValueError too, as bad options always were.
+
+    Attributes
+    ----------
+    option : str, the option's name (the first one named when two cannot go together)
+    """
+
+    def __init__(self, option, message):
+        super().__init__(message)
+        self.option = option

@@ -12,7 +12,8 @@ With the ``bpy`` module (``pip install bpy``)::
 
 Each object is unwrapped along its marked seams, with seams added (and marked) only on islands
 that cannot be certified as they are (``--seams needed``, the default; closed meshes need no
-seams marked first) and the mesh repaired where it is not a manifold, keeping its pinned UVs exactly, with the object's scale
+seams marked first) and the mesh repaired where it is not a manifold, keeping its pinned UVs
+exactly (an object with pins is unwrapped as marked), with the object's scale
 applied like the ``uv.bd_unwrap`` operator, and with ``--pack`` the islands are packed by Blender's
 Pack Islands as the operator does. Then each island is certified again from the UV map as it will
 be saved (float32, packed or not) with its own bound, and an island that fails is put back before
@@ -371,7 +372,8 @@ def main(argv):
     blends, rest = split_argv(argv)
     core, batch, arguments, mesh_data, session, stored = _import_addon()
     args = build_parser(arguments).parse_args(rest)
-    options = arguments.solver_kwargs(args)
+    # Blender packs (--pack): the core neither packs nor cuts what it stores.
+    options = batch.JobOptions(arguments.unwrap_options_of(args))
     if args.png and importlib.util.find_spec("matplotlib") is None:
         print("error: --png needs matplotlib, which this Python (Blender's own) does not have: "
               "install it into Blender's Python (<blender python> -m pip install matplotlib), "

@@ -20,7 +20,7 @@ from ..meshio import load_mesh, write_obj
 from ..scheduling import run_pool
 from ..scheduling.atomic import atomic_path
 from ..scheduling.cluster import run_dask
-from .jobs import Job, failed_entry, unwrap_job
+from .jobs import Job, JobOptions, failed_entry, unwrap_job
 
 MESH_SUFFIXES = (".obj", ".off", ".ply")
 BLEND_SUFFIX = ".blend"
@@ -100,19 +100,19 @@ def _unwrap_blend(task, options, base):
 
 
 def _script_options(options):
-    """``options`` (unwrap keyword arguments) as the Blender script's command-line flags."""
-    out = ["--method", options["method"], "--bound", str(options["bound"]),
-           "--frames", options["frames"], "--bound-limit", str(options["bound_limit"]),
-           "--cone", options["cone"]]
-    if not options["raise_bound"]:
+    """``options`` (JobOptions) as the Blender script's command-line flags."""
+    o = JobOptions.of(options).unwrap
+    out = ["--method", o.method, "--bound", str(o.bound), "--frames", o.frames,
+           "--bound-limit", str(o.bound_limit), "--cone", o.cone]
+    if not o.raise_bound:
         out.append("--no-raise")
-    if options.get("time_budget") is not None:
-        out += ["--time-budget", str(options["time_budget"])]
-    if options.get("boundary", "free") != "free":
-        out += ["--boundary", options["boundary"]]
-    if options.get("stretch") is not None:
-        out += ["--stretch", str(options["stretch"])]
-    out += ["--seams", "needed" if "needed_stretch" in options else "marked"]
+    if o.time_budget is not None:
+        out += ["--time-budget", str(o.time_budget)]
+    if o.boundary != "free":
+        out += ["--boundary", o.boundary]
+    if o.stretch is not None:
+        out += ["--stretch", str(o.stretch)]
+    out += ["--seams", "needed" if o.seams_mode == "needed" else "marked"]
     return out
 
 

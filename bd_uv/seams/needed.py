@@ -24,15 +24,16 @@ import numpy as np
 
 from ..errors import (ClosedIslandError, DegenerateFacesError, InfeasibleError, OverlapError,
                       SolverError, TopologyError)
+from ..options import unwrap_options
 from ..repair import repair_mesh, twin_corners
 from ..unwrapping.results import IslandResult, UnwrapResult
 from ..unwrapping.unwrap import unwrap
 from .auto import unwrap_auto
 from .measure import splice
 
-# The bound and stretch limit of the charts the seam search makes (see the module docstring).
+# The bound of the charts the seam search makes (see the module docstring); their stretch limit
+# is ``UnwrapOptions.seams_stretch`` (``options.AUTO_SEAMS_STRETCH`` = 2 unless asked).
 AUTO_BOUND = 2.0
-AUTO_STRETCH = 2.0
 # Island errors that seams can fix.
 NEEDS_SEAMS = (ClosedIslandError, TopologyError, InfeasibleError, SolverError, OverlapError)
 
@@ -45,77 +46,70 @@ def needs_seams(island, overlap="cut"):
     return isinstance(island.error, NEEDS_SEAMS)
 
 
-def unwrap_needed(V, F, seams=None, bound=5.0, stretch=AUTO_STRETCH, auto_bound=AUTO_BOUND,
-                  marked_stretch=None, polygons=None, method="lscm", frames="auto", cone="soc",
-                  overlap="cut", repair=True, progress=None, cancel=None):
-    """Unwrap with the marked seams, adding seams only to islands that cannot be certified.
+def unwrap_needed(V, F, seams=None, polygons=None, options=None, marked_stretch=None,
+                  repair=True, progress=None, cancel=None):
+    """Unwrap with the given (marked) seams, adding seams only to islands that cannot be
+    certified as they are.
 
     Parameters
     ----------
     V : (n,3) float array
     F : (m,3) int array
     seams : (s,2) int array, optional, vertex pairs of the marked seams (all kept)
-    bound : float, C for the islands the marked seams make (never raised: an island with no
-        certified map within C gets seams instead)
-    stretch : float, S for the charts the seam search makes (``unwrap_auto``)
-    auto_bound : float, C for those charts is ``min(bound, auto_bound)``
-    marked_stretch : float, optional, S for the islands the marked seams make too (``unwrap``'s
-        ``stretch``: Limit Stretch on every island)
     polygons : (m,) int array, optional, the polygon of each triangle (kept in one chart)
-    method, frames, cone, progress, cancel : as for ``bd_uv.unwrap``
-    overlap : "cut" | "fail", an island whose map lies over itself: cut into pieces (and, when
-        that fails, given seams), or failed and named
+    options : UnwrapOptions, optional (its ``seams_mode`` is not read): ``bound`` C for the
+        islands the marked seams make (never raised: an island with no certified map within C
+        gets seams instead), ``min(C, AUTO_BOUND)`` for the charts the search cuts, ``stretch``
+        (``seams_stretch``) S for those charts; ``method``, ``frames``, ``cone`` for all;
+        ``overlap`` for the marked islands (with "fail" an island overlapping itself is named,
+        not given seams)
+    marked_stretch : float, optional, S for the islands the marked seams make too (``unwrap``'s
+        ``stretch``: the operator's Limit Stretch), at least sqrt(C)
     repair : bool, repair the mesh first (``repair.repair_mesh``); without, a messy island
-        fails as it does in ``unwrap``
+        fails as it does with ``seams_mode="marked"``
+    progress, cancel : as for ``bd_uv.unwrap``
 
     Returns
     -------
-    result : UnwrapResult over the input faces; ``duplicate_of`` names each duplicate face's twin
-        (its corner UVs are the twin's); zero-area faces form one failed island
-        (``DegenerateFacesError``) with NaN UVs
-    added : (k,2) int64, input vertex pairs of the seams added (smaller index first)
-    info : dict, ``repair`` (list of str, what was repaired), ``seam_islands`` (islands given
-        to the seam search), ``charts`` (islands of ``result``)
+    UnwrapResult over the input faces, with ``seams_added`` (k,2) int64 (input vertex pairs of
+    the seams the search added, smaller index first) and ``repair`` (what was repaired);
+    ``duplicate_of`` names each duplicate face's twin (its corner UVs are the twin's);
+    zero-area faces form one failed island (``DegenerateFacesError``) with NaN UVs
     """
+    opts = unwrap_options(options)
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F)
-    if repair:
-        rep = repair_mesh(V, F)
-    else:
-        rep = None
+    rep = repair_mesh(V, F) if repair else None
     V2, F2 = (rep.V, rep.F) if rep is not None else (V, np.asarray(F, np.int64))
     faces = rep.faces if rep is not None else np.arange(len(F2))
     seams2 = rep.seams(seams) if rep is not None else seams
     poly = None if polygons is None else np.asarray(polygons, np.int64)[faces]
-    options = dict(method=method, frames=frames, cone=cone, progress=progress, cancel=cancel)
+    marked = opts.replace(seams_mode="marked", raise_bound=False, stretch=marked_stretch)
     added = np.zeros((0, 2), dtype=np.int64)
-    sent = 0
     if len(F2):
-        extra = {} if marked_stretch is None else {"stretch": float(marked_stretch)}
-        res = unwrap(V2, F2, seams=seams2, bound=float(bound), raise_bound=False,
-                     overlap=overlap, face_groups=poly, **extra, **options)
-        bad = [r for r in res.islands if r.status != "certified" and needs_seams(r, overlap)]
+        res = unwrap(V2, F2, seams2, face_groups=poly, progress=progress, cancel=cancel,
+                     options=marked)
+        bad = [r for r in res.islands
+               if r.status != "certified" and needs_seams(r, opts.overlap)]
         if bad:
-            sent = len(bad)
             sub = np.sort(np.concatenate([r.faces for r in bad]))
             voc, Fl = np.unique(F2[sub], return_inverse=True)
-            Fl = Fl.reshape(-1, 3)
-            local = pairs_in(seams2, voc)
-            part, found, _ = unwrap_auto(V2[voc], Fl, seams=local,
-                                         bound=min(float(bound), float(auto_bound)),
-                                         stretch=float(stretch),
-                                         polygons=None if poly is None else poly[sub], **options)
+            part, found, _ = unwrap_auto(
+                V2[voc], Fl.reshape(-1, 3), seams=pairs_in(seams2, voc),
+                bound=min(float(opts.bound), AUTO_BOUND), stretch=opts.seams_stretch,
+                method=opts.method, frames=opts.frames, cone=opts.cone, progress=progress,
+                cancel=cancel, polygons=None if poly is None else poly[sub])
             res = splice(res, part, sub, voc, len(F2))
             added = voc[found]
     else:
-        res = UnwrapResult(np.zeros((0, 3, 2)), np.zeros(0, np.int64), [], 0.0, method)
-    result = result_on_input(res, rep, np.asarray(F, np.int64), method) if rep is not None else res
+        res = UnwrapResult(np.zeros((0, 3, 2)), np.zeros(0, np.int64), [], 0.0, opts.method)
+    result = (result_on_input(res, rep, np.asarray(F, np.int64), opts.method)
+              if rep is not None else res)
     if rep is not None and len(added):
         added = rep.vertex_source[added]
     added = np.unique(np.sort(added, axis=1), axis=0) if len(added) else added.reshape(0, 2)
-    info = {"repair": rep.notes() if rep is not None else [], "seam_islands": sent,
-            "charts": sum(1 for r in result.islands if r.status == "certified")}
-    return result, added.astype(np.int64), info
+    return dataclasses.replace(result, seams_added=added.astype(np.int64),
+                               repair=tuple(rep.notes()) if rep is not None else ())
 
 
 def pairs_in(pairs, voc):

@@ -492,7 +492,8 @@ def test_bad_options_raise_value_error_naming_the_option(option, value):
     before = snapshot(V, F)
     with pytest.raises(ValueError) as info:
         bd_uv.unwrap(V, F, **{option: value})
-    assert not isinstance(info.value, bd_uv.BDError)
+    # issue 20: a typed error (a BDError, still a ValueError) that names the option
+    assert isinstance(info.value, bd_uv.OptionError) and info.value.option == option
     assert_message(str(info.value), option)
     assert_unchanged(before, V, F)
 

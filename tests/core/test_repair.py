@@ -91,8 +91,8 @@ def _check_certified(V, F, corner_uv, skip):
 @pytest.mark.parametrize("make", DEFECTS, ids=lambda f: f.__name__)
 def test_core_api_unwraps_every_other_face(make):
     V, F, skip, words = make()
-    res, added, info = unwrap_needed(V, F)
-    assert any(words in note for note in info["repair"]), info["repair"]
+    res = unwrap_needed(V, F)
+    assert any(words in note for note in res.repair), res.repair
     layout = stored_layout(V, F, res, dtype=np.float32)
     _check_certified(V, F, layout.corner_uv, skip)
     # Only the faces that cannot be certified at all are named failed, their UVs not written.
@@ -136,7 +136,7 @@ def test_closed_mesh_without_seams_unwraps_from_the_command_line(tmp_path):
                        text=True, cwd=REPO)
     assert r.returncode == 0, r.stderr
     report = json.loads(rep.read_text())
-    assert report["seams_mode"] == "needed" and len(report["seams_added"]) > 0
+    assert len(report["seams_added"]) > 0
 
 
 def test_marked_seams_that_make_disks_get_no_new_seam():
@@ -144,8 +144,20 @@ def test_marked_seams_that_make_disks_get_no_new_seam():
     V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
     F = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
     seams = np.array([[0, 1], [0, 2], [0, 3]])
-    res, added, info = unwrap_needed(V, F, seams=seams)
-    assert len(added) == 0 and info["seam_islands"] == 0 and res.certified
+    res = unwrap_needed(V, F, seams=seams)
+    assert len(res.seams_added) == 0 and res.certified and len(res.islands) == 1
+
+
+def test_public_unwrap_takes_seams_needed():
+    # bd_uv.unwrap keeps "marked" by default (a closed mesh fails); seams="needed" cuts it.
+    import bd_uv
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    F = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
+    assert not bd_uv.unwrap(V, F).certified
+    res = bd_uv.unwrap(V, F, seams="needed")
+    assert res.certified and len(res.seams_added) > 0
+    D, flipped = reference_distortion(V, F, res.corner_uv)
+    assert not flipped.any() and D.max() <= 2.0 * (1 + 1e-6)   # charts cut at min(C, 2)
 
 
 def test_clean_mesh_is_left_as_it_is():
