@@ -238,3 +238,30 @@ def test_zero_area_face_is_named_and_kept_off_the_atlas(addon, capsys):
     Vt, tris, loops, poly = _loop_triangles(obj)
     D, det = triangle_distortion(Vt, tris[poly < 2], uv[loops[poly < 2]])
     assert (det > 0).all() and D.max() <= C * SLACK
+
+
+def test_batch_script_unwraps_closed_primitives_with_its_defaults(empty_scene, tmp_path):
+    """scripts/bd_uv_batch.py with no options on a .blend of closed primitives (no seams, no UV
+    map): every object certified, the seams it added marked in the saved file, the saved UVs
+    certified (recomputed here)."""
+    import json
+    from test_post_write_check import _load_script
+
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=16, ring_count=8)
+    bpy.ops.mesh.primitive_torus_add(location=(4, 0, 0))
+    for ob in bpy.context.scene.objects:
+        while ob.data.uv_layers:
+            ob.data.uv_layers.remove(ob.data.uv_layers[0])
+    blend, out, report = tmp_path / "in.blend", tmp_path / "out.blend", tmp_path / "r.json"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    script = _load_script()
+    assert script.main([str(script.__file__), str(blend), "--", "--output", str(out),
+                        "--report", str(report)]) == 0
+    items = json.loads(report.read_text())["items"]
+    assert {e["object"] for e in items} == {"Sphere", "Torus"}
+    bpy.ops.wm.open_mainfile(filepath=str(out))
+    for e in items:
+        assert e["status"] == "certified" and len(e["seams_added"]) > 0, e
+        obj = bpy.data.objects[e["object"]]
+        assert _seams(obj.data).sum() == e["seams_marked"] > 0
+        _certified_as_stored(obj)
