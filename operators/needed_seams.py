@@ -22,7 +22,14 @@ from ..bd_uv.seams.measure import splice
 from ..bd_uv.seams.needed import AUTO_BOUND, needs_seams, pairs_in, result_on_input
 from . import auto_seams
 
-__all__ = ["solve"]
+__all__ = ["applies", "solve"]
+
+
+def applies(minimise, frames, boundary, pinned):
+    """Whether Seams "Add Where Needed" adds seams: not with Minimise, From Current UVs
+    (``frames == "input-uv"``), a fixed ``boundary`` or ``pinned`` UVs (seams added cannot keep
+    those: the islands are then taken as marked, as with Seams "Marked")."""
+    return not minimise and frames != "input-uv" and boundary == "free" and not pinned
 
 
 def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0,

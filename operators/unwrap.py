@@ -76,14 +76,6 @@ _FRAMES = (
 )
 
 
-def _adds_seams(op, batch):
-    """Whether Seams "Add Where Needed" applies: not with Minimise, From Current UVs, a fixed
-    Boundary or pinned UVs (seams added cannot keep those; the islands are then taken as
-    marked)."""
-    return (op.seams == 'NEEDED' and not op.minimise and op.frames != 'input-uv'
-            and op.boundary == 'free' and not len(batch.pin_corners))
-
-
 class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
     """Unwrap the selected faces with a certified bound on conformal distortion and no flipped
     faces (Bounded Distortion Mapping Spaces, Lipman 2012)"""
@@ -222,16 +214,15 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                                        use_object_scale=self.use_object_scale,
                                        need_uvs=(self.frames == 'input-uv'
                                                  and self.seams != 'AUTO'))
-            if _adds_seams(self, batch):
+            if self.seams == 'NEEDED' and needed_seams.applies(
+                    self.minimise, self.frames, self.boundary, len(batch.pin_corners)):
                 problem = self._stretch_problem() if self.limit_stretch else ""
                 if problem:
                     raise session.UserError(problem)
-                args, kwargs = session.auto_arguments(
-                    batch, method=self.method, bound=self.bound, minimise=False,
-                    stretch=self.stretch, frames=self.frames)
-                kwargs["overlap"] = 'cut' if self.overlap == 'CUT' else 'fail'
-                if self.limit_stretch:
-                    kwargs["marked_stretch"] = self.stretch
+                args, kwargs = session.needed_arguments(
+                    batch, method=self.method, bound=self.bound, stretch=self.stretch,
+                    frames=self.frames, overlap='cut' if self.overlap == 'CUT' else 'fail',
+                    limit_stretch=self.limit_stretch)
                 return batch, 'NEEDED', args, kwargs
             if self.seams == 'AUTO':
                 args, kwargs = session.auto_arguments(
