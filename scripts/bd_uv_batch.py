@@ -216,9 +216,6 @@ def unwrap_objects(objects, args, batch, options, mesh_data, session, source):
                     name, initial = layer.name, mesh_data.loop_uvs(ob.data, layer.name)
                 entry["uv_map"] = mesh_data.write_corner_uvs(
                     ob.data, name, arrays.tri_loops, result.corner_uv, ok)
-                if entry.get("seams_added"):  # where to see them: the mesh's marked seams
-                    entry["seams_marked"] = int(mesh_data.mark_seams(
-                        ob.data, arrays.vertices[np.asarray(entry["seams_added"])]).sum())
                 written.append(Written(entry, ob, arrays, ok, result.result, initial))
         except Exception as exc:  # one object never stops the others
             entry = batch.failed_entry(ob.name, type(exc).__name__, f"{ob.name}: {exc}",
@@ -439,6 +436,10 @@ def main(argv):
         pack(written, session, args.margin, args.pack_shape)
     check_saved(written, mesh_data, stored, args.pack)
     written = [w for w in written if w.ok.any()]
+    for w in written:   # the seams added, where the artist sees them: marked on the mesh saved
+        if w.entry.get("seams_added"):
+            w.entry["seams_marked"] = int(mesh_data.mark_seams(
+                w.ob.data, w.arrays.vertices[np.asarray(w.entry["seams_added"])]).sum())
     draw_saved(written, core, batch, mesh_data, options, args)
     items += done
     for e in done:
