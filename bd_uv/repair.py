@@ -6,7 +6,8 @@ refuses an island holding any of them (``NonManifoldError`` and the like), which
 explicit "marked seams" mode; ``repair_mesh`` instead returns a mesh every piece of which is a
 manifold, consistently oriented surface:
 
-- zero-area (or non-finite) faces are left out: no map of them can be certified;
+- zero-area faces and faces with a non-finite corner are left out: no map of them can be
+  certified;
 - of faces on the same three vertices in the same cyclic order, the first is kept and the others
   are left out of the solve (``twin``: they get its UVs afterwards);
 - every vertex is split into one vertex per fan of corners, where corners are joined only across
@@ -38,7 +39,8 @@ class Repair:
     vertex_source : (n2,) int64, input vertex of each vertex of ``V``
     twin : (m,) int64, for an input face left out as a duplicate the face it duplicates (a
         solved one); -1 otherwise
-    zero_area : (z,) int64, input faces of zero area or with non-finite corners (not solved)
+    zero_area : (z,) int64, input faces of zero area (not solved)
+    non_finite : (q,) int64, input faces with a NaN or infinite corner (not solved)
     split_vertices : (b,) int64, input vertices split into one vertex per fan
     nonmanifold_edges : (e1,2) int64, input vertex pairs of edges of three or more faces (cut)
     orientation_edges : (e2,2) int64, input vertex pairs of edges whose two faces are oriented
@@ -51,6 +53,7 @@ class Repair:
     vertex_source: np.ndarray
     twin: np.ndarray
     zero_area: np.ndarray
+    non_finite: np.ndarray
     split_vertices: np.ndarray
     nonmanifold_edges: np.ndarray
     orientation_edges: np.ndarray
@@ -58,7 +61,8 @@ class Repair:
     @property
     def changed(self):
         """Whether anything was split, cut or left out."""
-        return bool(len(self.zero_area) or (self.twin >= 0).any() or len(self.split_vertices)
+        return bool(len(self.zero_area) or len(self.non_finite) or (self.twin >= 0).any()
+                    or len(self.split_vertices)
                     or len(self.nonmanifold_edges) or len(self.orientation_edges))
 
     def seams(self, pairs):
@@ -108,6 +112,10 @@ class Repair:
         if len(self.zero_area) and indices:
             out.append(f"{len(self.zero_area)} zero-area face(s) cannot be certified: their UVs "
                        f"are left as they were (faces {_some(self.zero_area)})")
+        if len(self.non_finite) and indices:
+            out.append(f"{len(self.non_finite)} face(s) with NaN or infinite coordinates cannot "
+                       f"be certified: their UVs are left as they were (faces "
+                       f"{_some(self.non_finite)})")
         return out
 
 
@@ -123,14 +131,13 @@ def _pairs(pairs, k=4):
 
 
 def zero_area_faces(V, F):
-    """(m,) bool: faces with twice their area below ``DEGENERATE_RATIO`` times their longest edge
-    squared, or with a non-finite corner (``mesh.islands``' test)."""
+    """(m,) bool: faces with finite corners and twice their area below ``DEGENERATE_RATIO``
+    times their longest edge squared (``mesh.islands``' test)."""
     P = V[F]
     A = face_areas(V, F)
     lmax2 = np.max(np.sum((P - np.roll(P, -1, axis=1)) ** 2, axis=2), axis=1)
     with np.errstate(invalid="ignore"):
-        ok = (2 * A > DEGENERATE_RATIO * lmax2) & np.isfinite(P).all(axis=(1, 2))
-    return ~ok
+        return ~(2 * A > DEGENERATE_RATIO * lmax2) & np.isfinite(P).all(axis=(1, 2))
 
 
 def duplicate_twins(F, skip=None):
@@ -181,9 +188,10 @@ def repair_mesh(V, F, keep_duplicates=False):
     V, F = check_arrays(V, F)
     n, m = len(V), len(F)
     zero = zero_area_faces(V, F)
+    bad = ~np.isfinite(V[F]).all(axis=(1, 2))
     twin = (np.full(m, -1, dtype=np.int64) if keep_duplicates
-            else duplicate_twins(F, skip=zero))
-    faces = np.flatnonzero(~zero & (twin < 0))
+            else duplicate_twins(F, skip=zero | bad))
+    faces = np.flatnonzero(~zero & ~bad & (twin < 0))
     Fk = F[faces]
     k = len(Fk)
     # Half-edge h = 3 f + c runs from Fk[f, c] to Fk[f, c + 1].
@@ -217,5 +225,6 @@ def repair_mesh(V, F, keep_duplicates=False):
     ends = np.stack([uniq // n, uniq % n], axis=1) if len(uniq) else np.zeros((0, 2), np.int64)
     return Repair(V2, F2.astype(np.int64), faces.astype(np.int64), vertex_source.astype(np.int64),
                   twin, np.flatnonzero(zero).astype(np.int64),
+                  np.flatnonzero(bad).astype(np.int64),
                   np.unique(pairs[extra, 0]).astype(np.int64), ends[count >= 3],
                   ends[two[~opposite]])

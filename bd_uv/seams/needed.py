@@ -22,8 +22,8 @@ import dataclasses
 
 import numpy as np
 
-from ..errors import (ClosedIslandError, DegenerateFacesError, InfeasibleError, OverlapError,
-                      SolverError, TopologyError)
+from ..errors import (ClosedIslandError, DegenerateFacesError, InfeasibleError, NonFiniteError,
+                      OverlapError, SolverError, TopologyError)
 from ..options import unwrap_options
 from ..repair import repair_mesh, twin_corners
 from ..unwrapping.results import IslandResult, UnwrapResult
@@ -144,14 +144,17 @@ def result_on_input(res, rep, F, method):
         corner = twin_corners(F, dup, tw)
         corner_uv[dup] = np.take_along_axis(corner_uv[tw], corner[:, :, None], axis=1)
         face_island[dup] = face_island[tw]
-    if len(rep.zero_area):
-        z = rep.zero_area
+    for z, error, what, fix in (
+            (rep.zero_area, DegenerateFacesError, "zero-area face(s)",
+             "dissolve or merge them to unwrap them"),
+            (rep.non_finite, NonFiniteError, "face(s) with NaN or infinite coordinates",
+             "fix their vertices to unwrap them")):
+        if not len(z):
+            continue
         face_island[z] = len(islands)
-        err = DegenerateFacesError(
-            f"{len(z)} zero-area face(s) cannot be unwrapped with any certified bound (faces "
-            f"{', '.join(str(int(i)) for i in z[:8])}{', ...' if len(z) > 8 else ''}): their UVs "
-            "are left as they were; dissolve or merge them to unwrap them",
-            island=len(islands), faces=z)
+        err = error(f"{len(z)} {what} cannot be unwrapped with any certified bound (faces "
+                    f"{', '.join(str(int(i)) for i in z[:8])}{', ...' if len(z) > 8 else ''}): "
+                    f"their UVs are left as they were; {fix}", island=len(islands), faces=z)
         islands.append(IslandResult(index=len(islands), faces=z, vertices=np.zeros(0, np.int64),
                                     tris=np.zeros((0, 3), np.int64), status="failed", error=err,
                                     message=str(err)))

@@ -71,7 +71,16 @@ def zero_area_face():
     return V, np.vstack([F, [[0, len(V) - 1, 4]]]), {z}, "zero-area"
 
 
-DEFECTS = [bowtie, three_faces_on_an_edge, flipped_part, duplicate_face, zero_area_face]
+def non_finite_vertex():
+    """A triangle hanging off the grid's border on a vertex with a NaN coordinate."""
+    V, F = _grid()
+    V = np.vstack([V, [[0.5, -1.0, np.nan]]])
+    z = len(F)
+    return V, np.vstack([F, [[0, len(V) - 1, 4]]]), {z}, "NaN or infinite"
+
+
+DEFECTS = [bowtie, three_faces_on_an_edge, flipped_part, duplicate_face, zero_area_face,
+           non_finite_vertex]
 
 
 def _check_certified(V, F, corner_uv, skip):
