@@ -166,16 +166,13 @@ def twin_corners(F, faces, twins):
     return np.argmax(F[faces][:, :, None] == F[twins][:, None, :], axis=2)
 
 
-def repair_mesh(V, F, keep_duplicates=False):
+def repair_mesh(V, F):
     """Split, cut and leave out what keeps a mesh from being unwrapped piece by piece.
 
     Parameters
     ----------
     V : (n,3) float array
     F : (m,3) int array
-    keep_duplicates : bool, keep duplicate faces in the solve (the Blender operator: each is a
-        polygon with loops of its own); the edges they share with their twin are then edges of
-        three or more faces (or of two faces oriented alike) and are cut like any other
 
     Returns
     -------
@@ -189,8 +186,7 @@ def repair_mesh(V, F, keep_duplicates=False):
     n, m = len(V), len(F)
     zero = zero_area_faces(V, F)
     bad = ~np.isfinite(V[F]).all(axis=(1, 2))
-    twin = (np.full(m, -1, dtype=np.int64) if keep_duplicates
-            else duplicate_twins(F, skip=zero | bad))
+    twin = duplicate_twins(F, skip=zero | bad)
     faces = np.flatnonzero(~zero & ~bad & (twin < 0))
     Fk = F[faces]
     k = len(Fk)
