@@ -25,6 +25,7 @@ from .meshio import load_mesh, write_obj
 from .planar_cli import add_planar_parsers
 from .scenes import BLENDER_SUFFIXES, GLTF_SUFFIXES, SCENE_SUFFIXES, USD_SUFFIXES, read_scene
 from .seams import unwrap_auto
+from .seams.needed import AUTO_BOUND
 
 
 class ProgressBar:
@@ -77,6 +78,8 @@ def run_unwrap(args):
     else:
         res = unwrap(mesh.V, mesh.F, seams=seams, initial_uv=initial_uv, progress=ProgressBar(),
                      options=options)
+    if options.seams_mode == "needed":
+        _print_needed(res, options, args.output)
     layout = stored_layout(mesh.V, mesh.F, res, **layout_options)
     uv, F_uv = layout.vertex_uv(mesh.F)
     write_obj(args.output, mesh.V, mesh.F, uv, F_uv)
@@ -149,6 +152,17 @@ def core_cuts(islands):
     return {"islands": len(first), "edges": sum(first.values())}
 
 
+def _print_needed(res, options, output):
+    """What the default seams mode repaired and added (``bd_uv.seams.needed``)."""
+    for note in res.repair:
+        print(f"repaired: {note}")
+    n = len(res.seams_added)
+    print(f"seams: {n} added, only on islands that could not be certified as they were (their "
+          f"charts at C = {min(float(options.bound), AUTO_BOUND):g}, stretch <= "
+          f"{options.seams_stretch:g})" + (f"; they are UV discontinuities of {output} and "
+                                          "\"seams_added\" in the report" if n else ""))
+
+
 def auto_seams(mesh, seams, options):
     """Seams added where needed (``options.seams_mode == "auto"``): ``seams`` (the file's UV
     seams, or None) kept, more added; prints what was added."""
@@ -207,10 +221,15 @@ def build_parser():
     add_solver_options(p)
     add_layout_options(p)
     add_scene_options(p)
-    p.add_argument("--seams", choices=("uv", "none", "auto"), default=None,
-                   help="uv: cut where the file's UVs are discontinuous (default when the OBJ "
-                        "has vt); none: islands are the mesh's components; auto: add seams "
-                        "where needed (closed, genus, over C or --stretch)")
+    p.add_argument("--seams", choices=("needed", "uv", "none", "auto"), default=None,
+                   help="needed (the default): keep the file's UV seams (if it has vt), repair "
+                        "non-manifold vertices and edges, flipped parts and duplicate faces, and "
+                        "add seams only to islands that cannot be certified at C as they are "
+                        "(their charts at C = min(C, 2) within --stretch, default 2); uv: cut "
+                        "where the file's UVs are discontinuous, nothing added; none: islands "
+                        "are the mesh's components; auto: search seams on every island (closed, "
+                        "genus, over C or --stretch). Without --seams, --bound auto, --frames "
+                        "input-uv and a fixed --boundary take the islands as they are")
     p.add_argument("--report", help="write the JSON report here")
     p.add_argument("--png", help="write a picture of the UV layout coloured by distortion")
     p.set_defaults(func=run_unwrap)

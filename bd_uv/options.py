@@ -16,8 +16,15 @@ from .errors import OptionError
 from .spaces import check_stretch
 
 FRAMES = ("auto", "harmonic", "conformal", "input-uv", "constant")
-# How the seams are found: "marked" (the given seams only), "auto" (added where needed).
-SEAMS_MODES = ("marked", "auto")
+# How the seams are found: "marked" (the given seams only), "needed" (the mesh repaired, seams
+# added only to the islands that cannot be certified as they are), "auto" (seams searched on
+# every island).
+SEAMS_MODES = ("marked", "needed", "auto")
+# The seams mode of the command line, the batch, the Blender script and the operator when none
+# is asked for (``bd_uv.unwrap`` keeps "marked" for its callers); the command line falls back to
+# "marked" for options only the islands as they are take (--bound auto, --frames input-uv, a
+# fixed --boundary), the operator also for pinned UVs.
+ENTRY_SEAMS_MODE = "needed"
 CONES = ("soc", "linf")
 OVERLAPS = ("cut", "fail")
 BOUNDARIES = ("free",) + SHAPES
@@ -31,13 +38,17 @@ class UnwrapOptions:
 
     Attributes
     ----------
-    seams_mode : "marked" | "auto" (``SEAMS_MODES``). "marked": cut along the given seams only,
-        each island must be a disk; "auto" (``seams="auto"``): keep them and add seams where an
-        island cannot be certified as it is (``bd_uv.seams.unwrap_auto``: every chart a disk
-        within C and within ``stretch``). There C is never raised (a chart that cannot be
-        certified is cut further), so ``raise_bound`` and ``bound_limit`` do not apply, and the
-        search decides ``overlap`` per round (a chart overlapping itself is split; only the
-        last round cuts)
+    seams_mode : "marked" | "needed" | "auto" (``SEAMS_MODES``). "marked": cut along the given
+        seams only, each island must be a disk; "needed" (``seams="needed"``, the entry points'
+        default ``ENTRY_SEAMS_MODE``): repair the mesh (``bd_uv.repair``), keep the given seams,
+        unwrap their islands at C and add seams only to those that cannot be certified
+        (``bd_uv.seams.needed.unwrap_needed``: their charts at ``min(C, 2)`` within
+        ``stretch``); "auto" (``seams="auto"``): keep them and add seams where an island cannot
+        be certified as it is (``bd_uv.seams.unwrap_auto``: every chart a disk within C and
+        within ``stretch``). Where seams are added C is never raised (a chart that cannot be
+        certified is cut further), so ``raise_bound`` and ``bound_limit`` do not apply; "auto"
+        decides ``overlap`` per round (a chart overlapping itself is split; only the last round
+        cuts), "needed" applies it to the given seams' islands
     method : "lscm" | "arap" | "dirichlet" | "biharmonic" | "stretch-l1", the energy minimised in
         F_C (section 6.1; see ``bd_uv.unwrapping.unwrap``)
     bound : float >= 1 or "auto", C: every face's conformal distortion at most C (eq. 4.9);

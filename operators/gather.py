@@ -184,6 +184,18 @@ def auto_arguments(batch, *, method, bound, minimise, stretch, frames):
     return (batch.V, batch.F), kwargs
 
 
+def needed_arguments(batch, *, method, bound, stretch, frames, overlap, limit_stretch):
+    """Positional and keyword arguments of :func:`needed_seams.solve` (Seams "Add Where
+    Needed"): those of :func:`auto_arguments`, the Overlaps choice for the marked islands and,
+    with Limit Stretch, its S for them too."""
+    args, kwargs = auto_arguments(batch, method=method, bound=bound, minimise=False,
+                                  stretch=stretch, frames=frames)
+    kwargs["overlap"] = overlap
+    if limit_stretch:
+        kwargs["marked_stretch"] = float(stretch)
+    return args, kwargs
+
+
 def _options(**values):
     """``UnwrapOptions(**values)``; an option out of range becomes a UserError naming it."""
     try:

@@ -17,7 +17,10 @@ FBX, Alembic (.abc), Collada (.dae, Blender 4.x) and STL files are read with Ble
 importers into an empty scene and written with its exporters (``operators/formats.py``): the
 output's suffix picks the format (.blend saves the scene; STL stores no UVs).
 
-Each object is unwrapped along its seams, keeping its pinned UVs exactly, with the object's scale
+Each object is unwrapped along its marked seams, with seams added (and marked) only on islands
+that cannot be certified as they are (``--seams needed``, the default; closed meshes need no
+seams marked first) and the mesh repaired where it is not a manifold, keeping its pinned UVs
+exactly (an object with pins is unwrapped as marked), with the object's scale
 applied like the ``uv.bd_unwrap`` operator, and with ``--pack`` the islands are packed by Blender's
 Pack Islands as the operator does. Then each island is certified again from the UV map as it will
 be saved (float32, packed or not) with its own bound, and an island that fails is put back before
@@ -95,6 +98,11 @@ def build_parser(arguments):
     p.add_argument("--objects", nargs="+", metavar="NAME",
                    help="mesh objects to unwrap (default: every mesh object with faces)")
     arguments.add_solver_options(p)
+    p.add_argument("--seams", choices=("needed", "marked"), default=None,
+                   help="needed (the default): the marked seams kept, the mesh repaired where "
+                        "it is not a manifold, seams added (and marked) only on islands that "
+                        "cannot be certified as they are; marked: the marked seams only, every "
+                        "island must be a disk. Objects with pinned UVs are unwrapped as marked")
     p.add_argument("--uv-map", metavar="NAME",
                    help="UV map to read pins from and write (default: the active one; created "
                         "when missing)")
@@ -253,23 +261,37 @@ def pack(written, session, margin, shape):
             layers.active = layers[active]
 
 
-def _put_back(w, undo, mesh_data):
+def _put_back(w, undo, mesh_data, stored):
     """Give the triangles ``undo`` (m,) bool their UVs from before the unwrap; a map created
-    here is restored to what it held, or removed when nothing written is left on it."""
+    here is restored to what it held, or removed when nothing written is left on it. UVs that
+    would lie over the islands kept go back moved right by whole tiles (``stored.tiles_off``).
+
+    Returns
+    -------
+    int, the whole tiles they were moved by (0: exactly as they were)
+    """
     mesh, name = w.ob.data, w.entry["uv_map"]
-    if w.initial_uv is None:
-        mesh_data.write_corner_uvs(mesh, name, w.arrays.tri_loops, w.arrays.corner_uv, undo)
-        return
-    if not (w.ok & ~undo).any():
+    kept = w.ok & ~undo
+    if w.initial_uv is not None and not kept.any():
         mesh.uv_layers.remove(mesh.uv_layers[name])
         mesh.update()
         w.entry["uv_map"] = None
-        return
-    uv = mesh_data.loop_uvs(mesh, name)
+        return 0
+    now = mesh_data.loop_uvs(mesh, name)
     loops = w.arrays.tri_loops[undo].ravel()
-    uv[loops] = w.initial_uv[loops]
-    mesh.uv_layers[name].uv.foreach_set("vector", uv.ravel())
+    old = (w.initial_uv[loops] if w.initial_uv is not None
+           else np.asarray(w.arrays.corner_uv, np.float64)[undo].reshape(-1, 2))
+    tiles = stored.tiles_off(now[w.arrays.tri_loops[kept].ravel()], old)
+    if w.initial_uv is None:
+        shift = np.array([tiles, 0.0])
+        mesh_data.write_corner_uvs(mesh, name, w.arrays.tri_loops,
+                                   w.arrays.corner_uv + shift if tiles else w.arrays.corner_uv,
+                                   undo)
+        return tiles
+    now[loops] = old + np.array([tiles, 0.0], dtype=now.dtype)
+    mesh.uv_layers[name].uv.foreach_set("vector", now.ravel())
     mesh.update()
+    return tiles
 
 
 def check_saved(written, mesh_data, stored, packed):
@@ -301,7 +323,14 @@ def check_saved(written, mesh_data, stored, packed):
                            message=f"island {c.island}: put back as it was, its saved UVs fail "
                                    f"the certificate ({c.reason}; {cause})")
         if undo.any():
-            _put_back(w, undo, mesh_data)
+            tiles = _put_back(w, undo, mesh_data, stored)
+            if tiles:
+                for isl in entry["islands"]:
+                    c = by_index.get(isl["island"])
+                    if c is not None and not c.certified:
+                        isl["message"] += (f"; moved {tiles} UV tile(s) right, off the saved "
+                                           "islands it lay over")
+                        isl["moved_tiles"] = tiles
             w.ok = w.ok & ~undo
         kept = [c for c in checks if c.certified]
         P = arrays.V[arrays.F]
@@ -407,6 +436,10 @@ def main(argv):
         pack(written, session, args.margin, args.pack_shape)
     check_saved(written, mesh_data, stored, args.pack)
     written = [w for w in written if w.ok.any()]
+    for w in written:   # the seams added, where the artist sees them: marked on the mesh saved
+        if w.entry.get("seams_added"):
+            w.entry["seams_marked"] = int(mesh_data.mark_seams(
+                w.ob.data, w.arrays.vertices[np.asarray(w.entry["seams_added"])]).sum())
     draw_saved(written, core, batch, mesh_data, options, args)
     items += done
     for e in done:

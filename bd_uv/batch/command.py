@@ -34,9 +34,11 @@ def add_batch_parser(subparsers):
     add_solver_options(p)
     add_layout_options(p)
     add_scene_options(p)
-    p.add_argument("--seams", choices=("uv", "none", "auto"), default=None,
-                   help="uv: cut where an OBJ's UVs are discontinuous (default when it has vt); "
-                        "none: islands are the mesh's components; auto: add seams where needed")
+    p.add_argument("--seams", choices=("needed", "uv", "none", "auto"), default=None,
+                   help="needed (the default): an OBJ's UV seams kept, the mesh repaired, seams "
+                        "added only to islands that cannot be certified as they are; uv: cut "
+                        "where an OBJ's UVs are discontinuous; none: islands are the mesh's "
+                        "components; auto: search seams on every island")
     p.add_argument("--jobs", type=_positive_int, default=os.cpu_count() or 1,
                    help="worker processes, one file each (default: the number of cores); with "
                         "--scheduler local, the LocalCluster's workers")

@@ -54,7 +54,7 @@ def _unwrap_file(task, options, seams_mode):
                                      base=base)
         mesh = load_mesh(task.path)
         seams = None
-        if seams_mode == "uv" or (seams_mode in (None, "auto") and mesh.corner_uv is not None):
+        if seams_mode == "uv" or (seams_mode in (None, "auto", "needed") and mesh.corner_uv is not None):
             if mesh.corner_uv is None:
                 raise BDError(f"{task.path} has no UVs, so --seams uv has nothing to cut along")
             seams = mesh.uv_seams()
@@ -118,6 +118,7 @@ def _script_options(options):
         out += ["--boundary", o.boundary]
     if o.stretch is not None:
         out += ["--stretch", str(o.stretch)]
+    out += ["--seams", "needed" if o.seams_mode == "needed" else "marked"]
     return out
 
 

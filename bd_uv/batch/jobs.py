@@ -158,6 +158,8 @@ def unwrap_job(job, options, png=None):
         o = options.unwrap
         if o.frames == "input-uv" and job.corner_uv is None:
             raise ValueError(f"{job.name} has no UVs to take frames from (--frames input-uv)")
+        if o.seams_mode == "needed" and job.pin_corners is not None and len(job.pin_corners):
+            o = o.replace(seams_mode="marked")   # pinned UVs: the islands as they are marked
         res = unwrap(job.V, job.F, job.seams, job.pin_corners, job.pin_uv,
                      initial_uv=job.corner_uv if o.frames == "input-uv" else None,
                      face_groups=job.face_groups, options=o)
@@ -179,6 +181,7 @@ def unwrap_job(job, options, png=None):
     if w.any():
         D[w] = conformal_distortion(job.V, np.asarray(job.F)[w], layout.corner_uv[w])
     entry["islands"] = islands
+    entry.update(res.seams_report())
     entry["status"] = "certified" if not bad else ("partial" if ok else "failed")
     entry.update(overlapping=t["overlapping_unwrapped"], cut_edges=t["cut_edges"],
                  layout_overlaps=t["layout_overlaps"])

@@ -80,8 +80,9 @@ def test_the_operator_passes_unwrap_options_with_the_cores_defaults(addon, monke
     assert props["bound"].keywords["default"] == defaults.bound
     assert props["frames"].keywords["default"] == defaults.frames
     assert props["raise_bound"].keywords["default"] == defaults.raise_bound
+    # The operator starts where every entry point does: options.ENTRY_SEAMS_MODE ("needed").
     assert props["seams"].keywords["default"] == \
-        ('AUTO' if defaults.seams_mode == "auto" else 'MARKED')
+        {"needed": 'NEEDED', "auto": 'AUTO', "marked": 'MARKED'}[core.options.ENTRY_SEAMS_MODE]
     seen = []
 
     def recording(*args, **kwargs):

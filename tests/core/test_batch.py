@@ -67,7 +67,8 @@ def folder(tmp_path):
 
 def test_folder_good_files_written_bad_ones_reported_exit_1(folder, tmp_path, capsys):
     out, png = tmp_path / "out", tmp_path / "png"
-    code = run(folder, "-o", out, "--jobs", "2", "--bound", "3", "--png", png)
+    # --seams none: the closed tetrahedron fails as marked (the default would add its seams)
+    code = run(folder, "-o", out, "--jobs", "2", "--bound", "3", "--png", png, "--seams", "none")
     assert code == 1  # tetra and broken failed
     rep = json.loads((out / "report.json").read_text())
     items = {os.path.basename(e["input"]): e for e in rep["items"]}

@@ -11,6 +11,7 @@ from bd_uv import OptionError, UnwrapOptions
 from bd_uv.arguments import unwrap_options_of
 from bd_uv.batch import JobOptions
 from bd_uv.cli import build_parser
+from bd_uv.options import ENTRY_SEAMS_MODE
 from bd_uv.scheduling import options_sha256
 from helpers import reference_distortion
 
@@ -94,7 +95,10 @@ def test_keywords_and_the_object_unwrap_alike():
 
 def test_the_command_line_defaults_are_the_options_defaults():
     for command in (["unwrap", "x.obj", "-o", "y.obj"], ["batch", "x", "-o", "y"]):
-        assert unwrap_options_of(build_parser().parse_args(command)) == UnwrapOptions()
+        # The entry points start in ENTRY_SEAMS_MODE ("needed"); every other default is the
+        # options' own.
+        assert unwrap_options_of(build_parser().parse_args(command)) == \
+            UnwrapOptions(seams_mode=ENTRY_SEAMS_MODE)
     args = build_parser().parse_args(["unwrap", "x.obj", "-o", "y.obj", "--seams", "auto",
                                       "--bound", "2", "--no-raise", "--overlap", "fail"])
     assert unwrap_options_of(args) == UnwrapOptions(seams_mode="auto", bound=2.0,
