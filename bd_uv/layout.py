@@ -155,7 +155,9 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
                        for r in res.islands], dtype=np.float64)
     lab = np.where(ok[res.face_island], res.face_island, -1) if n else np.full(m, -1)
     uv = np.asarray(res.corner_uv, dtype=np.float64)
-    before = certify_islands(V, F, uv, lab, np.where(ok, bounds, 1.0))
+    before = res.certificates
+    if before is None or len(before) != n:  # the unwrap did not keep them: measure
+        before = certify_islands(V, F, uv, lab, np.where(ok, bounds, 1.0))
     unwrapped = [c if ok[i] else None for i, c in enumerate(before)]
     new = np.full(m, -1, dtype=np.int64)
     source, cuts, moved = [], [], []

@@ -60,12 +60,19 @@ class IslandResult:
 
 @dataclass(frozen=True)
 class UnwrapResult:
-    """UVs of a whole mesh; ``corner_uv`` is NaN on faces of failed islands."""
+    """UVs of a whole mesh; ``corner_uv`` is NaN on faces of failed islands.
+
+    ``certificates``: one ``certificate.Certificate`` per island (None for an island not
+    certified), measured on ``corner_uv`` exactly as returned, when the unwrap kept them (it does
+    unless it cut an island); ``layout.stored_layout`` reuses them instead of measuring the same
+    UVs again. None otherwise (a result spliced by the seam search, for one).
+    """
     corner_uv: np.ndarray
     face_island: np.ndarray
     islands: list
     seconds: float
     method: str
+    certificates: tuple = None
 
     @property
     def certified(self):
