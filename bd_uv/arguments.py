@@ -75,7 +75,8 @@ def unwrap_options_of(args):
     """
     seams = getattr(args, "seams", None)
     return UnwrapOptions(
-        add_seams=DEFAULTS.add_seams if seams is None else seams == "auto",
+        seams_mode=DEFAULTS.seams_mode if seams is None else
+        ("auto" if seams == "auto" else "marked"),
         method=args.method, bound=args.bound, frames=args.frames,
         raise_bound=not args.no_raise, bound_limit=args.bound_limit, cone=args.cone,
         time_budget=args.time_budget if args.bound == "auto" else None,

@@ -38,7 +38,7 @@ def run_unwrap(args):
             return 2
         initial_uv = mesh.corner_uv
     with TerminalProgress(quiet=args.quiet) as progress:
-        if options.add_seams:
+        if options.seams_mode == "auto":
             res = auto_seams(mesh, seams, options, progress)
         else:
             res = unwrap(mesh.V, mesh.F, seams=seams, initial_uv=initial_uv, progress=progress,
@@ -80,8 +80,9 @@ def core_cuts(islands):
 
 
 def auto_seams(mesh, seams, options, progress=None):
-    """Seams added where needed (``options.add_seams``): ``seams`` (the file's UV seams, or
-    None) kept, more added; prints what was added. ``progress(fraction, message)``, optional."""
+    """Seams added where needed (``options.seams_mode == "auto"``): ``seams`` (the file's UV
+    seams, or None) kept, more added; prints what was added. ``progress(fraction, message)``,
+    optional."""
     res, added, info = unwrap_auto(mesh.V, mesh.F, seams=seams, bound=options.bound,
                                    stretch=options.seams_stretch, method=options.method,
                                    frames=options.frames, cone=options.cone, progress=progress)

@@ -16,6 +16,8 @@ from .errors import OptionError
 from .spaces import check_stretch
 
 FRAMES = ("auto", "harmonic", "conformal", "input-uv", "constant")
+# How the seams are found: "marked" (the given seams only), "auto" (added where needed).
+SEAMS_MODES = ("marked", "auto")
 CONES = ("soc", "linf")
 OVERLAPS = ("cut", "fail")
 BOUNDARIES = ("free",) + SHAPES
@@ -29,8 +31,8 @@ class UnwrapOptions:
 
     Attributes
     ----------
-    add_seams : bool. False ("Marked"): cut along the given seams only, each island must be a
-        disk; True ("Add Where Needed", ``seams="auto"``): keep them and add seams where an
+    seams_mode : "marked" | "auto" (``SEAMS_MODES``). "marked": cut along the given seams only,
+        each island must be a disk; "auto" (``seams="auto"``): keep them and add seams where an
         island cannot be certified as it is (``bd_uv.seams.unwrap_auto``: every chart a disk
         within C and within ``stretch``). There C is never raised (a chart that cannot be
         certified is cut further), so ``raise_bound`` and ``bound_limit`` do not apply, and the
@@ -47,11 +49,11 @@ class UnwrapOptions:
     cone : "soc" (F_C, eq. 4.15) | "linf" (F_C^inf, eq. 4.22)
     time_budget : float >= 0 seconds per island for ``bound="auto"``, or None for no limit
     stretch : float S >= sqrt(C), or None: every face's singular values within [1/S, S]
-        (section 6.3); with ``add_seams`` every chart within S, any S >= 1, None meaning
+        (section 6.3); where seams are added every chart within S, any S >= 1, None meaning
         ``AUTO_SEAMS_STRETCH``
     boundary : "free" | "circle" | "rectangle" | "pinned", where each island's outer boundary
         goes (section 5); not "free" needs a numeric bound, frames "auto" or "harmonic" and
-        no ``add_seams``
+        ``seams_mode="marked"``
     overlap : "cut" | "fail", an island whose UVs lie over themselves: cut into overlap-free
         pieces, or failed
 
@@ -60,7 +62,7 @@ class UnwrapOptions:
     OptionError (a BDError and a ValueError) naming the option, when made with a value out of
     range or with options that cannot go together.
     """
-    add_seams: bool = False
+    seams_mode: str = "marked"
     method: str = "lscm"
     bound: Union[float, str] = 5.0
     frames: str = "auto"
@@ -73,9 +75,7 @@ class UnwrapOptions:
     overlap: str = "cut"
 
     def __post_init__(self):
-        if not isinstance(self.add_seams, bool):
-            raise OptionError("add_seams", f"add_seams must be True or False, got "
-                              f"{self.add_seams!r}")
+        _one_of("seams_mode", self.seams_mode, SEAMS_MODES)
         _one_of("method", self.method, METHODS)
         _one_of("frames", self.frames, FRAMES)
         if self.bound != "auto" and not (_number(self.bound) and 1.0 <= self.bound < math.inf):
@@ -101,15 +101,15 @@ class UnwrapOptions:
             raise OptionError("boundary", f"boundary={self.boundary!r} takes its frames from a "
                               "Tutte embedding onto the boundary (frames 'auto' or 'harmonic'), "
                               f"got frames={self.frames!r}")
-        if self.add_seams:
-            auto = "add_seams (seams='auto')"
+        if self.adds_seams:
+            auto = f"seams_mode={self.seams_mode!r}"
             if self.boundary != "free":
-                raise OptionError("add_seams", f"{auto} makes free-boundary charts; boundary= "
+                raise OptionError("seams_mode", f"{auto} makes free-boundary charts; boundary= "
                                   "needs boundary='free' there")
             if self.bound == "auto":
-                raise OptionError("add_seams", f"{auto} needs a numeric bound C")
+                raise OptionError("seams_mode", f"{auto} needs a numeric bound C")
             if self.frames == "input-uv":
-                raise OptionError("add_seams", f"{auto} does not take pins or the current UVs: "
+                raise OptionError("seams_mode", f"{auto} does not take pins or the current UVs: "
                                   "call bd_uv.seams.unwrap_auto for material groups, or mark "
                                   "seams")
             # The seam search's own S: any S >= 1 (every chart within S and within C).
@@ -123,9 +123,13 @@ class UnwrapOptions:
                 raise OptionError("stretch", str(exc)) from None
 
     @property
+    def adds_seams(self):
+        """True when seams may be added (any ``seams_mode`` but "marked")."""
+        return self.seams_mode != "marked"
+
+    @property
     def seams_stretch(self):
-        """S as the seam search (``add_seams``) uses it: ``stretch``, or ``AUTO_SEAMS_STRETCH``
-        when None."""
+        """S as the seam search uses it: ``stretch``, or ``AUTO_SEAMS_STRETCH`` when None."""
         return AUTO_SEAMS_STRETCH if self.stretch is None else self.stretch
 
     def replace(self, **changes):

@@ -174,7 +174,7 @@ def auto_arguments(batch, *, method, bound, minimise, stretch, frames):
         raise UserError("Add Where Needed seams cannot keep pinned UVs in place: unpin them, "
                         "unwrap with Sync Selection on or from the 3D Viewport, or mark the "
                         "seams yourself")
-    options = _options(add_seams=True, method=method, bound=float(bound),
+    options = _options(seams_mode="auto", method=method, bound=float(bound),
                        stretch=float(stretch), frames=frames)
     material = np.concatenate([p.arrays.material for p in batch.parts])
     kwargs = dict(**polygon_ids(batch),

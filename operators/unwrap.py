@@ -79,7 +79,7 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
 
     method: EnumProperty(name="Method", items=_METHODS, default=DEFAULTS.method)
     seams: EnumProperty(name="Seams", items=_SEAMS,
-                        default='AUTO' if DEFAULTS.add_seams else 'MARKED')
+                        default='AUTO' if DEFAULTS.seams_mode == "auto" else 'MARKED')
     overlap: EnumProperty(name="Overlaps", items=_OVERLAP, default=DEFAULTS.overlap.upper())
     boundary: EnumProperty(name="Boundary", items=_BOUNDARY, default=DEFAULTS.boundary)
     stretch: FloatProperty(name="Limit Stretch", default=DEFAULTS.seams_stretch, min=1.0,
