@@ -89,6 +89,29 @@ def solver_kwargs(args):
     return unwrap_options_of(args).as_dict()
 
 
+def add_scene_options(p):
+    """Where a scene's new UVs go (``unwrap`` and ``batch``)."""
+    p.add_argument("--uv-set", type=int, default=0, metavar="N",
+                   help="glTF: write the UVs to TEXCOORD_N (default 0; e.g. 1 for a lightmap "
+                        "beside the artist's UVs)")
+    p.add_argument("--uv-name", default="st", metavar="NAME",
+                   help="USD: write the UVs to primvars:NAME (default st)")
+
+
+def scene_option_misuse(args, paths):
+    """An error message when ``--uv-set`` or ``--uv-name`` is given but no input is of the
+    format it applies to (an option is never accepted and ignored), else None."""
+    low = [p.lower() for p in paths]
+    if args.uv_set != 0 and not any(p.endswith((".gltf", ".glb")) for p in low):
+        return "--uv-set applies to glTF files (.gltf, .glb) only"
+    if args.uv_name != "st" and not any(p.endswith((".usd", ".usda", ".usdc", ".usdz"))
+                                        for p in low):
+        return "--uv-name applies to USD files (.usd, .usda, .usdc, .usdz) only"
+    if args.uv_set < 0:
+        return f"--uv-set must be 0 or more, not {args.uv_set}"
+    return None
+
+
 def add_layout_options(p):
     """How the UVs are stored (``unwrap`` and ``batch``): cut overlaps, pack, margin."""
     p.add_argument("--no-pack", action="store_true",

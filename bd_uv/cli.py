@@ -11,18 +11,32 @@ import sys
 import numpy as np
 
 from .api import unwrap
-from .arguments import (add_layout_options, add_solver_options, bound_arg,  # noqa: F401
-                        layout_kwargs, solver_kwargs, unwrap_options_of)
+from .arguments import (add_layout_options, add_scene_options, add_solver_options,  # noqa: F401
+                        bound_arg, layout_kwargs, scene_option_misuse, solver_kwargs,
+                        unwrap_options_of)
 from .batch import add_batch_parser
+from .batch.jobs import JobOptions
+from .batch.report import item_line
+from .batch.scene_files import unwrap_scene_file
 from .errors import BDError
 from .layout import stored_layout
 from .meshio import load_mesh, write_obj
 from .planar_cli import add_planar_parsers
 from .progress import TerminalProgress
+from .scenes import BLENDER_SUFFIXES, GLTF_SUFFIXES, SCENE_SUFFIXES, USD_SUFFIXES, read_scene
 from .seams import unwrap_auto
 
 
 def run_unwrap(args):
+    misuse = scene_option_misuse(args, [args.input])
+    if misuse:
+        print(f"error: {misuse}", file=sys.stderr)
+        return 2
+    ext = os.path.splitext(args.input)[1].lower()
+    if ext in SCENE_SUFFIXES or ext in BLENDER_SUFFIXES:
+        if ext in BLENDER_SUFFIXES:
+            read_scene(args.input)     # raises with the Blender command that handles the file
+        return run_scene_unwrap(args)
     options = unwrap_options_of(args)
     mesh = load_mesh(args.input)
     if args.seams == "uv" and mesh.corner_uv is None:
@@ -69,6 +83,34 @@ def run_unwrap(args):
     for e in failed:
         print(f"error: {e['message']}", file=sys.stderr)
     return 0 if not failed else 1
+
+
+def run_scene_unwrap(args):
+    """``unwrap`` of a glTF or USD scene: every mesh, the scene written whole to ``-o``."""
+    ins, outs = (os.path.splitext(p)[1].lower() for p in (args.input, args.output))
+    for family in (GLTF_SUFFIXES, USD_SUFFIXES):
+        if (ins in family) != (outs in family):
+            print(f"error: {args.input} is written back as its own format: give -o a "
+                  f"{' or '.join(family if ins in family else ())} path, not {outs!r}",
+                  file=sys.stderr)
+            return 2
+    options = JobOptions(unwrap_options_of(args), **layout_kwargs(args), uv_set=args.uv_set,
+                         uv_name=args.uv_name)
+    entries = unwrap_scene_file(args.input, args.output, options, args.seams, png=args.png)
+    report = {"input": os.path.abspath(args.input), "output": os.path.abspath(args.output),
+              "options": options.as_dict(), "meshes": entries}
+    if args.report:
+        os.makedirs(os.path.dirname(os.path.abspath(args.report)), exist_ok=True)
+        with open(args.report, "w", encoding="utf-8") as fh:
+            json.dump(report, fh, indent=2)
+    for e in entries:
+        print(item_line(e) + "".join(f"\n  warning: {w}" for w in e.get("warnings", [])))
+    bad = [e for e in entries if e["status"] != "certified"]
+    for e in bad:
+        print(f"error: {e['name']}: {e['message']}", file=sys.stderr)
+    print(f"{len(entries) - len(bad)}/{len(entries)} mesh(es) certified and written -> "
+          f"{args.output}")
+    return 0 if not bad else 1
 
 
 def core_cuts(islands):
@@ -121,11 +163,15 @@ def build_parser():
                                      description="Certified bounded-distortion UV unwrapping "
                                                  "(Lipman 2012).")
     sub = parser.add_subparsers(dest="command", required=True)
-    p = sub.add_parser("unwrap", help="unwrap one mesh file (OBJ, OFF, PLY)")
-    p.add_argument("input", help="mesh file: .obj, .off or .ply")
-    p.add_argument("-o", "--output", required=True, help="output OBJ with UVs")
+    p = sub.add_parser("unwrap", help="unwrap one mesh file (OBJ, OFF, PLY) or scene (glTF, USD)")
+    p.add_argument("input", help="mesh file: .obj, .off or .ply; scene: .gltf, .glb, .usd, "
+                                 ".usda, .usdc, .usdz (FBX, Alembic, Collada, STL and .blend: "
+                                 "the answer gives the Blender command)")
+    p.add_argument("-o", "--output", required=True,
+                   help="output OBJ with UVs; for a scene, the scene written whole (same format)")
     add_solver_options(p)
     add_layout_options(p)
+    add_scene_options(p)
     p.add_argument("--seams", choices=("uv", "none", "auto"), default=None,
                    help="uv: cut where the file's UVs are discontinuous (default when the OBJ "
                         "has vt); none: islands are the mesh's components; auto: add seams "

@@ -1,14 +1,21 @@
-"""Unwrap the mesh objects of a .blend headless with bd-uv, write their UV maps, save.
+"""Unwrap the mesh objects of a .blend (or FBX, Alembic, Collada, STL) headless with bd-uv, write
+their UV maps, save (or export the same format).
 
 Inside Blender (installed extension or not)::
 
     blender -b scene.blend --python bd_uv_batch.py -- [--objects NAME...] [--method lscm|arap]
         [--bound C|auto] [--uv-map NAME] [--pack] [--output out.blend] [--report report.json]
         [--png DIR]
+    blender -b --python bd_uv_batch.py -- --input scene.fbx --output out/scene.fbx [options]
 
 With the ``bpy`` module (``pip install bpy``)::
 
     python bd_uv_batch.py scene.blend -- [same options]
+    python bd_uv_batch.py scene.fbx -- --output out/scene.fbx [same options]
+
+FBX, Alembic (.abc), Collada (.dae, Blender 4.x) and STL files are read with Blender's own
+importers into an empty scene and written with its exporters (``operators/formats.py``): the
+output's suffix picks the format (.blend saves the scene; STL stores no UVs).
 
 Each object is unwrapped along its seams, keeping its pinned UVs exactly, with the object's scale
 applied like the ``uv.bd_unwrap`` operator, and with ``--pack`` the islands are packed by Blender's
@@ -68,7 +75,7 @@ def _import_addon():
     pkg = _extension_package().__name__
     return tuple(importlib.import_module(f"{pkg}.{name}") for name in
                  ("bd_uv", "bd_uv.batch", "bd_uv.arguments", "operators.mesh_data",
-                  "operators.session", "operators.stored"))
+                  "operators.session", "operators.stored", "operators.formats"))
 
 
 def split_argv(argv):
@@ -100,8 +107,13 @@ def build_parser(arguments):
     p.add_argument("--pack-shape", choices=("AABB", "CONVEX", "CONCAVE"), default="AABB",
                    help="island shape for packing: bounding box (fastest, default), convex hull "
                         "or exact shape (tighter; either can take seconds on thousands of faces)")
+    p.add_argument("--input", metavar="FILE",
+                   help="an FBX, Alembic, Collada or STL file to import (inside Blender; with the "
+                        "bpy module it may also come before '--')")
     p.add_argument("--output", metavar="OUT.blend",
-                   help="save here (default: save the opened file in place)")
+                   help="save here (default: save the opened .blend in place); for an imported "
+                        "file, the file to export (its suffix picks the format: .fbx, .abc, .dae, "
+                        "or .blend)")
     p.add_argument("--report", metavar="REPORT.json", help="write the JSON report here")
     p.add_argument("--png", metavar="DIR", help="write a picture of each object's UV layout here")
     p.add_argument("--png-prefix", default="", help="prefix of the PNG file names")
@@ -338,8 +350,11 @@ def draw_saved(written, core, batch, mesh_data, options, args):
 
 def main(argv):
     blends, rest = split_argv(argv)
-    core, batch, arguments, mesh_data, session, stored = _import_addon()
+    core, batch, arguments, mesh_data, session, stored, formats = _import_addon()
     args = build_parser(arguments).parse_args(rest)
+    imported = [f for f in blends if not f.lower().endswith(".blend")] + (
+        [args.input] if args.input else [])
+    blends = [f for f in blends if f.lower().endswith(".blend")]
     # Blender packs (--pack): the core neither packs nor cuts what it stores.
     options = batch.JobOptions(arguments.unwrap_options_of(args))
     if args.png and importlib.util.find_spec("matplotlib") is None:
@@ -348,16 +363,29 @@ def main(argv):
               "or run python -m bd_uv batch FILE.blend --png DIR with the bpy module",
               file=sys.stderr)
         return 2
-    if len(blends) > 1:
-        print("error: give one .blend file before '--'", file=sys.stderr)
+    if len(blends) + len(imported) > 1:
+        print("error: give one file: a .blend before '--', or --input FILE", file=sys.stderr)
         return 2
+    if imported:
+        if not args.output:
+            print(f"error: {imported[0]} is imported: pass --output (e.g. --output "
+                  f"out/{os.path.basename(imported[0])})", file=sys.stderr)
+            return 2
+        if os.path.abspath(args.output) == os.path.abspath(imported[0]):
+            print(f"error: --output {args.output} would overwrite its input", file=sys.stderr)
+            return 2
+        try:
+            formats.import_file(imported[0])
+        except formats.FormatError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
     if blends:
         try:
             bpy.ops.wm.open_mainfile(filepath=os.path.abspath(blends[0]))
         except RuntimeError as exc:
             print(f"error: cannot open {blends[0]}: {exc}", file=sys.stderr)
             return 2
-    source = bpy.data.filepath or None
+    source = os.path.abspath(imported[0]) if imported else (bpy.data.filepath or None)
     output = os.path.abspath(args.output) if args.output else source
     if output is None:
         print("error: nothing to save to: open a .blend or pass --output", file=sys.stderr)
@@ -384,7 +412,11 @@ def main(argv):
     for e in done:
         print(batch.item_line(e), flush=True)
     if written or args.output:
-        bpy.ops.wm.save_as_mainfile(filepath=output)
+        try:
+            formats.save_file(output)
+        except formats.FormatError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
         for w in written:
             w.entry["output"] = output
     wall = time.perf_counter() - t0

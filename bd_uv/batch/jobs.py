@@ -78,11 +78,15 @@ class JobOptions:
         Blender script packs with Blender instead
     cut : bool, cut an island whose stored UVs lie over themselves into overlap-free pieces
     margin : float, the packing margin in the unit square
+    uv_set : int, where a glTF scene's UVs go: ``TEXCOORD_<uv_set>`` (``bd_uv.scenes``)
+    uv_name : str, where a USD scene's UVs go: ``primvars:<uv_name>``
     """
     unwrap: UnwrapOptions = field(default_factory=UnwrapOptions)
     pack: bool = False
     cut: bool = False
     margin: float = MARGIN
+    uv_set: int = 0
+    uv_name: str = "st"
 
     @classmethod
     def of(cls, options):
@@ -99,13 +103,16 @@ class JobOptions:
         solve = {k: v for k, v in options.items() if k in OPTION_NAMES}
         if "cut" in options:  # unwrap() itself cuts (or fails) an island whose UVs overlap
             solve["overlap"] = "cut" if options["cut"] else "fail"
-        layout = {k: options[k] for k in ("pack", "cut", "margin") if k in options}
+        layout = {k: options[k] for k in ("pack", "cut", "margin", "uv_set", "uv_name")
+                  if k in options}
         return cls(UnwrapOptions(**solve), **layout)
 
     def as_dict(self):
         """Every option, flat and JSON-able (the report's "options", the journal's hash)."""
+        scene = {"uv_set": self.uv_set, "uv_name": self.uv_name} if (
+            self.uv_set, self.uv_name) != (0, "st") else {}   # as before for other files
         return {**self.unwrap.as_dict(), "pack": self.pack, "cut": self.cut,
-                "margin": self.margin}
+                "margin": self.margin, **scene}
 
 
 def _num(x):

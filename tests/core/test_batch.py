@@ -165,7 +165,7 @@ def test_refuses_to_overwrite_an_input(folder, capsys):
 
 def test_no_input_files_is_a_usage_error(tmp_path, capsys):
     assert run(tmp_path, "-o", tmp_path / "out") == 2
-    assert "no .obj/.off/.ply/.blend files" in capsys.readouterr().err
+    assert "no mesh or scene files" in capsys.readouterr().err
 
 
 def test_blend_without_bpy_is_a_failed_entry(tmp_path, monkeypatch):
