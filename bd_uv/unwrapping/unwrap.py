@@ -152,7 +152,7 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
     if progress is not None:
         progress(1.0, "done")
     return UnwrapResult(corner_uv, face_island, results, time.perf_counter() - t0, o.method,
-                        certs)
+                        certificates=certs)
 
 
 def pin_arrays(pin_corners, pin_uv, m):
