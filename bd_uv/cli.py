@@ -7,7 +7,6 @@ import argparse
 import json
 import os
 import sys
-import time
 
 import numpy as np
 
@@ -23,29 +22,10 @@ from .errors import BDError
 from .layout import stored_layout
 from .meshio import load_mesh, write_obj
 from .planar_cli import add_planar_parsers
+from .progress import TerminalProgress
 from .scenes import BLENDER_SUFFIXES, GLTF_SUFFIXES, SCENE_SUFFIXES, USD_SUFFIXES, read_scene
 from .seams import unwrap_auto
 from .seams.needed import AUTO_BOUND
-
-
-class ProgressBar:
-    """A one-line progress bar on stderr (only when stderr is a terminal, or forced)."""
-
-    def __init__(self, enabled=None, stream=sys.stderr):
-        self.stream = stream
-        self.enabled = stream.isatty() if enabled is None else enabled
-        self.last = 0.0
-
-    def __call__(self, fraction, message):
-        now = time.monotonic()
-        if not self.enabled or (now - self.last < 0.1 and fraction < 1.0):
-            return
-        self.last = now
-        n = int(30 * fraction)
-        self.stream.write(f"\r[{'#' * n}{'.' * (30 - n)}] {100 * fraction:5.1f}% {message[:60]:<60}")
-        if fraction >= 1.0:
-            self.stream.write("\n")
-        self.stream.flush()
 
 
 def run_unwrap(args):
@@ -73,14 +53,16 @@ def run_unwrap(args):
             print(f"error: --frames input-uv needs UVs in {args.input}", file=sys.stderr)
             return 2
         initial_uv = mesh.corner_uv
-    if options.seams_mode == "auto":
-        res = auto_seams(mesh, seams, options)
-    else:
-        res = unwrap(mesh.V, mesh.F, seams=seams, initial_uv=initial_uv, progress=ProgressBar(),
-                     options=options)
+    with TerminalProgress(quiet=args.quiet) as progress:
+        if options.seams_mode == "auto":
+            res = auto_seams(mesh, seams, options, progress)
+        else:
+            res = unwrap(mesh.V, mesh.F, seams=seams, initial_uv=initial_uv, progress=progress,
+                         options=options)
+        progress.stage("storing: cut, pack and certify the UVs as stored")
+        layout = stored_layout(mesh.V, mesh.F, res, **layout_options)
     if options.seams_mode == "needed":
         _print_needed(res, options, args.output)
-    layout = stored_layout(mesh.V, mesh.F, res, **layout_options)
     uv, F_uv = layout.vertex_uv(mesh.F)
     write_obj(args.output, mesh.V, mesh.F, uv, F_uv)
     islands = layout.island_entries(res)
@@ -163,13 +145,13 @@ def _print_needed(res, options, output):
                                           "\"seams_added\" in the report" if n else ""))
 
 
-def auto_seams(mesh, seams, options):
+def auto_seams(mesh, seams, options, progress=None):
     """Seams added where needed (``options.seams_mode == "auto"``): ``seams`` (the file's UV
-    seams, or None) kept, more added; prints what was added."""
+    seams, or None) kept, more added; prints what was added. ``progress(fraction, message)``,
+    optional."""
     res, added, info = unwrap_auto(mesh.V, mesh.F, seams=seams, bound=options.bound,
                                    stretch=options.seams_stretch, method=options.method,
-                                   frames=options.frames, cone=options.cone,
-                                   progress=ProgressBar())
+                                   frames=options.frames, cone=options.cone, progress=progress)
     print(f"seams auto: {info['charts']} charts, {len(added)} edges added, seam length "
           f"{info['seam_length']:.4g} ({100 * info['seam_length'] / info['edge_length']:.2f}% of "
           f"all edge length), max stretch {max(info['max_stretch'], default=1.0):.3f} <= "
@@ -232,6 +214,9 @@ def build_parser():
                         "input-uv and a fixed --boundary take the islands as they are")
     p.add_argument("--report", help="write the JSON report here")
     p.add_argument("--png", help="write a picture of the UV layout coloured by distortion")
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="no progress bar on stderr (there is none either when stderr is not a "
+                        "terminal); the report lines still print")
     p.set_defaults(func=run_unwrap)
     add_batch_parser(sub)
     add_planar_parsers(sub)

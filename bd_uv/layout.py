@@ -172,7 +172,9 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
     dup = np.zeros(m, dtype=bool) if res.duplicate_of is None else res.duplicate_of >= 0
     lab[dup] = -1  # a duplicate face is stored with its twin's UVs, not certified twice
     uv = np.asarray(res.corner_uv, dtype=np.float64)
-    before = certify_islands(V, F, uv, lab, np.where(ok, bounds, 1.0))
+    before = res.certificates
+    if before is None or len(before) != n:  # the unwrap did not keep them: measure
+        before = certify_islands(V, F, uv, lab, np.where(ok, bounds, 1.0))
     unwrapped = [c if ok[i] else None for i, c in enumerate(before)]
     new = np.full(m, -1, dtype=np.int64)
     source, cuts, moved = [], [], []
