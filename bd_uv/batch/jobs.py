@@ -22,7 +22,7 @@ from ..pack import MARGIN
 from ..packing import PackOptions
 
 # The atlas packer's options as they appear in an options mapping and in the report.
-PACK_FIELDS = ("resolution", "padding_px", "texel_density", "rotate", "udim")
+PACK_FIELDS = ("resolution", "padding_px", "texel_density", "rotate", "udim", "solve_seconds")
 from ..scheduling.atomic import atomic_path
 from ..scheduling.entries import failed_entry
 

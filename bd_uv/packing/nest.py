@@ -57,10 +57,12 @@ def nest(outlines, height, separation, options):
                           allowed_orientations=options.orientations())
              for i, xy in enumerate(outlines)]
     inst = spyrrow.StripPackingInstance("bd_uv", float(height), items)
+    # solve_seconds 0: spyrrow's constructive placement only (no exploration: tens of ms).
+    budget = (dict(total_computation_time=options.solve_seconds) if options.solve_seconds else
+              dict(total_computation_time=None, exploration_time=0, compression_time=0))
     cfg = spyrrow.StripPackingConfig(early_termination=True,
-                                     total_computation_time=options.solve_seconds,
                                      min_items_separation=float(separation) if separation > 0
-                                     else None, seed=options.seed)
+                                     else None, seed=options.seed, **budget)
     try:
         sol = inst.solve(cfg)
     except BaseException as exc:  # a Rust panic arrives as pyo3's PanicException (BaseException)

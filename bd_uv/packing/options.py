@@ -20,7 +20,10 @@ class PackOptions:
     rotate : "none" | "90" | "any", the turns a chart may make (never a mirror)
     udim : bool, with ``texel_density``: charts that do not fit tile 1001 spill into 1002, 1003, ...
         (Blender's numbering: tile 1001 + u + 10 v covers [u, u+1] x [v, v+1])
-    solve_seconds : int, time given to each nesting solve (spyrrow counts in whole seconds)
+    solve_seconds : int, time given to each nesting solve's search (spyrrow counts in whole
+        seconds); 0 keeps its constructive placement only: tens of milliseconds a solve where 1
+        takes a second, for a few points of coverage less (measured: a cube's 3 charts 0.655 in
+        0.08 s against 0.654 in 3.9 s; cow's 46 charts 0.640 in 1.9 s against 0.661 in 5.0 s)
     solves : int, nesting solves spent on finding the smallest square (at least 1)
     seed : int, seed of the nesting heuristic. Its search is bounded in time, not in steps, so
         two runs on the same charts can give different layouts (each one certified); measured:
@@ -50,8 +53,8 @@ class PackOptions:
         if self.udim and self.texel_density is None:
             raise PackError("UDIM tiles need a texel density: without one every chart is scaled "
                             "to fit tile 1001, so nothing would spill")
-        if not (isinstance(self.solve_seconds, int) and self.solve_seconds >= 1):
-            raise PackError(f"solve_seconds must be a whole number >= 1, not "
+        if not (isinstance(self.solve_seconds, int) and self.solve_seconds >= 0):
+            raise PackError(f"solve_seconds must be a whole number >= 0, not "
                             f"{self.solve_seconds!r}")
         if not (isinstance(self.solves, int) and self.solves >= 1):
             raise PackError(f"solves must be a whole number >= 1, not {self.solves!r}")

@@ -65,6 +65,18 @@ def test_random_chart_sets_pack_inside_apart_one_density_no_mirror(kind, k, res,
     assert packed.solves >= (2 if k > 1 else 0) and packed.seconds > 0
 
 
+def test_constructive_placement_only_is_certified_too():
+    """solve_seconds=0 (``--pack-seconds 0``): spyrrow's first placement, no search; the layout is
+    still inside, apart and of one density."""
+    V, F, uv, lab = chart_set("holes", 12, seed=5)
+    options = PackOptions(resolution=1024, padding_px=4, solve_seconds=0)
+    packed = pack_islands(V, F, uv, lab, options)
+    cert = check_layout(V, F, uv, lab, packed, options)
+    assert 0.05 < cert.coverage < 1.0 and packed.solves >= 1
+    with pytest.raises(PackError, match="solve_seconds"):
+        PackOptions(solve_seconds=-1)
+
+
 def test_two_thousand_tiny_charts():
     V, F, uv, lab = chart_set("boxes", 2000, seed=3)
     options = PackOptions(resolution=4096, padding_px=1, solves=1)

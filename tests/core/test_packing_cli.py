@@ -30,12 +30,13 @@ def grids(tmp_path, sizes=((5, 3), (8, 2), (3, 3), (6, 6), (2, 9), (4, 1))):
     return path, V, F
 
 
-def test_unwrap_packs_with_the_options_and_reports_the_layout(tmp_path, capsys):
+@pytest.mark.parametrize("seconds", ["1", "0"])
+def test_unwrap_packs_with_the_options_and_reports_the_layout(tmp_path, capsys, seconds):
     src, V, F = grids(tmp_path)
     out, rep, png = tmp_path / "g.obj", tmp_path / "g.json", tmp_path / "g.png"
     code = cli.main(["unwrap", str(src), "-o", str(out), "--seams", "none", "--bound", "3",
                      "--resolution", "512", "--padding", "8", "--rotate", "90",
-                     "--report", str(rep), "--png", str(png)])
+                     "--pack-seconds", seconds, "--report", str(rep), "--png", str(png)])
     assert code == 0
     assert "packed: coverage" in capsys.readouterr().out
     pack = json.loads(rep.read_text())["pack"]
@@ -61,6 +62,7 @@ def test_unwrap_packs_with_the_options_and_reports_the_layout(tmp_path, capsys):
     (["--udim"], "UDIM tiles need a texel density"),
     (["--padding", "-2"], "padding must be"),
     (["--resolution", "4"], "resolution must be"),
+    (["--pack-seconds", "-1"], "solve_seconds must be"),
 ])
 def test_bad_packing_options_fail_before_solving(tmp_path, capsys, args, words):
     src, _, _ = grids(tmp_path)
