@@ -8,7 +8,7 @@ from the determinant's sign, no two triangles overlapping by the separating-axis
 a typed ``bd_uv.BDError`` and keeps the previous certified frame (``session.frame`` unchanged,
 bit for bit); the session never ends in an uncertified state.
 
-CI-friendly: 10 examples; ``BD_UV_FUZZ_EXAMPLES=2000`` (or ``bash scripts/fuzz_deep.sh``) runs
+CI-friendly: 40 examples; ``BD_UV_FUZZ_EXAMPLES=2000`` (or ``bash scripts/fuzz_deep.sh``) runs
 deeper.
 """
 import os
@@ -22,7 +22,7 @@ from bd_uv.live import LiveSession
 
 from planar import circle, mesh_polygon, overlapping_pairs, svd_of_maps
 
-EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "10"))
+EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "40"))
 MESHES = {"disk": mesh_polygon(circle(16), area=0.03),
           "disk with a hole": mesh_polygon(circle(18), [circle(8, 0.4)[::-1]], [[0.0, 0.0]],
                                            area=0.03)}

@@ -11,7 +11,7 @@ certified as written by independent code (numpy SVD distortion within the report
 from signed areas, no two UV triangles overlapping by an exact test) and a mesh that failed
 is kept as it was read.
 
-CI-friendly: 15 examples; ``BD_UV_FUZZ_EXAMPLES=2000`` (or ``bash scripts/fuzz_deep.sh``) runs
+CI-friendly: 40 examples; ``BD_UV_FUZZ_EXAMPLES=2000`` (or ``bash scripts/fuzz_deep.sh``) runs
 deeper.
 """
 import contextlib
@@ -33,7 +33,7 @@ from usd_build import quad_grid
 from helpers import reference_distortion
 from overlap_shapes import overlapping_triangle_pairs
 
-EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "15"))
+EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "40"))
 BREAKAGES = ("none", "index range", "position range", "index ctype", "position ctype",
              "sparse position", "no indices", "degenerate", "nan position", "view range",
              "buffer short", "bad mode")
