@@ -160,6 +160,8 @@ def test_scene_files_never_crash_or_write_an_uncertified_result(breakage, copies
                                           "GLB", "file")), msg
         if os.path.exists(out):
             _check_written(out, json.loads(open(rep).read()))
+            assert any(m.get("output") for m in json.loads(open(rep).read())["meshes"]), \
+                "a file at -o holds at least one certified mesh"
 
 
 USD_BREAKAGES = ("none", "polygon counts", "index range", "counts sum", "nan point", "empty stage",
