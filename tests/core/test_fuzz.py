@@ -216,10 +216,19 @@ NAN_VERTEX_BESIDE_CROSSING_ISLANDS = dict(
     defect="nan vertex", bound=1.2, method="dirichlet", frames="constant", cone="soc",
     solver_faults=0.0)
 
+# A one-face island pinned ~5e159 away (random pins spanning a 1e160 vertex): its solved map
+# collapsed to one point in float64, and _finish divided by its zero UV area (ZeroDivisionError).
+ONE_FACE_PINNED_FAR_AWAY = dict(
+    mesh="three_peaks patch", patch_size=65, seed=23, noise=0.0, delete=0.0, delete_kind="blobs",
+    seams=150, pins=2, pin_kind="random", defect="non-finite vertex", nonfinite=1e160,
+    nonfinite_at="any vertex", bound=1.2, method="arap", frames="auto", cone="soc",
+    solver_faults=0.0)
+
 
 @settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(sc=scenarios())
 @example(sc=NAN_VERTEX_BESIDE_CROSSING_ISLANDS)
+@example(sc=ONE_FACE_PINNED_FAR_AWAY)
 def test_unwrap_contract_on_perturbed_real_meshes(sc):
     rng, V, F, seams, bad = build(sc)
     pin_corners, pin_uv = pins_for(sc, rng, V, F, seams, bad)
