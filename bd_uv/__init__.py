@@ -11,8 +11,8 @@ from .colors import distortion_colors
 from .deform import DeformResult, deform
 from .errors import (BDError, CancelledError, ClosedIslandError, DegenerateFacesError,
                      DuplicateFacesError, InfeasibleError, InvalidMeshError, IslandError,
-                     NonFiniteError, NonManifoldError, OrientationError, SolverError,
-                     TopologyError)
+                     NonFiniteError, NonManifoldError, OptionError, OrientationError,
+                     SolverError, TopologyError)
 from .improve import ImproveResult, equilateral_distortion, improve
 from .metrics import (certify, conformal_distortion, face_jacobians, flipped_faces,
                       mean_distortion, signed_uv_areas, singular_values)

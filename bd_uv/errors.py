@@ -11,6 +11,12 @@ class InvalidMeshError(BDError):
     """The mesh as a whole cannot be read: empty, wrong shapes, face indices out of range."""
 
 
+class OptionError(BDError, ValueError):
+    """An option's value, or a combination of options, that cannot be honoured (a bound below 1,
+    a stretch below sqrt(C), a margin out of range, ...); nothing was computed. Also a
+    ``ValueError``, as the API documents for bad options."""
+
+
 class CancelledError(BDError):
     """The solve was cancelled; nothing partial is returned."""
 

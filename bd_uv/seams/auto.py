@@ -20,8 +20,8 @@ import time
 
 import numpy as np
 
-from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, OverlapError,
-                      SolverError, TopologyError)
+from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, OptionError,
+                      OverlapError, SolverError, TopologyError)
 from ..geometry import face_areas
 from ..mesh import DEGENERATE_RATIO, Island, check_arrays, islands
 from ..unwrapping.unwrap import _check_options, _pins, unwrap, unwrap_islands
@@ -86,7 +86,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     V, F = check_arrays(V, F)
     C, S = float(bound), float(stretch)
     if not (C >= 1.0 and S >= 1.0):
-        raise ValueError(f"seams='auto' needs a bound C >= 1 and a stretch S >= 1, not {bound!r}, "
+        raise OptionError(f"seams='auto' needs a bound C >= 1 and a stretch S >= 1, not {bound!r}, "
                          f"{stretch!r}")
     _check_options(method, frames, C, 1000.0, cone)
     unwrap_options = dict(method=method, frames=frames, cone=cone, progress=progress,
@@ -102,7 +102,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         cut[k[k >= 0]] = True
     cut[E.faces[:, 1] < 0] = False
     if (cut & diag).any():
-        raise ValueError(f"{int((cut & diag).sum())} marked seam(s) run inside a polygon (between "
+        raise OptionError(f"{int((cut & diag).sum())} marked seam(s) run inside a polygon (between "
                          "two triangles of one polygon): a seam must be a polygon edge")
     original = cut.copy()
     # Seams merging keeps: the marked ones and, once cut, material boundaries.
@@ -375,7 +375,7 @@ def _polygons(polygons, E, m):
         return None, diag
     poly = np.asarray(polygons)
     if poly.shape != (m,) or not np.issubdtype(poly.dtype, np.integer):
-        raise ValueError(f"polygons must be ({m},) integers, one polygon id per triangle, got "
+        raise OptionError(f"polygons must be ({m},) integers, one polygon id per triangle, got "
                          f"shape {poly.shape} of {poly.dtype}")
     poly = poly.astype(np.int64)
     inner = E.faces[:, 1] >= 0

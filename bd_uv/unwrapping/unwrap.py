@@ -15,7 +15,8 @@ import time
 
 import numpy as np
 
-from ..errors import BDError, CancelledError, InvalidMeshError, IslandError, SolverError
+from ..errors import (BDError, CancelledError, InvalidMeshError, IslandError, OptionError,
+                      SolverError)
 from ..mesh import check_arrays, islands as split_islands
 from ..metrics import certify, mean_distortion, singular_values
 from ..spaces import check_stretch
@@ -97,14 +98,14 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
     """
     if isinstance(seams, str):
         if seams != "auto":
-            raise ValueError(f"seams must be vertex pairs or 'auto', got {seams!r}")
+            raise OptionError(f"seams must be vertex pairs or 'auto', got {seams!r}")
         if boundary != "free":
-            raise ValueError("seams='auto' makes free-boundary charts; boundary= needs "
+            raise OptionError("seams='auto' makes free-boundary charts; boundary= needs "
                              "boundary='free' there")
         if bound == "auto":
-            raise ValueError("seams='auto' needs a numeric bound C")
+            raise OptionError("seams='auto' needs a numeric bound C")
         if (pin_corners is not None and len(pin_corners)) or frames == "input-uv":
-            raise ValueError("seams='auto' does not take pins or the current UVs: call "
+            raise OptionError("seams='auto' does not take pins or the current UVs: call "
                              "bd_uv.seams.unwrap_auto for material groups, or mark seams")
         from ..seams import unwrap_auto  # the seams package builds on this module
         # face_groups (polygons) are kept whole by the seams added too: unwrap_auto's polygons.
@@ -112,24 +113,24 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
                            method=method, frames=frames, cone=cone, progress=progress,
                            cancel=cancel, polygons=face_groups)[0]
     if boundary not in BOUNDARIES:
-        raise ValueError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}")
+        raise OptionError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}")
     if boundary != "free" and bound == "auto":
-        raise ValueError(f"boundary={boundary!r} needs a numeric bound C (bound='auto' minimises C "
+        raise OptionError(f"boundary={boundary!r} needs a numeric bound C (bound='auto' minimises C "
                          "with a free boundary only)")
     if boundary != "free" and frames not in ("auto", "harmonic"):
-        raise ValueError(f"boundary={boundary!r} takes its frames from a Tutte embedding onto the "
+        raise OptionError(f"boundary={boundary!r} takes its frames from a Tutte embedding onto the "
                          f"boundary (frames 'auto' or 'harmonic'), got frames={frames!r}")
     if stretch is not None:
         check_stretch(1.0 if bound == "auto" else float(bound), stretch)
     t0 = time.perf_counter()
     _check_options(method, frames, bound, bound_limit, cone)
     if overlap not in ("cut", "fail"):
-        raise ValueError(f"overlap must be 'cut' or 'fail', got {overlap!r}")
+        raise OptionError(f"overlap must be 'cut' or 'fail', got {overlap!r}")
     V, F = check_arrays(V, F)
     m = len(F)
     if frames == "input-uv":
         if initial_uv is None:
-            raise ValueError("frames='input-uv' needs initial_uv (m,3,2)")
+            raise OptionError("frames='input-uv' needs initial_uv (m,3,2)")
         initial_uv = np.asarray(initial_uv, dtype=np.float64).reshape(m, 3, 2)
     pins = _pins(pin_corners, pin_uv, m)
     return unwrap_islands(V, F, split_islands(V, F, seams), pins, method, bound, frames,
@@ -202,15 +203,15 @@ def unwrap_islands(V, F, isl, pins, method, bound, frames, initial_uv, raise_bou
 
 def _check_options(method, frames, bound, bound_limit, cone):
     if method not in METHODS:
-        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+        raise OptionError(f"method must be one of {METHODS}, got {method!r}")
     if frames not in FRAMES:
-        raise ValueError(f"frames must be one of {FRAMES}, got {frames!r}")
+        raise OptionError(f"frames must be one of {FRAMES}, got {frames!r}")
     if bound != "auto" and not (isinstance(bound, (int, float)) and 1.0 <= bound < np.inf):
-        raise ValueError(f"bound must be a finite number >= 1 or 'auto', got {bound!r}")
+        raise OptionError(f"bound must be a finite number >= 1 or 'auto', got {bound!r}")
     if not 1.0 <= bound_limit < np.inf:
-        raise ValueError(f"bound_limit must be a finite number >= 1, got {bound_limit!r}")
+        raise OptionError(f"bound_limit must be a finite number >= 1, got {bound_limit!r}")
     if cone not in ("soc", "linf"):
-        raise ValueError(f"cone must be 'soc' or 'linf', got {cone!r}")
+        raise OptionError(f"cone must be 'soc' or 'linf', got {cone!r}")
 
 
 def _pins(pin_corners, pin_uv, m):
@@ -220,7 +221,7 @@ def _pins(pin_corners, pin_uv, m):
     c = np.asarray(pin_corners, dtype=np.int64).ravel()
     uv = np.asarray(pin_uv, dtype=np.float64).reshape(-1, 2)
     if len(c) != len(uv):
-        raise ValueError(f"{len(c)} pinned corners but {len(uv)} pin UVs")
+        raise OptionError(f"{len(c)} pinned corners but {len(uv)} pin UVs")
     if np.any((c < 0) | (c >= 3 * m)):
         raise InvalidMeshError("pinned corner indices must lie in 0..3m-1 (face * 3 + corner)")
     if not np.all(np.isfinite(uv)):
