@@ -224,11 +224,21 @@ ONE_FACE_PINNED_FAR_AWAY = dict(
     nonfinite_at="any vertex", bound=1.2, method="arap", frames="auto", cone="soc",
     solver_faults=0.0)
 
+# Twenty pins ~1e299 away: the island overlapped itself, a piece cut from it failed its
+# certificate at that magnitude, and the failed piece kept its bound_certified (and the report its
+# C) though it has no UVs.
+FAILED_PIECE_KEPT_ITS_BOUND = dict(
+    mesh="three_peaks patch", patch_size=49, seed=49, noise=0.0, delete=0.3,
+    delete_kind="scattered faces", seams=0, pins=20, pin_kind="random",
+    defect="non-finite vertex", nonfinite=1e300, nonfinite_at="any vertex", bound=1.2,
+    method="lscm", frames="auto", cone="soc", solver_faults=0.0)
+
 
 @settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(sc=scenarios())
 @example(sc=NAN_VERTEX_BESIDE_CROSSING_ISLANDS)
 @example(sc=ONE_FACE_PINNED_FAR_AWAY)
+@example(sc=FAILED_PIECE_KEPT_ITS_BOUND)
 def test_unwrap_contract_on_perturbed_real_meshes(sc):
     rng, V, F, seams, bad = build(sc)
     pin_corners, pin_uv = pins_for(sc, rng, V, F, seams, bad)
