@@ -19,6 +19,8 @@ from .metrics import (certify, conformal_distortion, face_jacobians, flipped_fac
 from .mesh import Island, islands
 from .overlap import island_overlaps, layout_overlaps
 from .meshio import Mesh, load_mesh, write_obj
-from .unwrapping import IslandResult, UnwrapResult, unwrap
+from .options import UnwrapOptions
+from .api import unwrap
+from .unwrapping import IslandResult, UnwrapResult
 
 __version__ = "0.1.0"

@@ -33,6 +33,10 @@ class Certificate:
     reason : str, "" when certified, else what failed, in words
     faces : int, number of faces
     area : float, 3D area of the faces with finite distortion (weights the mean across islands)
+    min_singular, max_singular : float, the smallest and largest singular value of the faces'
+        maps (Lipman 2012, eqs. 4.7-4.8) when a stretch bound was checked too, else NaN
+    failed_as_solved : bool, for a certificate of UVs as stored (float32, packed) that fails:
+        the UVs as solved (float64, before packing) fail too, so storing did not break them
     """
     island: int
     certified: bool
@@ -45,6 +49,9 @@ class Certificate:
     reason: str
     faces: int = 0
     area: float = 0.0
+    min_singular: float = float("nan")
+    max_singular: float = float("nan")
+    failed_as_solved: bool = False
 
     def summary(self):
         """JSON-ready dict (no NaN or inf: those become None)."""

@@ -12,101 +12,16 @@ import time
 
 import numpy as np
 
+from .api import unwrap
+from .arguments import (add_layout_options, add_solver_options, bound_arg,  # noqa: F401
+                        layout_kwargs, solver_kwargs, unwrap_options_of)
+from .batch import add_batch_parser
 from .errors import BDError, OptionError
 from .layout import stored_layout
 from .meshio import load_mesh, write_obj
+from .planar_cli import add_planar_parsers
 from .scheduling.atomic import atomic_path
-from .unwrapping import FRAMES, METHODS, unwrap
-from .unwrapping.fixed_boundary import BOUNDARIES
-
-
-def bound_arg(text):
-    """``C`` (a number >= 1) or ``auto``."""
-    if text == "auto":
-        return "auto"
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"bound must be a number >= 1 or 'auto', not {text!r}")
-    if not value >= 1.0:
-        raise argparse.ArgumentTypeError(f"bound must be >= 1, not {value:g}")
-    return value
-
-
-def add_solver_options(p):
-    """Options shared by ``unwrap`` and ``batch``."""
-    p.add_argument("--method", choices=METHODS, default="lscm",
-                   help="energy: BD-LSCM (default), BD-ARAP, BD-Dirichlet, BD-Biharmonic "
-                        "(eq. 6.1, meant for --boundary circle|rectangle|pinned) or the L1 stretch "
-                        "energy sum (|alpha| + |beta|) Area (free boundary: scale held at the 3D "
-                        "area)")
-    p.add_argument("--bound", type=bound_arg, default=5.0,
-                   help="conformal distortion bound C >= 1, or 'auto' to minimise it (default 5)")
-    p.add_argument("--frames", choices=FRAMES, default="auto",
-                   help="frame field: auto (conformal map if flip-free, else harmonic), harmonic, "
-                        "conformal, input-uv (the file's UVs, eq. 4.21), constant (planar meshes)")
-    p.add_argument("--bound-limit", type=float, default=1000.0,
-                   help="raise C up to this limit when infeasible (default 1000)")
-    p.add_argument("--no-raise", action="store_true", help="fail instead of raising C")
-    p.add_argument("--cone", choices=("soc", "linf"), default="soc",
-                   help="space: F_C with second-order cones (default) or F_C^inf (eq. 4.22)")
-    p.add_argument("--time-budget", type=float, default=120.0,
-                   help="seconds per island for --bound auto (default 120)")
-    p.add_argument("--stretch", type=float, default=None, metavar="S",
-                   help="every face's singular values within [1/S, S] at its island's own scale "
-                        "(UV area = 3D area; Lipman 2012, section 6.3), with every --method; with "
-                        "--boundary circle|rectangle|pinned relative to the 3D geometry (the "
-                        "target gives the scale); with --bound auto: the smallest C within S; "
-                        "--seams auto: 2 by default")
-    p.add_argument("--boundary", choices=BOUNDARIES, default="free",
-                   help="each island's outer boundary: free (default), on a circle, on a rectangle "
-                        "(corners at the four boundary vertices nearest a right angle, or four "
-                        "pinned ones) or on the polygon of its pinned UVs; holes stay holes; the "
-                        "report says bijective: true when Theorems 5.1/5.2's premises hold")
-
-
-def solver_kwargs(args):
-    """The unwrap() keyword arguments from parsed options."""
-    kwargs = dict(method=args.method, bound=args.bound, frames=args.frames,
-                  bound_limit=args.bound_limit, raise_bound=not args.no_raise, cone=args.cone,
-                  time_budget=args.time_budget if args.bound == "auto" else None)
-    if args.boundary != "free":  # absent by default: options hashed by --resume stay the same
-        kwargs["boundary"] = args.boundary
-    # getattr: scripts/bd_uv_batch.py shares these options but has no --seams
-    if args.stretch is not None and getattr(args, "seams", None) != "auto":
-        kwargs["stretch"] = args.stretch
-    return kwargs
-
-
-LAYOUT_OPTIONS = ("pack", "cut", "margin")
-
-
-def add_layout_options(p):
-    """How the UVs are stored (``unwrap`` and ``batch``): cut overlaps, pack, margin."""
-    p.add_argument("--no-pack", action="store_true",
-                   help="keep each island at (0, 0) instead of packing them into the unit square")
-    p.add_argument("--margin", type=float, default=0.005,
-                   help="packing margin between islands, in the unit square (default 0.005)")
-    p.add_argument("--overlap", choices=("cut", "fail"), default="cut",
-                   help="an island whose UVs lie over themselves: cut it into overlap-free "
-                        "pieces (default, the cut edges are reported), or fail it")
-
-
-def layout_kwargs(args):
-    """The :func:`bd_uv.layout.stored_layout` keyword arguments from parsed options."""
-    return dict(pack=not args.no_pack, cut=args.overlap == "cut", margin=args.margin)
-
-
-def split_options(options):
-    """(unwrap keyword arguments, stored_layout keyword arguments) of one options dict; without
-    layout keys (the Blender script, which packs with Blender) nothing is cut or packed."""
-    solve = {k: v for k, v in options.items() if k not in LAYOUT_OPTIONS}
-    layout = {k: options[k] for k in LAYOUT_OPTIONS if k in options}
-    if "cut" in layout:  # unwrap() itself cuts (or fails) an island whose UVs overlap
-        solve["overlap"] = "cut" if layout["cut"] else "fail"
-    layout.setdefault("pack", False)
-    layout.setdefault("cut", False)
-    return solve, layout
+from .seams import unwrap_auto
 
 
 class ProgressBar:
@@ -131,42 +46,39 @@ class ProgressBar:
 
 def check_outputs(*paths):
     """Refuse, before any work, an output path that is a folder or lies under a file."""
-    for path in paths:
+    for option, path in zip(("output", "report", "png"), paths):
         if path is None:
             continue
         if os.path.isdir(path):
-            raise OptionError(f"{path} is a folder: give a file name to write")
+            raise OptionError(option, f"{path} is a folder: give a file name to write")
         parent = os.path.dirname(os.path.abspath(path))
         while parent and not os.path.exists(parent):
             parent = os.path.dirname(parent)
         if parent and not os.path.isdir(parent):
-            raise OptionError(f"cannot write {path}: {parent} is a file, not a folder")
+            raise OptionError(option, f"cannot write {path}: {parent} is a file, not a folder")
 
 
 def run_unwrap(args):
+    options = unwrap_options_of(args)
     check_outputs(args.output, args.report, args.png)
     mesh = load_mesh(args.input)
-    seams = None
-    use_uv = args.seams == "uv" or (args.seams is None and mesh.corner_uv is not None)
-    if use_uv:
-        if mesh.corner_uv is None:
-            print(f"error: {args.input} has no UVs, so --seams uv has nothing to cut along",
-                  file=sys.stderr)
-            return 2
-        seams = mesh.uv_seams()
-    kwargs = solver_kwargs(args)
-    if args.frames == "input-uv":
+    if args.seams == "uv" and mesh.corner_uv is None:
+        print(f"error: {args.input} has no UVs, so --seams uv has nothing to cut along",
+              file=sys.stderr)
+        return 2
+    # The file's UV seams (when it has UVs), kept when seams are added too; none with --seams none.
+    seams = mesh.uv_seams() if args.seams != "none" and mesh.corner_uv is not None else None
+    initial_uv = None
+    if options.frames == "input-uv":
         if mesh.corner_uv is None:
             print(f"error: --frames input-uv needs UVs in {args.input}", file=sys.stderr)
             return 2
-        kwargs["initial_uv"] = mesh.corner_uv
-    if args.seams == "auto":
-        res = auto_seams(mesh, args, kwargs)
-        if res is None:
-            return 2
+        initial_uv = mesh.corner_uv
+    if options.add_seams:
+        res = auto_seams(mesh, seams, options)
     else:
-        res = unwrap(mesh.V, mesh.F, seams=seams, progress=ProgressBar(), overlap=args.overlap,
-                     **kwargs)
+        res = unwrap(mesh.V, mesh.F, seams=seams, initial_uv=initial_uv, progress=ProgressBar(),
+                     options=options)
     layout = stored_layout(mesh.V, mesh.F, res, **layout_kwargs(args))
     islands = layout.island_entries(res)
     report = {"input": os.path.abspath(args.input), **res.report(), "islands": islands,
@@ -211,25 +123,17 @@ def core_cuts(islands):
     return {"islands": len(first), "edges": sum(first.values())}
 
 
-def auto_seams(mesh, args, kwargs):
-    """``--seams auto``: the file's UV seams (if any) kept, more added where needed."""
-    if args.bound == "auto":
-        print("error: --seams auto needs a numeric --bound C", file=sys.stderr)
-        return None
-    if args.boundary != "free":
-        print("error: --seams auto makes free-boundary charts; use --boundary free with it",
-              file=sys.stderr)
-        return None
-    from .seams import unwrap_auto
-    seams = mesh.uv_seams() if mesh.corner_uv is not None else None
-    res, added, info = unwrap_auto(mesh.V, mesh.F, seams=seams, bound=args.bound,
-                                   stretch=2.0 if args.stretch is None else args.stretch,
-                                   method=args.method, frames=args.frames,
-                                   cone=args.cone, progress=ProgressBar())
+def auto_seams(mesh, seams, options):
+    """Seams added where needed (``options.add_seams``): ``seams`` (the file's UV seams, or
+    None) kept, more added; prints what was added."""
+    res, added, info = unwrap_auto(mesh.V, mesh.F, seams=seams, bound=options.bound,
+                                   stretch=options.seams_stretch, method=options.method,
+                                   frames=options.frames, cone=options.cone,
+                                   progress=ProgressBar())
     print(f"seams auto: {info['charts']} charts, {len(added)} edges added, seam length "
           f"{info['seam_length']:.4g} ({100 * info['seam_length'] / info['edge_length']:.2f}% of "
           f"all edge length), max stretch {max(info['max_stretch'], default=1.0):.3f} <= "
-          f"{2.0 if args.stretch is None else args.stretch:g}")
+          f"{options.seams_stretch:g}")
     return res
 
 
@@ -273,9 +177,7 @@ def build_parser():
     p.add_argument("--report", help="write the JSON report here")
     p.add_argument("--png", help="write a picture of the UV layout coloured by distortion")
     p.set_defaults(func=run_unwrap)
-    from .batch import add_batch_parser  # batch builds on this module's options
     add_batch_parser(sub)
-    from .planar_cli import add_planar_parsers
     add_planar_parsers(sub)
     return parser
 

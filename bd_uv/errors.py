@@ -11,12 +11,6 @@ class InvalidMeshError(BDError):
     """The mesh as a whole cannot be read: empty, wrong shapes, face indices out of range."""
 
 
-class OptionError(BDError, ValueError):
-    """An option's value, or a combination of options, that cannot be honoured (a bound below 1,
-    a stretch below sqrt(C), a margin out of range, ...); nothing was computed. Also a
-    ``ValueError``, as the API documents for bad options."""
-
-
 class CancelledError(BDError):
     """The solve was cancelled; nothing partial is returned."""
 
@@ -78,3 +72,17 @@ class SolverError(IslandError):
 
 class OverlapError(IslandError):
     """The island's UVs lie over themselves (its UV boundary is not simple); cut it or mark seams."""
+
+
+class OptionError(BDError, ValueError):
+    """An unwrap option out of its range, or options that cannot go together
+    (``bd_uv.options.UnwrapOptions``). A ValueError too, as bad options always were.
+
+    Attributes
+    ----------
+    option : str, the option's name (the first one named when two cannot go together)
+    """
+
+    def __init__(self, option, message):
+        super().__init__(message)
+        self.option = option

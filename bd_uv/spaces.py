@@ -19,7 +19,6 @@ import numpy as np
 import scipy.sparse as sp
 
 from .energies import rotated_alpha
-from .errors import OptionError
 
 
 def cone_factor(C):
@@ -82,9 +81,9 @@ def check_stretch(C, S):
     ``S / s >= C`` (section 6.3) with ``s = 1/S``; below it F_C with stretch bounds is empty.
     """
     if not (isinstance(S, (int, float)) and 1.0 <= S < np.inf):
-        raise OptionError(f"stretch must be a finite number >= 1, got {S!r}")
+        raise ValueError(f"stretch must be a finite number >= 1, got {S!r}")
     if S * S < C * (1.0 - 1e-12):
-        raise OptionError(f"stretch {S:g} cannot hold with conformal bound C = {C:g}: singular "
+        raise ValueError(f"stretch {S:g} cannot hold with conformal bound C = {C:g}: singular "
                          f"values in [1/S, S] allow a distortion of at most S^2 = {S * S:g}; use "
                          f"S >= sqrt(C) = {np.sqrt(C):.4g} or lower C")
 

@@ -10,6 +10,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..bd_uv.errors import OptionError
+from ..bd_uv.options import UnwrapOptions
 from . import mesh_data
 
 
@@ -124,13 +126,18 @@ def gather(objects, *, pin_unselected_uvs=False, use_object_scale=True, need_uvs
 def unwrap_arguments(batch, *, method, bound, minimise, raise_bound, bound_limit, frames,
                      overlap="cut", boundary="free", stretch=None):
     """Positional and keyword arguments of ``bd_uv.unwrap`` for ``batch`` (``stretch`` S: Limit
-    Stretch, singular values within [1/S, S])."""
-    kwargs = dict(seams=batch.seams, method=method, bound="auto" if minimise else float(bound),
-                  frames=frames, raise_bound=raise_bound, bound_limit=float(bound_limit),
-                  overlap=overlap, boundary=boundary,
+    Stretch, singular values within [1/S, S]): the mesh's data and its ``UnwrapOptions``.
+
+    Raises
+    ------
+    UserError naming an option that cannot be used (``bd_uv.OptionError``)
+    """
+    options = _options(method=method, bound="auto" if minimise else float(bound), frames=frames,
+                       raise_bound=bool(raise_bound), bound_limit=float(bound_limit),
+                       overlap=overlap, boundary=boundary,
+                       stretch=None if stretch is None else float(stretch))
+    kwargs = dict(seams=batch.seams, options=options,
                   face_groups=batch.tri_polygons)  # an overlap cut never splits a polygon
-    if stretch is not None:
-        kwargs["stretch"] = float(stretch)
     if len(batch.pin_corners):
         kwargs.update(pin_corners=batch.pin_corners, pin_uv=batch.pin_uv)
     if frames == "input-uv":
@@ -167,9 +174,19 @@ def auto_arguments(batch, *, method, bound, minimise, stretch, frames):
         raise UserError("Add Where Needed seams cannot keep pinned UVs in place: unpin them, "
                         "unwrap with Sync Selection on or from the 3D Viewport, or mark the "
                         "seams yourself")
+    options = _options(add_seams=True, method=method, bound=float(bound),
+                       stretch=float(stretch), frames=frames)
     material = np.concatenate([p.arrays.material for p in batch.parts])
     kwargs = dict(**polygon_ids(batch),
                   face_groups=material if len(np.unique(material)) > 1 else None,
-                  seams=batch.seams, method=method, bound=float(bound), stretch=float(stretch),
-                  frames=frames)
+                  seams=batch.seams, method=options.method, bound=options.bound,
+                  stretch=options.seams_stretch, frames=options.frames)
     return (batch.V, batch.F), kwargs
+
+
+def _options(**values):
+    """``UnwrapOptions(**values)``; an option out of range becomes a UserError naming it."""
+    try:
+        return UnwrapOptions(**values)
+    except OptionError as exc:
+        raise UserError(f"{exc.option}: {exc}") from None

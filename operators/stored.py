@@ -12,17 +12,17 @@ No ``bpy``: numpy and ``bd_uv`` only, so the same code serves the operator and t
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+import dataclasses
 
 import numpy as np
 
-from ..bd_uv.certificate import RTOL
+from ..bd_uv.certificate import RTOL, Certificate
 from ..bd_uv.certificate import certify_islands as _core_certify
 from ..bd_uv.geometry import face_areas
 from ..bd_uv.metrics import face_jacobians, signed_uv_areas
 from ..bd_uv.overlap import layout_overlaps as _core_layout_overlaps
 
-__all__ = ["STORAGE_RTOL", "StoredIsland", "certify_islands", "check_stored", "layout_overlaps",
+__all__ = ["STORAGE_RTOL", "certify_islands", "check_stored", "layout_overlaps",
            "island_singular_values"]
 
 # Minimise only: an island certified at the exact float64 maximum of its solve measures a little
@@ -49,44 +49,6 @@ def _certify_some(V, F, corner_uv, labels, some, bounds):
     new = np.full(len(bounds) + 1, -1, dtype=np.int64)  # the last entry: label -1 stays -1
     new[some] = np.arange(len(some))
     return certify_islands(V, F, corner_uv, new[labels], np.asarray(bounds)[some])
-
-
-@dataclass(frozen=True)
-class StoredIsland:
-    """The post-write figures of one island, measured from its UVs as stored.
-
-    Attributes
-    ----------
-    island : int
-        Index of the island in the unwrap result.
-    certified : bool
-        Passes the certificate as stored (else it must be put back).
-    bound : float
-        The C it is certified at as stored: the solve's ``bound_certified``, or for a minimised
-        island the stored max when float32 rounding put it just above (see ``STORAGE_RTOL``).
-    max_distortion, mean_distortion : float
-        As stored; the mean is area-weighted over the island's 3D faces.
-    flipped : int
-    overlap_free : bool
-        The island's UV boundary is simple and wound right (one-to-one, Lipman 2012 Thms 5.1,
-        5.2).
-    reason : str
-        Why it fails, "" when certified.
-    failed_as_solved : bool
-        It fails on the UVs as solved already (not broken by storing or packing them).
-    """
-
-    island: int
-    certified: bool
-    bound: float
-    max_distortion: float
-    mean_distortion: float
-    flipped: int
-    overlap_free: bool
-    reason: str
-    failed_as_solved: bool = False
-    min_singular: float = float("nan")
-    max_singular: float = float("nan")
 
 
 def island_singular_values(V, F, corner_uv, face_island, n, normalized):
@@ -130,7 +92,7 @@ def island_singular_values(V, F, corner_uv, face_island, n, normalized):
 
 
 def check_stored(V, F, corner_uv, face_island, islands, solved_uv=None, stretch=None,
-                 normalized=None):
+                 normalized=None) -> list[Certificate]:
     """Certify each island of a stored layout with its own bound (float32 UVs, after packing).
 
     Parameters
@@ -157,8 +119,12 @@ def check_stored(V, F, corner_uv, face_island, islands, solved_uv=None, stretch=
 
     Returns
     -------
-    list of StoredIsland
-        One per written island, in increasing island index.
+    list of bd_uv.Certificate
+        One per written island, in increasing island index, its ``island`` the index in the
+        unwrap result; ``bound`` the C it is certified at as stored (the solve's
+        ``bound_certified``, or for a minimised island the stored max when float32 rounding put
+        it just above, see ``STORAGE_RTOL``); ``min_singular``, ``max_singular`` measured as the
+        core measures them; ``failed_as_solved`` when it fails on ``solved_uv`` already.
     """
     corner_uv = np.asarray(corner_uv, dtype=np.float64)
     face_island = np.asarray(face_island, dtype=np.int64)
@@ -200,9 +166,9 @@ def check_stored(V, F, corner_uv, face_island, islands, solved_uv=None, stretch=
                                                and hi[j] <= stretch * (1.0 + RTOL)):
             ok, reason = False, (f"singular values {lo[j]:.6g} to {hi[j]:.6g} outside "
                                  f"[{1.0 / stretch:.6g}, {stretch:g}]")
-        out.append(StoredIsland(int(labels[j]), ok, float(bounds[j]), float(c.max_distortion),
-                                float(c.mean_distortion), int(c.flipped), bool(c.overlap_free),
-                                reason, j in as_solved, float(lo[j]), float(hi[j])))
+        out.append(dataclasses.replace(
+            c, island=int(labels[j]), certified=ok, bound=float(bounds[j]), reason=reason,
+            failed_as_solved=j in as_solved, min_singular=float(lo[j]), max_singular=float(hi[j])))
     return out
 
 

@@ -21,6 +21,9 @@ from .editmode import edit_mesh_objects, object_mode
 SOLVE = bd_uv.unwrap
 # ... and with Seams "Add Where Needed".
 AUTO_SOLVE = auto_seams.solve
+# The core's defaults (bd_uv.UnwrapOptions) are the operator's: one line there changes both.
+# The operator's own: Limit (bound_limit) 100, where the core raises C up to 1000.
+DEFAULTS = bd_uv.UnwrapOptions()
 
 
 
@@ -74,11 +77,13 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
     JOB = "Bounded Distortion unwrap"
     CANCELLED = "Unwrap cancelled: mesh and UVs unchanged"
 
-    method: EnumProperty(name="Method", items=_METHODS, default='lscm')
-    seams: EnumProperty(name="Seams", items=_SEAMS, default='MARKED')
-    overlap: EnumProperty(name="Overlaps", items=_OVERLAP, default='CUT')
-    boundary: EnumProperty(name="Boundary", items=_BOUNDARY, default='free')
-    stretch: FloatProperty(name="Limit Stretch", default=2.0, min=1.0, soft_min=1.1,
+    method: EnumProperty(name="Method", items=_METHODS, default=DEFAULTS.method)
+    seams: EnumProperty(name="Seams", items=_SEAMS,
+                        default='AUTO' if DEFAULTS.add_seams else 'MARKED')
+    overlap: EnumProperty(name="Overlaps", items=_OVERLAP, default=DEFAULTS.overlap.upper())
+    boundary: EnumProperty(name="Boundary", items=_BOUNDARY, default=DEFAULTS.boundary)
+    stretch: FloatProperty(name="Limit Stretch", default=DEFAULTS.seams_stretch, min=1.0,
+                           soft_min=1.1,
                            soft_max=10.0,
                            description="Largest stretch allowed on any face, with each chart "
                            "scaled to its 3D area (both singular values within [1/S, S]; S must be "
@@ -88,16 +93,17 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                                 description="Marked seams: also bound every face's singular "
                                 "values to [1/S, S] (Lipman 2012, section 6.3), keeping texel "
                                 "density even; Minimise only with Boundary Free")
-    bound: FloatProperty(name="Bound C", default=5.0, min=1.0001, soft_min=1.05, soft_max=50.0,
+    bound: FloatProperty(name="Bound C", default=DEFAULTS.bound, min=1.0001, soft_min=1.05,
+                         soft_max=50.0,
                          description="Largest conformal distortion allowed on any face")
     minimise: BoolProperty(name="Minimise", default=False,
                            description="Find the smallest certified bound instead (optimal "
                            "quasi-conformal map; slower)")
-    raise_bound: BoolProperty(name="Raise C Automatically", default=True,
+    raise_bound: BoolProperty(name="Raise C Automatically", default=DEFAULTS.raise_bound,
                               description="When no map within C exists, raise C up to the limit")
     bound_limit: FloatProperty(name="Limit", default=100.0, min=1.0001, soft_max=1000.0,
                                description="Largest bound tried when raising C")
-    frames: EnumProperty(name="Frames", items=_FRAMES, default='auto')
+    frames: EnumProperty(name="Frames", items=_FRAMES, default=DEFAULTS.frames)
     margin: FloatProperty(name="Margin", default=0.001, min=0.0, max=1.0,
                           description="Space between islands when packing")
     pack: BoolProperty(name="Pack Islands", default=True,
@@ -205,11 +211,15 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
             self.report({'WARNING'}, "A fixed boundary needs a bound C and the Auto frames: turn "
                         "off Minimise and From Current UVs, or set Boundary to Free")
             return None
-        args, kwargs = session.unwrap_arguments(
-            batch, method=self.method, bound=self.bound, minimise=self.minimise,
-            raise_bound=self.raise_bound, bound_limit=self.bound_limit, frames=self.frames,
-            overlap='cut' if self.overlap == 'CUT' else 'fail', boundary=self.boundary,
-            stretch=self.stretch if self.limit_stretch else None)
+        try:
+            args, kwargs = session.unwrap_arguments(
+                batch, method=self.method, bound=self.bound, minimise=self.minimise,
+                raise_bound=self.raise_bound, bound_limit=self.bound_limit, frames=self.frames,
+                overlap='cut' if self.overlap == 'CUT' else 'fail', boundary=self.boundary,
+                stretch=self.stretch if self.limit_stretch else None)
+        except session.UserError as error:
+            self.report({'WARNING'}, str(error))
+            return None
         return batch, False, args, kwargs
 
     def _stretch_problem(self):

@@ -7,17 +7,19 @@ from dataclasses import dataclass, field
 import bpy
 import numpy as np
 
+from ..bd_uv.certificate import Certificate
 from . import mesh_data, stored
 
 
 @dataclass(frozen=True)
 class Checked:
-    """The post-write check of one written island (``stored.StoredIsland``) and its owner."""
+    """The post-write check of one written island (``bd_uv.Certificate`` of its stored UVs) and
+    its owner."""
 
     object_name: str
     polygons: int              # its faces as the user counts them
     area: float                # 3D area (weights the mean)
-    stored: object             # stored.StoredIsland
+    stored: Certificate        # of the UVs as stored (stored.check_stored)
     put_back: bool
 
 

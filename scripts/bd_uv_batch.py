@@ -63,12 +63,12 @@ def _extension_package():
 
 
 def _import_addon():
-    """The modules used here, from this extension: bd_uv's batch and cli, and the add-on's
+    """The modules used here, from this extension: bd_uv's batch and arguments, and the add-on's
     mesh_data (bpy <-> numpy), session (packing) and stored (the post-write check)."""
     pkg = _extension_package().__name__
     return tuple(importlib.import_module(f"{pkg}.{name}") for name in
-                 ("bd_uv", "bd_uv.batch", "bd_uv.cli", "operators.mesh_data", "operators.session",
-                  "operators.stored"))
+                 ("bd_uv", "bd_uv.batch", "bd_uv.arguments", "operators.mesh_data",
+                  "operators.session", "operators.stored"))
 
 
 def split_argv(argv):
@@ -80,14 +80,14 @@ def split_argv(argv):
     return (argv[1:argv.index("--")] if "--" in argv else argv[1:]), rest
 
 
-def build_parser(cli):
+def build_parser(arguments):
     p = argparse.ArgumentParser(
         prog="bd_uv_batch.py",
         description="Unwrap the mesh objects of a .blend with bd-uv (certified bounded "
                     "distortion), write their UV maps and save.")
     p.add_argument("--objects", nargs="+", metavar="NAME",
                    help="mesh objects to unwrap (default: every mesh object with faces)")
-    cli.add_solver_options(p)
+    arguments.add_solver_options(p)
     p.add_argument("--uv-map", metavar="NAME",
                    help="UV map to read pins from and write (default: the active one; created "
                         "when missing)")
@@ -338,9 +338,10 @@ def draw_saved(written, core, batch, mesh_data, options, args):
 
 def main(argv):
     blends, rest = split_argv(argv)
-    core, batch, cli, mesh_data, session, stored = _import_addon()
-    args = build_parser(cli).parse_args(rest)
-    options = cli.solver_kwargs(args)
+    core, batch, arguments, mesh_data, session, stored = _import_addon()
+    args = build_parser(arguments).parse_args(rest)
+    # Blender packs (--pack): the core neither packs nor cuts what it stores.
+    options = batch.JobOptions(arguments.unwrap_options_of(args))
     if args.png and importlib.util.find_spec("matplotlib") is None:
         print("error: --png needs matplotlib, which this Python (Blender's own) does not have: "
               "install it into Blender's Python (<blender python> -m pip install matplotlib), "

@@ -18,11 +18,9 @@ files of a batch (``files``), the report (``report``) and the command line (``co
 """
 from .command import add_batch_parser, run_batch
 from .files import BLEND_SUFFIX, MESH_SUFFIXES, SCRIPT, FileTask, input_files, plan, run_tasks
-# A worker looks this up here at call time (``scheduling.worker``), so it can be replaced.
-from .files import _unwrap_file  # noqa: F401
-from .jobs import Job, JobResult, caption, entry_png, failed_entry, unwrap_job
+from .jobs import Job, JobOptions, JobResult, caption, entry_png, failed_entry, unwrap_job
 from .report import batch_report, item_line
 
-__all__ = ["BLEND_SUFFIX", "MESH_SUFFIXES", "SCRIPT", "FileTask", "Job", "JobResult",
+__all__ = ["BLEND_SUFFIX", "MESH_SUFFIXES", "SCRIPT", "FileTask", "Job", "JobOptions", "JobResult",
            "add_batch_parser", "batch_report", "caption", "entry_png", "failed_entry",
            "input_files", "item_line", "plan", "run_batch", "run_tasks", "unwrap_job"]

@@ -9,9 +9,11 @@ import os
 import sys
 import time
 
-from ..cli import add_layout_options, add_solver_options, layout_kwargs, solver_kwargs
+from ..arguments import add_layout_options, add_solver_options, layout_kwargs, unwrap_options_of
+from ..scheduling import FileLimits, Ledger, Progress, options_sha256, read_previous, reusable
 from ..scheduling.atomic import remove_stale
 from .files import _size, input_files, plan, run_tasks
+from .jobs import JobOptions
 from .report import batch_report, item_line
 
 
@@ -98,7 +100,7 @@ def _positive_int(text):
 
 def run_batch(args):
     """``python -m bd_uv batch``: returns the exit code (0: all certified, 1: some failed)."""
-    from ..scheduling import FileLimits, Ledger, Progress, options_sha256, read_previous, reusable
+    options = JobOptions(unwrap_options_of(args), **layout_kwargs(args))
     files = input_files(args.inputs)
     if not files:
         print(f"error: no .obj/.off/.ply/.blend files in {' '.join(args.inputs)}",
@@ -108,16 +110,6 @@ def run_batch(args):
     if args.png:
         os.makedirs(args.png, exist_ok=True)
     tasks = plan(files, args.output, args.png)
-    options = {**solver_kwargs(args), **layout_kwargs(args)}
-    if args.seams == "auto":
-        if args.bound == "auto":
-            print("error: --seams auto needs a numeric --bound C", file=sys.stderr)
-            return 2
-        if args.boundary != "free":
-            print("error: --seams auto makes free-boundary charts; use --boundary free with it",
-                  file=sys.stderr)
-            return 2
-        options["auto_stretch"] = 2.0 if args.stretch is None else args.stretch
     report_path = args.report or os.path.join(args.output, "report.json")
     collisions = [t for t in tasks if os.path.abspath(t.output) == os.path.abspath(t.path)]
     if collisions:

@@ -17,8 +17,10 @@ from dataclasses import dataclass
 
 from ..errors import BDError
 from ..meshio import load_mesh, write_obj
+from ..scheduling import run_pool
 from ..scheduling.atomic import atomic_path
-from .jobs import Job, failed_entry, unwrap_job
+from ..scheduling.cluster import run_dask
+from .jobs import Job, JobOptions, failed_entry, unwrap_job
 
 MESH_SUFFIXES = (".obj", ".off", ".ply")
 BLEND_SUFFIX = ".blend"
@@ -98,18 +100,18 @@ def _unwrap_blend(task, options, base):
 
 
 def _script_options(options):
-    """``options`` (unwrap keyword arguments) as the Blender script's command-line flags."""
-    out = ["--method", options["method"], "--bound", str(options["bound"]),
-           "--frames", options["frames"], "--bound-limit", str(options["bound_limit"]),
-           "--cone", options["cone"]]
-    if not options["raise_bound"]:
+    """``options`` (JobOptions) as the Blender script's command-line flags."""
+    o = JobOptions.of(options).unwrap
+    out = ["--method", o.method, "--bound", str(o.bound), "--frames", o.frames,
+           "--bound-limit", str(o.bound_limit), "--cone", o.cone]
+    if not o.raise_bound:
         out.append("--no-raise")
-    if options.get("time_budget") is not None:
-        out += ["--time-budget", str(options["time_budget"])]
-    if options.get("boundary", "free") != "free":
-        out += ["--boundary", options["boundary"]]
-    if options.get("stretch") is not None:
-        out += ["--stretch", str(options["stretch"])]
+    if o.time_budget is not None:
+        out += ["--time-budget", str(o.time_budget)]
+    if o.boundary != "free":
+        out += ["--boundary", o.boundary]
+    if o.stretch is not None:
+        out += ["--stretch", str(o.stretch)]
     return out
 
 
@@ -166,7 +168,6 @@ def run_tasks(tasks, options, seams_mode=None, jobs=1, on_done=None, scheduler=N
     -------
     entries : list of list of dict, per task (in task order; None for tasks not run)
     """
-    from ..scheduling import run_pool
     results = [None] * len(tasks)
 
     def done(i, entries, attempts):
@@ -179,14 +180,15 @@ def run_tasks(tasks, options, seams_mode=None, jobs=1, on_done=None, scheduler=N
 
     order = range(len(tasks)) if order is None else order
     order = sorted(order, key=lambda i: -_size(tasks[i].path))
+    # The work of one file, looked up here at call time so that it can be replaced (tests).
+    work = _unwrap_file
     if scheduler:
-        from ..scheduling.cluster import run_dask
-        run_dask(tasks, order, options, seams_mode, scheduler, jobs, done, limits, retries,
+        run_dask(tasks, order, work, options, seams_mode, scheduler, jobs, done, limits, retries,
                  on_start=on_start)
     else:
         if on_start is not None:
             on_start(jobs)
-        run_pool(tasks, order, options, seams_mode, jobs, done, limits, retries)
+        run_pool(tasks, order, work, options, seams_mode, jobs, done, limits, retries)
     return results
 
 

@@ -8,16 +8,19 @@ the arrays were gathered; ``entry_png`` draws it with ``caption`` under it.
 import os
 import time
 import traceback
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..cli import split_options
+from ..api import unwrap
 from ..errors import BDError
 from ..layout import stored_layout
 from ..metrics import conformal_distortion
+from ..options import OPTION_NAMES, UnwrapOptions
+from ..pack import MARGIN
 from ..scheduling.atomic import atomic_path
-from ..unwrapping import unwrap
+from ..scheduling.entries import failed_entry
 
 
 @dataclass(frozen=True)
@@ -63,11 +66,46 @@ class JobResult:
     layout: object = None
 
 
-def failed_entry(name, error, message, faces=None, seconds=None, **where):
-    """A report entry with nothing certified (``where``: input, object, output, ...)."""
-    return {**where, "name": name, "status": "failed", "faces": faces, "islands": [],
-            "bound_certified": None, "max_distortion": None, "mean_distortion": None,
-            "flipped": None, "seconds": seconds, "error": error, "message": message}
+@dataclass(frozen=True)
+class JobOptions:
+    """What a batch does with every mesh: how it unwraps and how the UVs are stored. Frozen and
+    plain, so it travels to the pool's processes and Dask's workers as it is (pickled).
+
+    Attributes
+    ----------
+    unwrap : bd_uv.UnwrapOptions
+    pack : bool, pack the islands into the unit square (``bd_uv.layout.stored_layout``); the
+        Blender script packs with Blender instead
+    cut : bool, cut an island whose stored UVs lie over themselves into overlap-free pieces
+    margin : float, the packing margin in the unit square
+    """
+    unwrap: UnwrapOptions = field(default_factory=UnwrapOptions)
+    pack: bool = False
+    cut: bool = False
+    margin: float = MARGIN
+
+    @classmethod
+    def of(cls, options):
+        """``options`` as JobOptions: a JobOptions, an UnwrapOptions (nothing cut or packed in
+        the layout), or a mapping of UnwrapOptions fields and ``pack``, ``cut``, ``margin``
+        (``cut`` also decides ``unwrap``'s ``overlap``)."""
+        if isinstance(options, cls):
+            return options
+        if isinstance(options, UnwrapOptions):
+            return cls(options)
+        if not isinstance(options, Mapping):
+            raise TypeError(f"options must be JobOptions, UnwrapOptions or a mapping, got "
+                            f"{type(options).__name__}")
+        solve = {k: v for k, v in options.items() if k in OPTION_NAMES}
+        if "cut" in options:  # unwrap() itself cuts (or fails) an island whose UVs overlap
+            solve["overlap"] = "cut" if options["cut"] else "fail"
+        layout = {k: options[k] for k in ("pack", "cut", "margin") if k in options}
+        return cls(UnwrapOptions(**solve), **layout)
+
+    def as_dict(self):
+        """Every option, flat and JSON-able (the report's "options", the journal's hash)."""
+        return {**self.unwrap.as_dict(), "pack": self.pack, "cut": self.cut,
+                "margin": self.margin}
 
 
 def _num(x):
@@ -80,7 +118,8 @@ def unwrap_job(job, options, png=None):
     Parameters
     ----------
     job : Job
-    options : dict, keyword arguments of :func:`bd_uv.unwrap` (``solver_kwargs``)
+    options : JobOptions, or what ``JobOptions.of`` takes (an UnwrapOptions, or a dict of its
+        fields and pack, cut, margin)
     png : str, optional, where to draw the UV layout (:func:`bd_uv.render.uv_layout_png`)
 
     Returns
@@ -94,25 +133,16 @@ def unwrap_job(job, options, png=None):
     t0 = time.perf_counter()
     m = int(len(job.F))
     entry = failed_entry(job.name, None, "", faces=m, seconds=0.0)
-    kwargs, layout_options = split_options(options)
-    if kwargs.get("frames") == "input-uv":
-        kwargs["initial_uv"] = job.corner_uv
-    if job.pin_corners is not None and len(job.pin_corners):
-        kwargs.update(pin_corners=job.pin_corners, pin_uv=job.pin_uv)
-    if job.face_groups is not None:
-        kwargs["face_groups"] = job.face_groups
     try:
-        if kwargs.get("frames") == "input-uv" and job.corner_uv is None:
+        options = JobOptions.of(options)
+        o = options.unwrap
+        if o.frames == "input-uv" and job.corner_uv is None:
             raise ValueError(f"{job.name} has no UVs to take frames from (--frames input-uv)")
-        stretch = kwargs.pop("auto_stretch", None)
-        if stretch is not None:     # --seams auto: the file's own seams are kept, more added
-            from ..seams import unwrap_auto
-            res = unwrap_auto(job.V, job.F, seams=job.seams, bound=kwargs["bound"],
-                              stretch=stretch, method=kwargs["method"], frames=kwargs["frames"],
-                              cone=kwargs["cone"])[0]
-        else:
-            res = unwrap(job.V, job.F, seams=job.seams, **kwargs)
-        layout = stored_layout(job.V, job.F, res, **layout_options)
+        res = unwrap(job.V, job.F, job.seams, job.pin_corners, job.pin_uv,
+                     initial_uv=job.corner_uv if o.frames == "input-uv" else None,
+                     face_groups=job.face_groups, options=o)
+        layout = stored_layout(job.V, job.F, res, pack=options.pack, cut=options.cut,
+                               margin=options.margin)
     except Exception as exc:  # a bad mesh, or a bug: either way it stays this job's failure
         entry.update(error=type(exc).__name__, message=str(exc),
                      seconds=round(time.perf_counter() - t0, 4))
@@ -160,9 +190,9 @@ def entry_png(path, entry, corner_uv, distortion, options):
 
 def caption(entry, options):
     """The figures under a PNG: what was asked, what was certified, how long it took."""
-    bound = options.get("bound")
-    ask = "bound auto" if bound == "auto" else f"bound {bound:g}"
-    head = (f"{entry['name']}: BD-{options.get('method', 'lscm').upper()}, {ask}, "
+    o = JobOptions.of(options).unwrap
+    ask = "bound auto" if o.bound == "auto" else f"bound {o.bound:g}"
+    head = (f"{entry['name']}: BD-{o.method.upper()}, {ask}, "
             f"{entry['faces']} faces, {len(entry['islands'])} island(s)")
     if entry["bound_certified"] is None:
         return f"{head}\nnothing certified: {entry['message']}"[:400]

@@ -4,7 +4,8 @@ import os
 
 def batch_report(items, options, wall, jobs, files, interrupted=False, running=False,
                  resumed=(), scheduler="pool", files_run=None, startup=0.0, working=None):
-    """The JSON report: options, a summary and one entry per mesh (file or .blend object).
+    """The JSON report: options (JobOptions, UnwrapOptions or a dict), a summary and one entry
+    per mesh (file or .blend object).
 
     ``resumed`` are the entry lists of the files kept from an earlier run by ``--resume``. The
     throughput (files and faces per minute) counts only the ``files_run`` files run this time
@@ -13,6 +14,8 @@ def batch_report(items, options, wall, jobs, files, interrupted=False, running=F
     seconds spent before the workers were ready: starting a LocalCluster, connecting).
     """
     from .. import __version__
+    if hasattr(options, "as_dict"):  # JobOptions, UnwrapOptions
+        options = options.as_dict()
     count = {k: sum(e["status"] == k for e in items) for k in ("certified", "partial", "failed")}
     seen = {e["input"] for e in items}
     kept = {id(e) for entries in resumed for e in entries}

@@ -14,6 +14,7 @@ retry bound; a remote scheduler keeps its own (``distributed.scheduler.allowed-f
 3 by default). Dask is an optional extra: nothing else in bd-uv imports it.
 """
 import contextlib
+import importlib
 import logging
 import uuid
 
@@ -22,12 +23,15 @@ from .pool import crashed_entry
 from .worker import limit_entry, run_file
 
 
-def run_dask(tasks, order, options, seams_mode, scheduler, jobs, done, limits=None,
+def run_dask(tasks, order, work, options, seams_mode, scheduler, jobs, done, limits=None,
              retries=2, on_start=None):
-    """Run ``tasks[i]`` for ``i`` in ``order`` (first = highest priority) on a Dask cluster.
+    """Run ``work`` on ``tasks[i]`` for ``i`` in ``order`` (first = highest priority) on a Dask
+    cluster.
 
     Parameters
     ----------
+    work : callable(task, options, seams_mode) -> report entries, as for ``worker.run_file``: a
+        module-level function, pickled by reference (every worker imports its module)
     scheduler : str, a scheduler address, or "local" for a LocalCluster of ``jobs`` workers
     done : callable(i, entries, attempts), called in this process as each file finishes
     on_start : callable(workers: int), called once the client is connected
@@ -63,13 +67,13 @@ def run_dask(tasks, order, options, seams_mode, scheduler, jobs, done, limits=No
                 client = stack.enter_context(Client(scheduler, timeout="30s"))
         except (OSError, TimeoutError) as exc:
             raise BDError(f"cannot reach the Dask scheduler {scheduler}: {exc}") from exc
-        workers = _warm_up(client, scheduler)
+        workers = _warm_up(client, scheduler, work.__module__)
         if on_start is not None:
             on_start(workers)
         run = uuid.uuid4().hex[:12]
         futures = {}
         for rank, i in enumerate(order):
-            fut = client.submit(run_file, tasks[i], options, seams_mode, limits,
+            fut = client.submit(run_file, tasks[i], work, options, seams_mode, limits,
                                 key=f"bd-uv-{run}-{i}", priority=len(order) - rank, pure=False)
             futures[fut] = i
         try:
@@ -93,12 +97,13 @@ def run_dask(tasks, order, options, seams_mode, scheduler, jobs, done, limits=No
     return workers
 
 
-def _warm_up(client, scheduler):
-    """Import the batch code on every worker now (so that start-up is not counted in the
-    throughput, and a worker without bd-uv is named at once); returns the number of workers."""
+def _warm_up(client, scheduler, module):
+    """Import ``module`` (the work's: the solver stack) on every worker now (so that start-up is
+    not counted in the throughput, and a worker without bd-uv is named at once); returns the
+    number of workers."""
     from .. import __version__
     try:
-        versions = client.run(_worker_version)
+        versions = client.run(_worker_version, module)
     except Exception as exc:  # noqa: BLE001 - typically: bd_uv is not installed there
         raise BDError(f"the workers of {scheduler} cannot run bd-uv ({type(exc).__name__}: "
                       f"{exc}); install it on each worker: pip install 'bd-uv[cluster]'") from exc
@@ -108,8 +113,8 @@ def _warm_up(client, scheduler):
     return len(versions)
 
 
-def _worker_version():
-    import bd_uv.batch  # noqa: F401 - the solver stack, imported once per worker
+def _worker_version(module):
+    importlib.import_module(module)  # the solver stack, imported once per worker
     import bd_uv
     return bd_uv.__version__
 

@@ -20,7 +20,10 @@ from .atomic import atomic_path, file_sha256
 
 
 def options_sha256(options, seams_mode):
-    """Hex SHA-256 of the solver options and seams mode (canonical JSON)."""
+    """Hex SHA-256 of the options (a dict, or an object with ``as_dict()``: the batch's
+    JobOptions) and seams mode (canonical JSON)."""
+    if hasattr(options, "as_dict"):
+        options = options.as_dict()
     text = json.dumps({"options": options, "seams": seams_mode}, sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()
 

@@ -1,11 +1,12 @@
 """The local process pool: ``python -m bd_uv batch --jobs N`` without ``--scheduler``."""
 import concurrent.futures as cf
 
-from .worker import run_file
+from .worker import limit_entry, run_file
 
 
-def run_pool(tasks, order, options, seams_mode, jobs, done, limits=None, retries=1):
-    """Run ``tasks[i]`` for ``i`` in ``order``, in ``jobs`` processes (in this one when 1).
+def run_pool(tasks, order, work, options, seams_mode, jobs, done, limits=None, retries=1):
+    """Run ``work`` on ``tasks[i]`` for ``i`` in ``order``, in ``jobs`` processes (in this one
+    when 1); ``work`` as for ``worker.run_file``.
 
     A worker that dies (crash, out of memory) breaks the pool; the files it took down are run
     again, one fresh process each, up to ``retries`` times, so only a file that kills its worker
@@ -19,22 +20,22 @@ def run_pool(tasks, order, options, seams_mode, jobs, done, limits=None, retries
         return
     if jobs <= 1:
         for i in order:
-            done(i, run_file(tasks[i], options, seams_mode, limits), 1)
+            done(i, run_file(tasks[i], work, options, seams_mode, limits), 1)
         return
-    lost = _run_once(tasks, order, options, seams_mode, jobs, done, limits, 1)
+    lost = _run_once(tasks, order, work, options, seams_mode, jobs, done, limits, 1)
     for i in lost:  # isolate: one process per file, so a crash takes down only its own file
         for attempt in range(2, retries + 2):
-            if not _run_once(tasks, [i], options, seams_mode, 1, done, limits, attempt):
+            if not _run_once(tasks, [i], work, options, seams_mode, 1, done, limits, attempt):
                 break
         else:
             done(i, [crashed_entry(tasks[i], retries + 1)], retries + 1)
 
 
-def _run_once(tasks, order, options, seams_mode, jobs, done, limits, attempt):
+def _run_once(tasks, order, work, options, seams_mode, jobs, done, limits, attempt):
     """Submit ``order`` to a pool of ``jobs`` processes; returns the indices lost to a crash."""
     lost = []
     with cf.ProcessPoolExecutor(max_workers=min(jobs, len(order))) as pool:
-        futures = {pool.submit(run_file, tasks[i], options, seams_mode, limits): i
+        futures = {pool.submit(run_file, tasks[i], work, options, seams_mode, limits): i
                    for i in order}
         try:
             for fut in cf.as_completed(futures):
@@ -51,7 +52,6 @@ def _run_once(tasks, order, options, seams_mode, jobs, done, limits, attempt):
 
 def crashed_entry(task, attempts, detail=""):
     """The entry of a file whose worker died on each of its ``attempts``."""
-    from .worker import limit_entry
     return limit_entry(task, "WorkerCrashed",
                        f"{task.path}: the worker process died while unwrapping it, "
                        f"{attempts} time(s) (a crash, or killed for running out of memory)"

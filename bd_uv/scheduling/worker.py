@@ -1,5 +1,5 @@
-"""What a worker runs for one file: the unwrap and write of ``bd_uv.batch``, its resume hashes, and
-the per-file limits.
+"""What a worker runs for one file: the work it is handed (``bd_uv.batch``'s unwrap and write),
+its resume hashes, and the per-file limits.
 
 Without limits the file is unwrapped in the worker's own process, as before. With a time or memory
 limit it is unwrapped in a forked child that the worker watches: past ``timeout`` seconds, or
@@ -17,6 +17,7 @@ import time
 from dataclasses import dataclass
 
 from .atomic import file_sha256
+from .entries import failed_entry
 from .ledger import options_sha256
 
 
@@ -31,18 +32,23 @@ class FileLimits:
         return self.timeout is not None or self.memory is not None
 
 
-def run_file(task, options, seams_mode, limits=None):
-    """Unwrap ``task`` (a ``bd_uv.batch.FileTask``) and return its report entries.
+def run_file(task, work, options, seams_mode, limits=None):
+    """Run ``work(task, options, seams_mode)`` and return its report entries.
+
+    Parameters
+    ----------
+    task : an object with ``path`` and ``output`` (``bd_uv.batch.FileTask``)
+    work : callable(task, options, seams_mode) -> list of report entries, a module-level function
+        (it is pickled by reference for a process pool or a Dask worker)
 
     Each entry gets ``input_sha256``, ``options_sha256`` and ``output_sha256`` (None when no
     output was written) for ``--resume``. Never raises for a bad file.
     """
-    from .. import batch  # looked up at call time: the unwrap/write code stays batch's own
     digest = file_sha256(task.path)
     if limits:
-        entries = _in_child(batch._unwrap_file, (task, options, seams_mode), limits, task)
+        entries = _in_child(work, (task, options, seams_mode), limits, task)
     else:
-        entries = batch._unwrap_file(task, options, seams_mode)
+        entries = work(task, options, seams_mode)
     written = any(e.get("output") for e in entries)
     out_digest = file_sha256(task.output) if written else None
     opt = options_sha256(options, seams_mode)
@@ -52,7 +58,7 @@ def run_file(task, options, seams_mode, limits=None):
 
 
 def limit_entry(task, error, message, seconds=None):
-    from ..batch import failed_entry
+    """The entry of a file its worker could not finish (a limit, a crash, a worker error)."""
     return failed_entry(os.path.splitext(os.path.basename(task.path))[0], error, message,
                         seconds=seconds, input=os.path.abspath(task.path), object=None,
                         output=None)

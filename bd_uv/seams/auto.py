@@ -20,11 +20,12 @@ import time
 
 import numpy as np
 
-from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, OptionError,
-                      OverlapError, SolverError, TopologyError)
+from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, OverlapError,
+                      SolverError, TopologyError)
 from ..geometry import face_areas
 from ..mesh import DEGENERATE_RATIO, Island, check_arrays, islands
-from ..unwrapping.unwrap import _check_options, _pins, unwrap, unwrap_islands
+from ..options import UnwrapOptions
+from ..unwrapping.unwrap import pin_arrays, unwrap, unwrap_islands
 from .charts import MARGIN, chart_maps, face_geometry, mean_cap, piece_stretch
 from .cut_graph import cut_graph
 from .edges import edge_table
@@ -86,11 +87,12 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     V, F = check_arrays(V, F)
     C, S = float(bound), float(stretch)
     if not (C >= 1.0 and S >= 1.0):
-        raise OptionError(f"seams='auto' needs a bound C >= 1 and a stretch S >= 1, not {bound!r}, "
+        raise ValueError(f"seams='auto' needs a bound C >= 1 and a stretch S >= 1, not {bound!r}, "
                          f"{stretch!r}")
-    _check_options(method, frames, C, 1000.0, cone)
-    unwrap_options = dict(method=method, frames=frames, cone=cone, progress=progress,
-                          cancel=cancel)
+    # How the charts are certified: at C, never raised (a chart that fails is cut further).
+    chart_options = UnwrapOptions(method=method, bound=C, frames=frames, cone=cone,
+                                  raise_bound=False)
+    unwrap_options = dict(progress=progress, cancel=cancel)
     E = edge_table(V, F, face_groups)
     n, m = len(V), len(F)
     poly, diag = _polygons(polygons, E, m)
@@ -102,7 +104,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         cut[k[k >= 0]] = True
     cut[E.faces[:, 1] < 0] = False
     if (cut & diag).any():
-        raise OptionError(f"{int((cut & diag).sum())} marked seam(s) run inside a polygon (between "
+        raise ValueError(f"{int((cut & diag).sum())} marked seam(s) run inside a polygon (between "
                          "two triangles of one polygon): a seam must be a polygon edge")
     original = cut.copy()
     # Seams merging keeps: the marked ones and, once cut, material boundaries.
@@ -143,8 +145,9 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last
     # round lets ``unwrap`` cut what still overlaps.
-    result = _unwrap_charts(V, F, E, cut, C, known, not invalid.any(),
-                            "cut" if FINISH_ROUNDS == 0 else "fail", unwrap_options)
+    result = _unwrap_charts(V, F, E, cut, known, not invalid.any(),
+                            chart_options.replace(overlap="cut" if FINISH_ROUNDS == 0 else "fail"),
+                            unwrap_options)
     measured = None                         # (st, cr) of ``result`` on the current cut
     for finish in range(FINISH_ROUNDS):
         # Charts the certified map leaves beyond S or crossing itself are split again and only
@@ -176,8 +179,9 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
                 redo[c.faces] = True
         sub = np.flatnonzero(redo)
         Fc, voc = cut_mesh(F, E, cut, sub)
-        part = unwrap(V[voc], Fc[sub], bound=C, raise_bound=False,
-                      overlap="cut" if finish == FINISH_ROUNDS - 1 else "fail", **unwrap_options)
+        last = finish == FINISH_ROUNDS - 1
+        part = unwrap(V[voc], Fc[sub], options=chart_options.replace(
+            overlap="cut" if last else "fail"), **unwrap_options)
         result = splice(result, part, sub, voc, m)
     # Edges ``unwrap`` cut (overlaps left after the last round) are seams too.
     for r in result.islands:
@@ -197,9 +201,10 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     return result, added, info
 
 
-def _unwrap_charts(V, F, E, cut, C, known, valid, overlap, options):
-    """``unwrap`` of the mesh cut along ``cut`` at C (``raise_bound=False``), the conformal
-    maps in ``known`` (charts that passed) certified rather than solved again.
+def _unwrap_charts(V, F, E, cut, known, valid, options, run):
+    """``unwrap`` of the mesh cut along ``cut`` with ``options`` (UnwrapOptions: C, not raised),
+    the conformal maps in ``known`` (charts that passed) certified rather than solved again;
+    ``run``: progress, cancel and face_groups as ``unwrap`` takes them.
 
     Where the mesh is ``valid`` (``_valid_everywhere``, nothing frozen as invalid) and every
     chart is a disk, the charts are the islands ``mesh.islands`` would find (numbered alike), so
@@ -207,19 +212,15 @@ def _unwrap_charts(V, F, E, cut, C, known, valid, overlap, options):
     """
     chs = charts(F, E, cut) if valid else []
     if not valid or any(c.kind != "disk" for c in chs):
-        return unwrap(V, F, seams=E.ends[cut], bound=C, raise_bound=False, overlap=overlap,
-                      **options)
+        return unwrap(V, F, seams=E.ends[cut], options=options, **run)
     isl = [Island(j, c.faces, c.vertices, c.tris, c.loops) for j, c in enumerate(chs)]
     conformal = {}
     for j, c in enumerate(chs):
         u = known.get(c.faces.tobytes())
         if u is not None:
             conformal[j] = u
-    o = dict(options)
-    return unwrap_islands(V, F, isl, _pins(None, None, len(F)), o.pop("method"), C,
-                          o.pop("frames"), None, False, 1000.0, o.pop("cone"), None, overlap,
-                          o.pop("face_groups", None), None, "free", o.pop("progress"),
-                          o.pop("cancel"), conformal=conformal)
+    return unwrap_islands(V, F, isl, pin_arrays(None, None, len(F)), options, conformal=conformal,
+                          **run)
 
 
 def _valid_everywhere(V, F, E, A):
@@ -375,7 +376,7 @@ def _polygons(polygons, E, m):
         return None, diag
     poly = np.asarray(polygons)
     if poly.shape != (m,) or not np.issubdtype(poly.dtype, np.integer):
-        raise OptionError(f"polygons must be ({m},) integers, one polygon id per triangle, got "
+        raise ValueError(f"polygons must be ({m},) integers, one polygon id per triangle, got "
                          f"shape {poly.shape} of {poly.dtype}")
     poly = poly.astype(np.int64)
     inner = E.faces[:, 1] >= 0

@@ -7,9 +7,6 @@
 - ``factor``: one sparse SPD factorisation, back-solved with several right-hand sides
   (cholespy, qdldl or scipy's SuperLU, whichever is installed).
 - ``local_projection``: the closed-form per-face projection in the singular-value plane.
-- ``ipm``: a primal-dual interior-point method that factorises only the Schur complement onto the
-  vertex unknowns (same problem form and ``ConicSolution``; symbolic analysis reused, warm starts);
-  ``cones`` holds its cone algebra and Nesterov-Todd scaling.
 
 Every solver hands back an iterate; nothing here certifies it: the caller certifies every map from
 its own UVs.

@@ -6,13 +6,11 @@ cholespy factorises in 0.14 s and back-solves 4 columns in 2.3 ms, qdldl 0.053 s
 SuperLU 0.080 s and 4.5 ms (``benchmarks/bench_projection.py --backends``). All three have wheels
 for cp311 and cp313 on linux-x64, windows-x64, macos-arm64 and macos-x64.
 """
-import time
-
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-__all__ = ["factor_spd", "RefactorSPD"]
+__all__ = ["factor_spd"]
 
 try:  # qdldl: LDL^T with AMD ordering, numeric refactorisation on a fixed pattern
     import qdldl
@@ -87,39 +85,3 @@ def factor_spd(M, backend="auto"):
         raise ValueError(f"unknown backend {backend!r}: use 'auto', 'cholespy', 'qdldl' or "
                          "'splu'")
     return solve, backend
-
-
-class RefactorSPD:
-    """Numeric refactorisation of SPD matrices on one fixed upper-triangular CSC pattern (the
-    interior-point method's Schur complement, ``ipm.SchurIPM``): qdldl analyses the pattern once
-    and ``update``s the values; scipy's SuperLU refactorises from scratch."""
-
-    def __init__(self, backend):
-        if backend == "auto":
-            backend = "qdldl" if qdldl is not None else "splu"
-        if backend == "qdldl" and qdldl is None:
-            raise ImportError("qdldl is not installed")
-        if backend not in ("qdldl", "splu"):
-            raise ValueError(f"unknown backend {backend!r}: use 'qdldl', 'splu' or 'auto'")
-        self.backend = backend
-        self.solver = None
-        self.seconds = 0.0
-        self.count = 0
-
-    def factor(self, Hu):
-        """Factorise from the upper triangle ``Hu`` (CSC; the pattern is fixed after the first)."""
-        t = time.perf_counter()
-        if self.backend == "qdldl":
-            if self.solver is None:
-                self.solver = qdldl.Solver(Hu, upper=True)
-            else:
-                self.solver.update(Hu, upper=True)
-        else:
-            full = Hu + sp.triu(Hu, 1, format="csc").T
-            self.solver = spla.splu(full.tocsc(), permc_spec="MMD_AT_PLUS_A",
-                                    options={"SymmetricMode": True})
-        self.seconds += time.perf_counter() - t
-        self.count += 1
-
-    def solve(self, r):
-        return self.solver.solve(r)

@@ -7,4 +7,4 @@
 - ``results``: ``IslandResult`` and ``UnwrapResult``.
 """
 from .results import IslandResult, UnwrapResult
-from .unwrap import FRAMES, METHODS, unwrap
+from .unwrap import unwrap

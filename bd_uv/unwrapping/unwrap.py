@@ -19,73 +19,51 @@ from ..errors import (BDError, CancelledError, InvalidMeshError, IslandError, Op
                       SolverError)
 from ..mesh import check_arrays, islands as split_islands
 from ..metrics import certify, mean_distortion, singular_values
-from ..spaces import check_stretch
+from ..options import unwrap_options
 from . import strategies
 from . import stretch as stretch_search
 from .batched import conformal_islands
-from .fixed_boundary import BOUNDARIES, FRAMES_NAME, fixed_boundary_island, with_premises
+from .fixed_boundary import FRAMES_NAME, fixed_boundary_island, with_premises
 from .initial import start_map
 from .overlap_certificate import overlap_certificate
 from .problem import STORE_HEADROOM, Cancelled, IslandProblem
 from .results import IslandResult, UnwrapResult
 
-METHODS = ("lscm", "arap", "dirichlet", "biharmonic", "stretch-l1")
-FRAMES = ("auto", "harmonic", "conformal", "input-uv", "constant")
 HIGH_DISTORTION = 50.0  # certified bounds above this get a "high_distortion" flag and a hint
 
 
-def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound=5.0,
-           frames="auto", initial_uv=None, raise_bound=True, bound_limit=1000.0, cone="soc",
-           time_budget=None, overlap="cut", face_groups=None, stretch=None, boundary="free",
-           progress=None, cancel=None):
-    """Map a triangle mesh to the plane with no flipped face and conformal distortion <= C.
+def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
+           face_groups=None, progress=None, cancel=None, options=None, **values):
+    """Map a triangle mesh, cut along the given seams, to the plane with no flipped face and
+    conformal distortion <= C.
 
     Parameters
     ----------
     V : (n,3) float array
     F : (m,3) int array
-    seams : (s,2) int array, optional, vertex pairs of the edges to cut along; or "auto": cut
-        every island that cannot be certified as it is into certified disk charts
-        (``bd_uv.seams.unwrap_auto``, which also takes existing seams to keep)
+    seams : (s,2) int array, optional, vertex pairs of the edges to cut along (adding seams,
+        ``add_seams``/``seams="auto"``, is ``bd_uv.unwrap``'s: ``bd_uv.api``)
     pin_corners : (p,) int array, optional, flat corner indices (face * 3 + corner)
     pin_uv : (p,2) float array, optional, the UV of each pinned corner (kept exactly)
-    method : "lscm" | "arap" | "dirichlet" | "biharmonic" | "stretch-l1". BD-Biharmonic (eq. 6.1)
-        with boundary="free" is held at two boundary vertices of the start map, and its mean
-        distortion is higher than BD-LSCM's: it is meant for a fixed boundary. "stretch-l1" is the
-        L1 stretch energy sum_j (|alpha_j| + |beta_j|) Area_j (section 6.1, a second-order cone
-        objective); with a free boundary it would shrink the island to a point, so the island's
-        scale is held (area-weighted mean of Re(w alpha) = 1 on the unit-area island, one anchor
-        vertex; ``IslandProblem.hold_scale``); with two or more pins or a fixed boundary they
-        give the scale
-    bound : float >= 1 or "auto"
-    frames : "auto" | "harmonic" | "conformal" | "input-uv" | "constant"
     initial_uv : (m,3,2) float array, optional, per-corner UVs (needed for frames="input-uv":
         they are the start map, returned as they are when within the bound)
-    raise_bound : bool, raise C when infeasible (up to ``bound_limit``)
-    bound_limit : float
-    cone : "soc" (F_C, eq. 4.15) or "linf" (F_C^inf, eq. 4.22)
-    time_budget : float seconds per island for ``bound="auto"``, optional
-    overlap : "cut" | "fail", an island whose UVs lie over themselves: cut it into overlap-free
-        pieces (islands of their own, ``cut_edges`` naming the mesh edges cut), or fail it with
-        ``OverlapError``
     face_groups : (m,) int array, optional, a group per face (the polygon each triangle comes
-        from): a cut never separates faces of one group (with seams="auto", no seam is added
-        inside a group either)
-    stretch : float S >= sqrt(C), optional: every face's singular values within [1/S, S]
-        (section 6.3, eqs. 6.3-6.4), certified from the final UVs (``min_singular``,
-        ``max_singular``): relative to the island's own scale (UV area = 3D area) with a free
-        boundary and fewer than two pins, else relative to the 3D geometry (pins or the fixed
-        boundary give the scale). Every method; with bound="auto" the smallest C within S is
-        sought (free boundary only). With seams="auto": every chart within S; default 2 there
-    boundary : "free" | "circle" | "rectangle" | "pinned", where each island's outer boundary
-        goes (Lipman 2012, section 5; ``boundary.boundary_targets``): free (the default), on a
-        circle or a rectangle of the island's 3D area (rectangle corners at the four boundary
-        vertices nearest a right angle, or at four pinned ones), or on the polygon of its pinned
-        boundary vertices (at least 3); holes stay holes (filled for the solve with triangles held
-        orientation-preserving: a bijection by Theorem 5.1). Needs a numeric bound; frames come
-        from a Tutte embedding ("auto" or "harmonic"). Each such island reports ``bijective``.
+        from): an overlap cut never separates faces of one group
     progress : callable(fraction, message), optional
     cancel : object with ``is_set()``, optional
+    options : bd_uv.UnwrapOptions, optional (default: the defaults)
+    **values : UnwrapOptions fields replacing those of ``options`` (``bound=3.0``, ...). How each
+        works: ``method`` "biharmonic" (eq. 6.1) with a free boundary is held at two boundary
+        vertices of the start map; "stretch-l1" (section 6.1) holds the island's scale (the
+        area-weighted mean of Re(w alpha) = 1 on the unit-area island, one anchor vertex;
+        ``IslandProblem.hold_scale``) unless two or more pins or a fixed boundary give it.
+        ``stretch`` is relative to the island's own scale (UV area = 3D area) with a free
+        boundary and fewer than two pins, else to the 3D geometry, certified from the final UVs
+        (``min_singular``, ``max_singular``); with bound="auto" the smallest C within S is
+        sought. ``boundary`` other than "free" fixes the outer boundary on a circle or a
+        rectangle of the island's 3D area (corners at the four boundary vertices nearest a right
+        angle, or at four pinned ones), or on the polygon of its pinned boundary vertices (at
+        least 3); holes stay holes (Theorem 5.1); each such island reports ``bijective``.
 
     Returns
     -------
@@ -93,61 +71,36 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, method="lscm", bound
 
     Raises
     ------
-    InvalidMeshError for a mesh that cannot be read, ValueError for bad options,
-    CancelledError when cancelled.
+    InvalidMeshError for a mesh that cannot be read, OptionError (a ValueError) for bad
+    options, CancelledError when cancelled.
     """
-    if isinstance(seams, str):
-        if seams != "auto":
-            raise OptionError(f"seams must be vertex pairs or 'auto', got {seams!r}")
-        if boundary != "free":
-            raise OptionError("seams='auto' makes free-boundary charts; boundary= needs "
-                             "boundary='free' there")
-        if bound == "auto":
-            raise OptionError("seams='auto' needs a numeric bound C")
-        if (pin_corners is not None and len(pin_corners)) or frames == "input-uv":
-            raise OptionError("seams='auto' does not take pins or the current UVs: call "
-                             "bd_uv.seams.unwrap_auto for material groups, or mark seams")
-        from ..seams import unwrap_auto  # the seams package builds on this module
-        # face_groups (polygons) are kept whole by the seams added too: unwrap_auto's polygons.
-        return unwrap_auto(V, F, bound=bound, stretch=2.0 if stretch is None else stretch,
-                           method=method, frames=frames, cone=cone, progress=progress,
-                           cancel=cancel, polygons=face_groups)[0]
-    if boundary not in BOUNDARIES:
-        raise OptionError(f"boundary must be one of {BOUNDARIES}, got {boundary!r}")
-    if boundary != "free" and bound == "auto":
-        raise OptionError(f"boundary={boundary!r} needs a numeric bound C (bound='auto' minimises C "
-                         "with a free boundary only)")
-    if boundary != "free" and frames not in ("auto", "harmonic"):
-        raise OptionError(f"boundary={boundary!r} takes its frames from a Tutte embedding onto the "
-                         f"boundary (frames 'auto' or 'harmonic'), got frames={frames!r}")
-    if stretch is not None:
-        check_stretch(1.0 if bound == "auto" else float(bound), stretch)
+    opts = unwrap_options(options, **values)
+    if isinstance(seams, str) or opts.add_seams:
+        raise OptionError("add_seams", "seams must be vertex pairs here: adding seams "
+                          "(seams='auto') is bd_uv.unwrap's (the seam search, bd_uv.seams, "
+                          "builds on this function)")
     t0 = time.perf_counter()
-    _check_options(method, frames, bound, bound_limit, cone)
-    if overlap not in ("cut", "fail"):
-        raise OptionError(f"overlap must be 'cut' or 'fail', got {overlap!r}")
     V, F = check_arrays(V, F)
     m = len(F)
-    if frames == "input-uv":
+    if opts.frames == "input-uv":
         if initial_uv is None:
-            raise OptionError("frames='input-uv' needs initial_uv (m,3,2)")
+            raise OptionError("frames", "frames='input-uv' needs initial_uv (m,3,2)")
         initial_uv = np.asarray(initial_uv, dtype=np.float64).reshape(m, 3, 2)
-    pins = _pins(pin_corners, pin_uv, m)
-    return unwrap_islands(V, F, split_islands(V, F, seams), pins, method, bound, frames,
-                          initial_uv, raise_bound, bound_limit, cone, time_budget, overlap,
-                          face_groups, stretch, boundary, progress, cancel, t0=t0)
+    pins = pin_arrays(pin_corners, pin_uv, m)
+    return unwrap_islands(V, F, split_islands(V, F, seams), pins, opts, initial_uv=initial_uv,
+                          face_groups=face_groups, progress=progress, cancel=cancel, t0=t0)
 
 
-def unwrap_islands(V, F, isl, pins, method, bound, frames, initial_uv, raise_bound, bound_limit,
-                   cone, time_budget, overlap, face_groups, stretch, boundary, progress, cancel,
-                   conformal=None, t0=None):
+def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, progress=None,
+                   cancel=None, conformal=None, t0=None):
     """``unwrap`` on islands already found (``mesh.islands``, or charts of a validated mesh).
 
     Parameters
     ----------
     V, F : checked arrays; isl : list of mesh.Island numbered 0.. by their smallest face
-    pins : (corners (p,), uv (p,2)) as ``_pins`` returns; the other options as ``unwrap``'s,
-        already checked
+    pins : (corners (p,), uv (p,2)) as ``pin_arrays`` returns
+    options : UnwrapOptions (``add_seams`` False); initial_uv, face_groups, progress, cancel as
+        ``unwrap``'s, already checked
     conformal : dict island index -> (nv,) complex128, optional: the island's free-boundary
         conformal map as ``batched.conformal_islands`` would solve it (unit-area normalisation,
         ``_far_pairs`` pinned at 0 and 1), already known (the seam search's chart maps); only
@@ -167,8 +120,9 @@ def unwrap_islands(V, F, isl, pins, method, bound, frames, initial_uv, raise_bou
     face_island = np.empty(m, dtype=np.int64)
     for island in isl:
         face_island[island.faces] = island.index
-    batch, starts = ({}, {}) if boundary != "free" or stretch is not None else \
-        _batched(V, isl, pins, face_island, method, bound, frames, progress, cancel, conformal)
+    o = options
+    batch, starts = ({}, {}) if o.boundary != "free" or o.stretch is not None else \
+        _batched(V, isl, pins, face_island, o, progress, cancel, conformal)
     for island in isl:
         share = len(island.faces) / total
 
@@ -184,9 +138,8 @@ def unwrap_islands(V, F, isl, pins, method, bound, frames, initial_uv, raise_bou
                 res = batch[island.index]
                 report(1.0, "the conformal map fits the bound")
             else:
-                res = _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_bound,
-                                    bound_limit, cone, time_budget, report, cancel,
-                                    starts.get(island.index), boundary, stretch)
+                res = _solve_island(island, V, pins, o, initial_uv, report, cancel,
+                                    starts.get(island.index))
         except Cancelled:
             raise CancelledError("unwrap cancelled; nothing was changed") from None
         if res.status == "certified":
@@ -195,33 +148,27 @@ def unwrap_islands(V, F, isl, pins, method, bound, frames, initial_uv, raise_bou
         done += share
     pinned = set(face_island[pins[0] // 3].tolist())
     results, face_island, corner_uv = overlap_certificate(V, F, results, face_island, corner_uv,
-                                                           pinned, overlap == "cut", face_groups)
+                                                           pinned, o.overlap == "cut", face_groups)
     if progress is not None:
         progress(1.0, "done")
-    return UnwrapResult(corner_uv, face_island, results, time.perf_counter() - t0, method)
+    return UnwrapResult(corner_uv, face_island, results, time.perf_counter() - t0, o.method)
 
 
-def _check_options(method, frames, bound, bound_limit, cone):
-    if method not in METHODS:
-        raise OptionError(f"method must be one of {METHODS}, got {method!r}")
-    if frames not in FRAMES:
-        raise OptionError(f"frames must be one of {FRAMES}, got {frames!r}")
-    if bound != "auto" and not (isinstance(bound, (int, float)) and 1.0 <= bound < np.inf):
-        raise OptionError(f"bound must be a finite number >= 1 or 'auto', got {bound!r}")
-    if not 1.0 <= bound_limit < np.inf:
-        raise OptionError(f"bound_limit must be a finite number >= 1, got {bound_limit!r}")
-    if cone not in ("soc", "linf"):
-        raise OptionError(f"cone must be 'soc' or 'linf', got {cone!r}")
+def pin_arrays(pin_corners, pin_uv, m):
+    """Validated pins as (corners (p,), uv (p,2)).
 
-
-def _pins(pin_corners, pin_uv, m):
-    """Validated pins as (corners (p,), uv (p,2))."""
+    Parameters
+    ----------
+    pin_corners : (p,) int array or None, flat corner indices into an (m,3) F
+    pin_uv : (p,2) float array or None
+    m : int, the number of faces
+    """
     if pin_corners is None or len(pin_corners) == 0:
         return np.zeros(0, np.int64), np.zeros((0, 2))
     c = np.asarray(pin_corners, dtype=np.int64).ravel()
     uv = np.asarray(pin_uv, dtype=np.float64).reshape(-1, 2)
     if len(c) != len(uv):
-        raise OptionError(f"{len(c)} pinned corners but {len(uv)} pin UVs")
+        raise ValueError(f"{len(c)} pinned corners but {len(uv)} pin UVs")
     if np.any((c < 0) | (c >= 3 * m)):
         raise InvalidMeshError("pinned corner indices must lie in 0..3m-1 (face * 3 + corner)")
     if not np.all(np.isfinite(uv)):
@@ -236,11 +183,12 @@ def _failed(island, error, t0, bound, frames_name="", flags=(), timings=None):
                         timings=timings or {})
 
 
-def _batched(V, isl, pins, face_island, method, bound, frames, progress, cancel, conformal=None):
+def _batched(V, isl, pins, face_island, options, progress, cancel, conformal=None):
     """Solve every island that can go through ``batched.conformal_islands`` at once: valid,
     unpinned, BD-LSCM at a fixed bound from the conformal start. Returns (results by island index,
     conformal starts of the islands that did not fit)."""
-    if method != "lscm" or bound == "auto" or frames not in ("auto", "conformal"):
+    bound = options.bound
+    if options.method != "lscm" or bound == "auto" or options.frames not in ("auto", "conformal"):
         return {}, {}
     pinned = np.zeros(len(isl), dtype=bool)
     if len(pins[0]):
@@ -256,16 +204,17 @@ def _batched(V, isl, pins, face_island, method, bound, frames, progress, cancel,
     return conformal_islands(V, todo, float(bound), conformal)
 
 
-def _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_bound, bound_limit,
-                  cone, time_budget, report, cancel, lscm=None, boundary="free", stretch=None):
+def _solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=None):
     t0 = time.perf_counter()
+    o = options
+    method, bound, boundary, stretch = o.method, o.bound, o.boundary, o.stretch
     if island.error is not None:
         res = _failed(island, island.error, t0, bound)
         return res if boundary == "free" else with_premises(res, island)
     if boundary != "free":
         try:
             prob, u, C, flags = fixed_boundary_island(island, V, pins, boundary, method, bound,
-                                                      raise_bound, bound_limit, cone, cancel,
+                                                      o.raise_bound, o.bound_limit, o.cone, cancel,
                                                       report, stretch)
         except IslandError as exc:
             exc.island = island.index
@@ -275,8 +224,8 @@ def _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_boun
             return with_premises(_failed(island, err, t0, bound, FRAMES_NAME), island)
         return with_premises(_finish(prob, u, C, bound, FRAMES_NAME, flags, t0, stretch), island)
     try:
-        prob = IslandProblem(island, V, pins, method, cone, cancel)
-        start = start_map(prob, frames, initial_uv, report, lscm=lscm)
+        prob = IslandProblem(island, V, pins, method, o.cone, cancel)
+        start = start_map(prob, o.frames, initial_uv, report, lscm=lscm)
     except IslandError as exc:
         exc.island = island.index
         return _failed(island, exc, t0, bound)
@@ -286,17 +235,17 @@ def _solve_island(island, V, pins, method, bound, frames, initial_uv, raise_boun
     flags = []
     try:
         if bound == "auto" and stretch is not None:
-            u, C, name = stretch_search.minimise_stretch(prob, start, stretch, time_budget,
+            u, C, name = stretch_search.minimise_stretch(prob, start, stretch, o.time_budget,
                                                          flags, report, t0)
         elif bound == "auto":
-            u, C, name = strategies.minimise(prob, start, bound_limit, time_budget, flags, report,
-                                             t0)
+            u, C, name = strategies.minimise(prob, start, o.bound_limit, o.time_budget, flags,
+                                             report, t0)
         elif stretch is not None:
             u, C, name = stretch_search.bounded_stretch(prob, start, float(bound), stretch,
                                                         report, flags)
         else:
-            u, C, name = strategies.bounded(prob, start, float(bound), raise_bound, bound_limit,
-                                            flags, report)
+            u, C, name = strategies.bounded(prob, start, float(bound), o.raise_bound,
+                                            o.bound_limit, flags, report)
         if method == "arap" and u is not None:
             u = strategies.arap(prob, u, C, report, stretch)
     except IslandError as exc:

@@ -22,7 +22,7 @@ from unwrap_contract import (DATA, assert_unchanged, distortion_and_flips, read_
                              unwrap_checked)
 
 # The module that defines unwrap() (bd_uv/unwrapping/unwrap.py): found from the function, not by name.
-PIPELINE = sys.modules[bd_uv.unwrap.__module__]
+PIPELINE = sys.modules[bd_uv.unwrapping.unwrap.__module__]
 
 
 # ---------------------------------------------------------------------------------------------
@@ -494,7 +494,8 @@ def test_bad_options_raise_value_error_naming_the_option(option, value):
     before = snapshot(V, F)
     with pytest.raises(ValueError) as info:
         bd_uv.unwrap(V, F, **{option: value})
-    assert isinstance(info.value, bd_uv.OptionError)   # typed (BDError) and a ValueError
+    # issue 20: a typed error (a BDError, still a ValueError) that names the option
+    assert isinstance(info.value, bd_uv.OptionError) and info.value.option == option
     assert_message(str(info.value), option)
     assert_unchanged(before, V, F)
 

@@ -113,7 +113,7 @@ def test_folder_good_files_written_bad_ones_reported_exit_1(folder, tmp_path, ca
     assert lines[-1].startswith("4 file(s), 4 mesh(es): 2 certified, 0 partial, 2 failed")
 
 
-_REAL_UNWRAP_FILE = batch._unwrap_file
+_REAL_UNWRAP_FILE = batch.files._unwrap_file
 
 
 def _crashing(task, options, seams_mode):
@@ -124,7 +124,7 @@ def _crashing(task, options, seams_mode):
 
 def test_a_worker_that_dies_takes_only_its_own_file(folder, tmp_path, monkeypatch):
     """A crash (here os._exit in the worker) breaks the pool; the rest are run again."""
-    monkeypatch.setattr(batch, "_unwrap_file", _crashing)
+    monkeypatch.setattr(batch.files, "_unwrap_file", _crashing)
     src = tmp_path / "few"
     src.mkdir()
     for name in ("a.off", "crash.off", "b.off"):
@@ -225,7 +225,7 @@ def _slow_or_greedy(task, options, seams_mode):
 def test_file_timeout_and_memory_limit_fail_only_their_file(tmp_path, monkeypatch):
     """Each file runs in a child the worker watches: past --file-timeout, or above
     --memory-limit of resident memory, the child is killed and only that file fails."""
-    monkeypatch.setattr(batch, "_unwrap_file", _slow_or_greedy)
+    monkeypatch.setattr(batch.files, "_unwrap_file", _slow_or_greedy)
     src = tmp_path / "few"
     src.mkdir()
     for name in ("a.off", "slow.off", "greedy.off"):

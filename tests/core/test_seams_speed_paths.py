@@ -15,7 +15,8 @@ from bd_uv.seams import crossings
 from bd_uv.seams.edges import edge_table
 from bd_uv.seams.topology import charts
 from bd_uv.solvers import threads
-from bd_uv.unwrapping.unwrap import _pins, unwrap, unwrap_islands
+from bd_uv.options import UnwrapOptions
+from bd_uv.unwrapping.unwrap import pin_arrays, unwrap, unwrap_islands
 from helpers import reference_distortion
 from seams_helpers import face_singular_values, torus, uv_sphere
 
@@ -101,11 +102,8 @@ def _certify(V, F, res, C):
     return D
 
 
-# unwrap_islands' options after the islands: pins, method, bound, frames, initial_uv,
-# raise_bound, bound_limit, cone, time_budget, overlap, face_groups, stretch, boundary, progress,
-# cancel.
-OPTIONS = ("lscm", 2.0, "auto", None, False, 1000.0, "soc", None, "fail", None, None, "free",
-           None, None)
+# unwrap_islands' options after the islands and pins.
+OPTIONS = UnwrapOptions(method="lscm", bound=2.0, frames="auto", raise_bound=False, overlap="fail")
 
 
 def _torus_charts():
@@ -123,7 +121,7 @@ def _torus_charts():
 def test_known_maps_certify_what_unwrap_certifies():
     V, F, E, cut, isl, cm = _torus_charts()
     known = {j: cm.u[cm.voff[j]:cm.voff[j + 1]] for j in range(len(isl))}
-    fast = unwrap_islands(V, F, isl, _pins(None, None, len(F)), *OPTIONS, conformal=known)
+    fast = unwrap_islands(V, F, isl, pin_arrays(None, None, len(F)), OPTIONS, conformal=known)
     ref = unwrap(V, F, seams=E.ends[cut], bound=2.0, raise_bound=False, overlap="fail")
     assert fast.certified and ref.certified
     Df, Dr = _certify(V, F, fast, 2.0), _certify(V, F, ref, 2.0)
@@ -135,7 +133,7 @@ def test_a_wrong_known_map_is_not_trusted():
     V, F, E, cut, isl, cm = _torus_charts()
     # Mirrored maps: every face flipped. They must be replaced, never written as they are.
     known = {j: np.conj(cm.u[cm.voff[j]:cm.voff[j + 1]]) for j in range(len(isl))}
-    res = unwrap_islands(V, F, isl, _pins(None, None, len(F)), *OPTIONS, conformal=known)
+    res = unwrap_islands(V, F, isl, pin_arrays(None, None, len(F)), OPTIONS, conformal=known)
     for r in res.islands:
         if r.status == "certified":
             _certify(V, F[r.faces], type("R", (), {"corner_uv": res.corner_uv[r.faces]}), 2.0)

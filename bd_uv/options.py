@@ -1,0 +1,168 @@
+"""``UnwrapOptions``: every option of an unwrap, defined, documented and checked in one place.
+
+The command line (``bd_uv.arguments``), the batch and its workers (pool or Dask: it pickles),
+``scripts/bd_uv_batch.py``, the Blender operator and ``bd_uv.unwrap`` itself build one and pass it
+down; the functions below ``unwrap`` take it, or only the fields they use. What belongs to one
+mesh (its seams as vertex pairs, pins, current UVs, polygons) and how a run reports (progress,
+cancel) are arguments of ``unwrap``, not options.
+"""
+import dataclasses
+import math
+from typing import Optional, Union
+
+from .boundary import SHAPES
+from .deform import METHODS
+from .errors import OptionError
+from .spaces import check_stretch
+
+FRAMES = ("auto", "harmonic", "conformal", "input-uv", "constant")
+CONES = ("soc", "linf")
+OVERLAPS = ("cut", "fail")
+BOUNDARIES = ("free",) + SHAPES
+# S when seams are added and no stretch is asked for: every chart's singular values in [1/2, 2].
+AUTO_SEAMS_STRETCH = 2.0
+
+
+@dataclasses.dataclass(frozen=True)
+class UnwrapOptions:
+    """How to unwrap (Lipman 2012): checked when made, so a wrong value never reaches a solve.
+
+    Attributes
+    ----------
+    add_seams : bool. False ("Marked"): cut along the given seams only, each island must be a
+        disk; True ("Add Where Needed", ``seams="auto"``): keep them and add seams where an
+        island cannot be certified as it is (``bd_uv.seams.unwrap_auto``: every chart a disk
+        within C and within ``stretch``). There C is never raised (a chart that cannot be
+        certified is cut further), so ``raise_bound`` and ``bound_limit`` do not apply, and the
+        search decides ``overlap`` per round (a chart overlapping itself is split; only the
+        last round cuts)
+    method : "lscm" | "arap" | "dirichlet" | "biharmonic" | "stretch-l1", the energy minimised in
+        F_C (section 6.1; see ``bd_uv.unwrapping.unwrap``)
+    bound : float >= 1 or "auto", C: every face's conformal distortion at most C (eq. 4.9);
+        "auto" minimises C (free boundary, given seams only)
+    frames : "auto" | "harmonic" | "conformal" | "input-uv" | "constant", the frames of F_C
+        (eq. 4.21): "input-uv" starts from the mesh's current UVs
+    raise_bound : bool, raise C (by a factor) when no map within C is found ...
+    bound_limit : float >= 1, ... up to this C
+    cone : "soc" (F_C, eq. 4.15) | "linf" (F_C^inf, eq. 4.22)
+    time_budget : float >= 0 seconds per island for ``bound="auto"``, or None for no limit
+    stretch : float S >= sqrt(C), or None: every face's singular values within [1/S, S]
+        (section 6.3); with ``add_seams`` every chart within S, any S >= 1, None meaning
+        ``AUTO_SEAMS_STRETCH``
+    boundary : "free" | "circle" | "rectangle" | "pinned", where each island's outer boundary
+        goes (section 5); not "free" needs a numeric bound, frames "auto" or "harmonic" and
+        no ``add_seams``
+    overlap : "cut" | "fail", an island whose UVs lie over themselves: cut into overlap-free
+        pieces, or failed
+
+    Raises
+    ------
+    OptionError (a BDError and a ValueError) naming the option, when made with a value out of
+    range or with options that cannot go together.
+    """
+    add_seams: bool = False
+    method: str = "lscm"
+    bound: Union[float, str] = 5.0
+    frames: str = "auto"
+    raise_bound: bool = True
+    bound_limit: float = 1000.0
+    cone: str = "soc"
+    time_budget: Optional[float] = None
+    stretch: Optional[float] = None
+    boundary: str = "free"
+    overlap: str = "cut"
+
+    def __post_init__(self):
+        if not isinstance(self.add_seams, bool):
+            raise OptionError("add_seams", f"add_seams must be True or False, got "
+                              f"{self.add_seams!r}")
+        _one_of("method", self.method, METHODS)
+        _one_of("frames", self.frames, FRAMES)
+        if self.bound != "auto" and not (_number(self.bound) and 1.0 <= self.bound < math.inf):
+            raise OptionError("bound", "bound must be a finite number >= 1 or 'auto', got "
+                              f"{self.bound!r}")
+        if not (_number(self.bound_limit) and 1.0 <= self.bound_limit < math.inf):
+            raise OptionError("bound_limit", "bound_limit must be a finite number >= 1, got "
+                              f"{self.bound_limit!r}")
+        if not isinstance(self.raise_bound, bool):
+            raise OptionError("raise_bound", f"raise_bound must be True or False, got "
+                              f"{self.raise_bound!r}")
+        _one_of("cone", self.cone, CONES)
+        if self.time_budget is not None and not (_number(self.time_budget)
+                                                 and 0.0 <= self.time_budget <= math.inf):
+            raise OptionError("time_budget", "time_budget must be a number of seconds >= 0 or "
+                              f"None, got {self.time_budget!r}")
+        _one_of("boundary", self.boundary, BOUNDARIES)
+        _one_of("overlap", self.overlap, OVERLAPS)
+        if self.boundary != "free" and self.bound == "auto":
+            raise OptionError("boundary", f"boundary={self.boundary!r} needs a numeric bound C "
+                              "(bound='auto' minimises C with a free boundary only)")
+        if self.boundary != "free" and self.frames not in ("auto", "harmonic"):
+            raise OptionError("boundary", f"boundary={self.boundary!r} takes its frames from a "
+                              "Tutte embedding onto the boundary (frames 'auto' or 'harmonic'), "
+                              f"got frames={self.frames!r}")
+        if self.add_seams:
+            auto = "add_seams (seams='auto')"
+            if self.boundary != "free":
+                raise OptionError("add_seams", f"{auto} makes free-boundary charts; boundary= "
+                                  "needs boundary='free' there")
+            if self.bound == "auto":
+                raise OptionError("add_seams", f"{auto} needs a numeric bound C")
+            if self.frames == "input-uv":
+                raise OptionError("add_seams", f"{auto} does not take pins or the current UVs: "
+                                  "call bd_uv.seams.unwrap_auto for material groups, or mark "
+                                  "seams")
+            # The seam search's own S: any S >= 1 (every chart within S and within C).
+            if not (_number(self.seams_stretch) and 1.0 <= self.seams_stretch < math.inf):
+                raise OptionError("stretch", "stretch must be a finite number >= 1, got "
+                                  f"{self.stretch!r}")
+        elif self.stretch is not None:
+            try:
+                check_stretch(1.0 if self.bound == "auto" else float(self.bound), self.stretch)
+            except ValueError as exc:
+                raise OptionError("stretch", str(exc)) from None
+
+    @property
+    def seams_stretch(self):
+        """S as the seam search (``add_seams``) uses it: ``stretch``, or ``AUTO_SEAMS_STRETCH``
+        when None."""
+        return AUTO_SEAMS_STRETCH if self.stretch is None else self.stretch
+
+    def replace(self, **changes):
+        """A copy with ``changes`` (checked again)."""
+        return dataclasses.replace(self, **changes)
+
+    def as_dict(self):
+        """The options as a JSON-able dict (reports, the batch journal's options hash)."""
+        return dataclasses.asdict(self)
+
+
+OPTION_NAMES = tuple(f.name for f in dataclasses.fields(UnwrapOptions))
+
+
+def unwrap_options(options=None, **values):
+    """``options`` (an UnwrapOptions, default: the defaults) with ``values`` replacing its fields.
+
+    Raises
+    ------
+    OptionError for a name that is no option, or a value out of range
+    """
+    unknown = sorted(set(values) - set(OPTION_NAMES))
+    if unknown:
+        raise OptionError(unknown[0], f"{unknown[0]!r} is not an unwrap option; the options are "
+                          f"{', '.join(OPTION_NAMES)}")
+    if options is None:
+        return UnwrapOptions(**values)
+    if not isinstance(options, UnwrapOptions):
+        raise OptionError("options", f"options must be an UnwrapOptions, got "
+                          f"{type(options).__name__}")
+    return options.replace(**values) if values else options
+
+
+def _one_of(name, value, allowed):
+    if value not in allowed:
+        raise OptionError(name, f"{name} must be one of {allowed}, got {value!r}")
+
+
+def _number(x):
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and not math.isnan(x)

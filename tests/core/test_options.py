@@ -1,0 +1,118 @@
+"""UnwrapOptions: the one place an unwrap option is defined and checked (issue 20, item 5)."""
+import dataclasses
+import json
+import pickle
+
+import numpy as np
+import pytest
+
+import bd_uv
+from bd_uv import OptionError, UnwrapOptions
+from bd_uv.arguments import unwrap_options_of
+from bd_uv.batch import JobOptions
+from bd_uv.cli import build_parser
+from bd_uv.scheduling import options_sha256
+from helpers import reference_distortion
+
+
+def bumpy_grid(n=6):
+    xs, ys = np.meshgrid(np.linspace(0, 1, n + 1), np.linspace(0, 1, n + 1))
+    x, y = xs.ravel(), ys.ravel()
+    V = np.stack([x, y, 0.4 * np.sin(3 * x) * np.cos(2 * y)], axis=1)
+    i, j = np.meshgrid(np.arange(n), np.arange(n))
+    a = (j * (n + 1) + i).ravel()
+    b, c, d = a + 1, a + n + 2, a + n + 1
+    F = np.stack([np.stack([a, b, c], 1), np.stack([a, c, d], 1)], 1).reshape(-1, 3)
+    return V, F.astype(np.int64)
+
+
+def test_defaults_are_todays():
+    o = UnwrapOptions()
+    assert (o.add_seams, o.method, o.bound, o.frames, o.raise_bound, o.bound_limit, o.cone,
+            o.time_budget, o.stretch, o.boundary, o.overlap) == \
+        (False, "lscm", 5.0, "auto", True, 1000.0, "soc", None, None, "free", "cut")
+    assert o.seams_stretch == 2.0 and UnwrapOptions(stretch=3.0).seams_stretch == 3.0
+
+
+@pytest.mark.parametrize("values, option", [
+    (dict(method="lsqm"), "method"),
+    (dict(bound=0.5), "bound"),
+    (dict(bound=float("nan")), "bound"),
+    (dict(bound="minimise"), "bound"),
+    (dict(frames="uv"), "frames"),
+    (dict(raise_bound="yes"), "raise_bound"),
+    (dict(bound_limit=float("inf")), "bound_limit"),
+    (dict(cone="psd"), "cone"),
+    (dict(time_budget=-1.0), "time_budget"),
+    (dict(stretch=0.5), "stretch"),
+    (dict(bound=3.0, stretch=1.2), "stretch"),          # S^2 < C
+    (dict(boundary="square"), "boundary"),
+    (dict(overlap="keep"), "overlap"),
+    (dict(boundary="circle", bound="auto"), "boundary"),
+    (dict(boundary="circle", frames="conformal"), "boundary"),
+    (dict(add_seams=True, bound="auto"), "add_seams"),
+    (dict(add_seams=True, boundary="circle"), "add_seams"),
+    (dict(add_seams=True, frames="input-uv"), "add_seams"),
+    (dict(add_seams=True, stretch=0.5), "stretch"),
+    (dict(add_seams="auto"), "add_seams"),
+])
+def test_a_bad_option_is_named(values, option):
+    with pytest.raises(OptionError) as info:
+        UnwrapOptions(**values)
+    assert info.value.option == option
+    assert isinstance(info.value, bd_uv.BDError) and isinstance(info.value, ValueError)
+    assert option.split("_")[0] in str(info.value)
+
+
+def test_frozen_and_pickled_as_they_are():
+    o = UnwrapOptions(method="arap", bound=3.0, stretch=2.0)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        o.bound = 4.0
+    assert pickle.loads(pickle.dumps(o)) == o
+    job = JobOptions(o, pack=True, cut=True, margin=0.01)
+    assert pickle.loads(pickle.dumps(job)) == job
+    assert json.loads(json.dumps(job.as_dict()))["bound"] == 3.0
+    with pytest.raises(OptionError):
+        o.replace(bound=5.0)          # replace checks again: S = 2 < sqrt(5)
+    assert UnwrapOptions(add_seams=True).seams_stretch == 2.0   # the seam search's S: any >= 1
+
+
+def test_keywords_and_the_object_unwrap_alike():
+    V, F = bumpy_grid()
+    by_keywords = bd_uv.unwrap(V, F, bound=1.5, method="arap")
+    by_object = bd_uv.unwrap(V, F, options=UnwrapOptions(bound=1.5, method="arap"))
+    np.testing.assert_array_equal(by_keywords.corner_uv, by_object.corner_uv)
+    D, flipped = reference_distortion(V, F, by_object.corner_uv)
+    assert not flipped.any() and D.max() <= by_object.islands[0].bound_certified * (1 + 1e-9)
+    # keywords replace the object's fields
+    over = bd_uv.unwrap(V, F, options=UnwrapOptions(bound=4.0, method="arap"), bound=1.5)
+    np.testing.assert_array_equal(over.corner_uv, by_object.corner_uv)
+    with pytest.raises(OptionError, match="'bund' is not an unwrap option"):
+        bd_uv.unwrap(V, F, bund=2.0)
+
+
+def test_the_command_line_defaults_are_the_options_defaults():
+    for command in (["unwrap", "x.obj", "-o", "y.obj"], ["batch", "x", "-o", "y"]):
+        assert unwrap_options_of(build_parser().parse_args(command)) == UnwrapOptions()
+    args = build_parser().parse_args(["unwrap", "x.obj", "-o", "y.obj", "--seams", "auto",
+                                      "--bound", "2", "--no-raise", "--overlap", "fail"])
+    assert unwrap_options_of(args) == UnwrapOptions(add_seams=True, bound=2.0, raise_bound=False,
+                                                    overlap="fail")
+    args = build_parser().parse_args(["batch", "x", "-o", "y", "--bound", "auto"])
+    assert unwrap_options_of(args).time_budget == 120.0     # the command line's budget
+
+
+def test_the_journal_hash_follows_the_options():
+    a = JobOptions(UnwrapOptions(bound=3.0), pack=True, cut=True)
+    assert options_sha256(a, None) == options_sha256(pickle.loads(pickle.dumps(a)), None)
+    assert options_sha256(a, None) != options_sha256(
+        JobOptions(UnwrapOptions(bound=3.5), pack=True, cut=True), None)
+    assert options_sha256(a, None) != options_sha256(a, "auto")
+
+
+def test_job_options_of_a_dict_keeps_the_old_meaning():
+    """A dict of unwrap keywords (no layout keys) neither packs nor cuts in the layout; ``cut``
+    decides ``overlap``."""
+    assert JobOptions.of({"bound": 3.0}) == JobOptions(UnwrapOptions(bound=3.0))
+    assert JobOptions.of({"bound": 3.0, "cut": False, "pack": True}) == JobOptions(
+        UnwrapOptions(bound=3.0, overlap="fail"), pack=True, cut=False)
