@@ -237,6 +237,9 @@ FOUND = [
          opts=["--stretch", "3", "--bound-limit", "nan"]),
     dict(input="closed tetra.obj", output="new", report=None, png=None, opts=["--stretch", "nan"]),
     dict(input="closed tetra.obj", output="new", report=None, png=None, opts=["--stretch", "1.5"]),
+    # --bound 1 with a stretch bound: ValueError from the projection iterations (need C > 1)
+    dict(input="nan vertex.obj", output="new", report=None, png=None,
+         opts=["--bound", "1", "--stretch", "1.5"]),
     # an OBJ with no certified island written at -o (exit 1): now nothing is written
     dict(input="closed tetra.obj", output="new", report=None, png=None, opts=[]),
     dict(input="nan vertex.obj", output="existing file", report="report.json", png="pic.png",
