@@ -13,6 +13,9 @@ ROOT_TRIES = 6
 # exact, and shortest-path ties and the choice between equally short loop systems fall the same
 # way (by index) every time. Each weight moves by at most half a quantum (6e-5 of that length).
 QUANTUM = 2.0 ** -10
+# Quanta still straddle a rounding boundary here and there, so sums over many edges (a root's
+# distance, a loop system's length) can differ by a few quanta: within this share they tie.
+TIE = 1e-3
 
 
 def cut_graph(tris, nv, weight):
@@ -73,9 +76,10 @@ def cut_graph(tris, nv, weight):
     G = sp.csr_matrix(sp.coo_array((w, (ends[:, 0], ends[:, 1])), shape=(N, N)))
     far = dijkstra(G, directed=False, indices=0)
     for _ in range(ROOT_TRIES):
-        r = int(np.argmax(far))
+        # The first of the farthest vertices, up to TIE (not a rounding-level winner) ...
+        r = int(np.flatnonzero(far >= far.max() * (1.0 - TIE))[0])
         trial = _loops_from(r, uniq, ends, inv, w, all_tris, N, nv, n_caps)
-        if trial[1] < best[1]:
+        if trial[1] < best[1] * (1.0 - TIE):     # ... and only a clearly shorter system wins
             best = trial
         far = np.minimum(far, dijkstra(G, directed=False, indices=r))
     return best[0]

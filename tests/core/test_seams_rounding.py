@@ -5,7 +5,8 @@ Root cause: a torus's cut graph (``seams.cut_graph``) runs shortest paths over e
 on a symmetric mesh many paths, roots and loop systems are equally short; float32 rounding decided
 those ties, and one tie-break gave a cut whose conformal map broke S (max stretch 2.55) where the
 other passed (1.81). The cut graph now counts weights in whole quanta, so rounding noise leaves
-equal lengths equal and the ties fall by index.
+equal lengths equal and the ties fall by index; sums that still differ by a few quanta (a quantum
+straddled here and there) tie within 0.1 % (the root, the loop system kept).
 """
 import numpy as np
 import pytest
@@ -26,13 +27,14 @@ def charts_and_seams(V, F):
     return info["charts"], {tuple(e) for e in np.sort(added, axis=1).tolist()}
 
 
-@pytest.mark.parametrize("shape", [(0.5, 48, 12), (0.5, 32, 12)], ids=["48x12", "32x12"])
+@pytest.mark.parametrize("shape", [(0.5, 48, 12), (0.5, 32, 12), (0.5, 64, 16)],
+                         ids=["48x12", "32x12", "64x16"])
 def test_float32_rounding_does_not_change_the_charts(shape):
     V, F = torus(*shape)
     ref = charts_and_seams(V, F)
     stored32 = V.astype(np.float32).astype(np.float64)
     assert not np.array_equal(stored32, V)
-    variants = [stored32]
+    variants = [stored32, np.round(V, 6)]   # float32, and an OBJ written with 6 decimals
     for seed in (0, 1):                    # relative noise at float32's rounding level
         rng = np.random.default_rng(seed)
         variants.append(V * (1.0 + 6e-8 * rng.standard_normal(V.shape)))
