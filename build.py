@@ -61,17 +61,31 @@ REQUIREMENTS = ROOT / "requirements.txt"
 BUNDLED = ("scipy", "clarabel", "cffi", "pycparser", "trimesh", "shapely", "qdldl")
 # Provided by Blender itself: never bundled, and no file of it may appear in a zip.
 PROVIDED_BY_BLENDER = ("numpy",)
-# The numpy versions Blender ships per Python: 1.24.3 (4.2) to 1.26.4 (5.0) with Python 3.11, 2.3.4
-# with Python 3.13 (5.1; bpy 5.1.2 asks for numpy>=2.2,<3). A bundled wheel's numpy requirement must
-# accept every one of them.
-BLENDER_NUMPY = {"3.11": ("1.24.3", "1.26.4"), "3.13": ("2.3.4",)}
+README = ROOT / "README.md"
+# The table of the Blender versions we claim, their Python and the numpy they ship, in README.md:
+# "| Blender | Python | numpy |" rows such as "| 5.2 LTS | 3.13 | 2.5.5 |".
+BLENDER_ROW = re.compile(r"^\|\s*(\d+\.\d+[^|]*?)\s*\|\s*(3\.\d+)\s*\|\s*([\d., ]+?)\s*\|\s*$",
+                        re.MULTILINE)
+
+
+def blender_numpy(readme: Path = README) -> dict[str, tuple[str, ...]]:
+    """``{python: numpy versions}`` of every Blender version README.md's table lists: a bundled
+    wheel's numpy requirement must accept every one of them (a scipy whose range stops below
+    Blender's numpy warns "A NumPy version >=... and <... is required", and breaks on the next)."""
+    out: dict[str, list[str]] = {}
+    for _, python, numpys in BLENDER_ROW.findall(readme.read_text(encoding="utf-8")):
+        out.setdefault(python, []).extend(v.strip() for v in numpys.split(",") if v.strip())
+    return {p: tuple(dict.fromkeys(v)) for p, v in out.items()}
+
+
+BLENDER_NUMPY = blender_numpy()
 
 PYTHONS = ("3.11", "3.13")
 # Blender versions per Python: (blender_version_min, blender_version_max or None), and the zip name.
 BLENDER_RANGE = {"3.11": ("4.2.0", "5.1.0"), "3.13": ("5.1.0", None)}
 ZIP_NAME = {"3.11": "{id}-{version}-{platform}.zip", "3.13": "{id}-{version}-py313-{platform}.zip"}
 # pip --platform tags per Blender platform. Blender itself ignores the glibc / macOS version in a
-# tag; scipy 1.15.3 needs macOS 12 on both Mac platforms.
+# tag; scipy 1.15.3 (cp311) needs macOS 12 on both Mac platforms.
 PLATFORM_TAGS = {
     "linux-x64": ("manylinux_2_28_x86_64", "manylinux_2_17_x86_64", "manylinux2014_x86_64"),
     "windows-x64": ("win_amd64",),
@@ -219,13 +233,18 @@ class Wheel:
         return msg.get_all("Requires-Dist") or []
 
 
-def read_pins(path: Path = REQUIREMENTS) -> dict[str, str]:
-    """``{normalized name: version}`` of every ``name==version`` line of a requirements file."""
+def read_pins(path: Path = REQUIREMENTS, python: str = PYTHONS[0]) -> dict[str, str]:
+    """``{normalized name: version}`` of every ``name==version`` line of a requirements file whose
+    environment marker (``; python_version >= "3.13"``) holds for ``python``: scipy is pinned per
+    Python, so that each Blender gets a scipy whose numpy range includes its numpy."""
+    from pip._vendor.packaging.markers import Marker
+
     pins = {}
     for line in path.read_text().splitlines():
         line = line.split("#", 1)[0].strip()
-        m = re.fullmatch(r"([A-Za-z0-9][A-Za-z0-9._-]*)\s*==\s*([^\s;]+)", line)
-        if m:
+        m = re.fullmatch(r"([A-Za-z0-9][A-Za-z0-9._-]*)\s*==\s*([^\s;]+)\s*(?:;(.*))?", line)
+        if m and (m.group(3) is None or Marker(m.group(3)).evaluate(
+                {"python_version": python, "python_full_version": python + ".0"})):
             pins[normalize(m.group(1))] = m.group(2)
     return pins
 
@@ -471,11 +490,11 @@ class Built:
 
 def build(platforms: list[str], pythons: list[str], cache: Path, out: Path, offline: bool,
           max_mb: float, write_manifest: bool) -> list[Built]:
-    pins = bundled_pins(read_pins())
+    pins_of = {python: bundled_pins(read_pins(python=python)) for python in pythons}
     wheels: dict[tuple[str, str], list[Wheel]] = {}
     for platform in platforms:
         for python in pythons:
-            found = fetch_wheels(platform, python, pins, cache, offline)
+            found = fetch_wheels(platform, python, pins_of[python], cache, offline)
             if found is None:
                 continue
             problems = dependency_problems(found, platform, python)
@@ -519,7 +538,7 @@ def build(platforms: list[str], pythons: list[str], cache: Path, out: Path, offl
         if not zip_path.is_file():
             raise BuildError(f"the builder did not write {zip_path}")
         validate(zip_path)
-        problems = check_zip(zip_path, platform, python, pins, max_mb)
+        problems = check_zip(zip_path, platform, python, pins_of[python], max_mb)
         failures += [f"{zip_path.name}: {p}" for p in problems]
         results.append(Built(platform, python, zip_path, sorted(w.path.name for w in found)))
     stage_root = out / ".stage"

@@ -12,8 +12,9 @@ from .deform import DeformResult, deform
 from .errors import (BDError, CancelledError, ClosedIslandError, DegenerateFacesError,
                      DuplicateFacesError, InfeasibleError, InvalidMeshError, IslandError,
                      NonFiniteError, NonManifoldError, OptionError, OrientationError,
-                     SolverError, TopologyError)
+                     OverlapError, SolverError, TopologyError)
 from .improve import ImproveResult, equilateral_distortion, improve
+from .live import LiveFrame, LiveSession, SessionClosedError
 from .metrics import (certify, conformal_distortion, face_jacobians, flipped_faces,
                       mean_distortion, signed_uv_areas, singular_values)
 from .mesh import Island, islands

@@ -1,6 +1,8 @@
 """``bd_uv.unwrap``: the public entry point, above both ways of finding islands.
 
-With ``add_seams`` (``seams="auto"``) the seam search (``bd_uv.seams.unwrap_auto``) cuts the
+With ``seams_mode="needed"`` the mesh is repaired and only the islands that cannot be certified
+as they are get seams (``bd_uv.seams.needed.unwrap_needed``). With ``seams_mode="auto"``
+(``seams="auto"``) the seam search (``bd_uv.seams.unwrap_auto``) cuts the
 mesh into charts, which it certifies through ``bd_uv.unwrapping.unwrap``; otherwise the given
 seams go straight to ``bd_uv.unwrapping.unwrap``. Living here, above ``seams`` and
 ``unwrapping``, the choice needs no import from ``unwrapping`` back up to ``seams``.
@@ -8,6 +10,7 @@ seams go straight to ``bd_uv.unwrapping.unwrap``. Living here, above ``seams`` a
 from .errors import OptionError
 from .options import unwrap_options
 from .seams import unwrap_auto
+from .seams.needed import unwrap_needed
 from .unwrapping import unwrap as unwrap_given_seams
 
 
@@ -20,9 +23,11 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     V : (n,3) float array
     F : (m,3) int array
     seams : (s,2) int array, optional, vertex pairs of the edges to cut along (kept when seams
-        are added); or "auto", the same as ``add_seams=True`` with no given seams
+        are added); or "auto" / "needed", the same as ``seams_mode="auto"`` / ``"needed"`` with
+        no given seams
     pin_corners, pin_uv, initial_uv, progress, cancel : as ``bd_uv.unwrapping.unwrap``'s
-        (pins and ``initial_uv`` are refused with ``add_seams``: the charts are not known before)
+        (pins and ``initial_uv`` are refused where seams are added: the charts are not known
+        before)
     face_groups : (m,) int array, optional, the polygon each triangle comes from: no cut, and no
         seam added, goes through one
     options : bd_uv.UnwrapOptions, optional (default: the defaults)
@@ -39,18 +44,22 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     option, CancelledError when cancelled.
     """
     if isinstance(seams, str):
-        if seams != "auto":
-            raise OptionError("seams", f"seams must be vertex pairs or 'auto', got {seams!r}")
-        seams, values = None, {**values, "add_seams": True}
+        if seams not in ("auto", "needed"):
+            raise OptionError("seams", f"seams must be vertex pairs, 'auto' or 'needed', got "
+                              f"{seams!r}")
+        seams, values = None, {**values, "seams_mode": seams}
     opts = unwrap_options(options, **values)
-    if not opts.add_seams:
+    if opts.seams_mode == "marked":
         return unwrap_given_seams(V, F, seams, pin_corners, pin_uv, initial_uv=initial_uv,
                                   face_groups=face_groups, progress=progress, cancel=cancel,
                                   options=opts)
     if pin_corners is not None and len(pin_corners):
-        raise OptionError("add_seams", "add_seams (seams='auto') does not take pins or the "
-                          "current UVs: call bd_uv.seams.unwrap_auto for material groups, or "
-                          "mark seams")
+        raise OptionError("seams_mode", f"seams_mode={opts.seams_mode!r} does not take pins or "
+                          "the current UVs: call bd_uv.seams.unwrap_auto for material groups, "
+                          "or mark seams")
+    if opts.seams_mode == "needed":
+        return unwrap_needed(V, F, seams, polygons=face_groups, options=opts,
+                             progress=progress, cancel=cancel)
     # face_groups (polygons) are kept whole by the seams added too: unwrap_auto's polygons.
     return unwrap_auto(V, F, seams=seams, bound=opts.bound, stretch=opts.seams_stretch,
                        method=opts.method, frames=opts.frames, cone=opts.cone, progress=progress,

@@ -5,8 +5,8 @@ Below ``cli`` and ``batch`` (both build on it), so neither imports the other for
 """
 import argparse
 
-from .options import (AUTO_SEAMS_STRETCH, BOUNDARIES, CONES, FRAMES, METHODS, OVERLAPS,
-                      UnwrapOptions)
+from .options import (AUTO_SEAMS_STRETCH, BOUNDARIES, CONES, ENTRY_SEAMS_MODE, FRAMES, METHODS,
+                      OVERLAPS, UnwrapOptions)
 from .pack import MARGIN
 
 # Every default below is UnwrapOptions' own: changing one there changes it here.
@@ -43,7 +43,8 @@ def add_solver_options(p):
                         "conformal, input-uv (the file's UVs, eq. 4.21), constant (planar meshes)")
     p.add_argument("--bound-limit", type=float, default=DEFAULTS.bound_limit,
                    help="raise C up to this limit when infeasible "
-                        f"(default {DEFAULTS.bound_limit:g})")
+                        f"(default {DEFAULTS.bound_limit:g}; where seams are added, --seams "
+                        "needed or auto, C is never raised: such an island gets seams)")
     p.add_argument("--no-raise", action="store_true", help="fail instead of raising C")
     p.add_argument("--cone", choices=CONES, default=DEFAULTS.cone,
                    help="space: F_C with second-order cones (default) or F_C^inf (eq. 4.22)")
@@ -54,7 +55,9 @@ def add_solver_options(p):
                         "(UV area = 3D area; Lipman 2012, section 6.3), with every --method; with "
                         "--boundary circle|rectangle|pinned relative to the 3D geometry (the "
                         "target gives the scale); with --bound auto: the smallest C within S; "
-                        f"--seams auto: {AUTO_SEAMS_STRETCH:g} by default")
+                        f"--seams auto: {AUTO_SEAMS_STRETCH:g} by default; --seams needed (the "
+                        "default): only the charts it cuts, "
+                        f"{AUTO_SEAMS_STRETCH:g} by default")
     p.add_argument("--boundary", choices=BOUNDARIES, default=DEFAULTS.boundary,
                    help="each island's outer boundary: free (default), on a circle, on a rectangle "
                         "(corners at the four boundary vertices nearest a right angle, or four "
@@ -66,16 +69,23 @@ def unwrap_options_of(args):
     """The :class:`bd_uv.UnwrapOptions` of parsed options (``unwrap``, ``batch``, the Blender
     script, which has neither ``--seams`` nor ``--overlap``).
 
-    ``--seams auto`` adds seams, ``uv`` and ``none`` do not, no ``--seams`` keeps the default;
-    the time budget counts only with ``--bound auto``.
+    ``--seams needed`` (also the Blender script's) and ``auto`` add seams, ``uv``, ``none`` and
+    ``marked`` (the script's) do not; no ``--seams`` is ``ENTRY_SEAMS_MODE`` ("needed") unless
+    an option takes only the islands as they are (``--bound auto``, ``--frames input-uv``, a
+    fixed ``--boundary``: then "marked"); the time budget counts only with ``--bound auto``.
 
     Raises
     ------
     OptionError naming an option out of range, or options that cannot go together
     """
     seams = getattr(args, "seams", None)
+    as_they_are = args.bound == "auto" or args.frames == "input-uv" or args.boundary != "free"
+    if seams is None:
+        mode = "marked" if as_they_are else ENTRY_SEAMS_MODE
+    else:
+        mode = seams if seams in ("needed", "auto") else "marked"
     return UnwrapOptions(
-        add_seams=DEFAULTS.add_seams if seams is None else seams == "auto",
+        seams_mode=mode,
         method=args.method, bound=args.bound, frames=args.frames,
         raise_bound=not args.no_raise, bound_limit=args.bound_limit, cone=args.cone,
         time_budget=args.time_budget if args.bound == "auto" else None,
@@ -86,6 +96,29 @@ def unwrap_options_of(args):
 def solver_kwargs(args):
     """``unwrap_options_of(args)`` as keyword arguments of ``bd_uv.unwrap``."""
     return unwrap_options_of(args).as_dict()
+
+
+def add_scene_options(p):
+    """Where a scene's new UVs go (``unwrap`` and ``batch``)."""
+    p.add_argument("--uv-set", type=int, default=0, metavar="N",
+                   help="glTF: write the UVs to TEXCOORD_N (default 0; e.g. 1 for a lightmap "
+                        "beside the artist's UVs)")
+    p.add_argument("--uv-name", default="st", metavar="NAME",
+                   help="USD: write the UVs to primvars:NAME (default st)")
+
+
+def scene_option_misuse(args, paths):
+    """An error message when ``--uv-set`` or ``--uv-name`` is given but no input is of the
+    format it applies to (an option is never accepted and ignored), else None."""
+    low = [p.lower() for p in paths]
+    if args.uv_set != 0 and not any(p.endswith((".gltf", ".glb")) for p in low):
+        return "--uv-set applies to glTF files (.gltf, .glb) only"
+    if args.uv_name != "st" and not any(p.endswith((".usd", ".usda", ".usdc", ".usdz"))
+                                        for p in low):
+        return "--uv-name applies to USD files (.usd, .usda, .usdc, .usdz) only"
+    if args.uv_set < 0:
+        return f"--uv-set must be 0 or more, not {args.uv_set}"
+    return None
 
 
 def add_layout_options(p):

@@ -13,15 +13,21 @@ import time
 import numpy as np
 
 from .api import unwrap
-from .arguments import (add_layout_options, add_solver_options, bound_arg,  # noqa: F401
-                        layout_kwargs, solver_kwargs, unwrap_options_of)
+from .arguments import (add_layout_options, add_scene_options, add_solver_options,  # noqa: F401
+                        bound_arg, layout_kwargs, scene_option_misuse, solver_kwargs,
+                        unwrap_options_of)
 from .batch import add_batch_parser
+from .batch.jobs import JobOptions
+from .batch.report import item_line
+from .batch.scene_files import unwrap_scene_file
 from .errors import BDError, OptionError
 from .layout import stored_layout
 from .meshio import load_mesh, write_obj
 from .planar_cli import add_planar_parsers
+from .scenes import BLENDER_SUFFIXES, GLTF_SUFFIXES, SCENE_SUFFIXES, USD_SUFFIXES, read_scene
 from .scheduling.atomic import atomic_path
 from .seams import unwrap_auto
+from .seams.needed import AUTO_BOUND
 
 
 class ProgressBar:
@@ -59,8 +65,17 @@ def check_outputs(*paths):
 
 
 def run_unwrap(args):
-    options = unwrap_options_of(args)
+    misuse = scene_option_misuse(args, [args.input])
+    if misuse:
+        print(f"error: {misuse}", file=sys.stderr)
+        return 2
     check_outputs(args.output, args.report, args.png)
+    ext = os.path.splitext(args.input)[1].lower()
+    if ext in SCENE_SUFFIXES or ext in BLENDER_SUFFIXES:
+        if ext in BLENDER_SUFFIXES:
+            read_scene(args.input)     # raises with the Blender command that handles the file
+        return run_scene_unwrap(args)
+    options = unwrap_options_of(args)
     mesh = load_mesh(args.input)
     if args.seams == "uv" and mesh.corner_uv is None:
         print(f"error: {args.input} has no UVs, so --seams uv has nothing to cut along",
@@ -74,11 +89,13 @@ def run_unwrap(args):
             print(f"error: --frames input-uv needs UVs in {args.input}", file=sys.stderr)
             return 2
         initial_uv = mesh.corner_uv
-    if options.add_seams:
+    if options.seams_mode == "auto":
         res = auto_seams(mesh, seams, options)
     else:
         res = unwrap(mesh.V, mesh.F, seams=seams, initial_uv=initial_uv, progress=ProgressBar(),
                      options=options)
+    if options.seams_mode == "needed":
+        _print_needed(res, options, args.output)
     layout = stored_layout(mesh.V, mesh.F, res, **layout_kwargs(args))
     islands = layout.island_entries(res)
     report = {"input": os.path.abspath(args.input), **res.report(), "islands": islands,
@@ -115,6 +132,34 @@ def run_unwrap(args):
     return 0 if not failed else 1
 
 
+def run_scene_unwrap(args):
+    """``unwrap`` of a glTF or USD scene: every mesh, the scene written whole to ``-o``."""
+    ins, outs = (os.path.splitext(p)[1].lower() for p in (args.input, args.output))
+    for family in (GLTF_SUFFIXES, USD_SUFFIXES):
+        if (ins in family) != (outs in family):
+            print(f"error: {args.input} is written back as its own format: give -o a "
+                  f"{' or '.join(family if ins in family else ())} path, not {outs!r}",
+                  file=sys.stderr)
+            return 2
+    options = JobOptions(unwrap_options_of(args), **layout_kwargs(args), uv_set=args.uv_set,
+                         uv_name=args.uv_name)
+    entries = unwrap_scene_file(args.input, args.output, options, args.seams, png=args.png)
+    report = {"input": os.path.abspath(args.input), "output": os.path.abspath(args.output),
+              "options": options.as_dict(), "meshes": entries}
+    if args.report:
+        os.makedirs(os.path.dirname(os.path.abspath(args.report)), exist_ok=True)
+        with open(args.report, "w", encoding="utf-8") as fh:
+            json.dump(report, fh, indent=2)
+    for e in entries:
+        print(item_line(e) + "".join(f"\n  warning: {w}" for w in e.get("warnings", [])))
+    bad = [e for e in entries if e["status"] != "certified"]
+    for e in bad:
+        print(f"error: {e['name']}: {e['message']}", file=sys.stderr)
+    print(f"{len(entries) - len(bad)}/{len(entries)} mesh(es) certified and written -> "
+          f"{args.output}")
+    return 0 if not bad else 1
+
+
 def core_cuts(islands):
     """Islands unwrap() cut because their UVs overlapped: {"islands": n, "edges": cut edges},
     from the report entries (pieces name the island they were cut from)."""
@@ -123,9 +168,20 @@ def core_cuts(islands):
     return {"islands": len(first), "edges": sum(first.values())}
 
 
+def _print_needed(res, options, output):
+    """What the default seams mode repaired and added (``bd_uv.seams.needed``)."""
+    for note in res.repair:
+        print(f"repaired: {note}")
+    n = len(res.seams_added)
+    print(f"seams: {n} added, only on islands that could not be certified as they were (their "
+          f"charts at C = {min(float(options.bound), AUTO_BOUND):g}, stretch <= "
+          f"{options.seams_stretch:g})" + (f"; they are UV discontinuities of {output} and "
+                                          "\"seams_added\" in the report" if n else ""))
+
+
 def auto_seams(mesh, seams, options):
-    """Seams added where needed (``options.add_seams``): ``seams`` (the file's UV seams, or
-    None) kept, more added; prints what was added."""
+    """Seams added where needed (``options.seams_mode == "auto"``): ``seams`` (the file's UV
+    seams, or None) kept, more added; prints what was added."""
     res, added, info = unwrap_auto(mesh.V, mesh.F, seams=seams, bound=options.bound,
                                    stretch=options.seams_stretch, method=options.method,
                                    frames=options.frames, cone=options.cone,
@@ -165,15 +221,24 @@ def build_parser():
                                      description="Certified bounded-distortion UV unwrapping "
                                                  "(Lipman 2012).")
     sub = parser.add_subparsers(dest="command", required=True)
-    p = sub.add_parser("unwrap", help="unwrap one mesh file (OBJ, OFF, PLY)")
-    p.add_argument("input", help="mesh file: .obj, .off or .ply")
-    p.add_argument("-o", "--output", required=True, help="output OBJ with UVs")
+    p = sub.add_parser("unwrap", help="unwrap one mesh file (OBJ, OFF, PLY) or scene (glTF, USD)")
+    p.add_argument("input", help="mesh file: .obj, .off or .ply; scene: .gltf, .glb, .usd, "
+                                 ".usda, .usdc, .usdz (FBX, Alembic, Collada, STL and .blend: "
+                                 "the answer gives the Blender command)")
+    p.add_argument("-o", "--output", required=True,
+                   help="output OBJ with UVs; for a scene, the scene written whole (same format)")
     add_solver_options(p)
     add_layout_options(p)
-    p.add_argument("--seams", choices=("uv", "none", "auto"), default=None,
-                   help="uv: cut where the file's UVs are discontinuous (default when the OBJ "
-                        "has vt); none: islands are the mesh's components; auto: add seams "
-                        "where needed (closed, genus, over C or --stretch)")
+    add_scene_options(p)
+    p.add_argument("--seams", choices=("needed", "uv", "none", "auto"), default=None,
+                   help="needed (the default): keep the file's UV seams (if it has vt), repair "
+                        "non-manifold vertices and edges, flipped parts and duplicate faces, and "
+                        "add seams only to islands that cannot be certified at C as they are "
+                        "(their charts at C = min(C, 2) within --stretch, default 2); uv: cut "
+                        "where the file's UVs are discontinuous, nothing added; none: islands "
+                        "are the mesh's components; auto: search seams on every island (closed, "
+                        "genus, over C or --stretch). Without --seams, --bound auto, --frames "
+                        "input-uv and a fixed --boundary take the islands as they are")
     p.add_argument("--report", help="write the JSON report here")
     p.add_argument("--png", help="write a picture of the UV layout coloured by distortion")
     p.set_defaults(func=run_unwrap)

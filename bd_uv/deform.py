@@ -16,6 +16,8 @@ import scipy.sparse as sp
 
 from .energies import energy, jacobian_operators, stretch_l1_program
 from .errors import CancelledError, InfeasibleError
+from .live.drag import mend_overlap
+from .overlap import island_overlaps
 from .frames import _solve_fixed, frames_from_map
 from .geometry import local_coordinates
 from .metrics import conformal_distortion, flipped_faces
@@ -46,6 +48,10 @@ class DeformResult:
     energy : float, the energy at the result (normalised geometry: unit total area)
     solves, iterations : int
     seconds : float
+    overlap_free : bool, the overlap test (``overlap.island_overlaps``) on ``uv``: always True
+        for a returned result
+    mended : bool, the direct solve overlapped itself and this map was found by dragging the
+        handles there in steps with every step certified (``live.drag``)
     """
     uv: np.ndarray
     distortion: np.ndarray
@@ -56,6 +62,8 @@ class DeformResult:
     solves: int
     iterations: int
     seconds: float
+    overlap_free: bool = True
+    mended: bool = False
 
 
 def planar_operators(Z, tris, nv):
@@ -305,6 +313,13 @@ def deform(V2, F, handles, positions, method="lscm", bound=5.0, frames="rest", p
     if flipped or not np.all(D <= bound * (1 + 1e-6)):
         raise InfeasibleError(f"the deformation did not certify within C = {bound:g} after "
                               "writing the handles back; raise the bound slightly")
+    mended = False
+    ov = island_overlaps(F, corner, np.zeros(len(F), dtype=np.int64), 1)
+    if not ov.overlap_free[0]:
+        uv, D = mend_overlap(V2, F, handles, positions, method, bound, stretch, cone, ov)
+        u = ((uv[:, 0] - c[0]) + 1j * (uv[:, 1] - c[1])) / s
+        mended = True
     e = energy_value(method, ops, u, frames_from_map(alpha_of(ops, u)))
-    return DeformResult(uv, D, float(D.max()), flipped, float(bound), e, solves, iters,
-                        time.perf_counter() - t0)
+    return DeformResult(uv, D, float(D.max()), 0, float(bound), e, solves, iters,
+                        time.perf_counter() - t0, True, mended)
+

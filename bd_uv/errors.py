@@ -86,3 +86,12 @@ class OptionError(BDError, ValueError):
     def __init__(self, option, message):
         super().__init__(message)
         self.option = option
+
+
+class SceneFileError(BDError):
+    """A scene file (glTF, USD) cannot be read or written as asked; the message names the file
+    and the node, mesh or prim concerned."""
+
+
+class MissingExtraError(BDError):
+    """A format needs an optional package that is not installed; the message names the extra."""

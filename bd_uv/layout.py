@@ -13,6 +13,7 @@ from .certificate import certificate_totals, certify_islands
 from .cut import split_overlapping
 from .overlap import _bits, _row_ids, layout_overlaps
 from .pack import MARGIN, island_boxes, pack_islands
+from .repair import twin_corners
 
 
 @dataclass(frozen=True)
@@ -154,6 +155,8 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
     bounds = np.array([r.bound_certified if r.status == "certified" else np.nan
                        for r in res.islands], dtype=np.float64)
     lab = np.where(ok[res.face_island], res.face_island, -1) if n else np.full(m, -1)
+    dup = np.zeros(m, dtype=bool) if res.duplicate_of is None else res.duplicate_of >= 0
+    lab[dup] = -1  # a duplicate face is stored with its twin's UVs, not certified twice
     uv = np.asarray(res.corner_uv, dtype=np.float64)
     before = certify_islands(V, F, uv, lab, np.where(ok, bounds, 1.0))
     unwrapped = [c if ok[i] else None for i, c in enumerate(before)]
@@ -185,4 +188,9 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
     face_island = np.where(written, new, -1)
     stored[~written] = np.nan
     overlaps = layout_overlaps(stored, face_island, F) if written.any() else np.zeros((0, 2), int)
+    if dup.any():
+        d = np.flatnonzero(dup)
+        tw = res.duplicate_of[d]
+        stored[d] = np.take_along_axis(stored[tw], twin_corners(F, d, tw)[:, :, None], axis=1)
+        face_island[d] = face_island[tw]
     return Layout(stored, face_island, source, certs, unwrapped, cuts, overlaps, bool(pack))

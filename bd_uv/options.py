@@ -16,6 +16,15 @@ from .errors import OptionError
 from .spaces import check_stretch
 
 FRAMES = ("auto", "harmonic", "conformal", "input-uv", "constant")
+# How the seams are found: "marked" (the given seams only), "needed" (the mesh repaired, seams
+# added only to the islands that cannot be certified as they are), "auto" (seams searched on
+# every island).
+SEAMS_MODES = ("marked", "needed", "auto")
+# The seams mode of the command line, the batch, the Blender script and the operator when none
+# is asked for (``bd_uv.unwrap`` keeps "marked" for its callers); the command line falls back to
+# "marked" for options only the islands as they are take (--bound auto, --frames input-uv, a
+# fixed --boundary), the operator also for pinned UVs.
+ENTRY_SEAMS_MODE = "needed"
 CONES = ("soc", "linf")
 OVERLAPS = ("cut", "fail")
 BOUNDARIES = ("free",) + SHAPES
@@ -29,13 +38,17 @@ class UnwrapOptions:
 
     Attributes
     ----------
-    add_seams : bool. False ("Marked"): cut along the given seams only, each island must be a
-        disk; True ("Add Where Needed", ``seams="auto"``): keep them and add seams where an
-        island cannot be certified as it is (``bd_uv.seams.unwrap_auto``: every chart a disk
-        within C and within ``stretch``). There C is never raised (a chart that cannot be
-        certified is cut further), so ``raise_bound`` and ``bound_limit`` do not apply, and the
-        search decides ``overlap`` per round (a chart overlapping itself is split; only the
-        last round cuts)
+    seams_mode : "marked" | "needed" | "auto" (``SEAMS_MODES``). "marked": cut along the given
+        seams only, each island must be a disk; "needed" (``seams="needed"``, the entry points'
+        default ``ENTRY_SEAMS_MODE``): repair the mesh (``bd_uv.repair``), keep the given seams,
+        unwrap their islands at C and add seams only to those that cannot be certified
+        (``bd_uv.seams.needed.unwrap_needed``: their charts at ``min(C, 2)`` within
+        ``stretch``); "auto" (``seams="auto"``): keep them and add seams where an island cannot
+        be certified as it is (``bd_uv.seams.unwrap_auto``: every chart a disk within C and
+        within ``stretch``). Where seams are added C is never raised (a chart that cannot be
+        certified is cut further), so ``raise_bound`` and ``bound_limit`` do not apply; "auto"
+        decides ``overlap`` per round (a chart overlapping itself is split; only the last round
+        cuts), "needed" applies it to the given seams' islands
     method : "lscm" | "arap" | "dirichlet" | "biharmonic" | "stretch-l1", the energy minimised in
         F_C (section 6.1; see ``bd_uv.unwrapping.unwrap``)
     bound : float >= 1 or "auto", C: every face's conformal distortion at most C (eq. 4.9);
@@ -47,11 +60,11 @@ class UnwrapOptions:
     cone : "soc" (F_C, eq. 4.15) | "linf" (F_C^inf, eq. 4.22)
     time_budget : float >= 0 seconds per island for ``bound="auto"``, or None for no limit
     stretch : float S >= sqrt(C), or None: every face's singular values within [1/S, S]
-        (section 6.3); with ``add_seams`` every chart within S, any S >= 1, None meaning
+        (section 6.3); where seams are added every chart within S, any S >= 1, None meaning
         ``AUTO_SEAMS_STRETCH``
     boundary : "free" | "circle" | "rectangle" | "pinned", where each island's outer boundary
         goes (section 5); not "free" needs a numeric bound, frames "auto" or "harmonic" and
-        no ``add_seams``
+        ``seams_mode="marked"``
     overlap : "cut" | "fail", an island whose UVs lie over themselves: cut into overlap-free
         pieces, or failed
 
@@ -60,7 +73,7 @@ class UnwrapOptions:
     OptionError (a BDError and a ValueError) naming the option, when made with a value out of
     range or with options that cannot go together.
     """
-    add_seams: bool = False
+    seams_mode: str = "marked"
     method: str = "lscm"
     bound: Union[float, str] = 5.0
     frames: str = "auto"
@@ -73,9 +86,7 @@ class UnwrapOptions:
     overlap: str = "cut"
 
     def __post_init__(self):
-        if not isinstance(self.add_seams, bool):
-            raise OptionError("add_seams", f"add_seams must be True or False, got "
-                              f"{self.add_seams!r}")
+        _one_of("seams_mode", self.seams_mode, SEAMS_MODES)
         _one_of("method", self.method, METHODS)
         _one_of("frames", self.frames, FRAMES)
         if self.bound != "auto" and not (_number(self.bound) and 1.0 <= self.bound < math.inf):
@@ -101,15 +112,15 @@ class UnwrapOptions:
             raise OptionError("boundary", f"boundary={self.boundary!r} takes its frames from a "
                               "Tutte embedding onto the boundary (frames 'auto' or 'harmonic'), "
                               f"got frames={self.frames!r}")
-        if self.add_seams:
-            auto = "add_seams (seams='auto')"
+        if self.adds_seams:
+            auto = f"seams_mode={self.seams_mode!r}"
             if self.boundary != "free":
-                raise OptionError("add_seams", f"{auto} makes free-boundary charts; boundary= "
+                raise OptionError("seams_mode", f"{auto} makes free-boundary charts; boundary= "
                                   "needs boundary='free' there")
             if self.bound == "auto":
-                raise OptionError("add_seams", f"{auto} needs a numeric bound C")
+                raise OptionError("seams_mode", f"{auto} needs a numeric bound C")
             if self.frames == "input-uv":
-                raise OptionError("add_seams", f"{auto} does not take pins or the current UVs: "
+                raise OptionError("seams_mode", f"{auto} does not take pins or the current UVs: "
                                   "call bd_uv.seams.unwrap_auto for material groups, or mark "
                                   "seams")
             # The seam search's own S: any S >= 1 (every chart within S and within C).
@@ -123,9 +134,13 @@ class UnwrapOptions:
                 raise OptionError("stretch", str(exc)) from None
 
     @property
+    def adds_seams(self):
+        """True when seams may be added (any ``seams_mode`` but "marked")."""
+        return self.seams_mode != "marked"
+
+    @property
     def seams_stretch(self):
-        """S as the seam search (``add_seams``) uses it: ``stretch``, or ``AUTO_SEAMS_STRETCH``
-        when None."""
+        """S as the seam search uses it: ``stretch``, or ``AUTO_SEAMS_STRETCH`` when None."""
         return AUTO_SEAMS_STRETCH if self.stretch is None else self.stretch
 
     def replace(self, **changes):

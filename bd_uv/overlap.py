@@ -165,6 +165,17 @@ def touching_pairs(p, q, group=None):
     i, j = shapely.STRtree(boxes).query(boxes)
     keep = i < j
     i, j = i[keep].astype(np.int64), j[keep].astype(np.int64)
+    meets = segments_meet(p, q, i, j, geoms)
+    return np.stack([i[meets], j[meets]], axis=1)
+
+
+def segments_meet(p, q, i, j, geoms=None):
+    """Do segments ``i`` and ``j`` (each (k,) int) of ``p, q`` (b,2) intersect or touch? (k,) bool.
+
+    Decided by the four orientation signs in float64 when all four are clear of their rounding
+    error bound, by GEOS's robust predicate otherwise; segments with an identical end touch.
+    ``geoms`` (b,) shapely linestrings of the segments, optional (made when needed)."""
+    import shapely
     a, b, c, d = p[i], q[i], p[j], q[j]
     shared = np.zeros(len(i), dtype=bool)
     for x, y in ((a, c), (a, d), (b, c), (b, d)):
@@ -177,8 +188,10 @@ def touching_pairs(p, q, group=None):
     meets = shared | (clear & (np.sign(o1) != np.sign(o2)) & (np.sign(o3) != np.sign(o4)))
     unsure = ~shared & ~clear
     if unsure.any():
+        if geoms is None:
+            geoms = shapely.linestrings(np.stack([p, q], axis=1))
         meets[unsure] = shapely.intersects(geoms[i[unsure]], geoms[j[unsure]])
-    return np.stack([i[meets], j[meets]], axis=1)
+    return meets
 
 
 def crossing_pairs(bd, pairs):

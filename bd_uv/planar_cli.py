@@ -10,7 +10,7 @@ import sys
 import numpy as np
 
 from .deform import METHODS, deform
-from .errors import InvalidMeshError
+from .errors import BDError, InvalidMeshError
 from .meshio import load_mesh, write_obj
 
 
@@ -26,13 +26,17 @@ def _write(path, V2, F):
 
 
 def _user_errors(run):
-    """Bad options and inputs (ValueError, KeyError in handles.json) exit 2 with one line."""
+    """Bad options and inputs (ValueError, KeyError in handles.json) exit 2 with one line; no
+    certified result (``BDError``: infeasible, an overlap that cannot be mended) exits 1."""
     def wrapped(args):
         try:
             return run(args)
         except (ValueError, KeyError, OSError) as exc:
             print(f"error: {exc}", file=sys.stderr)
             return 2
+        except BDError as exc:                  # no certified result (infeasible, overlap)
+            print(f"error: {exc}", file=sys.stderr)
+            return 1
     return wrapped
 
 
@@ -48,7 +52,9 @@ def run_deform(args):
     _write(args.output, res.uv, mesh.F)
     print(f"{mesh.name}: BD-{args.method.upper()} deformation, {len(mesh.F)} faces, "
           f"max distortion {res.max_distortion:.4f} <= C = {res.bound:g}, {res.flipped} flipped, "
-          f"{res.solves} solves, {res.seconds:.2f} s -> {args.output}")
+          f"{res.solves} solves, {res.seconds:.2f} s"
+          + (" (mended: the direct solve overlapped itself; reached in certified steps)"
+             if res.mended else "") + f" -> {args.output}")
     return 0
 
 

@@ -40,11 +40,14 @@ class AutoSeams:
         different polygons (smaller index first).
     charts : int
         Islands of ``result``.
+    notes : tuple of str
+        What was repaired before solving (Seams "Add Where Needed": ``needed_seams.solve``).
     """
 
     result: object
     added: np.ndarray
     charts: int
+    notes: tuple = ()
 
 
 def split_polygons(face_island, tri_poly):

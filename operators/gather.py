@@ -174,7 +174,7 @@ def auto_arguments(batch, *, method, bound, minimise, stretch, frames):
         raise UserError("Add Where Needed seams cannot keep pinned UVs in place: unpin them, "
                         "unwrap with Sync Selection on or from the 3D Viewport, or mark the "
                         "seams yourself")
-    options = _options(add_seams=True, method=method, bound=float(bound),
+    options = _options(seams_mode="auto", method=method, bound=float(bound),
                        stretch=float(stretch), frames=frames)
     material = np.concatenate([p.arrays.material for p in batch.parts])
     kwargs = dict(**polygon_ids(batch),
@@ -182,6 +182,18 @@ def auto_arguments(batch, *, method, bound, minimise, stretch, frames):
                   seams=batch.seams, method=options.method, bound=options.bound,
                   stretch=options.seams_stretch, frames=options.frames)
     return (batch.V, batch.F), kwargs
+
+
+def needed_arguments(batch, *, method, bound, stretch, frames, overlap, limit_stretch):
+    """Positional and keyword arguments of :func:`needed_seams.solve` (Seams "Add Where
+    Needed"): those of :func:`auto_arguments`, the Overlaps choice for the marked islands and,
+    with Limit Stretch, its S for them too."""
+    args, kwargs = auto_arguments(batch, method=method, bound=bound, minimise=False,
+                                  stretch=stretch, frames=frames)
+    kwargs["overlap"] = overlap
+    if limit_stretch:
+        kwargs["marked_stretch"] = float(stretch)
+    return args, kwargs
 
 
 def _options(**values):

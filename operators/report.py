@@ -164,7 +164,10 @@ def summarise(batch, result, written, seconds, verified=None, packed=False, stre
             text = (f"its stored UVs fail the certificate ({why}); " + (
                 "packing shrank or moved it too far: unwrap it without packing" if packed
                 else "float32 storage changed it"))
-        parts.append(f"{_name(batch, result, c.stored.island, names)} put back as it was: {text}")
+        where = (f" (moved {c.moved_tiles} UV tile{'s' if c.moved_tiles != 1 else ''} right, "
+                 "off the written islands it lay over)" if c.moved_tiles else "")
+        parts.append(f"{_name(batch, result, c.stored.island, names)} put back as it was"
+                     f"{where}: {text}")
     if len(back) > LISTED:
         parts.append(f"{len(back) - LISTED} more islands put back as they were")
     n_overlaps = 0
@@ -177,6 +180,10 @@ def summarise(batch, result, written, seconds, verified=None, packed=False, stre
             f", ... ({len(pairs)} pairs in all)" if len(pairs) > 6 else "")
         parts.append(f"islands overlap in {object_name}'s UV map: {listed}"
                      + ("" if packed else "; turn on Pack Islands to lay them apart"))
+    for object_name, tiles in (verified.moved.items() if verified is not None else ()):
+        parts.append(f"the faces of {object_name} left as they were moved {tiles} UV "
+                     f"tile{'s' if tiles != 1 else ''} right, off the written islands (a new "
+                     "UV map's default squares)")
     for w in written:
         if w.skipped:
             parts.append(f"{w.object_name} not written: {w.skipped}")

@@ -22,7 +22,7 @@ from ..bd_uv.geometry import face_areas
 from ..bd_uv.metrics import face_jacobians, signed_uv_areas
 from ..bd_uv.overlap import layout_overlaps as _core_layout_overlaps
 
-__all__ = ["STORAGE_RTOL", "certify_islands", "check_stored", "layout_overlaps",
+__all__ = ["STORAGE_RTOL", "certify_islands", "check_stored", "layout_overlaps", "tiles_off",
            "island_singular_values"]
 
 # Minimise only: an island certified at the exact float64 maximum of its solve measures a little
@@ -186,3 +186,16 @@ def layout_overlaps(corner_uv, face_island, F):
     """
     return _core_layout_overlaps(np.asarray(corner_uv, dtype=np.float64),
                                  np.asarray(face_island, np.int64), F=np.asarray(F, np.int64))
+
+
+def tiles_off(kept_uv, back_uv):
+    """Whole UV tiles (int >= 0) to move ``back_uv`` (k,2) right by so that it no longer lies
+    over ``kept_uv`` (j,2): 0 when their bounding boxes do not overlap. A shift by whole tiles
+    samples a repeating texture exactly as before."""
+    if not len(kept_uv) or not len(back_uv):
+        return 0
+    klo, khi = kept_uv.min(axis=0), kept_uv.max(axis=0)
+    blo, bhi = back_uv.min(axis=0), back_uv.max(axis=0)
+    if np.any(bhi <= klo) or np.any(khi <= blo):
+        return 0
+    return max(1, int(np.ceil(khi[0] - blo[0])))

@@ -13,7 +13,8 @@ import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty
 
 from .. import bd_uv
-from . import auto_seams, session
+from ..bd_uv.options import ENTRY_SEAMS_MODE
+from . import auto_seams, needed_seams, session
 from .background import BackgroundSolve
 from .editmode import edit_mesh_objects, object_mode
 
@@ -21,9 +22,13 @@ from .editmode import edit_mesh_objects, object_mode
 SOLVE = bd_uv.unwrap
 # ... and with Seams "Add Where Needed".
 AUTO_SOLVE = auto_seams.solve
+# ... and with Seams "Add Where Needed" (the default).
+NEEDED_SOLVE = needed_seams.solve
 # The core's defaults (bd_uv.UnwrapOptions) are the operator's: one line there changes both.
 # The operator's own: Limit (bound_limit) 100, where the core raises C up to 1000.
 DEFAULTS = bd_uv.UnwrapOptions()
+# The seams mode the entry points start in (bd_uv.options.ENTRY_SEAMS_MODE: "needed").
+_SEAMS_ITEM = {"needed": 'NEEDED', "marked": 'MARKED', "auto": 'AUTO'}
 
 
 
@@ -40,10 +45,14 @@ _METHODS = (
      "evens out texel density within the bound"),
 )
 _SEAMS = (
+    ('NEEDED', "Add Where Needed", "Keep the marked seams; add seams (marked on the mesh) only "
+     "to islands that cannot be certified within C as they are (closed meshes, handles), their "
+     "charts within C 2 and Limit Stretch; non-manifold vertices and edges and flipped parts "
+     "are split. With Minimise, From Current UVs, a fixed Boundary or pinned UVs: as Marked"),
     ('MARKED', "Marked", "Cut along the marked seams only: every island must be a disk"),
-    ('AUTO', "Add Where Needed", "Keep the marked seams and add seams where an island cannot "
-     "be unwrapped within C and Limit Stretch (closed meshes, handles, too much distortion); "
-     "the added seams are marked on the mesh"),
+    ('AUTO', "Search All Islands", "Keep the marked seams and search seams on every island, "
+     "also those already certifiable, until every chart is within C and Limit Stretch; the "
+     "added seams are marked on the mesh"),
 )
 _OVERLAP = (
     ('CUT', "Cut Into Pieces", "An island whose UVs would lie over themselves is cut into "
@@ -79,7 +88,7 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
 
     method: EnumProperty(name="Method", items=_METHODS, default=DEFAULTS.method)
     seams: EnumProperty(name="Seams", items=_SEAMS,
-                        default='AUTO' if DEFAULTS.add_seams else 'MARKED')
+                        default=_SEAMS_ITEM[ENTRY_SEAMS_MODE])
     overlap: EnumProperty(name="Overlaps", items=_OVERLAP, default=DEFAULTS.overlap.upper())
     boundary: EnumProperty(name="Boundary", items=_BOUNDARY, default=DEFAULTS.boundary)
     stretch: FloatProperty(name="Limit Stretch", default=DEFAULTS.seams_stretch, min=1.0,
@@ -100,7 +109,9 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                            description="Find the smallest certified bound instead (optimal "
                            "quasi-conformal map; slower)")
     raise_bound: BoolProperty(name="Raise C Automatically", default=DEFAULTS.raise_bound,
-                              description="When no map within C exists, raise C up to the limit")
+                              description="Seams Marked: when no map within C exists, raise C "
+                              "up to the limit (with Add Where Needed such an island gets seams "
+                              "instead, C is never raised)")
     bound_limit: FloatProperty(name="Limit", default=100.0, min=1.0001, soft_max=1000.0,
                                description="Largest bound tried when raising C")
     frames: EnumProperty(name="Frames", items=_FRAMES, default=DEFAULTS.frames)
@@ -144,7 +155,7 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
             row = layout.row(heading="Limit Stretch")
             row.prop(self, "limit_stretch", text="")
             sub = row.row()
-            sub.active = self.limit_stretch
+            sub.active = self.limit_stretch or self.seams == 'NEEDED'  # added charts: always
             sub.prop(self, "stretch", text="")
         if self.seams == 'AUTO' or self.limit_stretch:
             problem = self._stretch_problem()
@@ -154,9 +165,11 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
         row = layout.row()
         row.active = not self.minimise
         row.prop(self, "bound")
-        layout.prop(self, "raise_bound")
         row = layout.row()
-        row.active = self.raise_bound and not self.minimise and self.seams != 'AUTO'
+        row.active = self.seams == 'MARKED' or self.minimise  # Add Where Needed: seams instead
+        row.prop(self, "raise_bound")
+        row = layout.row()
+        row.active = self.raise_bound and not self.minimise and self.seams == 'MARKED'
         row.prop(self, "bound_limit")
         layout.prop(self, "frames")
         layout.prop(self, "use_object_scale")
@@ -178,9 +191,15 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
         if gathered is None:
             return None
         batch, auto, args, kwargs = gathered
-        solve = AUTO_SOLVE if auto else functools.partial(auto_seams.whole_polygons, SOLVE,
-                                                          **session.polygon_ids(batch))
+        if auto == 'NEEDED':
+            solve = functools.partial(NEEDED_SOLVE, unwrap=SOLVE)
+        elif auto:
+            solve = AUTO_SOLVE
+        else:
+            solve = functools.partial(auto_seams.whole_polygons, SOLVE,
+                                      **session.polygon_ids(batch))
         return batch, solve, args, kwargs
+
 
     def _gather(self, context):
         """Gather the batch, whether the seams are added (``auto_seams.solve``) and the solve's
@@ -195,6 +214,16 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                                        use_object_scale=self.use_object_scale,
                                        need_uvs=(self.frames == 'input-uv'
                                                  and self.seams != 'AUTO'))
+            if self.seams == 'NEEDED' and needed_seams.applies(
+                    self.minimise, self.frames, self.boundary, len(batch.pin_corners)):
+                problem = self._stretch_problem() if self.limit_stretch else ""
+                if problem:
+                    raise session.UserError(problem)
+                args, kwargs = session.needed_arguments(
+                    batch, method=self.method, bound=self.bound, stretch=self.stretch,
+                    frames=self.frames, overlap='cut' if self.overlap == 'CUT' else 'fail',
+                    limit_stretch=self.limit_stretch)
+                return batch, 'NEEDED', args, kwargs
             if self.seams == 'AUTO':
                 args, kwargs = session.auto_arguments(
                     batch, method=self.method, bound=self.bound, minimise=self.minimise,
@@ -243,7 +272,7 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
         written (with a WARNING saying why; no seam is marked then)."""
         auto = solved if isinstance(solved, auto_seams.AutoSeams) else None
         result = auto.result if auto is not None else solved
-        stretch = self.stretch if auto is not None or self.limit_stretch else None
+        stretch = self.stretch if self.seams == 'AUTO' or self.limit_stretch else None
         with object_mode(context):
             written = session.write_back(batch, result)
         verified = None
@@ -254,12 +283,15 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                 verified = session.verify_written(batch, result, written, stretch)
         summary = session.summarise(batch, result, written, seconds, verified, packed=self.pack,
                                     stretch=stretch)
-        if auto is not None and summary.written:
+        if auto is not None and summary.written and (len(auto.added) or auto.notes
+                                                     or self.seams == 'AUTO'):
             with object_mode(context):
                 marked = session.mark_seams(batch, written, auto.added)
             summary = dataclasses.replace(summary, message=(
                 f"{summary.message}; {marked} seam{'s' if marked != 1 else ''} added, "
-                f"{auto.charts} chart{'s' if auto.charts != 1 else ''}"))
+                f"{auto.charts} chart{'s' if auto.charts != 1 else ''}"
+                + (" (see the marked seams in Edit Mode)" if marked else "")
+                + "".join(f"; {note}" for note in auto.notes)))
         elif summary.written:
             cut = session.overlap_cuts(result)
             if len(cut):  # an island that overlapped itself was cut: show the artist where

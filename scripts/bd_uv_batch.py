@@ -1,16 +1,26 @@
-"""Unwrap the mesh objects of a .blend headless with bd-uv, write their UV maps, save.
+"""Unwrap the mesh objects of a .blend (or FBX, Alembic, Collada, STL) headless with bd-uv, write
+their UV maps, save (or export the same format).
 
 Inside Blender (installed extension or not)::
 
     blender -b scene.blend --python bd_uv_batch.py -- [--objects NAME...] [--method lscm|arap]
         [--bound C|auto] [--uv-map NAME] [--pack] [--output out.blend] [--report report.json]
         [--png DIR]
+    blender -b --python bd_uv_batch.py -- --input scene.fbx --output out/scene.fbx [options]
 
 With the ``bpy`` module (``pip install bpy``)::
 
     python bd_uv_batch.py scene.blend -- [same options]
+    python bd_uv_batch.py scene.fbx -- --output out/scene.fbx [same options]
 
-Each object is unwrapped along its seams, keeping its pinned UVs exactly, with the object's scale
+FBX, Alembic (.abc), Collada (.dae, Blender 4.x) and STL files are read with Blender's own
+importers into an empty scene and written with its exporters (``operators/formats.py``): the
+output's suffix picks the format (.blend saves the scene; STL stores no UVs).
+
+Each object is unwrapped along its marked seams, with seams added (and marked) only on islands
+that cannot be certified as they are (``--seams needed``, the default; closed meshes need no
+seams marked first) and the mesh repaired where it is not a manifold, keeping its pinned UVs
+exactly (an object with pins is unwrapped as marked), with the object's scale
 applied like the ``uv.bd_unwrap`` operator, and with ``--pack`` the islands are packed by Blender's
 Pack Islands as the operator does. Then each island is certified again from the UV map as it will
 be saved (float32, packed or not) with its own bound, and an island that fails is put back before
@@ -68,7 +78,7 @@ def _import_addon():
     pkg = _extension_package().__name__
     return tuple(importlib.import_module(f"{pkg}.{name}") for name in
                  ("bd_uv", "bd_uv.batch", "bd_uv.arguments", "operators.mesh_data",
-                  "operators.session", "operators.stored"))
+                  "operators.session", "operators.stored", "operators.formats"))
 
 
 def split_argv(argv):
@@ -88,6 +98,11 @@ def build_parser(arguments):
     p.add_argument("--objects", nargs="+", metavar="NAME",
                    help="mesh objects to unwrap (default: every mesh object with faces)")
     arguments.add_solver_options(p)
+    p.add_argument("--seams", choices=("needed", "marked"), default=None,
+                   help="needed (the default): the marked seams kept, the mesh repaired where "
+                        "it is not a manifold, seams added (and marked) only on islands that "
+                        "cannot be certified as they are; marked: the marked seams only, every "
+                        "island must be a disk. Objects with pinned UVs are unwrapped as marked")
     p.add_argument("--uv-map", metavar="NAME",
                    help="UV map to read pins from and write (default: the active one; created "
                         "when missing)")
@@ -100,8 +115,13 @@ def build_parser(arguments):
     p.add_argument("--pack-shape", choices=("AABB", "CONVEX", "CONCAVE"), default="AABB",
                    help="island shape for packing: bounding box (fastest, default), convex hull "
                         "or exact shape (tighter; either can take seconds on thousands of faces)")
+    p.add_argument("--input", metavar="FILE",
+                   help="an FBX, Alembic, Collada or STL file to import (inside Blender; with the "
+                        "bpy module it may also come before '--')")
     p.add_argument("--output", metavar="OUT.blend",
-                   help="save here (default: save the opened file in place)")
+                   help="save here (default: save the opened .blend in place); for an imported "
+                        "file, the file to export (its suffix picks the format: .fbx, .abc, .dae, "
+                        "or .blend)")
     p.add_argument("--report", metavar="REPORT.json", help="write the JSON report here")
     p.add_argument("--png", metavar="DIR", help="write a picture of each object's UV layout here")
     p.add_argument("--png-prefix", default="", help="prefix of the PNG file names")
@@ -241,23 +261,37 @@ def pack(written, session, margin, shape):
             layers.active = layers[active]
 
 
-def _put_back(w, undo, mesh_data):
+def _put_back(w, undo, mesh_data, stored):
     """Give the triangles ``undo`` (m,) bool their UVs from before the unwrap; a map created
-    here is restored to what it held, or removed when nothing written is left on it."""
+    here is restored to what it held, or removed when nothing written is left on it. UVs that
+    would lie over the islands kept go back moved right by whole tiles (``stored.tiles_off``).
+
+    Returns
+    -------
+    int, the whole tiles they were moved by (0: exactly as they were)
+    """
     mesh, name = w.ob.data, w.entry["uv_map"]
-    if w.initial_uv is None:
-        mesh_data.write_corner_uvs(mesh, name, w.arrays.tri_loops, w.arrays.corner_uv, undo)
-        return
-    if not (w.ok & ~undo).any():
+    kept = w.ok & ~undo
+    if w.initial_uv is not None and not kept.any():
         mesh.uv_layers.remove(mesh.uv_layers[name])
         mesh.update()
         w.entry["uv_map"] = None
-        return
-    uv = mesh_data.loop_uvs(mesh, name)
+        return 0
+    now = mesh_data.loop_uvs(mesh, name)
     loops = w.arrays.tri_loops[undo].ravel()
-    uv[loops] = w.initial_uv[loops]
-    mesh.uv_layers[name].uv.foreach_set("vector", uv.ravel())
+    old = (w.initial_uv[loops] if w.initial_uv is not None
+           else np.asarray(w.arrays.corner_uv, np.float64)[undo].reshape(-1, 2))
+    tiles = stored.tiles_off(now[w.arrays.tri_loops[kept].ravel()], old)
+    if w.initial_uv is None:
+        shift = np.array([tiles, 0.0])
+        mesh_data.write_corner_uvs(mesh, name, w.arrays.tri_loops,
+                                   w.arrays.corner_uv + shift if tiles else w.arrays.corner_uv,
+                                   undo)
+        return tiles
+    now[loops] = old + np.array([tiles, 0.0], dtype=now.dtype)
+    mesh.uv_layers[name].uv.foreach_set("vector", now.ravel())
     mesh.update()
+    return tiles
 
 
 def check_saved(written, mesh_data, stored, packed):
@@ -289,7 +323,14 @@ def check_saved(written, mesh_data, stored, packed):
                            message=f"island {c.island}: put back as it was, its saved UVs fail "
                                    f"the certificate ({c.reason}; {cause})")
         if undo.any():
-            _put_back(w, undo, mesh_data)
+            tiles = _put_back(w, undo, mesh_data, stored)
+            if tiles:
+                for isl in entry["islands"]:
+                    c = by_index.get(isl["island"])
+                    if c is not None and not c.certified:
+                        isl["message"] += (f"; moved {tiles} UV tile(s) right, off the saved "
+                                           "islands it lay over")
+                        isl["moved_tiles"] = tiles
             w.ok = w.ok & ~undo
         kept = [c for c in checks if c.certified]
         P = arrays.V[arrays.F]
@@ -338,8 +379,11 @@ def draw_saved(written, core, batch, mesh_data, options, args):
 
 def main(argv):
     blends, rest = split_argv(argv)
-    core, batch, arguments, mesh_data, session, stored = _import_addon()
+    core, batch, arguments, mesh_data, session, stored, formats = _import_addon()
     args = build_parser(arguments).parse_args(rest)
+    imported = [f for f in blends if not f.lower().endswith(".blend")] + (
+        [args.input] if args.input else [])
+    blends = [f for f in blends if f.lower().endswith(".blend")]
     # Blender packs (--pack): the core neither packs nor cuts what it stores.
     options = batch.JobOptions(arguments.unwrap_options_of(args))
     if args.png and importlib.util.find_spec("matplotlib") is None:
@@ -348,16 +392,29 @@ def main(argv):
               "or run python -m bd_uv batch FILE.blend --png DIR with the bpy module",
               file=sys.stderr)
         return 2
-    if len(blends) > 1:
-        print("error: give one .blend file before '--'", file=sys.stderr)
+    if len(blends) + len(imported) > 1:
+        print("error: give one file: a .blend before '--', or --input FILE", file=sys.stderr)
         return 2
+    if imported:
+        if not args.output:
+            print(f"error: {imported[0]} is imported: pass --output (e.g. --output "
+                  f"out/{os.path.basename(imported[0])})", file=sys.stderr)
+            return 2
+        if os.path.abspath(args.output) == os.path.abspath(imported[0]):
+            print(f"error: --output {args.output} would overwrite its input", file=sys.stderr)
+            return 2
+        try:
+            formats.import_file(imported[0])
+        except formats.FormatError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
     if blends:
         try:
             bpy.ops.wm.open_mainfile(filepath=os.path.abspath(blends[0]))
         except RuntimeError as exc:
             print(f"error: cannot open {blends[0]}: {exc}", file=sys.stderr)
             return 2
-    source = bpy.data.filepath or None
+    source = os.path.abspath(imported[0]) if imported else (bpy.data.filepath or None)
     output = os.path.abspath(args.output) if args.output else source
     if output is None:
         print("error: nothing to save to: open a .blend or pass --output", file=sys.stderr)
@@ -379,12 +436,20 @@ def main(argv):
         pack(written, session, args.margin, args.pack_shape)
     check_saved(written, mesh_data, stored, args.pack)
     written = [w for w in written if w.ok.any()]
+    for w in written:   # the seams added, where the artist sees them: marked on the mesh saved
+        if w.entry.get("seams_added"):
+            w.entry["seams_marked"] = int(mesh_data.mark_seams(
+                w.ob.data, w.arrays.vertices[np.asarray(w.entry["seams_added"])]).sum())
     draw_saved(written, core, batch, mesh_data, options, args)
     items += done
     for e in done:
         print(batch.item_line(e), flush=True)
     if written or args.output:
-        bpy.ops.wm.save_as_mainfile(filepath=output)
+        try:
+            formats.save_file(output)
+        except formats.FormatError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
         for w in written:
             w.entry["output"] = output
     wall = time.perf_counter() - t0

@@ -1,5 +1,6 @@
-"""Menu entries: UV > Unwrap beside Blender's own methods; UV > Bounded Distortion Deform with the
-distortion tools; Mesh > Clean Up > Improve Triangles (Bounded Distortion) in Edit Mode.
+"""Menu entries: UV > Unwrap beside Blender's own methods; UV > Bounded Distortion Deform and
+Bounded Distortion Live with the distortion tools; Mesh > Clean Up > Improve Triangles (Bounded
+Distortion) in Edit Mode.
 
 ``IMAGE_MT_uvs_unwrap`` is the UV editor's UV > Unwrap menu, which the 3D View's U menu embeds
 since Blender 4.3; before that the 3D View uses ``VIEW3D_MT_uv_map``.
@@ -9,6 +10,7 @@ import bpy
 from ..operators.deform import UV_OT_bd_deform
 from ..operators.display import UV_OT_bd_select_distorted, UV_OT_bd_show_distortion
 from ..operators.improve import MESH_OT_bd_improve
+from ..operators.live import UV_OT_bd_live
 from ..operators.unwrap import UV_OT_bd_unwrap
 
 
@@ -26,6 +28,7 @@ def draw_distortion_entries(self, context):
     layout.operator(UV_OT_bd_select_distorted.bl_idname)
     layout.operator_context = 'INVOKE_DEFAULT'  # the background path, Esc cancels
     layout.operator(UV_OT_bd_deform.bl_idname)
+    layout.operator(UV_OT_bd_live.bl_idname)
 
 
 def draw_improve_entry(self, context):

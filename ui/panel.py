@@ -3,6 +3,7 @@ tools."""
 import bpy
 
 from ..operators.deform import UV_OT_bd_deform
+from ..operators.live import UV_OT_bd_live
 from ..operators.display import UV_OT_bd_select_distorted, UV_OT_bd_show_distortion
 from ..operators.unwrap import UV_OT_bd_unwrap
 
@@ -18,6 +19,9 @@ class IMAGE_PT_bd_uv_result(bpy.types.Panel):
         row = layout.row(align=True)
         row.operator(UV_OT_bd_unwrap.bl_idname, text="Unwrap")
         row.operator(UV_OT_bd_deform.bl_idname, text="Deform")
+        op_row = layout.row()
+        op_row.operator_context = 'INVOKE_DEFAULT'
+        op_row.operator(UV_OT_bd_live.bl_idname, text="Live Drag")
         last = context.window_manager.bd_uv_last_result
         box = layout.box()
         if not last.valid:

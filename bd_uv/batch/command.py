@@ -9,7 +9,8 @@ import os
 import sys
 import time
 
-from ..arguments import add_layout_options, add_solver_options, layout_kwargs, unwrap_options_of
+from ..arguments import (add_layout_options, add_scene_options, add_solver_options,
+                         layout_kwargs, scene_option_misuse, unwrap_options_of)
 from ..scheduling import FileLimits, Ledger, Progress, options_sha256, read_previous, reusable
 from ..scheduling.atomic import remove_stale
 from .files import _size, input_files, plan, run_tasks
@@ -20,18 +21,24 @@ from .report import batch_report, item_line
 def add_batch_parser(subparsers):
     """Add ``batch`` to ``python -m bd_uv``'s subcommands."""
     p = subparsers.add_parser(
-        "batch", help="unwrap every OBJ/OFF/PLY (and .blend) file of folders, in parallel",
-        description="Unwrap many files: one output per input (OBJ with UVs; .blend with the UV "
-                    "maps written), a JSON report, optional PNGs. Exit 0 only if every mesh was "
+        "batch", help="unwrap every mesh and scene file of folders, in parallel",
+        description="Unwrap many files: one output per input (OBJ with UVs for OBJ/OFF/PLY; "
+                    "glTF and USD scenes written whole; .blend, FBX, Alembic and Collada "
+                    "through Blender with the UV maps written, STL to .blend), a JSON report, "
+                    "optional PNGs. Exit 0 only if every mesh was "
                     "certified; a file that fails never stops the others.")
     p.add_argument("inputs", nargs="+", metavar="INPUT",
-                   help="mesh files or folders (their .obj/.off/.ply/.blend files, not recursive)")
+                   help="mesh or scene files, or folders (their .obj/.off/.ply/.gltf/.glb/.usd/"
+                        ".usda/.usdc/.usdz/.blend/.fbx/.abc/.dae/.stl files, not recursive)")
     p.add_argument("-o", "--output", required=True, metavar="OUT_DIR", help="output folder")
     add_solver_options(p)
     add_layout_options(p)
-    p.add_argument("--seams", choices=("uv", "none", "auto"), default=None,
-                   help="uv: cut where an OBJ's UVs are discontinuous (default when it has vt); "
-                        "none: islands are the mesh's components; auto: add seams where needed")
+    add_scene_options(p)
+    p.add_argument("--seams", choices=("needed", "uv", "none", "auto"), default=None,
+                   help="needed (the default): an OBJ's UV seams kept, the mesh repaired, seams "
+                        "added only to islands that cannot be certified as they are; uv: cut "
+                        "where an OBJ's UVs are discontinuous; none: islands are the mesh's "
+                        "components; auto: search seams on every island")
     p.add_argument("--jobs", type=_positive_int, default=os.cpu_count() or 1,
                    help="worker processes, one file each (default: the number of cores); with "
                         "--scheduler local, the LocalCluster's workers")
@@ -100,12 +107,17 @@ def _positive_int(text):
 
 def run_batch(args):
     """``python -m bd_uv batch``: returns the exit code (0: all certified, 1: some failed)."""
-    options = JobOptions(unwrap_options_of(args), **layout_kwargs(args))
     files = input_files(args.inputs)
     if not files:
-        print(f"error: no .obj/.off/.ply/.blend files in {' '.join(args.inputs)}",
+        print(f"error: no mesh or scene files in {' '.join(args.inputs)}",
               file=sys.stderr)
         return 2
+    misuse = scene_option_misuse(args, files)
+    if misuse:
+        print(f"error: {misuse}", file=sys.stderr)
+        return 2
+    options = JobOptions(unwrap_options_of(args), **layout_kwargs(args), uv_set=args.uv_set,
+                         uv_name=args.uv_name)
     os.makedirs(args.output, exist_ok=True)
     if args.png:
         os.makedirs(args.png, exist_ok=True)

@@ -17,10 +17,12 @@ from dataclasses import dataclass
 
 from ..errors import BDError
 from ..meshio import load_mesh, write_obj
+from ..scenes import BLENDER_SUFFIXES, SCENE_SUFFIXES, blender_command
 from ..scheduling import run_pool
 from ..scheduling.atomic import atomic_path
 from ..scheduling.cluster import run_dask
 from .jobs import Job, JobOptions, failed_entry, unwrap_job
+from .scene_files import unwrap_scene_file
 
 MESH_SUFFIXES = (".obj", ".off", ".ply")
 BLEND_SUFFIX = ".blend"
@@ -44,11 +46,15 @@ def _unwrap_file(task, options, seams_mode):
     t0 = time.perf_counter()
     base = {"input": os.path.abspath(task.path), "object": None, "output": None}
     try:
-        if task.path.lower().endswith(BLEND_SUFFIX):
+        ext = os.path.splitext(task.path)[1].lower()
+        if ext in BLENDER_SUFFIXES:   # FBX, Alembic, Collada, STL too: Blender reads them
             return _unwrap_blend(task, options, base)
+        if ext in SCENE_SUFFIXES:     # glTF and USD: read and written whole by bd_uv.scenes
+            return unwrap_scene_file(task.path, task.output, options, seams_mode, png=task.png,
+                                     base=base)
         mesh = load_mesh(task.path)
         seams = None
-        if seams_mode == "uv" or (seams_mode in (None, "auto") and mesh.corner_uv is not None):
+        if seams_mode == "uv" or (seams_mode in (None, "auto", "needed") and mesh.corner_uv is not None):
             if mesh.corner_uv is None:
                 raise BDError(f"{task.path} has no UVs, so --seams uv has nothing to cut along")
             seams = mesh.uv_seams()
@@ -71,11 +77,11 @@ def _unwrap_file(task, options, seams_mode):
 
 
 def _unwrap_blend(task, options, base):
-    """A .blend goes through the Blender script in a child process (it needs ``bpy``)."""
+    """A .blend (or FBX, Alembic, Collada, STL) goes through the Blender script in a child
+    process (it needs ``bpy``)."""
     if importlib.util.find_spec("bpy") is None:
-        raise BDError(f"{task.path}: reading .blend files needs the bpy module "
-                      "(pip install bpy) or Blender itself: blender -b FILE --python "
-                      "scripts/bd_uv_batch.py -- ...")
+        raise BDError(f"{task.path}: reading {os.path.splitext(task.path)[1]} files needs the bpy "
+                      f"module (pip install bpy) or Blender itself: {blender_command(task.path)}")
     if not os.path.isfile(SCRIPT):
         raise BDError(f"{task.path}: reading .blend files needs the extension's "
                       f"scripts/bd_uv_batch.py, not found at {SCRIPT}: set "
@@ -112,16 +118,18 @@ def _script_options(options):
         out += ["--boundary", o.boundary]
     if o.stretch is not None:
         out += ["--stretch", str(o.stretch)]
+    out += ["--seams", "needed" if o.seams_mode == "needed" else "marked"]
     return out
 
 
 def input_files(paths):
-    """Expand folders (not recursively) into their OBJ/OFF/PLY/.blend files, sorted by name.
+    """Expand folders (not recursively) into their mesh and scene files (OBJ, OFF, PLY, glTF,
+    USD, and through Blender .blend, FBX, Alembic, Collada, STL), sorted by name.
 
     Files named explicitly are kept whatever their suffix (they fail in the report if unreadable);
     hidden files (such as an unfinished output's temporary name) are not taken from folders.
     """
-    suffixes = MESH_SUFFIXES + (BLEND_SUFFIX,)
+    suffixes = MESH_SUFFIXES + SCENE_SUFFIXES + BLENDER_SUFFIXES
     files = []
     for p in paths:
         if os.path.isdir(p):
@@ -138,7 +146,9 @@ def plan(files, out_dir, png_dir=None):
     tasks, used = [], set()
     for path in files:
         stem, ext = os.path.splitext(os.path.basename(path))
-        out_ext = BLEND_SUFFIX if ext.lower() == BLEND_SUFFIX else ".obj"
+        low = ext.lower()   # a scene is written in its own format; an STL (no UVs) as a .blend
+        out_ext = (BLEND_SUFFIX if low == ".stl" else low) if low in SCENE_SUFFIXES + \
+            BLENDER_SUFFIXES else ".obj"
         name, k = stem, 1
         while name.lower() in used:
             name = f"{stem}_{ext.lstrip('.').lower()}" if k == 1 else f"{stem}-{k}"

@@ -78,11 +78,15 @@ class JobOptions:
         Blender script packs with Blender instead
     cut : bool, cut an island whose stored UVs lie over themselves into overlap-free pieces
     margin : float, the packing margin in the unit square
+    uv_set : int, where a glTF scene's UVs go: ``TEXCOORD_<uv_set>`` (``bd_uv.scenes``)
+    uv_name : str, where a USD scene's UVs go: ``primvars:<uv_name>``
     """
     unwrap: UnwrapOptions = field(default_factory=UnwrapOptions)
     pack: bool = False
     cut: bool = False
     margin: float = MARGIN
+    uv_set: int = 0
+    uv_name: str = "st"
 
     @classmethod
     def of(cls, options):
@@ -99,13 +103,16 @@ class JobOptions:
         solve = {k: v for k, v in options.items() if k in OPTION_NAMES}
         if "cut" in options:  # unwrap() itself cuts (or fails) an island whose UVs overlap
             solve["overlap"] = "cut" if options["cut"] else "fail"
-        layout = {k: options[k] for k in ("pack", "cut", "margin") if k in options}
+        layout = {k: options[k] for k in ("pack", "cut", "margin", "uv_set", "uv_name")
+                  if k in options}
         return cls(UnwrapOptions(**solve), **layout)
 
     def as_dict(self):
         """Every option, flat and JSON-able (the report's "options", the journal's hash)."""
+        scene = {"uv_set": self.uv_set, "uv_name": self.uv_name} if (
+            self.uv_set, self.uv_name) != (0, "st") else {}   # as before for other files
         return {**self.unwrap.as_dict(), "pack": self.pack, "cut": self.cut,
-                "margin": self.margin}
+                "margin": self.margin, **scene}
 
 
 def _num(x):
@@ -138,6 +145,8 @@ def unwrap_job(job, options, png=None):
         o = options.unwrap
         if o.frames == "input-uv" and job.corner_uv is None:
             raise ValueError(f"{job.name} has no UVs to take frames from (--frames input-uv)")
+        if o.seams_mode == "needed" and job.pin_corners is not None and len(job.pin_corners):
+            o = o.replace(seams_mode="marked")   # pinned UVs: the islands as they are marked
         res = unwrap(job.V, job.F, job.seams, job.pin_corners, job.pin_uv,
                      initial_uv=job.corner_uv if o.frames == "input-uv" else None,
                      face_groups=job.face_groups, options=o)
@@ -159,6 +168,7 @@ def unwrap_job(job, options, png=None):
     if w.any():
         D[w] = conformal_distortion(job.V, np.asarray(job.F)[w], layout.corner_uv[w])
     entry["islands"] = islands
+    entry.update(res.seams_report())
     entry["status"] = "certified" if not bad else ("partial" if ok else "failed")
     entry.update(overlapping=t["overlapping_unwrapped"], cut_edges=t["cut_edges"],
                  layout_overlaps=t["layout_overlaps"])

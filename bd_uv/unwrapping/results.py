@@ -60,12 +60,23 @@ class IslandResult:
 
 @dataclass(frozen=True)
 class UnwrapResult:
-    """UVs of a whole mesh; ``corner_uv`` is NaN on faces of failed islands."""
+    """UVs of a whole mesh; ``corner_uv`` is NaN on faces of failed islands.
+
+    With ``seams_mode="needed"`` (``bd_uv.seams.needed.unwrap_needed``):
+    ``duplicate_of`` (m,) int64 or None: for a face left out of the solve as a duplicate
+    (``bd_uv.repair``), the face it duplicates (-1 for the others). Such a face is in no
+    island's ``faces``; its ``face_island`` and corner UVs are its twin's.
+    ``seams_added`` (k,2) int64 or None: vertex pairs of the seams the search added.
+    ``repair`` tuple of str: what was repaired before solving (``repair.Repair.notes``).
+    """
     corner_uv: np.ndarray
     face_island: np.ndarray
     islands: list
     seconds: float
     method: str
+    duplicate_of: np.ndarray = None
+    seams_added: np.ndarray = None
+    repair: tuple = ()
 
     @property
     def certified(self):
@@ -87,7 +98,15 @@ class UnwrapResult:
                 offset += len(r.uv)
         return (np.concatenate(uvs) if uvs else np.zeros((0, 2))), F_uv
 
+    def seams_report(self):
+        """``seams_added`` (vertex pairs) and ``repair`` (sentences) for the JSON report, when
+        seams were added where needed (``seams_mode="needed"``); {} otherwise."""
+        if self.seams_added is None:
+            return {}
+        return {"seams_added": np.asarray(self.seams_added).tolist(),
+                "repair": list(self.repair)}
+
     def report(self):
         """JSON-ready report: method, seconds and one entry per island."""
         return {"method": self.method, "seconds": round(self.seconds, 4),
-                "islands": [r.summary() for r in self.islands]}
+                **self.seams_report(), "islands": [r.summary() for r in self.islands]}

@@ -42,7 +42,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     V : (n,3) float array
     F : (m,3) int array
     seams : (s,2) int array, optional, vertex pairs of the edges to cut along (adding seams,
-        ``add_seams``/``seams="auto"``, is ``bd_uv.unwrap``'s: ``bd_uv.api``)
+        ``seams_mode="auto"``/``seams="auto"``, is ``bd_uv.unwrap``'s: ``bd_uv.api``)
     pin_corners : (p,) int array, optional, flat corner indices (face * 3 + corner)
     pin_uv : (p,2) float array, optional, the UV of each pinned corner (kept exactly)
     initial_uv : (m,3,2) float array, optional, per-corner UVs (needed for frames="input-uv":
@@ -75,8 +75,8 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     options, CancelledError when cancelled.
     """
     opts = unwrap_options(options, **values)
-    if isinstance(seams, str) or opts.add_seams:
-        raise OptionError("add_seams", "seams must be vertex pairs here: adding seams "
+    if isinstance(seams, str) or opts.adds_seams:
+        raise OptionError("seams_mode", "seams must be vertex pairs here: adding seams "
                           "(seams='auto') is bd_uv.unwrap's (the seam search, bd_uv.seams, "
                           "builds on this function)")
     t0 = time.perf_counter()
@@ -99,7 +99,7 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
     ----------
     V, F : checked arrays; isl : list of mesh.Island numbered 0.. by their smallest face
     pins : (corners (p,), uv (p,2)) as ``pin_arrays`` returns
-    options : UnwrapOptions (``add_seams`` False); initial_uv, face_groups, progress, cancel as
+    options : UnwrapOptions (``seams_mode="marked"``); initial_uv, face_groups, progress, cancel as
         ``unwrap``'s, already checked
     conformal : dict island index -> (nv,) complex128, optional: the island's free-boundary
         conformal map as ``batched.conformal_islands`` would solve it (unit-area normalisation,

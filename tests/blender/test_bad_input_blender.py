@@ -306,7 +306,7 @@ def test_object_that_cannot_be_solved_keeps_every_map(addon, capsys):
     cube.select_set(True)
     bpy.context.view_layer.objects.active = grid
     bpy.ops.object.mode_set(mode='EDIT')
-    result, reports = run(capsys, bound=2.0)
+    result, reports = run(capsys, bound=2.0, seams='MARKED')
     assert result == {'FINISHED'} and len(reports) == 1 and reports[0][0] == 'WARNING'
     message = reports[0][1]
     assert message.startswith("BD-LSCM: 1 island, max distortion ")

@@ -193,10 +193,11 @@ def installed(interpreter, linux_extension_zips, tmp_path_factory):
     python = python_version(interpreter)
     zip_path = linux_extension_zips[python]
     tmp = tmp_path_factory.mktemp("blender_user")
-    result, _ = run_child(interpreter, CHILD, {
+    result, log = run_child(interpreter, CHILD, {
         "BD_UV_ZIP": str(zip_path), "BD_UV_SHIM": str(tmp / "site"),
         "BD_UV_HIDE": json.dumps(hidden_packages(zip_path))}, tmp)
     result["python"] = python
+    result["log"] = log
     return result
 
 
@@ -213,7 +214,11 @@ def test_bundled_wheels_are_the_ones_imported(installed):
     for name, (path, _version) in installed["modules"].items():
         assert pathlib.Path(path).is_relative_to(site), (name, path)
     # scipy built for this Python; numpy is Blender's (here: the environment's).
-    assert installed["modules"]["scipy"][1] == "1.15.3"
+    # requirements.txt pins scipy per Python (1.15.3 for 3.11, 1.17.1 for 3.13: numpy < 2.7)
+    pins = (pathlib.Path(__file__).resolve().parents[2] / "requirements.txt").read_text()
+    want = "1.17.1" if installed["python"] == "3.13" else "1.15.3"
+    assert f"scipy=={want}" in pins
+    assert installed["modules"]["scipy"][1] == want
     tag = installed["python"].replace(".", "")
     assert site.parts[-2] == f"python{installed['python']}"
     assert list((site / "scipy" / "_lib").glob(f"*.cpython-{tag}-*.so"))
@@ -221,6 +226,13 @@ def test_bundled_wheels_are_the_ones_imported(installed):
     assert [p for p in so_files if f"cpython-{tag}-" not in p.name] == []
     assert not (site / "numpy").exists()
     assert not pathlib.Path(installed["numpy"]).is_relative_to(site)
+
+
+def test_bundled_wheels_import_without_warnings(installed):
+    # scipy 1.15.3 under numpy 2.5 (Blender 5.2) printed "A NumPy version >=1.23.5 and <2.5.0
+    # is required for this version of SciPy": each zip's scipy must accept Blender's numpy.
+    assert "NumPy version" not in installed["log"], installed["log"][-2000:]
+    assert "UserWarning" not in installed["log"], installed["log"][-2000:]
 
 
 def test_operator_from_the_zip_writes_certified_uvs(installed):

@@ -76,16 +76,20 @@ def test_build_exclusions_keep_development_files_out():
 
 
 def test_committed_wheel_list_matches_the_pins():
-    pins = build.bundled_pins(build.read_pins())
+    pins_of = {p: build.bundled_pins(build.read_pins(python=p)) for p in build.PYTHONS}
     wheels = committed_wheels()
     assert wheels, "blender_manifest.toml lists no wheels: run python build.py"
-    # Only pinned, bundled packages at their pinned versions; never numpy.
+    # Only pinned, bundled packages at the version pinned for each Python they serve; never numpy.
     for wheel in wheels:
-        assert wheel.name in pins, wheel.path.name
-        assert wheel.version == pins[wheel.name], wheel.path.name
+        served = [p for p in build.PYTHONS if wheel.serves_python(p)]
+        assert served, wheel.path.name
+        for python in served:
+            assert wheel.name in pins_of[python], wheel.path.name
+            assert wheel.version == pins_of[python][wheel.name], (wheel.path.name, python)
         assert wheel.name != "numpy"
     for platform in build.PLATFORM_TAGS:
         for python in build.PYTHONS:
+            pins = pins_of[python]
             serving = {w.name for w in wheels
                        if platform in w.platforms() and w.serves_python(python)}
             if python == "3.11":
@@ -138,20 +142,50 @@ def test_dependency_check_flags_what_blender_cannot_satisfy(tmp_path):
 @pytest.mark.parametrize("python", ["3.11", "3.13"])
 def test_real_pinned_wheels_need_nothing_blender_lacks(linux_extension_zips, python):
     # The cached wheels of the pins, downloaded by the zip fixture's build.
-    pins = build.bundled_pins(build.read_pins())
+    pins = build.bundled_pins(build.read_pins(python=python))
     directory = load_cache_dir("linux-x64", python)
     wheels = [build.Wheel(build.cached_wheel(directory, n, v)) for n, v in pins.items()]
     assert build.dependency_problems(wheels, "linux-x64", python) == []
-    # scipy's own numpy requirement, read from its metadata, admits Blender 4.2's numpy.
-    scipy = next(w for w in wheels if w.name == "scipy")
+    # Every bundled wheel's own numpy requirement, read from its metadata, admits the numpy of
+    # every Blender version README.md lists for this Python (read here from the README itself).
     from pip._vendor.packaging.requirements import Requirement
-    numpy_req = [Requirement(r) for r in scipy.requirements()]
-    numpy_req = [r for r in numpy_req if r.name == "numpy" and r.marker is None]
-    assert len(numpy_req) == 1
-    spec = numpy_req[0].specifier
-    # Blender 4.2's 1.24.3, 5.0's 1.26.4 and 5.1's 2.3.4 all satisfy it.
-    assert all(spec.contains(v) for v in ("1.24.3", "1.26.4", "2.3.4"))
-    assert not spec.contains("1.23.4") and not spec.contains("2.5.0")
+    listed = readme_blender_numpy()[python]
+    assert listed
+    checked = 0
+    for wheel in wheels:
+        for req in map(Requirement, wheel.requirements()):
+            if req.name != "numpy" or req.marker is not None:
+                continue
+            checked += 1
+            for numpy in listed:
+                assert req.specifier.contains(numpy), (wheel.path.name, str(req), numpy)
+    assert checked >= 3          # scipy, clarabel, trimesh, shapely, qdldl declare numpy
+    scipy = next(w for w in wheels if w.name == "scipy")
+    spec = next(r for r in map(Requirement, scipy.requirements()) if r.name == "numpy").specifier
+    assert not spec.contains("1.23.4")
+
+
+def readme_blender_numpy():
+    """``{python: numpy versions}`` from README.md's Blender table, parsed here (not by build.py)."""
+    text = (REPO_ROOT / "README.md").read_text(encoding="utf-8")
+    head = text.index("| Blender | Python | numpy |")
+    out = {}
+    for line in text[head:].splitlines()[2:]:
+        if not line.startswith("|"):
+            break
+        blender, python, numpys = [c.strip() for c in line.strip("|").split("|")]
+        out.setdefault(python, []).extend(v.strip() for v in numpys.split(","))
+    return out
+
+
+def test_readme_lists_every_blender_we_claim():
+    listed = readme_blender_numpy()
+    assert set(listed) == set(build.PYTHONS)
+    assert "2.5.5" in listed["3.13"] and "1.24.3" in listed["3.11"]     # Blender 5.2 LTS, 4.2 LTS
+    assert {p: set(v) for p, v in build.BLENDER_NUMPY.items()} == {
+        p: set(v) for p, v in listed.items()}
+    # scipy 1.15.3 (numpy < 2.5) would warn under Blender 5.2: the 3.13 zips must not pin it.
+    assert build.read_pins(python="3.13")["scipy"] != "1.15.3"
 
 
 def load_cache_dir(platform, python):
@@ -189,16 +223,18 @@ def test_built_zip_passes_validator_and_checks(linux_extension_zips, python):
                       if "linux-x64" in w.platforms() and w.serves_python(python))
     assert wheels == expected
     tag = "cp" + python.replace(".", "")
+    scipy = build.read_pins(python=python)["scipy"]
     assert [w for w in wheels if w.startswith("scipy-")] == [
-        f"scipy-1.15.3-{tag}-{tag}-manylinux_2_17_x86_64.manylinux2014_x86_64.whl"]
+        w for w in expected if w.startswith(f"scipy-{scipy}-{tag}-{tag}-")]
+    assert len([w for w in wheels if w.startswith("scipy-")]) == 1
     assert not [n for n in names if "numpy" in n.lower()]
     assert {n.split("/", 1)[0] for n in names} <= {
         "__init__.py", "blender_manifest.toml", "README.md", "LICENSE", "bd_uv", "operators", "ui",
         "scripts", "wheels"}
     assert "__init__.py" in names and "bd_uv/__init__.py" in names
     assert path.stat().st_size <= 90e6
-    assert build.check_zip(path, "linux-x64", python, build.bundled_pins(build.read_pins()),
-                           90.0) == []
+    assert build.check_zip(path, "linux-x64", python,
+                           build.bundled_pins(build.read_pins(python=python)), 90.0) == []
 
 
 def test_check_zip_catches_what_must_not_ship(tmp_path, linux_extension_zip):

@@ -163,11 +163,12 @@ def test_minimise_with_added_seams_is_refused(addon, capsys):
                                                           "poly_select"))
 
 
-def test_marked_is_still_the_default(addon, capsys):
-    """Seams "Marked" (the default) on a closed mesh still refuses to cut it: no seam added."""
+def test_marked_still_refuses_a_closed_mesh(addon, capsys):
+    """Seams "Marked" (an explicit choice since issue 20) on a closed mesh still refuses to cut
+    it: no seam added."""
     obj = _uv_sphere(12, 6, uv=True)
     _edit_all(obj)
-    result, reports = run(capsys, 'EXEC_DEFAULT')
+    result, reports = run(capsys, 'EXEC_DEFAULT', seams='MARKED')
     assert result == {'CANCELLED'} and reports[0][0] == 'WARNING'
     set_mode(obj, 'OBJECT')
     assert not _seams(obj.data).any()

@@ -250,3 +250,40 @@ def test_an_island_failing_the_post_write_check_is_put_back(addon, monkeypatch):
     assert "island 0 of Grid (60 faces) put back as it was" in report and "made to fail" in report
     set_mode(obj, 'OBJECT')
     assert np.array_equal(loop_uv_array(obj.data), moved)
+
+
+def test_a_deformation_that_would_overlap_is_refused_and_the_island_left_as_it_was(addon):
+    """A U whose left arm's tip is pulled past the right one's: BD-Biharmonic's direct solve
+    lays the arms over each other and cannot be mended (``bd_uv.deform``): the island keeps its
+    UVs bit for bit and the report says why."""
+    import triangle
+    outline = np.array([(0, 0), (3, 0), (3, 2), (2, 2), (2, 0.5), (1, 0.5), (1, 2), (0, 2)],
+                       float)
+    seg = np.stack([np.arange(8), (np.arange(8) + 1) % 8], 1)
+    T = triangle.triangulate(dict(vertices=outline, segments=seg), "pq30a0.01")
+    V2, F = T["vertices"], T["triangles"]
+    mesh = bpy.data.meshes.new("U")
+    mesh.from_pydata(np.column_stack([V2, np.zeros(len(V2))]).tolist(), [], F.tolist())
+    mesh.update()
+    obj = bpy.data.objects.new("U", mesh)
+    bpy.context.scene.collection.objects.link(obj)
+    bpy.context.view_layer.objects.active = obj
+    obj.select_set(True)
+    layer = mesh.uv_layers.new(name="UVMap")
+    loop_vert = np.array([lp.vertex_index for lp in mesh.loops])
+    uv = V2[loop_vert] / 3.0
+    tips = [int(np.argmin(np.linalg.norm(V2 - p, axis=1))) for p in ([0.5, 2.0], [2.5, 2.0])]
+    uv[loop_vert == tips[0]] = (3.0 / 3.0, 2.0 / 3.0)
+    layer.uv.foreach_set("vector", uv.astype(np.float32).ravel())
+    layer.pin_ensure()
+    layer.pin.foreach_set("value", np.isin(loop_vert, tips))
+    mesh.polygons.foreach_set("select", np.ones(len(mesh.polygons), bool))
+    mesh.update()
+    before = loop_uv_array(mesh).tobytes()
+    set_mode(obj, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    assert bpy.ops.uv.bd_deform('EXEC_DEFAULT', method='biharmonic') == {'CANCELLED'}
+    report = bpy.context.window_manager.bd_uv_last_result.report
+    assert "left as it was: the deformation would lay the island over itself" in report
+    set_mode(obj, 'OBJECT')
+    assert loop_uv_array(mesh).tobytes() == before

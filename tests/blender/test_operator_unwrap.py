@@ -137,7 +137,7 @@ def test_closed_island_reports_and_changes_nothing(addon):
     before = loop_uv_array(obj.data).tobytes()
     assert len(obj.data.polygons) == 128
     _edit_all(obj)
-    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT') == {'CANCELLED'}
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', seams='MARKED') == {'CANCELLED'}
     message = bpy.context.window_manager.bd_uv_last_result.report
     assert message == ("BD-LSCM: nothing unwrapped; island 0 of Sphere (128 faces) is closed: it "
                        "has no boundary and cannot be flattened; mark seams that cut it open; "
@@ -157,7 +157,7 @@ def test_a_failed_island_is_named_and_the_others_are_written(addon):
     mesh = obj.data
     before = loop_uv_array(mesh).copy()
     _edit_all(obj)
-    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=3.0) == {'FINISHED'}  # a WARNING
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=3.0, seams='MARKED') == {'FINISHED'}
     report = bpy.context.window_manager.bd_uv_last_result.report
     assert report.startswith("BD-LSCM: 1 island, max distortion")
     assert "island 1 of Grid (6 faces) is closed" in report and "seam" in report.lower()

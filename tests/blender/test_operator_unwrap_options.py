@@ -67,14 +67,15 @@ def test_bound_not_raised_fails_clearly_and_raised_succeeds(addon):
     set_mode(obj, 'EDIT')
     bpy.ops.mesh.select_all(action='SELECT')
     # Nothing done: CANCELLED with a WARNING (no RuntimeError), the grid counted in polygons.
-    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=1.001, raise_bound=False) == {'CANCELLED'}
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=1.001, raise_bound=False,
+                                seams='MARKED') == {'CANCELLED'}
     assert re.search(r"island 0 of Grid \(30 faces\) left as it was: no map within distortion "
                      r"1\.001", bpy.context.window_manager.bd_uv_last_result.report)
     set_mode(obj, 'OBJECT')
     assert loop_uv_array(obj.data).tobytes() == before
     set_mode(obj, 'EDIT')
     assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=1.001, raise_bound=True,
-                                bound_limit=50.0) == {'FINISHED'}
+                                bound_limit=50.0, seams='MARKED') == {'FINISHED'}
     last = bpy.context.window_manager.bd_uv_last_result
     assert 1.001 < last.bound_certified <= 50.0
     set_mode(obj, 'OBJECT')

@@ -7,8 +7,8 @@ from conftest import bpy, load_addon, load_submodule
 
 
 CLASS_NAMES = ("UV_OT_bd_unwrap", "UV_OT_bd_show_distortion", "UV_OT_bd_select_distorted",
-               "UV_OT_bd_deform", "MESH_OT_bd_improve", "IMAGE_PT_bd_uv_result",
-               "BDUV_PG_last_result")
+               "UV_OT_bd_deform", "UV_OT_bd_live", "MESH_OT_bd_improve",
+               "IMAGE_PT_bd_uv_result", "BDUV_PG_last_result")
 
 
 def _footprint():
@@ -64,7 +64,7 @@ def test_register_unregister_leaves_nothing_behind(empty_scene):
         names, ops, props, menus = _footprint()
         assert set(CLASS_NAMES) <= names
         assert ops == {"bd_unwrap", "bd_show_distortion", "bd_select_distorted", "bd_deform",
-                       "mesh.bd_improve"}
+                       "bd_live", "mesh.bd_improve"}
         assert props == {"bd_uv_last_result"}
         assert menus != before[3]
         addon.unregister()
@@ -99,6 +99,6 @@ def test_panel_shows_the_last_result(addon):
     assert labels == ["BD-LSCM: 3 islands, 1 failed", "Max distortion 2.312",
                       "Mean distortion 1.250", "Certified C 5", "Flipped 0", "Time 1.75 s"]
     ops = [c[1] for c in fake.layout.calls if c[0] == "operator"]
-    assert ops == ["uv.bd_unwrap", "uv.bd_deform", "uv.bd_show_distortion",
+    assert ops == ["uv.bd_unwrap", "uv.bd_deform", "uv.bd_live", "uv.bd_show_distortion",
                    "uv.bd_select_distorted"]
     assert np.isclose(last.max_distortion, 2.3125)

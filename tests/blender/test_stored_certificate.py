@@ -80,7 +80,9 @@ def test_the_operator_passes_unwrap_options_with_the_cores_defaults(addon, monke
     assert props["bound"].keywords["default"] == defaults.bound
     assert props["frames"].keywords["default"] == defaults.frames
     assert props["raise_bound"].keywords["default"] == defaults.raise_bound
-    assert props["seams"].keywords["default"] == ('AUTO' if defaults.add_seams else 'MARKED')
+    # The operator starts where every entry point does: options.ENTRY_SEAMS_MODE ("needed").
+    assert props["seams"].keywords["default"] == \
+        {"needed": 'NEEDED', "auto": 'AUTO', "marked": 'MARKED'}[core.options.ENTRY_SEAMS_MODE]
     seen = []
 
     def recording(*args, **kwargs):
@@ -95,8 +97,8 @@ def test_the_operator_passes_unwrap_options_with_the_cores_defaults(addon, monke
     set_mode(obj, 'OBJECT')
     (options,) = seen
     assert isinstance(options, core.UnwrapOptions)
-    assert (options.bound, options.method, options.raise_bound, options.add_seams) == \
-        (2.5, "arap", False, False)
+    assert (options.bound, options.method, options.raise_bound, options.seams_mode) == \
+        (2.5, "arap", False, "marked")
     mesh = obj.data
     mesh.calc_loop_triangles()
     tris = np.array([t.vertices[:] for t in mesh.loop_triangles])

@@ -67,7 +67,8 @@ def folder(tmp_path):
 
 def test_folder_good_files_written_bad_ones_reported_exit_1(folder, tmp_path, capsys):
     out, png = tmp_path / "out", tmp_path / "png"
-    code = run(folder, "-o", out, "--jobs", "2", "--bound", "3", "--png", png)
+    # --seams none: the closed tetrahedron fails as marked (the default would add its seams)
+    code = run(folder, "-o", out, "--jobs", "2", "--bound", "3", "--png", png, "--seams", "none")
     assert code == 1  # tetra and broken failed
     rep = json.loads((out / "report.json").read_text())
     items = {os.path.basename(e["input"]): e for e in rep["items"]}
@@ -165,7 +166,7 @@ def test_refuses_to_overwrite_an_input(folder, capsys):
 
 def test_no_input_files_is_a_usage_error(tmp_path, capsys):
     assert run(tmp_path, "-o", tmp_path / "out") == 2
-    assert "no .obj/.off/.ply/.blend files" in capsys.readouterr().err
+    assert "no mesh or scene files" in capsys.readouterr().err
 
 
 def test_blend_without_bpy_is_a_failed_entry(tmp_path, monkeypatch):

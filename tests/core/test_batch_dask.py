@@ -51,7 +51,8 @@ def write_off(path, V, F):
 
 def asset_folder(folder, big=10, small=30, seed=0):
     """``big`` perturbed copies of three_peaks.off, ``small`` of nefertiti.off, a closed
-    tetrahedron and an unreadable PLY: ``big + small + 2`` files."""
+    tetrahedron (fails with ``--seams none``) and an unreadable PLY: ``big + small + 2``
+    files."""
     folder.mkdir(parents=True, exist_ok=True)
     rng = np.random.default_rng(seed)
     for name, count in (("three_peaks", big), ("nefertiti", small)):
@@ -74,7 +75,7 @@ def by_input(report_path):
 def test_dask_batch_survives_a_killed_worker_and_matches_the_local_pool(tmp_path):
     files = asset_folder(tmp_path / "in", big=6, small=32)
     assert len(files) == 40
-    assert run(tmp_path / "in", "-o", tmp_path / "pool", "--jobs", "2", "--bound", "4") == 1
+    assert run(tmp_path / "in", "-o", tmp_path / "pool", "--jobs", "2", "--bound", "4", "--seams", "none") == 1
 
     with dask.config.set({"distributed.scheduler.allowed-failures": 2}), \
             distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
@@ -95,7 +96,7 @@ def test_dask_batch_survives_a_killed_worker_and_matches_the_local_pool(tmp_path
 
         killer = threading.Thread(target=kill_one_worker_mid_run, daemon=True)
         killer.start()
-        code = run(tmp_path / "in", "-o", tmp_path / "dask", "--bound", "4",
+        code = run(tmp_path / "in", "-o", tmp_path / "dask", "--bound", "4", "--seams", "none",
                    "--scheduler", cluster.scheduler_address)
         killer.join(timeout=30)
         assert code == 1 and killed["keys"]
@@ -139,7 +140,7 @@ def test_scheduler_local_starts_a_cluster_and_runs_files_in_watched_children(tmp
     is unwrapped in a child forked by the worker (the limits themselves: test_batch.py)."""
     asset_folder(tmp_path / "in", big=1, small=2)
     out = tmp_path / "out"
-    assert run(tmp_path / "in", "-o", out, "--bound", "4", "--scheduler", "local",
+    assert run(tmp_path / "in", "-o", out, "--bound", "4", "--seams", "none", "--scheduler", "local",
                "--jobs", "2", "--file-timeout", "60") == 1
     rep, items = by_input(out / "report.json")
     assert rep["summary"]["scheduler"] == "local" and rep["summary"]["jobs"] == 2

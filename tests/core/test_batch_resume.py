@@ -44,7 +44,7 @@ def test_killed_batch_resumes_without_recomputing_certified_outputs(tmp_path):
     out = tmp_path / "out"
     journal = out / "report.json.journal"
     cmd = [sys.executable, "-m", "bd_uv", "batch", str(tmp_path / "in"), "-o", str(out),
-           "--jobs", "1", "--bound", "4"]
+           "--jobs", "1", "--bound", "4", "--seams", "none"]
     proc = subprocess.Popen(cmd, cwd=REPO, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
     deadline = time.monotonic() + 60
     while len(journal_lines(journal)) < 5 and proc.poll() is None and time.monotonic() < deadline:
@@ -70,7 +70,7 @@ def test_killed_batch_resumes_without_recomputing_certified_outputs(tmp_path):
     untouched = {n: v for n, v in kept.items() if n not in (changed, deleted)}
 
     time.sleep(0.01)   # a file rewritten now gets a later mtime even on coarse clocks
-    assert run(tmp_path / "in", "-o", out, "--jobs", "2", "--bound", "4", "--resume") == 1
+    assert run(tmp_path / "in", "-o", out, "--jobs", "2", "--bound", "4", "--seams", "none", "--resume") == 1
 
     rep = json.loads((out / "report.json").read_text())
     s = rep["summary"]
@@ -98,7 +98,7 @@ def test_killed_batch_resumes_without_recomputing_certified_outputs(tmp_path):
 
     # nothing certified changes on a second resume; other options redo everything
     mtimes = {n: os.stat(e["output"]).st_mtime_ns for n, e in items.items() if e["output"]}
-    assert run(tmp_path / "in", "-o", out, "--jobs", "1", "--bound", "4", "--resume") == 1
+    assert run(tmp_path / "in", "-o", out, "--jobs", "1", "--bound", "4", "--seams", "none", "--resume") == 1
     again = json.loads((out / "report.json").read_text())
     assert again["summary"]["resumed"] == len(files) - 2
     assert {n: os.stat(e["output"]).st_mtime_ns for n, e in items.items() if e["output"]} == mtimes

@@ -74,11 +74,12 @@ def test_obj_uv_seams_define_the_islands(tmp_path):
 
 
 def test_failed_island_gives_nonzero_exit_and_one_line(tmp_path):
-    # A closed tetrahedron: no boundary, needs seams.
+    # A closed tetrahedron: no boundary, needs seams (with --seams none nothing adds them).
     src = tmp_path / "tet.off"
     src.write_text("OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n")
     out = tmp_path / "o.obj"
-    r = _run("unwrap", str(src), "-o", str(out))
+    assert _run("unwrap", str(src), "-o", str(out)).returncode == 0  # the default adds seams
+    r = _run("unwrap", str(src), "-o", str(out), "--seams", "none")
     assert r.returncode == 1
     errs = [l for l in r.stderr.splitlines() if l.startswith("error:")]
     assert len(errs) == 1 and "closed" in errs[0] and "seams" in errs[0]

@@ -129,3 +129,61 @@ def test_cli_deform(tmp_path, annulus):
     r = subprocess.run([sys.executable, "-m", "bd_uv", "deform", str(src), "-o", str(out),
                         "--handles", str(hj)], capture_output=True, text=True)
     assert r.returncode == 2 and r.stderr.startswith("error:")
+
+
+def _u_shape():
+    """A U (two arms 1 wide and 1.5 long on a 3 x 0.5 base) and its arms' tips."""
+    outline = np.array([(0, 0), (3, 0), (3, 2), (2, 2), (2, 0.5), (1, 0.5), (1, 2), (0, 2)],
+                       float)
+    V, F = mesh_polygon(outline, area=0.01)
+
+    def near(p):
+        return int(np.argmin(np.linalg.norm(V - p, axis=1)))
+    return V, F, near
+
+
+@pytest.mark.parametrize("method", ["arap", "lscm"])
+def test_a_deformation_that_would_overlap_is_mended_in_certified_steps(method):
+    """The left tip pulled past the right one: the direct solve lays the arms over each other
+    (free boundary, two handles); the result is found by dragging there instead."""
+    V, F, near = _u_shape()
+    H = np.array([near([0.5, 2.0]), near([2.5, 2.0])])
+    P = np.array([[3.0, 2.0], [2.5, 2.0]])
+    res = deform(V, F, H, P, method=method, bound=5.0)
+    assert res.mended and res.overlap_free
+    assert np.array_equal(res.uv[H], P)
+    s, det = svd_of_maps(V, res.uv, F)
+    assert np.all(det > 0) and np.max(s[:, 0] / s[:, 1]) <= 5.0
+    assert overlapping_pairs(res.uv, F) == 0
+
+
+def test_a_deformation_that_would_overlap_and_cannot_be_mended_is_refused():
+    V, F, near = _u_shape()
+    H = np.array([near([0.5, 2.0]), near([2.5, 2.0])])
+    with pytest.raises(bd_uv.OverlapError, match="over itself"):
+        deform(V, F, H, np.array([[3.0, 2.0], [2.5, 2.0]]), method="biharmonic", bound=5.0)
+    H3 = np.array([near([0.5, 2.0]), near([2.5, 2.0]), near([1.5, 0.0])])
+    P3 = np.array([[2.7, 2.0], [0.3, 2.0], V[H3[2]]])       # the arms swapped, base held
+    with pytest.raises(bd_uv.OverlapError, match="no overlap-free map"):
+        deform(V, F, H3, P3, method="arap", bound=5.0)
+
+
+def test_every_result_carries_its_overlap_test(annulus):
+    V, F, H, P = annulus
+    res = deform(V, F, H, P, method="arap", bound=5.0)
+    assert res.overlap_free and not res.mended
+
+
+def test_cli_deform_refusing_an_overlap_exits_1_with_one_line(tmp_path):
+    V, F, near = _u_shape()
+    src = tmp_path / "u.obj"
+    bd_uv.write_obj(str(src), np.column_stack([V, 0 * V[:, 0]]), F)
+    hj = tmp_path / "handles.json"
+    H = [near([0.5, 2.0]), near([2.5, 2.0])]
+    hj.write_text(json.dumps({"vertices": H, "positions": [[3.0, 2.0], [2.5, 2.0]]}))
+    r = subprocess.run([sys.executable, "-m", "bd_uv", "deform", str(src), "-o",
+                        str(tmp_path / "out.obj"), "--handles", str(hj), "--method",
+                        "biharmonic", "--bound", "5"], capture_output=True, text=True)
+    assert r.returncode == 1
+    assert r.stderr.startswith("error: the deformation would lay the island over itself")
+    assert not (tmp_path / "out.obj").exists()

@@ -11,6 +11,7 @@ from bd_uv import OptionError, UnwrapOptions
 from bd_uv.arguments import unwrap_options_of
 from bd_uv.batch import JobOptions
 from bd_uv.cli import build_parser
+from bd_uv.options import ENTRY_SEAMS_MODE
 from bd_uv.scheduling import options_sha256
 from helpers import reference_distortion
 
@@ -28,9 +29,9 @@ def bumpy_grid(n=6):
 
 def test_defaults_are_todays():
     o = UnwrapOptions()
-    assert (o.add_seams, o.method, o.bound, o.frames, o.raise_bound, o.bound_limit, o.cone,
+    assert (o.seams_mode, o.method, o.bound, o.frames, o.raise_bound, o.bound_limit, o.cone,
             o.time_budget, o.stretch, o.boundary, o.overlap) == \
-        (False, "lscm", 5.0, "auto", True, 1000.0, "soc", None, None, "free", "cut")
+        ("marked", "lscm", 5.0, "auto", True, 1000.0, "soc", None, None, "free", "cut")
     assert o.seams_stretch == 2.0 and UnwrapOptions(stretch=3.0).seams_stretch == 3.0
 
 
@@ -50,11 +51,12 @@ def test_defaults_are_todays():
     (dict(overlap="keep"), "overlap"),
     (dict(boundary="circle", bound="auto"), "boundary"),
     (dict(boundary="circle", frames="conformal"), "boundary"),
-    (dict(add_seams=True, bound="auto"), "add_seams"),
-    (dict(add_seams=True, boundary="circle"), "add_seams"),
-    (dict(add_seams=True, frames="input-uv"), "add_seams"),
-    (dict(add_seams=True, stretch=0.5), "stretch"),
-    (dict(add_seams="auto"), "add_seams"),
+    (dict(seams_mode="auto", bound="auto"), "seams_mode"),
+    (dict(seams_mode="auto", boundary="circle"), "seams_mode"),
+    (dict(seams_mode="auto", frames="input-uv"), "seams_mode"),
+    (dict(seams_mode="auto", stretch=0.5), "stretch"),
+    (dict(seams_mode=True), "seams_mode"),
+    (dict(seams_mode="everywhere"), "seams_mode"),
 ])
 def test_a_bad_option_is_named(values, option):
     with pytest.raises(OptionError) as info:
@@ -74,7 +76,7 @@ def test_frozen_and_pickled_as_they_are():
     assert json.loads(json.dumps(job.as_dict()))["bound"] == 3.0
     with pytest.raises(OptionError):
         o.replace(bound=5.0)          # replace checks again: S = 2 < sqrt(5)
-    assert UnwrapOptions(add_seams=True).seams_stretch == 2.0   # the seam search's S: any >= 1
+    assert UnwrapOptions(seams_mode="auto").seams_stretch == 2.0   # the seam search's S: any >= 1
 
 
 def test_keywords_and_the_object_unwrap_alike():
@@ -93,11 +95,14 @@ def test_keywords_and_the_object_unwrap_alike():
 
 def test_the_command_line_defaults_are_the_options_defaults():
     for command in (["unwrap", "x.obj", "-o", "y.obj"], ["batch", "x", "-o", "y"]):
-        assert unwrap_options_of(build_parser().parse_args(command)) == UnwrapOptions()
+        # The entry points start in ENTRY_SEAMS_MODE ("needed"); every other default is the
+        # options' own.
+        assert unwrap_options_of(build_parser().parse_args(command)) == \
+            UnwrapOptions(seams_mode=ENTRY_SEAMS_MODE)
     args = build_parser().parse_args(["unwrap", "x.obj", "-o", "y.obj", "--seams", "auto",
                                       "--bound", "2", "--no-raise", "--overlap", "fail"])
-    assert unwrap_options_of(args) == UnwrapOptions(add_seams=True, bound=2.0, raise_bound=False,
-                                                    overlap="fail")
+    assert unwrap_options_of(args) == UnwrapOptions(seams_mode="auto", bound=2.0,
+                                                    raise_bound=False, overlap="fail")
     args = build_parser().parse_args(["batch", "x", "-o", "y", "--bound", "auto"])
     assert unwrap_options_of(args).time_budget == 120.0     # the command line's budget
 

@@ -201,4 +201,6 @@ def test_cli_and_batch_seams_auto(tmp_path):
     assert main(["unwrap", str(src), "-o", str(out), "--seams", "auto", "--bound", "auto"]) == 2
     assert main(["batch", str(src), "-o", str(tmp_path / "b"), "--seams", "auto", "--bound", "2",
                  "--jobs", "1"]) == 0
-    assert main(["unwrap", str(src), "-o", str(out), "--bound", "2"]) == 1   # closed: refused
+    # closed: refused as marked; the default (--seams needed) adds the seams it needs
+    assert main(["unwrap", str(src), "-o", str(out), "--bound", "2", "--seams", "none"]) == 1
+    assert main(["unwrap", str(src), "-o", str(out), "--bound", "2"]) == 0

@@ -1,0 +1,95 @@
+"""One scene file (glTF, USD): every mesh unwrapped as a job, the file written back whole.
+
+Shared by ``python -m bd_uv unwrap`` and ``batch``. Each mesh of the scene
+(:mod:`bd_uv.scenes`) is one :class:`Job`; a mesh is written only when every one of its faces is
+certified, and it is certified again from the UVs exactly as the format stores them (glTF:
+float32 with v downwards; USD: float32). A mesh that fails keeps the UVs it had, and its entry
+says so. The report names each mesh by its node paths (glTF) or prim path (USD).
+"""
+import os
+import time
+
+import numpy as np
+
+from ..certificate import certificate_totals
+from ..errors import BDError
+from ..scenes import Charts, read_scene
+from ..scheduling.entries import failed_entry
+from .jobs import Job, JobOptions, unwrap_job
+
+
+def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=None):
+    """Unwrap every mesh of ``path`` and write the scene to ``output``.
+
+    Parameters
+    ----------
+    path, output : str, the scene file read and the one written (same family: glTF or USD)
+    options : JobOptions (or what ``JobOptions.of`` takes): the unwrap and layout options, and
+        where the UVs go (``uv_set``: glTF ``TEXCOORD_<uv_set>``; ``uv_name``: USD primvar)
+    seams_mode : None | "uv" | "none" | "auto", as for OBJ files (the file's UVs give seams)
+    png : str or None, ``png`` path pattern: ``<stem>-<k>.png`` per mesh is drawn beside it
+    base : dict, fields every entry starts with (input, object, output)
+
+    Returns
+    -------
+    list of dict, one report entry per mesh (``name``: node or prim path)
+    """
+    if os.path.abspath(path) == os.path.abspath(output):
+        raise BDError(f"{output} would overwrite its input; choose another output")
+    base = dict(base or {"input": os.path.abspath(path), "object": None, "output": None})
+    options = JobOptions.of(options)
+    scene = read_scene(path, uv_set=options.uv_set, uv_name=options.uv_name)
+    if not scene.meshes:
+        raise BDError(f"{path} holds no triangle or polygon mesh")
+    entries, charts = [], {}
+    for k, sm in enumerate(scene.meshes):
+        where = {**base, "object": sm.name, **sm.info}
+        if sm.refused:
+            entries.append(failed_entry(sm.name, "SceneFileError", sm.refused, **where))
+            continue
+        t0 = time.perf_counter()
+        png_k = None if png is None else f"{os.path.splitext(png)[0]}-{k}.png"
+        try:
+            job = Job(sm.name, sm.mesh.V, sm.mesh.F, seams=_seams(sm, seams_mode, path),
+                      corner_uv=sm.mesh.corner_uv, face_groups=sm.face_groups)
+            result = unwrap_job(job, options, png=png_k)
+        except BDError as exc:
+            entries.append(failed_entry(sm.name, type(exc).__name__, str(exc),
+                                        seconds=round(time.perf_counter() - t0, 4), **where))
+            continue
+        entry = {**where, **result.entry, "warnings": list(sm.warnings)}
+        lay = result.layout
+        if lay is not None and entry["status"] == "certified" and (lay.face_island >= 0).all():
+            bounds = np.array([c.bound for c in lay.certificates], dtype=np.float64)
+            charts[k] = Charts(lay.corner_uv, lay.face_island, bounds)
+        elif entry["status"] != "failed":
+            entry["warnings"].append("not every face was certified: the mesh keeps the UVs it "
+                                     "had")
+        entries.append(entry)
+    stored = scene.write(output, charts)
+    for k, entry in zip(range(len(scene.meshes)), entries):
+        if k not in stored:
+            continue
+        certs, warnings = stored[k]
+        entry["warnings"] += warnings
+        t = certificate_totals(certs)
+        entry["stored"] = {"islands": t["islands"], "certified": t["certified"],
+                           "max_distortion": t["max_distortion"], "flipped": int(t["flipped"]),
+                           "overlap_free": t["overlapping"] == 0}
+        if t["certified"] < t["islands"]:
+            entry.update(status="failed", error="SceneFileError",
+                         message="; ".join(c.reason for c in certs if not c.certified))
+        else:
+            entry["output"] = os.path.abspath(output)
+    return entries
+
+
+def _seams(sm, seams_mode, path):
+    """The seams of one scene mesh: where the file's UVs are discontinuous (default when it has
+    UVs, or ``--seams uv``), none, or those kept by ``--seams auto``."""
+    has = sm.mesh.corner_uv is not None
+    if seams_mode == "uv" and not has:
+        raise BDError(f"{path}: {sm.name} has no UVs, so --seams uv has nothing to cut along")
+    if seams_mode == "none" or not has:
+        return None
+    return sm.mesh.uv_seams()

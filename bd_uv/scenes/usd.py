@@ -1,0 +1,255 @@
+"""OpenUSD scenes (``.usd``, ``.usda``, ``.usdc``, ``.usdz``) with ``usd-core``: every
+``UsdGeom.Mesh`` unwrapped, UVs written as an indexed faceVarying ``texCoord2f[]`` primvar.
+
+Reading: each mesh prim of the composed stage (references, payloads and variant selections
+resolved) in its own space; polygons are fan-triangulated for the solve, and the triangles of
+one polygon are one ``face_group`` so that seams run only along polygon edges, never through a
+quad. Holes (``holeIndices``) are not unwrapped. Time-sampled points: the rest pose (the
+default value, else the first time sample, with a warning). The existing primvar (``st``, or the
+name asked) gives the seams, as an OBJ's ``vt`` do.
+
+Writing: the input layer is never edited. The output's root layer is a copy of the input's root
+layer with every relative asset path (sublayers, references, payloads, textures) re-anchored so it
+resolves from the output folder, and the new primvar is authored in it as an opinion (an ``over``
+when the mesh is defined in a referenced layer or payload). Overrides rather than a flattened
+stage: references, payloads and variant sets stay composition arcs (a library asset stays shared,
+the variants stay selectable), and everything the unwrap does not touch keeps its source. Points,
+topology, normals, other primvars, bindings, xforms and metadata are not written at all. A
+``.usdz`` output is packaged with its dependencies (``UsdUtils.CreateNewUsdzPackage``).
+"""
+import os
+
+import numpy as np
+
+from ..certificate import certify_islands
+from ..errors import SceneFileError
+from ..meshio import Mesh
+from ..scheduling.atomic import atomic_path
+from .model import SceneMesh
+
+
+def _pxr():
+    from pxr import Sdf, Usd, UsdGeom, UsdUtils, Vt
+    return Sdf, Usd, UsdGeom, UsdUtils, Vt
+
+
+def fan_triangles(counts):
+    """Fan triangulation of polygons, in face-vertex ids.
+
+    Parameters
+    ----------
+    counts : (p,) int array, vertices of each polygon (>= 3)
+
+    Returns
+    -------
+    T : (m,3) int64 face-vertex ids (into faceVertexIndices), polygon j's triangles
+        (s, s+i, s+i+1) for i = 1 .. counts[j]-2, s its first face-vertex
+    poly : (m,) int64 polygon of each triangle
+    """
+    counts = np.asarray(counts, dtype=np.int64)
+    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    ntri = counts - 2
+    poly = np.repeat(np.arange(len(counts)), ntri)
+    i = np.arange(len(poly)) - np.repeat(np.cumsum(ntri) - ntri, ntri) + 1
+    s = start[poly]
+    return np.stack([s, s + i, s + i + 1], 1), poly
+
+
+class UsdScene:
+    """A USD stage read for unwrapping; ``meshes`` one :class:`SceneMesh` per mesh prim."""
+
+    def __init__(self, path, uv_name, meshes, parts):
+        self.path, self.uv_name, self.meshes, self._parts = path, uv_name, meshes, parts
+
+    @classmethod
+    def read(cls, path, uv_name="st"):
+        Sdf, Usd, UsdGeom, _, _ = _pxr()
+        if not os.path.isfile(path):
+            raise SceneFileError(f"{path}: no such file")
+        try:
+            stage = Usd.Stage.Open(path)
+        except Exception as exc:  # pxr raises Tf.ErrorException for unreadable layers
+            raise SceneFileError(f"{path}: not a USD stage USD can open ({exc})") from exc
+        if stage is None:
+            raise SceneFileError(f"{path}: not a USD stage USD can open")
+        # what did not compose (a missing reference, payload or sublayer) is said on each mesh
+        errors = [f"composition: {e}" for e in getattr(stage, "GetCompositionErrors",
+                                                       lambda: [])()]
+        meshes, parts = [], []
+        for prim in stage.Traverse():
+            if not prim.IsA(UsdGeom.Mesh):
+                continue
+            where = f"{path}: prim {prim.GetPath()}"
+            m, part, info, warnings = _mesh_arrays(UsdGeom.Mesh(prim), where, uv_name, Usd)
+            name = str(prim.GetPath())
+            meshes.append(SceneMesh(name, m, info, None, part["poly"], warnings + errors))
+            parts.append(part)
+        for proto in stage.GetPrototypes():
+            meshes_in = [p for p in Usd.PrimRange(proto) if p.IsA(UsdGeom.Mesh)]
+            if meshes_in:
+                meshes.append(SceneMesh(
+                    str(meshes_in[0].GetPath()), None, {"prim": str(meshes_in[0].GetPath())},
+                    f"{len(meshes_in)} mesh(es) inside instanced prims (instanceable = true) are "
+                    "not unwrapped: USD does not allow opinions on instance proxies; make the "
+                    "prims not instanceable, or unwrap the referenced asset itself"))
+                parts.append(None)
+        scene = cls(path, uv_name, meshes, parts)
+        scene.layers = {os.path.realpath(p) for p in (
+            layer.realPath for layer in stage.GetUsedLayers()) if p}
+        return scene
+
+    def write(self, path, charts):
+        """Write the output layer with the new primvar on every mesh in ``charts``.
+
+        Returns
+        -------
+        dict {mesh position: (list of Certificate of the UVs as stored, list of warnings)}
+        """
+        Sdf, Usd, UsdGeom, UsdUtils, Vt = _pxr()
+        if os.path.realpath(path) in self.layers | {os.path.realpath(self.path)}:
+            raise SceneFileError(f"{path} would overwrite a layer {self.path} uses; choose "
+                                 "another output name or folder")
+        if not path.lower().endswith(".usdz"):
+            with atomic_path(path) as tmp:
+                return self._write_layer(tmp, charts)
+        import tempfile
+        out_dir = os.path.dirname(os.path.abspath(path))
+        os.makedirs(out_dir, exist_ok=True)
+        with tempfile.TemporaryDirectory(prefix=".bd-uv-tmp-", dir=out_dir) as folder:
+            layer_path = os.path.join(folder, os.path.splitext(os.path.basename(path))[0] + ".usdc")
+            result = self._write_layer(layer_path, charts)
+            with atomic_path(path) as ztmp:
+                if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(layer_path), ztmp):
+                    raise SceneFileError(f"{path}: the .usdz package could not be written")
+        return result
+
+    def _write_layer(self, layer_path, charts):
+        """A copy of the input's root layer at ``layer_path`` with asset paths re-anchored there,
+        and the new primvars authored in it."""
+        Sdf, Usd, UsdGeom, UsdUtils, Vt = _pxr()
+        src = Sdf.Layer.FindOrOpen(self.path)
+        if src is None:
+            raise SceneFileError(f"{self.path}: the root layer cannot be opened")
+        layer = Sdf.Layer.CreateNew(layer_path)
+        layer.TransferContent(src)
+        folder = os.path.dirname(os.path.abspath(layer_path))
+        UsdUtils.ModifyAssetPaths(layer, lambda p: _reanchor(src, p, folder))
+        stage = Usd.Stage.Open(layer)
+        result = {k: self._author(stage, k, ch, UsdGeom, Sdf, Vt) for k, ch in charts.items()}
+        layer.Save()
+        return result
+
+    def _author(self, stage, k, ch, UsdGeom, Sdf, Vt):
+        sm, part = self.meshes[k], self._parts[k]
+        uv32 = ch.corner_uv.astype(np.float32)
+        # one value per face-vertex: a polygon's triangles agree on it (seams only along edges)
+        nfv = part["n_face_vertices"]
+        fv_uv = np.zeros((nfv, 2), np.float32)
+        T = part["T"]
+        fv_uv[T.reshape(-1)] = uv32.reshape(-1, 2)
+        values, index = np.unique(fv_uv, axis=0, return_inverse=True)
+        index = index.reshape(-1)
+        back = values[index][T].astype(np.float64)        # the stored UVs, per triangle corner
+        certs = certify_islands(sm.mesh.V, sm.mesh.F, back, ch.face_island, ch.bounds)
+        if not all(c.certified for c in certs):
+            return certs, ["the UVs as stored (float32, one per face-vertex) do not certify; "
+                           "the mesh keeps the UVs it had"]
+        prim = stage.GetPrimAtPath(sm.name)
+        api = UsdGeom.PrimvarsAPI(prim)
+        warnings = []
+        old = api.GetPrimvar(self.uv_name)
+        if old and old.GetTypeName() != Sdf.ValueTypeNames.TexCoord2fArray:
+            warnings.append(f"primvars:{self.uv_name} was {old.GetTypeName()}; it becomes "
+                            "texCoord2f[]")
+            prim.RemoveProperty(old.GetAttr().GetName())
+        pv = api.CreatePrimvar(self.uv_name, Sdf.ValueTypeNames.TexCoord2fArray,
+                               UsdGeom.Tokens.faceVarying)
+        pv.SetInterpolation(UsdGeom.Tokens.faceVarying)
+        if pv.GetAttr().GetNumTimeSamples() or pv.GetIndicesAttr().GetNumTimeSamples():
+            warnings.append(f"primvars:{self.uv_name} had time samples; they are blocked so "
+                            "the new UVs hold at every time")
+            pv.GetAttr().Block()
+            pv.GetIndicesAttr().Block()
+        pv.Set(Vt.Vec2fArray.FromNumpy(values))
+        pv.SetIndices(Vt.IntArray.FromNumpy(index.astype(np.int32)))
+        return certs, warnings + part["warnings"]
+
+
+def _reanchor(src, asset, out_dir):
+    """A relative asset path of the input layer, rewritten to resolve from ``out_dir``."""
+    if not asset or "://" in asset or os.path.isabs(asset) or asset.startswith("@"):
+        return asset
+    inner = ""
+    if asset.endswith("]") and "[" in asset:     # a file inside a package: pkg.usdz[tex.png]
+        asset, inner = asset[:asset.index("[")], asset[asset.index("["):]
+    full = src.ComputeAbsolutePath(asset)
+    if not full or "[" in full:                  # inside the input package: left as it was
+        return asset + inner
+    if not asset.startswith(("./", "../")) and not os.path.exists(full):
+        return asset + inner                     # a search path, resolved by the resolver
+    rel = os.path.relpath(full, out_dir).replace(os.sep, "/")
+    return (rel if rel.startswith("../") else "./" + rel) + inner
+
+
+def _mesh_arrays(mesh, where, uv_name, Usd):
+    """(Mesh, write-back part, info, warnings) of one UsdGeom.Mesh."""
+    from pxr import UsdGeom
+    warnings = []
+    points_attr = mesh.GetPointsAttr()
+    P = points_attr.Get(Usd.TimeCode.Default())
+    if P is None and points_attr.GetNumTimeSamples():
+        t = points_attr.GetTimeSamples()[0]
+        P = points_attr.Get(t)
+        warnings.append(f"points are time-sampled with no default: unwrapped at time {t:g}")
+    counts = mesh.GetFaceVertexCountsAttr().Get()
+    indices = mesh.GetFaceVertexIndicesAttr().Get()
+    if P is None or counts is None or indices is None:
+        raise SceneFileError(f"{where}: a mesh without points, faceVertexCounts or "
+                             "faceVertexIndices")
+    if mesh.GetFaceVertexCountsAttr().GetNumTimeSamples() > 1:
+        raise SceneFileError(f"{where}: faceVertexCounts is time-sampled (changing topology); "
+                             "bd-uv unwraps one topology")
+    V = np.asarray(P, dtype=np.float64).reshape(-1, 3)
+    counts = np.asarray(counts, dtype=np.int64)
+    indices = np.asarray(indices, dtype=np.int64)
+    if counts.sum() != len(indices):
+        raise SceneFileError(f"{where}: faceVertexCounts sum to {int(counts.sum())} but there "
+                             f"are {len(indices)} faceVertexIndices")
+    if len(counts) and counts.min() < 3:
+        bad = int(np.flatnonzero(counts < 3)[0])
+        raise SceneFileError(f"{where}: face {bad} has {int(counts[bad])} vertices (< 3)")
+    if len(indices) and (indices.min() < 0 or indices.max() >= len(V)):
+        raise SceneFileError(f"{where}: a faceVertexIndex is out of range ({len(V)} points)")
+    T, poly = fan_triangles(counts)
+    holes = np.asarray(mesh.GetHoleIndicesAttr().Get() or [], dtype=np.int64)
+    keep = ~np.isin(poly, holes)
+    T, poly = T[keep], poly[keep]
+    if mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded:
+        T = T[:, ::-1].copy()                    # the front face winds clockwise
+    F = indices[T]
+    corner_uv = _existing_uv(mesh, uv_name, T, indices, len(V))
+    info = {"prim": str(mesh.GetPath()), "polygons": int(len(counts)),
+            "holes": int(len(holes)),
+            "subdivision": str(mesh.GetSubdivisionSchemeAttr().Get())}
+    part = {"T": T, "poly": poly, "n_face_vertices": len(indices), "warnings": warnings}
+    return Mesh(V, F, corner_uv, str(mesh.GetPath())), part, info, warnings
+
+
+def _existing_uv(mesh, uv_name, T, indices, n_points):
+    """The mesh's UVs per triangle corner (m,3,2), or None."""
+    from pxr import UsdGeom
+    pv = UsdGeom.PrimvarsAPI(mesh.GetPrim()).GetPrimvar(uv_name)
+    if not pv or not pv.HasValue():
+        return None
+    vals = pv.ComputeFlattened()
+    if vals is None:
+        return None
+    vals = np.asarray(vals, dtype=np.float64)
+    if vals.ndim != 2 or vals.shape[1] != 2:
+        return None
+    interp = pv.GetInterpolation()
+    if interp == UsdGeom.Tokens.faceVarying and len(vals) == len(indices):
+        return vals[T]
+    if interp in (UsdGeom.Tokens.vertex, UsdGeom.Tokens.varying) and len(vals) == n_points:
+        return vals[indices[T]]
+    return None

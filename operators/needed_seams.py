@@ -1,0 +1,95 @@
+"""``uv.bd_unwrap`` with Seams "Add Where Needed" (the default): the marked seams kept, seams added
+only to the islands that cannot be certified as they are, a messy mesh repaired first.
+
+1. ``bd_uv.repair.repair_mesh``: bow-tie vertices split per fan, edges of three or more faces and
+   edges between oppositely oriented parts cut (marked as seams afterwards, so the artist sees
+   them), zero-area faces left out (named in the report, their UVs untouched), duplicate faces
+   left out of the solve and written with their twin's UVs (``verify.verify_written`` checks
+   them through their twin);
+2. the islands of the marked seams are unwrapped as Seams "Marked" does
+   (:func:`auto_seams.whole_polygons` of ``bd_uv.unwrap``) at C, C never raised;
+3. the islands that fail (closed, handles, no map within C, overlapping themselves) go to
+   :func:`auto_seams.solve` at ``min(C, AUTO_BOUND)`` and S, the marked seams kept.
+
+No ``bpy``: numpy and ``bd_uv`` only (runs in the background job).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ..bd_uv.repair import repair_mesh
+from ..bd_uv.seams.measure import splice
+from ..bd_uv.seams.needed import AUTO_BOUND, needs_seams, pairs_in, result_on_input
+from . import auto_seams
+
+__all__ = ["applies", "solve"]
+
+
+def applies(minimise, frames, boundary, pinned):
+    """Whether Seams "Add Where Needed" adds seams: not with Minimise, From Current UVs
+    (``frames == "input-uv"``), a fixed ``boundary`` or ``pinned`` UVs (seams added cannot keep
+    those: the islands are then taken as marked, as with Seams "Marked")."""
+    return not minimise and frames != "input-uv" and boundary == "free" and not pinned
+
+
+def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0,
+          marked_stretch=None, face_groups=None, method="lscm", frames="auto", overlap="cut",
+          progress=None, cancel=None):
+    """Unwrap with seams added only where an island cannot be certified.
+
+    Parameters
+    ----------
+    V : (n,3) float, F : (m,3) int, the batch (triangles of Blender polygons)
+    unwrap : callable, ``bd_uv.unwrap`` (the operator's ``SOLVE``)
+    tri_poly : (m,) int, tri_loops : (m,3) int, as for :func:`auto_seams.solve`
+    seams : (s,2) int, the marked seams (all kept)
+    bound : float, C of the islands the marked seams make (not raised)
+    stretch : float, S of the charts the seams added make
+    marked_stretch : float, optional, Limit Stretch of the islands the marked seams make
+    face_groups : (m,) int, optional, material of each triangle (seams prefer its boundaries)
+    overlap : "cut" | "fail", an island of the marked seams whose map lies over itself: cut
+        (and, failing that, given seams) or left as it was and named (Overlaps "Keep as One")
+    method, frames, progress, cancel : as for ``bd_uv.unwrap``
+
+    Returns
+    -------
+    auto_seams.AutoSeams, its ``added`` also holding the edges the repair cut, ``notes`` what
+    was repaired
+    """
+    V = np.asarray(V, np.float64)
+    F = np.asarray(F, np.int64)
+    tri_poly = np.asarray(tri_poly, np.int64)
+    tri_loops = np.asarray(tri_loops, np.int64)
+    rep = repair_mesh(V, F)
+    V2, F2, keep = rep.V, rep.F, rep.faces
+    tp, tl = tri_poly[keep], tri_loops[keep]
+    seams2 = rep.seams(seams)
+    options = dict(method=method, frames=frames, progress=progress, cancel=cancel)
+    added = np.zeros((0, 2), dtype=np.int64)
+    if not len(F2):
+        from ..bd_uv.unwrapping.results import UnwrapResult
+        res = UnwrapResult(np.zeros((0, 3, 2)), np.zeros(0, np.int64), [], 0.0, method)
+    else:
+        extra = {} if marked_stretch is None else {"stretch": float(marked_stretch)}
+        res = auto_seams.whole_polygons(unwrap, V2, F2, tri_poly=tp, tri_loops=tl, seams=seams2,
+                                        bound=float(bound), raise_bound=False, overlap=overlap,
+                                        face_groups=tp, **extra, **options)
+        bad = [r for r in res.islands if r.status != "certified" and needs_seams(r, overlap)]
+        if bad:
+            sub = np.sort(np.concatenate([r.faces for r in bad]))
+            voc, Fl = np.unique(F2[sub], return_inverse=True)
+            groups = None if face_groups is None else np.asarray(face_groups)[keep][sub]
+            auto = auto_seams.solve(V2[voc], Fl.reshape(-1, 3), tri_poly=tp[sub],
+                                    tri_loops=tl[sub], seams=pairs_in(seams2, voc),
+                                    bound=min(float(bound), AUTO_BOUND), stretch=float(stretch),
+                                    face_groups=groups, **options)
+            res = splice(res, auto.result, sub, voc, len(F2))
+            added = voc[auto.added]
+    result = result_on_input(res, rep, F, method)
+    added = rep.vertex_source[added] if len(added) else added
+    cuts = [p for p in (added, rep.nonmanifold_edges, rep.orientation_edges) if len(p)]
+    added = (np.unique(np.sort(np.concatenate(cuts), axis=1), axis=0) if cuts
+             else np.zeros((0, 2), dtype=np.int64))
+    charts = sum(1 for r in result.islands if r.status == "certified")
+    return auto_seams.AutoSeams(result, added, charts, tuple(rep.notes(
+        indices=False, count=lambda tris: len(np.unique(tri_poly[tris])))))

@@ -1,0 +1,177 @@
+"""Issue 20, item 2: real meshes as they come, through the core API and the command line.
+
+Each mesh carries one defect (a bow-tie vertex inside one island, an edge of three faces, a part
+oriented against the rest, a duplicate face, a zero-area face). With the default seams
+("needed") every other face is unwrapped and certified: recomputed here from the stored UVs
+(SVD of each face's map, signed areas, an exact triangle overlap test), and the report names the
+defect. A closed mesh without ``--seams`` unwraps too.
+"""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from bd_uv.layout import stored_layout
+from bd_uv.repair import repair_mesh
+from bd_uv.seams.needed import unwrap_needed
+from helpers import reference_distortion
+from overlap_shapes import overlapping_triangle_pairs
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+C = 5.0
+
+
+def _grid(nx=4, ny=3):
+    """A gently curved triangulated grid, vertex (i, j) at index i * (ny + 1) + j."""
+    xs, ys = np.meshgrid(np.arange(nx + 1.0), np.arange(ny + 1.0), indexing="ij")
+    V = np.stack([xs.ravel(), ys.ravel(), 0.1 * np.sin(xs.ravel() + 0.5 * ys.ravel())], 1)
+    i = (np.arange(nx)[:, None] * (ny + 1) + np.arange(ny)[None, :]).ravel()
+    F = np.concatenate([np.stack([i, i + ny + 1, i + ny + 2], 1),
+                        np.stack([i, i + ny + 2, i + 1], 1)])
+    return V, F
+
+
+def bowtie():
+    """The grid's corners (0,0) and (4,0) made one vertex: two fans of it in one island."""
+    V, F = _grid()
+    F[F == 4 * 4] = 0
+    return V, F, set(), "non-manifold vertex"
+
+
+def three_faces_on_an_edge():
+    """A fin triangle on the inner edge (1,1)-(2,1)."""
+    V, F = _grid()
+    a, b = 1 * 4 + 1, 2 * 4 + 1
+    V = np.vstack([V, [[1.5, 1.0, 1.0]]])
+    return V, np.vstack([F, [[a, b, len(V) - 1]]]), set(), "three or more faces"
+
+
+def flipped_part():
+    """The first column of faces wound the other way."""
+    V, F = _grid()
+    F = F.copy()
+    first = np.isin(np.arange(len(F)) % 12, np.arange(3))   # faces of column i = 0
+    F[first] = F[first][:, ::-1]
+    return V, F, set(), "oriented against each other"
+
+
+def duplicate_face():
+    V, F = _grid()
+    return V, np.vstack([F, F[7][[1, 2, 0]]]), set(), "duplicate face"
+
+
+def zero_area_face():
+    """A sliver on three collinear points hanging off the grid's border."""
+    V, F = _grid()
+    V = np.vstack([V, 0.5 * (V[0] + V[4])])     # the midpoint of the border edge (0,0)-(1,0)
+    z = len(F)
+    return V, np.vstack([F, [[0, len(V) - 1, 4]]]), {z}, "zero-area"
+
+
+def non_finite_vertex():
+    """A triangle hanging off the grid's border on a vertex with a NaN coordinate."""
+    V, F = _grid()
+    V = np.vstack([V, [[0.5, -1.0, np.nan]]])
+    z = len(F)
+    return V, np.vstack([F, [[0, len(V) - 1, 4]]]), {z}, "NaN or infinite"
+
+
+DEFECTS = [bowtie, three_faces_on_an_edge, flipped_part, duplicate_face, zero_area_face,
+           non_finite_vertex]
+
+
+def _check_certified(V, F, corner_uv, skip):
+    """Every face but ``skip`` has stored UVs: none flipped, distortion <= C, no two faces
+    overlapping (a duplicate may lie exactly on its twin: the pair is its own)."""
+    mask = np.ones(len(F), dtype=bool)
+    mask[list(skip)] = False
+    uv = corner_uv[mask]
+    assert np.isfinite(uv).all()
+    D, flipped = reference_distortion(V, F[mask], uv)
+    assert not flipped.any() and D.max() <= C * (1 + 1e-6)
+    pairs = overlapping_triangle_pairs(uv)
+    same = np.array([set(F[mask][i]) == set(F[mask][j]) for i, j in pairs], dtype=bool)
+    assert same.all(), pairs[~same]
+
+
+@pytest.mark.parametrize("make", DEFECTS, ids=lambda f: f.__name__)
+def test_core_api_unwraps_every_other_face(make):
+    V, F, skip, words = make()
+    res = unwrap_needed(V, F)
+    assert any(words in note for note in res.repair), res.repair
+    layout = stored_layout(V, F, res, dtype=np.float32)
+    _check_certified(V, F, layout.corner_uv, skip)
+    # Only the faces that cannot be certified at all are named failed, their UVs not written.
+    failed = [r for r in res.islands if r.status != "certified"]
+    assert sorted(int(f) for r in failed for f in r.faces) == sorted(skip)
+    assert np.isnan(layout.corner_uv[list(skip)]).all()
+
+
+@pytest.mark.parametrize("make", DEFECTS, ids=lambda f: f.__name__)
+def test_command_line_unwraps_every_other_face(make, tmp_path):
+    V, F, skip, words = make()
+    src = tmp_path / "messy.obj"
+    src.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V)
+                   + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F))
+    out, rep = tmp_path / "out.obj", tmp_path / "r.json"
+    r = subprocess.run([sys.executable, "-m", "bd_uv", "unwrap", str(src), "-o", str(out),
+                        "--report", str(rep)], capture_output=True, text=True, cwd=REPO)
+    assert r.returncode == (1 if skip else 0), r.stderr
+    assert words in r.stdout
+    report = json.loads(rep.read_text())
+    assert any(words in note for note in report["repair"])
+    vt, ft = [], []
+    for line in out.read_text().splitlines():
+        p = line.split()
+        if p and p[0] == "vt":
+            vt.append([float(t) for t in p[1:3]])
+        elif p and p[0] == "f":
+            ft.append([int(t.split("/")[1]) - 1 if "/" in t else -1 for t in p[1:]])
+    vt, ft = np.array(vt), np.array(ft)
+    corner_uv = np.where((ft >= 0)[:, :, None], vt[np.maximum(ft, 0)], np.nan)
+    _check_certified(V, F, corner_uv, skip)
+    assert (ft[list(skip)] < 0).all()
+
+
+def test_closed_mesh_without_seams_unwraps_from_the_command_line(tmp_path):
+    src = tmp_path / "tet.off"
+    src.write_text("OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 1 2 3\n3 0 3 2\n")
+    rep = tmp_path / "r.json"
+    r = subprocess.run([sys.executable, "-m", "bd_uv", "unwrap", str(src), "-o",
+                        str(tmp_path / "o.obj"), "--report", str(rep)], capture_output=True,
+                       text=True, cwd=REPO)
+    assert r.returncode == 0, r.stderr
+    report = json.loads(rep.read_text())
+    assert len(report["seams_added"]) > 0
+
+
+def test_marked_seams_that_make_disks_get_no_new_seam():
+    # A closed tetrahedron cut open along a spanning tree of three edges: one certifiable disk.
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    F = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
+    seams = np.array([[0, 1], [0, 2], [0, 3]])
+    res = unwrap_needed(V, F, seams=seams)
+    assert len(res.seams_added) == 0 and res.certified and len(res.islands) == 1
+
+
+def test_public_unwrap_takes_seams_needed():
+    # bd_uv.unwrap keeps "marked" by default (a closed mesh fails); seams="needed" cuts it.
+    import bd_uv
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    F = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
+    assert not bd_uv.unwrap(V, F).certified
+    res = bd_uv.unwrap(V, F, seams="needed")
+    assert res.certified and len(res.seams_added) > 0
+    D, flipped = reference_distortion(V, F, res.corner_uv)
+    assert not flipped.any() and D.max() <= 2.0 * (1 + 1e-6)   # charts cut at min(C, 2)
+
+
+def test_clean_mesh_is_left_as_it_is():
+    V, F = _grid()
+    rep = repair_mesh(V, F)
+    assert not rep.changed and rep.notes() == []
+    np.testing.assert_array_equal(rep.F, F)
+    np.testing.assert_array_equal(rep.V, V)

@@ -1,0 +1,242 @@
+"""USD stages in and out whole: every authored value of the composed input survives, the new
+``primvars:st`` (texCoord2f[], faceVarying, indexed) is certified from the file as written, the
+input layers are untouched, references resolve from another output folder."""
+import hashlib
+import json
+import os
+
+import numpy as np
+import pytest
+
+from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt  # usd-core: requirements-dev.txt
+
+from bd_uv.cli import main
+from bd_uv.errors import SceneFileError
+from bd_uv.scenes import read_scene
+from helpers import reference_distortion
+from overlap_shapes import overlapping_triangle_pairs
+from usd_build import build_stage, quad_grid
+
+NEW = ("primvars:st", "primvars:st:indices")
+
+
+def _tree_digest(folder):
+    out = {}
+    for root, _, files in os.walk(folder):
+        for f in files:
+            p = os.path.join(root, f)
+            out[os.path.relpath(p, folder)] = hashlib.sha256(open(p, "rb").read()).hexdigest()
+    return out
+
+
+def _values(attr):
+    vals = [attr.Get(Usd.TimeCode.Default())] + [attr.Get(t) for t in attr.GetTimeSamples()]
+    if attr.GetTypeName() == Sdf.ValueTypeNames.Asset:
+        return [None if v is None else os.path.realpath(v.resolvedPath) for v in vals]
+    return [None if v is None else (np.asarray(v).tolist() if hasattr(v, "__len__") else v)
+            for v in vals], attr.GetTimeSamples()
+
+
+def _check_everything_kept(stage_in, stage_out):
+    n = 0
+    for prim in stage_in.Traverse():
+        other = stage_out.GetPrimAtPath(prim.GetPath())
+        assert other, prim.GetPath()
+        assert other.GetTypeName() == prim.GetTypeName()
+        assert other.GetCustomData() == prim.GetCustomData()
+        assert other.GetAppliedSchemas() == prim.GetAppliedSchemas()
+        assert other.GetVariantSets().GetNames() == prim.GetVariantSets().GetNames()
+        for attr in prim.GetAttributes():
+            if attr.GetName() in NEW or not attr.HasAuthoredValue():
+                continue
+            assert _values(other.GetAttribute(attr.GetName())) == _values(attr), attr.GetPath()
+            n += 1
+        for rel in prim.GetRelationships():
+            assert other.GetRelationship(rel.GetName()).GetTargets() == rel.GetTargets()
+    return n
+
+
+def _check_st(stage, path, bound):
+    """Certify the stored primvar from the file, with this test's own fan triangulation."""
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath(path))
+    pv = UsdGeom.PrimvarsAPI(mesh.GetPrim()).GetPrimvar("st")
+    assert pv.GetTypeName() == Sdf.ValueTypeNames.TexCoord2fArray
+    assert pv.GetInterpolation() == UsdGeom.Tokens.faceVarying and pv.IsIndexed()
+    assert pv.GetAttr().GetNumTimeSamples() == 0
+    uv = np.asarray(pv.Get(), np.float64)[np.asarray(pv.GetIndices())]   # per face-vertex
+    P = np.asarray(mesh.GetPointsAttr().Get(), np.float64)
+    counts = np.asarray(mesh.GetFaceVertexCountsAttr().Get())
+    idx = np.asarray(mesh.GetFaceVertexIndicesAttr().Get())
+    tris, s = [], 0
+    for c in counts:
+        tris += [(s, s + i, s + i + 1) for i in range(1, c - 1)]
+        s += c
+    T = np.array(tris)
+    D, flipped = reference_distortion(P, idx[T], uv[T])
+    assert not flipped.any()
+    assert D.max() <= bound * (1 + 1e-9)
+    assert len(overlapping_triangle_pairs(uv[T])) == 0
+    return uv
+
+
+@pytest.mark.parametrize("out_name", ["shot_uv.usda", "shot_uv.usdc", "shot_uv.usd"])
+def test_round_trip_keeps_every_value(tmp_path, out_name):
+    src = tmp_path / "in"
+    shot, asset = build_stage(str(src))
+    before = _tree_digest(src)
+    out = tmp_path / "elsewhere" / "deeper" / out_name
+    assert main(["unwrap", shot, "-o", str(out), "--bound", "3",
+                 "--report", str(tmp_path / "r.json")]) == 0
+    assert _tree_digest(src) == before                     # the input layers are untouched
+    entries = {e["name"]: e for e in json.loads((tmp_path / "r.json").read_text())["meshes"]}
+    assert set(entries) == {"/World/Panel", "/World/Prop/Geo/Rock"}        # prim paths
+    assert all(e["status"] == "certified" for e in entries.values())
+    stage_in, stage_out = Usd.Stage.Open(shot), Usd.Stage.Open(str(out))
+    assert _check_everything_kept(stage_in, stage_out) > 10
+    # the texture still resolves from the output folder, to the same file
+    tex = stage_out.GetPrimAtPath("/World/Looks/Wood/Tex").GetAttribute("inputs:file").Get()
+    assert os.path.samefile(tex.resolvedPath, src / "lib" / "tex" / "wood.png")
+    binding = UsdShade.MaterialBindingAPI(stage_out.GetPrimAtPath("/World/Panel"))
+    assert binding.ComputeBoundMaterial()[0].GetPath() == "/World/Looks/Wood"
+    for path, e in entries.items():
+        _check_st(stage_out, path, e["bound_certified"])
+    # the referenced mesh got an over in the output layer; the asset layer holds no st
+    layer = Sdf.Layer.FindOrOpen(str(out))
+    spec = layer.GetPrimAtPath("/World/Prop/Geo/Rock")
+    assert spec.specifier == Sdf.SpecifierOver and "primvars:st" in spec.attributes
+    assert not Usd.Stage.Open(asset).GetPrimAtPath("/Asset/Geo/Rock").GetAttribute(
+        "primvars:st").IsValid()
+    # the rest pose was unwrapped; st is written once, for every time
+    panel = UsdGeom.Mesh(stage_out.GetPrimAtPath("/World/Panel"))
+    assert panel.GetPointsAttr().GetTimeSamples() == [10.0]
+
+
+def test_seams_only_along_polygon_edges_on_a_closed_quad_mesh(tmp_path):
+    """A closed box of quads needs seams: --seams auto cuts along quad edges only, and every
+    quad is one piece of UV (its fan triangles agree on every face-vertex)."""
+    n = 4
+    g = np.linspace(-1, 1, n + 1)
+    pts, polys = {}, []
+
+    def vid(p):
+        return pts.setdefault(tuple(np.round(p, 9)), len(pts))
+
+    for axis in range(3):
+        for sign in (-1, 1):
+            for i in range(n):
+                for j in range(n):
+                    quad = []
+                    for a, b in ((i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)):
+                        p = np.zeros(3)
+                        p[axis] = sign
+                        p[(axis + 1) % 3], p[(axis + 2) % 3] = g[a], g[b]
+                        quad.append(vid(p))
+                    polys.append(quad if sign > 0 else quad[::-1])
+    V = np.array(list(pts))
+    stage = Usd.Stage.CreateNew(str(tmp_path / "box.usda"))
+    m = UsdGeom.Mesh.Define(stage, "/Box")
+    m.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(V.astype(np.float32)))
+    m.CreateFaceVertexCountsAttr([4] * len(polys))
+    m.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.concatenate(polys).astype(np.int32)))
+    stage.GetRootLayer().Save()
+    out = tmp_path / "box_uv.usda"
+    assert main(["unwrap", str(tmp_path / "box.usda"), "-o", str(out), "--seams", "auto",
+                 "--bound", "2", "--report", str(tmp_path / "r.json")]) == 0
+    (e,) = json.loads((tmp_path / "r.json").read_text())["meshes"]
+    assert len(e["islands"]) >= 2
+    _check_st(Usd.Stage.Open(str(out)), "/Box", e["bound_certified"])
+
+
+def test_usdz_out(tmp_path):
+    shot, _ = build_stage(str(tmp_path / "in"))
+    out = tmp_path / "pkg" / "shot.usdz"
+    assert main(["unwrap", shot, "-o", str(out), "--bound", "3"]) == 0
+    stage = Usd.Stage.Open(str(out))
+    assert stage.GetPrimAtPath("/World/Prop/Geo/Rock").IsValid()      # packaged with the asset
+    _check_st(stage, "/World/Panel", 3.0)
+    assert not [f for f in os.listdir(out.parent) if f.startswith(".")]
+
+
+def test_malformed_stage_names_the_prim(tmp_path, capsys):
+    stage = Usd.Stage.CreateNew(str(tmp_path / "bad.usda"))
+    V, counts, idx = quad_grid(4, 3, bump=False)
+    m = UsdGeom.Mesh.Define(stage, "/Geo/Broken")
+    m.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(V.astype(np.float32)))
+    m.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy((counts + 1).astype(np.int32)))
+    m.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(idx.astype(np.int32)))
+    stage.GetRootLayer().Save()
+    with pytest.raises(SceneFileError, match="/Geo/Broken.*faceVertexCounts sum"):
+        read_scene(str(tmp_path / "bad.usda"))
+    assert main(["unwrap", str(tmp_path / "bad.usda"), "-o", str(tmp_path / "o.usda")]) == 2
+    assert "/Geo/Broken" in capsys.readouterr().err
+    assert not (tmp_path / "o.usda").exists()
+    (tmp_path / "junk.usda").write_text("this is not usd")
+    with pytest.raises(SceneFileError, match="junk.usda"):
+        read_scene(str(tmp_path / "junk.usda"))
+
+
+def test_holes_instances_and_points_only_time_sampled(tmp_path):
+    """A hole is not unwrapped (its corners get one value); a mesh inside an instanceable prim is
+    reported, not written; points with time samples only are unwrapped at the first sample."""
+    stage = Usd.Stage.CreateNew(str(tmp_path / "a.usda"))
+    V, counts, idx = quad_grid(5, 4, bump=False)
+    m = UsdGeom.Mesh.Define(stage, "/Holed")
+    m.CreatePointsAttr().Set(Vt.Vec3fArray.FromNumpy(V.astype(np.float32)), 1.0)
+    m.GetPointsAttr().Set(Vt.Vec3fArray.FromNumpy((2 * V).astype(np.float32)), 5.0)
+    m.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(counts.astype(np.int32)))
+    m.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(idx.astype(np.int32)))
+    m.CreateHoleIndicesAttr([5])                       # an interior quad
+    proto = stage.CreateClassPrim("/Proto")              # abstract: only its instance is seen
+    leaf = UsdGeom.Mesh.Define(stage, "/Proto/Leaf")
+    leaf.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(V.astype(np.float32)))
+    leaf.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(counts.astype(np.int32)))
+    leaf.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(idx.astype(np.int32)))
+    inst = stage.DefinePrim("/Inst")
+    inst.GetReferences().AddInternalReference("/Proto")
+    inst.SetInstanceable(True)
+    stage.GetRootLayer().Save()
+    assert proto
+    out = tmp_path / "b.usda"
+    assert main(["unwrap", str(tmp_path / "a.usda"), "-o", str(out), "--bound", "3",
+                 "--report", str(tmp_path / "r.json")]) == 1          # the instance is not done
+    entries = {e["name"]: e for e in json.loads((tmp_path / "r.json").read_text())["meshes"]}
+    holed = entries["/Holed"]
+    assert holed["status"] == "certified" and holed["faces"] == 2 * (len(counts) - 1)
+    assert any("time 1" in w for w in holed["warnings"])
+    (inst_entry,) = [e for p, e in entries.items() if p != "/Holed" and p != "/Proto/Leaf"]
+    assert "instanceable" in inst_entry["message"] and inst_entry["status"] == "failed"
+    stage_out = Usd.Stage.Open(str(out))
+    pv = UsdGeom.PrimvarsAPI(stage_out.GetPrimAtPath("/Holed")).GetPrimvar("st")
+    fv = np.asarray(pv.GetIndices()).reshape(-1, 4)
+    assert len(set(fv[5].tolist())) == 1                                 # the hole's corners
+    keep = np.ones(len(counts), bool)
+    keep[5] = False
+    uv = np.asarray(pv.Get(), np.float64)[fv[keep]]                      # (q,4,2) quads
+    P = np.asarray(V, np.float64)[idx.reshape(-1, 4)[keep]]
+    T = np.array([[0, 1, 2], [0, 2, 3]])
+    tri_uv = uv[:, T].reshape(-1, 3, 2)
+    D, flipped = reference_distortion(P[:, T].reshape(-1, 3), np.arange(3 * len(tri_uv))
+                                      .reshape(-1, 3), tri_uv)
+    assert not flipped.any() and D.max() <= holed["bound_certified"] * (1 + 1e-9)
+
+
+def test_never_overwrites_a_layer_the_input_uses(tmp_path, capsys):
+    shot, asset = build_stage(str(tmp_path))
+    before = _tree_digest(tmp_path)
+    assert main(["unwrap", shot, "-o", asset]) == 2
+    assert "would overwrite a layer" in capsys.readouterr().err
+    assert _tree_digest(tmp_path) == before
+
+
+def test_uv_name_writes_another_primvar_and_keeps_st(tmp_path):
+    shot, _ = build_stage(str(tmp_path / "in"))
+    out = tmp_path / "o.usda"
+    assert main(["unwrap", shot, "-o", str(out), "--bound", "3", "--uv-name", "lightmap"]) == 0
+    s_in, s_out = Usd.Stage.Open(shot), Usd.Stage.Open(str(out))
+    p_in = UsdGeom.PrimvarsAPI(s_in.GetPrimAtPath("/World/Panel"))
+    p_out = UsdGeom.PrimvarsAPI(s_out.GetPrimAtPath("/World/Panel"))
+    assert np.array_equal(np.asarray(p_in.GetPrimvar("st").Get()),
+                          np.asarray(p_out.GetPrimvar("st").Get()))
+    assert p_out.GetPrimvar("st").GetInterpolation() == UsdGeom.Tokens.vertex
+    lm = p_out.GetPrimvar("lightmap")
+    assert lm.GetInterpolation() == UsdGeom.Tokens.faceVarying and lm.IsIndexed()
