@@ -58,7 +58,7 @@ REQUIREMENTS = ROOT / "requirements.txt"
 
 # Packages the zips carry as wheels: the core's runtime needs and their own runtime dependencies
 # (clarabel declares cffi, cffi needs pycparser). Versions come from requirements.txt.
-BUNDLED = ("scipy", "clarabel", "cffi", "pycparser", "trimesh", "shapely", "qdldl")
+BUNDLED = ("scipy", "clarabel", "cffi", "pycparser", "trimesh", "shapely", "qdldl", "spyrrow")
 # Provided by Blender itself: never bundled, and no file of it may appear in a zip.
 PROVIDED_BY_BLENDER = ("numpy",)
 README = ROOT / "README.md"

@@ -19,6 +19,8 @@ from .metrics import (certify, conformal_distortion, face_jacobians, flipped_fac
                       mean_distortion, signed_uv_areas, singular_values)
 from .mesh import Island, islands
 from .overlap import island_overlaps, layout_overlaps
+from . import packing
+from .packing import PackOptions, layout_certificate, pack_islands
 from .meshio import Mesh, load_mesh, write_obj
 from .options import UnwrapOptions
 from .api import unwrap

@@ -7,7 +7,7 @@ import argparse
 
 from .options import (AUTO_SEAMS_STRETCH, BOUNDARIES, CONES, ENTRY_SEAMS_MODE, FRAMES, METHODS,
                       OVERLAPS, UnwrapOptions)
-from .pack import MARGIN
+from .packing import ROTATIONS, PackOptions
 
 # Every default below is UnwrapOptions' own: changing one there changes it here.
 DEFAULTS = UnwrapOptions()
@@ -122,16 +122,36 @@ def scene_option_misuse(args, paths):
 
 
 def add_layout_options(p):
-    """How the UVs are stored (``unwrap`` and ``batch``): cut overlaps, pack, margin."""
+    """How the UVs are stored (``unwrap`` and ``batch``): cut overlaps, pack and its options."""
     p.add_argument("--no-pack", action="store_true",
                    help="keep each island at (0, 0) instead of packing them into the unit square")
-    p.add_argument("--margin", type=float, default=MARGIN,
-                   help=f"packing margin between islands, in the unit square (default {MARGIN:g})")
+    p.add_argument("--resolution", type=int, default=1024,
+                   help="texture size in texels the packing is measured at (default 1024)")
+    p.add_argument("--padding", type=float, default=4.0,
+                   help="least gap between two charts in texels at --resolution, half of it to "
+                        "the square's edge (default 4)")
+    p.add_argument("--texel-density", type=float, default=None,
+                   help="texels per scene unit for every chart (default: one density, as large "
+                        "as fits the square)")
+    p.add_argument("--rotate", choices=ROTATIONS, default="any",
+                   help="turns a chart may make when packed (never a mirror; default any)")
+    p.add_argument("--pack-seconds", type=int, default=1,
+                   help="seconds each nesting solve may search (it runs 3); 0: the first "
+                        "placement found, in milliseconds, for a little less coverage (default 1)")
+    p.add_argument("--udim", action="store_true",
+                   help="with --texel-density: charts that do not fit tile 1001 spill into 1002, "
+                        "1003, ... (Blender's UDIM numbering)")
     p.add_argument("--overlap", choices=OVERLAPS, default=DEFAULTS.overlap,
                    help="an island whose UVs lie over themselves: cut it into overlap-free "
                         "pieces (default, the cut edges are reported), or fail it")
 
 
 def layout_kwargs(args):
-    """The :func:`bd_uv.layout.stored_layout` keyword arguments from parsed options."""
-    return dict(pack=not args.no_pack, cut=args.overlap == "cut", margin=args.margin)
+    """The :func:`bd_uv.layout.stored_layout` keyword arguments from parsed options: packed by
+    the atlas packer (``pack_options``) unless ``--no-pack``. Bad packing options raise
+    ``PackError`` here, before anything is solved."""
+    pack = not args.no_pack
+    options = PackOptions(resolution=args.resolution, padding_px=args.padding,
+                          texel_density=args.texel_density, rotate=args.rotate,
+                          udim=args.udim, solve_seconds=args.pack_seconds) if pack else None
+    return dict(pack=pack, cut=args.overlap == "cut", pack_options=options)

@@ -8,7 +8,6 @@ import contextlib
 import json
 import os
 import sys
-import time
 
 import numpy as np
 
@@ -24,30 +23,11 @@ from .errors import BDError, OptionError
 from .layout import stored_layout
 from .meshio import load_mesh, write_obj
 from .planar_cli import add_planar_parsers
+from .progress import TerminalProgress
 from .scenes import BLENDER_SUFFIXES, GLTF_SUFFIXES, SCENE_SUFFIXES, USD_SUFFIXES, read_scene
 from .scheduling.atomic import atomic_path
 from .seams import unwrap_auto
 from .seams.needed import AUTO_BOUND
-
-
-class ProgressBar:
-    """A one-line progress bar on stderr (only when stderr is a terminal, or forced)."""
-
-    def __init__(self, enabled=None, stream=sys.stderr):
-        self.stream = stream
-        self.enabled = stream.isatty() if enabled is None else enabled
-        self.last = 0.0
-
-    def __call__(self, fraction, message):
-        now = time.monotonic()
-        if not self.enabled or (now - self.last < 0.1 and fraction < 1.0):
-            return
-        self.last = now
-        n = int(30 * fraction)
-        self.stream.write(f"\r[{'#' * n}{'.' * (30 - n)}] {100 * fraction:5.1f}% {message[:60]:<60}")
-        if fraction >= 1.0:
-            self.stream.write("\n")
-        self.stream.flush()
 
 
 def check_outputs(*paths):
@@ -76,6 +56,7 @@ def run_unwrap(args):
             read_scene(args.input)     # raises with the Blender command that handles the file
         return run_scene_unwrap(args)
     options = unwrap_options_of(args)
+    layout_options = layout_kwargs(args)      # bad packing options: said before solving
     mesh = load_mesh(args.input)
     if args.seams == "uv" and mesh.corner_uv is None:
         print(f"error: {args.input} has no UVs, so --seams uv has nothing to cut along",
@@ -89,17 +70,20 @@ def run_unwrap(args):
             print(f"error: --frames input-uv needs UVs in {args.input}", file=sys.stderr)
             return 2
         initial_uv = mesh.corner_uv
-    if options.seams_mode == "auto":
-        res = auto_seams(mesh, seams, options)
-    else:
-        res = unwrap(mesh.V, mesh.F, seams=seams, initial_uv=initial_uv, progress=ProgressBar(),
-                     options=options)
+    with TerminalProgress(quiet=args.quiet) as progress:
+        if options.seams_mode == "auto":
+            res = auto_seams(mesh, seams, options, progress)
+        else:
+            res = unwrap(mesh.V, mesh.F, seams=seams, initial_uv=initial_uv, progress=progress,
+                         options=options)
+        progress.stage("storing: cut, pack and certify the UVs as stored")
+        layout = stored_layout(mesh.V, mesh.F, res, **layout_options)
     if options.seams_mode == "needed":
         _print_needed(res, options, args.output)
-    layout = stored_layout(mesh.V, mesh.F, res, **layout_kwargs(args))
     islands = layout.island_entries(res)
     report = {"input": os.path.abspath(args.input), **res.report(), "islands": islands,
-              "summary": layout.totals(), "layout_overlaps": layout.overlaps.tolist()}
+              "summary": layout.totals(), "layout_overlaps": layout.overlaps.tolist(),
+              "pack": layout.pack}
     any_certified = any(e["status"] == "certified" for e in islands)
     # Every output goes to a temporary file first and is renamed into place only when all were
     # written (the OBJ first): a failed write leaves no file that looks like a result. With no
@@ -114,7 +98,7 @@ def run_unwrap(args):
                 D[w] = conformal_distortion(mesh.V, mesh.F[w], layout.corner_uv[w])
             bound = layout.totals()["bound"] or (args.bound if args.bound != "auto" else None)
             uv_layout_png(stack.enter_context(atomic_path(args.png)), layout.corner_uv, D, bound,
-                          layout.caption(mesh.name, args.method, res.seconds))
+                          layout.caption(mesh.name, args.method, res.seconds), **png_tiles(layout))
         if args.report:
             with open(stack.enter_context(atomic_path(args.report)), "w",
                       encoding="utf-8") as fh:
@@ -130,6 +114,14 @@ def run_unwrap(args):
         print(f"no island was certified: nothing was written to {args.output}"
               + (f" (the report {args.report} says why)" if args.report else ""))
     return 0 if not failed else 1
+
+
+def png_tiles(layout):
+    """uv_layout_png's ``tiles`` and ``padding`` for a layout packed by the atlas packer."""
+    if not layout.pack:
+        return {}
+    return dict(tiles=layout.pack["tiles"],
+                padding=layout.pack["padding_px"] / layout.pack["resolution"])
 
 
 def run_scene_unwrap(args):
@@ -179,13 +171,13 @@ def _print_needed(res, options, output):
                                           "\"seams_added\" in the report" if n else ""))
 
 
-def auto_seams(mesh, seams, options):
+def auto_seams(mesh, seams, options, progress=None):
     """Seams added where needed (``options.seams_mode == "auto"``): ``seams`` (the file's UV
-    seams, or None) kept, more added; prints what was added."""
+    seams, or None) kept, more added; prints what was added. ``progress(fraction, message)``,
+    optional."""
     res, added, info = unwrap_auto(mesh.V, mesh.F, seams=seams, bound=options.bound,
                                    stretch=options.seams_stretch, method=options.method,
-                                   frames=options.frames, cone=options.cone,
-                                   progress=ProgressBar())
+                                   frames=options.frames, cone=options.cone, progress=progress)
     print(f"seams auto: {info['charts']} charts, {len(added)} edges added, seam length "
           f"{info['seam_length']:.4g} ({100 * info['seam_length'] / info['edge_length']:.2f}% of "
           f"all edge length), max stretch {max(info['max_stretch'], default=1.0):.3f} <= "
@@ -202,6 +194,13 @@ def _print_report(name, islands, layout, seconds, args, out):
           f"{t['cut_edges'] + cut['edges']} edges), {t['layout_overlaps']} overlapping island pair(s)"
           f"{'' if layout.packed else ' (not packed)'}, {seconds:.2f} s -> {args.output}",
           file=out)
+    p = layout.pack
+    if p:
+        gap = "" if p["least_gap_px"] is None else f", least gap {p['least_gap_px']:.2f} px"
+        print(f"  packed: coverage {p['coverage']:.3f} at {p['resolution']} px{gap}, padding "
+              f"{p['padding_px']:g} px {'met' if p['certified'] else 'NOT met: ' + p['reason']}, "
+              f"tiles {', '.join(map(str, p['tiles']))}, {p['texel_density']:.4g} texels per "
+              f"unit, {p['seconds']:.2f} s", file=out)
     for e in islands:
         if e["status"] == "certified":
             cut = f", cut into {e['pieces']} pieces" if e["pieces"] > 1 else ""
@@ -241,6 +240,9 @@ def build_parser():
                         "input-uv and a fixed --boundary take the islands as they are")
     p.add_argument("--report", help="write the JSON report here")
     p.add_argument("--png", help="write a picture of the UV layout coloured by distortion")
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="no progress bar on stderr (there is none either when stderr is not a "
+                        "terminal); the report lines still print")
     p.set_defaults(func=run_unwrap)
     add_batch_parser(sub)
     add_planar_parsers(sub)

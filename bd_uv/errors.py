@@ -74,6 +74,11 @@ class OverlapError(IslandError):
     """The island's UVs lie over themselves (its UV boundary is not simple); cut it or mark seams."""
 
 
+class PackError(BDError):
+    """The charts cannot be packed with the options given (bad options, a chart larger than a
+    UDIM tile at the texel density asked for, or no layout that passes the layout certificate)."""
+
+
 class OptionError(BDError, ValueError):
     """An unwrap option out of its range, or options that cannot go together
     (``bd_uv.options.UnwrapOptions``). A ValueError too, as bad options always were.

@@ -32,6 +32,9 @@ class Layout:
     cut_edges : list of (c,2) int64 per unwrap island, the edges cut to remove its overlap
     overlaps : (p,2) int64, pairs of written stored islands that overlap each other
     packed : bool
+    pack : dict or None, with the atlas packer (``pack_options``): its figures measured on the
+        stored UVs (``seconds`` of packing alone, ``coverage``, ``resolution``, ``padding_px``,
+        ``least_gap_px``, ``tiles``, ... from :class:`bd_uv.packing.LayoutCertificate`)
     """
     corner_uv: np.ndarray
     face_island: np.ndarray
@@ -41,6 +44,7 @@ class Layout:
     cut_edges: list
     overlaps: np.ndarray
     packed: bool
+    pack: dict = None
 
     def vertex_uv(self, F):
         """One ``vt`` per (island, vertex, UV) of the written faces, for :func:`write_obj`.
@@ -119,18 +123,26 @@ class Layout:
             extra += f", {t['cut_islands']} island(s) cut ({t['cut_edges']} edges)"
         if t["layout_overlaps"]:
             extra += f", {t['layout_overlaps']} overlapping island pair(s)"
+        if self.pack:
+            p = self.pack
+            gap = "" if p["least_gap_px"] is None else f", least gap {p['least_gap_px']:.2f} px"
+            extra += (f", coverage {p['coverage']:.3f} at {p['resolution']} px{gap} (padding "
+                      f"{p['padding_px']:g} px{'' if p['certified'] else ', NOT met'})")
         return (f"{head}, {t['certified']}/{t['islands']} islands, {t['faces']} faces, max "
                 f"distortion {t['max_distortion']:.3f} <= {t['bound']:.3g}, mean "
                 f"{t['mean_distortion']:.3f}, 0 flipped, overlap-free{extra}, {seconds:.2f} s")
 
 
-def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float64):
+def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float64,
+                  pack_options=None):
     """Turn an :class:`UnwrapResult` into the UVs to store, and certify them as stored.
 
     1. islands the unwrap certified are checked for self-overlap; with ``cut`` an overlapping one
        is cut into overlap-free pieces (:func:`split_overlapping`, UVs unchanged);
-    2. with ``pack`` all islands go into the unit square (:func:`pack_islands`), else each cut
-       piece is moved to (0, 0) like the unwrap's islands;
+    2. with ``pack`` all islands go into the unit square: by their outlines with
+       ``pack_options`` (:func:`bd_uv.packing.pack_islands`), else on shelves of boxes
+       (:func:`pack_islands`, ``margin``); without ``pack`` each cut piece is moved to (0, 0) like
+       the unwrap's islands;
     3. the UVs are rounded to ``dtype`` (float32 in Blender; the OBJ writer keeps float64) and every
        stored island is certified from them; islands that fail are not written.
 
@@ -140,8 +152,10 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
     F : (m,3) int array
     res : UnwrapResult
     pack, cut : bool
-    margin : float, packing margin in the unit square
+    margin : float, shelf packing margin in the unit square (without ``pack_options``)
     dtype : numpy dtype the UVs are stored in
+    pack_options : bd_uv.packing.PackOptions, optional: pack with the atlas packer; its layout
+        certificate (on the stored, written islands) goes into ``Layout.pack``
 
     Returns
     -------
@@ -158,7 +172,9 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
     dup = np.zeros(m, dtype=bool) if res.duplicate_of is None else res.duplicate_of >= 0
     lab[dup] = -1  # a duplicate face is stored with its twin's UVs, not certified twice
     uv = np.asarray(res.corner_uv, dtype=np.float64)
-    before = certify_islands(V, F, uv, lab, np.where(ok, bounds, 1.0))
+    before = res.certificates
+    if before is None or len(before) != n:  # the unwrap did not keep them: measure
+        before = certify_islands(V, F, uv, lab, np.where(ok, bounds, 1.0))
     unwrapped = [c if ok[i] else None for i, c in enumerate(before)]
     new = np.full(m, -1, dtype=np.int64)
     source, cuts, moved = [], [], []
@@ -173,7 +189,12 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
             moved.append(len(pieces) > 1)
         cuts.append(cut_edges)
     source = np.asarray(source, dtype=np.int64)
-    if pack:
+    packed = None
+    if pack and pack_options is not None and len(source):
+        from .packing import pack_islands as pack_atlas
+        packed = pack_atlas(V, F, uv, new, pack_options)
+        uv = packed.corner_uv
+    elif pack:
         uv = pack_islands(uv, new, margin)
     elif any(moved):
         lo, _ = island_boxes(uv, new, len(source))
@@ -188,9 +209,22 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
     face_island = np.where(written, new, -1)
     stored[~written] = np.nan
     overlaps = layout_overlaps(stored, face_island, F) if written.any() else np.zeros((0, 2), int)
+    # the layout certificate of the written islands (duplicate faces, copies of their twins'
+    # UVs, are added after it)
+    report = _pack_report(V, F, stored, face_island, packed) if packed is not None else None
     if dup.any():
         d = np.flatnonzero(dup)
         tw = res.duplicate_of[d]
         stored[d] = np.take_along_axis(stored[tw], twin_corners(F, d, tw)[:, :, None], axis=1)
         face_island[d] = face_island[tw]
-    return Layout(stored, face_island, source, certs, unwrapped, cuts, overlaps, bool(pack))
+    return Layout(stored, face_island, source, certs, unwrapped, cuts, overlaps, bool(pack),
+                  report)
+
+
+def _pack_report(V, F, stored, face_island, packed):
+    """The ``pack`` report object: the layout certificate of the written islands as stored."""
+    from .packing import layout_certificate
+    o = packed.options
+    cert = layout_certificate(V, F, stored, face_island, packed.tile, o.resolution, o.padding_px)
+    return dict(seconds=round(packed.seconds, 4), **cert.summary(),
+                texel_density=packed.texel_density, rotate=o.rotate, solves=packed.solves)

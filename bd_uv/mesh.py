@@ -137,10 +137,16 @@ def islands(V, F, seams=None):
     cols = np.concatenate([np.where(gcons, nxt(g2), g2), np.where(gcons, g2, nxt(g2))])
     fan_adj = sp.coo_array((np.ones(len(rows)), (rows, cols)), shape=(3 * m, 3 * m))
     _, fan = connected_components(fan_adj, directed=False)
+    # A fan holds corners of one vertex; (vertex, island) pairs reached by several fans are
+    # bow-ties. Integer keys, not np.unique(axis=0) (a structured sort, slow on small meshes too).
     corner_isl = np.repeat(face_isl, 3)
-    fan_keys = np.unique(np.stack([src, corner_isl, fan], 1), axis=0)
-    vi_pairs, vi_count = np.unique(fan_keys[:, :2], axis=0, return_counts=True)
-    bowtie = vi_pairs[vi_count > 1]
+    fan_vertex = np.empty(3 * m, dtype=np.int64)
+    fan_vertex[fan] = src
+    fan_isl = np.unique(fan.astype(np.int64) * n_isl + corner_isl)  # distinct (fan, island)
+    vi, vi_count = np.unique(fan_vertex[fan_isl // n_isl] * n_isl + fan_isl % n_isl,
+                             return_counts=True)
+    vi = vi[vi_count > 1]
+    bowtie = np.stack([vi // n_isl, vi % n_isl], axis=1)
 
     A = face_areas(V, F)
     P = V[F]
@@ -150,9 +156,7 @@ def islands(V, F, seams=None):
     # The one place non-finite vertex coordinates are caught: NaN or inf, and coordinates so large
     # that the face's squared edges or area overflow (nothing downstream could measure it).
     nonfinite_face = ~(np.all(np.isfinite(P), axis=(1, 2)) & np.isfinite(lmax2) & np.isfinite(A))
-    sorted_tri = np.sort(F, axis=1)
-    _, tri_inv, tri_count = np.unique(sorted_tri, axis=0, return_inverse=True, return_counts=True)
-    duplicate = tri_count[tri_inv.ravel()] > 1
+    duplicate = _repeated_rows(np.sort(F, axis=1))
     nonmanifold_face = np.zeros(m, dtype=bool)
     nonmanifold_face[np.flatnonzero(he_count >= 3) // 3] = True
     inconsistent_face = np.zeros(m, dtype=bool)
@@ -200,6 +204,19 @@ def islands(V, F, seams=None):
         if err is None:
             loops, err = loops_of[idx], topo_err(idx, faces)
         out.append(Island(idx, faces, vertices, tris, loops if err is None else (), err))
+    return out
+
+
+def _repeated_rows(T):
+    """(m,) bool: rows of the (m,3) int array ``T`` that occur more than once."""
+    order = np.lexsort((T[:, 2], T[:, 1], T[:, 0]))
+    S = T[order]
+    same = np.all(S[1:] == S[:-1], axis=1)
+    rep = np.zeros(len(T), dtype=bool)
+    rep[1:] |= same
+    rep[:-1] |= same
+    out = np.empty(len(T), dtype=bool)
+    out[order] = rep
     return out
 
 

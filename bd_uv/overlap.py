@@ -220,15 +220,19 @@ def crossing_pairs(bd, pairs):
 
 
 def _loops(bd):
-    """Label the boundary loops: segments joined end to start at the same UV point."""
+    """Label the boundary loops: segments joined end to start at the same UV point.
+
+    Every UV point must start exactly one segment and end exactly one (islands with no crossing
+    and no pinch, as ``island_overlaps`` passes them), so segment i continues with the one
+    segment that starts where i ends."""
     nb = len(bd.p)
     if nb == 0:
         return 0, np.zeros(0, dtype=np.int64)
     npts = int(max(bd.pid.max(), bd.qid.max())) + 1
-    # Segment i continues with segment j when q_i == p_j (same point id).
-    seg_by_start = sp.coo_array((np.ones(nb), (bd.pid, np.arange(nb))), shape=(npts, nb)).tocsr()
-    seg_by_end = sp.coo_array((np.ones(nb), (np.arange(nb), bd.qid)), shape=(nb, npts)).tocsr()
-    adj = seg_by_end @ seg_by_start
+    starting = np.full(npts, -1, dtype=np.int64)
+    starting[bd.pid] = np.arange(nb)
+    nxt = starting[bd.qid]
+    adj = sp.coo_array((np.ones(nb), (np.arange(nb), nxt)), shape=(nb, nb))
     return connected_components(adj, directed=False)
 
 

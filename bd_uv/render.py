@@ -36,7 +36,8 @@ def wrap_caption(caption, size_px, font):
     return "\n".join(textwrap.fill(part, per_line) for part in caption.split("\n"))
 
 
-def uv_layout_png(path, corner_uv, distortion, bound, caption, size_px=1024, flipped=None):
+def uv_layout_png(path, corner_uv, distortion, bound, caption, size_px=1024, flipped=None,
+                  tiles=(), padding=0.0):
     """Write a ``size_px`` x ``size_px`` PNG of a UV layout coloured by conformal distortion.
 
     Parameters
@@ -57,6 +58,11 @@ def uv_layout_png(path, corner_uv, distortion, bound, caption, size_px=1024, fli
         Width and height of the PNG in pixels.
     flipped : (m,) bool array, optional
         Faces known to be flipped, drawn purple (otherwise non-finite faces are drawn yellow).
+    tiles : sequence of int, optional
+        UDIM tiles of a packed layout (1001: the unit square): each is outlined, with a dashed
+        line half the padding inside it.
+    padding : float
+        The packing's padding, in UV units.
 
     Returns
     -------
@@ -68,7 +74,7 @@ def uv_layout_png(path, corner_uv, distortion, bound, caption, size_px=1024, fli
     from matplotlib.collections import PolyCollection
     from matplotlib.colors import ListedColormap, Normalize
     from matplotlib.figure import Figure
-    from matplotlib.patches import Patch
+    from matplotlib.patches import Patch, Rectangle
 
     corner_uv = np.asarray(corner_uv, dtype=np.float64).reshape(-1, 3, 2)
     distortion = np.asarray(distortion, dtype=np.float64).reshape(-1)
@@ -82,21 +88,38 @@ def uv_layout_png(path, corner_uv, distortion, bound, caption, size_px=1024, fli
     colors = distortion_colors(distortion, C, flipped=flipped)
     drawn = np.isfinite(corner_uv).all(axis=(1, 2))
 
+    font = max(6.0, size_px / 90.0)
+    caption = wrap_caption(caption, size_px, font) if caption else ""
     # Figure(), not pyplot: no global state, safe in worker processes and threads.
     fig = Figure(figsize=(size_px / DPI, size_px / DPI), dpi=DPI)
     FigureCanvasAgg(fig)
-    font = max(6.0, size_px / 90.0)
-    ax = fig.add_axes((0.04, 0.20, 0.80, 0.77))
-    cax = fig.add_axes((0.87, 0.40, 0.03, 0.57))
+    # The caption takes the lines it needs at the bottom; the layout takes the rest (no blank band).
+    line = 1.3 * font / 72.0 * DPI / size_px           # one caption line, in figure fractions
+    text_h = (caption.count("\n") + 1) * line if caption else 0.0
+    bottom = 0.02 + text_h + 0.065                      # caption, then the u axis and its label
+    ax = fig.add_axes((0.07, bottom, 0.79, 0.975 - bottom))
     ax.set_aspect("equal")
+    ax.set_anchor("N")
     ax.tick_params(labelsize=font * 0.8)
+    ax.set_xlabel("u", fontsize=font)
+    ax.set_ylabel("v", fontsize=font, rotation=0, labelpad=font)
     if drawn.any():
-        polys = PolyCollection(corner_uv[drawn], facecolors=colors[drawn],
-                               edgecolors=(0.0, 0.0, 0.0, 0.25),
-                               linewidths=0.1 if drawn.sum() > 2000 else 0.3)
+        # Edges a shade darker than their face, opaque: thin translucent edges drawn twice (once
+        # per face) alias into dashes when zoomed.
+        face = colors[drawn]
+        edge = np.concatenate([face[:, :3] * 0.8, face[:, 3:]], axis=1)
+        polys = PolyCollection(corner_uv[drawn], facecolors=face, edgecolors=edge,
+                               linewidths=0.15 if drawn.sum() > 2000 else 0.35)
         ax.add_collection(polys)
         lo = corner_uv[drawn].reshape(-1, 2).min(axis=0)
         hi = corner_uv[drawn].reshape(-1, 2).max(axis=0)
+        for t in tiles:
+            u, v = (t - 1001) % 10, (t - 1001) // 10
+            ax.add_patch(Rectangle((u, v), 1, 1, fill=False, linewidth=1.0, edgecolor="black"))
+            h = 0.5 * padding
+            ax.add_patch(Rectangle((u + h, v + h), 1 - padding, 1 - padding, fill=False,
+                                   linewidth=0.6, linestyle="--", edgecolor="tab:blue"))
+            lo, hi = np.minimum(lo, (u, v)), np.maximum(hi, (u + 1, v + 1))
         pad = 0.02 * max(float((hi - lo).max()), 1e-12)
         ax.set_xlim(lo[0] - pad, hi[0] + pad)
         ax.set_ylim(lo[1] - pad, hi[1] + pad)
@@ -106,18 +129,39 @@ def uv_layout_png(path, corner_uv, distortion, bound, caption, size_px=1024, fli
         ax.set_xticks([])
         ax.set_yticks([])
 
-    # Colour bar: the grey-to-red ramp over [1, C], sampled from the same colour function.
+    # The layout's box as drawn (equal aspect, anchored at the top): the colour bar beside it and
+    # the caption right under it.
+    ax.apply_aspect()
+    box = ax.get_position()
+    spare = box.y0 - bottom                             # what the equal aspect left unused
+    if spare > 0:                                       # split it above and below, not all below
+        ax.set_position((box.x0, box.y0 - spare / 2, box.width, box.height))
+        box = ax.get_position()
+    cax = fig.add_axes((0.885, box.y0 + 0.35 * box.height, 0.03, 0.65 * box.height))
+    # Colour bar: the grey-to-red ramp over [1, C], sampled from the same colour function, its
+    # top tick the bound itself.
     ramp = distortion_colors(np.linspace(1.0, C, 256), C)
     mappable = ScalarMappable(norm=Normalize(1.0, C), cmap=ListedColormap(ramp))
     bar = fig.colorbar(mappable, cax=cax)
+    ticks = [t for t in bar.get_ticks() if 1.0 <= t < C - 0.04 * (C - 1.0)] + [C]
+    bar.set_ticks(ticks)
+    bar.set_ticklabels([f"{t:g}" for t in ticks[:-1]] + [f"C = {C:.4g}"])
     bar.set_label("conformal distortion", fontsize=font)
     bar.ax.tick_params(labelsize=font * 0.8)
-    legend = [Patch(color=ABOVE_25, label="> 25"), Patch(color=ABOVE_50, label="> 50"),
-              Patch(color=FLIPPED, label="flipped"), Patch(color=DEGENERATE, label="degenerate")]
-    fig.legend(handles=legend, loc="upper left", bbox_to_anchor=(0.845, 0.37), frameon=False,
-               fontsize=font * 0.85)
-
-    fig.text(0.04, 0.16, wrap_caption(caption, size_px, font), ha="left", va="top",
-             fontsize=font, family="monospace")
+    # Only what the picture shows gets a swatch: a certified layout has none of these.
+    finite = np.isfinite(distortion)
+    shown = drawn if flipped is None else drawn & ~np.asarray(flipped, dtype=bool)
+    kinds = [(ABOVE_25, "> 25", shown & finite & (distortion > 25.0) & (distortion <= 50.0)),
+             (ABOVE_50, "> 50", shown & finite & (distortion > 50.0)),
+             (FLIPPED, "flipped", drawn & (np.asarray(flipped, dtype=bool) if flipped is not None
+                                           else False)),
+             (DEGENERATE, "degenerate", shown & ~finite)]
+    legend = [Patch(color=c, label=label) for c, label, mask in kinds if np.any(mask)]
+    if legend:
+        fig.legend(handles=legend, loc="upper left", frameon=False, fontsize=font * 0.85,
+                   bbox_to_anchor=(0.865, box.y0 + 0.33 * box.height))
+    if caption:
+        fig.text(0.04, box.y0 - 0.065, caption, ha="left", va="top", fontsize=font,
+                 family="monospace")
     fig.savefig(path, dpi=DPI, format="png")
     return str(path)

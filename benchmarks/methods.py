@@ -23,8 +23,10 @@ METHODS = {
     "blender-lscm": ("Blender LSCM", "blender", {"method": "CONFORMAL"}),
     "blender-minstretch": ("Blender Min Stretch", "blender", {"method": "MINIMUM_STRETCH"}),
     "igl-slim": ("libigl SLIM (sym. Dirichlet, 20 it)", "slim", {"iterations": 20}),
+    "bd-seams-auto": ("bd-uv seams auto (C=2, S=2)", "seams", {"bound": 2.0, "stretch": 2.0}),
+    "xatlas": ("xatlas (defaults)", "xatlas", {}),
 }
-PEER_KINDS = ("blender", "slim")   # results that do not depend on bd-uv's code: cacheable
+PEER_KINDS = ("blender", "slim", "xatlas")   # results that do not depend on bd-uv's code
 
 
 def is_peer(key: str) -> bool:
@@ -51,8 +53,12 @@ def bd_warmup():
 def warmup(key: str):
     """Untimed warm-up for the method's kind (imports, first call)."""
     kind = METHODS[key][1]
-    if kind in ("bd", "init"):
+    if kind in ("bd", "init", "seams"):
         bd_warmup()
+    if kind == "seams":
+        run_seams(*_icosphere(), METHODS[key][2])
+    elif kind == "xatlas":
+        run_xatlas(*_icosphere())
     elif kind == "blender":
         peers._bpy_setup()
     elif kind == "slim":
@@ -140,6 +146,40 @@ def run_init_lscm(V, F):
     return cu, seconds, (f"{bad} islands not mapped" if bad else "no bound, no solve"), None
 
 
+def _icosphere():
+    import trimesh
+
+    m = trimesh.creation.icosphere(subdivisions=2)
+    return np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces, dtype=np.int64)
+
+
+def run_seams(V, F, params):
+    """``bd_uv.seams.unwrap_auto`` at C and S; ``seconds`` is the result's own ``seconds`` (the
+    unwrap's, as its report gives it: the seam search and the certification, no packing)."""
+    from bd_uv.seams import unwrap_auto
+
+    res, added, info = unwrap_auto(V, F, bound=params["bound"], stretch=params["stretch"])
+    bad = sum(r.status != "certified" for r in res.islands)
+    note = f"{info['charts']} charts, seam length {info['seam_length']:.4g}" + (
+        f", {bad} chart(s) not certified" if bad else ", every chart certified")
+    cs = [r.bound_certified for r in res.islands if r.bound_certified is not None]
+    return (np.asarray(res.corner_uv, dtype=np.float64), res.seconds, note,
+            max(cs) if cs and res.certified else None)
+
+
+def run_xatlas(V, F):
+    """``xatlas.parametrize`` with its defaults (charts and packing); only that call is timed."""
+    import xatlas
+
+    Vf, Fi = V.astype(np.float32), F.astype(np.uint32)
+    t0 = time.perf_counter()
+    vmap, idx, uvs = xatlas.parametrize(Vf, Fi)
+    seconds = time.perf_counter() - t0
+    if not np.array_equal(vmap[idx], F):
+        raise RuntimeError("xatlas reordered the faces")
+    return uvs.astype(np.float64)[idx], seconds, "", None
+
+
 def run_method(key, V, F, max_seconds):
     """Run one method; returns (corner_uv (m,3,2), seconds, note, certified C or None)."""
     _, kind, params = METHODS[key]
@@ -151,4 +191,8 @@ def run_method(key, V, F, max_seconds):
         return cu, s, note, None
     if kind == "init":
         return run_init_lscm(V, F)
+    if kind == "seams":
+        return run_seams(V, F, params)
+    if kind == "xatlas":
+        return run_xatlas(V, F)
     return run_bd(V, F, params, max_seconds)

@@ -8,10 +8,10 @@ and ``planar``.
 """
 import bpy
 
-from . import deform, display, improve, live, properties, unwrap
+from . import deform, display, improve, live, pack, properties, unwrap
 
 classes = (*properties.classes, *unwrap.classes, *display.classes, *deform.classes,
-           *improve.classes, *live.classes)
+           *improve.classes, *live.classes, *pack.classes)
 
 
 def register():

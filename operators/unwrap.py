@@ -10,13 +10,16 @@ import dataclasses
 import functools
 
 import bpy
-from bpy.props import BoolProperty, EnumProperty, FloatProperty
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
 
 from .. import bd_uv
+from ..bd_uv.errors import BDError
 from ..bd_uv.options import ENTRY_SEAMS_MODE
+from ..bd_uv.packing import PackOptions
 from . import auto_seams, needed_seams, session
 from .background import BackgroundSolve
 from .editmode import edit_mesh_objects, object_mode
+from .pack import pack_atlas, pack_message
 
 # The background job's solve function (tests substitute a gated one to control timing).
 SOLVE = bd_uv.unwrap
@@ -121,12 +124,19 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                        description="Pack the unwrapped islands with Blender's Pack Islands; "
                        "islands with pinned UVs stay where they are")
     pack_shape: EnumProperty(
-        name="Pack Shape", default='AABB',
-        items=(('AABB', "Bounding Box", "Fastest, like Blender's own Unwrap"),
+        name="Packer", default='ATLAS',
+        items=(('ATLAS', "Atlas (Bounded Distortion)", "bd-uv's packer: true shapes, turns "
+                "only, padding in texels, the layout certified as written; Blender's packer "
+                "(bounding box) when pinned islands must stay put"),
+               ('AABB', "Bounding Box", "Blender's packer: fastest, like Blender's own Unwrap"),
                ('CONVEX', "Convex Hull", "Tighter than bounding boxes; can take seconds on "
                 "thousands of faces, sometimes longer than Exact Shape"),
                ('CONCAVE', "Exact Shape", "Tightest; can take seconds on thousands of faces")),
-        description="Island shape Pack Islands works with")
+        description="Which packer, and for Blender's the island shape it works with")
+    pack_resolution: IntProperty(name="Resolution", default=1024, min=8, max=65536,
+                                 description="Texture size the atlas padding is measured at")
+    pack_padding: FloatProperty(name="Padding", default=4.0, min=0.0, soft_max=32.0,
+                                description="Least gap between islands in texels (atlas packer)")
     show_distortion: BoolProperty(name="Colour by Distortion", default=False,
                                   description="Colour faces by their distortion afterwards")
     use_object_scale: BoolProperty(name="Use Object Scale", default=True,
@@ -176,11 +186,34 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
         layout.prop(self, "pack")
         row = layout.row()
         row.active = self.pack
-        row.prop(self, "margin")
-        row = layout.row()
-        row.active = self.pack
         row.prop(self, "pack_shape")
+        atlas = self.pack_shape == 'ATLAS'
+        for name in (("pack_resolution", "pack_padding") if atlas else ("margin",)):
+            row = layout.row()
+            row.active = self.pack
+            row.prop(self, name)
         layout.prop(self, "show_distortion")
+
+    def _pack(self, context, batch, written):
+        """Pack the written islands: the atlas packer (unless pinned islands must stay put, or it
+        cannot certify a layout: then Blender's, said in the note), or Blender's. Returns the
+        note for the report line."""
+        if self.pack_shape != 'ATLAS':
+            session.pack(context, written, self.margin, self.pack_shape)
+            return ""
+        if any(part.pinned_faces.any() for part in batch.parts):
+            session.pack(context, written, self.margin, 'AABB')
+            return "packed by Blender's packer (pinned islands stay put)"
+        options = PackOptions(resolution=self.pack_resolution, padding_px=self.pack_padding)
+        try:
+            with object_mode(context):
+                obs = [bpy.data.objects.get(w.object_name) for w in written]
+                todo = [(ob, w.pack_polygons) for ob, w in zip(obs, written) if ob is not None]
+                done = pack_atlas([o for o, _ in todo], [m for _, m in todo], options)
+        except BDError as exc:
+            session.pack(context, written, self.margin, 'AABB')
+            return f"packed by Blender's packer: {exc}"
+        return pack_message(*done, head="packed: ") if done is not None else ""
 
     # -- shared --------------------------------------------------------------------------------
     def _prepare(self, context):
@@ -275,10 +308,10 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
         stretch = self.stretch if self.seams == 'AUTO' or self.limit_stretch else None
         with object_mode(context):
             written = session.write_back(batch, result)
-        verified = None
+        verified, packed_note = None, ""
         if any(w.faces.any() for w in written):
             if self.pack:
-                session.pack(context, written, self.margin, self.pack_shape)
+                packed_note = self._pack(context, batch, written)
             with object_mode(context):
                 verified = session.verify_written(batch, result, written, stretch)
         summary = session.summarise(batch, result, written, seconds, verified, packed=self.pack,
@@ -300,6 +333,8 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                 summary = dataclasses.replace(summary, message=(
                     f"{summary.message}; {marked} seam{'s' if marked != 1 else ''} marked where "
                     "overlapping islands were cut"))
+        if summary.written and packed_note:
+            summary = dataclasses.replace(summary, message=f"{summary.message}; {packed_note}")
         if summary.written and self.show_distortion:
             bound = summary.bound_certified if summary.bound_certified > 1 else self.bound
             session.show_distortion(context, written, bound)

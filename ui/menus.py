@@ -11,6 +11,7 @@ from ..operators.deform import UV_OT_bd_deform
 from ..operators.display import UV_OT_bd_select_distorted, UV_OT_bd_show_distortion
 from ..operators.improve import MESH_OT_bd_improve
 from ..operators.live import UV_OT_bd_live
+from ..operators.pack import UV_OT_bd_pack
 from ..operators.unwrap import UV_OT_bd_unwrap
 
 
@@ -29,6 +30,10 @@ def draw_distortion_entries(self, context):
     layout.operator_context = 'INVOKE_DEFAULT'  # the background path, Esc cancels
     layout.operator(UV_OT_bd_deform.bl_idname)
     layout.operator(UV_OT_bd_live.bl_idname)
+
+
+def draw_pack_entry(self, context):
+    self.layout.operator(UV_OT_bd_pack.bl_idname)
 
 
 def draw_improve_entry(self, context):
@@ -53,6 +58,7 @@ def _menus():
     uvs_menu = getattr(bpy.types, "IMAGE_MT_uvs", None)
     if uvs_menu is not None:
         pairs.append((uvs_menu, draw_distortion_entries))
+        pairs.append((uvs_menu, draw_pack_entry))
     pairs.append((bpy.types.VIEW3D_MT_edit_mesh_clean, draw_improve_entry))
     return pairs
 

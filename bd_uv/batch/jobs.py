@@ -19,6 +19,10 @@ from ..layout import stored_layout
 from ..metrics import conformal_distortion
 from ..options import OPTION_NAMES, UnwrapOptions
 from ..pack import MARGIN
+from ..packing import PackOptions
+
+# The atlas packer's options as they appear in an options mapping and in the report.
+PACK_FIELDS = ("resolution", "padding_px", "texel_density", "rotate", "udim", "solve_seconds")
 from ..scheduling.atomic import atomic_path
 from ..scheduling.entries import failed_entry
 
@@ -77,7 +81,8 @@ class JobOptions:
     pack : bool, pack the islands into the unit square (``bd_uv.layout.stored_layout``); the
         Blender script packs with Blender instead
     cut : bool, cut an island whose stored UVs lie over themselves into overlap-free pieces
-    margin : float, the packing margin in the unit square
+    margin : float, the shelf packing margin in the unit square (without ``pack_options``)
+    pack_options : bd_uv.PackOptions or None, pack with the atlas packer (the command line's)
     uv_set : int, where a glTF scene's UVs go: ``TEXCOORD_<uv_set>`` (``bd_uv.scenes``)
     uv_name : str, where a USD scene's UVs go: ``primvars:<uv_name>``
     """
@@ -85,6 +90,7 @@ class JobOptions:
     pack: bool = False
     cut: bool = False
     margin: float = MARGIN
+    pack_options: PackOptions = None
     uv_set: int = 0
     uv_name: str = "st"
 
@@ -105,14 +111,21 @@ class JobOptions:
             solve["overlap"] = "cut" if options["cut"] else "fail"
         layout = {k: options[k] for k in ("pack", "cut", "margin", "uv_set", "uv_name")
                   if k in options}
+        atlas = {k: options[k] for k in PACK_FIELDS if k in options}
+        if atlas and options.get("pack"):
+            layout["pack_options"] = PackOptions(**atlas)
         return cls(UnwrapOptions(**solve), **layout)
 
     def as_dict(self):
         """Every option, flat and JSON-able (the report's "options", the journal's hash)."""
         scene = {"uv_set": self.uv_set, "uv_name": self.uv_name} if (
             self.uv_set, self.uv_name) != (0, "st") else {}   # as before for other files
-        return {**self.unwrap.as_dict(), "pack": self.pack, "cut": self.cut,
-                "margin": self.margin, **scene}
+        out = {**self.unwrap.as_dict(), "pack": self.pack, "cut": self.cut}
+        if self.pack_options is None:
+            out["margin"] = self.margin
+        else:
+            out.update({k: getattr(self.pack_options, k) for k in PACK_FIELDS})
+        return {**out, **scene}
 
 
 def _num(x):
@@ -151,7 +164,7 @@ def unwrap_job(job, options, png=None):
                      initial_uv=job.corner_uv if o.frames == "input-uv" else None,
                      face_groups=job.face_groups, options=o)
         layout = stored_layout(job.V, job.F, res, pack=options.pack, cut=options.cut,
-                               margin=options.margin)
+                               margin=options.margin, pack_options=options.pack_options)
     except Exception as exc:  # a bad mesh, or a bug: either way it stays this job's failure
         entry.update(error=type(exc).__name__, message=str(exc),
                      seconds=round(time.perf_counter() - t0, 4))
@@ -172,6 +185,8 @@ def unwrap_job(job, options, png=None):
     entry["status"] = "certified" if not bad else ("partial" if ok else "failed")
     entry.update(overlapping=t["overlapping_unwrapped"], cut_edges=t["cut_edges"],
                  layout_overlaps=t["layout_overlaps"])
+    if layout.pack:
+        entry["pack"] = layout.pack
     if ok:
         entry.update(bound_certified=max(e["bound_certified"] for e in ok),
                      max_distortion=t["max_distortion"], mean_distortion=_num(t["mean_distortion"]),
@@ -194,8 +209,10 @@ def entry_png(path, entry, corner_uv, distortion, options):
     from ..render import uv_layout_png
     entry["png"] = os.path.abspath(path)
     with atomic_path(path) as tmp:
+        p = entry.get("pack")
+        tiles = dict(tiles=p["tiles"], padding=p["padding_px"] / p["resolution"]) if p else {}
         uv_layout_png(tmp, corner_uv, distortion, entry["bound_certified"],
-                      caption(entry, options))
+                      caption(entry, options), **tiles)
 
 
 def caption(entry, options):
@@ -213,6 +230,12 @@ def caption(entry, options):
              + (f"{entry['overlapping']} overlapping island(s) cut along {entry['cut_edges']} "
                 "edges, " if entry.get("overlapping") else "")
              + f"{entry['seconds']:.2f} s"]
+    p = entry.get("pack")
+    if p:
+        gap = "" if p["least_gap_px"] is None else f", least gap {p['least_gap_px']:.2f} px"
+        lines.append(f"packed: coverage {p['coverage']:.3f} at {p['resolution']} px{gap} "
+                     f"(padding {p['padding_px']:g} px{'' if p['certified'] else ', NOT met'}), "
+                     f"tiles {', '.join(map(str, p['tiles']))}, {p['seconds']:.2f} s")
     if entry["status"] != "certified":
         lines.append(f"not certified: {entry['message']}"[:160])
     return "\n".join(lines)

@@ -26,13 +26,21 @@ def overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True,
     Returns
     -------
     results, face_island (m,), corner_uv (m,3,2)
+    certificates : tuple of Certificate (None for an island not certified), one per island, as
+        ``certify_islands`` measures the returned ``corner_uv`` with each certified island's
+        ``bound_certified``; None when an island was cut (its pieces were certified apart), so
+        that a caller measuring the same UVs again (``layout.stored_layout``) need not
     """
     ok = np.array([r.status == "certified" for r in results], dtype=bool)
     if not ok.any():
-        return results, face_island, corner_uv
+        return results, face_island, corner_uv, (None,) * len(results)
     lab = np.where(ok[face_island], face_island, -1)
     certs = certify_islands(V, F, corner_uv, lab, np.where(ok, [
         r.bound_certified or 1.0 for r in results], 1.0))
+    if all(c.overlap_free for c, good in zip(certs, ok) if good):
+        kept = tuple(c if good else None for c, good in zip(certs, ok))
+        return ([dataclasses.replace(r, overlap_free=bool(good)) for r, good in zip(results, ok)],
+                face_island, corner_uv, kept)
     out, extra = [], []
     for r, c in zip(results, certs):
         if r.status != "certified" or c.overlap_free:
@@ -88,4 +96,4 @@ def overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True,
                                                         message=str(err), overlap_free=False,
                                                         uv=None, bound_certified=None)
                 corner_uv[r.faces] = np.nan
-    return results, face_island, corner_uv
+    return results, face_island, corner_uv, None

@@ -68,6 +68,11 @@ class UnwrapResult:
     island's ``faces``; its ``face_island`` and corner UVs are its twin's.
     ``seams_added`` (k,2) int64 or None: vertex pairs of the seams the search added.
     ``repair`` tuple of str: what was repaired before solving (``repair.Repair.notes``).
+
+    ``certificates``: one ``certificate.Certificate`` per island (None for an island not
+    certified), measured on ``corner_uv`` exactly as returned, when the unwrap kept them (it does
+    unless it cut an island); ``layout.stored_layout`` reuses them instead of measuring the same
+    UVs again. None otherwise (a result spliced by the seam search, for one).
     """
     corner_uv: np.ndarray
     face_island: np.ndarray
@@ -77,6 +82,7 @@ class UnwrapResult:
     duplicate_of: np.ndarray = None
     seams_added: np.ndarray = None
     repair: tuple = ()
+    certificates: tuple = None
 
     @property
     def certified(self):

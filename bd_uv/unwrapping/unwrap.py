@@ -147,11 +147,12 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
         results.append(res)
         done += share
     pinned = set(face_island[pins[0] // 3].tolist())
-    results, face_island, corner_uv = overlap_certificate(V, F, results, face_island, corner_uv,
-                                                           pinned, o.overlap == "cut", face_groups)
+    results, face_island, corner_uv, certs = overlap_certificate(
+        V, F, results, face_island, corner_uv, pinned, o.overlap == "cut", face_groups)
     if progress is not None:
         progress(1.0, "done")
-    return UnwrapResult(corner_uv, face_island, results, time.perf_counter() - t0, o.method)
+    return UnwrapResult(corner_uv, face_island, results, time.perf_counter() - t0, o.method,
+                        certificates=certs)
 
 
 def pin_arrays(pin_corners, pin_uv, m):

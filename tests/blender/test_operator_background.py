@@ -48,7 +48,7 @@ def _operator(**props):
     op.reports = []
     op.report = lambda level, message: op.reports.append((set(level), message))
     for name in ("_prepare", "_gather", "_stretch_problem", "_failed", "_cancelled", "_finish",
-                 "_status", "_end_modal", "modal", "invoke", "execute"):
+                 "_status", "_end_modal", "modal", "invoke", "execute", "_pack"):
         setattr(op, name, types.MethodType(getattr(op_cls, name), op))
     op.JOB, op.CANCELLED = op_cls.JOB, op_cls.CANCELLED
     return op

@@ -233,7 +233,7 @@ def test_stored_uvs_are_recertified_after_packing(addon, monkeypatch):
             layer.foreach_set("vector", np.full(2 * len(layer), 0.5, np.float32))
     monkeypatch.setattr(session, "pack", ruinous_pack)
     _edit_all(obj)
-    bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', pack=True)
+    bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', pack=True, pack_shape='AABB')
     set_mode(obj, 'OBJECT')
     assert calls == [1]
     assert loop_uv_array(obj.data).tobytes() == before

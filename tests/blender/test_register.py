@@ -8,7 +8,7 @@ from conftest import bpy, load_addon, load_submodule
 
 CLASS_NAMES = ("UV_OT_bd_unwrap", "UV_OT_bd_show_distortion", "UV_OT_bd_select_distorted",
                "UV_OT_bd_deform", "UV_OT_bd_live", "MESH_OT_bd_improve",
-               "IMAGE_PT_bd_uv_result", "BDUV_PG_last_result")
+               "IMAGE_PT_bd_uv_result", "BDUV_PG_last_result", "UV_OT_bd_pack")
 
 
 def _footprint():
@@ -64,7 +64,7 @@ def test_register_unregister_leaves_nothing_behind(empty_scene):
         names, ops, props, menus = _footprint()
         assert set(CLASS_NAMES) <= names
         assert ops == {"bd_unwrap", "bd_show_distortion", "bd_select_distorted", "bd_deform",
-                       "bd_live", "mesh.bd_improve"}
+                       "bd_live", "mesh.bd_improve", "bd_pack"}
         assert props == {"bd_uv_last_result"}
         assert menus != before[3]
         addon.unregister()

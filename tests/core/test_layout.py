@@ -3,6 +3,7 @@ certified as stored: overlapping islands cut, packed into the unit square, repor
 import json
 
 import numpy as np
+import pytest
 
 from bd_uv import batch, cli
 from bd_uv.meshio import load_mesh, write_obj
@@ -71,3 +72,54 @@ def test_batch_entry_and_caption_come_from_the_stored_uvs(tmp_path):
     refused = batch.unwrap_job(batch.Job("helicoid", V, F), {**options, "cut": False})
     assert refused.entry["status"] == "failed" and "lie over themselves" in str(refused.entry)
     assert np.isnan(refused.corner_uv).all()
+
+
+def _bumpy_grids(n=9, copies=2):
+    """``copies`` bumpy n x n grids side by side: that many disk islands."""
+    g = np.linspace(0.0, 1.0, n)
+    x, y = np.meshgrid(g, g)
+    V0 = np.c_[x.ravel(), y.ravel(), 0.2 * np.sin(3 * x.ravel()) * np.cos(2 * y.ravel())]
+    i, j = np.meshgrid(np.arange(n - 1), np.arange(n - 1))
+    a = (j * n + i).ravel()
+    F0 = np.r_[np.c_[a, a + 1, a + n + 1], np.c_[a, a + n + 1, a + n]]
+    V = np.concatenate([V0 + [2.0 * c, 0, 0] for c in range(copies)])
+    F = np.concatenate([F0 + c * len(V0) for c in range(copies)]).astype(np.int64)
+    return V, F
+
+
+def test_stored_layout_reuses_the_unwraps_certificates_and_they_are_the_measured_ones():
+    """The unwrap keeps the certificates its overlap check measured on the UVs it returns; the
+    layout takes them instead of measuring the same UVs again, with the same outcome."""
+    import dataclasses
+
+    import bd_uv
+    from bd_uv.certificate import certify_islands
+    from bd_uv.layout import stored_layout
+
+    V, F = _bumpy_grids()
+    res = bd_uv.unwrap(V, F, bound=5.0)
+    assert res.certified and res.certificates is not None
+    assert len(res.certificates) == len(res.islands) == 2
+    again = certify_islands(V, F, res.corner_uv, res.face_island,
+                            [r.bound_certified for r in res.islands])
+    D, flipped = distortion_and_flips(V, F, res.corner_uv)
+    for kept, measured, r in zip(res.certificates, again, res.islands):
+        assert kept == measured
+        assert kept.overlap_free and kept.certified and kept.flipped == 0
+        assert kept.max_distortion == pytest.approx(D[r.faces].max(), rel=1e-9)
+    assert not flipped.any()
+    reused = stored_layout(V, F, res, pack=True, dtype=np.float32)
+    fresh = stored_layout(V, F, dataclasses.replace(res, certificates=None), pack=True,
+                          dtype=np.float32)
+    assert reused.unwrapped == fresh.unwrapped
+    assert reused.certificates == fresh.certificates
+    assert np.array_equal(reused.corner_uv, fresh.corner_uv)
+
+
+def test_an_unwrap_that_cut_an_island_keeps_no_certificates():
+    V, F = helicoid_ribbon()
+    import bd_uv
+
+    res = bd_uv.unwrap(V, F)
+    assert any("cut" in r.flags for r in res.islands)
+    assert res.certificates is None

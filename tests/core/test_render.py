@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from matplotlib.image import imread
 
-from bd_uv.colors import ABOVE_50, DEGENERATE, FLIPPED, GREY, RED
+from bd_uv.colors import ABOVE_25, ABOVE_50, DEGENERATE, FLIPPED, GREY, RED
 from bd_uv.render import uv_layout_png
 from helpers import grid
 
@@ -56,8 +56,8 @@ def test_faces_with_nan_uvs_are_not_drawn(tmp_path):
     uv[: m // 2] = np.nan                   # those faces' island failed
     uv_layout_png(tmp_path / "some.png", uv, D, 3.0, "", size_px=400)
     full, some = imread(tmp_path / "all.png"), imread(tmp_path / "some.png")
-    legend = pixels_near(some, ABOVE_50)    # only the legend's patch is left blue
-    assert pixels_near(full, ABOVE_50) > 0.05 * 400 * 400 > 50 * max(legend, 1)
+    assert pixels_near(full, ABOVE_50) > 0.05 * 400 * 400
+    assert pixels_near(some, ABOVE_50) == 0  # no blue face drawn: no "> 50" swatch either
     assert pixels_near(some, GREY) > pixels_near(full, GREY)   # the rest fills the view
 
 
@@ -100,3 +100,35 @@ def test_long_captions_are_wrapped_to_the_picture_width():
     assert max(len(l) for l in lines) < 95  # the length that was cut off before wrapping
     width_pt = max(len(l) for l in lines) * 0.75 * font
     assert width_pt <= 0.92 * 1024 / DPI * 72.0
+
+
+def test_the_legend_shows_only_what_is_drawn(tmp_path):
+    """A certified layout (every face within C) gets no swatch for "> 25", "> 50", flipped or
+    degenerate faces: none of those colours appears anywhere in the picture; one flipped face
+    brings its swatch (and only its own)."""
+    uv, m = layout()
+    D = np.linspace(1.0, 2.5, m)
+    uv_layout_png(tmp_path / "ok.png", uv, D, 2.5, "certified", size_px=400)
+    ok = imread(tmp_path / "ok.png")
+    for colour in (ABOVE_25, ABOVE_50, FLIPPED, DEGENERATE):
+        assert pixels_near(ok, colour) == 0
+    flipped = np.zeros(m, dtype=bool)
+    flipped[0] = True
+    uv_layout_png(tmp_path / "flip.png", uv, np.where(flipped, np.inf, D), 2.5, "", size_px=400,
+                  flipped=flipped)
+    flip = imread(tmp_path / "flip.png")
+    assert pixels_near(flip, FLIPPED) > 0
+    for colour in (ABOVE_25, ABOVE_50, DEGENERATE):
+        assert pixels_near(flip, colour) == 0
+
+
+def test_the_caption_sits_under_the_layout(tmp_path):
+    """No blank band: what the equal aspect leaves unused is split above the layout and below the
+    caption, not left as a band at the bottom."""
+    uv, m = layout()
+    uv = uv / uv.reshape(-1, 2).max(axis=0)          # the grid fills the unit square
+    uv_layout_png(tmp_path / "a.png", uv, np.ones(m), 3.0, "one line of caption", size_px=500)
+    img = imread(tmp_path / "a.png")
+    inked = np.flatnonzero((img[:, :, :3] < 0.9).any(axis=(1, 2)))
+    top_margin, bottom_margin = inked.min(), 500 - 1 - inked.max()
+    assert bottom_margin < 0.07 * 500 and abs(top_margin - bottom_margin) < 0.03 * 500

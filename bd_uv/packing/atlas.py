@@ -1,0 +1,137 @@
+"""``pack_islands``: charts into a texture square (or UDIM tiles) by their true outlines.
+
+1. every chart is scaled to one texel density (:func:`chart_outlines`);
+2. its outer outline is nested by spyrrow with turns (any angle, quarter turns or none), the
+   padding as the least separation and half of it to the square's edge (:mod:`.nest`);
+3. each chart's corners get its turn, translation and the common scale: a similarity with positive
+   determinant, so every face keeps its orientation and its conformal distortion.
+
+Why spyrrow (measured on our charts, see docs/ARCHITECTURE.md and benchmarks/bench_pack.py): it
+matched Blender's exact-shape packer in coverage in a fraction of its time, has wheels for every
+platform and Python the zips serve, and is a maintained library rather than our own code.
+"""
+import time
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..errors import PackError
+from .nest import rotations, square_layout, tile_layouts
+from .options import PackOptions, udim_tile
+from .outlines import chart_outlines
+from .pinned import chart_boxes, free_square
+
+
+@dataclass(frozen=True)
+class Packed:
+    """A packed layout.
+
+    Attributes
+    ----------
+    corner_uv : (m,3,2) float64, packed UVs (faces of no chart as given)
+    face_island : (m,) int64, chart of each face (-1: not packed)
+    tile : (k,) int64, UDIM number of each chart's tile (1001, 1002, ...)
+    angle : (k,) float64, each chart's turn in degrees (counter-clockwise)
+    texel_density : float, texels per scene unit of every chart
+    seconds : float, packing time
+    solves : int, nesting solves run
+    options : PackOptions
+    """
+    corner_uv: np.ndarray
+    face_island: np.ndarray
+    tile: np.ndarray
+    angle: np.ndarray
+    texel_density: float
+    seconds: float
+    solves: int
+    options: PackOptions
+
+
+def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None):
+    """Pack every chart into the square (or UDIM tiles) at one texel density.
+
+    Parameters
+    ----------
+    V : (n,3) float array, the mesh (3D areas give the density)
+    F : (m,3) int array
+    corner_uv : (m,3,2) float array, each chart flip-free
+    face_island : (m,) int array, chart of each face, labels 0..k-1 (-1: left as it is)
+    options : PackOptions, default PackOptions()
+    pinned : (k,) bool array, optional: charts that stay where they are (bit for bit, inside the
+        unit square); the others are packed at one density into the largest square beside them
+        that keeps the padding (:func:`.pinned.free_square`)
+
+    Returns
+    -------
+    Packed
+    """
+    t0 = time.perf_counter()
+    options = options or PackOptions()
+    F = np.asarray(F, dtype=np.int64)
+    uv = np.asarray(corner_uv, dtype=np.float64).reshape(len(F), 3, 2)
+    lab = np.asarray(face_island, dtype=np.int64).reshape(-1)
+    if len(lab) != len(F):
+        raise PackError(f"face_island has {len(lab)} entries for {len(F)} faces")
+    k = int(lab.max()) + 1 if len(lab) else 0
+    if k == 0:
+        return Packed(uv.copy(), lab.copy(), np.zeros(0, np.int64), np.zeros(0), 0.0,
+                      time.perf_counter() - t0, 0, options)
+    if np.any(np.bincount(lab[lab >= 0], minlength=k) == 0):
+        raise PackError("chart labels must run from 0 to k-1 without gaps")
+    if pinned is not None and np.any(pinned):
+        return _around_pinned(V, F, uv, lab, options, np.asarray(pinned, dtype=bool), t0)
+    charts, tol = chart_outlines(V, F, uv, lab, k, options)
+    if options.texel_density is not None:
+        f = options.texel_density / options.resolution   # tile units per scene unit
+        outlines = [xy * f for xy in charts.outlines]
+        pl, tile, solves = tile_layouts(outlines, options, tol * f)
+        side = 1.0
+    else:
+        f = 1.0
+        pl, side, solves = square_layout(charts.outlines, options, tol)
+        tile = np.zeros(k, dtype=np.int64)
+    R = rotations(pl.angle)
+    use = lab >= 0
+    x = (charts.uv[use] - charts.centre[lab[use]][:, None, :]) * f
+    placed = np.einsum("fij,fcj->fci", R[lab[use]], x) + pl.shift[lab[use]][:, None, :]
+    offset = np.array([udim_tile(t)[1] for t in range(int(tile.max()) + 1)], dtype=np.float64)
+    out = uv.copy()
+    out[use] = placed / side + offset[tile[lab[use]]][:, None, :]
+    density = options.resolution * f / side
+    return Packed(out, lab.copy(), 1001 + tile, pl.angle, float(density),
+                  time.perf_counter() - t0, solves, options)
+
+
+def _around_pinned(V, F, uv, lab, options, pinned, t0):
+    """Pinned charts kept; the rest packed into the largest free square beside them, with the
+    padding scaled so it stays ``padding_px`` texels once the square is scaled into place."""
+    k = int(lab.max()) + 1
+    if len(pinned) != k:
+        raise PackError(f"pinned has {len(pinned)} entries for {k} charts")
+    if options.texel_density is not None:
+        raise PackError("charts are packed around pinned charts at the largest density that "
+                        "fits; a fixed texel density with pinned charts is not supported")
+    fixed = np.flatnonzero(pinned)
+    lo, hi = chart_boxes(uv, lab, fixed)
+    if (lo < 0).any() or (hi > 1).any():
+        raise PackError(f"pinned chart {fixed[np.any((lo < 0) | (hi > 1), axis=1)][0]} lies "
+                        "outside the unit square: pinned charts stay where they are")
+    moving = np.flatnonzero(~pinned)
+    out = uv.copy()
+    angle = np.zeros(k)
+    if not len(moving):
+        return Packed(out, lab.copy(), np.full(k, 1001), angle, 0.0,
+                      time.perf_counter() - t0, 0, options)
+    corner, side = free_square(lo, hi, 0.5 * options.padding)
+    if side * options.resolution < 8 * max(options.padding_px, 1.0):
+        raise PackError("no room left beside the pinned charts for the others")
+    inner_options = replace(options, padding_px=options.padding_px / side)
+    sub = np.full(k, -1)
+    sub[moving] = np.arange(len(moving))
+    inner = pack_islands(V, F, uv, np.where(lab >= 0, sub[np.maximum(lab, 0)], -1),
+                         inner_options)
+    sel = (lab >= 0) & ~pinned[np.maximum(lab, 0)]
+    out[sel] = inner.corner_uv[sel] * side + corner
+    angle[moving] = inner.angle
+    return Packed(out, lab.copy(), np.full(k, 1001), angle, inner.texel_density * side,
+                  time.perf_counter() - t0, inner.solves, options)

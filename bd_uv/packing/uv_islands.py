@@ -1,0 +1,43 @@
+"""UV islands of any UV map: faces joined across an edge whose two corners carry the same UVs on
+both sides (what Blender's UV editor calls an island)."""
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+
+from ..overlap import uv_boundary
+
+
+def uv_islands(F, corner_uv):
+    """Label every face with its UV island.
+
+    Parameters
+    ----------
+    F : (m,3) int array, mesh vertex of each corner
+    corner_uv : (m,3,2) float array; faces with non-finite UVs get -1
+
+    Returns
+    -------
+    (m,) int64, island labels 0..k-1 in order of each island's first face (-1: no UVs)
+    """
+    F = np.asarray(F, dtype=np.int64)
+    uv = np.asarray(corner_uv, dtype=np.float64).reshape(len(F), 3, 2)
+    ok = np.isfinite(uv).all(axis=(1, 2))
+    m = len(F)
+    lab = np.full(m, -1, dtype=np.int64)
+    if not ok.any():
+        return lab
+    bd = uv_boundary(F, uv, np.where(ok, 0, -1))
+    a, b = bd.interior[:, 0] // 3, bd.interior[:, 1] // 3
+    idx = np.flatnonzero(ok)
+    where = np.full(m, -1, dtype=np.int64)
+    where[idx] = np.arange(len(idx))
+    n = len(idx)
+    graph = sp.coo_array((np.ones(len(a)), (where[a], where[b])), shape=(n, n))
+    _, comp = connected_components(graph, directed=False)
+    # renumber by first face so labels follow face order
+    first = np.full(comp.max() + 1, n, dtype=np.int64)
+    np.minimum.at(first, comp, np.arange(n))
+    rank = np.empty_like(first)
+    rank[np.argsort(first, kind="stable")] = np.arange(len(first))
+    lab[idx] = rank[comp]
+    return lab

@@ -1,0 +1,194 @@
+"""bd_uv.packing: random chart sets packed, then checked by code that shares nothing with it
+(exact triangle overlap test, brute-force edge distances, densities and turns from the corners)."""
+import numpy as np
+import pytest
+
+from bd_uv.errors import BDError, PackError
+from bd_uv.packing import PackOptions, layout_certificate, pack_islands, udim_tile, uv_islands
+from overlap_shapes import overlapping_triangle_pairs
+from packing_sets import chart_maps, chart_set, least_gap, texel_densities
+
+
+def check_layout(V, F, uv_in, lab, packed, options, tiles=(1001,)):
+    """Everything the layout promises, recomputed from the float32 UVs."""
+    out = packed.corner_uv.astype(np.float32).astype(np.float64)
+    res, pad = options.resolution, options.padding_px
+    # inside its tile, half the padding from the edge
+    t = packed.tile[lab] - 1001
+    lo = np.stack([t % 10, t // 10], 1)[:, None, :]
+    assert np.all(out >= lo + 0.5 * pad / res * (1 - 1e-3))
+    assert np.all(out <= lo + 1 - 0.5 * pad / res * (1 - 1e-3))
+    assert sorted(set(packed.tile.tolist())) == list(tiles)
+    # no overlap: every pair of triangles of different charts is separated (exact SAT test)
+    pairs = overlapping_triangle_pairs(out)
+    assert not np.any(lab[pairs[:, 0]] != lab[pairs[:, 1]])
+    # least gap between two charts >= padding, measured at the resolution
+    gap = least_gap(out, lab, reach=2 * pad / res + 1e-9) * res
+    assert gap >= pad * (1 - 1e-4) or (pad == 0 and gap > 0)
+    # one density: sqrt(UV area / 3D area) equal for every chart (float32 rounding moves tiny
+    # charts' areas by up to about 1e-4)
+    d = texel_densities(V, F, packed.corner_uv, lab)
+    assert np.allclose(d, d[0], rtol=1e-9)
+    assert np.allclose(texel_densities(V, F, out, lab), d[0], rtol=1e-3)
+    assert np.isclose(d[0] * res, packed.texel_density, rtol=1e-5)
+    # a turn and a scale per face, never a mirror: J = s R with det > 0
+    J = chart_maps(uv_in, out)
+    assert np.all(np.linalg.det(J) > 0)
+    assert np.allclose(J[:, 0, 0], J[:, 1, 1], atol=1e-4 * np.abs(J).max())
+    assert np.allclose(J[:, 0, 1], -J[:, 1, 0], atol=1e-4 * np.abs(J).max())
+    if options.rotate == "none":
+        assert np.allclose(J[:, 0, 1], 0, atol=1e-5 * np.abs(J).max())
+    # the product's own certificate agrees with the independent figures
+    cert = layout_certificate(V, F, out.astype(np.float32), lab, packed.tile, res, pad)
+    assert cert.certified, cert.reason
+    if np.isfinite(gap):
+        assert cert.least_gap_px == pytest.approx(gap, rel=1e-6)
+    assert cert.density_spread == pytest.approx(1.0, abs=1e-3)
+    return cert
+
+
+@pytest.mark.parametrize("kind, k, res, pad, rotate", [
+    ("boxes", 1, 256, 0, "any"),
+    ("boxes", 30, 1024, 4, "any"),
+    ("slivers", 25, 2048, 8, "90"),
+    ("holes", 12, 512, 16, "none"),
+    ("huge_tiny", 60, 8192, 2, "any"),
+])
+def test_random_chart_sets_pack_inside_apart_one_density_no_mirror(kind, k, res, pad, rotate):
+    V, F, uv, lab = chart_set(kind, k, seed=k)
+    before = uv.copy()
+    options = PackOptions(resolution=res, padding_px=pad, rotate=rotate, solves=2)
+    packed = pack_islands(V, F, uv, lab, options)
+    assert np.array_equal(uv, before)                       # input untouched
+    cert = check_layout(V, F, uv, lab, packed, options)
+    assert 0.05 < cert.coverage < 1.0
+    assert packed.solves >= (2 if k > 1 else 0) and packed.seconds > 0
+
+
+def test_constructive_placement_only_is_certified_too():
+    """solve_seconds=0 (``--pack-seconds 0``): spyrrow's first placement, no search; the layout is
+    still inside, apart and of one density."""
+    V, F, uv, lab = chart_set("holes", 12, seed=5)
+    options = PackOptions(resolution=1024, padding_px=4, solve_seconds=0)
+    packed = pack_islands(V, F, uv, lab, options)
+    cert = check_layout(V, F, uv, lab, packed, options)
+    assert 0.05 < cert.coverage < 1.0 and packed.solves >= 1
+    with pytest.raises(PackError, match="solve_seconds"):
+        PackOptions(solve_seconds=-1)
+
+
+def test_two_thousand_tiny_charts():
+    V, F, uv, lab = chart_set("boxes", 2000, seed=3)
+    options = PackOptions(resolution=4096, padding_px=1, solves=1)
+    packed = pack_islands(V, F, uv, lab, options)
+    check_layout(V, F, uv, lab, packed, options)
+
+
+def test_udim_spill_numbers_tiles_as_blender():
+    assert [udim_tile(i)[0] for i in (0, 1, 9, 10, 11)] == [1001, 1002, 1010, 1011, 1012]
+    assert [udim_tile(i)[1] for i in (0, 1, 9, 10, 11)] == [(0, 0), (1, 0), (9, 0), (0, 1), (1, 1)]
+    V, F, uv, lab = chart_set("boxes", 24, seed=5)
+    # the set's 3D area at 120 texels per unit is about three 256 px tiles; its largest chart fits
+    options = PackOptions(resolution=256, padding_px=4, texel_density=120.0, udim=True, solves=1)
+    packed = pack_islands(V, F, uv, lab, options)
+    used = sorted(set(packed.tile.tolist()))
+    assert used == list(range(1001, 1001 + len(used))) and len(used) >= 2
+    check_layout(V, F, uv, lab, packed, options, tiles=used)
+    assert packed.texel_density == pytest.approx(120.0, rel=1e-9)
+
+
+def test_texel_density_that_does_not_fit_without_udim_is_a_clear_error():
+    V, F, uv, lab = chart_set("boxes", 24, seed=5)
+    with pytest.raises(PackError, match="do not fit the square"):
+        pack_islands(V, F, uv, lab, PackOptions(resolution=256, texel_density=120.0))
+
+
+def test_a_chart_larger_than_a_tile_is_a_clear_error():
+    V, F, uv, lab = chart_set("huge_tiny", 3, seed=1)
+    with pytest.raises(PackError, match="larger than a UDIM tile"):
+        pack_islands(V, F, uv, lab, PackOptions(resolution=256, texel_density=1000.0, udim=True))
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    (dict(resolution=0), "resolution"), (dict(padding_px=-1), "padding"),
+    (dict(rotate="mirror"), "rotate"), (dict(udim=True), "texel density"),
+    (dict(texel_density=0.0), "texel density"),
+])
+def test_bad_options_raise_typed_errors(kwargs, words):
+    with pytest.raises(PackError, match=words) as err:
+        PackOptions(**kwargs)
+    assert isinstance(err.value, BDError)
+
+
+def test_flipped_chart_is_refused_and_input_untouched():
+    V, F, uv, lab = chart_set("boxes", 3, seed=2)
+    uv[lab == 1] = uv[lab == 1][:, [0, 2, 1]]               # chart 1 mirrored: faces flipped
+    before = uv.copy()
+    with pytest.raises(PackError, match="flipped"):
+        pack_islands(V, F, uv, lab)
+    assert np.array_equal(uv, before)
+
+
+def test_certificate_sees_an_overlap_and_a_short_gap():
+    V, F, uv, lab = chart_set("boxes", 4, seed=4)
+    options = PackOptions(solves=1)
+    packed = pack_islands(V, F, uv, lab, options)
+    out = packed.corner_uv.copy()
+    # chart 1 moved onto chart 0: the certificate fails it
+    c0 = out[lab == 0].reshape(-1, 2).mean(0)
+    c1 = out[lab == 1].reshape(-1, 2).mean(0)
+    moved = out.copy()
+    moved[lab == 1] += c0 - c1
+    cert = layout_certificate(V, F, moved, lab, packed.tile, 1024, 4)
+    assert not cert.certified and len(cert.overlaps) >= 1
+    # padding asked for larger than the layout keeps: certified False, gap reported
+    cert = layout_certificate(V, F, out, lab, packed.tile, 1024, 64)
+    assert not cert.certified and "least gap" in cert.reason
+
+
+def test_uv_islands_follow_shared_uvs_not_shared_vertices():
+    # two triangles sharing mesh edge (1, 2): one island when the UVs agree along it, two when not
+    F = np.array([[0, 1, 2], [2, 1, 3]])
+    uv = np.array([[[0, 0], [1, 0], [0, 1]], [[0, 1], [1, 0], [1, 1]]], float)
+    assert uv_islands(F, uv).tolist() == [0, 0]
+    cut = uv.copy()
+    cut[1] += 5.0
+    assert uv_islands(F, cut).tolist() == [0, 1]
+    nan = uv.copy()
+    nan[0, 0] = np.nan
+    assert uv_islands(F, nan).tolist() == [-1, 0]
+    V, F, uv, lab = chart_set("holes", 7, seed=1)
+    assert np.array_equal(uv_islands(F, uv), lab)
+
+
+def test_pinned_charts_do_not_move_and_the_rest_pack_beside_them():
+    V, F, uv, lab = chart_set("boxes", 14, seed=7)
+    targets = {0: ((0.05, 0.05), 0.3), 1: ((0.6, 0.1), 0.25), 2: ((0.1, 0.7), 0.2)}
+    for c, (at, size) in targets.items():     # pinned charts put somewhere in the square
+        P = uv[lab == c]
+        lo, hi = P.reshape(-1, 2).min(0), P.reshape(-1, 2).max(0)
+        uv[lab == c] = (P - lo) * (size / (hi - lo).max()) + at
+    pinned = np.zeros(14, bool)
+    pinned[list(targets)] = True
+    options = PackOptions(resolution=512, padding_px=6, solves=1)
+    packed = pack_islands(V, F, uv, lab, options, pinned=pinned)
+    out = packed.corner_uv.astype(np.float32).astype(np.float64)
+    keep = pinned[lab]
+    assert np.array_equal(packed.corner_uv[keep], uv[keep])          # bit for bit
+    assert out.min() >= 0 and out.max() <= 1
+    pairs = overlapping_triangle_pairs(out)
+    assert not np.any(lab[pairs[:, 0]] != lab[pairs[:, 1]])
+    assert least_gap(out, lab, reach=12 / 512) * 512 >= 6 * (1 - 1e-4)
+    d = texel_densities(V, F, packed.corner_uv, lab)[~pinned]
+    assert np.allclose(d, d[0], rtol=1e-9)
+    J = chart_maps(uv[~keep], packed.corner_uv[~keep])
+    assert np.all(np.linalg.det(J) > 0)
+    cert = layout_certificate(V, F, out, lab, packed.tile, 512, 6)
+    assert cert.certified, cert.reason
+
+
+def test_pinned_chart_outside_the_square_is_a_clear_error():
+    V, F, uv, lab = chart_set("boxes", 4, seed=8)
+    pinned = np.array([True, False, False, False])
+    with pytest.raises(PackError, match="outside the unit square"):
+        pack_islands(V, F, uv + 10.0, lab, PackOptions(), pinned=pinned)
