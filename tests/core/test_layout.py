@@ -53,10 +53,14 @@ def test_cli_no_pack_and_overlap_fail(tmp_path, capsys):
     uv = load_mesh(out).corner_uv
     assert np.isclose(uv.reshape(-1, 2).min(axis=0), 0).all()    # pieces at (0, 0), overlapping
     assert "(not packed)" in capsys.readouterr().out
+    before = out.read_bytes()
     assert cli.main(["unwrap", str(src), "-o", str(out), "--overlap", "fail"]) == 1
     err = capsys.readouterr().err
     assert "lie over themselves" in err and "crosses itself" in err
-    assert load_mesh(out).corner_uv is None                     # nothing stored
+    assert out.read_bytes() == before        # nothing certified: the file at -o is left as it was
+    fresh = tmp_path / "fresh.obj"
+    assert cli.main(["unwrap", str(src), "-o", str(fresh), "--overlap", "fail"]) == 1
+    assert not fresh.exists()                                   # nothing stored
 
 
 def test_batch_entry_and_caption_come_from_the_stored_uvs(tmp_path):
