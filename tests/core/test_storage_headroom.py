@@ -1,0 +1,57 @@
+"""A certified map must survive being stored: the Utah teapot (Newell's patches, tests/data)
+packed and rounded to float32 (as Blender and the batch store UVs)."""
+import numpy as np
+
+import bd_uv
+from bd_uv.layout import stored_layout
+from bd_uv.packing import PackOptions
+from bd_uv.unwrapping.storage import (rounding_distortion, stored_layout_with_headroom,
+                                      float_step)
+from helpers import reference_distortion
+from teapot import teapot, triangulated
+
+
+def _signed_areas(uv):
+    d1, d2 = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
+    return d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+
+
+def test_teapot_is_four_open_quad_parts():
+    V, polys = teapot(6)
+    assert len(polys) == 1152 and sum(len(p) == 4 for p in polys) == 1104
+
+
+def test_teapot_islands_written_certified_as_float32():
+    V, F = triangulated(6)
+    res = bd_uv.unwrap(V, F)
+    assert [r.status for r in res.islands] == ["certified"] * 4
+    opts = dict(dtype=np.float32, pack_options=PackOptions())
+    plain = stored_layout(V, F, res, **opts)
+    # the cause: the handle's conformal map shrinks faces near where it meets the body, and
+    # rounding to float32 at the packed scale pushes them over C
+    assert sum(not c.certified for c in plain.certificates) == 1
+    layout, fixed, done = stored_layout_with_headroom(V, F, res, **opts)
+    assert list(done) == [int(plain.source[[not c.certified for c in plain.certificates]][0])]
+    assert all(c.certified for c in layout.certificates)
+    assert (layout.face_island >= 0).all()                   # every face written
+    stored = layout.corner_uv
+    assert np.array_equal(stored, stored.astype(np.float32).astype(np.float64))
+    assert (_signed_areas(stored) > 0).all()                 # 0 flips, from signed areas
+    D, flipped = reference_distortion(V, F, stored)          # SVD, independent of bd_uv
+    assert not flipped.any()
+    assert D.max() <= 5.0 * (1 + 1e-9)
+    assert layout.overlaps.size == 0
+
+
+def test_rounding_distortion_bounds_a_rounded_map():
+    V, F = triangulated(4)
+    res = bd_uv.unwrap(V, F)
+    uv = np.asarray(res.corner_uv)
+    ok = np.isfinite(uv).all(axis=(1, 2))
+    uv = uv[ok] / np.abs(uv[ok]).max() * 0.9               # coordinates below 1
+    Fk = F[ok]
+    h = float_step(np.float32, 1.0)
+    bound = rounding_distortion(V, Fk, uv, h)
+    after = reference_distortion(V, Fk, uv.astype(np.float32).astype(np.float64))[0]
+    before = reference_distortion(V, Fk, uv)[0]
+    assert np.all(after <= bound * (1 + 1e-9)) and np.all(before <= bound)
