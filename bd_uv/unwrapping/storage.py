@@ -19,7 +19,8 @@ import dataclasses
 import numpy as np
 
 from ..layout import stored_layout
-from ..metrics import conformal_distortion, singular_values
+from ..geometry import face_areas
+from ..metrics import conformal_distortion, signed_uv_areas, singular_values
 
 #: stretch limits tried in turn, loosest first (each must be >= sqrt(C))
 STRETCH_LADDER = (64.0, 16.0, 8.0, 4.0)
@@ -142,3 +143,60 @@ def stored_layout_with_headroom(V, F, res, ladder=STRETCH_LADDER, **layout_optio
     if not done:
         return layout, res, done
     return stored_layout(V, F, fixed, **layout_options), fixed, done
+
+
+def predicted_to_fail(V, F, res, dtype=np.float32, coverage=0.25):
+    """Unwrap islands whose certificate is not expected to survive packing and rounding to
+    ``dtype``.
+
+    Used where the packed scale is not known before writing (the Blender operator packs after
+    it writes). Each island is placed as a packer would at one texel density, UV area =
+    ``coverage`` x its 3D area / the total 3D area (``coverage`` low: a small scale, the
+    pessimistic side), centred in the unit square's upper half of coordinates (where float
+    steps are largest), rounded to ``dtype`` and measured; it is flagged when that exceeds its
+    certified bound, or when :func:`rounding_distortion` says a face may collapse or flip
+    (s_min within one rounding). The certificate of the UVs as really stored still decides what
+    is written: this only chooses what to re-solve before writing.
+
+    Returns
+    -------
+    list of int, certified unwrap islands flagged
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    uv = np.asarray(res.corner_uv, dtype=np.float64)
+    ok = [i for i, r in enumerate(res.islands) if r.status == "certified"]
+    faces = np.concatenate([res.islands[i].faces for i in ok]) if ok else np.zeros(0, np.int64)
+    total = float(face_areas(V, F[faces]).sum()) if len(faces) else 0.0
+    if total <= 0:
+        return []
+    h = float_step(dtype, 1.0)
+    out = []
+    for i in ok:   # per island (its own UV scale), vectorised over its faces
+        r = res.islands[i]
+        f, u = F[r.faces], uv[r.faces]
+        uv_area = float(np.abs(signed_uv_areas(u)).sum())
+        if not uv_area > 0:
+            continue
+        u = u * (np.sqrt(face_areas(V, f).sum() / uv_area) * np.sqrt(coverage / total))
+        lo, hi = u.min(axis=(0, 1)), u.max(axis=(0, 1))
+        u = u - lo + np.maximum(0.5 * (1.0 - (hi - lo)), 0.0)
+        stored = u.astype(dtype).astype(np.float64)
+        if (conformal_distortion(V, f, stored).max() > r.bound_certified
+                or not np.isfinite(rounding_distortion(V, f, u, h)).all()):
+            out.append(i)
+    return out
+
+
+def with_predicted_headroom(V, F, res, dtype=np.float32, ladder=STRETCH_LADDER):
+    """``res`` with the islands :func:`predicted_to_fail` re-solved under a stretch limit
+    (:func:`with_storage_headroom`), before anything is written.
+
+    Returns
+    -------
+    (UnwrapResult, dict {island: S})
+    """
+    flagged = predicted_to_fail(V, F, res, dtype=dtype)
+    if not flagged:
+        return res, {}
+    return with_storage_headroom(V, F, res, flagged, ladder=ladder)

@@ -5,8 +5,8 @@ import numpy as np
 import bd_uv
 from bd_uv.layout import stored_layout
 from bd_uv.packing import PackOptions
-from bd_uv.unwrapping.storage import (rounding_distortion, stored_layout_with_headroom,
-                                      float_step)
+from bd_uv.unwrapping.storage import (float_step, predicted_to_fail, rounding_distortion,
+                                      stored_layout_with_headroom, with_predicted_headroom)
 from helpers import reference_distortion
 from teapot import teapot, triangulated
 
@@ -55,3 +55,21 @@ def test_rounding_distortion_bounds_a_rounded_map():
     after = reference_distortion(V, Fk, uv.astype(np.float32).astype(np.float64))[0]
     before = reference_distortion(V, Fk, uv)[0]
     assert np.all(after <= bound * (1 + 1e-9)) and np.all(before <= bound)
+
+
+def test_prediction_flags_the_handle_only_and_its_resolve_stores_certified():
+    # the Blender operator packs after it writes: it re-solves what the prediction flags first
+    V, F = triangulated(6)
+    res = bd_uv.unwrap(V, F)
+    plain = stored_layout(V, F, res, dtype=np.float32, pack_options=PackOptions())
+    failing = sorted(int(s) for c, s in zip(plain.certificates, plain.source) if not c.certified)
+    assert predicted_to_fail(V, F, res) == failing == [1]
+    fixed, done = with_predicted_headroom(V, F, res)
+    assert list(done) == [1] and "storage_stretch_64" in fixed.islands[1].flags
+    D, flipped = reference_distortion(V, F[fixed.islands[1].faces],
+                                      fixed.corner_uv[fixed.islands[1].faces])
+    assert not flipped.any() and D.max() <= 5.0 * (1 + 1e-9)
+    assert np.array_equal(fixed.corner_uv[fixed.islands[0].faces],
+                          res.corner_uv[res.islands[0].faces])     # the others untouched
+    layout = stored_layout(V, F, fixed, dtype=np.float32, pack_options=PackOptions())
+    assert all(c.certified for c in layout.certificates)
