@@ -341,8 +341,9 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
             summary = dataclasses.replace(summary, message=f"{summary.message}; " + ", ".join(
                 f"island {i} re-solved with stretch <= {S:g}" for i, S in headroom.items())
                 + " (its conformal map shrank faces below what float32 UVs resolve)")
-        if summary.written and packed_note:
-            summary = dataclasses.replace(summary, message=f"{summary.message}; {packed_note}")
+        if summary.written and packed_note:  # the layout's figures beside the map's, before notes
+            head, sep, notes = summary.message.partition("; ")
+            summary = dataclasses.replace(summary, message=f"{head}; {packed_note}{sep}{notes}")
         if summary.written and self.show_distortion:
             bound = summary.bound_certified if summary.bound_certified > 1 else self.bound
             session.show_distortion(context, written, bound)

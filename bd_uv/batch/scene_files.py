@@ -66,6 +66,8 @@ def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=Non
             entry["warnings"].append("not every face was certified: the mesh keeps the UVs it "
                                      "had")
         entries.append(entry)
+    if not charts:  # nothing certified: no file at ``output`` that looks like a result
+        return entries
     stored = scene.write(output, charts)
     for k, entry in zip(range(len(scene.meshes)), entries):
         if k not in stored:

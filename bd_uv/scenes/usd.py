@@ -69,7 +69,8 @@ class UsdScene:
         try:
             stage = Usd.Stage.Open(path)
         except Exception as exc:  # pxr raises Tf.ErrorException for unreadable layers
-            raise SceneFileError(f"{path}: not a USD stage USD can open ({exc})") from exc
+            raise SceneFileError(f"{path}: not a USD stage USD can open "
+                                 f"({_pxr_message(exc)})") from exc
         if stage is None:
             raise SceneFileError(f"{path}: not a USD stage USD can open")
         # what did not compose (a missing reference, payload or sublayer) is said on each mesh
@@ -253,3 +254,20 @@ def _existing_uv(mesh, uv_name, T, indices, n_points):
     if interp in (UsdGeom.Tokens.vertex, UsdGeom.Tokens.varying) and len(vals) == n_points:
         return vals[indices[T]]
     return None
+
+
+def _pxr_message(exc):
+    """The text of a pxr error, one line. ``str()`` of a ``Tf.ErrorException`` decodes the
+    parser's message as UTF-8 and raises ``UnicodeDecodeError`` when it quotes a corrupted byte
+    of the layer; the message is then decoded with those bytes replaced."""
+    try:
+        text = str(exc)
+    except UnicodeError:
+        parts = []
+        for arg in getattr(exc, "args", ()):
+            try:    # pxr.Tf.Error: its commentary is the message
+                parts.append(str(getattr(arg, "commentary", arg)))
+            except UnicodeError:
+                parts.append("a corrupted byte the parser could not quote")
+        text = "; ".join(parts) or type(exc).__name__
+    return " ".join(text.split())

@@ -210,7 +210,7 @@ def test_zip_installs_and_enables(installed):
 def test_bundled_wheels_are_the_ones_imported(installed):
     site = pathlib.Path(installed["site_packages"])
     assert set(installed["modules"]) == {"scipy", "clarabel", "cffi", "_cffi_backend", "pycparser",
-                                         "trimesh", "shapely", "qdldl"}
+                                         "trimesh", "shapely", "qdldl", "spyrrow"}
     for name, (path, _version) in installed["modules"].items():
         assert pathlib.Path(path).is_relative_to(site), (name, path)
     # scipy built for this Python; numpy is Blender's (here: the environment's).

@@ -161,6 +161,20 @@ def test_uv_islands_follow_shared_uvs_not_shared_vertices():
     assert np.array_equal(uv_islands(F, uv), lab)
 
 
+def test_a_duplicate_face_joins_its_twins_island_and_leaves_it_whole():
+    # A quad (two triangles) given twice with the same UVs, and a second quad apart: the copy
+    # must not cut its twin's diagonal (used four times) nor travel alone when packed.
+    F = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6], [1, 2, 0], [0, 2, 3]])
+    quad = np.array([[[0, 0], [1, 0], [1, 1]], [[0, 0], [1, 1], [0, 1]]], float)
+    other = np.array([[[3, 0], [4, 0], [3, 1]]], float)
+    uv = np.concatenate([quad, other, quad[:1][:, [1, 2, 0]], quad[1:]])
+    assert uv_islands(F, uv).tolist() == [0, 0, 1, 0, 0]
+    moved = uv.copy()
+    moved[3:] += 7.0          # the copy's UVs elsewhere: not its twin's island
+    lab = uv_islands(F, moved)
+    assert lab[3] not in lab[:3] and lab[4] not in lab[:3]
+
+
 def test_pinned_charts_do_not_move_and_the_rest_pack_beside_them():
     V, F, uv, lab = chart_set("boxes", 14, seed=7)
     targets = {0: ((0.05, 0.05), 0.3), 1: ((0.6, 0.1), 0.25), 2: ((0.1, 0.7), 0.2)}
