@@ -60,7 +60,8 @@ def run_unwrap(args):
             res = unwrap(mesh.V, mesh.F, seams=seams, initial_uv=initial_uv, progress=progress,
                          options=options)
         progress.stage("storing: cut, pack and certify the UVs as stored")
-        layout, res, _ = stored_layout_with_headroom(mesh.V, mesh.F, res, **layout_options)
+        layout, res, _ = stored_layout_with_headroom(mesh.V, mesh.F, res,
+                                                     stretch=options.stretch, **layout_options)
     if options.seams_mode == "needed":
         _print_needed(res, options, args.output)
     uv, F_uv = layout.vertex_uv(mesh.F)

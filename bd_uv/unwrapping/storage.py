@@ -124,16 +124,20 @@ def with_storage_headroom(V, F, res, islands, ladder=STRETCH_LADDER):
                                certificates=None), done
 
 
-def stored_layout_with_headroom(V, F, res, ladder=STRETCH_LADDER, **layout_options):
+def stored_layout_with_headroom(V, F, res, stretch=None, ladder=STRETCH_LADDER,
+                                **layout_options):
     """``layout.stored_layout``, and when islands the unwrap certified fail as stored, those
     islands re-solved with headroom (:func:`with_storage_headroom`) and the whole layout packed
-    and certified again before anything is left unwritten.
+    and certified again before anything is left unwritten. With the caller's own ``stretch``
+    limit (the unwrap already held it) nothing is re-solved: a looser one would break it.
 
     Returns
     -------
     (Layout, UnwrapResult the layout was made from, dict {island: S} re-solved)
     """
     layout = stored_layout(V, F, res, **layout_options)
+    if stretch is not None:
+        return layout, res, {}
     ok = [r.status == "certified" for r in res.islands]
     failed = {int(s) for c, s in zip(layout.certificates, layout.source)
               if not c.certified and ok[int(s)]}

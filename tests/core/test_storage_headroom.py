@@ -73,3 +73,20 @@ def test_prediction_flags_the_handle_only_and_its_resolve_stores_certified():
                           res.corner_uv[res.islands[0].faces])     # the others untouched
     layout = stored_layout(V, F, fixed, dtype=np.float32, pack_options=PackOptions())
     assert all(c.certified for c in layout.certificates)
+
+
+def test_batch_job_saves_the_teapot_certified_as_float32():
+    # the batch's UVs are saved as float32 by the Blender script and the scene writers
+    from bd_uv import batch
+    V, F = triangulated(6)
+    out = batch.unwrap_job(batch.Job("teapot", V, F), {})
+    assert out.entry["status"] == "certified"
+    assert any(f.startswith("storage_stretch_") for f in out.result.islands[1].flags)
+    uv = out.corner_uv.astype(np.float32).astype(np.float64)
+    assert np.isfinite(uv).all() and (_signed_areas(uv) > 0).all()
+    D, flipped = reference_distortion(V, F, uv)
+    assert not flipped.any() and D.max() <= 5.0 * (1 + 1e-9)
+    # with a stretch limit of the caller's own nothing is loosened
+    held = batch.unwrap_job(batch.Job("teapot", V, F), {"stretch": 8.0})
+    assert not any(f.startswith("storage_stretch_") for r in held.result.islands
+                   for f in r.flags)
