@@ -4,6 +4,7 @@ A stable contract for scripts: exit 0 only if every island was certified, otherw
 one line per problem on stderr. The JSON report has the shape documented in README.md.
 """
 import argparse
+import contextlib
 import json
 import os
 import sys
@@ -18,14 +19,29 @@ from .batch import add_batch_parser
 from .batch.jobs import JobOptions
 from .batch.report import item_line
 from .batch.scene_files import unwrap_scene_file
-from .errors import BDError
+from .errors import BDError, OptionError
 from .unwrapping.storage import stored_layout_with_headroom
 from .meshio import load_mesh, write_obj
 from .planar_cli import add_planar_parsers
 from .progress import TerminalProgress
 from .scenes import BLENDER_SUFFIXES, GLTF_SUFFIXES, SCENE_SUFFIXES, USD_SUFFIXES, read_scene
+from .scheduling.atomic import atomic_path
 from .seams import unwrap_auto
 from .seams.needed import AUTO_BOUND
+
+
+def check_outputs(*paths):
+    """Refuse, before any work, an output path that is a folder or lies under a file."""
+    for option, path in zip(("output", "report", "png"), paths):
+        if path is None:
+            continue
+        if os.path.isdir(path):
+            raise OptionError(option, f"{path} is a folder: give a file name to write")
+        parent = os.path.dirname(os.path.abspath(path))
+        while parent and not os.path.exists(parent):
+            parent = os.path.dirname(parent)
+        if parent and not os.path.isdir(parent):
+            raise OptionError(option, f"cannot write {path}: {parent} is a file, not a folder")
 
 
 def run_unwrap(args):
@@ -33,6 +49,7 @@ def run_unwrap(args):
     if misuse:
         print(f"error: {misuse}", file=sys.stderr)
         return 2
+    check_outputs(args.output, args.report, args.png)
     ext = os.path.splitext(args.input)[1].lower()
     if ext in SCENE_SUFFIXES or ext in BLENDER_SUFFIXES:
         if ext in BLENDER_SUFFIXES:
@@ -64,30 +81,39 @@ def run_unwrap(args):
                                                      stretch=options.stretch, **layout_options)
     if options.seams_mode == "needed":
         _print_needed(res, options, args.output)
-    uv, F_uv = layout.vertex_uv(mesh.F)
-    write_obj(args.output, mesh.V, mesh.F, uv, F_uv)
     islands = layout.island_entries(res)
     report = {"input": os.path.abspath(args.input), **res.report(), "islands": islands,
               "summary": layout.totals(), "layout_overlaps": layout.overlaps.tolist(),
               "pack": layout.pack}
-    if args.report:
-        os.makedirs(os.path.dirname(os.path.abspath(args.report)), exist_ok=True)
-        with open(args.report, "w", encoding="utf-8") as fh:
-            json.dump(report, fh, indent=2)
-    if args.png:
-        from .metrics import conformal_distortion
-        from .render import uv_layout_png
-        D = np.full(len(mesh.F), np.nan)
-        w = layout.face_island >= 0
-        if w.any():
-            D[w] = conformal_distortion(mesh.V, mesh.F[w], layout.corner_uv[w])
-        bound = layout.totals()["bound"] or (args.bound if args.bound != "auto" else None)
-        uv_layout_png(args.png, layout.corner_uv, D, bound,
-                      layout.caption(mesh.name, args.method, res.seconds), **png_tiles(layout))
+    any_certified = any(e["status"] == "certified" for e in islands)
+    # Every output goes to a temporary file first and is renamed into place only when all were
+    # written (the OBJ first): a failed write leaves no file that looks like a result. With no
+    # island certified there is no result: only the report (which says why) is written.
+    with contextlib.ExitStack() as stack:
+        if args.png and any_certified:
+            from .metrics import conformal_distortion
+            from .render import uv_layout_png
+            D = np.full(len(mesh.F), np.nan)
+            w = layout.face_island >= 0
+            if w.any():
+                D[w] = conformal_distortion(mesh.V, mesh.F[w], layout.corner_uv[w])
+            bound = layout.totals()["bound"] or (args.bound if args.bound != "auto" else None)
+            uv_layout_png(stack.enter_context(atomic_path(args.png)), layout.corner_uv, D, bound,
+                          layout.caption(mesh.name, args.method, res.seconds), **png_tiles(layout))
+        if args.report:
+            with open(stack.enter_context(atomic_path(args.report)), "w",
+                      encoding="utf-8") as fh:
+                json.dump(report, fh, indent=2)
+        if any_certified:
+            uv, F_uv = layout.vertex_uv(mesh.F)
+            write_obj(stack.enter_context(atomic_path(args.output)), mesh.V, mesh.F, uv, F_uv)
     _print_report(mesh.name, islands, layout, res.seconds, args, sys.stdout)
     failed = [e for e in islands if e["status"] != "certified"]
     for e in failed:
         print(f"error: {e['message']}", file=sys.stderr)
+    if not any_certified:
+        print(f"no island was certified: nothing was written to {args.output}"
+              + (f" (the report {args.report} says why)" if args.report else ""))
     return 0 if not failed else 1
 
 
@@ -231,6 +257,10 @@ def main(argv=None):
         return args.func(args)
     except BDError as exc:
         print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:   # a file that cannot be read or written (permissions, full disk)
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"error: {where}{exc.strerror or exc}; nothing was written", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("error: interrupted; nothing was written", file=sys.stderr)

@@ -150,10 +150,12 @@ def islands(V, F, seams=None):
 
     A = face_areas(V, F)
     P = V[F]
-    lmax2 = np.max(np.sum((P - np.roll(P, -1, axis=1)) ** 2, axis=2), axis=1)
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore", over="ignore"):
+        lmax2 = np.max(np.sum((P - np.roll(P, -1, axis=1)) ** 2, axis=2), axis=1)
         degenerate = ~(2 * A > DEGENERATE_RATIO * lmax2)
-    nonfinite_face = ~np.all(np.isfinite(P), axis=(1, 2))
+    # The one place non-finite vertex coordinates are caught: NaN or inf, and coordinates so large
+    # that the face's squared edges or area overflow (nothing downstream could measure it).
+    nonfinite_face = ~(np.all(np.isfinite(P), axis=(1, 2)) & np.isfinite(lmax2) & np.isfinite(A))
     duplicate = _repeated_rows(np.sort(F, axis=1))
     nonmanifold_face = np.zeros(m, dtype=bool)
     nonmanifold_face[np.flatnonzero(he_count >= 3) // 3] = True
@@ -223,8 +225,9 @@ def _validate(idx, faces, tris, vertices, V, degenerate, nonfinite, duplicate, n
     name = f"island {idx}"
     bad = faces[nonfinite[faces]]
     if len(bad):
-        return NonFiniteError(f"{name}: {len(bad)} face(s) have NaN or infinite vertex coordinates "
-                              f"(faces {_some(bad)}); fix or delete those vertices", idx, bad)
+        return NonFiniteError(f"{name}: {len(bad)} face(s) have NaN or infinite vertex coordinates, "
+                              f"or coordinates too large to measure (faces {_some(bad)}); fix or "
+                              "delete those vertices", idx, bad)
     bad = faces[duplicate[faces]]
     if len(bad):
         return DuplicateFacesError(f"{name}: {len(bad)} faces repeat the same three vertices "

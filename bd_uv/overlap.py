@@ -238,6 +238,8 @@ def _loops(bd):
 
 def _winding_ok(bd, loop, n_loops):
     """Per loop: does the faces' side of it have winding number 1? (k,) bool, k = n_loops."""
+    if n_loops == 0:
+        return np.zeros(0, dtype=bool)
     area2 = np.bincount(loop, weights=_cross(bd.p, bd.q), minlength=n_loops)  # twice signed area
     positive = area2 > 0
     lisl = np.zeros(n_loops, dtype=np.int64)
@@ -337,8 +339,10 @@ def island_overlaps(F, corner_uv, face_island, n_islands=None):
     crossings += np.bincount(pt_isl, weights=np.maximum(extra, 0), minlength=k).astype(np.int64)
     bad = np.zeros(k, dtype=np.int64)
     clean = crossings == 0
-    if len(bd.p) and clean.any():
-        sel = clean[bd.island]
+    sel = clean[bd.island]
+    # Only islands with boundary segments have loops to wind: an island with no faces in the
+    # layout (a failed island, left out with -1 or non-finite UVs) is clean but has nothing here.
+    if sel.any():
         sub = Boundary(bd.p[sel], bd.q[sel], bd.island[sel], bd.face[sel], bd.edge[sel],
                        bd.pid[sel], bd.qid[sel], bd.interior)
         n_loops, loop = _loops(sub)

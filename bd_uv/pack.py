@@ -8,6 +8,8 @@ to rounding (conformal distortion is scale-invariant, Lipman 2012 eq. 4.9).
 """
 import numpy as np
 
+from .errors import OptionError
+
 MARGIN = 0.005  # gap between islands and to the square's edge, in the unit square's units
 
 
@@ -82,7 +84,7 @@ def pack_islands(corner_uv, face_island, margin=MARGIN):
     if not len(lab) or lab.max() < 0:
         return out
     if not 0 <= margin < 0.25:
-        raise ValueError(f"margin must be in [0, 0.25), got {margin!r}")
+        raise OptionError("margin", f"margin must be in [0, 0.25), got {margin!r}")
     lo, hi = island_boxes(uv, lab)
     live = np.flatnonzero(np.isfinite(lo).all(axis=1))
     if not len(live):

@@ -40,10 +40,10 @@ class BackgroundSolve:
         """Report an exception from the solve; nothing has been written."""
         if isinstance(error, bd_uv.CancelledError):
             self.report({'WARNING'}, self._cancelled())
+        elif isinstance(error, ValueError):  # bad options (bd_uv.OptionError is one too)
+            self.report({'ERROR'}, str(error))
         elif isinstance(error, bd_uv.BDError):
             self.report({'WARNING'}, str(error))
-        elif isinstance(error, ValueError):
-            self.report({'ERROR'}, str(error))
         else:
             raise error
         return {'CANCELLED'}

@@ -7,6 +7,15 @@ from scipy.sparse.csgraph import connected_components, dijkstra, minimum_spannin
 
 # Roots tried (farthest-point samples) for the loops of a closed chart of genus >= 1.
 ROOT_TRIES = 6
+# Edge weights are whole multiples of a quantum, a power of two near this share of their 10th
+# percentile (below the polygons' diagonals, weighted a million times):
+# rounding noise (the same mesh stored as float32) then leaves equal lengths equal, path sums are
+# exact, and shortest-path ties and the choice between equally short loop systems fall the same
+# way (by index) every time. Each weight moves by at most half a quantum (6e-5 of that length).
+QUANTUM = 2.0 ** -10
+# Quanta still straddle a rounding boundary here and there, so sums over many edges (a root's
+# distance, a loop system's length) can differ by a few quanta: within this share they tie.
+TIE = 1e-3
 
 
 def cut_graph(tris, nv, weight):
@@ -56,9 +65,7 @@ def cut_graph(tris, nv, weight):
     real = ends[:, 1] < nv
     w = np.full(len(uniq), 0.0)
     w[real] = weight(ends[real])
-    # Zero weights would drop out of the sparse graph: floor every weight.
-    tiny = 1e-9 * max(w[real].mean() if real.any() else 1.0, 1e-300)
-    w = np.maximum(w, tiny)
+    w = quantised_weights(w, real)
     if n_caps:
         return _loops_from(nv, uniq, ends, inv, w, all_tris, N, nv, n_caps)[0]
     # Closed: the loops all pass through the root, so try a few roots spread over the chart
@@ -69,12 +76,35 @@ def cut_graph(tris, nv, weight):
     G = sp.csr_matrix(sp.coo_array((w, (ends[:, 0], ends[:, 1])), shape=(N, N)))
     far = dijkstra(G, directed=False, indices=0)
     for _ in range(ROOT_TRIES):
-        r = int(np.argmax(far))
+        # The first of the farthest vertices, up to TIE (not a rounding-level winner) ...
+        r = int(np.flatnonzero(far >= far.max() * (1.0 - TIE))[0])
         trial = _loops_from(r, uniq, ends, inv, w, all_tris, N, nv, n_caps)
-        if trial[1] < best[1]:
+        if trial[1] < best[1] * (1.0 - TIE):     # ... and only a clearly shorter system wins
             best = trial
         far = np.minimum(far, dijkstra(G, directed=False, indices=r))
     return best[0]
+
+
+def quantised_weights(w, real):
+    """Weights as whole numbers of quanta (float64 integers, so sums are exact), at least 1.
+
+    Parameters
+    ----------
+    w : (e,) float64 >= 0, edge weights (the caps' edges 0), possibly inf (never cut)
+    real : (e,) bool, the mesh's edges (the scale is taken from these)
+
+    Returns
+    -------
+    (e,) float64, ``max(1, round(w / q))`` with ``q`` a power of two near ``QUANTUM`` times the
+    10th percentile of the finite weights; inf stays inf. A weight too large to count in quanta exactly (above 2^40
+    quanta) is capped there: never cut unless nothing else will do.
+    """
+    fin = real & np.isfinite(w)
+    low = float(np.percentile(w[fin], 10)) if fin.any() else 1.0
+    q = 2.0 ** np.floor(np.log2(max(low, 1e-300) * QUANTUM))
+    with np.errstate(over="ignore", invalid="ignore"):
+        k = np.round(np.where(np.isfinite(w), w, np.inf) / q)
+    return np.clip(k, 1.0, 2.0 ** 40)
 
 
 def _loops_from(root, uniq, ends, inv, w, all_tris, N, nv, n_caps):

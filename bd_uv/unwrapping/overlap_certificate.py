@@ -52,8 +52,8 @@ def overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True,
                                "on a circle (boundary='circle': a bijection without new seams)",
                                r.index, r.faces)
             out.append(dataclasses.replace(r, status="failed", error=err, message=str(err),
-                                           uv=None, bijective=None if r.bijective is None
-                                           else False))
+                                           uv=None, bound_certified=None,
+                                           bijective=None if r.bijective is None else False))
             corner_uv[r.faces] = np.nan
             continue
         pieces, cut_edges = split_overlapping(V, F, corner_uv, r.faces, face_groups)
@@ -94,6 +94,6 @@ def overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True,
                                   r.index)
                 results[c.island] = dataclasses.replace(r, status="failed", error=err,
                                                         message=str(err), overlap_free=False,
-                                                        uv=None)
+                                                        uv=None, bound_certified=None)
                 corner_uv[r.faces] = np.nan
     return results, face_island, corner_uv, None

@@ -272,7 +272,10 @@ def _finish(prob, u, C, bound, frames_name, flags, t0, stretch=None):
     isl = prob.island
     npins = len(prob.pin_idx)
     if npins < 2:
-        s = np.sqrt(prob.area3d / strategies.uv_area(u, isl.tris))
+        # A map collapsed to a point or a line (e.g. pinned ~1e159 away, where float64 cannot
+        # hold the island's shape) has no area to scale by: left unscaled, its certificate fails.
+        area = strategies.uv_area(u, isl.tris)
+        s = math.sqrt(prob.area3d / area) if area > 0.0 and math.isfinite(area) else 1.0
         if npins == 1:
             p = prob.pin_val[0]
             u = p + s * (u - p)

@@ -198,8 +198,10 @@ def test_single_face_island_next_to_a_real_mesh():
 # Island-level problems: the island fails with a typed error, the others are still solved
 # ---------------------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf, 1e300, -1e160])
 def test_non_finite_coordinates_fail_only_their_island(value):
+    """1e300 and 1e160 are finite, but a face's squared edges or area overflow: caught with NaN
+    and inf in mesh.islands, not reported as a zero-area face."""
     V, F = combine(grid(), grid())
     V = V.copy()
     V[6, 1] = value

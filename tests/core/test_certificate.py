@@ -147,6 +147,23 @@ def test_unlabelled_and_nonfinite_faces():
     assert certs[0].certified and certs[0].faces == 1
 
 
+
+def test_an_island_without_uvs_beside_a_crossing_one_is_no_crash():
+    """Issue 22's fuzz crash: a failed island (its faces' UVs NaN, as after a NaN vertex) next to
+    an island whose boundary crosses itself left no clean island with boundary segments, and the
+    winding check ran on nothing (ValueError from ``overlap._winding_ok``)."""
+    V8, F8, uv8 = figure8_uv()
+    Vs, Fs, uvs = square()
+    V = np.concatenate([Vs, V8])
+    F = np.concatenate([Fs, F8 + len(Vs)])
+    uv = np.concatenate([np.full_like(uvs, np.nan), uv8])
+    lab = np.concatenate([np.zeros(len(Fs), int), np.ones(len(F8), int)])
+    failed, crossing = certify_islands(V, F, uv, lab, [5.0, 50.0])
+    assert not failed.certified and failed.flipped == 2
+    assert not crossing.certified and crossing.crossings > 0 and not crossing.overlap_free
+    ov = island_overlaps(F, uv, np.where(lab == 0, -1, lab), 2)   # island 0 has no faces at all
+    assert ov.crossings[1] > 0 and not ov.overlap_free[1] and ov.bad_loops.tolist() == [0, 0]
+
 # ---- the issue's shapes through bd_uv.unwrap, then certify / cut ---------------------------------
 
 from overlap_shapes import folded_strip, helicoid_ribbon, spiral_strip  # noqa: E402

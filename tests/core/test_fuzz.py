@@ -20,7 +20,7 @@ from unittest import mock
 import clarabel
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, event, given, settings
+from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
 import bd_uv
@@ -89,8 +89,12 @@ def scenarios(draw):
         seams=draw(st.sampled_from([0, 0, 5, 30, 150])),
         pins=draw(st.sampled_from([0, 0, 1, 2, 4, 20])),
         pin_kind=draw(st.sampled_from(["from a certified map", "random"])),
-        defect=draw(st.sampled_from([None, None, None, "nan vertex", "duplicate face",
-                                     "reversed face", "collapsed face", "fin (3-face edge)"])),
+        defect=draw(st.sampled_from([None, None, None, "nan vertex", "non-finite vertex",
+                                     "non-finite vertex", "duplicate face", "reversed face",
+                                     "collapsed face", "fin (3-face edge)"])),
+        # issue 22: a non-finite vertex inside an otherwise valid island, on a seam or pinned
+        nonfinite=draw(st.sampled_from([np.nan, np.inf, -np.inf, 1e300, 1e160])),
+        nonfinite_at=draw(st.sampled_from(["any vertex", "a seam vertex", "a pinned vertex"])),
         bound=draw(st.sampled_from([1.2, 2.0, 5.0, "auto"])),
         method=draw(st.sampled_from(["lscm", "lscm", "dirichlet", "arap"])),
         frames=draw(st.sampled_from(["auto", "auto", "harmonic", "conformal", "constant"])),
@@ -138,13 +142,20 @@ def build(sc):
         E = np.unique(np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), 1),
                       axis=0)
         seams = E[rng.choice(len(E), size=min(sc["seams"], len(E)), replace=False)]
-    return rng, V, F.astype(np.int64), seams
+    bad = None
+    if defect == "non-finite vertex":     # on a seam, pinned (pins_for) or anywhere
+        on_seam = sc.get("nonfinite_at") == "a seam vertex" and seams is not None
+        bad = int(seams[rng.integers(len(seams)), 0] if on_seam else F[f, 0])
+        V[bad] = sc.get("nonfinite", np.nan)
+    return rng, V, F.astype(np.int64), seams, bad
 
 
-def pins_for(sc, rng, V, F, seams):
+def pins_for(sc, rng, V, F, seams, bad=None):
     if not sc["pins"]:
         return None, None
     corners = rng.choice(3 * len(F), size=min(sc["pins"], 3 * len(F)), replace=False)
+    if bad is not None and sc.get("nonfinite_at") == "a pinned vertex":
+        corners[0] = np.flatnonzero(F.ravel() == bad)[0]        # a pin on the non-finite vertex
     if sc["pin_kind"] == "random":
         span = np.ptp(V[np.isfinite(V).all(1)], axis=0).max() if np.isfinite(V).any() else 1.0
         return corners, rng.uniform(0, span, size=(len(corners), 2))
@@ -195,11 +206,42 @@ def flaky_solver(p, rng):
 EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "25"))
 
 
+# Falsifying examples found by deep runs (issue 22), each kept as a regression.
+# A NaN vertex fails island 0; the certified islands beside it all crossed themselves, so no clean
+# island had boundary segments and the winding check ran on nothing (ValueError in
+# overlap._winding_ok; also test_certificate's test_an_island_without_uvs_beside_a_crossing_one).
+NAN_VERTEX_BESIDE_CROSSING_ISLANDS = dict(
+    mesh="nefertiti", patch_size=143, seed=4225207817, noise=0.001, delete=0.0,
+    delete_kind="scattered faces", seams=150, pins=4, pin_kind="from a certified map",
+    defect="nan vertex", bound=1.2, method="dirichlet", frames="constant", cone="soc",
+    solver_faults=0.0)
+
+# A one-face island pinned ~5e159 away (random pins spanning a 1e160 vertex): its solved map
+# collapsed to one point in float64, and _finish divided by its zero UV area (ZeroDivisionError).
+ONE_FACE_PINNED_FAR_AWAY = dict(
+    mesh="three_peaks patch", patch_size=65, seed=23, noise=0.0, delete=0.0, delete_kind="blobs",
+    seams=150, pins=2, pin_kind="random", defect="non-finite vertex", nonfinite=1e160,
+    nonfinite_at="any vertex", bound=1.2, method="arap", frames="auto", cone="soc",
+    solver_faults=0.0)
+
+# Twenty pins ~1e299 away: the island overlapped itself, a piece cut from it failed its
+# certificate at that magnitude, and the failed piece kept its bound_certified (and the report its
+# C) though it has no UVs.
+FAILED_PIECE_KEPT_ITS_BOUND = dict(
+    mesh="three_peaks patch", patch_size=49, seed=49, noise=0.0, delete=0.3,
+    delete_kind="scattered faces", seams=0, pins=20, pin_kind="random",
+    defect="non-finite vertex", nonfinite=1e300, nonfinite_at="any vertex", bound=1.2,
+    method="lscm", frames="auto", cone="soc", solver_faults=0.0)
+
+
 @settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(sc=scenarios())
+@example(sc=NAN_VERTEX_BESIDE_CROSSING_ISLANDS)
+@example(sc=ONE_FACE_PINNED_FAR_AWAY)
+@example(sc=FAILED_PIECE_KEPT_ITS_BOUND)
 def test_unwrap_contract_on_perturbed_real_meshes(sc):
-    rng, V, F, seams = build(sc)
-    pin_corners, pin_uv = pins_for(sc, rng, V, F, seams)
+    rng, V, F, seams, bad = build(sc)
+    pin_corners, pin_uv = pins_for(sc, rng, V, F, seams, bad)
     args = (V, F, seams, pin_corners, pin_uv)
     before = snapshot(*args)
     solver = flaky_solver(sc["solver_faults"], rng) if sc["solver_faults"] else REAL_SOLVER

@@ -47,3 +47,22 @@ def test_an_island_that_cannot_meet_the_bounds_fails_and_says_so():
     (isl,) = res.islands
     assert isl.status == "failed" and type(isl.error) is bd_uv.InfeasibleError
     assert "stretch" in isl.message and np.isnan(res.corner_uv).all()
+
+
+def test_bound_one_with_a_stretch_bound_is_no_crash():
+    """Found by the CLI fuzz contract (issue 22): C = 1 is a valid bound, but with a stretch bound
+    the search handed it to the projection iterations, which need C > 1 (ValueError). Now the
+    conic solve alone: every island certified within C = 1 (up to rounding) and S, or failed
+    with a typed error."""
+    V, F = load_off("three_peaks.off")
+    V, F = V[np.unique(F[:60])], np.unique(F[:60], return_inverse=True)[1].reshape(-1, 3)
+    for method in ("lscm", "arap"):
+        res = bd_uv.unwrap(V, F, bound=1.0, stretch=1.5, method=method)
+        for isl in res.islands:
+            if isl.status == "failed":
+                assert isinstance(isl.error, bd_uv.IslandError)
+                continue
+            f = isl.faces
+            s1, s2, det = singular_values_at_own_scale(V, F[f], res.corner_uv[f])
+            assert (det > 0).all() and (s1 / s2).max() <= 1.0 + 2e-6
+        assert any(isl.status == "certified" for isl in res.islands)

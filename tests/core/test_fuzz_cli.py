@@ -1,0 +1,301 @@
+"""Fuzzing the command-line contract (issue 22): ``python -m bd_uv unwrap`` with random option
+combinations, bad values and bad paths, run in process through ``bd_uv.cli.main``.
+
+For every example: ``main`` returns an exit code (argparse's usage errors exit 2) and nothing else
+escapes; no traceback; a non-zero exit says why on stderr (one "error:" line for a usage or input
+error, one per failed island for exit 1); the input file is byte-identical afterwards; nothing is
+written outside ``-o``, ``--report`` and ``--png`` (no temporary file left either); a run that
+fails (exit 2, or exit 1 with no island certified) leaves the file at ``-o`` as it was (absent,
+or the old bytes); a written OBJ keeps the input's faces, and its certified islands are
+re-verified from the stored UVs by independent code (numpy SVD distortion within the reported
+bound, no flipped face from signed areas, no two UV triangles overlapping by an exact test).
+
+CI-friendly: 25 examples; ``BD_UV_FUZZ_EXAMPLES=2000`` (or ``bash scripts/fuzz_deep.sh``) runs
+deeper.
+"""
+import contextlib
+import io
+import json
+import os
+import pathlib
+import re
+import shutil
+import tempfile
+
+import numpy as np
+from hypothesis import HealthCheck, event, example, given, settings
+from hypothesis import strategies as st
+
+from bd_uv.cli import main
+from overlap_shapes import overlapping_triangle_pairs
+from unwrap_contract import DATA, distortion_and_flips, read_off
+
+EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "25"))
+V3, F3 = read_off(DATA / "three_peaks.off")
+
+
+def small_patch(n_faces=60):
+    """A small disk cut from three_peaks: faces reached breadth-first, vertices renumbered."""
+    used, inv = np.unique(F3[:n_faces], return_inverse=True)
+    return V3[used], inv.reshape(-1, 3)
+
+
+PATCH = small_patch()
+PATCH32 = (PATCH[0].astype(np.float32).astype(np.float64), PATCH[1])   # as the PLY stores it
+NAN_PATCH = (np.concatenate([[[np.nan, *PATCH[0][0, :2]]], PATCH[0][1:]]), PATCH[1])  # "v nan x y z"
+TETRA = (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float),
+         np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]]))
+
+
+def obj_text(V, F, with_uv=False):
+    lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in V]
+    if with_uv:   # the 3D x, y as UVs: a planar projection, one UV per vertex (no UV seams)
+        lines += [f"vt {x!r} {y!r}" for x, y, _ in V]
+        lines += [f"f {a + 1}/{a + 1} {b + 1}/{b + 1} {c + 1}/{c + 1}" for a, b, c in F]
+    else:
+        lines += [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in F]
+    return "\n".join(lines) + "\n"
+
+
+def off_text(V, F):
+    return "OFF\n%d %d 0\n" % (len(V), len(F)) + "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in V) \
+        + "".join(f"3 {a} {b} {c}\n" for a, b, c in F)
+
+
+def ply_text(V, F):
+    head = ("ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\nproperty float y\n"
+            "property float z\nelement face %d\nproperty list uchar int vertex_indices\n"
+            "end_header\n" % (len(V), len(F)))
+    return head + "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in V) \
+        + "".join(f"3 {a} {b} {c}\n" for a, b, c in F)
+
+
+INPUTS = {   # name -> (file name, bytes or None for "no such file", or "dir")
+    "patch.obj": ("in.obj", obj_text(*PATCH).encode()),
+    "patch.obj with vt": ("in.obj", obj_text(*PATCH, with_uv=True).encode()),
+    "patch.off": ("in.off", off_text(*PATCH).encode()),
+    "patch.ply": ("in.ply", ply_text(*PATCH).encode()),
+    "closed tetra.obj": ("in.obj", obj_text(*TETRA).encode()),
+    "nan vertex.obj": ("in.obj", obj_text(*PATCH).replace("v ", "v nan ", 1).encode()),
+    "index out of range.obj": ("in.obj", (obj_text(*PATCH) + "f 1 2 9999\n").encode()),
+    "truncated.obj": ("in.obj", obj_text(*PATCH).encode()[:700]),
+    "truncated.ply": ("in.ply", ply_text(*PATCH).encode()[:400]),
+    "garbage.off": ("in.off", bytes(range(256)) * 4),
+    "empty.obj": ("in.obj", b""),
+    "no faces.off": ("in.off", b"OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n"),
+    "unknown suffix": ("in.stl", b"solid x\nendsolid x\n"),
+    "missing file": ("missing.obj", None),
+    "a directory": ("adir.obj", "dir"),
+}
+
+BAD_NUMBERS = ["nan", "inf", "-inf", "-1", "0", "abc", "", "1e400"]
+
+
+@st.composite
+def command_lines(draw):
+    """(input name, output kind, argv tail) of one run."""
+    opts = []
+    # Half the runs take only valid values, so that results get written and re-verified too.
+    kinds = ["absent", "absent", "good"] + (["bad"] if draw(st.booleans()) else [])
+
+    def maybe(flag, good, bad=BAD_NUMBERS):
+        kind = draw(st.sampled_from(kinds))
+        if kind != "absent":
+            opts.extend([flag, draw(st.sampled_from(good if kind == "good" else bad))])
+
+    maybe("--method", ["lscm", "arap", "dirichlet", "biharmonic", "stretch-l1"], ["LSCM", "x"])
+    maybe("--bound", ["1.5", "2", "5", "auto", "1"], BAD_NUMBERS + ["0.5", "Auto"])
+    maybe("--frames", ["auto", "harmonic", "conformal", "input-uv", "constant"], ["uv"])
+    maybe("--seams", ["uv", "none", "auto"], ["marked"])
+    maybe("--stretch", ["1.5", "2", "3", "10"], BAD_NUMBERS + ["1.0"])
+    maybe("--bound-limit", ["10", "1000"], BAD_NUMBERS)
+    maybe("--cone", ["soc", "linf"], ["l2"])
+    maybe("--time-budget", ["5", "1"], BAD_NUMBERS)
+    maybe("--margin", ["0", "0.005", "0.05"], BAD_NUMBERS + ["0.9", "2"])
+    maybe("--overlap", ["cut", "fail"], ["merge"])
+    maybe("--boundary", ["free", "circle", "rectangle", "pinned"], ["square"])
+    for flag in ("--no-pack", "--no-raise"):
+        if draw(st.booleans()):
+            opts.append(flag)
+    if "bad" in kinds and draw(st.integers(0, 9)) == 0:
+        opts.append(draw(st.sampled_from(["--unknown", "-x", "--bound"])))  # unknown, or no value
+    valid = ["patch.obj", "patch.obj with vt", "patch.off", "patch.ply", "closed tetra.obj"]
+    return dict(input=draw(st.sampled_from(valid) | st.sampled_from(sorted(INPUTS))),
+                output=draw(st.sampled_from(["new", "new", "existing file", "in a new folder",
+                                             "a directory", "no suffix"])),
+                report=draw(st.sampled_from([None, None, "report.json", "adir.obj/r.json",
+                                             "existing.txt/r.json"])),
+                png=draw(st.sampled_from([None, None, "pic.png", "existing.txt/p.png"])),
+                opts=opts)
+
+
+def tree(root):
+    """{relative path: bytes or 'dir'} of everything under root."""
+    out = {}
+    for p in sorted(pathlib.Path(root).rglob("*")):
+        out[str(p.relative_to(root))] = "dir" if p.is_dir() else p.read_bytes()
+    return out
+
+
+def read_obj(path):
+    V, VT, F, FT = [], [], [], []
+    for line in pathlib.Path(path).read_text().splitlines():
+        p = line.split()
+        if p and p[0] == "v":
+            V.append([float(t) for t in p[1:4]])
+        elif p and p[0] == "vt":
+            VT.append([float(t) for t in p[1:3]])
+        elif p and p[0] == "f":
+            F.append([int(t.split("/")[0]) - 1 for t in p[1:]])
+            FT.append([int(t.split("/")[1]) - 1 if "/" in t else -1 for t in p[1:]])
+    return np.array(V).reshape(-1, 3), np.array(VT).reshape(-1, 2), np.array(F), np.array(FT)
+
+
+def run(sc, root):
+    """Lay out the files of a scenario under root and run ``main`` on them: (argv, exit code,
+    stdout, stderr, input path, -o path, the output paths named, the tree before the run)."""
+    root = pathlib.Path(root)
+    (root / "adir.obj").mkdir()
+    (root / "existing.txt").write_bytes(b"not a folder\n")
+    name, data = INPUTS[sc["input"]]
+    inp = root / name
+    if isinstance(data, bytes):
+        inp.write_bytes(data)
+    out = {"new": root / "out.obj", "existing file": root / "old.obj",
+           "in a new folder": root / "sub" / "out.obj", "a directory": root / "adir.obj",
+           "no suffix": root / "out"}[sc["output"]]
+    if sc["output"] == "existing file":
+        out.write_bytes(b"# a previous result, to be kept unless replaced by a certified one\n")
+    argv = ["unwrap", str(inp), "-o", str(out)]
+    named = {out}
+    if sc["report"]:
+        argv += ["--report", str(root / sc["report"])]
+        named.add(root / sc["report"])
+    if sc["png"]:
+        argv += ["--png", str(root / sc["png"])]
+        named.add(root / sc["png"])
+    argv += sc["opts"]
+    before = tree(root)
+    so, se = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(so), contextlib.redirect_stderr(se):
+        try:
+            rc = main(argv)
+        except SystemExit as exc:           # argparse: usage errors
+            rc = exc.code
+    return argv, rc, so.getvalue(), se.getvalue(), inp, out, named, before
+
+
+def certified_bounds(stdout):
+    return [float(x) for x in re.findall(r"certified C = ([0-9.eE+-]+),", stdout)]
+
+
+def check_written(inp_mesh, out, report, stdout, packed):
+    """The OBJ's certified faces re-verified from the stored UVs (independent code)."""
+    V, VT, F, FT = read_obj(out)
+    V0, F0 = inp_mesh
+    assert np.array_equal(F, F0)
+    assert np.allclose(V, V0, rtol=1e-6 if inp_mesh is PATCH32 else 1e-12, equal_nan=True)
+    has = (FT >= 0).all(axis=1)
+    assert has.any(), "an OBJ was written with no certified island"
+    uv = VT[FT[has]]
+    D, flipped = distortion_and_flips(V, F[has], uv)
+    assert not flipped.any()
+    if report is not None and report.exists():
+        rep = json.loads(report.read_text())
+        bound = max(e["bound_certified"] for e in rep["islands"] if e["status"] == "certified")
+        slack = 2e-6
+    else:                                   # the report line prints 4 significant digits
+        bound, slack = max(certified_bounds(stdout)), 5e-4
+    assert D.max() <= bound * (1 + slack), (D.max(), bound)
+    pairs = overlapping_triangle_pairs(uv)
+    if not packed:                          # islands all start at (0, 0): only within one
+        isl = uv_islands(FT[has])
+        pairs = pairs[isl[pairs[:, 0]] == isl[pairs[:, 1]]]
+    assert len(pairs) == 0, pairs[:5]
+
+
+def uv_islands(FT):
+    """Island of each face: faces joined through shared UV (vt) indices."""
+    from scipy.sparse import coo_array
+    from scipy.sparse.csgraph import connected_components
+    k = len(FT)
+    rows = np.repeat(np.arange(k), 3)
+    g = coo_array((np.ones(3 * k), (rows, k + FT.ravel())), shape=(k + FT.max() + 1,) * 2)
+    return connected_components(g, directed=False)[1][:k]
+
+
+def mesh_of(sc):
+    """The (V, F) the input holds when it is a valid mesh, else None."""
+    return {"patch.obj": PATCH, "patch.obj with vt": PATCH, "patch.off": PATCH,
+            "patch.ply": PATCH32, "closed tetra.obj": TETRA,
+            "nan vertex.obj": NAN_PATCH}.get(sc["input"])
+
+
+# Falsifying examples found on the way (issue 22), each kept; what each did before its fix:
+FOUND = [
+    # ValueError tracebacks from option checks in the core (now bd_uv.OptionError, exit 2)
+    dict(input="closed tetra.obj", output="new", report=None, png=None,
+         opts=["--bound", "auto", "--boundary", "circle"]),
+    dict(input="patch.obj", output="new", report=None, png=None,
+         opts=["--stretch", "3", "--bound-limit", "nan"]),
+    dict(input="closed tetra.obj", output="new", report=None, png=None, opts=["--stretch", "nan"]),
+    dict(input="closed tetra.obj", output="new", report=None, png=None, opts=["--stretch", "1.5"]),
+    # --bound 1 with a stretch bound: ValueError from the projection iterations (need C > 1)
+    dict(input="nan vertex.obj", output="new", report=None, png=None,
+         opts=["--bound", "1", "--stretch", "1.5"]),
+    # an OBJ with no certified island written at -o (exit 1): now nothing is written
+    dict(input="closed tetra.obj", output="new", report=None, png=None, opts=[]),
+    dict(input="nan vertex.obj", output="existing file", report="report.json", png="pic.png",
+         opts=["--seams", "none"]),
+    # OSError tracebacks: -o a folder, --report or --png under a file (now exit 2, one line)
+    dict(input="patch.obj", output="a directory", report=None, png=None, opts=[]),
+    dict(input="patch.obj", output="new", report="existing.txt/r.json", png=None, opts=[]),
+    dict(input="patch.obj", output="new", report=None, png="existing.txt/p.png", opts=[]),
+]
+
+
+def with_examples(test):
+    for sc in reversed(FOUND):
+        test = example(sc=sc)(test)
+    return test
+
+
+@settings(max_examples=EXAMPLES, deadline=None,
+          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+@given(sc=command_lines())
+@with_examples
+def test_command_line_contract(sc):
+    root = pathlib.Path(tempfile.mkdtemp(prefix="bd-uv-cli-fuzz-"))
+    try:
+        check(sc, root)
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+
+
+def check(sc, root):
+    argv, rc, stdout, stderr, inp, out, named, before = run(sc, root)
+    after = tree(root)
+    event(f"exit {rc}")
+    assert isinstance(rc, int) and rc in (0, 1, 2), (rc, argv, stderr)
+    assert "Traceback" not in stderr and "Traceback" not in stdout, stderr
+    errors = [line for line in stderr.splitlines() if "error:" in line]
+    if rc == 2:
+        assert len(errors) == 1, (argv, stderr)
+    elif rc == 1:
+        assert errors, (argv, stderr)
+    # The input is untouched (a folder stays a folder).
+    rel = str(inp.relative_to(root))
+    assert after.get(rel) == before.get(rel)
+    # Nothing written outside -o, --report and --png (and the new folders they name).
+    allowed = {str(p.relative_to(root)) for p in named}
+    allowed |= {str(pathlib.Path(a).parent) for a in allowed}
+    for path, content in after.items():
+        if before.get(path) != content:
+            assert path in allowed, (path, argv)
+    orel = str(out.relative_to(root))
+    if after.get(orel) != before.get(orel):      # written: a certified result, re-verified
+        assert rc in (0, 1) and after.get(orel) != "dir", (rc, argv)
+        report = next((p for p in named if p.suffix == ".json"), None)
+        check_written(mesh_of(sc), out, report, stdout, "--no-pack" not in sc["opts"])
+    else:
+        assert rc != 0, (argv, "exit 0 but nothing written at -o")
