@@ -20,7 +20,7 @@ from .batch.jobs import JobOptions
 from .batch.report import item_line
 from .batch.scene_files import unwrap_scene_file
 from .errors import BDError, OptionError
-from .layout import stored_layout
+from .unwrapping.storage import stored_layout_with_headroom
 from .meshio import load_mesh, write_obj
 from .planar_cli import add_planar_parsers
 from .progress import TerminalProgress
@@ -77,7 +77,8 @@ def run_unwrap(args):
             res = unwrap(mesh.V, mesh.F, seams=seams, initial_uv=initial_uv, progress=progress,
                          options=options)
         progress.stage("storing: cut, pack and certify the UVs as stored")
-        layout = stored_layout(mesh.V, mesh.F, res, **layout_options)
+        layout, res, _ = stored_layout_with_headroom(mesh.V, mesh.F, res,
+                                                     stretch=options.stretch, **layout_options)
     if options.seams_mode == "needed":
         _print_needed(res, options, args.output)
     islands = layout.island_entries(res)

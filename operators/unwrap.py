@@ -16,6 +16,7 @@ from .. import bd_uv
 from ..bd_uv.errors import BDError
 from ..bd_uv.options import ENTRY_SEAMS_MODE
 from ..bd_uv.packing import PackOptions
+from ..bd_uv.unwrapping.storage import with_predicted_headroom
 from . import auto_seams, needed_seams, session
 from .background import BackgroundSolve
 from .editmode import edit_mesh_objects, object_mode
@@ -306,6 +307,9 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
         auto = solved if isinstance(solved, auto_seams.AutoSeams) else None
         result = auto.result if auto is not None else solved
         stretch = self.stretch if self.seams == 'AUTO' or self.limit_stretch else None
+        headroom = {}
+        if stretch is None:   # islands whose faces float32 UVs would not resolve: re-solved now
+            result, headroom = with_predicted_headroom(batch.V, batch.F, result)
         with object_mode(context):
             written = session.write_back(batch, result)
         verified, packed_note = None, ""
@@ -333,6 +337,10 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                 summary = dataclasses.replace(summary, message=(
                     f"{summary.message}; {marked} seam{'s' if marked != 1 else ''} marked where "
                     "overlapping islands were cut"))
+        if summary.written and headroom:
+            summary = dataclasses.replace(summary, message=f"{summary.message}; " + ", ".join(
+                f"island {i} re-solved with stretch <= {S:g}" for i, S in headroom.items())
+                + " (its conformal map shrank faces below what float32 UVs resolve)")
         if summary.written and packed_note:  # the layout's figures beside the map's, before notes
             head, sep, notes = summary.message.partition("; ")
             summary = dataclasses.replace(summary, message=f"{head}; {packed_note}{sep}{notes}")

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..api import unwrap
 from ..errors import BDError
-from ..layout import stored_layout
+from ..unwrapping.storage import stored_layout_with_headroom, with_predicted_headroom
 from ..metrics import conformal_distortion
 from ..options import OPTION_NAMES, UnwrapOptions
 from ..pack import MARGIN
@@ -163,8 +163,11 @@ def unwrap_job(job, options, png=None):
         res = unwrap(job.V, job.F, job.seams, job.pin_corners, job.pin_uv,
                      initial_uv=job.corner_uv if o.frames == "input-uv" else None,
                      face_groups=job.face_groups, options=o)
-        layout = stored_layout(job.V, job.F, res, pack=options.pack, cut=options.cut,
-                               margin=options.margin, pack_options=options.pack_options)
+        if o.stretch is None:   # its UVs are saved as float32 too (Blender script, scenes)
+            res, _ = with_predicted_headroom(job.V, job.F, res)
+        layout, res, _ = stored_layout_with_headroom(
+            job.V, job.F, res, stretch=o.stretch, pack=options.pack, cut=options.cut,
+            margin=options.margin, pack_options=options.pack_options)
     except Exception as exc:  # a bad mesh, or a bug: either way it stays this job's failure
         entry.update(error=type(exc).__name__, message=str(exc),
                      seconds=round(time.perf_counter() - t0, 4))
