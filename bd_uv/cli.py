@@ -148,8 +148,9 @@ def run_scene_unwrap(args):
     bad = [e for e in entries if e["status"] != "certified"]
     for e in bad:
         print(f"error: {e['name']}: {e['message']}", file=sys.stderr)
-    print(f"{len(entries) - len(bad)}/{len(entries)} mesh(es) certified and written -> "
-          f"{args.output}")
+    done = len(entries) - len(bad)
+    print(f"{done}/{len(entries)} mesh(es) certified and written -> {args.output}" if done else
+          f"0/{len(entries)} mesh(es) certified: nothing written to {args.output}")
     return 0 if not bad else 1
 
 
