@@ -122,7 +122,9 @@ def layout_certificate(V, F, corner_uv, face_island, tile, resolution, padding_p
     P3 = V[F[use]]
     a3 = 0.5 * np.linalg.norm(np.cross(P3[:, 1] - P3[:, 0], P3[:, 2] - P3[:, 0]), axis=1)
     present = np.unique(lab[use])
-    dens = np.sqrt(np.bincount(lab[use], auv, k) / np.bincount(lab[use], a3, k))[present]
+    area3 = np.bincount(lab[use], a3, k)[present]
+    dens = np.sqrt(np.bincount(lab[use], auv, k)[present][area3 > 0] / area3[area3 > 0])
+    # (a chart of zero 3D area has no texel density: it takes no part in the spread)
     tiles = sorted(int(x) for x in np.unique(tile[present]))
     coverage = float(auv.sum() / len(tiles)) if tiles else 0.0
     reasons = []
