@@ -40,7 +40,10 @@ def check_layout(V, F, uv_in, lab, packed, options, tiles=(1001,), pinned=None):
     if len(moved):
         d = texel_densities(V, F, packed.corner_uv, lab)[moved]
         assert np.allclose(d, d[0], rtol=1e-9)
-        assert np.allclose(texel_densities(V, F, out, lab)[moved], d[0], rtol=1e-3)
+        # as stored: float32 spacing (6e-8 near 1) moves a chart of least side w by about 1e-7 / w
+        w = np.array([np.ptp(out[lab == c].reshape(-1, 2), axis=0).min() for c in moved])
+        d32 = texel_densities(V, F, out, lab)[moved]
+        assert np.all(np.abs(d32 / d[0] - 1) <= 1e-3 + 1e-6 / w)
         assert np.isclose(d[0] * res, packed.texel_density, rtol=1e-5)
         # a turn and a scale per face, never a mirror: J = s R with det > 0 (no flip as stored:
         # float32; the similarity from float64, float32 rounding of thin slivers aside)
