@@ -14,7 +14,7 @@ Each example is cheap: spyrrow's constructive placement only (``solve_seconds=0`
 draws, a one-second search for one in twenty; 200 islands at most (5,000 islands take about a
 minute to pack and 20 s to check on the shared machine, out of a fuzz example's budget).
 
-CI-friendly: 20 examples; ``BD_UV_FUZZ_EXAMPLES=2000`` (or ``bash scripts/fuzz_deep.sh``) runs
+CI-friendly: 10 examples; ``BD_UV_FUZZ_EXAMPLES=2000`` (or ``bash scripts/fuzz_deep.sh``) runs
 deeper.
 """
 import os
@@ -28,7 +28,7 @@ from bd_uv.packing import PackOptions, pack_islands
 from packing_checks import check_layout
 from packing_sets import RECT, annulus
 
-EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "20"))
+EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "10"))
 KINDS = ("box", "sliver", "hole")
 
 
