@@ -14,6 +14,7 @@ from ..errors import PackError
 
 DENSITY_GUESS = 0.64   # first guess of outline area / square area (measured 0.6-0.7 on our charts)
 HEADROOM = 1.08       # a strip's separation is the padding of a square this much larger
+NARROW = 1.05         # outlines of area below NARROW * separation * height are grown (_nest_grown)
 
 
 @dataclass(frozen=True)
@@ -53,6 +54,9 @@ def nest(outlines, height, separation, options):
     Placement, with x in [0, width] and y in [0, height] for every outline point
     """
     import spyrrow
+    area = sum(_area(xy) for xy in outlines)
+    if separation > 0 and area <= NARROW * separation * height:
+        return _nest_grown(outlines, height, separation, options)
     items = [spyrrow.Item(str(i), [tuple(p) for p in xy], demand=1,
                           allowed_orientations=options.orientations())
              for i, xy in enumerate(outlines)]
@@ -76,6 +80,32 @@ def nest(outlines, height, separation, options):
         angle[i] = p.rotation
         shift[i] = p.translation
     return Placement(angle, shift, float(sol.width))
+
+
+def _area(xy):
+    """Area of a simple polygon (n,2)."""
+    x, y = xy[:, 0], xy[:, 1]
+    return 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
+def _nest_grown(outlines, height, separation, options):
+    """:func:`nest` for outlines whose total area is at most about ``separation * height``.
+
+    spyrrow starts from a strip of width (total item area) / height and shrinks it inwards by half
+    the separation on each side; when that width is at most the separation the strip is empty and
+    spyrrow panics ("Offset resulted in an empty polygon", measured: it fails exactly when
+    separation >= area / height). Such charts (slivers, a lone thin chart) are nested here with
+    no separation, each outline grown by half of it (mitred: the grown outline holds every point
+    within that distance, and turns commute with growing), in a strip shorter by the separation;
+    shifting the result by half the separation gives what spyrrow's separation gives: outlines
+    ``separation`` apart and from the strip's edges."""
+    import shapely
+    half = 0.5 * separation
+    grown = [np.asarray(shapely.get_coordinates(shapely.orient_polygons(shapely.Polygon(
+        shapely.buffer(shapely.Polygon(xy), half, join_style="mitre").exterior))))[:-1]
+        for xy in outlines]
+    pl = nest(grown, height - separation, 0.0, options)
+    return Placement(pl.angle, pl.shift + half, pl.width + separation)
 
 
 def least_squares(outlines, options, step=1.0):
@@ -145,8 +175,7 @@ def square_layout(outlines, options, tol):
     -------
     Placement (offset to the square's corner included in ``shift``), side, solves
     """
-    area = sum(0.5 * abs(np.dot(xy[:, 0], np.roll(xy[:, 1], -1))
-                         - np.dot(xy[:, 1], np.roll(xy[:, 0], -1))) for xy in outlines)
+    area = sum(_area(xy) for xy in outlines)
     if len(outlines) == 1:
         return (*single_layout(outlines[0], options, tol), 0)
     widest = float(least_squares(outlines, options)[0].max())

@@ -106,8 +106,9 @@ def chart_outlines(V, F, corner_uv, face_island, n_charts, options, tol_px=TOL_P
     outlines, centre = [], np.zeros((n_charts, 2))
     for i in range(n_charts):  # per chart
         polys = shapely.get_parts(shapely.polygonize(segs[cuts[i]:cuts[i + 1]]))
-        outer = shapely.Polygon(polys[np.argmax(shapely.area(polys))].exterior) if len(polys) \
-            else None
+        # the outer ring encloses the most (a hole's own face can have more area than the chart)
+        rings = shapely.polygons(shapely.get_exterior_ring(polys))
+        outer = rings[np.argmax(shapely.area(rings))] if len(polys) else None
         if outer is None or outer.area < 0.999 * A3[i]:
             outer = _hull_outline(out[lab == i])
         ring = shapely.simplify(outer, tol, preserve_topology=True)

@@ -6,45 +6,8 @@ import pytest
 from bd_uv.errors import BDError, PackError
 from bd_uv.packing import PackOptions, layout_certificate, pack_islands, udim_tile, uv_islands
 from overlap_shapes import overlapping_triangle_pairs
+from packing_checks import check_layout
 from packing_sets import chart_maps, chart_set, least_gap, texel_densities
-
-
-def check_layout(V, F, uv_in, lab, packed, options, tiles=(1001,)):
-    """Everything the layout promises, recomputed from the float32 UVs."""
-    out = packed.corner_uv.astype(np.float32).astype(np.float64)
-    res, pad = options.resolution, options.padding_px
-    # inside its tile, half the padding from the edge
-    t = packed.tile[lab] - 1001
-    lo = np.stack([t % 10, t // 10], 1)[:, None, :]
-    assert np.all(out >= lo + 0.5 * pad / res * (1 - 1e-3))
-    assert np.all(out <= lo + 1 - 0.5 * pad / res * (1 - 1e-3))
-    assert sorted(set(packed.tile.tolist())) == list(tiles)
-    # no overlap: every pair of triangles of different charts is separated (exact SAT test)
-    pairs = overlapping_triangle_pairs(out)
-    assert not np.any(lab[pairs[:, 0]] != lab[pairs[:, 1]])
-    # least gap between two charts >= padding, measured at the resolution
-    gap = least_gap(out, lab, reach=2 * pad / res + 1e-9) * res
-    assert gap >= pad * (1 - 1e-4) or (pad == 0 and gap > 0)
-    # one density: sqrt(UV area / 3D area) equal for every chart (float32 rounding moves tiny
-    # charts' areas by up to about 1e-4)
-    d = texel_densities(V, F, packed.corner_uv, lab)
-    assert np.allclose(d, d[0], rtol=1e-9)
-    assert np.allclose(texel_densities(V, F, out, lab), d[0], rtol=1e-3)
-    assert np.isclose(d[0] * res, packed.texel_density, rtol=1e-5)
-    # a turn and a scale per face, never a mirror: J = s R with det > 0
-    J = chart_maps(uv_in, out)
-    assert np.all(np.linalg.det(J) > 0)
-    assert np.allclose(J[:, 0, 0], J[:, 1, 1], atol=1e-4 * np.abs(J).max())
-    assert np.allclose(J[:, 0, 1], -J[:, 1, 0], atol=1e-4 * np.abs(J).max())
-    if options.rotate == "none":
-        assert np.allclose(J[:, 0, 1], 0, atol=1e-5 * np.abs(J).max())
-    # the product's own certificate agrees with the independent figures
-    cert = layout_certificate(V, F, out.astype(np.float32), lab, packed.tile, res, pad)
-    assert cert.certified, cert.reason
-    if np.isfinite(gap):
-        assert cert.least_gap_px == pytest.approx(gap, rel=1e-6)
-    assert cert.density_spread == pytest.approx(1.0, abs=1e-3)
-    return cert
 
 
 @pytest.mark.parametrize("kind, k, res, pad, rotate", [

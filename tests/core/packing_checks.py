@@ -1,0 +1,63 @@
+"""``check_layout``: everything a packed layout promises, recomputed from its float32 UVs by code
+that shares nothing with the packer (exact triangle overlap test, brute-force edge distances,
+densities and turns from the corners), then compared with the product's own certificate.
+Shared by ``test_packing.py`` and the atlas fuzz contract ``test_fuzz_atlas.py``."""
+import numpy as np
+import pytest
+
+from bd_uv.packing import layout_certificate
+from overlap_shapes import overlapping_triangle_pairs
+from packing_sets import chart_maps, least_gap, texel_densities
+
+
+def check_layout(V, F, uv_in, lab, packed, options, tiles=(1001,), pinned=None):
+    """Assert the layout of ``packed`` (charts ``lab`` of the input ``uv_in``) is certified.
+
+    pinned : (k,) bool, optional: these charts keep their input UVs bit for bit; the density and
+        the similarity checks then cover the other charts only.
+
+    Returns the product's LayoutCertificate (certified).
+    """
+    out = packed.corner_uv.astype(np.float32).astype(np.float64)
+    res, pad = options.resolution, options.padding_px
+    keep = np.zeros(len(lab), bool) if pinned is None else np.asarray(pinned, bool)[lab]
+    assert np.array_equal(packed.corner_uv[keep], uv_in[keep])      # pinned: bit for bit
+    # inside its tile, half the padding from the edge
+    t = packed.tile[lab] - 1001
+    lo = np.stack([t % 10, t // 10], 1)[:, None, :]
+    assert np.all(out >= lo + 0.5 * pad / res * (1 - 1e-3))
+    assert np.all(out <= lo + 1 - 0.5 * pad / res * (1 - 1e-3))
+    assert sorted(set(packed.tile.tolist())) == list(tiles)
+    # no overlap: every pair of triangles of different charts is separated (exact SAT test)
+    pairs = overlapping_triangle_pairs(out)
+    assert not np.any(lab[pairs[:, 0]] != lab[pairs[:, 1]])
+    # least gap between two charts >= padding, measured at the resolution
+    gap = least_gap(out, lab, reach=2 * pad / res + 1e-9) * res
+    assert gap >= pad * (1 - 1e-4) or (pad == 0 and gap > 0)
+    # one density: sqrt(UV area / 3D area) equal for every chart that moved (float32 rounding
+    # moves tiny charts' areas by up to about 1e-4)
+    moved = np.unique(lab[~keep])
+    if len(moved):
+        d = texel_densities(V, F, packed.corner_uv, lab)[moved]
+        assert np.allclose(d, d[0], rtol=1e-9)
+        # as stored: float32 spacing (6e-8 near 1) moves a chart of least side w by about 1e-7 / w
+        w = np.array([np.ptp(out[lab == c].reshape(-1, 2), axis=0).min() for c in moved])
+        d32 = texel_densities(V, F, out, lab)[moved]
+        assert np.all(np.abs(d32 / d[0] - 1) <= 1e-3 + 1e-6 / w)
+        assert np.isclose(d[0] * res, packed.texel_density, rtol=1e-5)
+        # a turn and a scale per face, never a mirror: J = s R with det > 0 (no flip as stored:
+        # float32; the similarity from float64, float32 rounding of thin slivers aside)
+        assert np.all(np.linalg.det(chart_maps(uv_in[~keep], out[~keep])) > 0)
+        J = chart_maps(uv_in[~keep], packed.corner_uv[~keep])
+        assert np.allclose(J[:, 0, 0], J[:, 1, 1], atol=1e-4 * np.abs(J).max())
+        assert np.allclose(J[:, 0, 1], -J[:, 1, 0], atol=1e-4 * np.abs(J).max())
+        if options.rotate == "none":
+            assert np.allclose(J[:, 0, 1], 0, atol=1e-5 * np.abs(J).max())
+    # the product's own certificate agrees with the independent figures
+    cert = layout_certificate(V, F, out.astype(np.float32), lab, packed.tile, res, pad)
+    assert cert.certified, cert.reason
+    if np.isfinite(gap):
+        assert cert.least_gap_px == pytest.approx(gap, rel=1e-6)
+    if pinned is None:
+        assert cert.density_spread == pytest.approx(1.0, abs=1e-3)
+    return cert
