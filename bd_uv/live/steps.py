@@ -18,7 +18,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..errors import CancelledError
-from ..solvers.local_projection import project_singular_values
+from ..solvers.local_projection import nearest_jacobian_parts, project_singular_values
 
 __all__ = ["EnergySteps", "pin_similarity", "apply_similarity", "project_frame", "LIVE_METHODS"]
 
@@ -151,15 +151,8 @@ def project_frame(steps, U, C, max_iter, margin=0.9, floor=1e-3, cancel=None):
             lo = np.full(k, floor * scale)
         t1, t2, moved = project_singular_values(s1, s2, kappa, lo, np.inf)
         m = np.flatnonzero(moved)
-        # The nearest allowed Jacobian keeps the phases of alpha and beta (a face with alpha = 0
-        # gets a real alpha, likewise beta).
-        with np.errstate(invalid="ignore", divide="ignore"):
-            fa = np.where(na[m] > 0, 0.25 * (t1[m] + t2[m]) / na[m], 0.0)
-            fb = np.where(nb[m] > 0, 0.25 * (t1[m] - t2[m]) / nb[m], 0.0)
-        pre = np.where(na[m] > 0, fa * are[m], 0.5 * (t1[m] + t2[m]))
-        pim = fa * aim[m]
-        qre = np.where(nb[m] > 0, fb * bre[m], 0.5 * (t1[m] - t2[m]))
-        qim = fb * bim[m]
+        pre, pim, qre, qim = nearest_jacobian_parts(t1[m], t2[m], na[m], nb[m], are[m], aim[m],
+                                                    bre[m], bim[m])
         # The normal N = J - P, non-zero on the moved faces only: rows m (d/dx) and k + m (d/dy).
         rows = np.concatenate([m, k + m])
         N = np.empty((len(rows), 2))

@@ -61,3 +61,26 @@ def project_singular_values(s1, s2, kappa, lo, hi):
         y2 = np.where(better, y, y2)
     t1[out], t2[out] = y1, y2
     return t1, t2, ~inside
+
+
+def nearest_jacobian_parts(t1, t2, na, nb, are, aim, bre, bim):
+    """The nearest allowed Jacobian of faces whose singular values moved to ``t1 >= t2``, in its
+    conformal / anti-conformal parts, keeping the phases of alpha and beta (a face with alpha = 0
+    gets the real alpha ``(t1 + t2) / 2``, likewise beta with ``(t1 - t2) / 2``).
+
+    Parameters
+    ----------
+    t1, t2 : (k,) float arrays, the projected singular values
+    na, nb : (k,) float arrays, |alpha| and |beta| before the projection
+    are, aim, bre, bim : (k,) float arrays, real and imaginary parts of alpha and beta
+
+    Returns
+    -------
+    pre, pim, qre, qim : (k,) float64, real and imaginary parts of the new alpha and beta
+    """
+    with np.errstate(invalid="ignore", divide="ignore"):
+        fa = np.where(na > 0, 0.25 * (t1 + t2) / na, 0.0)
+        fb = np.where(nb > 0, 0.25 * (t1 - t2) / nb, 0.0)
+    pre = np.where(na > 0, fa * are, 0.5 * (t1 + t2))
+    qre = np.where(nb > 0, fb * bre, 0.5 * (t1 - t2))
+    return pre, fa * aim, qre, fb * bim

@@ -29,7 +29,7 @@ import scipy.sparse.csgraph as csgraph
 
 from ..errors import CancelledError
 from .factor import factor_spd
-from .local_projection import project_singular_values
+from .local_projection import nearest_jacobian_parts, project_singular_values
 
 __all__ = ["ProjectionResult", "ProjectionSolver"]
 
@@ -321,14 +321,8 @@ class ProjectionSolver:
             # faces outside the set move.
             t1, t2, moved = project_singular_values(s1, s2, kappa, lo, hi)
             m = np.flatnonzero(moved)
-            with np.errstate(invalid="ignore", divide="ignore"):
-                fa = np.where(na[m] > 0, 0.25 * (t1[m] + t2[m]) / na[m], 0.0)
-                fb = np.where(nb[m] > 0, 0.25 * (t1[m] - t2[m]) / nb[m], 0.0)
-            # A face with alpha = 0 gets the real alpha |alpha'| (phase 1), likewise beta.
-            pre = np.where(na[m] > 0, fa * are[m], 0.5 * (t1[m] + t2[m]))
-            pim = fa * aim[m]
-            qre = np.where(nb[m] > 0, fb * bre[m], 0.5 * (t1[m] - t2[m]))
-            qim = fb * bim[m]
+            pre, pim, qre, qim = nearest_jacobian_parts(t1[m], t2[m], na[m], nb[m], are[m],
+                                                        aim[m], bre[m], bim[m])
             # Normal n = J - P on the moved faces, back in (u_x, u_y, v_x, v_y).
             N = np.zeros((2 * k, 2))
             N[m, 0] = ux[m] - (pre + qre)
