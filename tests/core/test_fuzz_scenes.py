@@ -93,6 +93,35 @@ def _digest(folder):
             for f in sorted(os.listdir(folder))}
 
 
+def _spoil_and_unwrap(name, src, tmp, flips, cut, out_name):
+    """Corrupt bytes of the file ``name`` (``flips``: (where, xor) pairs) and truncate it at
+    ``cut``; read it, then unwrap it through the command line. Never a crash, never a traceback,
+    the input folder ``src`` byte-identical afterwards. Returns (exit code, stderr, -o, --report)."""
+    raw = bytearray(open(name, "rb").read())
+    for at, x in flips:                             # corrupted bytes
+        raw[int(at * len(raw))] ^= x
+    if cut is not None:                             # a truncated download
+        raw = raw[:int(cut * len(raw))]
+    open(name, "wb").write(bytes(raw))
+    before = _digest(src)
+    try:
+        read_scene(name)
+    except BDError:
+        pass
+    out, rep = os.path.join(tmp, "o", out_name), os.path.join(tmp, "r.json")
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        try:
+            rc = main(["unwrap", name, "-o", out, "--report", rep])
+        except SystemExit as e:
+            rc = e.code
+    msg = err.getvalue()
+    assert rc in (0, 1, 2), (rc, msg)
+    assert "Traceback" not in msg, msg
+    assert _digest(src) == before                                      # input untouched
+    return rc, msg, out, rep
+
+
 def _check_written(out, report):
     """Every primitive's new UVs as the file stores them, certified by code apart from bd_uv; a
     mesh that was not certified is written as it was read (no TEXCOORD_0 added) and its report
@@ -130,28 +159,7 @@ def test_scene_files_never_crash_or_write_an_uncertified_result(breakage, copies
         os.mkdir(src)
         name = os.path.join(src, "scene.glb" if glb else "scene.gltf")
         _scene(breakage, copies, seed).write(name, glb=glb)
-        raw = bytearray(open(name, "rb").read())
-        for at, x in flips:                         # corrupted bytes
-            raw[int(at * len(raw))] ^= x
-        if cut is not None:                         # a truncated download
-            raw = raw[:int(cut * len(raw))]
-        open(name, "wb").write(bytes(raw))
-        before = _digest(src)
-        try:
-            read_scene(name)
-        except BDError:
-            pass
-        out, rep = os.path.join(tmp, "o", "out.glb"), os.path.join(tmp, "r.json")
-        err = io.StringIO()
-        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-            try:
-                rc = main(["unwrap", name, "-o", out, "--report", rep])
-            except SystemExit as e:
-                rc = e.code
-        msg = err.getvalue()
-        assert rc in (0, 1, 2), (rc, msg)
-        assert "Traceback" not in msg, msg
-        assert _digest(src) == before                                  # input untouched
+        rc, msg, out, rep = _spoil_and_unwrap(name, src, tmp, flips, cut, "out.glb")
         if rc == 2:
             assert msg.strip(), "a failure says why"
             assert not os.path.exists(out)
@@ -253,28 +261,7 @@ def test_usd_stages_never_crash_or_write_an_uncertified_result(breakage, seed, c
         os.mkdir(src)
         name = os.path.join(src, "shot.usda")
         _stage(name, breakage, seed)
-        raw = bytearray(open(name, "rb").read())
-        for at, x in flips:
-            raw[int(at * len(raw))] ^= x
-        if cut is not None:
-            raw = raw[:int(cut * len(raw))]
-        open(name, "wb").write(bytes(raw))
-        before = _digest(src)
-        try:
-            read_scene(name)
-        except BDError:
-            pass
-        out, rep = os.path.join(tmp, "o", "out.usda"), os.path.join(tmp, "r.json")
-        err = io.StringIO()
-        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
-            try:
-                rc = main(["unwrap", name, "-o", out, "--report", rep])
-            except SystemExit as e:
-                rc = e.code
-        msg = err.getvalue()
-        assert rc in (0, 1, 2), (rc, msg)
-        assert "Traceback" not in msg, msg
-        assert _digest(src) == before
+        rc, msg, out, rep = _spoil_and_unwrap(name, src, tmp, flips, cut, "out.usda")
         if rc == 2:
             assert msg.strip() and not os.path.exists(out)
         if rc != 0 and breakage not in ("none", "empty stage") and not flips and cut is None:
