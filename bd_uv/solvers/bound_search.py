@@ -36,6 +36,7 @@ TOLERANCE = 0.01    # stop once a step below this share of D - 1 failed
 MARGIN = 0.98       # the cones are aimed at 1 + MARGIN (C - 1)
 MAX_ITER = 150      # iterations per target
 STALL = 20          # a target is out of reach after this many iterations ...
+ALPHA = 1.5         # ADMM over-relaxation (hemisphere: 196 iterations against 240 at 1.0)
 PROGRESS = 0.01     # ... that did not lower the max by this share of its excess over 1
 
 
@@ -80,38 +81,53 @@ class BoundSearch:
         self.UF = None
         self.iterations = 0
 
-    def _parts(self, R):
-        """(Re, Im) of alpha and beta per face from stacked gradients R (2k, 2)."""
+    def max_distortion(self, R):
+        """Max conformal distortion (eq. 4.9) of the map with stacked gradients R (2k, 2); inf
+        when a face flips or collapses."""
         k = self.k
         ux, uy, vx, vy = R[:k, 0], R[k:, 0], R[:k, 1], R[k:, 1]
-        return 0.5 * (ux + vy), 0.5 * (vx - uy), 0.5 * (ux - vy), 0.5 * (vx + uy)
-
-    def max_distortion(self, R):
-        """Max conformal distortion (eq. 4.9) of the map with gradients R; inf when a face flips
-        or collapses."""
-        ar, ai, br, bi = self._parts(R)
-        a2, b2 = ar * ar + ai * ai, br * br + bi * bi
-        if not np.all(a2 > b2):
+        with np.errstate(invalid="ignore", divide="ignore"):
+            r = float(np.max((np.square(ux - vy) + np.square(vx + uy))
+                             / (np.square(ux + vy) + np.square(vx - uy))))   # |beta|^2 / |alpha|^2
+        if not r < 1.0:
             return np.inf
-        r = np.sqrt(float(np.max(b2 / a2)))
+        r = np.sqrt(r)
         return (1.0 + r) / (1.0 - r)
+
+    def _project(self, Q, wr, wi, kappa):
+        """Every face's Jacobian of Q (2k, 2), in place, onto its cone ``|beta| <= kappa Re(w
+        alpha)``; only faces outside it move (alpha and beta are carried doubled)."""
+        k = self.k
+        ux, uy, vx, vy = Q[:k, 0], Q[k:, 0], Q[:k, 1], Q[k:, 1]
+        ar, ai, br, bi = ux + vy, vx - uy, ux - vy, vx + uy
+        pr = wr * ar - wi * ai                                   # Re(w alpha)
+        nb = np.hypot(br, bi)
+        m = np.flatnonzero(nb > kappa * pr)
+        if not len(m):
+            return Q
+        wrm, wim, arm, aim = wr[m], wi[m], ar[m], ai[m]
+        x, bm_r, bm_i = framed_cone_projection(pr[m], br[m], bi[m], kappa)
+        pi = wrm * aim + wim * arm                               # Im(w alpha), kept
+        arm, aim = wrm * x + wim * pi, wrm * pi - wim * x        # conj(w) (x + i Im(w alpha))
+        Q[m, 0], Q[k + m, 0] = 0.5 * (arm + bm_r), 0.5 * (bm_i - aim)
+        Q[m, 1], Q[k + m, 1] = 0.5 * (aim + bm_i), 0.5 * (arm - bm_r)
+        return Q
 
     def run(self, U, w, C, D_best, cancel=None):
         """ADMM towards F_C with frames w (unit complex, (k,)), from U (nv, 2).
 
         Returns (U of the least max distortion below D_best or None, that max, whether it is
         within C)."""
-        s, k = self.solver, self.k
+        s = self.solver
         Cm = 1.0 + MARGIN * (C - 1.0)
         kappa = (Cm - 1.0) / (Cm + 1.0)
         solve = s.factorize()
         rhs_fixed = s._L_fF @ self.UF
         wr, wi = w.real, w.imag
         U = U.copy()
-        lam = np.zeros((2 * k, 2))
-        best, since, mark = None, 0, D_best
-        Z = np.empty((2 * k, 2))
         GU = s.G @ U
+        lam = np.zeros_like(GU)
+        best, since, mark = None, 0, D_best
         for it in range(MAX_ITER + 1):
             if cancel is not None and cancel.is_set():
                 break
@@ -129,11 +145,9 @@ class BoundSearch:
                         break
                 if it == MAX_ITER:
                     break
-            ar, ai, br, bi = self._parts(GU + lam)
-            pr, pi = wr * ar - wi * ai, wr * ai + wi * ar        # w alpha
-            xo, br, bi = framed_cone_projection(pr, br, bi, kappa)
-            ar, ai = wr * xo + wi * pi, wr * pi - wi * xo       # conj(w) (x + i Im(w alpha))
-            Z[:k, 0], Z[k:, 0], Z[:k, 1], Z[k:, 1] = ar + br, bi - ai, ai + bi, ar - br
+            Z = self._project(GU + lam, wr, wi, kappa)
+            if ALPHA != 1.0:  # over-relaxation
+                Z = ALPHA * Z + (1.0 - ALPHA) * GU
             U[s.free] = solve((s.GT @ (self.area2 * (Z - lam)))[s.free] - rhs_fixed)
             GU = s.G @ U
             lam += GU
