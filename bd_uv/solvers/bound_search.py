@@ -32,7 +32,7 @@ __all__ = ["BoundSearch", "framed_cone_projection"]
 
 STEP = 0.3          # first step, as a share of D - 1
 MAX_STEP = 0.5
-TOLERANCE = 0.01    # stop once a step below this share of D - 1 failed
+TOLERANCE = 0.02    # stop once a step below this share of D - 1 failed
 MARGIN = 0.98       # the cones are aimed at 1 + MARGIN (C - 1)
 MAX_ITER = 150      # iterations per target
 STALL = 20          # a target is out of reach after this many iterations ...
