@@ -77,15 +77,16 @@ class BoundSearch:
     def __init__(self, ops, nv, tris, fixed):
         self.solver = s = ProjectionSolver(ops, nv, fixed, tris=tris)
         self.k = len(s.area)
-        self.area2 = np.concatenate([s.area, s.area])[:, None]
+        self.area2 = np.concatenate([s.area, s.area])
+        self.GTf = s.GT[s.free]
         self.UF = None
         self.iterations = 0
 
     def max_distortion(self, R):
-        """Max conformal distortion (eq. 4.9) of the map with stacked gradients R (2k, 2); inf
-        when a face flips or collapses."""
+        """Max conformal distortion (eq. 4.9) of the map with gradients R (2, 2k): rows
+        ``(u_x; u_y)`` and ``(v_x; v_y)``; inf when a face flips or collapses."""
         k = self.k
-        ux, uy, vx, vy = R[:k, 0], R[k:, 0], R[:k, 1], R[k:, 1]
+        ux, uy, vx, vy = R[0, :k], R[0, k:], R[1, :k], R[1, k:]
         with np.errstate(invalid="ignore", divide="ignore"):
             r = float(np.max((np.square(ux - vy) + np.square(vx + uy))
                              / (np.square(ux + vy) + np.square(vx - uy))))   # |beta|^2 / |alpha|^2
@@ -95,10 +96,10 @@ class BoundSearch:
         return (1.0 + r) / (1.0 - r)
 
     def _project(self, Q, wr, wi, kappa):
-        """Every face's Jacobian of Q (2k, 2), in place, onto its cone ``|beta| <= kappa Re(w
+        """Every face's Jacobian of Q (2, 2k), in place, onto its cone ``|beta| <= kappa Re(w
         alpha)``; only faces outside it move (alpha and beta are carried doubled)."""
         k = self.k
-        ux, uy, vx, vy = Q[:k, 0], Q[k:, 0], Q[:k, 1], Q[k:, 1]
+        ux, uy, vx, vy = Q[0, :k], Q[0, k:], Q[1, :k], Q[1, k:]
         ar, ai, br, bi = ux + vy, vx - uy, ux - vy, vx + uy
         pr = wr * ar - wi * ai                                   # Re(w alpha)
         nb = np.hypot(br, bi)
@@ -109,12 +110,18 @@ class BoundSearch:
         x, bm_r, bm_i = framed_cone_projection(pr[m], br[m], bi[m], kappa)
         pi = wrm * aim + wim * arm                               # Im(w alpha), kept
         arm, aim = wrm * x + wim * pi, wrm * pi - wim * x        # conj(w) (x + i Im(w alpha))
-        Q[m, 0], Q[k + m, 0] = 0.5 * (arm + bm_r), 0.5 * (bm_i - aim)
-        Q[m, 1], Q[k + m, 1] = 0.5 * (aim + bm_i), 0.5 * (arm - bm_r)
+        Q[0, m], Q[0, k + m] = 0.5 * (arm + bm_r), 0.5 * (bm_i - aim)
+        Q[1, m], Q[1, k + m] = 0.5 * (aim + bm_i), 0.5 * (arm - bm_r)
         return Q
 
+    def _gradients(self, U):
+        """G applied to each coordinate of U (2, nv) -> (2, 2k) (two single-vector products:
+        scipy's product with a two-column block is several times slower)."""
+        G = self.solver.G
+        return np.stack([G @ U[0], G @ U[1]])
+
     def run(self, U, w, C, D_best, cancel=None):
-        """ADMM towards F_C with frames w (unit complex, (k,)), from U (nv, 2).
+        """ADMM towards F_C with frames w (unit complex, (k,)), from U (2, nv): rows u and v.
 
         Returns (U of the least max distortion below D_best or None, that max, whether it is
         within C)."""
@@ -122,10 +129,11 @@ class BoundSearch:
         Cm = 1.0 + MARGIN * (C - 1.0)
         kappa = (Cm - 1.0) / (Cm + 1.0)
         solve = s.factorize()
-        rhs_fixed = s._L_fF @ self.UF
+        free, GTf = s.free, self.GTf
+        rhs_fixed = (s._L_fF @ self.UF).T
         wr, wi = w.real, w.imag
         U = U.copy()
-        GU = s.G @ U
+        GU = self._gradients(U)
         lam = np.zeros_like(GU)
         best, since, mark = None, 0, D_best
         for it in range(MAX_ITER + 1):
@@ -148,8 +156,10 @@ class BoundSearch:
             Z = self._project(GU + lam, wr, wi, kappa)
             if ALPHA != 1.0:  # over-relaxation
                 Z = ALPHA * Z + (1.0 - ALPHA) * GU
-            U[s.free] = solve((s.GT @ (self.area2 * (Z - lam)))[s.free] - rhs_fixed)
-            GU = s.G @ U
+            X = self.area2 * (Z - lam)
+            for c in (0, 1):
+                U[c, free] = solve(GTf @ X[c] - rhs_fixed[c])
+            GU = self._gradients(U)
             lam += GU
             lam -= Z
             self.iterations += 1
@@ -170,10 +180,10 @@ class BoundSearch:
         D : float, its max distortion
         out_of_time : bool, the deadline stopped the search
         """
-        U = np.stack([u.real, u.imag], 1)
-        self.UF = U[self.solver.fixed]
+        U = np.stack([u.real, u.imag])
+        self.UF = U[:, self.solver.fixed].T
         self.solver._assemble()
-        D = self.max_distortion(self.solver.G @ U)
+        D = self.max_distortion(self._gradients(U))
         step = STEP
         out_of_time = False
         while np.isfinite(D) and D > 1.0:
@@ -183,7 +193,7 @@ class BoundSearch:
             C = 1.0 + (D - 1.0) * (1.0 - step)
             if report is not None:
                 report(D, C)
-            Ub, Db, reached = self.run(U, frames_of(U[:, 0] + 1j * U[:, 1]), C, D, cancel=cancel)
+            Ub, Db, reached = self.run(U, frames_of(U[0] + 1j * U[1]), C, D, cancel=cancel)
             if cancel is not None and cancel.is_set():
                 break
             if Ub is not None:
@@ -194,4 +204,4 @@ class BoundSearch:
             step *= 0.5
             if step < TOLERANCE:
                 break
-        return U[:, 0] + 1j * U[:, 1], D, out_of_time
+        return U[0] + 1j * U[1], D, out_of_time
