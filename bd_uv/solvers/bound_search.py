@@ -37,6 +37,7 @@ MARGIN = 0.98       # the cones are aimed at 1 + MARGIN (C - 1)
 MAX_ITER = 150      # iterations per target
 STALL = 20          # a target is out of reach after this many iterations ...
 ALPHA = 1.5         # ADMM over-relaxation (hemisphere: 196 iterations against 240 at 1.0)
+FLIPPING = 6
 PROGRESS = 0.01     # ... that did not lower the max by this share of its excess over 1
 
 
@@ -149,7 +150,9 @@ class BoundSearch:
                     since, mark = 0, D
                 else:
                     since += 1
-                    if since >= STALL:
+                    # out of reach: no progress for STALL iterations, or FLIPPING flipping
+                    # iterates in a row (three_peaks: a target that flips stays flipped)
+                    if since >= (FLIPPING if np.isinf(D) and since == it else STALL):
                         break
                 if it == MAX_ITER:
                     break
