@@ -222,13 +222,14 @@ def minimise(prob, start, limit, budget, flags, report, t0):
                 else None)
         start = (Start(bent, frames_from_map(prob.alpha(bent)), start.name, prob.distortion(bent))
                  if bent is not None else start_for_solve(prob, start, report))
-    formulate(prob, start)
     best, projected, steps = None, None, budget is not None
     if np.isfinite(start.D) and start.D <= limit:
         best = (start.u, start.D)   # the start is certified at its own distortion
         u, D = search(prob, start.u, report, budget, flags, t0)
         if D < best[1] and prob.check(u, D)[0]:
             best = projected = (u, prob.distortion(u))
+    if best is None or steps:
+        formulate(prob, start)      # the conic programs' anchors, weights and scale
     if best is None:
         best = first_certified(prob, start, limit, budget, flags, report, t0)
         steps = True
