@@ -228,8 +228,10 @@ def minimise(prob, start, limit, budget, flags, report, t0):
         u, D = search(prob, start.u, report, budget, flags, t0)
         if D < best[1] and prob.check(u, D)[0]:
             best = projected = (u, prob.distortion(u))
-    if best is None or steps:
-        formulate(prob, start)      # the conic programs' anchors, weights and scale
+    if best is None or steps:  # the conic programs' anchors, weights and scale, at the map
+        formulate(prob, start if projected is None else  # the steps start from
+                  Start(projected[0], frames_from_map(prob.alpha(projected[0])), start.name,
+                        projected[1]))
     if best is None:
         best = first_certified(prob, start, limit, budget, flags, report, t0)
         steps = True
