@@ -58,7 +58,9 @@ class UnwrapOptions:
     raise_bound : bool, raise C (by a factor) when no map within C is found ...
     bound_limit : float >= 1, ... up to this C
     cone : "soc" (F_C, eq. 4.15) | "linf" (F_C^inf, eq. 4.22)
-    time_budget : float >= 0 seconds per island for ``bound="auto"``, or None for no limit
+    time_budget : float >= 0 seconds per island for ``bound="auto"``: the search starts no new
+        target after it, and conic Dinkelbach steps refine its map while it lasts; None: the
+        search alone, no conic solve where a flip-free map is at hand
     stretch : float S >= sqrt(C), or None: every face's singular values within [1/S, S]
         (section 6.3); where seams are added every chart within S, any S >= 1, None meaning
         ``AUTO_SEAMS_STRETCH``

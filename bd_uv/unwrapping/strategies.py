@@ -3,8 +3,9 @@
 - ``bounded``: a start map within C is returned as it is; otherwise one solve over F_C from the
   start's frames, anchored at the start (``IslandProblem.anchor_to``); when F_C is empty, C is
   raised towards the bound the flip-free start is known to meet.
-- ``minimise`` (``bound="auto"``): the smallest certified C (Algorithm 1's goal) by projection, then
-  Dinkelbach steps (one always-feasible conic program each, frames from the last map).
+- ``minimise`` (``bound="auto"``): the smallest certified C (Algorithm 1's goal) by ADMM onto F_C
+  with frames (one factorisation, no conic solve); Dinkelbach steps (one always-feasible conic
+  program each) only under a time budget or where no flip-free map is at hand.
 - ``arap``: BD-ARAP iterations with frames from the previous map.
 Each returns a map in the normalised geometry and the C it is meant to be certified at; the caller
 certifies it from its final UVs.
@@ -16,10 +17,11 @@ import numpy as np
 from ..errors import InfeasibleError
 from ..frames import frames_from_map
 from ..solvers.flip_free import flip_free_map
-from ..solvers.projection import ProjectionSolver
+from ..solvers.bound_search import BoundSearch
 from ..spaces import stretch_conformal_bound
 from .initial import Start, start_map
-from .problem import SOLVE_MARGIN, STORE_HEADROOM, STRETCH_MARGIN_SOLVE, solve_bound
+from .problem import (SOLVE_MARGIN, STORE_HEADROOM, STRETCH_MARGIN_SOLVE, Cancelled,
+                      solve_bound)
 
 RAISE_FACTOR = 1.5      # C grows by this factor when infeasible
 MAX_RESETS = 3          # frame resets after the first feasible solve (BD-Dirichlet, BD-ARAP)
@@ -42,8 +44,8 @@ AUTO_MAX_SOLVES = 24
 # more than this share (mannequin-devil: 1.071 -> 1.150 after two steps).
 AUTO_MEAN_RISE = 0.02
 LINE_SEARCH = 14        # distortion evaluations along each Dinkelbach step (``best_along``)
-# Minimising C first projects from the best bound D onto 1 + (D - 1)(1 - DESCENT) while that
-# certifies (one factorisation), then takes Dinkelbach steps (one conic solve each).
+# Minimising C within a stretch bound (``stretch.minimise_stretch``) first tries
+# 1 + (D - 1)(1 - DESCENT) below the best bound D.
 DESCENT = 0.15
 # Polish a projected map with one conic solve when the projection changed more than this share of
 # the island's area (measured: three_peaks 10 % at C = 5, mannequin-devil 0.3 %, lion-head at C = 2
@@ -197,15 +199,22 @@ def start_for_solve(prob, start, report):
 
 
 def minimise(prob, start, limit, budget, flags, report, t0):
-    """Algorithm 1's goal, the smallest certified C, by Dinkelbach steps (``ratio_step``).
+    """Algorithm 1's goal, the smallest certified C, without a conic solve where a flip-free map
+    is at hand (issue 21).
 
-    A flip-free map bounds C* from above: the start, bent into C = 5 when it flips, lowered by
-    projection (``descend``); when there is none, ``first_certified`` searches C upwards. From
-    there each step solves one always-feasible program whose map's max distortion is the next
-    bound (Crouzeix, Ferland & Schaible 1985), no bisection and no infeasible solve, and keeps the
-    best map along the step (``best_along``); the steps stop when one lowers C - 1 by less than
-    AUTO_STEP of itself (or no longer lowers it). When they raised the mean distortion by more
-    than AUTO_MEAN_RISE, one energy solve at the certified C lowers it (``lower_mean``).
+    A flip-free map bounds C* from above: the start, bent into C = 5 when it flips. From it
+    ``search`` lowers the bound by ADMM onto F_C with frames (``solvers.bound_search``: one
+    factorisation for every C). Conic programs run only where they are the only way or were
+    asked for:
+    - no flip-free map at hand: ``first_certified`` searches C upwards by energy solves, then
+      Dinkelbach steps lower it (``ratio_step``);
+    - with a time budget (``time_budget``, the command line's ``--time-budget``): Dinkelbach steps
+      from the searched map while the budget lasts, each one always-feasible program whose map's
+      max distortion is the next bound (Crouzeix, Ferland & Schaible 1985), the best map along
+      the step kept (``best_along``), until a step lowers C - 1 by less than AUTO_STEP of itself;
+      when they raised the mean distortion by more than AUTO_MEAN_RISE, one energy solve at the
+      certified C lowers it (``lower_mean``).
+    The budget also bounds the search (no new target after it; at least one is tried).
     Returns (u, smallest certified C, name of the start).
     """
     if not np.isfinite(start.D):  # a flip-free start bounds C* from above
@@ -213,19 +222,25 @@ def minimise(prob, start, limit, budget, flags, report, t0):
                 else None)
         start = (Start(bent, frames_from_map(prob.alpha(bent)), start.name, prob.distortion(bent))
                  if bent is not None else start_for_solve(prob, start, report))
-    formulate(prob, start)
-    best, projected = None, None
+    best, projected, steps = None, None, budget is not None
     if np.isfinite(start.D) and start.D <= limit:
         best = (start.u, start.D)   # the start is certified at its own distortion
-        u = descend(prob, start.u, report)
-        if u is not None:
+        u, D = search(prob, start.u, report, budget, flags, t0)
+        if D < best[1] and prob.check(u, D)[0]:
             best = projected = (u, prob.distortion(u))
+    if best is None or steps:  # the conic programs' anchors, weights and scale, at the map
+        formulate(prob, start if projected is None else  # the steps start from
+                  Start(projected[0], frames_from_map(prob.alpha(projected[0])), start.name,
+                        projected[1]))
     if best is None:
         best = first_certified(prob, start, limit, budget, flags, report, t0)
+        steps = True
     mean0 = prob.mean_distortion(best[0]) if best is not None else np.inf
-    while best is not None and prob.solves < AUTO_MAX_SOLVES:
-        if prob.solves and budget is not None and time.perf_counter() - t0 > budget:
-            flags.append("time_budget_exhausted")
+    while steps and best is not None and prob.solves < AUTO_MAX_SOLVES:
+        if budget is not None and time.perf_counter() - t0 > budget and (
+                prob.solves or projected is not None):
+            if "time_budget_exhausted" not in flags:
+                flags.append("time_budget_exhausted")
             break
         report(0.1 + 0.8 * prob.solves / AUTO_MAX_SOLVES, f"minimising C: C* <= {best[1]:.4g}")
         u, _, _ = prob.ratio_step(best[0], AUTO_ENERGY)
@@ -238,7 +253,8 @@ def minimise(prob, start, limit, budget, flags, report, t0):
         best = (u, D)
         if gain < AUTO_STEP:
             break
-    if best is not None and prob.mean_distortion(best[0]) > mean0 * (1.0 + AUTO_MEAN_RISE):
+    if (prob.solves and best is not None
+            and prob.mean_distortion(best[0]) > mean0 * (1.0 + AUTO_MEAN_RISE)):
         best = lower_mean(prob, best, budget, flags, report, t0)
     if best is None:
         failure = prob.solver_failure()
@@ -251,10 +267,39 @@ def minimise(prob, start, limit, budget, flags, report, t0):
                               f"{limit:g}{spent}; add seams, move pins, or raise the limit",
                               prob.island.index)
     if best[0] is start.u:
-        flags.append("initial_map")  # no solve bettered the start
+        flags.append("initial_map")  # nothing bettered the start
     elif projected is not None and best[0] is projected[0]:
-        flags.append("projected")    # no conic solve bettered the projection iterations
+        flags.append("projected")    # no conic solve bettered the search
     return best + (start.name,)
+
+
+def search(prob, u, report, budget, flags, t0):
+    """Lower the bound of a flip-free map ``u`` by ADMM onto F_C with frames
+    (``solvers.bound_search``), holding the pins (or one boundary vertex, where ``u`` has it).
+    Returns (the best map, its max distortion); flags "time_budget_exhausted" when the budget
+    stopped it."""
+    if len(prob.pin_idx) >= prob.nv:
+        return u, prob.distortion(u)
+    t = time.perf_counter()
+    fixed = prob.pin_idx if len(prob.pin_idx) else prob.island.loops[0][:1]
+    u = u.copy()
+    if len(prob.pin_idx):
+        u[prob.pin_idx] = prob.pin_val
+    bs = BoundSearch(prob.ops, prob.nv, prob.island.tris, fixed)
+
+    def progress(D, C):
+        report(0.1, f"minimising C: C* <= {D:.4g}, aiming at {C:.4g}")
+
+    deadline = None if budget is None else t0 + budget
+    u, D, out_of_time = bs.search(u, lambda v: frames_from_map(prob.alpha(v)), progress,
+                                  deadline, prob.cancel)
+    if prob.cancel is not None and prob.cancel.is_set():
+        raise Cancelled
+    if out_of_time:
+        flags.append("time_budget_exhausted")
+    prob.iterations += bs.iterations
+    prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
+    return u, D
 
 
 def lower_mean(prob, best, budget, flags, report, t0):
@@ -320,31 +365,6 @@ def first_certified(prob, start, limit, budget, flags, report, t0):
         if np.isfinite(start.D) and C >= start.D:
             C, w = guaranteed_bound(start.D), start.frames
     return None
-
-
-def descend(prob, u, report, max_iter=40):
-    """Lower the bound of a flip-free map with projection iterations (one factorisation): project
-    onto 1 + (D - 1)(1 - DESCENT) from the last certified map while that certifies. Returns the
-    last certified map, or None when the first step already stalled."""
-    if len(prob.pin_idx) >= prob.nv:
-        return None
-    t = time.perf_counter()
-    fixed = prob.pin_idx if len(prob.pin_idx) else prob.island.loops[0][:1]
-    values = prob.pin_val if len(prob.pin_idx) else u[fixed]
-    solver = ProjectionSolver(prob.ops, prob.nv, fixed, tris=prob.island.tris)
-    scale = solver.component_scale(u)
-    best, D = None, prob.distortion(u)
-    while D > 1.0 + 1e-3:
-        C = 1.0 + (D - 1.0) * (1.0 - DESCENT)
-        report(0.1, f"minimising C: projecting onto {C:.4g}")
-        res = solver.project(u, C, values, margin=1.0 - 0.5 * DESCENT, scale=scale,
-                             max_iter=max_iter, stall=10, cancel=prob.cancel)
-        prob.iterations += res.iterations
-        if not res.all_converged:
-            break
-        u, D, best = res.u, prob.distortion(res.u), res.u
-    prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
-    return best
 
 
 def arap(prob, u, C, report, S=None):

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import bd_uv
+import bd_uv.solvers.bound_search
 import bd_uv.solvers.conic
 import bd_uv.unwrapping.strategies
 from bd_uv.solvers.conic import ConicSolution
@@ -799,28 +800,37 @@ def test_zero_time_budget_still_returns_a_certified_map():
 
 
 def test_time_budget_running_out_returns_the_best_found_so_far(monkeypatch):
-    """A clock that advances one second per conic solve and stands still otherwise: a budget of
-    n - 1.5 s lets exactly n - 1 of the n solves of the full run go, whatever the machine's
-    speed."""
+    """A clock that advances one second per target of the search (``BoundSearch.run``, ADMM onto
+    F_C) and per conic solve, and stands still otherwise: a budget of n - 1.5 s lets exactly
+    n - 1 of the n targets of the full run go, whatever the machine's speed, and no conic
+    finishing step after them."""
     V, F = grid(8, 8, bump=0.3)
-    full = unwrap_checked(V, F, bound="auto")
-    n = full.islands[0].solves
-    assert n >= 2
-    clock = [0.0]
+    clock, runs = [0.0], []
+    real_run = bd_uv.solvers.bound_search.BoundSearch.run
     real = bd_uv.solvers.conic.solve_conic
+
+    def ticking_run(*args, **kwargs):
+        clock[0] += 1.0
+        runs.append(1)
+        return real_run(*args, **kwargs)
 
     def ticking(*args, **kwargs):
         clock[0] += 1.0
         return real(*args, **kwargs)
+    monkeypatch.setattr(bd_uv.solvers.bound_search.BoundSearch, "run", ticking_run)
     monkeypatch.setattr(bd_uv.solvers.conic, "solve_conic", ticking)
     now = lambda: clock[0]
-    for module in (PIPELINE, bd_uv.unwrapping.strategies):
+    for module in (PIPELINE, bd_uv.unwrapping.strategies, bd_uv.solvers.bound_search):
         monkeypatch.setattr(module, "time",
                             types.SimpleNamespace(perf_counter=now, monotonic=now, time=now))
+    full = unwrap_checked(V, F, bound="auto", time_budget=float("inf"))
+    n = len(runs)
+    assert n >= 2 and full.islands[0].solves >= 1   # the search's targets, then conic steps
+    runs.clear()
     res = unwrap_checked(V, F, bound="auto", time_budget=n - 1.5)
     (isl,) = res.islands
     assert isl.status == "certified" and "time_budget_exhausted" in isl.flags
-    assert isl.solves == n - 1
+    assert len(runs) == n - 1 and isl.solves == 0
     assert "time_budget_exhausted" not in full.islands[0].flags
     assert isl.bound_certified >= full.islands[0].bound_certified
 
