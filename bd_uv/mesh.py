@@ -131,12 +131,15 @@ def islands(V, F, seams=None):
     _, corner_vertex = connected_components(cadj, directed=False)
 
     # Non-manifold vertices: several corner fans of one vertex, ignoring seams, in one island.
-    g1, g2 = order[first[two]], order[first[two] + 1]
-    gcons = src[g1] == dst[g2]
-    rows = np.concatenate([g1, nxt(g1)])
-    cols = np.concatenate([np.where(gcons, nxt(g2), g2), np.where(gcons, g2, nxt(g2))])
-    fan_adj = sp.coo_array((np.ones(len(rows)), (rows, cols)), shape=(3 * m, 3 * m))
-    _, fan = connected_components(fan_adj, directed=False)
+    if join.all():      # no seam between two faces: the fans are the cut vertices
+        fan = corner_vertex
+    else:
+        g1, g2 = order[first[two]], order[first[two] + 1]
+        gcons = src[g1] == dst[g2]
+        rows = np.concatenate([g1, nxt(g1)])
+        cols = np.concatenate([np.where(gcons, nxt(g2), g2), np.where(gcons, g2, nxt(g2))])
+        fan_adj = sp.coo_array((np.ones(len(rows)), (rows, cols)), shape=(3 * m, 3 * m))
+        _, fan = connected_components(fan_adj, directed=False)
     # A fan holds corners of one vertex; (vertex, island) pairs reached by several fans are
     # bow-ties. Integer keys, not np.unique(axis=0) (a structured sort, slow on small meshes too).
     corner_isl = np.repeat(face_isl, 3)
