@@ -11,7 +11,6 @@ import time
 
 import numpy as np
 
-from ..metrics import conformal_distortion, flipped_faces
 from ..solvers.lscm import face_geometry, lscm_pinned
 from .problem import STORE_HEADROOM
 from .results import IslandResult
@@ -86,10 +85,19 @@ def conformal_islands(V, islands, C, known=None):
     lo = (np.minimum.reduceat(us.real, voff[:-1]) + 1j * np.minimum.reduceat(us.imag, voff[:-1]))
     us = us - lo[vert_isl]
     uv = np.stack([us.real, us.imag], axis=1)
-    # Certify from the final UVs in the input geometry, every face at once.
-    corner_uv = uv[tris]
-    Dc = conformal_distortion(P, tris, corner_uv)
-    flipped = np.add.reduceat(flipped_faces(P, tris, corner_uv).astype(np.int64), foff[:-1])
+    # Certify from the final UVs in the input geometry, every face at once: each face's alpha
+    # and beta (eq. 4.19 on its corner UVs, coefficients of its 3D local frame), its signed UV
+    # area; D = inf where flipped, collapsed or not finite (as metrics.conformal_distortion).
+    cu = us[tris]
+    alpha = np.einsum("fk,fk->f", geom.ca, cu)
+    beta = np.einsum("fk,fk->f", geom.cb, cu)
+    e1, e2 = cu[:, 1] - cu[:, 0], cu[:, 2] - cu[:, 0]
+    unflipped = 0.5 * (e1.conj() * e2).imag > 0
+    ac, bc = np.abs(alpha), np.abs(beta)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        Dc = (ac + bc) / (ac - bc)
+    Dc[~(ac > bc) | ~np.isfinite(Dc) | ~unflipped] = np.inf
+    flipped = np.add.reduceat((~unflipped).astype(np.int64), foff[:-1])
     maxc = np.maximum.reduceat(Dc, foff[:-1])
     A3 = geom.area
     finite = np.isfinite(Dc)
@@ -97,11 +105,9 @@ def conformal_islands(V, islands, C, known=None):
             / np.maximum(np.bincount(face_isl, np.where(finite, A3, 0.0), minlength=k), 1e-300))
     ok = fit & (flipped == 0) & (maxc <= C * (1 + 1e-6))
     # Singular values at the island's own scale (UV area = 3D area), as the per-island finish
-    # reports them: the map's |alpha| +- |beta| times the scale it was given.
-    with np.errstate(invalid="ignore"):
-        sf = s[face_isl] / root
-        smax = np.maximum.reduceat((a + b) * sf, foff[:-1])
-        smin = np.minimum.reduceat((a - b) * sf, foff[:-1])
+    # reports them (Lipman 2012, eqs. 4.7-4.8).
+    smax = np.maximum.reduceat(ac + bc, foff[:-1])
+    smin = np.minimum.reduceat(ac - bc, foff[:-1])
     seconds = (time.perf_counter() - t0) / k
     done, starts = {}, {}
     for j, isl in enumerate(islands):
