@@ -113,16 +113,17 @@ def chart_maps(V, charts, geom=None, limits=None):
     area = np.bincount(face_c, A3, minlength=k)
     root = np.sqrt(area)[face_c][:, None]
     ca, cb = geom.ca[faces] * root, geom.cb[faces] * root
-    h = geom.h[faces]
+    cbw, cbf = geom.cbw[faces], geom.cb[faces]
     idx = _far_pairs(P, charts, voff)
     val = np.tile(np.array([0.0, 1.0], np.complex128), k)
     j = halves(nvs, PARALLEL_VERTICES)
     if j is None:
-        u = lscm_pinned(h, tris, n, idx, val)
+        u = lscm_pinned(cbw, cbf, tris, n, idx, val)
     else:                   # two runs of charts, factored side by side (one system each)
         def run(r):
             (a, b), (fa, fb) = r, (foff[r[0]], foff[r[1]])
-            return lscm_pinned(h[fa:fb], tris[fa:fb] - voff[a], int(voff[b] - voff[a]),
+            return lscm_pinned(cbw[fa:fb], cbf[fa:fb], tris[fa:fb] - voff[a],
+                               int(voff[b] - voff[a]),
                                 idx[2 * a:2 * b] - voff[a], val[2 * a:2 * b])
         u = np.concatenate(map_blocks(run, [(0, j), (j, k)]))
     u_solved = u

@@ -31,13 +31,14 @@ class FaceGeometry:
     area : (m,) float64, 3D area
     ca, cb : (m,3) complex128, alpha's and beta's coefficient of each corner (eq. 4.19) in the
         face's local frame at its 3D size
-    h : (m,3,3) complex128, the face's term ``area cb^* cb^T`` of the LSCM energy ``u^H H u``
-        (the same at any scale of the chart: the coefficients grow as the area shrinks)
+    cbw : (m,3) complex128, ``area cb^*``: the face's term of the LSCM energy ``u^H H u`` is
+        ``h = cbw cb^T`` (the same at any scale of the chart: the coefficients grow as the area
+        shrinks), kept as its two factors (a third of the memory of the 3x3 terms)
     """
     area: np.ndarray
     ca: np.ndarray
     cb: np.ndarray
-    h: np.ndarray
+    cbw: np.ndarray
 
 
 def face_geometry(V, F):
@@ -46,8 +47,8 @@ def face_geometry(V, F):
     G = gradient_operators(Z)
     zarea = 0.5 * np.abs(((Z[:, 1] - Z[:, 0]).conj() * (Z[:, 2] - Z[:, 0])).imag)
     cb = 0.5 * (G[:, 0] + 1j * G[:, 1])
-    h = zarea[:, None, None] * cb.conj()[:, :, None] * cb[:, None, :]
-    return FaceGeometry(face_areas(V, F), 0.5 * (G[:, 0] - 1j * G[:, 1]), cb, h)
+    return FaceGeometry(face_areas(V, F), 0.5 * (G[:, 0] - 1j * G[:, 1]), cb,
+                        zarea[:, None] * cb.conj())
 
 
 def spd_solver(A, upper=False):
@@ -82,11 +83,11 @@ def spd_solver(A, upper=False):
     return lu.solve
 
 
-def lscm_pinned(h, tris, n, idx, val):
+def lscm_pinned(cbw, cb, tris, n, idx, val):
     """LSCM (minimise ``sum_f area_f |beta_f|^2``) with vertices ``idx`` fixed to ``val``.
 
     The energy is ``u^H H u`` with ``H = sum_f h_f`` (n x n Hermitian, ``h_f = area_f cb_f^*
-    cb_f^T``); on x = [Re u; Im u] it is ``x^T Q x`` with ``Q = [[Re H, -Im H], [Im H, Re H]]``.
+    cb_f^T = cbw_f cb_f^T``); on x = [Re u; Im u] it is ``x^T Q x`` with ``Q = [[Re H, -Im H], [Im H, Re H]]``.
     H's entries are summed first (the diagonal per vertex, the rest per edge), then only Q's upper
     triangle on the free unknowns is written: the two ``Re H`` blocks' diagonal and upper entries
     and the block ``-Im H`` (H's diagonal is real; off the boundary Im H vanishes). The pinned values enter the right-hand
@@ -94,7 +95,8 @@ def lscm_pinned(h, tris, n, idx, val):
 
     Parameters
     ----------
-    h : (f,3,3) complex128, each face's term of H; tris : (f,3) int64 into n vertices
+    cbw, cb : (f,3) complex128, each face's term of H as ``cbw cb^T`` (``FaceGeometry``);
+    tris : (f,3) int64 into n vertices
     idx : (p,) int64, pinned vertices; val : (p,) complex128, their positions
 
     Returns
@@ -107,14 +109,14 @@ def lscm_pinned(h, tris, n, idx, val):
     u0 = np.zeros(n, dtype=np.complex128)
     u0[idx] = val
     flat = tris.ravel()
-    hu = np.einsum("fab,fb->fa", h, u0[tris]).ravel()
+    hu = (cbw * np.einsum("fb,fb->f", cb, u0[tris])[:, None]).ravel()      # (h u0) per corner
     rhs_c = -(np.bincount(flat, hu.real, n) + 1j * np.bincount(flat, hu.imag, n))
     pos = np.cumsum(~pinned) - 1
     nf = int(n - pinned.sum())
-    diag = np.bincount(flat, np.einsum("faa->fa", h).real.ravel(), n)
+    diag = np.bincount(flat, (cbw * cb).real.ravel(), n)
     # One entry per face side (j, k), summed per edge {lo, hi}: Re H and Im H[lo, hi].
     J, K = tris, tris[:, [1, 2, 0]]
-    hjk = h[:, [0, 1, 2], [1, 2, 0]].ravel()
+    hjk = (cbw * cb[:, [1, 2, 0]]).ravel()
     lo, hi = np.minimum(J, K).ravel(), np.maximum(J, K).ravel()
     im = np.where((J < K).ravel(), hjk.imag, -hjk.imag)
     edge, inv, count = np.unique(lo * n + hi, return_inverse=True, return_counts=True)
