@@ -112,7 +112,6 @@ def chart_maps(V, charts, geom=None, limits=None):
     A3 = geom.area[faces]
     area = np.bincount(face_c, A3, minlength=k)
     root = np.sqrt(area)[face_c][:, None]
-    ca, cb = geom.ca[faces] * root, geom.cb[faces] * root
     cbw, cbf = geom.cbw[faces], geom.cb[faces]
     idx = _far_pairs(P, charts, voff)
     val = np.tile(np.array([0.0, 1.0], np.complex128), k)
@@ -127,6 +126,8 @@ def chart_maps(V, charts, geom=None, limits=None):
                                 idx[2 * a:2 * b] - voff[a], val[2 * a:2 * b])
         u = np.concatenate(map_blocks(run, [(0, j), (j, k)]))
     u_solved = u
+    del cbw, cbf                            # the factorisations' inputs, before more arrays
+    ca, cb = geom.ca[faces] * root, geom.cb[faces] * root
     # Scale each chart so its UV area equals its (unit-normalised) 3D area: sigma are then the
     # singular values of the map with the chart at its 3D size.
     e1 = u[tris[:, 1]] - u[tris[:, 0]]

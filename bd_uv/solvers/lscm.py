@@ -103,6 +103,19 @@ def lscm_pinned(cbw, cb, tris, n, idx, val):
     -------
     u : (n,) complex128
     """
+    A, rhs, u0, free = _lscm_system(cbw, cb, tris, n, idx, val)
+    x = spd_solver(A, upper=True)(rhs)
+    u = u0
+    nf = len(free)
+    u[free] = x[:nf] + 1j * x[nf:]
+    return u
+
+
+def _lscm_system(cbw, cb, tris, n, idx, val):
+    """``lscm_pinned``'s system: Q's upper triangle on the free unknowns (csc), the right-hand
+    side, the map with the pinned values set (zeros elsewhere), the free vertices. Its own
+    function so that the assembly's temporaries (a few times the matrix) are freed before the
+    factorisation, which is the memory peak of a large chart."""
     idx = np.asarray(idx, dtype=np.int64)
     pinned = np.zeros(n, dtype=bool)
     pinned[idx] = True
@@ -137,7 +150,4 @@ def lscm_pinned(cbw, cb, tris, n, idx, val):
     vals = np.concatenate([diag[free], re_e, diag[free], re_e, -im_b, im_b])
     A = sp.csc_matrix((vals, (rows, cols)), shape=(2 * nf, 2 * nf))
     rhs = np.concatenate([rhs_c.real[free], rhs_c.imag[free]])
-    x = spd_solver(A, upper=True)(rhs)
-    u = u0.copy()
-    u[free] = x[:nf] + 1j * x[nf:]
-    return u
+    return A, rhs, u0, free
