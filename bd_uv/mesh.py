@@ -292,10 +292,17 @@ def _all_boundary_loops(cv, hisl, n_isl, ncut, fbounds, valid, local):
     pos = np.full(ncut, -1, dtype=np.int64)
     pos[ba] = np.arange(len(ba))
     nxt = pos[bb]
-    g = sp.coo_array((np.ones(len(ba)), (np.arange(len(ba)), nxt)), shape=(len(ba), len(ba)))
-    n_loops, lab = connected_components(g, directed=False) if len(ba) else (0, np.zeros(0, int))
-    start = np.full(n_loops, len(ba), dtype=np.int64)
-    np.minimum.at(start, lab, np.arange(len(ba)))
+    # The loops are the cycles of nxt: each labelled by its least member (found by pointer
+    # doubling: after k steps each entry holds the least of the 2^k entries from it on), labels
+    # numbered by it, as connected_components would number them.
+    least, ptr = np.arange(len(ba)), nxt
+    while True:
+        lower = np.minimum(least, least[ptr])
+        if np.array_equal(lower, least):
+            break
+        least, ptr = lower, ptr[ptr]
+    start, lab = np.unique(least, return_inverse=True)
+    n_loops = len(start)
     prev = np.empty(len(ba), dtype=np.int64)
     prev[nxt] = np.arange(len(ba))
     ptr = nxt.copy()
