@@ -13,7 +13,7 @@ from scipy.sparse.csgraph import connected_components
 from .errors import (ClosedIslandError, DegenerateFacesError, DuplicateFacesError,
                      InvalidMeshError, NonFiniteError, NonManifoldError, OrientationError,
                      TopologyError)
-from .geometry import face_areas
+from .geometry import cycle_labels, face_areas
 
 # A face is degenerate when twice its area is below this fraction of its longest edge squared.
 DEGENERATE_RATIO = 1e-12
@@ -292,16 +292,7 @@ def _all_boundary_loops(cv, hisl, n_isl, ncut, fbounds, valid, local):
     pos = np.full(ncut, -1, dtype=np.int64)
     pos[ba] = np.arange(len(ba))
     nxt = pos[bb]
-    # The loops are the cycles of nxt: each labelled by its least member (found by pointer
-    # doubling: after k steps each entry holds the least of the 2^k entries from it on), labels
-    # numbered by it, as connected_components would number them.
-    least, ptr = np.arange(len(ba)), nxt
-    while True:
-        lower = np.minimum(least, least[ptr])
-        if np.array_equal(lower, least):
-            break
-        least, ptr = lower, ptr[ptr]
-    start, lab = np.unique(least, return_inverse=True)
+    start, lab = cycle_labels(nxt)                         # the loops: the cycles of nxt
     n_loops = len(start)
     prev = np.empty(len(ba), dtype=np.int64)
     prev[nxt] = np.arange(len(ba))

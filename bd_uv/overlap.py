@@ -17,8 +17,8 @@ counter-clockwise and the holes clockwise inside it, none inside another: then t
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
+
+from .geometry import cycle_labels
 
 
 @dataclass(frozen=True)
@@ -231,9 +231,8 @@ def _loops(bd):
     npts = int(max(bd.pid.max(), bd.qid.max())) + 1
     starting = np.full(npts, -1, dtype=np.int64)
     starting[bd.pid] = np.arange(nb)
-    nxt = starting[bd.qid]
-    adj = sp.coo_array((np.ones(nb), (np.arange(nb), nxt)), shape=(nb, nb))
-    return connected_components(adj, directed=False)
+    least, loop = cycle_labels(starting[bd.qid])
+    return len(least), loop
 
 
 def _winding_ok(bd, loop, n_loops):
