@@ -126,7 +126,7 @@ def chart_maps(V, charts, geom=None, limits=None):
                                 idx[2 * a:2 * b] - voff[a], val[2 * a:2 * b])
         u = np.concatenate(map_blocks(run, [(0, j), (j, k)]))
     u_solved = u
-    del cbw, cbf                            # the factorisations' inputs, before more arrays
+    cbw = cbf = None                        # the factorisations' inputs, freed before more arrays
     ca, cb = geom.ca[faces] * root, geom.cb[faces] * root
     # Scale each chart so its UV area equals its (unit-normalised) 3D area: sigma are then the
     # singular values of the map with the chart at its 3D size.
