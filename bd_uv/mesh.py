@@ -13,7 +13,7 @@ from scipy.sparse.csgraph import connected_components
 from .errors import (ClosedIslandError, DegenerateFacesError, DuplicateFacesError,
                      InvalidMeshError, NonFiniteError, NonManifoldError, OrientationError,
                      TopologyError)
-from .geometry import face_areas
+from .geometry import cycle_labels, face_areas
 
 # A face is degenerate when twice its area is below this fraction of its longest edge squared.
 DEGENERATE_RATIO = 1e-12
@@ -131,12 +131,15 @@ def islands(V, F, seams=None):
     _, corner_vertex = connected_components(cadj, directed=False)
 
     # Non-manifold vertices: several corner fans of one vertex, ignoring seams, in one island.
-    g1, g2 = order[first[two]], order[first[two] + 1]
-    gcons = src[g1] == dst[g2]
-    rows = np.concatenate([g1, nxt(g1)])
-    cols = np.concatenate([np.where(gcons, nxt(g2), g2), np.where(gcons, g2, nxt(g2))])
-    fan_adj = sp.coo_array((np.ones(len(rows)), (rows, cols)), shape=(3 * m, 3 * m))
-    _, fan = connected_components(fan_adj, directed=False)
+    if join.all():      # no seam between two faces: the fans are the cut vertices
+        fan = corner_vertex
+    else:
+        g1, g2 = order[first[two]], order[first[two] + 1]
+        gcons = src[g1] == dst[g2]
+        rows = np.concatenate([g1, nxt(g1)])
+        cols = np.concatenate([np.where(gcons, nxt(g2), g2), np.where(gcons, g2, nxt(g2))])
+        fan_adj = sp.coo_array((np.ones(len(rows)), (rows, cols)), shape=(3 * m, 3 * m))
+        _, fan = connected_components(fan_adj, directed=False)
     # A fan holds corners of one vertex; (vertex, island) pairs reached by several fans are
     # bow-ties. Integer keys, not np.unique(axis=0) (a structured sort, slow on small meshes too).
     corner_isl = np.repeat(face_isl, 3)
@@ -289,10 +292,8 @@ def _all_boundary_loops(cv, hisl, n_isl, ncut, fbounds, valid, local):
     pos = np.full(ncut, -1, dtype=np.int64)
     pos[ba] = np.arange(len(ba))
     nxt = pos[bb]
-    g = sp.coo_array((np.ones(len(ba)), (np.arange(len(ba)), nxt)), shape=(len(ba), len(ba)))
-    n_loops, lab = connected_components(g, directed=False) if len(ba) else (0, np.zeros(0, int))
-    start = np.full(n_loops, len(ba), dtype=np.int64)
-    np.minimum.at(start, lab, np.arange(len(ba)))
+    start, lab = cycle_labels(nxt)                         # the loops: the cycles of nxt
+    n_loops = len(start)
     prev = np.empty(len(ba), dtype=np.int64)
     prev[nxt] = np.arange(len(ba))
     ptr = nxt.copy()

@@ -17,8 +17,8 @@ counter-clockwise and the holes clockwise inside it, none inside another: then t
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
+
+from .geometry import cycle_labels
 
 
 @dataclass(frozen=True)
@@ -115,6 +115,11 @@ def uv_boundary(F, corner_uv, face_island):
                     np.stack([h[x[match]], h[y[match]]], axis=1))
 
 
+# Up to this many boundary segments every pair is tested (2016 pairs at 64) rather than the
+# candidates of an STRtree, whose set-up costs more than the pairs below it.
+ALL_PAIRS = 64
+
+
 def _cross(u, v):
     return u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
 
@@ -130,7 +135,8 @@ def _orient(a, b, c):
 def touching_pairs(p, q, group=None):
     """Pairs of segments that intersect or touch, each pair once (i < j).
 
-    Bounding-box candidates come from ``shapely.STRtree``; each candidate is decided by the four
+    Bounding-box candidates come from ``shapely.STRtree`` (every pair, up to ``ALL_PAIRS``
+    segments); each candidate is decided by the four
     orientation signs in float64 when all four are clear of their rounding error bound, and by
     GEOS's robust predicate otherwise (touching, collinear and near-degenerate pairs). Segments
     with an identical end touch.
@@ -147,11 +153,22 @@ def touching_pairs(p, q, group=None):
     -------
     (k,2) int64
     """
-    import shapely
     p = np.asarray(p, dtype=np.float64)
     q = np.asarray(q, dtype=np.float64)
     if len(p) < 2:
         return np.zeros((0, 2), dtype=np.int64)
+    if len(p) <= ALL_PAIRS:
+        # Few segments (a small island): every pair is decided at once, no tree to build; the
+        # same pairs as the tree's candidates decided alike (segments whose boxes are apart
+        # cannot meet).
+        i, j = np.triu_indices(len(p), 1)
+        if group is not None:
+            g = np.asarray(group)
+            keep = g[i] == g[j]
+            i, j = i[keep], j[keep]
+        meets = segments_meet(p, q, i, j)
+        return np.stack([i[meets], j[meets]], axis=1).astype(np.int64)
+    import shapely
     geoms = shapely.linestrings(np.stack([p, q], axis=1))
     if group is None:
         boxes = geoms
@@ -231,9 +248,8 @@ def _loops(bd):
     npts = int(max(bd.pid.max(), bd.qid.max())) + 1
     starting = np.full(npts, -1, dtype=np.int64)
     starting[bd.pid] = np.arange(nb)
-    nxt = starting[bd.qid]
-    adj = sp.coo_array((np.ones(nb), (np.arange(nb), nxt)), shape=(nb, nb))
-    return connected_components(adj, directed=False)
+    least, loop = cycle_labels(starting[bd.qid])
+    return len(least), loop
 
 
 def _winding_ok(bd, loop, n_loops):

@@ -8,20 +8,11 @@ itself (so the flip-free map of the disk is injective).
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
-from ..geometry import face_areas, gradient_operators, local_coordinates
+from ..solvers.lscm import FaceGeometry, face_geometry, lscm_pinned, spd_solver  # noqa: F401
 from ..solvers.threads import halves, map_blocks
 from .crossings import boundary_crossings
 from ..unwrapping.batched import _far_pairs
-
-try:  # LDL^T with AMD ordering; SuperLU without it
-    import qdldl
-except ImportError:  # pragma: no cover - exercised where qdldl is absent
-    qdldl = None
-
-
 
 # Charts are accepted a little inside S: bending a map into C moves its stretch slightly.
 MARGIN = 0.98
@@ -84,35 +75,6 @@ class ChartMaps:
             known[charts[j].faces.tobytes()] = self.u[self.voff[j]:self.voff[j + 1]]
 
 
-@dataclass(frozen=True)
-class FaceGeometry:
-    """What ``chart_maps`` needs of each face, computed once per mesh (the seam search maps the
-    same faces again in every round).
-
-    Attributes
-    ----------
-    area : (m,) float64, 3D area
-    ca, cb : (m,3) complex128, alpha's and beta's coefficient of each corner (eq. 4.19) in the
-        face's local frame at its 3D size
-    h : (m,3,3) complex128, the face's term ``area cb^* cb^T`` of the LSCM energy ``u^H H u``
-        (the same at any scale of the chart: the coefficients grow as the area shrinks)
-    """
-    area: np.ndarray
-    ca: np.ndarray
-    cb: np.ndarray
-    h: np.ndarray
-
-
-def face_geometry(V, F):
-    """``FaceGeometry`` of every face of (V, F)."""
-    Z = local_coordinates(V, F)
-    G = gradient_operators(Z)
-    zarea = 0.5 * np.abs(((Z[:, 1] - Z[:, 0]).conj() * (Z[:, 2] - Z[:, 0])).imag)
-    cb = 0.5 * (G[:, 0] + 1j * G[:, 1])
-    h = zarea[:, None, None] * cb.conj()[:, :, None] * cb[:, None, :]
-    return FaceGeometry(face_areas(V, F), 0.5 * (G[:, 0] - 1j * G[:, 1]), cb, h)
-
-
 def chart_maps(V, charts, geom=None, limits=None):
     """LSCM of every chart in one block-diagonal solve, with per-face distortion and stretch.
 
@@ -150,20 +112,22 @@ def chart_maps(V, charts, geom=None, limits=None):
     A3 = geom.area[faces]
     area = np.bincount(face_c, A3, minlength=k)
     root = np.sqrt(area)[face_c][:, None]
-    ca, cb = geom.ca[faces] * root, geom.cb[faces] * root
-    h = geom.h[faces]
+    cbw, cbf = geom.cbw[faces], geom.cb[faces]
     idx = _far_pairs(P, charts, voff)
     val = np.tile(np.array([0.0, 1.0], np.complex128), k)
     j = halves(nvs, PARALLEL_VERTICES)
     if j is None:
-        u = _lscm_pinned(h, tris, n, idx, val)
+        u = lscm_pinned(cbw, cbf, tris, n, idx, val)
     else:                   # two runs of charts, factored side by side (one system each)
         def run(r):
             (a, b), (fa, fb) = r, (foff[r[0]], foff[r[1]])
-            return _lscm_pinned(h[fa:fb], tris[fa:fb] - voff[a], int(voff[b] - voff[a]),
+            return lscm_pinned(cbw[fa:fb], cbf[fa:fb], tris[fa:fb] - voff[a],
+                               int(voff[b] - voff[a]),
                                 idx[2 * a:2 * b] - voff[a], val[2 * a:2 * b])
         u = np.concatenate(map_blocks(run, [(0, j), (j, k)]))
     u_solved = u
+    cbw = cbf = None                        # the factorisations' inputs, freed before more arrays
+    ca, cb = geom.ca[faces] * root, geom.cb[faces] * root
     # Scale each chart so its UV area equals its (unit-normalised) 3D area: sigma are then the
     # singular values of the map with the chart at its 3D size.
     e1 = u[tris[:, 1]] - u[tris[:, 0]]
@@ -222,94 +186,3 @@ def piece_stretch(sigma, area3, label, k):
     out = np.full(k, -np.inf)
     np.maximum.at(out, label, st)
     return out
-
-
-def spd_solver(A, upper=False):
-    """Factor a sparse symmetric positive definite matrix once; return its solve.
-
-    LDL^T with an AMD ordering (qdldl), about twice as fast as SuperLU on the LSCM and dual
-    Laplacian systems here; SuperLU with a symmetric ordering where qdldl is missing or the
-    factorisation breaks down.
-
-    Parameters
-    ----------
-    A : (N,N) sparse, symmetric positive definite; with ``upper`` only its upper triangle
-        (diagonal included), in canonical CSC form (no duplicate entries)
-    upper : bool
-
-    Returns
-    -------
-    callable((N,) float64) -> (N,) float64
-
-    Raises
-    ------
-    RuntimeError when the matrix is singular
-    """
-    if qdldl is not None:
-        try:
-            return qdldl.Solver(A if upper else sp.triu(A, format="csc"), upper=True).solve
-        except ValueError:  # zero pivot: let SuperLU (with pivoting) try
-            pass
-    if upper:
-        A = A + sp.triu(A, k=1, format="csc").T
-    lu = spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
-    return lu.solve
-
-
-def _lscm_pinned(h, tris, n, idx, val):
-    """LSCM (minimise ``sum_f area_f |beta_f|^2``) with vertices ``idx`` fixed to ``val``.
-
-    The energy is ``u^H H u`` with ``H = sum_f h_f`` (n x n Hermitian, ``h_f = area_f cb_f^*
-    cb_f^T``); on x = [Re u; Im u] it is ``x^T Q x`` with ``Q = [[Re H, -Im H], [Im H, Re H]]``.
-    H's entries are summed first (the diagonal per vertex, the rest per edge), then only Q's upper
-    triangle on the free unknowns is written: the two ``Re H`` blocks' diagonal and upper entries
-    and the block ``-Im H`` (H's diagonal is real; off the boundary Im H vanishes). The pinned values enter the right-hand
-    side as ``-[Re; Im](H u_pinned)``.
-
-    Parameters
-    ----------
-    h : (f,3,3) complex128, each face's term of H; tris : (f,3) int64 into n vertices
-    idx : (p,) int64, pinned vertices; val : (p,) complex128, their positions
-
-    Returns
-    -------
-    u : (n,) complex128
-    """
-    idx = np.asarray(idx, dtype=np.int64)
-    pinned = np.zeros(n, dtype=bool)
-    pinned[idx] = True
-    u0 = np.zeros(n, dtype=np.complex128)
-    u0[idx] = val
-    flat = tris.ravel()
-    hu = np.einsum("fab,fb->fa", h, u0[tris]).ravel()
-    rhs_c = -(np.bincount(flat, hu.real, n) + 1j * np.bincount(flat, hu.imag, n))
-    pos = np.cumsum(~pinned) - 1
-    nf = int(n - pinned.sum())
-    diag = np.bincount(flat, np.einsum("faa->fa", h).real.ravel(), n)
-    # One entry per face side (j, k), summed per edge {lo, hi}: Re H and Im H[lo, hi].
-    J, K = tris, tris[:, [1, 2, 0]]
-    hjk = h[:, [0, 1, 2], [1, 2, 0]].ravel()
-    lo, hi = np.minimum(J, K).ravel(), np.maximum(J, K).ravel()
-    im = np.where((J < K).ravel(), hjk.imag, -hjk.imag)
-    edge, inv, count = np.unique(lo * n + hi, return_inverse=True, return_counts=True)
-    inv = inv.ravel()
-    re_e, im_e = np.bincount(inv, hjk.real, len(edge)), np.bincount(inv, im, len(edge))
-    lo, hi = edge // n, edge % n
-    on = ~pinned[lo] & ~pinned[hi]
-    pl, ph, re_e = pos[lo[on]], pos[hi[on]], re_e[on]
-    # Im H is the signed area term: the two faces of an interior edge cancel (to rounding), so
-    # only boundary edges couple the real and imaginary parts. Leaving the interior zeros out
-    # keeps the two Laplacian blocks apart but for the boundary: half the fill to factor.
-    rim = on & (count == 1)
-    bl, bh, im_b = pos[lo[rim]], pos[hi[rim]], im_e[rim]
-    free = np.flatnonzero(~pinned)
-    pd = pos[free]
-    rows = np.concatenate([pd, pl, pd + nf, pl + nf, bl, bh])
-    cols = np.concatenate([pd, ph, pd + nf, ph + nf, bh + nf, bl + nf])
-    vals = np.concatenate([diag[free], re_e, diag[free], re_e, -im_b, im_b])
-    A = sp.csc_matrix((vals, (rows, cols)), shape=(2 * nf, 2 * nf))
-    rhs = np.concatenate([rhs_c.real[free], rhs_c.imag[free]])
-    x = spd_solver(A, upper=True)(rhs)
-    u = u0.copy()
-    u[free] = x[:nf] + 1j * x[nf:]
-    return u

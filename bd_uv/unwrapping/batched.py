@@ -11,10 +11,7 @@ import time
 
 import numpy as np
 
-from ..energies import jacobian_operators
-from ..frames import _solve_fixed
-from ..geometry import face_areas, local_coordinates
-from ..metrics import conformal_distortion, flipped_faces
+from ..solvers.lscm import face_geometry, lscm_pinned
 from .problem import STORE_HEADROOM
 from .results import IslandResult
 
@@ -50,19 +47,16 @@ def conformal_islands(V, islands, C, known=None):
     verts = np.concatenate([i.vertices for i in islands])
     tris = np.concatenate([i.tris for i in islands]) + voff[face_isl][:, None]
     P = V[verts]
-    area = np.bincount(face_isl, face_areas(P, tris), minlength=k)
-    # Normalise each island to unit area (as IslandProblem does): local coordinates scale with it.
-    Z = local_coordinates(P, tris) / np.sqrt(area)[face_isl][:, None]
-    n = len(verts)
-    ops = jacobian_operators(Z, tris, n)
+    # alpha = sum ca u, beta = sum cb u per face (eq. 4.19); each island normalised to unit area
+    # (as IslandProblem does): the coefficients grow by sqrt(area), the LSCM terms do not change.
+    geom = face_geometry(P, tris)
+    area = np.bincount(face_isl, geom.area, minlength=k)
     known = {} if known is None else known
     have = np.array([i.index in known for i in islands], dtype=bool)
     if have.all():
         u = np.concatenate([np.asarray(known[i.index], dtype=np.complex128) for i in islands])
     else:
         # The islands not known are solved together (one block system on their vertices).
-        W = ops.area
-        Q = (ops.Bre.T.multiply(W) @ ops.Bre + ops.Bim.T.multiply(W) @ ops.Bim).tocsc()
         idx = _far_pairs(P, islands, voff)
         val = np.tile(np.array([0.0, 1.0], dtype=np.complex128), k)
         if have.any():          # known islands' vertices are all fixed at their known map
@@ -71,18 +65,19 @@ def conformal_islands(V, islands, C, known=None):
             own = ~have[np.repeat(np.arange(k), 2)]
             idx = np.concatenate([idx[own], kv])
             val = np.concatenate([val[own], kidx])
-        u = _solve_fixed(Q, n, idx, val)
-    x = np.concatenate([u.real, u.imag])
-    a = np.abs(ops.Are @ x + 1j * (ops.Aim @ x))
-    b = np.abs(ops.Bre @ x + 1j * (ops.Bim @ x))
+        u = lscm_pinned(geom.cbw, geom.cb, tris, len(verts), idx, val)
+    root = np.sqrt(area)[face_isl]
+    uc = u[tris]
+    a = np.abs(np.einsum("fk,fk->f", geom.ca, uc)) * root
+    b = np.abs(np.einsum("fk,fk->f", geom.cb, uc)) * root
     with np.errstate(invalid="ignore", divide="ignore"):
         D = np.where(a > b, (a + b) / (a - b), np.inf)
     maxD = np.maximum.reduceat(D, foff[:-1])
     fit = maxD * (1.0 + STORE_HEADROOM) <= C
 
     # Fitting islands: UV area = 3D area, bounding box at (0, 0), as IslandProblem's finish.
-    e1 = u[tris[:, 1]] - u[tris[:, 0]]
-    e2 = u[tris[:, 2]] - u[tris[:, 0]]
+    e1 = uc[:, 1] - uc[:, 0]
+    e2 = uc[:, 2] - uc[:, 0]
     uv_area = np.bincount(face_isl, 0.5 * (e1.conj() * e2).imag, minlength=k)
     with np.errstate(invalid="ignore", divide="ignore"):
         s = np.sqrt(area / uv_area)
@@ -90,16 +85,29 @@ def conformal_islands(V, islands, C, known=None):
     lo = (np.minimum.reduceat(us.real, voff[:-1]) + 1j * np.minimum.reduceat(us.imag, voff[:-1]))
     us = us - lo[vert_isl]
     uv = np.stack([us.real, us.imag], axis=1)
-    # Certify from the final UVs in the input geometry, every face at once.
-    corner_uv = uv[tris]
-    Dc = conformal_distortion(P, tris, corner_uv)
-    flipped = np.add.reduceat(flipped_faces(P, tris, corner_uv).astype(np.int64), foff[:-1])
+    # Certify from the final UVs in the input geometry, every face at once: each face's alpha
+    # and beta (eq. 4.19 on its corner UVs, coefficients of its 3D local frame), its signed UV
+    # area; D = inf where flipped, collapsed or not finite (as metrics.conformal_distortion).
+    cu = us[tris]
+    alpha = np.einsum("fk,fk->f", geom.ca, cu)
+    beta = np.einsum("fk,fk->f", geom.cb, cu)
+    e1, e2 = cu[:, 1] - cu[:, 0], cu[:, 2] - cu[:, 0]
+    unflipped = 0.5 * (e1.conj() * e2).imag > 0
+    ac, bc = np.abs(alpha), np.abs(beta)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        Dc = (ac + bc) / (ac - bc)
+    Dc[~(ac > bc) | ~np.isfinite(Dc) | ~unflipped] = np.inf
+    flipped = np.add.reduceat((~unflipped).astype(np.int64), foff[:-1])
     maxc = np.maximum.reduceat(Dc, foff[:-1])
-    A3 = face_areas(P, tris)
+    A3 = geom.area
     finite = np.isfinite(Dc)
     mean = (np.bincount(face_isl, np.where(finite, A3 * Dc, 0.0), minlength=k)
             / np.maximum(np.bincount(face_isl, np.where(finite, A3, 0.0), minlength=k), 1e-300))
     ok = fit & (flipped == 0) & (maxc <= C * (1 + 1e-6))
+    # Singular values at the island's own scale (UV area = 3D area), as the per-island finish
+    # reports them (Lipman 2012, eqs. 4.7-4.8).
+    smax = np.maximum.reduceat(ac + bc, foff[:-1])
+    smin = np.minimum.reduceat(ac - bc, foff[:-1])
     seconds = (time.perf_counter() - t0) / k
     done, starts = {}, {}
     for j, isl in enumerate(islands):
@@ -115,6 +123,7 @@ def conformal_islands(V, islands, C, known=None):
             bound_requested=C, bound_certified=float(C), max_distortion=mx,
             mean_distortion=float(mean[j]), flipped=0, frames="conformal", seconds=seconds,
             distortion=Dc[foff[j]:foff[j + 1]], flags=("initial_map",),
+            min_singular=float(smin[j]), max_singular=float(smax[j]),
             timings={"setup": 0.0, "solve": 0.0, "certify": 0.0})
     return done, starts
 

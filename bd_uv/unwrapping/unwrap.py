@@ -195,8 +195,7 @@ def _batched(V, isl, pins, face_island, options, progress, cancel, conformal=Non
     if len(pins[0]):
         pinned[np.unique(face_island[pins[0] // 3])] = True
     todo = [i for i in isl if i.error is None and not pinned[i.index]]
-    known = conformal is not None and len(todo) > 0 and all(i.index in conformal for i in todo)
-    if len(todo) < 2 and not known:
+    if not todo:    # one island too: its conformal map is solved and certified here
         return {}, {}
     if progress is not None:
         progress(0.01, f"conformal maps of {len(todo)} islands")

@@ -1,0 +1,153 @@
+"""Free-boundary conformal maps (LSCM, Levy et al. 2002) of many islands or charts in one sparse
+solve, assembled from per-face terms (no sparse operator products), factored by LDL^T.
+
+Used by the batched unwrap (``unwrapping.batched``: every island whose conformal map fits the
+bound) and by the seam search (``seams.charts``: every candidate chart, every round), which share
+one way of pinning (two far boundary vertices at 0 and 1) so a map solved by one is the other's.
+"""
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from ..geometry import face_areas, gradient_operators, local_coordinates
+
+try:  # LDL^T with AMD ordering; SuperLU without it
+    import qdldl
+except ImportError:  # pragma: no cover - exercised where qdldl is absent
+    qdldl = None
+
+__all__ = ["FaceGeometry", "face_geometry", "lscm_pinned", "spd_solver"]
+
+
+@dataclass(frozen=True)
+class FaceGeometry:
+    """What an LSCM solve needs of each face (``seams.charts.chart_maps`` computes it once per
+    mesh: the seam search maps the same faces again in every round).
+
+    Attributes
+    ----------
+    area : (m,) float64, 3D area
+    ca, cb : (m,3) complex128, alpha's and beta's coefficient of each corner (eq. 4.19) in the
+        face's local frame at its 3D size
+    cbw : (m,3) complex128, ``area cb^*``: the face's term of the LSCM energy ``u^H H u`` is
+        ``h = cbw cb^T`` (the same at any scale of the chart: the coefficients grow as the area
+        shrinks), kept as its two factors (a third of the memory of the 3x3 terms)
+    """
+    area: np.ndarray
+    ca: np.ndarray
+    cb: np.ndarray
+    cbw: np.ndarray
+
+
+def face_geometry(V, F):
+    """``FaceGeometry`` of every face of (V, F)."""
+    Z = local_coordinates(V, F)
+    G = gradient_operators(Z)
+    zarea = 0.5 * np.abs(((Z[:, 1] - Z[:, 0]).conj() * (Z[:, 2] - Z[:, 0])).imag)
+    cb = 0.5 * (G[:, 0] + 1j * G[:, 1])
+    return FaceGeometry(face_areas(V, F), 0.5 * (G[:, 0] - 1j * G[:, 1]), cb,
+                        zarea[:, None] * cb.conj())
+
+
+def spd_solver(A, upper=False):
+    """Factor a sparse symmetric positive definite matrix once; return its solve.
+
+    LDL^T with an AMD ordering (qdldl), about twice as fast as SuperLU on the LSCM and dual
+    Laplacian systems here; SuperLU with a symmetric ordering where qdldl is missing or the
+    factorisation breaks down.
+
+    Parameters
+    ----------
+    A : (N,N) sparse, symmetric positive definite; with ``upper`` only its upper triangle
+        (diagonal included), in canonical CSC form (no duplicate entries)
+    upper : bool
+
+    Returns
+    -------
+    callable((N,) float64) -> (N,) float64
+
+    Raises
+    ------
+    RuntimeError when the matrix is singular
+    """
+    if qdldl is not None:
+        try:
+            return qdldl.Solver(A if upper else sp.triu(A, format="csc"), upper=True).solve
+        except ValueError:  # zero pivot: let SuperLU (with pivoting) try
+            pass
+    if upper:
+        A = A + sp.triu(A, k=1, format="csc").T
+    lu = spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True})
+    return lu.solve
+
+
+def lscm_pinned(cbw, cb, tris, n, idx, val):
+    """LSCM (minimise ``sum_f area_f |beta_f|^2``) with vertices ``idx`` fixed to ``val``.
+
+    The energy is ``u^H H u`` with ``H = sum_f h_f`` (n x n Hermitian, ``h_f = area_f cb_f^*
+    cb_f^T = cbw_f cb_f^T``); on x = [Re u; Im u] it is ``x^T Q x`` with ``Q = [[Re H, -Im H], [Im H, Re H]]``.
+    H's entries are summed first (the diagonal per vertex, the rest per edge), then only Q's upper
+    triangle on the free unknowns is written: the two ``Re H`` blocks' diagonal and upper entries
+    and the block ``-Im H`` (H's diagonal is real; off the boundary Im H vanishes). The pinned values enter the right-hand
+    side as ``-[Re; Im](H u_pinned)``.
+
+    Parameters
+    ----------
+    cbw, cb : (f,3) complex128, each face's term of H as ``cbw cb^T`` (``FaceGeometry``);
+    tris : (f,3) int64 into n vertices
+    idx : (p,) int64, pinned vertices; val : (p,) complex128, their positions
+
+    Returns
+    -------
+    u : (n,) complex128
+    """
+    A, rhs, u0, free = _lscm_system(cbw, cb, tris, n, idx, val)
+    x = spd_solver(A, upper=True)(rhs)
+    u = u0
+    nf = len(free)
+    u[free] = x[:nf] + 1j * x[nf:]
+    return u
+
+
+def _lscm_system(cbw, cb, tris, n, idx, val):
+    """``lscm_pinned``'s system: Q's upper triangle on the free unknowns (csc), the right-hand
+    side, the map with the pinned values set (zeros elsewhere), the free vertices. Its own
+    function so that the assembly's temporaries (a few times the matrix) are freed before the
+    factorisation, which is the memory peak of a large chart."""
+    idx = np.asarray(idx, dtype=np.int64)
+    pinned = np.zeros(n, dtype=bool)
+    pinned[idx] = True
+    u0 = np.zeros(n, dtype=np.complex128)
+    u0[idx] = val
+    flat = tris.ravel()
+    hu = (cbw * np.einsum("fb,fb->f", cb, u0[tris])[:, None]).ravel()      # (h u0) per corner
+    rhs_c = -(np.bincount(flat, hu.real, n) + 1j * np.bincount(flat, hu.imag, n))
+    pos = np.cumsum(~pinned) - 1
+    nf = int(n - pinned.sum())
+    diag = np.bincount(flat, (cbw * cb).real.ravel(), n)
+    # One entry per face side (j, k), summed per edge {lo, hi}: Re H and Im H[lo, hi].
+    J, K = tris, tris[:, [1, 2, 0]]
+    hjk = (cbw * cb[:, [1, 2, 0]]).ravel()
+    lo, hi = np.minimum(J, K).ravel(), np.maximum(J, K).ravel()
+    im = np.where((J < K).ravel(), hjk.imag, -hjk.imag)
+    edge, inv, count = np.unique(lo * n + hi, return_inverse=True, return_counts=True)
+    inv = inv.ravel()
+    re_e, im_e = np.bincount(inv, hjk.real, len(edge)), np.bincount(inv, im, len(edge))
+    lo, hi = edge // n, edge % n
+    on = ~pinned[lo] & ~pinned[hi]
+    pl, ph, re_e = pos[lo[on]], pos[hi[on]], re_e[on]
+    # Im H is the signed area term: the two faces of an interior edge cancel (to rounding), so
+    # only boundary edges couple the real and imaginary parts. Leaving the interior zeros out
+    # keeps the two Laplacian blocks apart but for the boundary: half the fill to factor.
+    rim = on & (count == 1)
+    bl, bh, im_b = pos[lo[rim]], pos[hi[rim]], im_e[rim]
+    free = np.flatnonzero(~pinned)
+    pd = pos[free]
+    rows = np.concatenate([pd, pl, pd + nf, pl + nf, bl, bh])
+    cols = np.concatenate([pd, ph, pd + nf, ph + nf, bh + nf, bl + nf])
+    vals = np.concatenate([diag[free], re_e, diag[free], re_e, -im_b, im_b])
+    A = sp.csc_matrix((vals, (rows, cols)), shape=(2 * nf, 2 * nf))
+    rhs = np.concatenate([rhs_c.real[free], rhs_c.imag[free]])
+    return A, rhs, u0, free
