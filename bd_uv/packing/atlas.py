@@ -16,10 +16,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import PackError
-from .nest import rotations, square_layout, tile_layouts
+from .nest import rotations, tile_layouts
 from .options import PackOptions, udim_tile
 from .outlines import chart_outlines
 from .pinned import chart_boxes, free_square
+from .square import square_layout
 
 
 @dataclass(frozen=True)
@@ -88,7 +89,8 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None):
         side = 1.0
     else:
         f = 1.0
-        pl, side, solves = square_layout(charts.outlines, options, tol)
+        seconds = options.search_seconds(k, int((lab >= 0).sum()))
+        pl, side, solves = square_layout(charts.outlines, options, tol, seconds)
         tile = np.zeros(k, dtype=np.int64)
     R = rotations(pl.angle)
     use = lab >= 0

@@ -1,0 +1,143 @@
+"""The smallest square found for the charts: spyrrow's strip packing turned into a square.
+
+spyrrow fixes a strip's height H and shortens its width W; a square wants W = H, so H must be
+guessed from the density the search will reach. Measured on the charts of closed meshes (see
+docs/ARCHITECTURE.md): the density reached is 0.51-0.70 of the strip; a solve's first placement
+costs about 15 ms of CPU a chart and every solve starts from scratch, so solves run one after
+another (the old search over heights) spend most of a short budget placing; a density guessed
+off by a fraction e costs about e of coverage. Hence:
+
+- the density is guessed (0.63 times sqrt(1 - 1/k): fewer charts pack looser); no measure of the
+  charts' shapes predicted it better (area over convex hull area: worse);
+- ``options.solves - 1`` solves run at once, in threads (spyrrow releases the GIL), at heights
+  for densities spread around the guess, so one of them lands near a square; then one solve,
+  searching as long, at the square strip of the density reached by the one that came nearest
+  to a square (a search as long reaches about as far);
+- spyrrow reports each narrower strip it reaches, every one a feasible layout: each is a
+  candidate square, so a strip too high still gives the square of the first layout narrower
+  than it, not only the last one.
+"""
+import os
+import threading
+import time
+
+import numpy as np
+
+from ..errors import PackError
+from .nest import Placement, _area, _strip, least_squares, nest, rotations, single_layout
+
+DENSITY_GUESS = 0.63  # strip density expected (measured 0.58-0.70 on 27-46 charts of 5 meshes)
+START_PER_CHART = 0.015  # seconds of a solve's first placement per chart (measured, quiet)
+HEADROOM = 1.10       # a strip's separation is the padding of a square this much larger
+SPREAD = 0.07         # the first solves' densities: the guess times 1 -+ SPREAD
+
+
+def _squares(points, owner, placements, tol, padding):
+    """The square side holding each placement's outlines with the padding, and the outlines'
+    low corner: (p,) float64 and (p,2) float64."""
+    side = np.zeros(len(placements))
+    low = np.zeros((len(placements), 2))
+    for j, pl in enumerate(placements):  # per candidate layout
+        R = rotations(pl.angle)[owner]
+        q = np.einsum("nij,nj->ni", R, points) + pl.shift[owner]
+        lo, hi = q.min(axis=0), q.max(axis=0)
+        side[j] = (float((hi - lo).max()) + 2 * tol) / (1 - padding)
+        low[j] = lo
+    return side, low
+
+
+def _solve_all(outlines, sides, options, tol, seconds):
+    """One solve per square side, all at once (threads): per side, the strip height and every
+    feasible layout reached (reports, then the result)."""
+    out, errors = [None] * len(sides), []
+    workers = max(1, (os.cpu_count() or 1) // len(sides))
+
+    def work(i):
+        try:
+            height, sep, _ = _strip(sides[i], options, tol, HEADROOM)
+            reports = []
+            final = nest(outlines, height, sep, options, seconds, reports, workers)
+            out[i] = reports + [final]
+        except BaseException as exc:  # handed to the caller's thread
+            errors.append(exc)
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(len(sides))]
+    for t in threads:  # per solve
+        t.start()
+    for t in threads:  # per solve
+        t.join()
+    if errors:
+        raise errors[0]
+    return out
+
+
+def square_layout(outlines, options, tol, seconds):
+    """The smallest square found that holds every outline with the padding.
+
+    The padding scales with the square (it is in texels). A solve packs a strip of height H for
+    a square of side S with the separation of a square ``HEADROOM`` S, so any of its layouts is a
+    square layout of side the placed outlines' larger extent (plus the edges) whenever that is at
+    most ``HEADROOM`` S. ``options.solves - 1`` solves run at once, at the sides of the guessed
+    density times 1 -+ ``SPREAD``, then one at the density the solve nearest to a square reached,
+    each round searching for half the time (``options.solves`` 1: one solve at the guess). With
+    no square found, sides keep growing (first placements only) until one is.
+
+    Parameters
+    ----------
+    outlines : list of (n_i,2) float arrays
+    options : PackOptions
+    tol : float, outline simplification tolerance
+    seconds : float, the time to take (each solve's first placement is not bounded: it is
+        left out, measured as about ``START_PER_CHART`` seconds a chart)
+
+    Returns
+    -------
+    Placement (offset to the square's corner included in ``shift``), side, solves
+    """
+    k = len(outlines)
+    if k == 1:
+        return (*single_layout(outlines[0], options, tol), 0)
+    area = sum(_area(xy) for xy in outlines)
+    points = np.concatenate(outlines)
+    owner = np.repeat(np.arange(k), [len(xy) for xy in outlines])
+    widest = float(least_squares(outlines, options)[0].max())
+    least = (widest + 2 * tol) / (1 - options.padding) * 1.01
+    t0 = time.perf_counter()
+    # solves - 1 solves at once around the guess, then one at the density they reached
+    rounds, first = (1, 1) if options.solves == 1 else (2, options.solves - 1)
+    spread = 1 + SPREAD * np.linspace(-1, 1, first) if first > 1 else np.ones(1)
+    dens = DENSITY_GUESS * np.sqrt(1 - 1 / k) * spread
+    best, solves, start = None, 0, START_PER_CHART * k
+    for r in range(rounds + 8):  # per round; then larger squares, placing only
+        if r >= rounds and best is not None:
+            break
+        # each round's search: an equal share of what is left, less a first placement (measured)
+        left = seconds - (time.perf_counter() - t0) - start * max(rounds - r, 1)
+        search = max(left / (rounds - r), 0.0) if r < rounds and seconds > 0 else 0.0
+        if r < rounds:
+            sides = [max(float(s), least) for s in (np.sqrt(area / np.atleast_1d(dens))
+                                                    - 2 * tol) / (1 + options.padding * HEADROOM)]
+        else:
+            sides = [max(sides) * 1.05]
+        t1 = time.perf_counter()
+        runs = _solve_all(outlines, sides, options, tol, search)
+        start = max(time.perf_counter() - t1 - search, 0.0)
+        solves += len(sides)
+        nearest = np.inf
+        for side, found in zip(sides, runs):  # per solve
+            squares, low = _squares(points, owner, found, tol, options.padding)
+            height = _strip(side, options, tol, HEADROOM)[0]
+            if abs(np.log(found[-1].width / height)) < nearest:   # the next round's density
+                nearest = abs(np.log(found[-1].width / height))
+                dens = area / (height * found[-1].width)
+            fit = np.flatnonzero(squares <= HEADROOM * side)
+            if not len(fit):
+                continue
+            j = fit[np.argmin(squares[fit])]
+            if best is None or squares[j] < best[1]:
+                edge = 0.5 * options.padding * squares[j] + tol
+                pl = found[j]
+                best = (Placement(pl.angle, pl.shift - low[j] + edge, pl.width), squares[j])
+    if best is None:
+        raise PackError("the nesting found no square layout for these charts")
+    return best[0], best[1], solves
