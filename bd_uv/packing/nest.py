@@ -13,6 +13,11 @@ import numpy as np
 from ..errors import PackError
 
 FEASIBLE = (0, 3, 4)  # spyrrow's ReportType of feasible layouts: ExplFeas, CmprFeas, Final
+# Room the least side leaves the widest chart: spyrrow samples spots and gives up (a panic:
+# "strip-width is running away, item does not seem to fit") when a chart has under about 1 % of
+# the strip's height to spare at its only allowed turns (found by the atlas fuzz contract:
+# slivers at 22 px padding on 179 px, huge with tiny charts at 4 px on 128 px, rotate none)
+FIT = {"any": 1.01, "90": 1.03, "none": 1.03}
 NARROW = 1.05         # outlines of area below NARROW * separation * height are grown (_nest_grown)
 
 
@@ -191,7 +196,9 @@ def tile_layouts(outlines, options, tol):
     """
     height, sep, over = _strip(1.0, options, tol)
     k = len(outlines)
-    big = np.flatnonzero(least_squares(outlines, options)[0] > height - 2 * sep)
+    # (with room to spare, as for a square: spyrrow gives up on a chart that barely fits)
+    big = np.flatnonzero(least_squares(outlines, options)[0] * FIT[options.rotate]
+                         > height - 2 * sep)
     if len(big):
         where = "UDIM tile" if options.udim else "square"
         raise PackError(f"chart {big[0]} is larger than a {where} at {options.texel_density:g} "

@@ -24,16 +24,12 @@ import time
 import numpy as np
 
 from ..errors import PackError
-from .nest import Placement, _area, _strip, least_squares, nest, rotations, single_layout
+from .nest import (FIT, Placement, _area, _strip, least_squares, nest, rotations,
+                   single_layout)
 
 DENSITY_GUESS = 0.63  # strip density expected (measured 0.58-0.70 on 27-46 charts of 5 meshes)
 START_PER_CHART = 0.015  # seconds of a solve's first placement per chart (measured, quiet)
 HEADROOM = 1.10       # a strip's separation is the padding of a square this much larger
-# Room the least side leaves the widest chart: spyrrow samples spots and gives up (a panic:
-# "strip-width is running away, item does not seem to fit") when a chart has under about 1 % of
-# the strip's height to spare at its only allowed turns (found by the atlas fuzz contract:
-# slivers at 22 px padding on 179 px, huge with tiny charts at 4 px on 128 px, rotate none)
-FIT = {"any": 1.01, "90": 1.03, "none": 1.03}
 SPREAD = 0.07         # the first solves' densities: the guess times 1 -+ SPREAD
 
 
