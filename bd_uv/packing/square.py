@@ -9,10 +9,10 @@ off by a fraction e costs about e of coverage. Hence:
 
 - the density is guessed (0.63 times sqrt(1 - 1/k): fewer charts pack looser); no measure of the
   charts' shapes predicted it better (area over convex hull area: worse);
-- ``options.solves - 1`` solves run at once, in threads (spyrrow releases the GIL), at heights
-  for densities spread around the guess, so one of them lands near a square; then one solve,
-  searching as long, at the square strip of the density reached by the one that came nearest
-  to a square (a search as long reaches about as far);
+- ``options.solves`` solves run at once, in threads (spyrrow releases the GIL), at heights
+  for densities spread around the guess (-+7 %), so one of them lands near a square; then as
+  many, searching as long, around (-+2.5 %) the density reached by the one that came nearest to
+  a square (a search as long reaches about as far);
 - spyrrow reports each narrower strip it reaches, every one a feasible layout: each is a
   candidate square, so a strip too high still gives the square of the first layout narrower
   than it, not only the last one.
@@ -30,7 +30,7 @@ from .nest import (FIT, Placement, _area, _strip, least_squares, nest, rotations
 DENSITY_GUESS = 0.63  # strip density expected (measured 0.58-0.70 on 27-46 charts of 5 meshes)
 START_PER_CHART = 0.015  # seconds of a solve's first placement per chart (measured, quiet)
 HEADROOM = 1.10       # a strip's separation is the padding of a square this much larger
-SPREAD = 0.07         # the first solves' densities: the guess times 1 -+ SPREAD
+SPREAD = (0.07, 0.025)  # each round's densities: its guess times 1 -+ SPREAD[round]
 
 
 def _squares(points, owner, placements, tol, padding):
@@ -81,10 +81,11 @@ def square_layout(outlines, options, tol, seconds):
     The padding scales with the square (it is in texels). A solve packs a strip of height H for
     a square of side S with the separation of a square ``HEADROOM`` S, so any of its layouts is a
     square layout of side the placed outlines' larger extent (plus the edges) whenever that is at
-    most ``HEADROOM`` S. ``options.solves - 1`` solves run at once, at the sides of the guessed
-    density times 1 -+ ``SPREAD``, then one at the density the solve nearest to a square reached,
-    each round searching for half the time (``options.solves`` 1: one solve at the guess). With
-    no square found, sides keep growing (first placements only) until one is.
+    most ``HEADROOM`` S. ``options.solves`` solves run at once, at the sides of the guessed
+    density times 1 -+ ``SPREAD[0]``, then as many around the density the solve nearest to a
+    square reached (1 -+ ``SPREAD[1]``), each round searching for half the time
+    (``options.solves`` 1: one solve at the guess). With no square found, sides keep growing
+    (first placements only) until one is.
 
     Parameters
     ----------
@@ -109,10 +110,10 @@ def square_layout(outlines, options, tol, seconds):
     # S (1 + p HEADROOM) + 2 tol, the chart's extent at most S (1 - p HEADROOM) - 2 tol
     least = (widest + 2 * tol) / (1 - options.padding * HEADROOM) * FIT[options.rotate]
     t0 = time.perf_counter()
-    # solves - 1 solves at once around the guess, then one at the density they reached
-    rounds, first = (1, 1) if options.solves == 1 else (2, options.solves - 1)
-    spread = 1 + SPREAD * np.linspace(-1, 1, first) if first > 1 else np.ones(1)
-    dens = DENSITY_GUESS * np.sqrt(1 - 1 / k) * spread
+    # solves at once around the guess, then as many around the density the nearest reached
+    rounds = 1 if options.solves == 1 else 2
+    spread = np.linspace(-1, 1, options.solves) if options.solves > 1 else np.zeros(1)
+    dens = DENSITY_GUESS * np.sqrt(1 - 1 / k)
     best, solves, start = None, 0, START_PER_CHART * k
     sides = [least]
     for r in range(rounds + 8):  # per round; then larger squares, placing only
@@ -124,14 +125,14 @@ def square_layout(outlines, options, tol, seconds):
         # the sides of square strips at the densities (after the rounds: the density reached,
         # less 5 %, and 5 % larger at least, until a square is found)
         grow = r >= rounds
-        dens = np.atleast_1d(dens) / (1.05 if grow else 1.0)
+        dens = np.atleast_1d(dens) / 1.05 if grow else dens * (1 + SPREAD[r] * spread)
         fresh = (np.sqrt(area / dens) - 2 * tol) / (1 + options.padding * HEADROOM)
         sides = [max(float(s), least, 1.05 * max(sides) if grow else 0.0) for s in fresh]
         t1 = time.perf_counter()
         runs, refused = _solve_all(outlines, sides, options, tol, search)
         start = max(time.perf_counter() - t1 - search, 0.0)
         solves += len(sides)
-        nearest, dens = np.inf, np.atleast_1d(dens) / 1.1   # all refused: larger sides
+        nearest, dens = np.inf, float(np.min(dens)) / 1.1   # all refused: larger sides
         for side, found in zip(sides, runs):  # per solve
             if found is None:
                 continue

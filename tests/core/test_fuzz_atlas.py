@@ -11,8 +11,10 @@ with the packer (every corner inside its tile, exact triangle overlap test, brut
 least the padding, one texel density, pinned islands bit for bit, no mirror).
 
 Each example is cheap: spyrrow's constructive placement only (``solve_seconds=0``) for most
-draws, a one-second search for one in twenty; 200 islands at most (5,000 islands take about a
-minute to pack and 20 s to check on the shared machine, out of a fuzz example's budget).
+draws, a one-second search for one in twenty; one solve for most draws, the product's two
+rounds of two solves at once (threads) for one in four; 200 islands at most (5,000 islands
+take about a minute to pack and 20 s to check on the shared machine, out of a fuzz example's
+budget).
 
 CI-friendly: 10 examples; ``BD_UV_FUZZ_EXAMPLES=2000`` (or ``bash scripts/fuzz_deep.sh``) runs
 deeper.
@@ -101,19 +103,20 @@ def problems(draw):
     rotate = draw(st.sampled_from(["any", "90", "none"]))
     mode = draw(st.sampled_from(["fit", "fit", "density", "udim", "pinned"]))
     solve_seconds = draw(st.sampled_from([0] * 19 + [1]))
+    solves = draw(st.sampled_from([1, 1, 1, 2]))     # 2: the product's two rounds of two solves
     fill = draw(st.floats(0.05, 4.0))            # 3D area at the density over a tile's area
     n_pins = draw(st.integers(1, 9))
     outside = draw(st.sampled_from([False] * 4 + [True]))
     return dict(k=k, kinds=kinds, huge_tiny=huge_tiny, zero=zero, seed=seed, res=res, pad=pad,
                 rotate=rotate, mode=mode, solve_seconds=solve_seconds, fill=fill, n_pins=n_pins,
-                outside=outside)
+                outside=outside, solves=solves)
 
 
 def _pack(p):
     """The inputs and options of a drawn problem, and what the contract expects of them."""
     V, F, uv, lab = island_set(p["k"], p["seed"], p["kinds"], p["huge_tiny"], p["zero"])
     k, res, pad = p["k"], p["res"], p["pad"]
-    kw = dict(resolution=res, padding_px=pad, rotate=p["rotate"], solves=1,
+    kw = dict(resolution=res, padding_px=pad, rotate=p["rotate"], solves=p.get("solves", 1),
               solve_seconds=p["solve_seconds"], seed=p["seed"] % 1000)
     pinned = None
     if p["mode"] in ("density", "udim"):
