@@ -31,9 +31,9 @@ class PackOptions:
         (its solves' first placements, about 15 ms a chart each, are measured and left out of
         their search); None (default): adaptive (:meth:`search_seconds`); 0 keeps spyrrow's
         first placements only, for a few points of coverage less
-    solves : int, nesting solves at once (threads) in each of two rounds for the smallest
-        square (at least 1; default 2): at strip heights spread around a guessed density, then
-        around the density they reached; 1: one solve at the guess
+    solves : int, nesting solves for the smallest square (at least 1; default 2), in two
+        rounds: (solves + 1) // 2 at once (threads) at strip heights around a guessed density,
+        then solves // 2 around the density reached; 1: one solve at the guess
     seed : int, seed of the nesting heuristic. Its search is bounded in time, not in steps, so
         two runs on the same charts can give different layouts (each one certified); measured:
         suzanne's 27 charts, two runs, different placements

@@ -9,10 +9,12 @@ off by a fraction e costs about e of coverage. Hence:
 
 - the density is guessed (0.63 times sqrt(1 - 1/k): fewer charts pack looser); no measure of the
   charts' shapes predicted it better (area over convex hull area: worse);
-- ``options.solves`` solves run at once, in threads (spyrrow releases the GIL), at heights
-  for densities spread around the guess (-+7 %), so one of them lands near a square; then as
-  many, searching as long, around (-+2.5 %) the density reached by the one that came nearest to
-  a square (a search as long reaches about as far);
+- two rounds of solves, each searching for half the time: one at the guess, then one at the
+  square strip of the density it reached (a search as long reaches about as far). With
+  ``options.solves`` above 2, each round runs several at once, in threads (spyrrow releases the
+  GIL), at densities spread around its guess (-+7 %, then -+2.5 %). Measured under load, two
+  solves at once did no better than one searching twice as long (each gets half the CPU), so the
+  default is one at a time (``solves`` 2); on idle cores they cost no more time;
 - spyrrow reports each narrower strip it reaches, every one a feasible layout: each is a
   candidate square, so a strip too high still gives the square of the first layout narrower
   than it, not only the last one.
@@ -81,10 +83,10 @@ def square_layout(outlines, options, tol, seconds):
     The padding scales with the square (it is in texels). A solve packs a strip of height H for
     a square of side S with the separation of a square ``HEADROOM`` S, so any of its layouts is a
     square layout of side the placed outlines' larger extent (plus the edges) whenever that is at
-    most ``HEADROOM`` S. ``options.solves`` solves run at once, at the sides of the guessed
-    density times 1 -+ ``SPREAD[0]``, then as many around the density the solve nearest to a
-    square reached (1 -+ ``SPREAD[1]``), each round searching for half the time
-    (``options.solves`` 1: one solve at the guess). With no square found, sides keep growing
+    most ``HEADROOM`` S. Two rounds, each searching for half the time: (solves + 1) // 2
+    solves at once at the sides of the guessed density times 1 -+ ``SPREAD[0]``, then solves // 2
+    around the density the solve nearest to a square reached (1 -+ ``SPREAD[1]``);
+    ``options.solves`` 1: one solve at the guess. With no square found, sides keep growing
     (first placements only) until one is.
 
     Parameters
@@ -110,9 +112,10 @@ def square_layout(outlines, options, tol, seconds):
     # S (1 + p HEADROOM) + 2 tol, the chart's extent at most S (1 - p HEADROOM) - 2 tol
     least = (widest + 2 * tol) / (1 - options.padding * HEADROOM) * FIT[options.rotate]
     t0 = time.perf_counter()
-    # solves at once around the guess, then as many around the density the nearest reached
+    # (solves + 1) // 2 solves at once around the guess, then solves // 2 around the density the
+    # one nearest to a square reached
     rounds = 1 if options.solves == 1 else 2
-    spread = np.linspace(-1, 1, options.solves) if options.solves > 1 else np.zeros(1)
+    at_once = [(options.solves + 1) // 2, options.solves // 2]
     dens = DENSITY_GUESS * np.sqrt(1 - 1 / k)
     best, solves, start = None, 0, START_PER_CHART * k
     sides = [least]
@@ -125,7 +128,8 @@ def square_layout(outlines, options, tol, seconds):
         # the sides of square strips at the densities (after the rounds: the density reached,
         # less 5 %, and 5 % larger at least, until a square is found)
         grow = r >= rounds
-        dens = np.atleast_1d(dens) / 1.05 if grow else dens * (1 + SPREAD[r] * spread)
+        spread = np.linspace(-1, 1, at_once[r]) if not grow and at_once[r] > 1 else 0.0
+        dens = np.atleast_1d(dens) / (1.05 if grow else 1.0) * (1 + SPREAD[min(r, 1)] * spread)
         fresh = (np.sqrt(area / dens) - 2 * tol) / (1 + options.padding * HEADROOM)
         sides = [max(float(s), least, 1.05 * max(sides) if grow else 0.0) for s in fresh]
         t1 = time.perf_counter()
