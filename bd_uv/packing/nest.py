@@ -185,9 +185,11 @@ def _strip(side, options, tol, headroom=1.0):
     return side + 2 * over, sep, over
 
 
-def tile_layouts(outlines, options, tol):
+def tile_layouts(outlines, options, tol, seconds):
     """Charts at a fixed size (tile side 1) in UDIM tiles: each tile is filled from a strip of the
     charts still unplaced; charts that end past the tile's right edge wait for the next tile.
+    The search time ``seconds`` is for all tiles: half of it for the first tile's solve, half of
+    what is left for the next, ...
 
     Returns
     -------
@@ -207,7 +209,8 @@ def tile_layouts(outlines, options, tol):
     todo, t, solves = np.arange(k), 0, 0
     while len(todo):
         sub = [outlines[i] for i in todo]
-        pl = nest(sub, height, sep, options, options.search_seconds(len(sub)))
+        # the time for all tiles: half of it for the first, half of the rest for the next, ...
+        pl = nest(sub, height, sep, options, seconds * 0.5 ** (t + 1))
         solves += 1
         lo, hi = placed_bounds(sub, pl)
         fits = hi[:, 0] + sep <= height
