@@ -194,6 +194,24 @@ def test_charts_with_fixed_turns_and_wide_padding_are_packed(p):
     check_layout(V, F, uv, lab, packed, options)
 
 
+# Found by this contract (seed 4, 100 examples): 189 huge and tiny islands spilled over 14 UDIM
+# tiles at 128 px; stored as float32, a chart 4e-4 wide in tile 1010 (u near 10, float32 spacing
+# about 1e-6) read its density 0.1 % off, and the contract asserted the certificate's density
+# spread within 1e-3 of 1 while its own per-chart bound allows 1e-3 + 1e-6 / width. Not a packer
+# fault (the spread is exactly 1 before storing); the contract now compares the certificate's
+# spread with the spread it recomputes from the stored UVs (packing_checks.check_layout).
+FAR_TILES_TINY_CHARTS = problem(k=120, kinds=["box", "sliver"], huge_tiny=True, seed=14534,
+                                res=128, pad=16.0, rotate="90", mode="udim", fill=0.3)
+
+
+def test_tiny_charts_in_far_tiles_keep_their_density_as_stored():
+    V, F, uv, lab, options, _ = _pack(FAR_TILES_TINY_CHARTS)
+    packed = pack_islands(V, F, uv, lab, options)
+    tiles = tuple(range(1001, int(packed.tile.max()) + 1))
+    cert = check_layout(V, F, uv, lab, packed, options, tiles=tiles)
+    assert len(tiles) >= 9 and cert.density_spread > 1.001     # float32 in far tiles
+
+
 @settings(max_examples=EXAMPLES, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(p=problems())
