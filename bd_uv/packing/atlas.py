@@ -16,10 +16,11 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import PackError
-from .nest import rotations, square_layout, tile_layouts
+from .nest import rotations, tile_layouts
 from .options import PackOptions, udim_tile
 from .outlines import chart_outlines
 from .pinned import chart_boxes, free_square
+from .square import square_layout
 
 
 @dataclass(frozen=True)
@@ -81,14 +82,15 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None):
     if pinned is not None and np.any(pinned):
         return _around_pinned(V, F, uv, lab, options, np.asarray(pinned, dtype=bool), t0)
     charts, tol = chart_outlines(V, F, uv, lab, k, options)
+    seconds = options.search_seconds(k, int((lab >= 0).sum()))
     if options.texel_density is not None:
         f = options.texel_density / options.resolution   # tile units per scene unit
         outlines = [xy * f for xy in charts.outlines]
-        pl, tile, solves = tile_layouts(outlines, options, tol * f)
+        pl, tile, solves = tile_layouts(outlines, options, tol * f, seconds)
         side = 1.0
     else:
         f = 1.0
-        pl, side, solves = square_layout(charts.outlines, options, tol)
+        pl, side, solves = square_layout(charts.outlines, options, tol, seconds)
         tile = np.zeros(k, dtype=np.int64)
     R = rotations(pl.angle)
     use = lab >= 0

@@ -2,18 +2,22 @@
 
 spyrrow packs polygons into a strip of fixed height, minimising its width, with any rotation (or a
 list of angles) and a least separation between items. A square needs a search over the strip
-height: :func:`square_layout` solves a few heights and keeps the smallest square that holds every
-chart with the padding; :func:`tile_layouts` fills UDIM tiles of a fixed size one after another.
+height (:mod:`.square`); :func:`tile_layouts` fills UDIM tiles of a fixed size one after another.
 Placements are turns and translations only (a rotation matrix has determinant +1: never a mirror).
 """
 from dataclasses import dataclass
+from datetime import timedelta
 
 import numpy as np
 
 from ..errors import PackError
 
-DENSITY_GUESS = 0.64   # first guess of outline area / square area (measured 0.6-0.7 on our charts)
-HEADROOM = 1.08       # a strip's separation is the padding of a square this much larger
+FEASIBLE = (0, 3, 4)  # spyrrow's ReportType of feasible layouts: ExplFeas, CmprFeas, Final
+# Room the least side leaves the widest chart: spyrrow samples spots and gives up (a panic:
+# "strip-width is running away, item does not seem to fit") when a chart has under about 1 % of
+# the strip's height to spare at its only allowed turns (found by the atlas fuzz contract:
+# slivers at 22 px padding on 179 px, huge with tiny charts at 4 px on 128 px, rotate none)
+FIT = {"any": 1.01, "90": 1.03, "none": 1.03}
 NARROW = 1.05         # outlines of area below NARROW * separation * height are grown (_nest_grown)
 
 
@@ -39,7 +43,7 @@ def rotations(angle):
     return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
 
 
-def nest(outlines, height, separation, options):
+def nest(outlines, height, separation, options, seconds=0.0, reports=None, workers=None):
     """One spyrrow solve: every outline in a strip of ``height``, ``separation`` apart.
 
     Parameters
@@ -47,7 +51,12 @@ def nest(outlines, height, separation, options):
     outlines : list of (n_i,2) float arrays, centred simple polygons
     height : float
     separation : float, least distance between two outlines
-    options : PackOptions (orientations, solve_seconds, seed)
+    options : PackOptions (orientations, seed)
+    seconds : float, time for the search after the first placement (0: that placement only),
+        split 4:1 between exploration and compression as spyrrow does
+    reports : list, optional: every feasible layout the search passes through is appended to it
+        as a Placement (a narrower strip is a better one; the last is the result)
+    workers : int, optional: threads of spyrrow's search (default: one per core)
 
     Returns
     -------
@@ -56,25 +65,35 @@ def nest(outlines, height, separation, options):
     import spyrrow
     area = sum(_area(xy) for xy in outlines)
     if separation > 0 and area <= NARROW * separation * height:
-        return _nest_grown(outlines, height, separation, options)
+        return _nest_grown(outlines, height, separation, options, seconds, reports, workers)
     items = [spyrrow.Item(str(i), [tuple(p) for p in xy], demand=1,
                           allowed_orientations=options.orientations())
              for i, xy in enumerate(outlines)]
     inst = spyrrow.StripPackingInstance("bd_uv", float(height), items)
-    # solve_seconds 0: spyrrow's constructive placement only (no exploration: tens of ms).
-    budget = (dict(total_computation_time=options.solve_seconds) if options.solve_seconds else
-              dict(total_computation_time=None, exploration_time=0, compression_time=0))
-    cfg = spyrrow.StripPackingConfig(early_termination=True,
-                                     min_items_separation=float(separation) if separation > 0
-                                     else None, seed=options.seed, **budget)
+    cfg = spyrrow.StripPackingConfig(
+        early_termination=True, min_items_separation=float(separation) if separation > 0
+        else None, seed=options.seed, total_computation_time=None, exploration_time=0,
+        compression_time=0, num_workers=workers)
+    # spyrrow's constructor takes whole seconds; its attributes take any duration
+    cfg.exploration_time = timedelta(seconds=0.8 * seconds)
+    cfg.compression_time = timedelta(seconds=0.2 * seconds)
+    queue = spyrrow.ProgressQueue() if reports is not None else None
     try:
-        sol = inst.solve(cfg)
+        sol = inst.solve(cfg, queue) if queue is not None else inst.solve(cfg)
     except BaseException as exc:  # a Rust panic arrives as pyo3's PanicException (BaseException)
         if type(exc).__name__ != "PanicException":
             raise
         raise PackError(f"the nesting failed on these charts: {exc}") from None
-    angle = np.zeros(len(outlines))
-    shift = np.zeros((len(outlines), 2))
+    if queue is not None:
+        reports.extend(_placement(s, len(outlines)) for kind, s in queue.drain()
+                       if int(kind) in FEASIBLE)
+    return _placement(sol, len(outlines))
+
+
+def _placement(sol, k):
+    """A Placement from a spyrrow solution of k items."""
+    angle = np.zeros(k)
+    shift = np.zeros((k, 2))
     for p in sol.placed_items:  # per chart
         i = int(p.id)
         angle[i] = p.rotation
@@ -88,7 +107,8 @@ def _area(xy):
     return 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
 
 
-def _nest_grown(outlines, height, separation, options):
+def _nest_grown(outlines, height, separation, options, seconds=0.0, reports=None,
+                workers=None):
     """:func:`nest` for outlines whose total area is at most about ``separation * height``.
 
     spyrrow starts from a strip of width (total item area) / height and shrinks it inwards by half
@@ -104,7 +124,10 @@ def _nest_grown(outlines, height, separation, options):
     grown = [np.asarray(shapely.get_coordinates(shapely.orient_polygons(shapely.Polygon(
         shapely.buffer(shapely.Polygon(xy), half, join_style="mitre").exterior))))[:-1]
         for xy in outlines]
-    pl = nest(grown, height - separation, 0.0, options)
+    more = [] if reports is not None else None
+    pl = nest(grown, height - separation, 0.0, options, seconds, more, workers)
+    if reports is not None:
+        reports.extend(Placement(r.angle, r.shift + half, r.width + separation) for r in more)
     return Placement(pl.angle, pl.shift + half, pl.width + separation)
 
 
@@ -162,48 +185,11 @@ def _strip(side, options, tol, headroom=1.0):
     return side + 2 * over, sep, over
 
 
-def square_layout(outlines, options, tol):
-    """The smallest square found that holds every outline with the padding.
-
-    The padding scales with the square (it is in texels). Each solve packs a strip of height S
-    with the separation of a square ``HEADROOM`` S, so its layout is a square layout of side the
-    placed outlines' larger extent (plus the edges) whenever that is at most ``HEADROOM`` S; the
-    next height is the geometric mean of the last height and the strip's width. With ``options.solves`` spent and no
-    square found, heights keep growing until one is.
-
-    Returns
-    -------
-    Placement (offset to the square's corner included in ``shift``), side, solves
-    """
-    area = sum(_area(xy) for xy in outlines)
-    if len(outlines) == 1:
-        return (*single_layout(outlines[0], options, tol), 0)
-    widest = float(least_squares(outlines, options)[0].max())
-    side = max(np.sqrt(area / DENSITY_GUESS), (widest + 2 * tol) / (1 - options.padding) * 1.01)
-    best, solves = None, 0
-    while solves < options.solves or (best is None and solves < options.solves + 8):
-        height, sep, over = _strip(side, options, tol, HEADROOM)
-        pl = nest(outlines, height, sep, options)
-        solves += 1
-        length = pl.width - 2 * over          # the strip's extent along it
-        # The square fits the placed outlines' own box (often smaller than the strip): its side
-        # S' leaves half the padding at S' plus tol to each edge; the separation, set for
-        # HEADROOM S, keeps the padding for any S' up to that.
-        lo, hi = placed_bounds(outlines, pl)
-        lo, hi = lo.min(axis=0), hi.max(axis=0)
-        square = (float((hi - lo).max()) + 2 * tol) / (1 - options.padding)
-        if square <= HEADROOM * side and (best is None or square < best[1]):
-            edge = 0.5 * options.padding * square + tol
-            best = (Placement(pl.angle, pl.shift - lo + edge, pl.width), square)
-        side = float(np.sqrt(side * length)) * (0.99 if square <= HEADROOM * side else 1.0)
-    if best is None:
-        raise PackError("the nesting found no square layout for these charts")
-    return best[0], best[1], solves
-
-
-def tile_layouts(outlines, options, tol):
+def tile_layouts(outlines, options, tol, seconds):
     """Charts at a fixed size (tile side 1) in UDIM tiles: each tile is filled from a strip of the
     charts still unplaced; charts that end past the tile's right edge wait for the next tile.
+    The search time ``seconds`` is for all tiles: half of it for the first tile's solve, half of
+    what is left for the next, ...
 
     Returns
     -------
@@ -212,7 +198,9 @@ def tile_layouts(outlines, options, tol):
     """
     height, sep, over = _strip(1.0, options, tol)
     k = len(outlines)
-    big = np.flatnonzero(least_squares(outlines, options)[0] > height - 2 * sep)
+    # (with room to spare, as for a square: spyrrow gives up on a chart that barely fits)
+    big = np.flatnonzero(least_squares(outlines, options)[0] * FIT[options.rotate]
+                         > height - 2 * sep)
     if len(big):
         where = "UDIM tile" if options.udim else "square"
         raise PackError(f"chart {big[0]} is larger than a {where} at {options.texel_density:g} "
@@ -221,7 +209,8 @@ def tile_layouts(outlines, options, tol):
     todo, t, solves = np.arange(k), 0, 0
     while len(todo):
         sub = [outlines[i] for i in todo]
-        pl = nest(sub, height, sep, options)
+        # the time for all tiles: half of it for the first, half of the rest for the next, ...
+        pl = nest(sub, height, sep, options, seconds * 0.5 ** (t + 1))
         solves += 1
         lo, hi = placed_bounds(sub, pl)
         fits = hi[:, 0] + sep <= height

@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import PackError
 from ..overlap import uv_boundary
-from .nest import DENSITY_GUESS
+from .square import DENSITY_GUESS
 
 TOL_PX = 0.1   # outline simplification, in texels: the separation grows by twice this
 

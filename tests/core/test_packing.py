@@ -40,6 +40,42 @@ def test_constructive_placement_only_is_certified_too():
         PackOptions(solve_seconds=-1)
 
 
+def test_nesting_time_is_adaptive_or_as_given():
+    """None (the default): 0.4 s + 0.06 s a chart + 0.04 ms a face, at most 20 s, nothing for
+    one chart; a number of seconds, fractional too, is taken as given; anything else refused."""
+    auto = PackOptions()
+    assert auto.search_seconds(1, 10_000) == 0.0
+    assert auto.search_seconds(46, 5804) == pytest.approx(0.4 + 46 * 0.06 + 5804 * 4e-5)
+    assert auto.search_seconds(5000, 10 ** 6) == 20.0
+    assert PackOptions(solve_seconds=0.25).search_seconds(46, 5804) == 0.25
+    for bad in ("1", -0.5, 1e9):
+        with pytest.raises(PackError, match="solve_seconds"):
+            PackOptions(solve_seconds=bad)
+
+
+def test_every_layout_the_search_reports_keeps_the_separation():
+    """Every strip spyrrow reports on its way (each a candidate square) is checked here from the
+    placed outlines: inside the strip, outlines at least the separation apart (GEOS distances)."""
+    import shapely
+    from bd_uv.packing.nest import nest, rotations
+    from bd_uv.packing.outlines import chart_outlines
+    V, F, uv, lab = chart_set("holes", 10, seed=7)
+    options = PackOptions(solve_seconds=1)
+    charts, _ = chart_outlines(V, F, uv, lab, 10, options)
+    height, sep = 1.3 * np.sqrt(charts.area.sum()), 0.02
+    reports = []
+    final = nest(charts.outlines, height, sep, options, 1.0, reports)
+    assert len(reports) >= 2 and reports[-1].width == pytest.approx(final.width)
+    for pl in reports:  # per reported layout
+        R = rotations(pl.angle)
+        polys = [shapely.Polygon(xy @ R[i].T + pl.shift[i]) for i, xy in enumerate(charts.outlines)]
+        lo = np.min([p.bounds[:2] for p in polys], axis=0)
+        hi = np.max([p.bounds[2:] for p in polys], axis=0)
+        assert lo.min() >= -1e-5 and hi[1] <= height + 1e-5 and hi[0] <= pl.width + 1e-5
+        gaps = [polys[i].distance(polys[j]) for i in range(10) for j in range(i)]
+        assert min(gaps) >= sep * (1 - 1e-4)
+
+
 def test_two_thousand_tiny_charts():
     V, F, uv, lab = chart_set("boxes", 2000, seed=3)
     options = PackOptions(resolution=4096, padding_px=1, solves=1)

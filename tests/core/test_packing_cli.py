@@ -30,7 +30,7 @@ def grids(tmp_path, sizes=((5, 3), (8, 2), (3, 3), (6, 6), (2, 9), (4, 1))):
     return path, V, F
 
 
-@pytest.mark.parametrize("seconds", ["1", "0"])
+@pytest.mark.parametrize("seconds", ["auto", "0.5", "0"])
 def test_unwrap_packs_with_the_options_and_reports_the_layout(tmp_path, capsys, seconds):
     src, V, F = grids(tmp_path)
     out, rep, png = tmp_path / "g.obj", tmp_path / "g.json", tmp_path / "g.png"
@@ -69,6 +69,16 @@ def test_bad_packing_options_fail_before_solving(tmp_path, capsys, args, words):
     out = tmp_path / "g.obj"
     assert cli.main(["unwrap", str(src), "-o", str(out), "--seams", "none", *args]) == 2
     assert words in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_pack_seconds_takes_auto_or_a_number(tmp_path, capsys):
+    src, _, _ = grids(tmp_path)
+    out = tmp_path / "g.obj"
+    with pytest.raises(SystemExit) as done:      # argparse's own exit for a value of bad type
+        cli.main(["unwrap", str(src), "-o", str(out), "--pack-seconds", "soon"])
+    assert done.value.code == 2
+    assert "not a number of seconds nor auto: 'soon'" in capsys.readouterr().err
     assert not out.exists()
 
 

@@ -1,0 +1,158 @@
+"""The smallest square found for the charts: spyrrow's strip packing turned into a square.
+
+spyrrow fixes a strip's height H and shortens its width W; a square wants W = H, so H must be
+guessed from the density the search will reach. Measured on the charts of closed meshes (see
+docs/ARCHITECTURE.md): the density reached is 0.51-0.70 of the strip; a solve's first placement
+costs about 15 ms of CPU a chart and every solve starts from scratch, so solves run one after
+another (the old search over heights) spend most of a short budget placing; a density guessed
+off by a fraction e costs about e of coverage. Hence:
+
+- the density is guessed (0.63 times sqrt(1 - 1/k): fewer charts pack looser); no measure of the
+  charts' shapes predicted it better (area over convex hull area: worse);
+- two rounds of solves, each searching for half the time: one at the guess, then one at the
+  square strip of the density it reached (a search as long reaches about as far). With
+  ``options.solves`` above 2, each round runs several at once, in threads (spyrrow releases the
+  GIL), at densities spread around its guess (-+7 %, then -+2.5 %). Measured under load, two
+  solves at once did no better than one searching twice as long (each gets half the CPU), so the
+  default is one at a time (``solves`` 2); on idle cores they cost no more time;
+- spyrrow reports each narrower strip it reaches, every one a feasible layout: each is a
+  candidate square, so a strip too high still gives the square of the first layout narrower
+  than it, not only the last one.
+"""
+import os
+import threading
+import time
+
+import numpy as np
+
+from ..errors import PackError
+from .nest import (FIT, Placement, _area, _strip, least_squares, nest, rotations,
+                   single_layout)
+
+DENSITY_GUESS = 0.63  # strip density expected (measured 0.58-0.70 on 27-46 charts of 5 meshes)
+START_PER_CHART = 0.015  # seconds of a solve's first placement per chart (measured, quiet)
+HEADROOM = 1.10       # a strip's separation is the padding of a square this much larger
+SPREAD = (0.07, 0.025)  # each round's densities: its guess times 1 -+ SPREAD[round]
+
+
+def _squares(points, owner, placements, tol, padding):
+    """The square side holding each placement's outlines with the padding, and the outlines'
+    low corner: (p,) float64 and (p,2) float64."""
+    side = np.zeros(len(placements))
+    low = np.zeros((len(placements), 2))
+    for j, pl in enumerate(placements):  # per candidate layout
+        R = rotations(pl.angle)[owner]
+        q = np.einsum("nij,nj->ni", R, points) + pl.shift[owner]
+        lo, hi = q.min(axis=0), q.max(axis=0)
+        side[j] = (float((hi - lo).max()) + 2 * tol) / (1 - padding)
+        low[j] = lo
+    return side, low
+
+
+def _solve_all(outlines, sides, options, tol, seconds):
+    """One solve per square side, all at once (threads): per side, every feasible layout reached
+    (reports, then the result), or None where spyrrow gave up (it panics when it cannot place a
+    chart in the strip); the last such refusal (PackError) or None."""
+    out, errors, refused = [None] * len(sides), [], []
+    workers = max(1, (os.cpu_count() or 1) // len(sides))
+
+    def work(i):
+        try:
+            height, sep, _ = _strip(sides[i], options, tol, HEADROOM)
+            reports = []
+            final = nest(outlines, height, sep, options, seconds, reports, workers)
+            out[i] = reports + [final]
+        except PackError as exc:
+            refused.append(exc)
+        except BaseException as exc:  # handed to the caller's thread
+            errors.append(exc)
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(len(sides))]
+    for t in threads:  # per solve
+        t.start()
+    for t in threads:  # per solve
+        t.join()
+    if errors:
+        raise errors[0]
+    return out, (refused[-1] if refused else None)
+
+
+def square_layout(outlines, options, tol, seconds):
+    """The smallest square found that holds every outline with the padding.
+
+    The padding scales with the square (it is in texels). A solve packs a strip of height H for
+    a square of side S with the separation of a square ``HEADROOM`` S, so any of its layouts is a
+    square layout of side the placed outlines' larger extent (plus the edges) whenever that is at
+    most ``HEADROOM`` S. Two rounds, each searching for half the time: (solves + 1) // 2
+    solves at once at the sides of the guessed density times 1 -+ ``SPREAD[0]``, then solves // 2
+    around the density the solve nearest to a square reached (1 -+ ``SPREAD[1]``);
+    ``options.solves`` 1: one solve at the guess. With no square found, sides keep growing
+    (first placements only) until one is.
+
+    Parameters
+    ----------
+    outlines : list of (n_i,2) float arrays
+    options : PackOptions
+    tol : float, outline simplification tolerance
+    seconds : float, the time to take (each solve's first placement is not bounded: it is
+        left out, measured as about ``START_PER_CHART`` seconds a chart)
+
+    Returns
+    -------
+    Placement (offset to the square's corner included in ``shift``), side, solves
+    """
+    k = len(outlines)
+    if k == 1:
+        return (*single_layout(outlines[0], options, tol), 0)
+    area = sum(_area(xy) for xy in outlines)
+    points = np.concatenate(outlines)
+    owner = np.repeat(np.arange(k), [len(xy) for xy in outlines])
+    widest = float(least_squares(outlines, options)[0].max())
+    # the strip must hold the widest chart with the separation to both its edges: its height is
+    # S (1 + p HEADROOM) + 2 tol, the chart's extent at most S (1 - p HEADROOM) - 2 tol
+    least = (widest + 2 * tol) / (1 - options.padding * HEADROOM) * FIT[options.rotate]
+    t0 = time.perf_counter()
+    # (solves + 1) // 2 solves at once around the guess, then solves // 2 around the density the
+    # one nearest to a square reached
+    rounds = 1 if options.solves == 1 else 2
+    at_once = [(options.solves + 1) // 2, options.solves // 2]
+    dens = DENSITY_GUESS * np.sqrt(1 - 1 / k)
+    best, solves, start = None, 0, START_PER_CHART * k
+    sides = [least]
+    for r in range(rounds + 8):  # per round; then larger squares, placing only
+        if r >= rounds and best is not None:
+            break
+        # each round's search: an equal share of what is left, less a first placement (measured)
+        left = seconds - (time.perf_counter() - t0) - start * max(rounds - r, 1)
+        search = max(left / (rounds - r), 0.0) if r < rounds and seconds > 0 else 0.0
+        # the sides of square strips at the densities (after the rounds: the density reached,
+        # less 5 %, and 5 % larger at least, until a square is found)
+        grow = r >= rounds
+        spread = np.linspace(-1, 1, at_once[r]) if not grow and at_once[r] > 1 else 0.0
+        dens = np.atleast_1d(dens) / (1.05 if grow else 1.0) * (1 + SPREAD[min(r, 1)] * spread)
+        fresh = (np.sqrt(area / dens) - 2 * tol) / (1 + options.padding * HEADROOM)
+        sides = [max(float(s), least, 1.05 * max(sides) if grow else 0.0) for s in fresh]
+        t1 = time.perf_counter()
+        runs, refused = _solve_all(outlines, sides, options, tol, search)
+        start = max(time.perf_counter() - t1 - search, 0.0)
+        solves += len(sides)
+        nearest, dens = np.inf, float(np.min(dens)) / 1.1   # all refused: larger sides
+        for side, found in zip(sides, runs):  # per solve
+            if found is None:
+                continue
+            squares, low = _squares(points, owner, found, tol, options.padding)
+            height = _strip(side, options, tol, HEADROOM)[0]
+            if abs(np.log(found[-1].width / height)) < nearest:   # the next round's density
+                nearest = abs(np.log(found[-1].width / height))
+                dens = area / (height * found[-1].width)
+            fit = np.flatnonzero(squares <= HEADROOM * side)
+            if not len(fit):
+                continue
+            j = fit[np.argmin(squares[fit])]
+            if best is None or squares[j] < best[1]:
+                edge = 0.5 * options.padding * squares[j] + tol
+                pl = found[j]
+                best = (Placement(pl.angle, pl.shift - low[j] + edge, pl.width), squares[j])
+    if best is None:
+        raise refused or PackError("the nesting found no square layout for these charts")
+    return best[0], best[1], solves
