@@ -210,9 +210,9 @@ def _mesh_arrays(mesh, where, uv_name, Usd):
     if mesh.GetFaceVertexCountsAttr().GetNumTimeSamples() > 1:
         raise SceneFileError(f"{where}: faceVertexCounts is time-sampled (changing topology); "
                              "bd-uv unwraps one topology")
-    V = np.asarray(P, dtype=np.float64).reshape(-1, 3)
-    counts = np.asarray(counts, dtype=np.int64)
-    indices = np.asarray(indices, dtype=np.int64)
+    V = _numbers(P, np.float64, f"{where}: points", width=3)
+    counts = _numbers(counts, np.int64, f"{where}: faceVertexCounts")
+    indices = _numbers(indices, np.int64, f"{where}: faceVertexIndices")
     if counts.sum() != len(indices):
         raise SceneFileError(f"{where}: faceVertexCounts sum to {int(counts.sum())} but there "
                              f"are {len(indices)} faceVertexIndices")
@@ -222,13 +222,13 @@ def _mesh_arrays(mesh, where, uv_name, Usd):
     if len(indices) and (indices.min() < 0 or indices.max() >= len(V)):
         raise SceneFileError(f"{where}: a faceVertexIndex is out of range ({len(V)} points)")
     T, poly = fan_triangles(counts)
-    holes = np.asarray(mesh.GetHoleIndicesAttr().Get() or [], dtype=np.int64)
+    holes = _numbers(mesh.GetHoleIndicesAttr().Get() or [], np.int64, f"{where}: holeIndices")
     keep = ~np.isin(poly, holes)
     T, poly = T[keep], poly[keep]
     if mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded:
         T = T[:, ::-1].copy()                    # the front face winds clockwise
     F = indices[T]
-    corner_uv = _existing_uv(mesh, uv_name, T, indices, len(V))
+    corner_uv = _existing_uv(mesh, uv_name, T, indices, len(V), where)
     info = {"prim": str(mesh.GetPath()), "polygons": int(len(counts)),
             "holes": int(len(holes)),
             "subdivision": str(mesh.GetSubdivisionSchemeAttr().Get())}
@@ -236,7 +236,21 @@ def _mesh_arrays(mesh, where, uv_name, Usd):
     return Mesh(V, F, corner_uv, str(mesh.GetPath())), part, info, warnings
 
 
-def _existing_uv(mesh, uv_name, T, indices, n_points):
+def _numbers(value, dtype, what, width=None):
+    """An attribute's value as a numpy array of ``dtype`` ((n, width) when ``width`` is given), or
+    SceneFileError naming it: a damaged file can hold a value of an unknown type (pxr's
+    ``UnregisteredValue``) or of the wrong shape where numbers belong."""
+    try:
+        arr = np.asarray(value, dtype=dtype)
+    except (TypeError, ValueError):
+        raise SceneFileError(f"{what} is not an array of numbers (a {type(value).__name__}); "
+                             "the file is damaged or not USD this reads") from None
+    if width is not None and (arr.ndim != 2 or arr.shape[1] != width) and arr.size:
+        raise SceneFileError(f"{what} is not {width} numbers per element (shape {arr.shape})")
+    return arr.reshape(-1, width) if width is not None else arr.reshape(-1)
+
+
+def _existing_uv(mesh, uv_name, T, indices, n_points, where=""):
     """The mesh's UVs per triangle corner (m,3,2), or None."""
     from pxr import UsdGeom
     pv = UsdGeom.PrimvarsAPI(mesh.GetPrim()).GetPrimvar(uv_name)
@@ -245,7 +259,11 @@ def _existing_uv(mesh, uv_name, T, indices, n_points):
     vals = pv.ComputeFlattened()
     if vals is None:
         return None
-    vals = np.asarray(vals, dtype=np.float64)
+    try:
+        vals = np.asarray(vals, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise SceneFileError(f"{where}: primvars:{uv_name} is not an array of numbers (a "
+                             f"{type(vals).__name__}); the file is damaged") from None
     if vals.ndim != 2 or vals.shape[1] != 2:
         return None
     interp = pv.GetInterpolation()
