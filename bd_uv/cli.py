@@ -30,11 +30,20 @@ from .seams import unwrap_auto
 from .seams.needed import AUTO_BOUND
 
 
-def check_outputs(*paths):
-    """Refuse, before any work, an output path that is a folder or lies under a file."""
+def check_outputs(inp, *paths):
+    """Refuse, before any work, an output path that is empty, a folder, under a file, the input
+    ``inp`` itself (never changed) or the path of another output (one would replace the other)."""
+    taken = {os.path.realpath(inp): "the input file, which is never written"} if inp else {}
     for option, path in zip(("output", "report", "png"), paths):
         if path is None:
             continue
+        if not path:
+            raise OptionError(option, f"--{option} is empty: give a file name to write")
+        real = os.path.realpath(path)
+        if real in taken:
+            raise OptionError(option, f"--{option} {path} is {taken[real]}: give each output "
+                                      "its own file")
+        taken[real] = f"the --{option} path too"
         if os.path.isdir(path):
             raise OptionError(option, f"{path} is a folder: give a file name to write")
         parent = os.path.dirname(os.path.abspath(path))
@@ -49,7 +58,7 @@ def run_unwrap(args):
     if misuse:
         print(f"error: {misuse}", file=sys.stderr)
         return 2
-    check_outputs(args.output, args.report, args.png)
+    check_outputs(args.input, args.output, args.report, args.png)
     ext = os.path.splitext(args.input)[1].lower()
     if ext in SCENE_SUFFIXES or ext in BLENDER_SUFFIXES:
         if ext in BLENDER_SUFFIXES:
