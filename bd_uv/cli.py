@@ -64,6 +64,10 @@ def run_unwrap(args):
         if ext in BLENDER_SUFFIXES:
             read_scene(args.input)     # raises with the Blender command that handles the file
         return run_scene_unwrap(args)
+    out_ext = os.path.splitext(args.output)[1].lower()
+    if out_ext in (".off", ".ply") + SCENE_SUFFIXES + BLENDER_SUFFIXES:
+        raise OptionError("output", f"a mesh file is written as OBJ: give -o an .obj path, not "
+                                    f"{out_ext!r} (that file would hold OBJ text)")
     options = unwrap_options_of(args)
     layout_options = layout_kwargs(args)      # bad packing options: said before solving
     mesh = load_mesh(args.input)

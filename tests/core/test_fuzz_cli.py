@@ -137,7 +137,7 @@ def command_lines(draw):
                 # about a third of the runs, so that most reach the unwrap
                 output=draw(st.sampled_from(["new"] * 12 + ["existing file", "in a new folder",
                                              "no suffix", "a directory", "the input",
-                                             "empty"])),
+                                             "empty", "another format"])),
                 report=draw(st.sampled_from([None] * 8 + ["report.json"] * 4 + [
                     "adir.obj/r.json", "existing.txt/r.json", "the input", "-o"])),
                 png=draw(st.sampled_from([None] * 10 + ["pic.png"] * 2 + [
@@ -179,7 +179,8 @@ def run(sc, root):
         inp.write_bytes(data)
     out = {"new": root / "out.obj", "existing file": root / "old.obj",
            "in a new folder": root / "sub" / "out.obj", "a directory": root / "adir.obj",
-           "no suffix": root / "out", "the input": inp, "empty": None}[sc["output"]]
+           "no suffix": root / "out", "the input": inp, "empty": None,
+           "another format": root / "out.glb"}[sc["output"]]
     if sc["output"] == "existing file":
         out.write_bytes(b"# a previous result, to be kept unless replaced by a certified one\n")
     argv = ["unwrap", str(inp), "-o", "" if out is None else str(out)]
@@ -276,6 +277,8 @@ FOUND = [
     dict(input="patch.obj", output="new", report="-o", png=None, opts=[]),
     # -o "": the temporary file went to the folder above, the error named it (now exit 2)
     dict(input="patch.obj", output="empty", report=None, png=None, opts=[]),
+    # -o out.glb (or .ply, .usd, ...) for a mesh: OBJ text was written there (now exit 2)
+    dict(input="patch.obj", output="another format", report=None, png=None, opts=[]),
     # a packing option with --no-pack was accepted and ignored (now exit 2)
     dict(input="patch.obj", output="new", report=None, png=None,
          opts=["--no-pack", "--padding", "16"]),
@@ -324,7 +327,7 @@ def check(sc, root):
     for path, content in after.items():
         if before.get(path) != content:
             assert path in allowed, (path, argv)
-    if out is None or out == inp:   # -o empty or the input: refused before any work
+    if out is None or out == inp or sc["output"] == "another format":   # refused before work
         assert rc == 2 and after == before, (rc, argv, stderr)
         return
     orel = str(out.relative_to(root))
