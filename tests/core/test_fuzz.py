@@ -284,8 +284,22 @@ BOUND_A_HAIR_ABOVE_ONE = dict(
     method="lscm", frames="auto", cone="soc", solver_faults=0.0)
 
 
+# Two pins on one point (seed 8 at 2,000): pieces 1e-8 to 5e-14 across at u = 0.98. The
+# independent overlap test projected coordinates far from the origin onto tiny edge normals and
+# took neighbours sharing an edge for overlapping (overlap_shapes, test-side); and
+# metrics.face_jacobians summed absolute coordinates, so D was off by 5e-4 (test_metrics'
+# test_distortion_of_a_tiny_face_far_from_the_origin).
+PINS_ON_ONE_POINT = dict(
+    mesh="nefertiti", patch_size=100, seed=1001, noise=0.0, delete=0.3, delete_kind="blobs",
+    seams=150, pins=2, pin_kind="from a certified map", defect=None, nonfinite=np.nan,
+    nonfinite_at="any vertex", nonfinite_count=1, pin_fault="all on one point", bound="auto",
+    stretch=None, method="lscm", frames="auto", cone="soc", solver_faults=0.0)
+
+
 @settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(sc=scenarios())
+@example(sc=PINS_ON_ONE_POINT)
+@example(sc=dict(PINS_ON_ONE_POINT, patch_size=30, seed=0, solver_faults=1.0))
 @example(sc=BOUND_A_HAIR_ABOVE_ONE)
 @example(sc=dict(BOUND_A_HAIR_ABOVE_ONE, stretch=1.5, method="arap"))
 @example(sc=NAN_VERTEX_BESIDE_CROSSING_ISLANDS)
