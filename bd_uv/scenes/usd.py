@@ -76,15 +76,20 @@ class UsdScene:
         # what did not compose (a missing reference, payload or sublayer) is said on each mesh
         errors = [f"composition: {e}" for e in getattr(stage, "GetCompositionErrors",
                                                        lambda: [])()]
-        meshes, parts = [], []
-        for prim in stage.Traverse():
-            if not prim.IsA(UsdGeom.Mesh):
-                continue
-            where = f"{path}: prim {prim.GetPath()}"
-            m, part, info, warnings = _mesh_arrays(UsdGeom.Mesh(prim), where, uv_name, Usd)
-            name = str(prim.GetPath())
-            meshes.append(SceneMesh(name, m, info, None, part["poly"], warnings + errors))
-            parts.append(part)
+        from pxr import Tf
+        meshes, parts, where = [], [], path
+        try:   # a crate file's values are read lazily: a damaged one fails here, not at Open
+            for prim in stage.Traverse():
+                if not prim.IsA(UsdGeom.Mesh):
+                    continue
+                where = f"{path}: prim {prim.GetPath()}"
+                m, part, info, warnings = _mesh_arrays(UsdGeom.Mesh(prim), where, uv_name, Usd)
+                name = str(prim.GetPath())
+                meshes.append(SceneMesh(name, m, info, None, part["poly"], warnings + errors))
+                parts.append(part)
+        except Tf.ErrorException as exc:
+            raise SceneFileError(f"{where}: USD could not read its values, the file is damaged "
+                                 f"({_pxr_message(exc)})") from None
         for proto in stage.GetPrototypes():
             meshes_in = [p for p in Usd.PrimRange(proto) if p.IsA(UsdGeom.Mesh)]
             if meshes_in:
