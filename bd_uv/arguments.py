@@ -7,12 +7,16 @@ import argparse
 
 from .options import (AUTO_SEAMS_STRETCH, BOUNDARIES, CONES, ENTRY_SEAMS_MODE, FRAMES, METHODS,
                       OVERLAPS, UnwrapOptions)
+from .errors import OptionError
 from .packing import ROTATIONS, PackOptions
 
 # Every default below is UnwrapOptions' own: changing one there changes it here.
 DEFAULTS = UnwrapOptions()
 # The command line's own: the library's time budget is None (no limit).
 TIME_BUDGET = 120.0
+# The packing options' defaults (``--udim`` is a flag): with ``--no-pack`` any other is refused.
+PACK_DEFAULTS = dict(resolution=1024, padding=4.0, texel_density=None, rotate="any", udim=False,
+                     pack_seconds=None)
 
 
 def bound_arg(text):
@@ -125,17 +129,18 @@ def add_layout_options(p):
     """How the UVs are stored (``unwrap`` and ``batch``): cut overlaps, pack and its options."""
     p.add_argument("--no-pack", action="store_true",
                    help="keep each island at (0, 0) instead of packing them into the unit square")
-    p.add_argument("--resolution", type=int, default=1024,
+    p.add_argument("--resolution", type=int, default=PACK_DEFAULTS["resolution"],
                    help="texture size in texels the packing is measured at (default 1024)")
-    p.add_argument("--padding", type=float, default=4.0,
+    p.add_argument("--padding", type=float, default=PACK_DEFAULTS["padding"],
                    help="least gap between two charts in texels at --resolution, half of it to "
                         "the square's edge (default 4)")
-    p.add_argument("--texel-density", type=float, default=None,
+    p.add_argument("--texel-density", type=float, default=PACK_DEFAULTS["texel_density"],
                    help="texels per scene unit for every chart (default: one density, as large "
                         "as fits the square)")
-    p.add_argument("--rotate", choices=ROTATIONS, default="any",
+    p.add_argument("--rotate", choices=ROTATIONS, default=PACK_DEFAULTS["rotate"],
                    help="turns a chart may make when packed (never a mirror; default any)")
-    p.add_argument("--pack-seconds", type=_seconds, default=None, metavar="S|auto",
+    p.add_argument("--pack-seconds", type=_seconds, default=PACK_DEFAULTS["pack_seconds"],
+                   metavar="S|auto",
                    help="seconds the nesting may search for the smallest square (default auto: "
                         "about 0.4 s + 0.06 s a chart); 0: the first placements found only, "
                         "for a little less coverage")
@@ -162,6 +167,12 @@ def layout_kwargs(args):
     the atlas packer (``pack_options``) unless ``--no-pack``. Bad packing options raise
     ``PackError`` here, before anything is solved."""
     pack = not args.no_pack
+    if not pack:   # an option is never accepted and ignored
+        given = ["--" + name.replace("_", "-") for name, default in PACK_DEFAULTS.items()
+                 if getattr(args, name) != default]
+        if given:
+            raise OptionError("no_pack", f"{', '.join(given)} set how islands are packed: "
+                                         "not with --no-pack")
     options = PackOptions(resolution=args.resolution, padding_px=args.padding,
                           texel_density=args.texel_density, rotate=args.rotate,
                           udim=args.udim, solve_seconds=args.pack_seconds) if pack else None

@@ -28,7 +28,8 @@ class Certificate:
     max_distortion : float (inf when a face is flipped, collapsed or has non-finite UVs)
     mean_distortion : float, area-weighted over the island's faces with finite distortion
     flipped : int, faces with signed UV area <= 0 (or non-finite UVs)
-    overlap_free : bool, the island is one-to-one in UV
+    overlap_free : bool, the island is one-to-one in UV (False when a face has non-finite UVs:
+        never placed, never proven)
     crossings : int, pairs of crossing boundary edges (0 when overlap_free)
     reason : str, "" when certified, else what failed, in words
     faces : int, number of faces

@@ -30,11 +30,20 @@ from .seams import unwrap_auto
 from .seams.needed import AUTO_BOUND
 
 
-def check_outputs(*paths):
-    """Refuse, before any work, an output path that is a folder or lies under a file."""
+def check_outputs(inp, *paths):
+    """Refuse, before any work, an output path that is empty, a folder, under a file, the input
+    ``inp`` itself (never changed) or the path of another output (one would replace the other)."""
+    taken = {os.path.realpath(inp): "the input file, which is never written"} if inp else {}
     for option, path in zip(("output", "report", "png"), paths):
         if path is None:
             continue
+        if not path:
+            raise OptionError(option, f"--{option} is empty: give a file name to write")
+        real = os.path.realpath(path)
+        if real in taken:
+            raise OptionError(option, f"--{option} {path} is {taken[real]}: give each output "
+                                      "its own file")
+        taken[real] = f"the --{option} path too"
         if os.path.isdir(path):
             raise OptionError(option, f"{path} is a folder: give a file name to write")
         parent = os.path.dirname(os.path.abspath(path))
@@ -49,12 +58,16 @@ def run_unwrap(args):
     if misuse:
         print(f"error: {misuse}", file=sys.stderr)
         return 2
-    check_outputs(args.output, args.report, args.png)
+    check_outputs(args.input, args.output, args.report, args.png)
     ext = os.path.splitext(args.input)[1].lower()
     if ext in SCENE_SUFFIXES or ext in BLENDER_SUFFIXES:
         if ext in BLENDER_SUFFIXES:
             read_scene(args.input)     # raises with the Blender command that handles the file
         return run_scene_unwrap(args)
+    out_ext = os.path.splitext(args.output)[1].lower()
+    if out_ext in (".off", ".ply") + SCENE_SUFFIXES + BLENDER_SUFFIXES:
+        raise OptionError("output", f"a mesh file is written as OBJ: give -o an .obj path, not "
+                                    f"{out_ext!r} (that file would hold OBJ text)")
     options = unwrap_options_of(args)
     layout_options = layout_kwargs(args)      # bad packing options: said before solving
     mesh = load_mesh(args.input)

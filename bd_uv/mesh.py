@@ -56,15 +56,36 @@ def check_arrays(V, F):
     if F.ndim != 2 or F.shape[1] != 3:
         raise InvalidMeshError(f"faces must be an (m,3) array of triangles, got shape {F.shape}; "
                                "triangulate n-gons first")
-    if not np.issubdtype(F.dtype, np.integer):
-        if not np.all(np.isfinite(F)) or np.any(F != np.round(F)):
-            raise InvalidMeshError("face indices must be integers")
-    F = F.astype(np.int64)
+    F = as_indices(F, "face indices")
     bad = np.flatnonzero(np.any((F < 0) | (F >= len(V)), axis=1))
     if len(bad):
         raise InvalidMeshError(f"{len(bad)} face(s) use vertex indices outside 0..{len(V) - 1} "
                                f"(faces {_some(bad)}); fix the face list")
-    return V.astype(np.float64), F
+    return as_reals(V, "vertex coordinates"), F
+
+
+def as_reals(x, what):
+    """``x`` as float64, or InvalidMeshError naming ``what`` when it is not real numbers (text,
+    complex numbers: nothing is parsed or dropped silently). NaN and inf pass."""
+    x = np.asarray(x)
+    if x.dtype.kind not in "biufO":
+        raise InvalidMeshError(f"{what} must be real numbers, got {x.dtype}")
+    try:
+        return x.astype(np.float64)
+    except (TypeError, ValueError) as exc:
+        raise InvalidMeshError(f"{what} must be real numbers ({exc})") from None
+
+
+def as_indices(x, what):
+    """``x`` as int64 indices, or InvalidMeshError naming ``what`` when a value is not an integer
+    (fractions, NaN, text: never truncated or cast silently)."""
+    x = np.asarray(x)
+    if x.dtype.kind in "iu":
+        return x.astype(np.int64)
+    f = as_reals(x, what)
+    if not np.all(np.isfinite(f)) or np.any(f != np.round(f)):
+        raise InvalidMeshError(f"{what} must be integers")
+    return f.astype(np.int64)
 
 
 def _some(idx, k=8):
@@ -101,7 +122,11 @@ def islands(V, F, seams=None):
     uniq, inv, count = np.unique(key, return_inverse=True, return_counts=True)
     he_count = count[inv]
     if seams is not None and len(seams):
-        S = np.asarray(seams, dtype=np.int64).reshape(-1, 2)
+        S = as_indices(seams, "seam vertex indices")
+        if S.size % 2 or (S.ndim > 1 and S.shape[-1] != 2):
+            raise InvalidMeshError(f"seams must be an (s,2) array of vertex pairs, got shape "
+                                   f"{S.shape}")
+        S = S.reshape(-1, 2)
         S = S[np.all((S >= 0) & (S < n), axis=1)]  # pairs naming no mesh vertex name no edge
         is_seam = np.isin(key, _edge_keys(S[:, 0], S[:, 1], n))
     else:

@@ -306,7 +306,7 @@ class IslandOverlap:
 
     Attributes
     ----------
-    overlap_free : (k,) bool
+    overlap_free : (k,) bool (False for an island with a face of non-finite UVs)
     crossings : (k,) int64, crossing pairs of boundary segments (plus extra passes through a point)
     bad_loops : (k,) int64, boundary loops on the wrong winding side (a hole outside the outer
         boundary, a second outer boundary around the first, ...)
@@ -335,11 +335,15 @@ def island_overlaps(F, corner_uv, face_island, n_islands=None):
 
     Returns
     -------
-    IslandOverlap
+    IslandOverlap (an island with a face of non-finite UVs is not overlap-free)
     """
     lab = np.asarray(face_island, dtype=np.int64).reshape(-1)
     k = int(lab.max()) + 1 if n_islands is None and len(lab) else int(n_islands or 0)
     bd = uv_boundary(F, corner_uv, lab)
+    # A face with a non-finite UV has no place in UV: nothing proves its island one-to-one (its
+    # boundary is not all there), so such an island is never overlap-free.
+    finite = np.isfinite(np.asarray(corner_uv, dtype=np.float64).reshape(-1, 3, 2)).all(axis=(1, 2))
+    unplaced = np.bincount(lab[(lab >= 0) & (lab < k) & ~finite], minlength=k)
     pairs = touching_pairs(bd.p, bd.q, bd.island)
     pairs = pairs[bd.island[pairs[:, 0]] == bd.island[pairs[:, 1]]]
     pairs = pairs[crossing_pairs(bd, pairs)]
@@ -366,7 +370,7 @@ def island_overlaps(F, corner_uv, face_island, n_islands=None):
         lisl = np.zeros(n_loops, dtype=np.int64)
         lisl[loop] = sub.island
         bad = np.bincount(lisl[~ok], minlength=k).astype(np.int64)
-    return IslandOverlap(clean & (bad == 0), crossings, bad, bd, pairs)
+    return IslandOverlap(clean & (bad == 0) & (unplaced == 0), crossings, bad, bd, pairs)
 
 
 def layout_overlaps(corner_uv, face_island, F=None):

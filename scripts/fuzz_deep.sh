@@ -2,13 +2,15 @@
 # Deep fuzz runs (issue 22): every fuzz contract at EXAMPLES Hypothesis examples (default 2000),
 # each from a clean Hypothesis database, one line per contract:
 #
-#   mesh: 2000 examples, 843 s, passed
+#   mesh: 2000 examples, seed 1804289383, 843 s (load 2.10), passed
 #
 # and a non-zero exit when any contract fails (its log is named on its line). Not for CI: CI runs
-# the same tests at their small default counts.
+# the same tests at their small default counts. Every run has a seed, printed on each line: the
+# one given, else one drawn at random here, so a run someone else started (a failure above all)
+# is repeated exactly by passing that seed back.
 #
-# Usage: bash scripts/fuzz_deep.sh [EXAMPLES]
-#   FUZZ_SEED=N    pass --hypothesis-seed=N to every contract (default: Hypothesis picks)
+# Usage: bash scripts/fuzz_deep.sh [EXAMPLES [SEED]]
+#   SEED           --hypothesis-seed for every contract (or FUZZ_SEED=N; default: a random one)
 #   FUZZ_ONLY=a,b  run only these contracts (names as below)
 #   FUZZ_LOGS=DIR  keep the pytest logs there (default: a new temporary directory)
 #
@@ -18,13 +20,17 @@
 set -uo pipefail
 
 EXAMPLES="${1:-2000}"
-case "$EXAMPLES" in ''|*[!0-9]*) echo "usage: bash scripts/fuzz_deep.sh [EXAMPLES]" >&2; exit 2;; esac
+SEED="${2:-${FUZZ_SEED:-}}"
+[ -n "$SEED" ] || SEED=$(( $(od -An -N4 -tu4 /dev/urandom) % 2147483648 ))
+for n in "$EXAMPLES" "$SEED"; do
+    case "$n" in ''|*[!0-9]*)
+        echo "usage: bash scripts/fuzz_deep.sh [EXAMPLES [SEED]] (whole numbers)" >&2; exit 2;;
+    esac
+done
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 PY="${PYTHON:-python3.11}"
 LOGS="${FUZZ_LOGS:-$(mktemp -d "${TMPDIR:-/tmp}/bd-uv-fuzz.XXXXXX")}"
 mkdir -p "$LOGS"
-SEED_OPT=()
-[ -n "${FUZZ_SEED:-}" ] && SEED_OPT=("--hypothesis-seed=$FUZZ_SEED")
 
 contracts=()
 [ -f "$ROOT/tests/core/test_fuzz.py" ] && contracts+=("mesh=tests/core/test_fuzz.py")
@@ -45,7 +51,8 @@ for entry in "${contracts[@]}"; do
     work="$(mktemp -d "${TMPDIR:-/tmp}/bd-uv-fuzz-$name.XXXXXX")"   # a clean .hypothesis/
     start=$(date +%s)
     (cd "$work" && PYTHONPATH="$ROOT${PYTHONPATH:+:$PYTHONPATH}" BD_UV_FUZZ_EXAMPLES="$EXAMPLES" \
-        "$PY" -m pytest -q -x -p no:cacheprovider --hypothesis-show-statistics "${SEED_OPT[@]}" \
+        "$PY" -m pytest -q -x -p no:cacheprovider --hypothesis-show-statistics \
+        "--hypothesis-seed=$SEED" \
         "$ROOT/$target") >"$log" 2>&1
     rc=$?
     secs=$(( $(date +%s) - start ))
@@ -59,7 +66,8 @@ for entry in "${contracts[@]}"; do
         outcome="FAILED (exit $rc, log $log)"
         failed=1
     fi
-    echo "$name: $ran examples, $secs s, $outcome"
+    load=$(cut -d' ' -f1 /proc/loadavg 2>/dev/null || echo "?")   # times mean little without it
+    echo "$name: $ran examples, seed $SEED, $secs s (load $load), $outcome"
 done
 [ "${#contracts[@]}" -gt 0 ] || { echo "no fuzz contracts found under $ROOT/tests" >&2; exit 2; }
 exit "$failed"

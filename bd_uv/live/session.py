@@ -214,7 +214,10 @@ class LiveSession:
         """
         self._check_open()
         t0 = time.perf_counter()
-        T = np.asarray(targets, dtype=np.float64)
+        try:
+            T = np.asarray(targets, dtype=np.float64)
+        except (TypeError, ValueError):   # text, ragged lists: not numbers
+            T = np.full(0, np.nan)
         if T.shape != (len(self.pins), 2) or not np.all(np.isfinite(T)):
             raise OptionError("targets", f"targets must be ({len(self.pins)}, 2) finite: one "
                               "per pin")

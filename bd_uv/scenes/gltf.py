@@ -222,8 +222,9 @@ def _mesh_arrays(gf, label, prims, uv_set, name):
         if len(idx) % 3:
             raise SceneFileError(f"{gf.path}: {where}: {len(idx)} indices is not a whole "
                                  "number of triangles")
-        if len(idx) and (idx.max() >= n):
-            raise SceneFileError(f"{gf.path}: {where}: index {int(idx.max())} is out of range "
+        if len(idx) and (idx.max() >= n or idx.min() < 0):   # signed types can go below 0
+            bad = int(idx.min()) if idx.min() < 0 else int(idx.max())
+            raise SceneFileError(f"{gf.path}: {where}: index {bad} is out of range "
                                  f"({n} vertices)")
         F = idx.reshape(-1, 3)
         key = f"TEXCOORD_{uv_set}" if f"TEXCOORD_{uv_set}" in attrs else "TEXCOORD_0"

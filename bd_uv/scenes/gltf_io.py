@@ -128,11 +128,17 @@ def _buffer_bytes(path, i, buf, bin_chunk):
         if bin_chunk is None:
             raise SceneFileError(f"{path}: buffer {i} has no uri and there is no GLB BIN chunk")
         return bytes(bin_chunk)
+    if not isinstance(uri, str):
+        raise SceneFileError(f"{path}: buffer {i}: its uri is not text ({uri!r})")
     if uri.startswith("data:"):
         head, _, data = uri.partition(",")
         if not head.endswith(";base64"):
             raise SceneFileError(f"{path}: buffer {i}: only base64 data URIs are supported")
-        return base64.b64decode(data)
+        try:   # a damaged data URI (a byte changed, cut short) is named, not decoded to garbage
+            return base64.b64decode(data, validate=True)
+        except ValueError as exc:   # binascii.Error is a ValueError
+            raise SceneFileError(f"{path}: buffer {i}: its base64 data URI is damaged "
+                                 f"({exc})") from None
     file = os.path.join(os.path.dirname(os.path.abspath(path)), unquote(uri))
     try:
         with open(file, "rb") as fh:

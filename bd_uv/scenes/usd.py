@@ -76,15 +76,20 @@ class UsdScene:
         # what did not compose (a missing reference, payload or sublayer) is said on each mesh
         errors = [f"composition: {e}" for e in getattr(stage, "GetCompositionErrors",
                                                        lambda: [])()]
-        meshes, parts = [], []
-        for prim in stage.Traverse():
-            if not prim.IsA(UsdGeom.Mesh):
-                continue
-            where = f"{path}: prim {prim.GetPath()}"
-            m, part, info, warnings = _mesh_arrays(UsdGeom.Mesh(prim), where, uv_name, Usd)
-            name = str(prim.GetPath())
-            meshes.append(SceneMesh(name, m, info, None, part["poly"], warnings + errors))
-            parts.append(part)
+        from pxr import Tf
+        meshes, parts, where = [], [], path
+        try:   # a crate file's values are read lazily: a damaged one fails here, not at Open
+            for prim in stage.Traverse():
+                if not prim.IsA(UsdGeom.Mesh):
+                    continue
+                where = f"{path}: prim {prim.GetPath()}"
+                m, part, info, warnings = _mesh_arrays(UsdGeom.Mesh(prim), where, uv_name, Usd)
+                name = str(prim.GetPath())
+                meshes.append(SceneMesh(name, m, info, None, part["poly"], warnings + errors))
+                parts.append(part)
+        except Tf.ErrorException as exc:
+            raise SceneFileError(f"{where}: USD could not read its values, the file is damaged "
+                                 f"({_pxr_message(exc)})") from None
         for proto in stage.GetPrototypes():
             meshes_in = [p for p in Usd.PrimRange(proto) if p.IsA(UsdGeom.Mesh)]
             if meshes_in:
@@ -210,9 +215,9 @@ def _mesh_arrays(mesh, where, uv_name, Usd):
     if mesh.GetFaceVertexCountsAttr().GetNumTimeSamples() > 1:
         raise SceneFileError(f"{where}: faceVertexCounts is time-sampled (changing topology); "
                              "bd-uv unwraps one topology")
-    V = np.asarray(P, dtype=np.float64).reshape(-1, 3)
-    counts = np.asarray(counts, dtype=np.int64)
-    indices = np.asarray(indices, dtype=np.int64)
+    V = _numbers(P, np.float64, f"{where}: points", width=3)
+    counts = _numbers(counts, np.int64, f"{where}: faceVertexCounts")
+    indices = _numbers(indices, np.int64, f"{where}: faceVertexIndices")
     if counts.sum() != len(indices):
         raise SceneFileError(f"{where}: faceVertexCounts sum to {int(counts.sum())} but there "
                              f"are {len(indices)} faceVertexIndices")
@@ -222,13 +227,13 @@ def _mesh_arrays(mesh, where, uv_name, Usd):
     if len(indices) and (indices.min() < 0 or indices.max() >= len(V)):
         raise SceneFileError(f"{where}: a faceVertexIndex is out of range ({len(V)} points)")
     T, poly = fan_triangles(counts)
-    holes = np.asarray(mesh.GetHoleIndicesAttr().Get() or [], dtype=np.int64)
+    holes = _numbers(mesh.GetHoleIndicesAttr().Get() or [], np.int64, f"{where}: holeIndices")
     keep = ~np.isin(poly, holes)
     T, poly = T[keep], poly[keep]
     if mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded:
         T = T[:, ::-1].copy()                    # the front face winds clockwise
     F = indices[T]
-    corner_uv = _existing_uv(mesh, uv_name, T, indices, len(V))
+    corner_uv = _existing_uv(mesh, uv_name, T, indices, len(V), where)
     info = {"prim": str(mesh.GetPath()), "polygons": int(len(counts)),
             "holes": int(len(holes)),
             "subdivision": str(mesh.GetSubdivisionSchemeAttr().Get())}
@@ -236,7 +241,21 @@ def _mesh_arrays(mesh, where, uv_name, Usd):
     return Mesh(V, F, corner_uv, str(mesh.GetPath())), part, info, warnings
 
 
-def _existing_uv(mesh, uv_name, T, indices, n_points):
+def _numbers(value, dtype, what, width=None):
+    """An attribute's value as a numpy array of ``dtype`` ((n, width) when ``width`` is given), or
+    SceneFileError naming it: a damaged file can hold a value of an unknown type (pxr's
+    ``UnregisteredValue``) or of the wrong shape where numbers belong."""
+    try:
+        arr = np.asarray(value, dtype=dtype)
+    except (TypeError, ValueError):
+        raise SceneFileError(f"{what} is not an array of numbers (a {type(value).__name__}); "
+                             "the file is damaged or not USD this reads") from None
+    if width is not None and (arr.ndim != 2 or arr.shape[1] != width) and arr.size:
+        raise SceneFileError(f"{what} is not {width} numbers per element (shape {arr.shape})")
+    return arr.reshape(-1, width) if width is not None else arr.reshape(-1)
+
+
+def _existing_uv(mesh, uv_name, T, indices, n_points, where=""):
     """The mesh's UVs per triangle corner (m,3,2), or None."""
     from pxr import UsdGeom
     pv = UsdGeom.PrimvarsAPI(mesh.GetPrim()).GetPrimvar(uv_name)
@@ -245,7 +264,11 @@ def _existing_uv(mesh, uv_name, T, indices, n_points):
     vals = pv.ComputeFlattened()
     if vals is None:
         return None
-    vals = np.asarray(vals, dtype=np.float64)
+    try:
+        vals = np.asarray(vals, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise SceneFileError(f"{where}: primvars:{uv_name} is not an array of numbers (a "
+                             f"{type(vals).__name__}); the file is damaged") from None
     if vals.ndim != 2 or vals.shape[1] != 2:
         return None
     interp = pv.GetInterpolation()

@@ -29,6 +29,10 @@ def atomic_path(path):
     try:
         yield tmp
         os.replace(tmp, path)
+    except OSError as exc:   # said in the caller's terms: the path asked for, not the temporary
+        if exc.filename == tmp:
+            exc.filename = path
+        raise
     finally:
         if os.path.lexists(tmp):
             os.remove(tmp)

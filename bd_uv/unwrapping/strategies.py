@@ -88,7 +88,7 @@ def bounded(prob, start, C, raise_bound, limit, flags, report):
     if not solved and fits(start, C):
         flags.append("initial_map")  # the start already fits: nothing to bend
         return start.u, C, start.name
-    if not solved and start.u is not None and C > 1.0:
+    if not solved and start.u is not None and solve_bound(C) > 1.0:   # the projection needs C > 1
         bent = bend(prob, start, C, report, flags)
         if bent is not None:
             return bent, C, start.name

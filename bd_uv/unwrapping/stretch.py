@@ -119,7 +119,7 @@ def bounded_stretch(prob, start, C, S, report, flags=None):
     # S close to 1 leaves the projection's own margins (1 % each side) no room, and C = 1 (maps
     # conformal on every face) leaves the projection no set to project onto: conic solve only
     pm = min(STRETCH_MARGIN, S ** 0.25)
-    project = not solved and C > 1.0 and (pm / S) * 1.011 <= (S / pm) * 0.989
+    project = not solved and solve_bound(C) > 1.0 and (pm / S) * 1.011 <= (S / pm) * 0.989
     try:
         for st in starts if project else []:
             report(0.2, f"bending into C = {C:.3g}, stretch {S:.3g}")

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import (BDError, CancelledError, InvalidMeshError, IslandError, OptionError,
                       SolverError)
-from ..mesh import check_arrays, islands as split_islands
+from ..mesh import as_indices, as_reals, check_arrays, islands as split_islands
 from ..metrics import certify, mean_distortion, singular_values
 from ..options import unwrap_options
 from . import strategies
@@ -166,10 +166,14 @@ def pin_arrays(pin_corners, pin_uv, m):
     """
     if pin_corners is None or len(pin_corners) == 0:
         return np.zeros(0, np.int64), np.zeros((0, 2))
-    c = np.asarray(pin_corners, dtype=np.int64).ravel()
-    uv = np.asarray(pin_uv, dtype=np.float64).reshape(-1, 2)
-    if len(c) != len(uv):
-        raise ValueError(f"{len(c)} pinned corners but {len(uv)} pin UVs")
+    c = as_indices(pin_corners, "pinned corner indices").ravel()
+    if pin_uv is None:
+        raise InvalidMeshError(f"{len(c)} pinned corners but no pin UVs")
+    uv = as_reals(pin_uv, "pinned UVs")
+    if uv.size != 2 * len(c) or (uv.ndim > 1 and uv.shape[-1] != 2):
+        raise InvalidMeshError(f"{len(c)} pinned corners need ({len(c)},2) pin UVs, got shape "
+                               f"{uv.shape}")
+    uv = uv.reshape(-1, 2)
     if np.any((c < 0) | (c >= 3 * m)):
         raise InvalidMeshError("pinned corner indices must lie in 0..3m-1 (face * 3 + corner)")
     if not np.all(np.isfinite(uv)):

@@ -140,7 +140,8 @@ def test_face_index_out_of_range_raises_invalid_mesh(bad):
                    "fix the face list")
 
 
-@pytest.mark.parametrize("case", ["quads", "2d-vertices", "fractional-index", "nan-index"])
+@pytest.mark.parametrize("case", ["quads", "2d-vertices", "fractional-index", "nan-index",
+                                  "text-vertices", "complex-vertices", "text-index"])
 def test_wrong_shapes_and_types_raise_invalid_mesh(case):
     V, F = grid()
     if case == "quads":
@@ -149,6 +150,12 @@ def test_wrong_shapes_and_types_raise_invalid_mesh(case):
         V, words = V[:, :2].copy(), ("(n,3)",)
     elif case == "fractional-index":
         F, words = F.astype(np.float64) + 0.5, ("integers",)
+    elif case == "text-vertices":       # issue 22: was a ValueError from numpy, not typed
+        V, words = V.astype(str), ("vertex coordinates", "real numbers")
+    elif case == "complex-vertices":    # was certified with the imaginary parts dropped
+        V, words = V + 1j, ("vertex coordinates", "real numbers")
+    elif case == "text-index":
+        F, words = F.astype(str), ("face indices", "real numbers")
     else:
         F = F.astype(np.float64)
         F[0, 0] = np.nan
@@ -157,14 +164,45 @@ def test_wrong_shapes_and_types_raise_invalid_mesh(case):
     assert_message(str(err), *words)
 
 
-@pytest.mark.parametrize("case", ["corner-out-of-range", "negative-corner", "nan-pin-uv"])
+@pytest.mark.parametrize("case", ["corner-out-of-range", "negative-corner", "nan-pin-uv",
+                                  "fewer-pin-uvs", "three-columns", "no-pin-uv",
+                                  "fractional-corner", "nan-corner", "text-pin-uv"])
 def test_bad_pins_raise_invalid_mesh(case):
+    """Issue 22: pins whose arrays do not match (a count, a shape, None, a fraction, text) were a
+    ValueError from numpy or from a length check, not a typed error; a fractional corner index
+    was truncated to the corner before it."""
     V, F = grid()
     corners = np.array([0, 3 * len(F) if case == "corner-out-of-range" else
                         (-1 if case == "negative-corner" else 5)])
     uv = np.array([[0.0, 0.0], [np.nan if case == "nan-pin-uv" else 1.0, 1.0]])
+    if case == "fewer-pin-uvs":
+        uv = uv[:1]
+    elif case == "three-columns":
+        uv = np.zeros((2, 3))
+    elif case == "no-pin-uv":
+        uv = None
+    elif case == "fractional-corner":
+        corners = np.array([0.0, 5.5])
+    elif case == "nan-corner":
+        corners = np.array([0.0, np.nan])
+    elif case == "text-pin-uv":
+        uv = uv.astype(str)
     err = raises_unchanged(bd_uv.InvalidMeshError, V, F, pin_corners=corners, pin_uv=uv)
-    assert_message(str(err), "pinned")
+    assert_message(str(err), "pin")
+
+
+@pytest.mark.parametrize("seams", [np.zeros((2, 3), int), np.ones(5, bool), [[0.5, 1.5]],
+                                   [[np.nan, 1.0]], [["0", "1"]]])
+def test_malformed_seams_raise_invalid_mesh(seams):
+    """Issue 22: seams that are not (s,2) integer vertex pairs were cut silently into pairs,
+    truncated to integers (NaN to a garbage index), or a ValueError from numpy."""
+    V, F = grid()
+    seams = np.asarray(seams)
+    before = snapshot(V, F, seams)
+    with pytest.raises(bd_uv.InvalidMeshError) as info:
+        bd_uv.unwrap(V, F, seams=seams)
+    assert_message(str(info.value), "seam")
+    assert_unchanged(before, V, F, seams)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -499,6 +537,21 @@ def test_bad_options_raise_value_error_naming_the_option(option, value):
     assert isinstance(info.value, bd_uv.OptionError) and info.value.option == option
     assert_message(str(info.value), option)
     assert_unchanged(before, V, F)
+
+
+@pytest.mark.parametrize("stretch", [None, 1.5])
+@pytest.mark.parametrize("bound", [1.0000001, 1.0001, 1.0002])
+def test_a_bound_just_above_one_is_no_crash(bound, stretch):
+    """Issue 22: for 1 < C < 1 / (1 - 2e-4) the solve bound (a hair below C, never below 1) is 1,
+    and the projection was started at it: ValueError("C must be > 1"). Such a C is solved like
+    C = 1 (the conic solve alone): certified within C, or a typed island error."""
+    V, F = grid()
+    res = unwrap_checked(V, F, bound=bound, stretch=stretch)
+    (isl,) = res.islands
+    if isl.status == "certified":
+        assert isl.bound_certified >= bound
+    else:
+        assert isinstance(isl.error, bd_uv.InfeasibleError), isl.error
 
 
 def test_infinite_bound_is_a_value_error_or_certified():

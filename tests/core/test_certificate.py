@@ -304,3 +304,26 @@ def test_touching_pairs_is_exact_on_degenerate_integer_segments():
     alone[1] = 0
     assert {tuple(x) for x in touching_pairs(P[:, 0] * 1.0, P[:, 1] * 1.0, alone).tolist()} \
         == want & {(0, 1)}
+
+
+def test_an_island_with_non_finite_uvs_is_not_overlap_free():
+    """Issue 22: an island whose UVs are all NaN (a failed island) was reported overlap-free: its
+    faces leave no boundary to cross, but nothing proves it one-to-one. One NaN face is enough."""
+    V, F, uv = square()
+    certs = certify_islands(V, F, np.full_like(uv, np.nan), [0, 0], [5.0])
+    assert not certs[0].overlap_free and not certs[0].certified
+    assert certs[0].summary()["overlap_free"] is False
+    one = uv.copy()
+    one[1, 2] = [np.inf, 0.0]
+    c = certify_islands(V, F, one, [0, 0], [5.0])[0]
+    assert not c.overlap_free and c.crossings == 0 and not c.certified
+    # beside a placed island: only the unplaced one loses overlap_free
+    F2 = np.concatenate([F, F + len(V)])
+    V2 = np.concatenate([V, V + [3.0, 0, 0]])
+    uv2 = np.concatenate([uv, np.full_like(uv, np.nan)])
+    ov = island_overlaps(F2, uv2, [0, 0, 1, 1], 2)
+    assert ov.overlap_free.tolist() == [True, False] and ov.crossings.tolist() == [0, 0]
+    placed, unplaced = certify_islands(V2, F2, uv2, [0, 0, 1, 1], [5.0, 5.0])
+    assert placed.certified and placed.overlap_free
+    assert not unplaced.overlap_free and not unplaced.certified
+    assert certificate_totals([placed, unplaced])["overlapping"] == 1

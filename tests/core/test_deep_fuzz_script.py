@@ -33,14 +33,56 @@ def test_fuzz_deep_runs_every_contract_and_fails_when_one_fails(tmp_path):
     lines = r.stdout.splitlines()
     assert r.returncode == 1, (r.stdout, r.stderr)
     assert [line.split(":")[0] for line in lines] == ["mesh", "boom"]
-    assert re.fullmatch(r"mesh: 7 examples, \d+ s, passed", lines[0])
-    assert re.match(r"boom: \d+ examples, \d+ s, FAILED \(exit 1, log .*boom\.log\)", lines[1])
+    assert re.fullmatch(r"mesh: 7 examples, seed \d+, \d+ s \(load [0-9.]+\), passed", lines[0])
+    assert re.match(r"boom: \d+ examples, seed \d+, \d+ s \(load [0-9.]+\), FAILED \(exit 1, "
+                    r"log .*boom\.log\)", lines[1])
     assert "Falsifying example" in (tmp_path / "logs" / "boom.log").read_text()
     only = subprocess.run(["bash", str(tmp_path / "scripts" / "fuzz_deep.sh"), "3"],
                           capture_output=True, text=True, cwd=tmp_path,
                           env={"PATH": "/usr/bin:/bin", "PYTHON": sys.executable,
                                "FUZZ_ONLY": "mesh"})
-    assert only.returncode == 0 and re.fullmatch(r"mesh: 3 examples, \d+ s, passed\n",
-                                                 only.stdout)
+    assert only.returncode == 0 and re.fullmatch(
+        r"mesh: 3 examples, seed \d+, \d+ s \(load [0-9.]+\), passed\n", only.stdout)
     bad = subprocess.run(["bash", str(SCRIPT), "many"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "usage" in bad.stderr
+
+
+RECORDING = '''import os
+from hypothesis import given, settings, strategies as st
+
+@settings(max_examples=int(os.environ["BD_UV_FUZZ_EXAMPLES"]), database=None)
+@given(st.integers())
+def test_contract(x):
+    with open(os.environ["DRAWS"], "a") as fh:
+        fh.write(f"{x}\\n")
+'''
+
+
+def test_a_run_is_repeated_from_the_seed_it_prints(tmp_path):
+    """Issue 22: deep runs are reproducible with seeds we did not choose. Without a seed the
+    script draws one and prints it; that seed given back (as SEED or FUZZ_SEED) draws the same
+    examples again."""
+    (tmp_path / "scripts").mkdir()
+    shutil.copy(SCRIPT, tmp_path / "scripts" / "fuzz_deep.sh")
+    tests = tmp_path / "tests" / "core"
+    tests.mkdir(parents=True)
+    (tests / "test_fuzz.py").write_text(RECORDING)
+
+    def run(*args, **env):
+        draws = tmp_path / f"draws{len(list(tmp_path.glob('draws*')))}"
+        r = subprocess.run(["bash", str(tmp_path / "scripts" / "fuzz_deep.sh"), "30", *args],
+                           capture_output=True, text=True, cwd=tmp_path,
+                           env={"PATH": "/usr/bin:/bin", "PYTHON": sys.executable,
+                                "DRAWS": str(draws), **env})
+        assert r.returncode == 0, (r.stdout, r.stderr)
+        seed = re.fullmatch(r"mesh: 30 examples, seed (\d+), .*passed\n", r.stdout).group(1)
+        return int(seed), draws.read_text()
+
+    seed, first = run()
+    assert len(first.split()) == 30
+    assert run(str(seed)) == (seed, first)
+    assert run(FUZZ_SEED=str(seed)) == (seed, first)
+    other = run(str(seed + 1))
+    assert other[0] == seed + 1 and other[1] != first
+    bad = subprocess.run(["bash", str(SCRIPT), "10", "x7"], capture_output=True, text=True)
     assert bad.returncode == 2 and "usage" in bad.stderr

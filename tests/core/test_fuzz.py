@@ -1,7 +1,9 @@
 """Fuzzing the unwrap contract (issue 6) on real meshes from tests/data/.
 
 Hypothesis draws a scenario (which mesh or patch, vertex noise, face deletions, a random seam set,
-random pins, one optional injected defect, bound, method, frames, cone, and a solver that fails
+random pins, one optional injected defect (non-finite vertices on seams and under pins among them),
+pins a caller got wrong or asks the impossible of, bound (1.0001 too), stretch, method, frames,
+cone, and a solver that fails
 some or all of its solves with a non-solved status or a garbage iterate); numpy draws the details from a seed
 that Hypothesis also chooses, so every failure is reproducible from the printed example. The
 contract asserted for every example: the call returns (or raises a typed ``bd_uv.BDError``), the
@@ -95,7 +97,14 @@ def scenarios(draw):
         # issue 22: a non-finite vertex inside an otherwise valid island, on a seam or pinned
         nonfinite=draw(st.sampled_from([np.nan, np.inf, -np.inf, 1e300, 1e160])),
         nonfinite_at=draw(st.sampled_from(["any vertex", "a seam vertex", "a pinned vertex"])),
-        bound=draw(st.sampled_from([1.2, 2.0, 5.0, "auto"])),
+        nonfinite_count=draw(st.sampled_from([1, 1, 1, 3])),     # more in the same island
+        # pins as a caller may get them wrong (typed InvalidMeshError) or ask the impossible
+        pin_fault=draw(st.sampled_from([None] * 16 + [
+            "nan target", "inf target", "huge target", "fewer targets", "fractional corner",
+            "one corner twice apart", "one vertex's corners apart", "all on one point"])),
+        # 1.0001: the solve bound a hair below C is clamped to 1 (issue 22's second crash)
+        bound=draw(st.sampled_from([1.0, 1.0001, 1.2, 2.0, 5.0, "auto"])),
+        stretch=draw(st.sampled_from([None, None, None, 1.5, 3.0])),
         method=draw(st.sampled_from(["lscm", "lscm", "dirichlet", "arap"])),
         frames=draw(st.sampled_from(["auto", "auto", "harmonic", "conformal", "constant"])),
         cone=draw(st.sampled_from(["soc", "soc", "linf"])),
@@ -147,10 +156,43 @@ def build(sc):
         on_seam = sc.get("nonfinite_at") == "a seam vertex" and seams is not None
         bad = int(seams[rng.integers(len(seams)), 0] if on_seam else F[f, 0])
         V[bad] = sc.get("nonfinite", np.nan)
+        # more of them near it, inside the same otherwise valid island (one coordinate each)
+        near = np.unique(F[(F == bad).any(axis=1)])
+        for v in rng.choice(near, size=min(sc.get("nonfinite_count", 1) - 1, len(near)),
+                            replace=False):
+            V[v, rng.integers(3)] = sc.get("nonfinite", np.nan)
     return rng, V, F.astype(np.int64), seams, bad
 
 
 def pins_for(sc, rng, V, F, seams, bad=None):
+    corners, uv = _pins(sc, rng, V, F, seams, bad)
+    fault = sc.get("pin_fault")
+    if fault is None or corners is None or not len(corners):
+        return corners, uv
+    uv = uv.copy()
+    if fault in ("nan target", "inf target", "huge target"):
+        uv[rng.integers(len(uv)), rng.integers(2)] = {"nan target": np.nan, "inf target": np.inf,
+                                                      "huge target": 1e300}[fault]
+    elif fault == "fewer targets":
+        uv = uv[:-1]
+    elif fault == "fractional corner":
+        corners = corners.astype(np.float64)
+        corners[rng.integers(len(corners))] += 0.5
+    elif fault == "one corner twice apart":
+        corners, uv = np.append(corners, corners[0]), np.concatenate([uv, uv[:1] + 1.0])
+    elif fault == "one vertex's corners apart":   # two corners of one vertex pinned apart
+        v = F.ravel()[corners[0]]
+        other = np.flatnonzero(F.ravel() == v)
+        other = other[other != corners[0]]
+        if len(other):
+            corners = np.append(corners, other[0])
+            uv = np.concatenate([uv, uv[:1] + [0.5, -0.25]])
+    else:                                          # "all on one point"
+        uv[:] = uv[0]
+    return corners, uv
+
+
+def _pins(sc, rng, V, F, seams, bad=None):
     if not sc["pins"]:
         return None, None
     corners = rng.choice(3 * len(F), size=min(sc["pins"], 3 * len(F)), replace=False)
@@ -234,8 +276,32 @@ FAILED_PIECE_KEPT_ITS_BOUND = dict(
     method="lscm", frames="auto", cone="soc", solver_faults=0.0)
 
 
+# A bound a hair above 1: the solve bound (a little below C, never below 1) was 1, and the
+# projection started at it raised ValueError("C must be > 1"); with a stretch bound too.
+BOUND_A_HAIR_ABOVE_ONE = dict(
+    mesh="three_peaks patch", patch_size=120, seed=5, noise=0.0, delete=0.0,
+    delete_kind="blobs", seams=0, pins=0, pin_kind="random", defect=None, bound=1.0001,
+    method="lscm", frames="auto", cone="soc", solver_faults=0.0)
+
+
+# Two pins on one point (seed 8 at 2,000): pieces 1e-8 to 5e-14 across at u = 0.98. The
+# independent overlap test projected coordinates far from the origin onto tiny edge normals and
+# took neighbours sharing an edge for overlapping (overlap_shapes, test-side); and
+# metrics.face_jacobians summed absolute coordinates, so D was off by 5e-4 (test_metrics'
+# test_distortion_of_a_tiny_face_far_from_the_origin).
+PINS_ON_ONE_POINT = dict(
+    mesh="nefertiti", patch_size=100, seed=1001, noise=0.0, delete=0.3, delete_kind="blobs",
+    seams=150, pins=2, pin_kind="from a certified map", defect=None, nonfinite=np.nan,
+    nonfinite_at="any vertex", nonfinite_count=1, pin_fault="all on one point", bound="auto",
+    stretch=None, method="lscm", frames="auto", cone="soc", solver_faults=0.0)
+
+
 @settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(sc=scenarios())
+@example(sc=PINS_ON_ONE_POINT)
+@example(sc=dict(PINS_ON_ONE_POINT, patch_size=30, seed=0, solver_faults=1.0))
+@example(sc=BOUND_A_HAIR_ABOVE_ONE)
+@example(sc=dict(BOUND_A_HAIR_ABOVE_ONE, stretch=1.5, method="arap"))
 @example(sc=NAN_VERTEX_BESIDE_CROSSING_ISLANDS)
 @example(sc=ONE_FACE_PINNED_FAR_AWAY)
 @example(sc=FAILED_PIECE_KEPT_ITS_BOUND)
@@ -250,7 +316,7 @@ def test_unwrap_contract_on_perturbed_real_meshes(sc):
         with mock.patch.object(bd_uv.solvers.conic.clarabel, "DefaultSolver", solver):
             res = bd_uv.unwrap(V, F, seams=seams, pin_corners=pin_corners, pin_uv=pin_uv,
                                bound=sc["bound"], method=sc["method"], frames=sc["frames"],
-                               cone=sc["cone"])
+                               cone=sc["cone"], stretch=sc.get("stretch"))
     except bd_uv.BDError as exc:
         assert not isinstance(exc, bd_uv.CancelledError)
         event(f"raised {type(exc).__name__}")
@@ -264,6 +330,7 @@ def test_unwrap_contract_on_perturbed_real_meshes(sc):
     for isl in res.islands:
         event(f"island: {isl.status}" + (f" {type(isl.error).__name__}" if isl.error else ""))
     if sc["defect"] is None and not sc["delete"] and not sc["seams"] and sc["pins"] < 2 \
-            and sc["noise"] <= 1e-2 and sc["frames"] in ("auto", "harmonic"):
+            and sc["noise"] <= 1e-2 and sc["frames"] in ("auto", "harmonic") \
+            and sc.get("stretch") is None and sc.get("pin_fault") is None:
         # the unperturbed disk with at most one pin always has a flip-free initial map
         assert res.certified, [i.message for i in res.islands]

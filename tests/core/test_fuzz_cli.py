@@ -96,7 +96,7 @@ def command_lines(draw):
     """(input name, output kind, argv tail) of one run."""
     opts = []
     # Half the runs take only valid values, so that results get written and re-verified too.
-    kinds = ["absent", "absent", "good"] + (["bad"] if draw(st.booleans()) else [])
+    kinds = ["absent", "absent", "good"] + (["bad"] if draw(st.integers(0, 2)) == 0 else [])
 
     def maybe(flag, good, bad=BAD_NUMBERS):
         kind = draw(st.sampled_from(kinds))
@@ -104,28 +104,44 @@ def command_lines(draw):
             opts.extend([flag, draw(st.sampled_from(good if kind == "good" else bad))])
 
     maybe("--method", ["lscm", "arap", "dirichlet", "biharmonic", "stretch-l1"], ["LSCM", "x"])
-    maybe("--bound", ["1.5", "2", "5", "auto", "1"], BAD_NUMBERS + ["0.5", "Auto"])
+    # 1.0001: its solve bound is clamped to 1 (a crash in the projection before issue 22's fix)
+    maybe("--bound", ["1.5", "2", "5", "auto", "1", "1.0001"], BAD_NUMBERS + ["0.5", "Auto"])
     maybe("--frames", ["auto", "harmonic", "conformal", "input-uv", "constant"], ["uv"])
-    maybe("--seams", ["uv", "none", "auto"], ["marked"])
+    maybe("--seams", ["needed", "uv", "none", "auto"], ["marked"])
     maybe("--stretch", ["1.5", "2", "3", "10"], BAD_NUMBERS + ["1.0"])
     maybe("--bound-limit", ["10", "1000"], BAD_NUMBERS)
     maybe("--cone", ["soc", "linf"], ["l2"])
     maybe("--time-budget", ["5", "1"], BAD_NUMBERS)
-    maybe("--margin", ["0", "0.005", "0.05"], BAD_NUMBERS + ["0.9", "2"])
     maybe("--overlap", ["cut", "fail"], ["merge"])
     maybe("--boundary", ["free", "circle", "rectangle", "pinned"], ["square"])
-    for flag in ("--no-pack", "--no-raise"):
+    # packing (the atlas packer), in a third of the runs: with --no-pack any of these is refused
+    # (never ignored), so that flag and --udim come in a quarter of the runs each
+    if draw(st.integers(0, 2)) == 0:
+        maybe("--resolution", ["64", "256", "1024", "16384"], BAD_NUMBERS + ["7", "1e9", "65537"])
+        maybe("--padding", ["0", "4", "16", "64"], BAD_NUMBERS + ["1e9", "200"])
+        maybe("--texel-density", ["1", "50", "400", "1e4"], BAD_NUMBERS + ["1e-9", "1e9"])
+        maybe("--rotate", ["none", "90", "any"], ["45"])
+        maybe("--pack-seconds", ["0", "1"], BAD_NUMBERS)
+    if draw(st.integers(0, 3)) == 0:
+        opts.append("--no-pack")
+    if draw(st.integers(0, 3 if "--texel-density" in opts else 11)) == 0:   # needs a density
+        opts.append("--udim")
+    for flag in ("--no-raise", "-q"):
         if draw(st.booleans()):
             opts.append(flag)
     if "bad" in kinds and draw(st.integers(0, 9)) == 0:
         opts.append(draw(st.sampled_from(["--unknown", "-x", "--bound"])))  # unknown, or no value
     valid = ["patch.obj", "patch.obj with vt", "patch.off", "patch.ply", "closed tetra.obj"]
     return dict(input=draw(st.sampled_from(valid) | st.sampled_from(sorted(INPUTS))),
-                output=draw(st.sampled_from(["new", "new", "existing file", "in a new folder",
-                                             "a directory", "no suffix"])),
-                report=draw(st.sampled_from([None, None, "report.json", "adir.obj/r.json",
-                                             "existing.txt/r.json"])),
-                png=draw(st.sampled_from([None, None, "pic.png", "existing.txt/p.png"])),
+                # bad paths (a folder, under a file, the input, another output, empty) in
+                # about a third of the runs, so that most reach the unwrap
+                output=draw(st.sampled_from(["new"] * 12 + ["existing file", "in a new folder",
+                                             "no suffix", "a directory", "the input",
+                                             "empty", "another format"])),
+                report=draw(st.sampled_from([None] * 8 + ["report.json"] * 4 + [
+                    "adir.obj/r.json", "existing.txt/r.json", "the input", "-o"])),
+                png=draw(st.sampled_from([None] * 10 + ["pic.png"] * 2 + [
+                    "existing.txt/p.png", "the input", "-o"])),
                 opts=opts)
 
 
@@ -163,17 +179,19 @@ def run(sc, root):
         inp.write_bytes(data)
     out = {"new": root / "out.obj", "existing file": root / "old.obj",
            "in a new folder": root / "sub" / "out.obj", "a directory": root / "adir.obj",
-           "no suffix": root / "out"}[sc["output"]]
+           "no suffix": root / "out", "the input": inp, "empty": None,
+           "another format": root / "out.glb"}[sc["output"]]
     if sc["output"] == "existing file":
         out.write_bytes(b"# a previous result, to be kept unless replaced by a certified one\n")
-    argv = ["unwrap", str(inp), "-o", str(out)]
-    named = {out}
-    if sc["report"]:
-        argv += ["--report", str(root / sc["report"])]
-        named.add(root / sc["report"])
-    if sc["png"]:
-        argv += ["--png", str(root / sc["png"])]
-        named.add(root / sc["png"])
+    argv = ["unwrap", str(inp), "-o", "" if out is None else str(out)]
+    named = {out} if out is not None else set()
+    for flag in ("--report", "--png"):
+        path = sc[flag[2:]]
+        if path:   # a file under root, the input itself, or the -o path again
+            path = {"the input": inp, "-o": out}.get(path, root / path)
+            argv += [flag, "" if path is None else str(path)]
+            if path is not None:
+                named.add(path)
     argv += sc["opts"]
     before = tree(root)
     so, se = io.StringIO(), io.StringIO()
@@ -251,6 +269,23 @@ FOUND = [
     dict(input="patch.obj", output="a directory", report=None, png=None, opts=[]),
     dict(input="patch.obj", output="new", report="existing.txt/r.json", png=None, opts=[]),
     dict(input="patch.obj", output="new", report=None, png="existing.txt/p.png", opts=[]),
+    # -o, --report or --png naming the input: it was overwritten (now exit 2, one line)
+    dict(input="patch.obj", output="the input", report=None, png=None, opts=[]),
+    dict(input="patch.off", output="new", report="the input", png=None, opts=[]),
+    dict(input="patch.ply", output="new", report=None, png="the input", opts=[]),
+    # two outputs on one path: the last written replaced the other (now exit 2)
+    dict(input="patch.obj", output="new", report="-o", png=None, opts=[]),
+    # -o "": the temporary file went to the folder above, the error named it (now exit 2)
+    dict(input="patch.obj", output="empty", report=None, png=None, opts=[]),
+    # -o out.glb (or .ply, .usd, ...) for a mesh: OBJ text was written there (now exit 2)
+    dict(input="patch.obj", output="another format", report=None, png=None, opts=[]),
+    # a packing option with --no-pack was accepted and ignored (now exit 2)
+    dict(input="patch.obj", output="new", report=None, png=None,
+         opts=["--no-pack", "--padding", "16"]),
+    # --bound 1.0001: ValueError('C must be > 1') from the projection (solve bound clamped to 1)
+    dict(input="patch.obj", output="new", report=None, png=None, opts=["--bound", "1.0001"]),
+    dict(input="patch.obj", output="new", report=None, png=None,
+         opts=["--bound", "1.0001", "--stretch", "1.5"]),
 ]
 
 
@@ -292,6 +327,9 @@ def check(sc, root):
     for path, content in after.items():
         if before.get(path) != content:
             assert path in allowed, (path, argv)
+    if out is None or out == inp or sc["output"] == "another format":   # refused before work
+        assert rc == 2 and after == before, (rc, argv, stderr)
+        return
     orel = str(out.relative_to(root))
     if after.get(orel) != before.get(orel):      # written: a certified result, re-verified
         assert rc in (0, 1) and after.get(orel) != "dir", (rc, argv)

@@ -1,6 +1,6 @@
 """Fuzzing the live-session contract (issue 22): random pins and random drags on a small disk
-and a disk with a hole, with targets that are infeasible, far outside the square, NaN or
-repeated, and ``set_pins`` midway.
+and a disk with a hole, with targets that are infeasible, far outside the square (up to
+1.7e308), NaN, repeated or malformed (a caller's mistake), and ``set_pins`` midway.
 
 For every step: ``update`` returns a frame certified from its own coordinates, recomputed here
 apart from bd_uv (SVD of each face's affine map against the rest shape within C, no flipped face
@@ -14,7 +14,7 @@ deeper.
 import os
 
 import numpy as np
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import bd_uv
@@ -40,16 +40,24 @@ def _certified(rest, frame, F, bound):
 STEP = st.one_of(
     st.tuples(st.just("move"), st.floats(-0.5, 0.5), st.floats(-0.5, 0.5), st.floats(-3, 3)),
     st.tuples(st.just("far"), st.floats(-1e6, 1e6), st.floats(-1e6, 1e6), st.just(0.0)),
+    st.tuples(st.just("far"), st.sampled_from([1e12, -1e160, 1e300, -1.7e308]),
+              st.sampled_from([0.0, 1e300]), st.just(0.0)),                   # overflow range
     st.tuples(st.just("nan"), st.sampled_from([np.nan, np.inf, -np.inf]), st.just(0.0),
               st.just(0.0)),
     st.tuples(st.just("collapse"), st.just(0.0), st.just(0.0), st.just(0.0)),   # pins on one point
     st.tuples(st.just("repeat"), st.just(0.0), st.just(0.0), st.just(0.0)),
     st.tuples(st.just("set_pins"), st.integers(0, 2 ** 16), st.integers(2, 4), st.just(0.0)),
+    # a caller's mistake: one target short, a third column, text, None (typed error, frame kept)
+    st.tuples(st.just("malformed"), st.sampled_from(["short", "3 columns", "text", "none"]),
+              st.just(0.0), st.just(0.0)),
 )
 
 
 @settings(max_examples=EXAMPLES, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+# found by this contract: text targets were numpy's ValueError out of update(), not OptionError
+@example(mesh="disk", method="arap", bound=3.0, n_pins=2, seed=0, steps=[("malformed", "text",
+                                                                          0.0, 0.0)], f32=False)
 @given(mesh=st.sampled_from(sorted(MESHES)), method=st.sampled_from(["arap", "lscm"]),
        bound=st.floats(1.5, 6.0), n_pins=st.integers(1, 4), seed=st.integers(0, 2 ** 16),
        steps=st.lists(STEP, min_size=1, max_size=6), f32=st.booleans())
@@ -88,6 +96,9 @@ def test_every_live_frame_is_certified_or_refused_keeping_the_last(mesh, method,
             T[rng.integers(P), rng.integers(2)] = a
         elif kind == "collapse":
             T = np.repeat(last_T[:1], P, axis=0)
+        elif kind == "malformed":
+            T = {"short": last_T[:-1], "3 columns": np.c_[last_T, last_T[:, :1]],
+                 "text": last_T.astype(str).astype(object) + "x", "none": None}[a]
         else:
             T = last_T
         try:
@@ -99,6 +110,7 @@ def test_every_live_frame_is_certified_or_refused_keeping_the_last(mesh, method,
             continue
         _certified(s.rest, fr, F, bound)
         assert s.frame is fr
+        assert kind != "malformed", "malformed targets gave a frame"
         if np.isfinite(T).all():
             last_T = T
     if s.frame is not None:

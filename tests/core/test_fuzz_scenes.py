@@ -36,7 +36,7 @@ from overlap_shapes import overlapping_triangle_pairs
 EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "40"))
 BREAKAGES = ("none", "index range", "position range", "index ctype", "position ctype",
              "sparse position", "no indices", "degenerate", "nan position", "view range",
-             "buffer short", "bad mode")
+             "buffer short", "bad mode", "inf position")
 
 
 def _scene(breakage, copies, seed):
@@ -46,9 +46,12 @@ def _scene(breakage, copies, seed):
     V = V.astype(np.float32)
     if breakage == "nan position":
         V[rng.integers(len(V))] = np.nan
+    if breakage == "inf position":   # one coordinate, either sign, of one or a few vertices
+        for v in rng.choice(len(V), int(rng.integers(1, 4)), replace=False):
+            V[v, rng.integers(3)] = rng.choice([np.inf, -np.inf])
     if breakage == "degenerate":
         F = np.concatenate([F, [[0, 0, 1], [2, 2, 2]]])
-    pos = b.accessor(V, 5126, "VEC3", minmax=breakage != "nan position")
+    pos = b.accessor(V, 5126, "VEC3", minmax=breakage not in ("nan position", "inf position"))
     prim = {"attributes": {"POSITION": pos}}
     if breakage != "no indices":
         prim["indices"] = b.accessor(F.reshape(-1, 1), 5123, "SCALAR")
@@ -93,16 +96,19 @@ def _digest(folder):
             for f in sorted(os.listdir(folder))}
 
 
-def _spoil_and_unwrap(name, src, tmp, flips, cut, out_name):
-    """Corrupt bytes of the file ``name`` (``flips``: (where, xor) pairs) and truncate it at
-    ``cut``; read it, then unwrap it through the command line. Never a crash, never a traceback,
-    the input folder ``src`` byte-identical afterwards. Returns (exit code, stderr, -o, --report)."""
-    raw = bytearray(open(name, "rb").read())
+def _spoil_and_unwrap(name, src, tmp, flips, cut, out_name, spoil=None):
+    """Corrupt bytes of the file ``spoil`` (default: the scene ``name`` itself; ``flips``: (where,
+    xor) pairs) and truncate it at ``cut``; read the scene, then unwrap it through the command
+    line. Never a crash, never a traceback, the input folder ``src`` byte-identical afterwards.
+    Returns (exit code, stderr, -o, --report)."""
+    spoil = spoil or name
+    raw = bytearray(open(spoil, "rb").read())
     for at, x in flips:                             # corrupted bytes
-        raw[int(at * len(raw))] ^= x
+        if raw:
+            raw[int(at * len(raw))] ^= x
     if cut is not None:                             # a truncated download
         raw = raw[:int(cut * len(raw))]
-    open(name, "wb").write(bytes(raw))
+    open(spoil, "wb").write(bytes(raw))
     before = _digest(src)
     try:
         read_scene(name)
@@ -149,17 +155,33 @@ def _check_written(out, report):
 
 @settings(max_examples=EXAMPLES, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+# found by this contract (seed 7): a flipped byte in a base64 data URI was binascii.Error out of
+# read_scene (gltf_io._buffer_bytes; test_scene_gltf's test_a_damaged_data_uri_is_a_scene_error)
+@example(breakage="none", copies=1, glb=False, seed=0, cut=None, flips=[(0.25, 1)],
+         spoil="data URI")
+# and (seed 8): indices of a signed component type (5120) whose .bin byte was flipped held -107,
+# and only indices >= the vertex count were refused: IndexError in weld (gltf._mesh_arrays)
+@example(breakage="index ctype", copies=1, glb=False, seed=1, cut=None, flips=[(0.75, 128)],
+         spoil="its .bin")
 @given(breakage=st.sampled_from(BREAKAGES), copies=st.integers(1, 40), glb=st.booleans(),
        seed=st.integers(0, 2 ** 16), cut=st.one_of(st.none(), st.floats(0.0, 0.999)),
-       flips=st.lists(st.tuples(st.floats(0, 0.999), st.integers(1, 255)), max_size=3))
+       flips=st.lists(st.tuples(st.floats(0, 0.999), st.integers(1, 255)), max_size=3),
+       spoil=st.sampled_from(["scene", "scene", "its .bin", "its .bin gone", "data URI"]))
 def test_scene_files_never_crash_or_write_an_uncertified_result(breakage, copies, glb, seed,
-                                                                  cut, flips):
+                                                                  cut, flips, spoil):
+    """``spoil`` (a .gltf only): corrupt and truncate the .gltf, or its external .bin, or delete
+    the .bin, or carry the buffer inside the .gltf as a base64 data URI."""
     with tempfile.TemporaryDirectory() as tmp:
         src = os.path.join(tmp, "in")
         os.mkdir(src)
         name = os.path.join(src, "scene.glb" if glb else "scene.gltf")
-        _scene(breakage, copies, seed).write(name, glb=glb)
-        rc, msg, out, rep = _spoil_and_unwrap(name, src, tmp, flips, cut, "out.glb")
+        spoil = "scene" if glb else spoil
+        _scene(breakage, copies, seed).write(name, glb=glb, data_uri=spoil == "data URI")
+        bins = [os.path.join(src, f) for f in os.listdir(src) if f.endswith(".bin")]
+        if spoil == "its .bin gone":
+            os.remove(bins[0])
+        target = bins[0] if spoil == "its .bin" else None
+        rc, msg, out, rep = _spoil_and_unwrap(name, src, tmp, flips, cut, "out.glb", target)
         if rc == 2:
             assert msg.strip(), "a failure says why"
             assert not os.path.exists(out)
@@ -173,7 +195,8 @@ def test_scene_files_never_crash_or_write_an_uncertified_result(breakage, copies
 
 
 USD_BREAKAGES = ("none", "polygon counts", "index range", "counts sum", "nan point", "empty stage",
-                 "no points", "instanced")
+                 "no points", "instanced", "instanceable", "time-sampled points", "holes",
+                 "inf point")
 
 
 def _stage(path, breakage, seed):
@@ -199,20 +222,30 @@ def _stage(path, breakage, seed):
         idx[int(rng.integers(len(idx)))] = 10 ** 6
     elif breakage == "counts sum":
         counts.append(4)
-    elif breakage == "nan point":
+    elif breakage in ("nan point", "inf point"):
         V = V.copy()
-        V[int(rng.integers(len(V)))] = np.nan
+        V[int(rng.integers(len(V))), int(rng.integers(3))] = \
+            np.nan if breakage == "nan point" else rng.choice([np.inf, -np.inf])
     prims = ["/World/Panel"] + (["/World/Panel2"] if breakage == "instanced" else [])
     for path_ in prims:
         mesh = UsdGeom.Mesh.Define(stage, path_)
-        if breakage != "no points":
+        if breakage == "time-sampled points":   # no default value: the first sample is read
+            for t in range(int(rng.integers(1, 4))):
+                mesh.GetPointsAttr().Set(Vt.Vec3fArray.FromNumpy(
+                    (V * (1 + 0.1 * t)).astype(np.float32)), float(t))
+        elif breakage != "no points":
             mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(V.astype(np.float32)))
         mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.array(counts, np.int32)))
         mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.array(idx, np.int32)))
-    if breakage == "instanced":   # the first mesh referenced by many prims
+        if breakage == "holes":   # some polygons holes, some indices out of range
+            holes = rng.choice(len(counts) + 3, int(rng.integers(1, len(counts))), replace=False)
+            mesh.CreateHoleIndicesAttr(Vt.IntArray.FromNumpy(holes.astype(np.int32)))
+    if breakage in ("instanced", "instanceable"):   # the first mesh referenced by many prims
         for i in range(int(rng.integers(2, 30))):
             p = stage.DefinePrim(f"/World/Copy{i}")
             p.GetReferences().AddInternalReference("/World/Panel")
+            if breakage == "instanceable":
+                p.SetInstanceable(True)
     stage.GetRootLayer().Save()
 
 
@@ -235,11 +268,17 @@ def _check_stage(out, report):
         uv = np.asarray(pv.Get(), np.float64)
         if pv.IsIndexed():
             uv = uv[np.asarray(pv.GetIndices())]
-        P = np.asarray(mesh.GetPointsAttr().Get(), np.float64)
+        points = mesh.GetPointsAttr()
+        P = points.Get()
+        if P is None:   # time-sampled only: the first sample, the rest pose bd-uv reads
+            P = points.Get(points.GetTimeSamples()[0])
+        P = np.asarray(P, np.float64)
         counts = np.asarray(mesh.GetFaceVertexCountsAttr().Get())
         idx = np.asarray(mesh.GetFaceVertexIndicesAttr().Get())
+        holes = set(np.asarray(mesh.GetHoleIndicesAttr().Get() or [], int).tolist())
         start = np.concatenate([[0], np.cumsum(counts)[:-1]])
-        T = np.array([(s, s + i, s + i + 1) for s, c in zip(start, counts) for i in range(1, c - 1)])
+        T = np.array([(s, s + i, s + i + 1) for k, (s, c) in enumerate(zip(start, counts))
+                      if k not in holes for i in range(1, c - 1)]).reshape(-1, 3)
         assert np.isfinite(uv[T]).all()
         D, flipped = reference_distortion(P, idx[T], uv[T])
         assert not flipped.any()
@@ -251,17 +290,27 @@ def _check_stage(out, report):
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 # found by this contract: a byte >= 0x80 in a .usda made pxr's error unprintable (str() of its
 # Tf.ErrorException raised UnicodeDecodeError out of read_scene): usd._pxr_message
-@example(breakage="none", seed=0, cut=None, flips=[(0.5, 128)])
+@example(breakage="none", seed=0, cut=None, flips=[(0.5, 128)], suffix=".usda")
+# found by this contract: a flipped byte left points of an unknown type (Sdf.UnregisteredValue),
+# and numpy's TypeError left read_scene (usd._numbers; test_scene_usd's
+# test_a_value_of_an_unknown_type_is_a_scene_error)
+@example(breakage="inf point", seed=2, cut=None, flips=[(0.4, 99)], suffix=".usda")
+# and (seed 7 once .usdc was drawn): a crate file's values are decompressed when read, so a
+# flipped byte raised pxr's Tf.ErrorException (LZ4) from points.Get() out of read_scene
+@example(breakage="none", seed=0, cut=None, flips=[(0.171875, 1)], suffix=".usdc")
 @given(breakage=st.sampled_from(USD_BREAKAGES), seed=st.integers(0, 2 ** 16),
        cut=st.one_of(st.none(), st.floats(0.0, 0.999)),
-       flips=st.lists(st.tuples(st.floats(0, 0.999), st.integers(1, 255)), max_size=2))
-def test_usd_stages_never_crash_or_write_an_uncertified_result(breakage, seed, cut, flips):
+       flips=st.lists(st.tuples(st.floats(0, 0.999), st.integers(1, 255)), max_size=2),
+       suffix=st.sampled_from([".usda", ".usda", ".usdc"]))
+def test_usd_stages_never_crash_or_write_an_uncertified_result(breakage, seed, cut, flips,
+                                                                suffix):
+    """``suffix``: the stage as text, or as a binary crate file (its bytes corrupted and cut)."""
     with tempfile.TemporaryDirectory() as tmp:
         src = os.path.join(tmp, "in")
         os.mkdir(src)
-        name = os.path.join(src, "shot.usda")
+        name = os.path.join(src, "shot" + suffix)
         _stage(name, breakage, seed)
-        rc, msg, out, rep = _spoil_and_unwrap(name, src, tmp, flips, cut, "out.usda")
+        rc, msg, out, rep = _spoil_and_unwrap(name, src, tmp, flips, cut, "out" + suffix)
         if rc == 2:
             assert msg.strip() and not os.path.exists(out)
         if rc != 0 and breakage not in ("none", "empty stage") and not flips and cut is None:

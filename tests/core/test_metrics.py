@@ -63,3 +63,18 @@ def test_local_coordinates_are_isometric():
     for i, j in [(0, 1), (1, 2), (0, 2)]:
         assert abs(Z[i] - Z[j]) == pytest.approx(np.linalg.norm(V[i] - V[j]))
     assert Z[2].imag > 0
+
+
+def test_distortion_of_a_tiny_face_far_from_the_origin():
+    """Issue 22 (mesh contract, seed 8): a one-face piece 5e-14 across at u = 0.98 measured
+    D = 1.03456 where its UVs give 1.03407: the Jacobian summed absolute coordinates, whose
+    rounding at 0.98 is 2e-3 of the face's size. Measured from the face's own corner, where it
+    lies does not change D."""
+    V = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.3, 0.8, 0.0]])
+    F = np.array([[0, 1, 2]])
+    uv = np.array([[[0.0, 0.0], [1.0, 0.1], [0.2, 0.9]]]) * 5e-14
+    at_origin = bd_uv.conformal_distortion(V, F, uv)
+    far = uv + [0.985407614873111, 0.5037187684895323]
+    ref, _ = reference_distortion(V, F, far)      # numpy SVD of the stored corners' differences
+    assert at_origin[0] == pytest.approx(ref[0], rel=1e-9)
+    assert bd_uv.conformal_distortion(V, F, far)[0] == pytest.approx(ref[0], rel=1e-9)

@@ -284,3 +284,32 @@ def test_primitives_sharing_accessors_unwrap_as_one_mesh(tmp_path):
     D, flipped = reference_distortion(P.reshape(-1, 3), np.arange(3 * len(P)).reshape(-1, 3), U)
     assert not flipped.any() and D.max() <= entry["bound_certified"] * (1 + 1e-9)
     assert len(overlapping_triangle_pairs(U)) == 0
+
+
+@pytest.mark.parametrize("damage", ["padding", "alphabet", "uri not text"])
+def test_a_damaged_data_uri_is_a_scene_error(tmp_path, capsys, damage):
+    """Issue 22 (scene contract, seed 7): a .gltf whose buffer is a base64 data URI with one
+    byte changed ended in binascii.Error out of read_scene ("Incorrect padding"); a character
+    outside base64 was dropped silently (the buffer decoded to other bytes). Now a
+    SceneFileError naming the buffer, exit 2, the file untouched, nothing written."""
+    b = Builder()
+    V, F, _ = seamed_grid(3, 3)
+    prim = {"attributes": {"POSITION": b.accessor(V.astype(np.float32), 5126, "VEC3",
+                                                  minmax=True)},
+            "indices": b.accessor(F.reshape(-1, 1), 5123, "SCALAR")}
+    b.doc.update(meshes=[{"name": "Rock", "primitives": [prim]}], nodes=[{"mesh": 0}],
+                 scenes=[{"nodes": [0]}], scene=0)
+    path = tmp_path / "scene.gltf"
+    b.write(str(path), data_uri=True)
+    doc = json.loads(path.read_text())
+    uri = doc["buffers"][0]["uri"]
+    doc["buffers"][0]["uri"] = {"padding": uri[:-1], "alphabet": uri[:-8] + "*" + uri[-7:],
+                                "uri not text": 5}[damage]
+    path.write_text(json.dumps(doc))
+    raw = path.read_bytes()
+    with pytest.raises(SceneFileError, match="buffer 0"):
+        read_scene(str(path))
+    assert main(["unwrap", str(path), "-o", str(tmp_path / "o.gltf")]) == 2
+    err = capsys.readouterr().err
+    assert "buffer 0" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert path.read_bytes() == raw and not (tmp_path / "o.gltf").exists()

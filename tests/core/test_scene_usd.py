@@ -175,6 +175,32 @@ def test_malformed_stage_names_the_prim(tmp_path, capsys):
         read_scene(str(tmp_path / "junk.usda"))
 
 
+@pytest.mark.parametrize("attr, line", [
+    ("points", "pointz3f[] points = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)]"),
+    ("faceVertexIndices", "int[] faceVertexCounts = [3, 3]\n        "
+                          "intz[] faceVertexIndices = [0, 1, 2, 0, 2, 3]"),
+    ("primvars:st", "texCoord2z[] primvars:st = [(0, 0), (1, 0), (1, 1), (0, 1)] (\n"
+                    "            interpolation = \"vertex\"\n        )")])
+def test_a_value_of_an_unknown_type_is_a_scene_error(tmp_path, capsys, attr, line):
+    """Issue 22 (scene contract): a damaged .usda whose type name no longer reads (a corrupted
+    byte: ``point3f[]`` became something else) holds an ``Sdf.UnregisteredValue`` where numbers
+    belong; numpy raised TypeError out of read_scene. Now a SceneFileError naming the prim."""
+    body = {"points": "point3f[] points = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)]",
+            "faceVertexIndices": "int[] faceVertexCounts = [3, 3]\n        "
+                                 "int[] faceVertexIndices = [0, 1, 2, 0, 2, 3]"}
+    body[attr] = line                     # the damaged line, in place of the good one
+    path = tmp_path / "damaged.usda"
+    path.write_text('#usda 1.0\n\ndef Mesh "Panel"\n{\n        '
+                    + "\n        ".join(body.values()) + "\n}\n")
+    raw = path.read_bytes()
+    with pytest.raises(SceneFileError, match=f"/Panel.*{attr}.*not an array of numbers"):
+        read_scene(str(path))
+    assert main(["unwrap", str(path), "-o", str(tmp_path / "o.usda")]) == 2
+    err = capsys.readouterr().err
+    assert "/Panel" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "o.usda").exists() and path.read_bytes() == raw
+
+
 def test_holes_instances_and_points_only_time_sampled(tmp_path):
     """A hole is not unwrapped (its corners get one value); a mesh inside an instanceable prim is
     reported, not written; points with time samples only are unwrapped at the first sample."""
