@@ -90,6 +90,13 @@ class FrameCertificate:
         Gy = sp.csr_array((o.Bim - o.Aim)[:, :nv])
         self.G = sp.csr_array(sp.vstack([Gx, Gy]))
         self.area = np.asarray(o.area, dtype=np.float64)
+        # Each face is measured from its own first corner (edge vectors), not by G on absolute
+        # coordinates: a frame dragged 1e160 away keeps its shape in the differences, which the
+        # absolute sums cancel away (a frame measured 4.6 was passed at C = 2).
+        self.F = F
+        E = np.stack([rest[F[:, 1]] - rest[F[:, 0]], rest[F[:, 2]] - rest[F[:, 0]]], axis=-1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self._rest_inv = np.linalg.inv(E) if len(F) else np.zeros((0, 2, 2))
         self.edges = boundary_half_edges(F)
         a, b = self.edges[:, 0], self.edges[:, 1]
         # Fixed topology: the UV point of a boundary vertex is the vertex itself.
@@ -101,9 +108,10 @@ class FrameCertificate:
     def distortion(self, U):
         """Per-face conformal distortion (k,) of ``U`` (n,2) against the rest shape, inf where a
         face is flipped or degenerate, and the number of flipped faces."""
-        R = self.G @ U
-        k = self.k
-        ux, uy, vx, vy = R[:k, 0], R[k:, 0], R[:k, 1], R[k:, 1]
+        F = self.F
+        W = np.stack([U[F[:, 1]] - U[F[:, 0]], U[F[:, 2]] - U[F[:, 0]]], axis=-1)
+        J = W @ self._rest_inv          # (k,2,2): rows u, v; columns d/dx, d/dy
+        ux, uy, vx, vy = J[:, 0, 0], J[:, 0, 1], J[:, 1, 0], J[:, 1, 1]
         na = 0.5 * np.hypot(ux + vy, vx - uy)
         nb = 0.5 * np.hypot(ux - vy, vx + uy)
         with np.errstate(invalid="ignore", divide="ignore"):
