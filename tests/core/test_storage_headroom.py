@@ -10,6 +10,11 @@ from bd_uv.unwrapping.storage import (float_step, predicted_to_fail, rounding_di
 from helpers import reference_distortion
 from teapot import teapot, triangulated
 
+# The nesting's search is bounded in time, so its layout (and the handle's packed scale) varies
+# from run to run; its first placements alone (solve_seconds=0) are the same every run, so these
+# tests pack the same atlas each time and the handle fails as stored without headroom.
+PACK = PackOptions(solve_seconds=0)
+
 
 def _signed_areas(uv):
     d1, d2 = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
@@ -25,7 +30,7 @@ def test_teapot_islands_written_certified_as_float32():
     V, F = triangulated(6)
     res = bd_uv.unwrap(V, F)
     assert [r.status for r in res.islands] == ["certified"] * 4
-    opts = dict(dtype=np.float32, pack_options=PackOptions())
+    opts = dict(dtype=np.float32, pack_options=PACK)
     plain = stored_layout(V, F, res, **opts)
     # the cause: the handle's conformal map shrinks faces near where it meets the body, and
     # rounding to float32 at the packed scale pushes them over C
@@ -61,7 +66,7 @@ def test_prediction_flags_the_handle_only_and_its_resolve_stores_certified():
     # the Blender operator packs after it writes: it re-solves what the prediction flags first
     V, F = triangulated(6)
     res = bd_uv.unwrap(V, F)
-    plain = stored_layout(V, F, res, dtype=np.float32, pack_options=PackOptions())
+    plain = stored_layout(V, F, res, dtype=np.float32, pack_options=PACK)
     failing = sorted(int(s) for c, s in zip(plain.certificates, plain.source) if not c.certified)
     assert predicted_to_fail(V, F, res) == failing == [1]
     fixed, done = with_predicted_headroom(V, F, res)
@@ -71,7 +76,7 @@ def test_prediction_flags_the_handle_only_and_its_resolve_stores_certified():
     assert not flipped.any() and D.max() <= 5.0 * (1 + 1e-9)
     assert np.array_equal(fixed.corner_uv[fixed.islands[0].faces],
                           res.corner_uv[res.islands[0].faces])     # the others untouched
-    layout = stored_layout(V, F, fixed, dtype=np.float32, pack_options=PackOptions())
+    layout = stored_layout(V, F, fixed, dtype=np.float32, pack_options=PACK)
     assert all(c.certified for c in layout.certificates)
 
 
