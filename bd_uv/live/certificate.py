@@ -94,9 +94,14 @@ class FrameCertificate:
         # coordinates: a frame dragged 1e160 away keeps its shape in the differences, which the
         # absolute sums cancel away (a frame measured 4.6 was passed at C = 2).
         self.F = F
-        E = np.stack([rest[F[:, 1]] - rest[F[:, 0]], rest[F[:, 2]] - rest[F[:, 0]]], axis=-1)
+        e1, e2 = rest[F[:, 1]] - rest[F[:, 0]], rest[F[:, 2]] - rest[F[:, 0]]
+        det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+        adj = np.stack([np.stack([e2[:, 1], -e2[:, 0]], -1),
+                        np.stack([-e1[:, 1], e1[:, 0]], -1)], -2)
+        # the inverse of [e1 e2] by its adjugate: a degenerate rest face gives inf/NaN (its D is
+        # then inf, never certified) where np.linalg.inv would raise
         with np.errstate(divide="ignore", invalid="ignore"):
-            self._rest_inv = np.linalg.inv(E) if len(F) else np.zeros((0, 2, 2))
+            self._rest_inv = adj / det[:, None, None]
         self.edges = boundary_half_edges(F)
         a, b = self.edges[:, 0], self.edges[:, 1]
         # Fixed topology: the UV point of a boundary vertex is the vertex itself.
