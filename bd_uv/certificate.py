@@ -14,6 +14,9 @@ from .overlap import island_overlaps
 
 # Same relative tolerance as metrics.certify: the bound is met up to rounding.
 RTOL = 1e-6
+# an island narrower than this (UV units) that fails certification is named too small in its reason:
+# measures at that scale fall below what the overlap test and float32 storage resolve
+TINY = 2.0 ** -20
 
 
 @dataclass(frozen=True)
@@ -108,6 +111,7 @@ def certify_islands(V, F, corner_uv, face_island, bounds, rtol=RTOL):
     with np.errstate(invalid="ignore", divide="ignore"):
         meanD = np.where(wsum > 0, dsum / wsum, np.inf)
     ov = island_overlaps(F, uv, lab, k)
+    width = _island_widths(uv64, fl, k)
     certs = []
     for i in range(k):  # one small record per island, no per-face work
         why = []
@@ -122,6 +126,9 @@ def certify_islands(V, F, corner_uv, face_island, bounds, rtol=RTOL):
         elif ov.bad_loops[i]:
             why.append(f"{ov.bad_loops[i]} UV boundary loop(s) wound the wrong way (a hole "
                        "outside its island, or the island lying over itself)")
+        if why and width[i] < TINY:
+            why.append(f"the island is {width[i]:.2g} of the UV square across, too small to "
+                       "measure: raise the texel density")
         overlap_free = bool(ov.overlap_free[i]) and n_faces[i] > 0
         certs.append(Certificate(
             island=i, certified=not why, bound=float(bounds[i]), max_distortion=float(maxD[i]),
@@ -129,6 +136,19 @@ def certify_islands(V, F, corner_uv, face_island, bounds, rtol=RTOL):
             crossings=int(ov.crossings[i]), reason="; ".join(why), faces=int(n_faces[i]),
             area=float(wsum[i])))
     return certs
+
+
+def _island_widths(uv64, fl, k):
+    """(k,) float64, each island's larger UV extent over its finite corners (0 when none)."""
+    P = uv64.reshape(-1, 2)
+    own = np.repeat(fl, 3)
+    keep = np.isfinite(P).all(axis=1)
+    lo = np.full((k, 2), np.inf)
+    hi = np.full((k, 2), -np.inf)
+    np.minimum.at(lo, own[keep], P[keep])
+    np.maximum.at(hi, own[keep], P[keep])
+    with np.errstate(invalid="ignore"):
+        return np.nan_to_num((hi - lo).max(axis=1), nan=0.0, neginf=0.0, posinf=np.inf)
 
 
 def certificate_totals(certs):

@@ -1,6 +1,7 @@
 """The atlas packer from the command line and the batch: options, the report's ``pack`` object
 and the PNG, checked against figures recomputed from the written OBJ."""
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -8,6 +9,8 @@ import pytest
 from bd_uv import cli
 from bd_uv.meshio import load_mesh
 from packing_sets import least_gap, texel_densities
+
+DATA = Path(__file__).resolve().parents[1] / "data"
 
 
 def grids(tmp_path, sizes=((5, 3), (8, 2), (3, 3), (6, 6), (2, 9), (4, 1))):
@@ -92,3 +95,20 @@ def test_batch_entry_carries_the_pack_object(tmp_path):
     entry = report["items"][0]
     pack = entry["pack"]
     assert pack["certified"] and pack["padding_px"] == 2 and pack["least_gap_px"] >= 2
+
+
+def test_a_texel_density_too_small_to_store_says_so_and_writes_nothing(tmp_path, capsys):
+    """Found by the CLI fuzz contract: at 1e-9 texels per unit every chart is about 1e-11 of the
+    square across; its stored UVs cannot be certified, and the message said only "loop(s) wound
+    the wrong way". It now names the island's size and what to change."""
+    src = tmp_path / "nefertiti.off"
+    src.write_bytes((DATA / "nefertiti.off").read_bytes())
+    out = tmp_path / "n.obj"
+    before = src.read_bytes()
+    rc = cli.main(["unwrap", str(src), "-o", str(out), "--seams", "none",
+                   "--texel-density", "1e-9"])
+    err = capsys.readouterr().err
+    assert rc == 1 and not out.exists() and src.read_bytes() == before
+    line = next(x for x in err.splitlines() if "island 0" in x)
+    width = float(line.split("the island is ")[1].split(" ")[0])
+    assert 0 < width < 1e-9 and "raise the texel density" in line
