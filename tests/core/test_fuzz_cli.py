@@ -95,8 +95,11 @@ BAD_NUMBERS = ["nan", "inf", "-inf", "-1", "0", "abc", "", "1e400"]
 def command_lines(draw):
     """(input name, output kind, argv tail) of one run."""
     opts = []
-    # Half the runs take only valid values, so that results get written and re-verified too.
-    kinds = ["absent", "absent", "good"] + (["bad"] if draw(st.integers(0, 2)) == 0 else [])
+    # Half the runs are clean (valid input, paths and values), so that results get written and
+    # re-verified too; in the others anything goes, bad values in a third of them.
+    clean = draw(st.booleans())
+    kinds = ["absent", "absent", "good"] + (["bad"] if not clean and draw(st.integers(0, 2)) == 0
+                                            else [])
 
     def maybe(flag, good, bad=BAD_NUMBERS):
         kind = draw(st.sampled_from(kinds))
@@ -107,7 +110,13 @@ def command_lines(draw):
     # 1.0001: its solve bound is clamped to 1 (a crash in the projection before issue 22's fix)
     maybe("--bound", ["1.5", "2", "5", "auto", "1", "1.0001"], BAD_NUMBERS + ["0.5", "Auto"])
     maybe("--frames", ["auto", "harmonic", "conformal", "input-uv", "constant"], ["uv"])
-    maybe("--seams", ["needed", "uv", "none", "auto"], ["marked"])
+    # the input first: "--seams uv" is a valid value only for an input with UVs (for the others
+    # it is a refusal, drawn as a bad value)
+    valid = ["patch.obj", "patch.obj with vt", "patch.off", "patch.ply", "closed tetra.obj"]
+    source = draw(st.sampled_from(valid) if clean else
+                  st.sampled_from(valid) | st.sampled_from(sorted(INPUTS)))
+    has_uv = source == "patch.obj with vt"
+    maybe("--seams", ["needed", "none", "auto"] + ["uv"] * has_uv, ["marked"] + ["uv"] * (not has_uv))
     maybe("--stretch", ["1.5", "2", "3", "10"], BAD_NUMBERS + ["1.0"])
     maybe("--bound-limit", ["10", "1000"], BAD_NUMBERS)
     maybe("--cone", ["soc", "linf"], ["l2"])
@@ -122,26 +131,30 @@ def command_lines(draw):
         maybe("--texel-density", ["1", "50", "400", "1e4"], BAD_NUMBERS + ["1e-9", "1e9"])
         maybe("--rotate", ["none", "90", "any"], ["45"])
         maybe("--pack-seconds", ["0", "1"], BAD_NUMBERS)
-    if draw(st.integers(0, 3)) == 0:
+    # --no-pack with a packing option is a refusal: drawn so in runs with bad values only
+    packing = {"--resolution", "--padding", "--texel-density", "--rotate", "--pack-seconds"}
+    if draw(st.integers(0, 3)) == 0 and ("bad" in kinds or not packing & set(opts)):
         opts.append("--no-pack")
-    if draw(st.integers(0, 3 if "--texel-density" in opts else 11)) == 0:   # needs a density
+    if draw(st.integers(0, 3)) == 0 and ("--texel-density" in opts or not clean and
+                                         draw(st.integers(0, 2)) == 0):   # needs a density
         opts.append("--udim")
     for flag in ("--no-raise", "-q"):
         if draw(st.booleans()):
             opts.append(flag)
     if "bad" in kinds and draw(st.integers(0, 9)) == 0:
         opts.append(draw(st.sampled_from(["--unknown", "-x", "--bound"])))  # unknown, or no value
-    valid = ["patch.obj", "patch.obj with vt", "patch.off", "patch.ply", "closed tetra.obj"]
-    return dict(input=draw(st.sampled_from(valid) | st.sampled_from(sorted(INPUTS))),
+    return dict(input=source,
                 # bad paths (a folder, under a file, the input, another output, empty) in
                 # about a third of the runs, so that most reach the unwrap
-                output=draw(st.sampled_from(["new"] * 12 + ["existing file", "in a new folder",
-                                             "no suffix", "a directory", "the input",
-                                             "empty", "another format"])),
-                report=draw(st.sampled_from([None] * 8 + ["report.json"] * 4 + [
-                    "adir.obj/r.json", "existing.txt/r.json", "the input", "-o"])),
-                png=draw(st.sampled_from([None] * 10 + ["pic.png"] * 2 + [
-                    "existing.txt/p.png", "the input", "-o"])),
+                output=draw(st.sampled_from(["new", "existing file", "in a new folder"]) if clean
+                            else st.sampled_from(["new"] * 12 + [
+                                "existing file", "in a new folder", "no suffix", "a directory",
+                                "the input", "empty", "another format"])),
+                report=draw(st.sampled_from([None, "report.json"] if clean else [None] * 8 + [
+                    "report.json"] * 4 + ["adir.obj/r.json", "existing.txt/r.json", "the input",
+                                          "-o"])),
+                png=draw(st.sampled_from([None] * 4 + ["pic.png"] if clean else [None] * 10 + [
+                    "pic.png"] * 2 + ["existing.txt/p.png", "the input", "-o"])),
                 opts=opts)
 
 
