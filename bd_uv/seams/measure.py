@@ -1,5 +1,6 @@
 """The charts of a finished unwrap measured from their final UVs (stretch, boundary crossings), and
 a result with some charts unwrapped again spliced in."""
+import copy
 import dataclasses
 
 import numpy as np
@@ -44,6 +45,21 @@ def measure_charts(V, F, E, cut, result):
     return st.tolist(), cr.tolist()
 
 
+def renumbered(r, j):
+    """The island result ``r`` as island ``j``: its index, and a failed one's error (``island``
+    and the "island N:" its message starts with) and message along."""
+    if r.index == j:
+        return r
+    if r.error is None:
+        return dataclasses.replace(r, index=j)
+    old, new = f"island {r.index}:", f"island {j}:"
+    err = copy.copy(r.error)
+    err.args = (str(r.error).replace(old, new, 1),) + tuple(r.error.args[1:])
+    err.island = j
+    msg = r.message.replace(old, new, 1) if r.message else r.message
+    return dataclasses.replace(r, index=j, error=err, message=msg)
+
+
 def splice(result, part, sub, voc, m):
     """``result`` with the islands on faces ``sub`` replaced by ``part`` (unwrapped on F[sub])."""
     redo = np.zeros(m, dtype=bool)
@@ -54,7 +70,7 @@ def splice(result, part, sub, voc, m):
                                else voc[np.asarray(r.cut_edges, np.int64).reshape(-1, 2)])
            for r in part.islands]
     isl = sorted(keep + new, key=lambda r: int(r.faces.min()))
-    isl = [dataclasses.replace(r, index=j) for j, r in enumerate(isl)]
+    isl = [renumbered(r, j) for j, r in enumerate(isl)]
     corner_uv = result.corner_uv.copy()
     corner_uv[sub] = part.corner_uv
     face_island = np.empty(m, dtype=np.int64)

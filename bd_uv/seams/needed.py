@@ -152,11 +152,13 @@ def result_on_input(res, rep, F, method):
         if not len(z):
             continue
         face_island[z] = len(islands)
-        err = error(f"{len(z)} {what} cannot be unwrapped with any certified bound (faces "
+        err = error(f"island {len(islands)}: {len(z)} {what} cannot be unwrapped with any certified bound (faces "
                     f"{', '.join(str(int(i)) for i in z[:8])}{', ...' if len(z) > 8 else ''}): "
                     f"their UVs are left as they were; {fix}", island=len(islands), faces=z)
-        islands.append(IslandResult(index=len(islands), faces=z, vertices=np.zeros(0, np.int64),
-                                    tris=np.zeros((0, 3), np.int64), status="failed", error=err,
-                                    message=str(err)))
+        # its vertices and triangles as any island's (vertices[tris] == F[faces])
+        verts, tris = np.unique(F[z], return_inverse=True)
+        islands.append(IslandResult(index=len(islands), faces=z, vertices=verts.astype(np.int64),
+                                    tris=tris.reshape(-1, 3).astype(np.int64), status="failed",
+                                    error=err, message=str(err)))
     twin = rep.twin if len(dup) else None
     return UnwrapResult(corner_uv, face_island, islands, res.seconds, method, duplicate_of=twin)
