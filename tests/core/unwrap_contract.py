@@ -184,6 +184,20 @@ def assert_contract(res, V, F, pin_corners=None, pin_uv=None):
         if hasattr(isl, "overlap_free"):   # IslandResult gains it once the pipeline certifies it
             assert isl.overlap_free is True, f"island {i}: certified but not overlap-free"
         assert np.all(np.isfinite(V[F[isl.faces]])), f"island {i}: non-finite vertex certified"
+    dup = getattr(res, "duplicate_of", None)
+    if dup is not None:
+        # seams_mode="needed": a duplicate face is in no island; it carries its twin's island and,
+        # vertex by vertex, its twin's UVs
+        d = np.flatnonzero(dup >= 0)
+        assert np.all(seen[d] == 0), "a duplicate face is in an island"
+        seen[d] = 1
+        tw = dup[d]
+        assert np.all(res.face_island[d] == res.face_island[tw])
+        for f, t in zip(d, tw):  # per duplicate face (few)
+            assert sorted(F[f]) == sorted(F[t]), "duplicate_of names a face of other vertices"
+            for c in range(3):
+                j = int(np.flatnonzero(F[t] == F[f, c])[0])
+                assert np.array_equal(res.corner_uv[f, c], res.corner_uv[t, j], equal_nan=True)
     assert np.all(seen == 1), "islands do not partition the faces"
     assert res.certified == all(s == "certified" for s in statuses)
     # The JSON report (CLI, batch tool) must be strict JSON: no NaN or inf, whatever failed.
