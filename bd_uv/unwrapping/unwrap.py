@@ -190,10 +190,12 @@ def _failed(island, error, t0, bound, frames_name="", flags=(), timings=None):
 
 def _batched(V, isl, pins, face_island, options, progress, cancel, conformal=None):
     """Solve every island that can go through ``batched.conformal_islands`` at once: valid,
-    unpinned, BD-LSCM at a fixed bound from the conformal start. Returns (results by island index,
-    conformal starts of the islands that did not fit)."""
+    unpinned, BD-LSCM from the conformal start; at a fixed bound those that fit are certified
+    here, with ``bound="auto"`` only their conformal maps are solved (one assembly and
+    factorisation for all, 3-4x faster than per-island ``frames.lscm_map`` on nefertiti). Returns
+    (results by island index, conformal starts of the islands not certified here)."""
     bound = options.bound
-    if options.method != "lscm" or bound == "auto" or options.frames not in ("auto", "conformal"):
+    if options.method != "lscm" or options.frames not in ("auto", "conformal"):
         return {}, {}
     pinned = np.zeros(len(isl), dtype=bool)
     if len(pins[0]):
@@ -205,7 +207,7 @@ def _batched(V, isl, pins, face_island, options, progress, cancel, conformal=Non
         progress(0.01, f"conformal maps of {len(todo)} islands")
     if cancel is not None and cancel.is_set():
         raise CancelledError("unwrap cancelled; nothing was changed")
-    return conformal_islands(V, todo, float(bound), conformal)
+    return conformal_islands(V, todo, None if bound == "auto" else float(bound), conformal)
 
 
 def _solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=None):
