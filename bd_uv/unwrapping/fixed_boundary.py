@@ -19,7 +19,7 @@ from ..errors import CancelledError, InfeasibleError
 from ..metrics import conformal_distortion
 from ..spaces import stretch_conformal_bound
 from .problem import STORE_HEADROOM, Cancelled, IslandProblem
-from .strategies import RAISE_FACTOR, guaranteed_bound
+from .bounded import RAISE_FACTOR, guaranteed_bound
 
 BOUNDARIES = ("free",) + SHAPES
 FRAMES_NAME = "harmonic"  # fixed_boundary_map's frames: the Tutte embedding, turned to the targets
@@ -44,7 +44,7 @@ def fixed_boundary_island(island, V, pins, shape, method, bound, raise_bound, bo
     method : an energy of ``deform.METHODS`` ("lscm", "arap", "dirichlet", "biharmonic",
         "stretch-l1")
     bound : float >= 1, the conformal bound C
-    raise_bound : bool, multiply C by ``strategies.RAISE_FACTOR`` while no map is found
+    raise_bound : bool, multiply C by ``bounded.RAISE_FACTOR`` while no map is found
     bound_limit : float, the largest C tried
     cone : "soc" | "linf"
     cancel : object with ``is_set()`` or None

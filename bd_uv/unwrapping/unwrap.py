@@ -4,7 +4,7 @@ Per island (Lipman 2012, sections 4 and 6; issue 9's "never worse than its start
 1. a start map (``initial.start_map``): the free-boundary conformal map when it has no flipped
    face, else a flip-free map;
 2. a start within the bound is returned as it is; otherwise it is bent only where the bound demands
-   (``strategies.bounded``), or C is minimised (``strategies.minimise``);
+   (``bounded.bounded``), or C is minimised (``strategies.minimise``);
 3. every result is certified from its final UVs: no flipped face and max distortion <= C.
 With ``boundary`` other than "free", steps 1-2 are replaced by a solve with the island's outer
 boundary fixed on a circle, a rectangle or its pinned polygon (``fixed_boundary``, section 5),
@@ -20,7 +20,7 @@ from ..errors import (BDError, CancelledError, InvalidMeshError, IslandError, Op
 from ..mesh import as_indices, as_reals, check_arrays, islands as split_islands
 from ..metrics import certify, mean_distortion, singular_values
 from ..options import unwrap_options
-from . import strategies
+from . import bounded as within, strategies
 from . import stretch as stretch_search
 from .batched import conformal_islands
 from .fixed_boundary import FRAMES_NAME, fixed_boundary_island, with_premises
@@ -250,10 +250,10 @@ def _solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=Non
             u, C, name = stretch_search.bounded_stretch(prob, start, float(bound), stretch,
                                                         report, flags)
         else:
-            u, C, name = strategies.bounded(prob, start, float(bound), o.raise_bound,
+            u, C, name = within.bounded(prob, start, float(bound), o.raise_bound,
                                             o.bound_limit, flags, report)
         if method == "arap" and u is not None:
-            u = strategies.arap(prob, u, C, report, stretch)
+            u = within.arap(prob, u, C, report, stretch)
     except IslandError as exc:
         return _failed(island, exc, t0, bound, start.name, flags, prob.timings)
     return _finish(prob, u, C, bound, name, flags, t0, stretch)
@@ -279,7 +279,7 @@ def _finish(prob, u, C, bound, frames_name, flags, t0, stretch=None):
     if npins < 2:
         # A map collapsed to a point or a line (e.g. pinned ~1e159 away, where float64 cannot
         # hold the island's shape) has no area to scale by: left unscaled, its certificate fails.
-        area = strategies.uv_area(u, isl.tris)
+        area = within.uv_area(u, isl.tris)
         s = math.sqrt(prob.area3d / area) if area > 0.0 and math.isfinite(area) else 1.0
         if npins == 1:
             p = prob.pin_val[0]
