@@ -5,6 +5,7 @@
 - ``problem``: one island's normalised geometry, formulation and solve;
 - ``bounded``: keep, bend, raise a map for a given C, BD-ARAP;
 - ``strategies``: minimise C (``bound="auto"``);
+- ``finish``: an island's map scaled, placed and certified from its final UVs;
 - ``results``: ``IslandResult`` and ``UnwrapResult``.
 """
 from .results import IslandResult, UnwrapResult
