@@ -1,14 +1,16 @@
 """Issue 21's "done when" table in one run: bd-uv's times as ratios to its peers, per mesh and median.
 
-    python benchmarks/bench_no_waiting.py [--rounds 2] [--disks NAME ...] [--closed NAME ...]
-        [--subdivide NAME:TIMES ...] [--meshes DIR] [--out table.md]
+    python benchmarks/bench_no_waiting.py [--rounds 2] [--disks NAME ...] [--patches NAME:FACES ...]
+        [--closed NAME ...] [--subdivide NAME:TIMES ...] [--meshes DIR] [--out table.md]
 
 Every (mesh, method) runs in its own fresh process (``isolate.py``: time and peak memory are the
 method's own, warm-up untimed). The methods of one mesh run one after another, and the whole
 set ``--rounds`` times over, interleaved; each time is the least of its rounds (a shared machine's
 load only ever adds time) and each peak memory the largest. Printed:
 
-- disks: Blender ABF, LSCM, Minimum Stretch, libigl SLIM, bd-uv C = 5 and ``bound="auto"``
+- disks (the shared disks, and ``--patches``: ``assets.patch``, whole face rings of a shared mesh
+  holding at least FACES faces; default a ~200-face patch of face.obj, the small case of item 2):
+  Blender ABF, LSCM, Minimum Stretch, libigl SLIM, bd-uv C = 5 and ``bound="auto"``
   (``bd_uv.unwrap``: validation, islands, start, certification, overlap test; no packing, while
   Blender's operator packs), with ``auto / ABF`` and ``C=5 / ABF``, auto's certified C against
   the smallest max distortion of the four peers, and auto's area-weighted mean against ABF's;
@@ -32,7 +34,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 REPO = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 
-from assets import subdivided  # noqa: E402
+from assets import patch, subdivided  # noqa: E402
 from isolate import run_isolated  # noqa: E402
 
 MESHES = next((p for p in (os.path.normpath(os.path.join(REPO, "..", "shared", "meshes")),
@@ -40,6 +42,7 @@ MESHES = next((p for p in (os.path.normpath(os.path.join(REPO, "..", "shared", "
 DISKS = ["nefertiti.off", "three_peaks.off", "hemisphere.obj", "mushroom.off", "lion-head.off",
          "mannequin-devil.off", "face.obj"]
 CLOSED = ["cow.off", "dino.off", "fandisk.off", "camel.off", "armadillo.off", "horse.obj"]
+PATCHES = ["face.obj:200"]
 SUBDIVIDED = ["cow.off:2", "dino.off:3"]
 DISK_METHODS = ["blender-abf", "blender-lscm", "blender-minstretch", "igl-slim", "bd-lscm-5",
                 "bd-lscm-auto"]
@@ -136,6 +139,7 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--meshes", default=MESHES)
     ap.add_argument("--disks", nargs="*", default=DISKS)
+    ap.add_argument("--patches", nargs="*", default=PATCHES, metavar="NAME:FACES")
     ap.add_argument("--closed", nargs="*", default=CLOSED)
     ap.add_argument("--subdivide", nargs="*", default=SUBDIVIDED, metavar="NAME:TIMES")
     ap.add_argument("--rounds", type=int, default=2)
@@ -143,6 +147,9 @@ def main(argv=None) -> int:
     ap.add_argument("--out", help="also write the tables here (markdown)")
     a = ap.parse_args(argv)
     disks = [os.path.join(a.meshes, d) for d in a.disks]
+    for spec in a.patches:
+        name, faces = spec.rsplit(":", 1)
+        disks.insert(0, patch(os.path.join(a.meshes, name), int(faces)))
     closed = [os.path.join(a.meshes, c) for c in a.closed]
     for spec in a.subdivide:
         name, times = spec.rsplit(":", 1)

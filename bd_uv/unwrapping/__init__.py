@@ -3,7 +3,9 @@
 - ``unwrap``: the entry point (``bd_uv.unwrap``);
 - ``initial``: the map an island starts from and its frames;
 - ``problem``: one island's normalised geometry, formulation and solve;
-- ``strategies``: keep, bend, raise, minimise C, BD-ARAP;
+- ``bounded``: keep, bend, raise a map for a given C, BD-ARAP;
+- ``strategies``: minimise C (``bound="auto"``);
+- ``finish``: an island's map scaled, placed and certified from its final UVs;
 - ``results``: ``IslandResult`` and ``UnwrapResult``.
 """
 from .results import IslandResult, UnwrapResult

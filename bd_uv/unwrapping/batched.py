@@ -23,7 +23,8 @@ def conformal_islands(V, islands, C, known=None):
     ----------
     V : (n,3) float64
     islands : list of mesh.Island, valid (no error), without pins
-    C : float, the bound
+    C : float, the bound; None: no island is certified here, every map is returned as a start
+        (``bound="auto"``: each island's search starts from it)
     known : dict island index -> (nv,) complex128, optional, conformal maps already solved the
         same way (unit-area normalisation, ``_far_pairs`` pinned at 0 and 1): not solved again.
         They are certified like the others, from the final UVs.
@@ -66,6 +67,8 @@ def conformal_islands(V, islands, C, known=None):
             idx = np.concatenate([idx[own], kv])
             val = np.concatenate([val[own], kidx])
         u = lscm_pinned(geom.cbw, geom.cb, tris, len(verts), idx, val)
+    if C is None:
+        return {}, {isl.index: u[voff[j]:voff[j + 1]] / 1.0 for j, isl in enumerate(islands)}
     root = np.sqrt(area)[face_isl]
     uc = u[tris]
     a = np.abs(np.einsum("fk,fk->f", geom.ca, uc)) * root

@@ -6,7 +6,7 @@ simple and nested rightly (Theorem 5.2); the solve fills the holes with triangle
 orientation-preserving, so that holds by construction. ``boundary.boundary_targets`` places the
 outer boundary, ``boundary.fixed_boundary_map`` minimises the energy over F_C (eqs. 4.15-4.18) with
 those targets (and the island's other pins) held fixed; the caller certifies the result from its
-final UVs like every island (``unwrap._finish``), and ``with_premises`` then checks Theorems
+final UVs like every island (``finish.finish``), and ``with_premises`` then checks Theorems
 5.1/5.2's premises on the certified UVs (``IslandResult.bijective``).
 """
 import dataclasses
@@ -19,7 +19,7 @@ from ..errors import CancelledError, InfeasibleError
 from ..metrics import conformal_distortion
 from ..spaces import stretch_conformal_bound
 from .problem import STORE_HEADROOM, Cancelled, IslandProblem
-from .strategies import RAISE_FACTOR, guaranteed_bound
+from .bounded import RAISE_FACTOR, guaranteed_bound
 
 BOUNDARIES = ("free",) + SHAPES
 FRAMES_NAME = "harmonic"  # fixed_boundary_map's frames: the Tutte embedding, turned to the targets
@@ -44,7 +44,7 @@ def fixed_boundary_island(island, V, pins, shape, method, bound, raise_bound, bo
     method : an energy of ``deform.METHODS`` ("lscm", "arap", "dirichlet", "biharmonic",
         "stretch-l1")
     bound : float >= 1, the conformal bound C
-    raise_bound : bool, multiply C by ``strategies.RAISE_FACTOR`` while no map is found
+    raise_bound : bool, multiply C by ``bounded.RAISE_FACTOR`` while no map is found
     bound_limit : float, the largest C tried
     cone : "soc" | "linf"
     cancel : object with ``is_set()`` or None
@@ -55,7 +55,7 @@ def fixed_boundary_island(island, V, pins, shape, method, bound, raise_bound, bo
     Returns
     -------
     prob : IslandProblem whose pins are the targets and kept pins (``pin_idx`` (q,),
-        ``pin_val`` (q,) complex), so that ``unwrap._finish`` writes them back exactly
+        ``pin_val`` (q,) complex), so that ``finish.finish`` writes them back exactly
     u : (nv,) complex, the map in UV coordinates (not normalised)
     C : float, the bound it is to be certified at
     flags : list of str: ``"bound_raised"``; ``"boundary_pins_moved"`` when pins on the outer

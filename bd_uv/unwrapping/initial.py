@@ -3,7 +3,7 @@
 The result inherits the start: a start that already fits the bound is returned as it is, and a
 start that does not is bent only where the bound demands. So the start is the best map we can get
 cheaply: the free-boundary conformal map (LSCM), flipped faces and all (projection iterations
-untangle them, see ``strategies.bend``); the harmonic map when asked for, or when bending stalls.
+untangle them, see ``bounded.bend``); the harmonic map when asked for, or when bending stalls.
 """
 from dataclasses import dataclass
 

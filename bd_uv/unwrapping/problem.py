@@ -272,11 +272,13 @@ class IslandProblem:
             self.weights = 1.0 / np.maximum(a, 1e-6 * typical)
         self._scale_objective(u_start, frames_from_map(self.alpha(u_start)))
 
-    def solve(self, w, C):
+    def solve(self, w, C, **settings):
         """Minimise the energy over F_C with frames w (eqs. 4.15-4.18), with the stretch rows of
         section 6.3 (eqs. 6.3-6.4, ``spaces.stretch_space``) when ``self.stretch`` is set and the
         scale row when ``self.fix_scale``; the L1 stretch energy ("stretch-l1") as a cone
-        program (``energies.stretch_l1_program``). Returns (u or None, outcome)."""
+        program (``energies.stretch_l1_program``). ``settings``: ``conic.solve_conic``'s
+        ``max_iter``, ``tol_gap``, ``tol_feas`` (its defaults without). Returns (u or None,
+        outcome)."""
         if self.cancel is not None and self.cancel.is_set():
             raise Cancelled
         t = time.perf_counter()
@@ -290,7 +292,8 @@ class IslandProblem:
             extra = A.shape[1] - 2 * self.nv
             P = sp.csc_array((A.shape[1], A.shape[1]))
             q = q / float(self.ops.area.sum())
-        x, outcome = self._solve_reduced(P * self.scale, q * self.scale, A, b, cones, t, extra)
+        x, outcome = self._solve_reduced(P * self.scale, q * self.scale, A, b, cones, t, extra,
+                                         **settings)
         if x is None:
             return None, outcome
         return x[:self.nv] + 1j * x[self.nv:2 * self.nv], outcome

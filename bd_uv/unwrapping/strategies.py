@@ -1,13 +1,8 @@
-"""How an island's map is found for a bound: keep, bend, raise, minimise (Lipman 2012, section 6).
-
-- ``bounded``: a start map within C is returned as it is; otherwise one solve over F_C from the
-  start's frames, anchored at the start (``IslandProblem.anchor_to``); when F_C is empty, C is
-  raised towards the bound the flip-free start is known to meet.
-- ``minimise`` (``bound="auto"``): the smallest certified C (Algorithm 1's goal) by ADMM onto F_C
-  with frames (one factorisation, no conic solve); Dinkelbach steps (one always-feasible conic
-  program each) only under a time budget or where no flip-free map is at hand.
-- ``arap``: BD-ARAP iterations with frames from the previous map.
-Each returns a map in the normalised geometry and the C it is meant to be certified at; the caller
+"""The smallest certified bound of an island's map (``bound="auto"``, Lipman 2012, Algorithm 1's
+goal): ``minimise`` by ADMM onto F_C with frames (one factorisation, no conic solve); Dinkelbach
+steps (one always-feasible conic program each) only under a time budget or where no flip-free map
+is at hand. A map within a given bound (keep, bend, raise) and BD-ARAP are ``bounded``'s.
+Returns a map in the normalised geometry and the C it is meant to be certified at; the caller
 certifies it from its final UVs.
 """
 import time
@@ -16,19 +11,11 @@ import numpy as np
 
 from ..errors import InfeasibleError
 from ..frames import frames_from_map
-from ..solvers.flip_free import flip_free_map
 from ..solvers.bound_search import BoundSearch
-from ..spaces import stretch_conformal_bound
-from .initial import Start, start_map
-from .problem import (SOLVE_MARGIN, STORE_HEADROOM, STRETCH_MARGIN_SOLVE, Cancelled,
-                      solve_bound)
+from .bounded import bend, formulate, guaranteed_bound, start_for_solve
+from .initial import Start
+from .problem import Cancelled
 
-RAISE_FACTOR = 1.5      # C grows by this factor when infeasible
-MAX_RESETS = 3          # frame resets after the first feasible solve (BD-Dirichlet, BD-ARAP)
-IMPROVEMENT = 0.01      # keep resetting frames while the energy drops by more than this fraction
-# Reset frames only when a solution turns faces away from their frames by more than this (radians,
-# 99th percentile, after removing the common rotation).
-FRAME_TOLERANCE = 0.1
 # Minimising C stops after a Dinkelbach step that lowers C - 1 by less than this share of it.
 # Measured against C* = where 24 steps end: mushroom 1.12375 -> 1.10996 (11 %, C* 1.10980),
 # nefertiti 1.3075 -> 1.2693 (12 %, C* 1.2661), then lion-head 21 % and 7 % (1.5830, C* 1.5703),
@@ -44,158 +31,6 @@ AUTO_MAX_SOLVES = 24
 # more than this share (mannequin-devil: 1.071 -> 1.150 after two steps).
 AUTO_MEAN_RISE = 0.02
 LINE_SEARCH = 14        # distortion evaluations along each Dinkelbach step (``best_along``)
-# Minimising C within a stretch bound (``stretch.minimise_stretch``) first tries
-# 1 + (D - 1)(1 - DESCENT) below the best bound D.
-DESCENT = 0.15
-# Polish a projected map with one conic solve when the projection changed more than this share of
-# the island's area (measured: three_peaks 10 % at C = 5, mannequin-devil 0.3 %, lion-head at C = 2
-# 0.2 %: a local bend leaves the conformal map's distortion elsewhere, which a solve cannot lower).
-POLISH_AREA = 0.05
-# Energies whose result is always the solve's optimum: no start is kept as it is, no projection.
-ALWAYS_SOLVED = ("dirichlet", "stretch-l1")
-
-_WHY = {"infeasible": "the space is empty for these frames",
-        "inexact": "the solver did not converge", "error": "the solver failed",
-        "solved": "the solver's map did not pass certification"}
-
-
-def fits(start, C):
-    """Whether a start map is within C with room for how its UVs will be stored."""
-    return start.u is not None and start.D * (1.0 + STORE_HEADROOM) <= C
-
-
-def guaranteed_bound(D0):
-    """The requested C whose solve bound still contains a flip-free map of max distortion D0."""
-    return max(1.0 + (D0 - 1.0) / (1.0 - SOLVE_MARGIN), D0 * (1.0 + STORE_HEADROOM)) \
-        * (1 + 1e-9) + 1e-12
-
-
-def formulate(prob, start):
-    """Set up the island's formulation from its start map (see ``IslandProblem.anchor_to``)."""
-    u = start.u if start.u is not None else prob.fallback_map()
-    if prob.method == "stretch-l1":
-        prob.hold_scale(u)  # the L1 stretch energy shrinks the map to a point unless held
-    elif prob.method == "dirichlet":
-        prob.floor_scale(u, start.frames)
-    else:
-        prob.anchor_to(u)
-
-
-def bounded(prob, start, C, raise_bound, limit, flags, report):
-    """A certified-to-be map within C. Returns (u, C, name of the start it came from)."""
-    isl = prob.island
-    solved = prob.method in ALWAYS_SOLVED
-    if not solved and fits(start, C):
-        flags.append("initial_map")  # the start already fits: nothing to bend
-        return start.u, C, start.name
-    if not solved and start.u is not None and solve_bound(C) > 1.0:   # the projection needs C > 1
-        bent = bend(prob, start, C, report, flags)
-        if bent is not None:
-            return bent, C, start.name
-    start = start_for_solve(prob, start, report)
-    formulate(prob, start)
-    w, best, prev_e, retried, resets = start.frames, None, None, False, 0
-    D0 = start.D
-    while True:
-        report(min(0.9, 0.1 + 0.15 * prob.solves), f"solving at C = {C:.3g}")
-        u, outcome = prob.solve(w, C)
-        ok, D = prob.check(u, C)
-        if ok:
-            best = (u, C, start.name)
-            if not solved:
-                # BD-LSCM: frame resets lower the energy but measured higher mean distortion
-                # (three_peaks 1.378 -> 1.397 over 5 resets), so one solve is the answer.
-                return best
-            e = prob.energy_of(u, w)
-            if (prev_e is not None and prev_e - e <= IMPROVEMENT * abs(prev_e)
-                    or resets >= MAX_RESETS or frame_turn(prob, u, w) <= FRAME_TOLERANCE):
-                return best
-            prev_e, resets = e, resets + 1
-            w = frames_from_map(prob.alpha(u))
-            continue
-        if best is not None:  # a later frame reset did not certify: keep the last certified map
-            return best
-        if u is not None and not retried and outcome == "inexact":
-            retried = True  # an inexact iterate may still give better frames; an infeasible one not
-            w = frames_from_map(prob.alpha(u))
-            continue
-        if np.isfinite(D0) and prob.check(start.u, C)[0]:
-            flags.append("initial_map")  # the solver failed where the start already fits
-            return start.u, C, start.name
-        failure = prob.solver_failure()
-        if failure is not None and (not raise_bound or C * RAISE_FACTOR > limit):
-            raise failure
-        if not raise_bound:
-            raise InfeasibleError(f"island {isl.index}: no map within distortion {C:g} was found "
-                                  f"({_WHY.get(outcome, outcome)}); allow raising the bound or "
-                                  "use a larger C", isl.index)
-        newC = C * RAISE_FACTOR
-        if np.isfinite(D0):  # approach the bound known to be feasible geometrically
-            newC = max(newC, np.sqrt(C * D0))
-            if newC * RAISE_FACTOR >= D0:
-                newC = max(guaranteed_bound(D0), C * 1.0001)
-        w = start.frames
-        if newC > limit:
-            raise InfeasibleError(f"island {isl.index}: infeasible up to the bound limit "
-                                  f"{limit:g}" + (" (the pins force a flip or a larger distortion)"
-                                                  if len(prob.pin_idx) >= 2 else "")
-                                  + "; raise the limit, move or remove pins, or add seams",
-                                  isl.index)
-        if "bound_raised" not in flags:
-            flags.append("bound_raised")
-        C, retried = newC, False
-
-
-def bend(prob, start, C, report, flags=None, polish=True):
-    """Bend a start that breaks the bound into F_C, only where the bound demands.
-
-    Projection iterations (Kovalsky et al. 2015, ``solvers.flip_free``) move the faces above C and
-    their neighbourhood, from the start itself even when it flips, and keep the start's
-    distortion elsewhere. When they changed more than POLISH_AREA of the island's area, one conic
-    solve from the harmonic map's frames (``IslandProblem.anchor_to``) redistributes the
-    distortion; the map with the lower mean is kept (three_peaks at C = 5: projection 1.378, the
-    solve 1.346).
-    ``polish=False`` skips that solve (``minimise`` only needs a flip-free map to descend from).
-    Returns the map, or None when the projection stalled (the caller solves from a flip-free start).
-    """
-    if len(prob.pin_idx) >= prob.nv:
-        return None  # every vertex pinned: nothing can move
-    report(0.1, f"bending into C = {C:.3g}")
-    t = time.perf_counter()
-    pins = (prob.pin_idx, prob.pin_val) if len(prob.pin_idx) else None
-    u, info = flip_free_map(prob.Z, prob.island.tris, prob.nv, prob.island.loops, start.u,
-                            solve_bound(C), pins=pins, cancel=prob.cancel)
-    prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
-    prob.iterations += info["iterations"]
-    if u is None or not prob.check(u, C)[0]:
-        return None
-    D0 = prob.face_distortion(start.u)
-    D = prob.face_distortion(u)
-    changed = ~(np.abs(D - D0) <= 0.01 * D0)
-    if flags is not None:
-        flags.append("projected")
-    if (not polish or prob.method != "lscm"
-            or np.sum(prob.ops.area[changed]) <= POLISH_AREA * prob.ops.area.sum()):
-        return u
-    report(0.5, f"solving at C = {C:.3g}")
-    # From the harmonic map's frames, anchored at it: on three_peaks they gave a lower mean (1.346)
-    # than the projected map's own frames (1.369).
-    harmonic = start_map(prob, "harmonic", None, report)
-    prob.anchor_to(harmonic.u)
-    us, _ = prob.solve(harmonic.frames, C)
-    if prob.check(us, C)[0] and prob.mean_distortion(us) < prob.mean_distortion(u):
-        if flags is not None:
-            flags.remove("projected")
-        return us
-    return u
-
-
-def start_for_solve(prob, start, report):
-    """A flip-free start for the conic solve when projection stalled: the start itself when it is
-    flip-free (or frames only), else the harmonic map."""
-    if start.u is None or np.isfinite(start.D):
-        return start
-    return start_map(prob, "harmonic", None, report)
 
 
 def minimise(prob, start, limit, budget, flags, report, t0):
@@ -365,60 +200,3 @@ def first_certified(prob, start, limit, budget, flags, report, t0):
         if np.isfinite(start.D) and C >= start.D:
             C, w = guaranteed_bound(start.D), start.frames
     return None
-
-
-def arap(prob, u, C, report, S=None):
-    """BD-ARAP: minimise the ARAP energy over F_C with frames from the previous map, resetting
-    the frames while the energy improves (section 6.1, "As-rigid-as-possible"). With a stretch
-    bound S the rows of section 6.3 are added (``stretch.stretch_solve``'s scale and margins) and
-    each iterate must pass them as certified (``IslandProblem.within``)."""
-    if len(prob.pin_idx) < 2:
-        # ARAP has an absolute scale: start from the map scaled to the 3D area, one anchor.
-        scale = np.sqrt(1.0 / uv_area(u, prob.island.tris))
-        if len(prob.pin_idx):
-            p = prob.pin_val[0]
-            u = p + (u - p) * scale
-            prob.set_anchors(prob.pin_idx, prob.pin_val)
-        else:
-            u = (u - u[0]) * scale
-            prob.set_anchors(np.array([0]), u[:1])
-    else:
-        prob.set_anchors(prob.pin_idx, prob.pin_val)
-    prob.weights = None
-    prob.sigma = 1e-3 * float(np.median(np.abs(prob.alpha(u))))
-    Cs = C
-    if S is not None:
-        k = np.sqrt(prob.area3d) if len(prob.pin_idx) >= 2 else 1.0
-        prob.fix_scale = len(prob.pin_idx) < 2
-        prob.stretch = (k * STRETCH_MARGIN_SOLVE / S, k * S / STRETCH_MARGIN_SOLVE)
-        Cs = stretch_conformal_bound(C, STRETCH_MARGIN_SOLVE / S, S / STRETCH_MARGIN_SOLVE)
-    prev = None
-    for i in range(MAX_RESETS + 1):
-        w = frames_from_map(prob.alpha(u))
-        prob.scale = 1.0 / max(prob.energy_of(u, w), 1e-6)
-        report(0.9, f"BD-ARAP iteration {i + 1}")
-        un, _ = prob.solve(w, Cs)
-        if not prob.within(un, C, S):
-            break
-        e = prob.energy_of(un, w)
-        u = un
-        if prev is not None and prev - e <= IMPROVEMENT * abs(prev):
-            break
-        prev = e
-    prob.stretch, prob.fix_scale = None, False
-    return u
-
-
-def frame_turn(prob, u, w):
-    """How far a map turns faces away from frames w, beyond their common rotation (radians,
-    99th percentile)."""
-    wa = w * prob.alpha(u)
-    common = np.sum(prob.ops.area * wa / np.maximum(np.abs(wa), 1e-300))
-    turn = np.abs(np.angle(wa * np.conj(common)))
-    return float(np.percentile(turn, 99))
-
-
-def uv_area(u, tris):
-    """Signed UV area of a map."""
-    p = u[tris]
-    return float(np.sum(0.5 * ((p[:, 1] - p[:, 0]).conj() * (p[:, 2] - p[:, 0])).imag))

@@ -20,8 +20,8 @@ from ..solvers.projection import ProjectionSolver
 from ..spaces import stretch_conformal_bound
 from .initial import start_map
 from .problem import STORE_HEADROOM, STRETCH_MARGIN_SOLVE, solve_bound
-from .strategies import (ALWAYS_SOLVED, AUTO_MAX_SOLVES, DESCENT, IMPROVEMENT, MAX_RESETS,
-                         POLISH_AREA, fits)
+from .bounded import ALWAYS_SOLVED, DESCENT, IMPROVEMENT, MAX_RESETS, POLISH_AREA, fits
+from .strategies import AUTO_MAX_SOLVES
 
 # Projection iterations bound the singular values by [m/S, S/m] with this m: the result is
 # certified at its own final scale, which the iterations move.

@@ -1,0 +1,82 @@
+"""An island's map made final: scaled and placed, then certified from its final UVs in the input
+geometry (no flipped face, max conformal distortion <= C; the stretch limits of section 6.3 when
+asked for), whatever strategy found it (``unwrap._solve_island``, ``fixed_boundary``)."""
+import math
+import time
+
+import numpy as np
+
+from ..errors import SolverError
+from ..metrics import certify, mean_distortion, singular_values
+from .bounded import uv_area
+from .problem import STORE_HEADROOM
+from .results import IslandResult
+
+HIGH_DISTORTION = 50.0  # certified bounds above this get a "high_distortion" flag and a hint
+
+
+def certified_bound(max_distortion):
+    """The bound ``bound="auto"`` reports for a map: its max distortion with STORE_HEADROOM,
+    with C - 1 rounded up to 4 significant digits (1.03633 for 1.036117, 3.858 for 3.8563), so the
+    UVs still pass as stored (float32, packed) and a C close to 1 keeps the precision it was
+    minimised to (the search's tolerance is relative to C - 1 too)."""
+    c = max_distortion * (1.0 + STORE_HEADROOM)
+    excess = c - 1.0
+    if not excess > 0.0:
+        return c
+    digits = 3 - int(math.floor(math.log10(excess)))
+    return 1.0 + math.ceil(excess * 10 ** digits) / 10 ** digits
+
+
+def finish(prob, u, C, bound, frames_name, flags, t0, stretch=None):
+    """Scale and place the island, certify it from its final UVs in the input geometry."""
+    isl = prob.island
+    npins = len(prob.pin_idx)
+    if npins < 2:
+        # A map collapsed to a point or a line (e.g. pinned ~1e159 away, where float64 cannot
+        # hold the island's shape) has no area to scale by: left unscaled, its certificate fails.
+        area = uv_area(u, isl.tris)
+        s = math.sqrt(prob.area3d / area) if area > 0.0 and math.isfinite(area) else 1.0
+        if npins == 1:
+            p = prob.pin_val[0]
+            u = p + s * (u - p)
+            u[prob.pin_idx[0]] = p
+        else:
+            u = s * u
+            u = u - (u.real.min() + 1j * u.imag.min())
+    uv = np.stack([u.real, u.imag], axis=1)
+    if npins:
+        uv[prob.pin_idx] = np.stack([prob.pin_val.real, prob.pin_val.imag], axis=1)
+    t = time.perf_counter()
+    target = C if bound != "auto" else certified_bound(C)
+    ok, D, n_flipped = certify(prob.V, isl.tris, uv[isl.tris], target)
+    smax, smin = singular_values(prob.V, isl.tris, uv[isl.tris], normalize=npins < 2)
+    lo_s, hi_s = float(np.min(smin)), float(np.max(smax))
+    if stretch is not None:  # section 6.3: 1/S <= gamma <= Gamma <= S, certified from the UVs
+        ok = ok and lo_s >= (1.0 - 1e-6) / stretch and hi_s <= stretch * (1.0 + 1e-6)
+    prob.timings["certify"] += time.perf_counter() - t
+    maxD = float(np.max(D))
+    meanD = mean_distortion(prob.V, isl.tris, D)
+    seconds = time.perf_counter() - t0
+    common = dict(bound_requested=bound, max_distortion=maxD, mean_distortion=meanD,
+                  flipped=n_flipped, frames=frames_name, seconds=seconds, solves=prob.solves,
+                  iterations=prob.iterations, distortion=D, flags=tuple(flags),
+                  min_singular=lo_s, max_singular=hi_s,
+                  timings=dict(prob.timings))
+    if not ok:
+        err = SolverError(f"island {isl.index}: the result could not be certified (max distortion "
+                          f"{maxD:.4g}, {n_flipped} flipped, bound {target:.4g}); nothing was "
+                          "written", isl.index)
+        return IslandResult(isl.index, isl.faces, isl.vertices, isl.tris, status="failed",
+                            error=err, message=str(err), **common)
+    certified_C = certified_bound(maxD) if bound == "auto" else C
+    msg = (f"island {isl.index}: {len(isl.faces)} faces, max distortion {maxD:.3f} <= "
+           f"{certified_C:.4g}, 0 flipped")
+    if "bound_raised" in flags:
+        msg += f" (C raised from {bound:g})"
+    if certified_C > HIGH_DISTORTION:
+        common["flags"] = tuple(flags) + ("high_distortion",)
+        msg += (f"; C above {HIGH_DISTORTION:g} means the island is nearly closed or badly cut: "
+                "mark seams for a lower bound")
+    return IslandResult(isl.index, isl.faces, isl.vertices, isl.tris, uv=uv, status="certified",
+                        message=msg, bound_certified=float(certified_C), **common)
