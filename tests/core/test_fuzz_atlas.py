@@ -107,7 +107,8 @@ def problems(draw):
     fill = draw(st.floats(0.05, 4.0))            # 3D area at the density over a tile's area
     n_pins = draw(st.integers(1, 9))
     outside = draw(st.sampled_from([False] * 4 + [True]))
-    return dict(k=k, kinds=kinds, huge_tiny=huge_tiny, zero=zero, seed=seed, res=res, pad=pad,
+    fits = draw(st.sampled_from([False, True, True, True]))
+    return dict(fits=fits, k=k, kinds=kinds, huge_tiny=huge_tiny, zero=zero, seed=seed, res=res, pad=pad,
                 rotate=rotate, mode=mode, solve_seconds=solve_seconds, fill=fill, n_pins=n_pins,
                 outside=outside, solves=solves)
 
@@ -122,8 +123,14 @@ def _pack(p):
     if p["mode"] in ("density", "udim"):
         P3 = V[F]
         a3 = 0.5 * np.linalg.norm(np.cross(P3[:, 1] - P3[:, 0], P3[:, 2] - P3[:, 0]), axis=1).sum()
-        kw.update(texel_density=res * float(np.sqrt(p["fill"] / max(a3, 1e-300))),
-                  udim=p["mode"] == "udim")
+        density = res * float(np.sqrt(p["fill"] / max(a3, 1e-300)))
+        if p.get("fits", False):
+            # at most the density at which the largest island's 3D bounding box diagonal fits a
+            # tile with the padding (else most such draws are refusals: "larger than a tile")
+            diag = max(float(np.linalg.norm(np.ptp(V[np.unique(F[lab == i])], axis=0)))
+                       for i in range(k))
+            density = min(density, 0.9 * (res - 2 * pad) / max(diag, 1e-300))
+        kw.update(texel_density=density, udim=p["mode"] == "udim")
     margin = 0.5 * pad / res + 1e-3
     if p["mode"] == "pinned" and k > 1 and 1.0 / 3 - 2 * margin > 0.02:
         which = np.random.default_rng(p["seed"]).choice(k, min(p["n_pins"], k - 1), replace=False)
