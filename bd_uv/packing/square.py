@@ -26,6 +26,7 @@ import time
 import numpy as np
 
 from ..errors import PackError
+from .compact import compact_square
 from .nest import (FIT, Placement, _area, _strip, least_squares, nest, rotations,
                    single_layout)
 
@@ -33,6 +34,7 @@ DENSITY_GUESS = 0.63  # strip density expected (measured 0.58-0.70 on 27-46 char
 START_PER_CHART = 0.015  # seconds of a solve's first placement per chart (measured, quiet)
 HEADROOM = 1.10       # a strip's separation is the padding of a square this much larger
 SPREAD = (0.07, 0.025)  # each round's densities: its guess times 1 -+ SPREAD[round]
+COMPACT_SHARE = 0.5     # of the time: compaction of the best layout found (.compact)
 
 
 def _squares(points, owner, placements, tol, padding):
@@ -112,6 +114,7 @@ def square_layout(outlines, options, tol, seconds):
     # S (1 + p HEADROOM) + 2 tol, the chart's extent at most S (1 - p HEADROOM) - 2 tol
     least = (widest + 2 * tol) / (1 - options.padding * HEADROOM) * FIT[options.rotate]
     t0 = time.perf_counter()
+    nesting = (1 - COMPACT_SHARE) * seconds
     # (solves + 1) // 2 solves at once around the guess, then solves // 2 around the density the
     # one nearest to a square reached
     rounds = 1 if options.solves == 1 else 2
@@ -123,7 +126,7 @@ def square_layout(outlines, options, tol, seconds):
         if r >= rounds and best is not None:
             break
         # each round's search: an equal share of what is left, less a first placement (measured)
-        left = seconds - (time.perf_counter() - t0) - start * max(rounds - r, 1)
+        left = nesting - (time.perf_counter() - t0) - start * max(rounds - r, 1)
         search = max(left / (rounds - r), 0.0) if r < rounds and seconds > 0 else 0.0
         # the sides of square strips at the densities (after the rounds: the density reached,
         # less 5 %, and 5 % larger at least, until a square is found)
@@ -155,4 +158,7 @@ def square_layout(outlines, options, tol, seconds):
                 best = (Placement(pl.angle, pl.shift - low[j] + edge, pl.width), squares[j])
     if best is None:
         raise refused or PackError("the nesting found no square layout for these charts")
-    return best[0], best[1], solves
+    # its share of the time (kept when the nesting ran over): compaction of the best layout
+    left = max(seconds - (time.perf_counter() - t0), COMPACT_SHARE * seconds)
+    pl, side, _ = compact_square(outlines, best[0], best[1], options, tol, left)
+    return pl, side, solves
