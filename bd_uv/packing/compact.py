@@ -27,7 +27,8 @@ from .nest import Placement, rotations
 
 STEP = 0.005      # largest move of a point in one step, as a fraction of the square's side
 MARGIN = 1e-5     # separation kept above the padding, as a fraction of the side (0.01 px at 1024)
-TURN_MAX = 0.02   # largest turn of a chart in one step, radians
+TURN_MAX = 0.1    # largest turn of a chart in one step, radians
+LINE_SEARCH = (1.0, 0.5, 0.25)  # fractions of a step's move tried in turn
 REL_GAIN = 1e-5   # a step shrinking the side by less than this fraction ends the compaction
 
 
@@ -114,7 +115,9 @@ def _step_lp(Q, owner, nxt, centre, radius, S, pad, pm, tol, step, turn):
     bounds[2:-1:3, 0] = bounds[2:-1:3, 1] = lim
     bounds[:-1, 0] *= -1
     bounds[-1] = (0.0, S)
-    res = linprog(cost, A_ub=A, b_ub=np.concatenate(rhs), bounds=bounds, method="highs")
+    # (dual simplex without presolve: measured 1.5x faster on these small, tall programs)
+    res = linprog(cost, A_ub=A, b_ub=np.concatenate(rhs), bounds=bounds, method="highs-ds",
+                  options={"presolve": False})
     if res.status != 0:
         return None
     x = res.x[:-1].reshape(k, 3)
@@ -172,13 +175,16 @@ def compact_square(outlines, placement, side, options, tol, seconds):
             step *= 0.5
             continue
         move, phi, S_new = got
-        if S_new > S * (1 - REL_GAIN):
-            break
-        new_angle = angle + np.rad2deg(phi)
-        # a turn about the chart's centre (its outline is centred: the centre is its shift)
-        if _fits(outlines, new_angle, shift + move, S_new, options.padding, pm, tol):
-            angle, shift, S, steps = new_angle, shift + move, S_new, steps + 1
-            step = min(2 * step, STEP * side)
-        else:
+        if S_new > S * (1 - REL_GAIN):   # (the turns' error bound can block a long step)
             step *= 0.5
+            continue
+        # the move, else part of it (the linear model holds on the segment to it; the exact
+        # check decides); a turn is about the chart's centre (its outline is centred on shift)
+        for part in LINE_SEARCH:  # per fraction of the move
+            new = (angle + part * np.rad2deg(phi), shift + part * move, S + part * (S_new - S))
+            if _fits(outlines, *new, options.padding, pm, tol):
+                angle, shift, S = new
+                steps += 1
+                break
+        step = min(2 * step, STEP * side) if part == 1 else step * 0.5
     return Placement(angle, shift, S), S, steps
