@@ -87,7 +87,9 @@ def _step_lp(Q, owner, nxt, centre, radius, S, pad, pm, tol, step, turn):
     cols = [3 * i, 3 * i + 1, 3 * i + 2, 3 * j, 3 * j + 1, 3 * j + 2, np.full(m, 3 * k)]
     vals = [-u[:, 0], -u[:, 1], -ri, u[:, 0], u[:, 1], rj, np.full(m, pm)]
     rows = [np.tile(np.arange(m), 7)]
-    rhs = [d - 2 * tol - err[i] - err[j]]
+    # the segment's own turn tilts its line: |phi_j| times the points' relative slide (each
+    # point moves at most (sqrt 2 + 1) step), second order again
+    rhs = [d - 2 * tol - err[i] - err[j] - 2 * (np.sqrt(2) + 1) * step * lim[j]]
     n = m
     # edges: vertices near their chart's extremes, e <= q + D + phi J(q - centre) <= S - e
     lo = np.full((k, 2), np.inf)
@@ -141,7 +143,7 @@ def _fits(outlines, angle, shift, S, pad, pm, tol):
     return not np.any(i != j)
 
 
-def compact_square(outlines, placement, side, options, tol, seconds):
+def compact_square(outlines, placement, side, options, tol, seconds, max_programs=None):
     """Shrink a square layout by compaction steps for at most ``seconds`` (or until a step gains
     under ``REL_GAIN``).
 
@@ -152,6 +154,8 @@ def compact_square(outlines, placement, side, options, tol, seconds):
     side : float
     options : PackOptions (padding; rotate "any": small turns too)
     tol : float, outline simplification tolerance
+    seconds : float, time to take (a program started before it ends is finished)
+    max_programs : int, optional: at most this many linear programs (deterministic runs)
 
     Returns
     -------
@@ -167,7 +171,10 @@ def compact_square(outlines, placement, side, options, tol, seconds):
     step, steps = STEP * side, 0
     if k < 2 or not _fits(outlines, angle, shift, S, options.padding, options.padding, tol):
         return placement, side, 0
-    while time.perf_counter() - t0 < seconds and step > 1e-4 * side:
+    programs = 0
+    while (time.perf_counter() - t0 < seconds and step > 1e-4 * side
+           and (max_programs is None or programs < max_programs)):
+        programs += 1
         R = rotations(angle)
         Q = np.concatenate([o @ R[i].T for i, o in enumerate(outlines)]) + shift[owner]
         got = _step_lp(Q, owner, nxt, shift, radius, S, options.padding, pm, tol, step, turn)
