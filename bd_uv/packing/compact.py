@@ -68,8 +68,9 @@ def _cross(w, u):
     return w[:, 0] * u[:, 1] - w[:, 1] * u[:, 0]
 
 
-def _step_lp(Q, owner, nxt, centre, radius, S, pad, pm, tol, step, turn):
-    """One linear program: the moves (k,2), turns (k,) in radians and the side reached, or None."""
+def _step_lp(Q, owner, nxt, centre, radius, S, pad, pm, tol, step, turn, seconds):
+    """One linear program (at most ``seconds`` long): the moves (k,2), turns (k,) in radians and
+    the side reached, or None."""
     from scipy.optimize import linprog
     from scipy.sparse import coo_array
     k = len(centre)
@@ -119,7 +120,7 @@ def _step_lp(Q, owner, nxt, centre, radius, S, pad, pm, tol, step, turn):
     bounds[-1] = (0.0, S)
     # (dual simplex without presolve: measured 1.5x faster on these small, tall programs)
     res = linprog(cost, A_ub=A, b_ub=np.concatenate(rhs), bounds=bounds, method="highs-ds",
-                  options={"presolve": False})
+                  options={"presolve": False, "time_limit": max(float(seconds), 1e-3)})
     if res.status != 0:
         return None
     x = res.x[:-1].reshape(k, 3)
@@ -177,7 +178,8 @@ def compact_square(outlines, placement, side, options, tol, seconds, max_program
         programs += 1
         R = rotations(angle)
         Q = np.concatenate([o @ R[i].T for i, o in enumerate(outlines)]) + shift[owner]
-        got = _step_lp(Q, owner, nxt, shift, radius, S, options.padding, pm, tol, step, turn)
+        got = _step_lp(Q, owner, nxt, shift, radius, S, options.padding, pm, tol, step, turn,
+                       seconds - (time.perf_counter() - t0))
         if got is None:
             step *= 0.5
             continue
