@@ -12,12 +12,14 @@ allowed a small turn about its centre), minimising the square's side S subject t
   a translation when c is inside the segment, a tangent of the circle round c otherwise).
 
 Each step's layout is checked exactly (GEOS distances between the moved outlines, every point
-inside) before it is kept; a failed step is retried with half the move. Turns are linearised
-(second order error, caught by the exact check). The charts keep their shape: a turn and a
-translation each, never a mirror.
+inside) before it is kept: else half and a quarter of the move are tried (the linear model holds
+on the segment to the move), then a shorter step. Turns are linearised; their second-order error
+(r phi^2) and the tilt of a turning segment's line (the points' slide times phi) are kept as
+slack in the rows. The charts keep their shape: a turn and a translation each, never a mirror.
 
-Measured (cow, 46 charts, after the default nesting, load ~5): coverage 0.629 -> 0.665 in
-1.3 s of translations alone; see docs/ARCHITECTURE.md.
+Measured (load ~10-13, from the two-round nesting's layouts): cow 0.629 -> 0.709, camel
+0.632 -> 0.693, suzanne 0.559 -> 0.611 in 40 programs (2.0, 1.9, 0.6 s of CPU); see
+docs/ARCHITECTURE.md.
 """
 import time
 
@@ -28,8 +30,10 @@ from .nest import Placement, rotations
 STEP = 0.005      # largest move of a point in one step, as a fraction of the square's side
 MARGIN = 1e-5     # separation kept above the padding, as a fraction of the side (0.01 px at 1024)
 TURN_MAX = 0.1    # largest turn of a chart in one step, radians
+REACH = 2.0      # rows for vertex and segment pairs within the separation plus REACH steps
 LINE_SEARCH = (1.0, 0.5, 0.25)  # fractions of a step's move tried in turn
-REL_GAIN = 1e-5   # a step shrinking the side by less than this fraction ends the compaction
+REL_GAIN = 1e-5   # a program shrinking the side by less than this fraction: a shorter step
+LEAST_STEP = 1e-4  # the compaction ends when the step falls below this fraction of the side
 
 
 def _rings(outlines):
@@ -80,7 +84,7 @@ def _step_lp(Q, owner, nxt, centre, radius, S, pad, pm, tol, step, turn, seconds
     # turn departs from the linear one by at most r (1 - cos phi) + r (phi - sin phi) < r phi^2
     lim = np.minimum(step / np.maximum(radius, 1e-300), TURN_MAX) if turn else np.zeros(k)
     err = radius * lim ** 2
-    vi, si, c, u, d = _near_pairs(Q, owner, nxt, sep + 3 * step)
+    vi, si, c, u, d = _near_pairs(Q, owner, nxt, sep + REACH * step)
     i, j = owner[vi], owner[si]
     m = len(vi)
     ri, rj = _cross(Q[vi] - centre[i], u), _cross(c - centre[j], u)
@@ -145,8 +149,8 @@ def _fits(outlines, angle, shift, S, pad, pm, tol):
 
 
 def compact_square(outlines, placement, side, options, tol, seconds, max_programs=None):
-    """Shrink a square layout by compaction steps for at most ``seconds`` (or until a step gains
-    under ``REL_GAIN``).
+    """Shrink a square layout by compaction steps for at most ``seconds`` (or until the step
+    falls below ``LEAST_STEP`` of the side: no program gains, or no move passes the check).
 
     Parameters
     ----------
@@ -155,14 +159,16 @@ def compact_square(outlines, placement, side, options, tol, seconds, max_program
     side : float
     options : PackOptions (padding; rotate "any": small turns too)
     tol : float, outline simplification tolerance
-    seconds : float, time to take (a program started before it ends is finished)
+    seconds : float, CPU time of this process to take: on a loaded machine the compaction
+        takes longer but reaches as far (a program's solve is cut at the time left, by its own
+        clock; its exact checks are finished)
     max_programs : int, optional: at most this many linear programs (deterministic runs)
 
     Returns
     -------
     Placement, side (no larger than given), steps taken
     """
-    t0 = time.perf_counter()
+    t0 = time.process_time()
     k = len(outlines)
     owner, nxt = _rings(outlines)
     radius = np.array([np.sqrt((o ** 2).sum(axis=1).max()) for o in outlines])
@@ -173,13 +179,13 @@ def compact_square(outlines, placement, side, options, tol, seconds, max_program
     if k < 2 or not _fits(outlines, angle, shift, S, options.padding, options.padding, tol):
         return placement, side, 0
     programs = 0
-    while (time.perf_counter() - t0 < seconds and step > 1e-4 * side
+    while (time.process_time() - t0 < seconds and step > LEAST_STEP * side
            and (max_programs is None or programs < max_programs)):
         programs += 1
         R = rotations(angle)
         Q = np.concatenate([o @ R[i].T for i, o in enumerate(outlines)]) + shift[owner]
         got = _step_lp(Q, owner, nxt, shift, radius, S, options.padding, pm, tol, step, turn,
-                       seconds - (time.perf_counter() - t0))
+                       seconds - (time.process_time() - t0))
         if got is None:
             step *= 0.5
             continue

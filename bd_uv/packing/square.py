@@ -9,12 +9,13 @@ off by a fraction e costs about e of coverage. Hence:
 
 - the density is guessed (0.63 times sqrt(1 - 1/k): fewer charts pack looser); no measure of the
   charts' shapes predicted it better (area over convex hull area: worse);
-- two rounds of solves, each searching for half the time: one at the guess, then one at the
-  square strip of the density it reached (a search as long reaches about as far). With
-  ``options.solves`` above 2, each round runs several at once, in threads (spyrrow releases the
-  GIL), at densities spread around its guess (-+7 %, then -+2.5 %). Measured under load, two
-  solves at once did no better than one searching twice as long (each gets half the CPU), so the
-  default is one at a time (``solves`` 2); on idle cores they cost no more time;
+- one solve at the guess by default (``solves`` 1), then compaction (:mod:`.compact`) of its
+  best square for ``COMPACT_SHARE`` of the time: every further solve pays spyrrow's first
+  placement again (1-4 s wall on 27-46 charts under load ~10), and compaction gains more a
+  second than spyrrow's search (measured: cow 0.629 -> 0.70 in about 2 s of CPU). With
+  ``solves`` 2, a second round at the square strip of the density the first reached; above 2,
+  each round runs several at once in threads (spyrrow releases the GIL) at densities spread
+  around its guess (-+7 %, then -+2.5 %); under load each gets part of the CPU;
 - spyrrow reports each narrower strip it reaches, every one a feasible layout: each is a
   candidate square, so a strip too high still gives the square of the first layout narrower
   than it, not only the last one.
@@ -92,7 +93,9 @@ def square_layout(outlines, options, tol, seconds):
     solves at once at the sides of the guessed density times 1 -+ ``SPREAD[0]``, then solves // 2
     around the density the solve nearest to a square reached (1 -+ ``SPREAD[1]``);
     ``options.solves`` 1: one solve at the guess. With no square found, sides keep growing
-    (first placements only) until one is.
+    (first placements only) until one is. Then, up to ``COMPACT_MAX_CHARTS`` charts, the best
+    layout is compacted (:func:`.compact.compact_square`) for ``COMPACT_SHARE`` of the time, in
+    CPU seconds of this process (the nesting gets the rest, by the clock).
 
     Parameters
     ----------
@@ -100,7 +103,7 @@ def square_layout(outlines, options, tol, seconds):
     options : PackOptions
     tol : float, outline simplification tolerance
     seconds : float, the time to take (each solve's first placement is not bounded: it is
-        left out, measured as about ``START_PER_CHART`` seconds a chart)
+        left out of the nesting's share, measured as about ``START_PER_CHART`` seconds a chart)
 
     Returns
     -------
@@ -164,7 +167,6 @@ def square_layout(outlines, options, tol, seconds):
         raise refused or PackError("the nesting found no square layout for these charts")
     if not share:
         return best[0], best[1], solves
-    # its share of the time (kept when the nesting ran over): compaction of the best layout
-    left = max(seconds - (time.perf_counter() - t0), share * seconds)
-    pl, side, _ = compact_square(outlines, best[0], best[1], options, tol, left)
+    # its share of the time, in CPU seconds: compaction of the best layout
+    pl, side, _ = compact_square(outlines, best[0], best[1], options, tol, share * seconds)
     return pl, side, solves
