@@ -46,16 +46,24 @@ def _rings(outlines):
     return owner, nxt
 
 
-def _near_pairs(Q, owner, nxt, reach):
-    """Vertex / segment pairs of two charts closer than ``reach``: vertex index, the nearest
-    point c of the segment, unit u = (v - c) / |v - c| and the distance (one row per vertex and
-    segment end where the nearest point is an end)."""
+def _close(Q, owner, nxt, reach):
+    """Vertex and segment indices of two charts closer than ``reach``."""
     import shapely
-    A, B = Q, Q[nxt]
-    tree = shapely.STRtree(shapely.linestrings(np.stack([A, B], axis=1)))
+    tree = shapely.STRtree(shapely.linestrings(np.stack([Q, Q[nxt]], axis=1)))
     vi, si = tree.query(shapely.points(Q), predicate="dwithin", distance=reach)
     keep = owner[vi] != owner[si]
-    vi, si = vi[keep], si[keep]
+    return vi[keep], si[keep]
+
+
+def _near_pairs(Q, owner, nxt, reach, extra=None):
+    """Vertex / segment pairs of two charts closer than ``reach``, and the ``extra`` pairs
+    (vertex and segment indices): vertex index, the nearest point c of the segment, unit
+    u = (v - c) / |v - c| and the distance (one row per vertex and segment end where the
+    nearest point is an end)."""
+    A, B = Q, Q[nxt]
+    vi, si = _close(Q, owner, nxt, reach)
+    if extra is not None:
+        vi, si = np.concatenate([vi, extra[0]]), np.concatenate([si, extra[1]])
     a, ab, v = A[si], B[si] - A[si], Q[vi]
     t = np.clip(np.einsum("ij,ij->i", v - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab),
                                                              1e-300), 0.0, 1.0)
@@ -72,7 +80,7 @@ def _cross(w, u):
     return w[:, 0] * u[:, 1] - w[:, 1] * u[:, 0]
 
 
-def _step_lp(Q, owner, nxt, centre, radius, S, pad, pm, tol, step, turn, seconds):
+def _step_lp(Q, owner, nxt, centre, radius, S, pad, pm, tol, step, turn, seconds, extra=None):
     """One linear program (at most ``seconds`` long): the moves (k,2), turns (k,) in radians and
     the side reached, or None."""
     from scipy.optimize import linprog
@@ -84,7 +92,7 @@ def _step_lp(Q, owner, nxt, centre, radius, S, pad, pm, tol, step, turn, seconds
     # turn departs from the linear one by at most r (1 - cos phi) + r (phi - sin phi) < r phi^2
     lim = np.minimum(step / np.maximum(radius, 1e-300), TURN_MAX) if turn else np.zeros(k)
     err = radius * lim ** 2
-    vi, si, c, u, d = _near_pairs(Q, owner, nxt, sep + REACH * step)
+    vi, si, c, u, d = _near_pairs(Q, owner, nxt, sep + REACH * step, extra)
     i, j = owner[vi], owner[si]
     m = len(vi)
     ri, rj = _cross(Q[vi] - centre[i], u), _cross(c - centre[j], u)
@@ -129,6 +137,12 @@ def _step_lp(Q, owner, nxt, centre, radius, S, pad, pm, tol, step, turn, seconds
         return None
     x = res.x[:-1].reshape(k, 3)
     return x[:, :2], x[:, 2], float(res.x[-1])
+
+
+def _placed(outlines, angle, shift):
+    """(n,2) every outline point turned by its chart's angle (degrees) and moved by its shift."""
+    R = rotations(angle)
+    return np.concatenate([o @ R[i].T + shift[i] for i, o in enumerate(outlines)])
 
 
 def _fits(outlines, angle, shift, S, pad, pm, tol):
@@ -182,19 +196,29 @@ def compact_square(outlines, placement, side, options, tol, seconds, max_program
     while (time.process_time() - t0 < seconds and step > LEAST_STEP * side
            and (max_programs is None or programs < max_programs)):
         programs += 1
-        R = rotations(angle)
-        Q = np.concatenate([o @ R[i].T for i, o in enumerate(outlines)]) + shift[owner]
-        got = _step_lp(Q, owner, nxt, shift, radius, S, options.padding, pm, tol, step, turn,
-                       seconds - (time.process_time() - t0))
-        if got is None:
-            step *= 0.5
-            continue
-        move, phi, S_new = got
-        if S_new > S * (1 - REL_GAIN):   # (the turns' error bound can block a long step)
+        Q = _placed(outlines, angle, shift)
+        extra = None
+        for again in (False, True):  # the program, then once more with the pairs it missed
+            got = _step_lp(Q, owner, nxt, shift, radius, S, options.padding, pm, tol, step,
+                           turn, seconds - (time.process_time() - t0), extra)
+            if got is None or got[2] > S * (1 - REL_GAIN):
+                break   # (the turns' error bound can block a long step)
+            move, phi, S_new = got
+            # a turn is about the chart's centre (its outline is centred on shift)
+            full = (angle + np.rad2deg(phi), shift + move, S_new)
+            if again or _fits(outlines, *full, options.padding, pm, tol):
+                break
+            # pairs closer than the separation after the move, out of reach before it: rows
+            # for them too (the points move up to 2 (sqrt 2 + 1) steps apart, beyond REACH)
+            near = _close(_placed(outlines, full[0], full[1]), owner, nxt,
+                          pm * S_new + 2 * tol + step)
+            extra = near if extra is None else tuple(np.concatenate(z) for z in zip(extra, near))
+            programs += 1
+        if got is None or got[2] > S * (1 - REL_GAIN):
             step *= 0.5
             continue
         # the move, else part of it (the linear model holds on the segment to it; the exact
-        # check decides); a turn is about the chart's centre (its outline is centred on shift)
+        # check decides)
         for part in LINE_SEARCH:  # per fraction of the move
             new = (angle + part * np.rad2deg(phi), shift + part * move, S + part * (S_new - S))
             if _fits(outlines, *new, options.padding, pm, tol):
