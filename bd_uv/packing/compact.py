@@ -206,7 +206,8 @@ def compact_square(outlines, placement, side, options, tol, seconds, max_program
             move, phi, S_new = got
             # a turn is about the chart's centre (its outline is centred on shift)
             full = (angle + np.rad2deg(phi), shift + move, S_new)
-            if again or _fits(outlines, *full, options.padding, pm, tol):
+            checked = not again and _fits(outlines, *full, options.padding, pm, tol)
+            if again or checked:
                 break
             # pairs closer than the separation after the move, out of reach before it: rows
             # for them too (the points move up to 2 (sqrt 2 + 1) steps apart, beyond REACH)
@@ -219,9 +220,9 @@ def compact_square(outlines, placement, side, options, tol, seconds, max_program
             continue
         # the move, else part of it (the linear model holds on the segment to it; the exact
         # check decides)
-        for part in LINE_SEARCH:  # per fraction of the move
+        for part in LINE_SEARCH:  # per fraction of the move (the whole one maybe checked)
             new = (angle + part * np.rad2deg(phi), shift + part * move, S + part * (S_new - S))
-            if _fits(outlines, *new, options.padding, pm, tol):
+            if (part == 1 and checked) or _fits(outlines, *new, options.padding, pm, tol):
                 angle, shift, S = new
                 steps += 1
                 break
