@@ -6,7 +6,6 @@ import pytest
 
 from bd_uv.packing import PackOptions, pack_islands
 from bd_uv.packing.compact import compact_square
-from bd_uv.packing.nest import rotations
 from bd_uv.packing.outlines import chart_outlines
 from bd_uv.packing.square import square_layout
 from packing_checks import check_layout
