@@ -141,9 +141,9 @@ def add_layout_options(p):
                    help="turns a chart may make when packed (never a mirror; default any)")
     p.add_argument("--pack-seconds", type=_seconds, default=PACK_DEFAULTS["pack_seconds"],
                    metavar="S|auto",
-                   help="seconds the nesting may search for the smallest square (default auto: "
-                        "about 0.4 s + 0.06 s a chart); 0: the first placements found only, "
-                        "for a little less coverage")
+                   help="seconds the nesting and compaction may take for the smallest square "
+                        "(default auto: about 6 ms sqrt(charts x faces)); 0: the first "
+                        "placements found only, for less coverage")
     p.add_argument("--udim", action="store_true",
                    help="with --texel-density: charts that do not fit tile 1001 spill into 1002, "
                         "1003, ... (Blender's UDIM numbering)")

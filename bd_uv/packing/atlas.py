@@ -2,7 +2,8 @@
 
 1. every chart is scaled to one texel density (:func:`chart_outlines`);
 2. its outer outline is nested by spyrrow with turns (any angle, quarter turns or none), the
-   padding as the least separation and half of it to the square's edge (:mod:`.nest`);
+   padding as the least separation and half of it to the square's edge (:mod:`.nest`), and the
+   best square layout compacted by small moves and turns (:mod:`.compact`);
 3. each chart's corners get its turn, translation and the common scale: a similarity with positive
    determinant, so every face keeps its orientation and its conformal distortion.
 

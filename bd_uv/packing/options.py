@@ -1,15 +1,18 @@
 """The options of the atlas packer, in a texture artist's terms (one frozen dataclass)."""
 from dataclasses import dataclass
 
+import numpy as np
+
 from ..errors import PackError
 
 ROTATIONS = ("none", "90", "any")
-# The adaptive time: about a seventh of what Blender 5's exact-shape packer took on the same
-# charts (measured on ten meshes of 2-116 charts, 0.6k-52k faces: about 3 s at least, plus about
-# 0.4 s a chart and 0.3 ms a face, on a quiet machine)
-AUTO_SECONDS = 0.4
-AUTO_SECONDS_PER_CHART = 0.06
-AUTO_SECONDS_PER_FACE = 0.00004
+# The adaptive time: about an eighth of what Blender 5's exact-shape packer takes on the same
+# charts. Its time went about as 0.045 s sqrt(charts x faces) (quiet: suzanne 27 charts 968 faces
+# 7.3 s, cow 46/5804 28.9 s, dino 36/7828 22.1 s, camel 29/19536 26.0 s; within about 30 % on
+# seven meshes of 3-46 charts, 0.6k-52k faces); a chart count or a face count alone did not
+# follow it (dino has more faces than cow and takes less time, suzanne's charts take 0.27 s
+# each, camel's 0.9 s)
+AUTO_SECONDS_PER_ROOT = 0.006   # seconds per sqrt(charts x faces)
 AUTO_SECONDS_MAX = 20.0
 
 
@@ -31,9 +34,10 @@ class PackOptions:
         (its solves' first placements, about 15 ms a chart each, are measured and left out of
         their search); None (default): adaptive (:meth:`search_seconds`); 0 keeps spyrrow's
         first placements only, for a few points of coverage less
-    solves : int, nesting solves for the smallest square (at least 1; default 2), in two
-        rounds: (solves + 1) // 2 at once (threads) at strip heights around a guessed density,
-        then solves // 2 around the density reached; 1: one solve at the guess
+    solves : int, nesting solves for the smallest square (at least 1; default 1: one solve at
+        a guessed density, then compaction, :mod:`.compact`); above 1, two rounds:
+        (solves + 1) // 2 at once (threads) at strip heights around the guess, then solves // 2
+        around the density reached (each solve pays its first placement again)
     seed : int, seed of the nesting heuristic. Its search is bounded in time, not in steps, so
         two runs on the same charts can give different layouts (each one certified); measured:
         suzanne's 27 charts, two runs, different placements
@@ -44,7 +48,7 @@ class PackOptions:
     rotate: str = "any"
     udim: bool = False
     solve_seconds: float | None = None
-    solves: int = 2
+    solves: int = 1
     seed: int = 0
 
     def __post_init__(self):
@@ -71,13 +75,13 @@ class PackOptions:
 
     def search_seconds(self, charts, faces=0):
         """Seconds of nesting for ``charts`` charts of ``faces`` faces: ``solve_seconds``, or
-        adaptive: ``AUTO_SECONDS`` + ``AUTO_SECONDS_PER_CHART`` a chart +
-        ``AUTO_SECONDS_PER_FACE`` a face, at most ``AUTO_SECONDS_MAX`` (0 for one chart)."""
+        adaptive: ``AUTO_SECONDS_PER_ROOT`` sqrt(charts x faces), at most ``AUTO_SECONDS_MAX``
+        (0 for one chart)."""
         if self.solve_seconds is not None:
             return float(self.solve_seconds)
         if charts < 2:
             return 0.0
-        return min(AUTO_SECONDS + AUTO_SECONDS_PER_CHART * charts + AUTO_SECONDS_PER_FACE * faces,
+        return min(AUTO_SECONDS_PER_ROOT * float(np.sqrt(charts * max(faces, charts))),
                    AUTO_SECONDS_MAX)
 
     @property

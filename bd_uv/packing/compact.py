@@ -1,0 +1,230 @@
+"""Compaction: a square layout made smaller by small moves of every chart at once.
+
+spyrrow's layouts keep slack: its separation is the padding of a square ``HEADROOM`` larger than
+the one found (measured least gaps 4.4-4.6 px for 4 px), and within its short search it leaves
+loose space between charts. A sequence of linear programs (Li and Milenkovic's compaction, 1995)
+removes it: each step moves every chart by at most ``step`` (a translation, and with any turn
+allowed a small turn about its centre), minimising the square's side S subject to
+
+- every outline inside [e, S - e]^2 with e = S padding / 2 + tol (its vertices near its extremes);
+- every vertex v of a chart at least padding S + 2 tol from the nearest point c of every segment
+  of another chart within reach (``u . (v' - c') >= sep`` along u = (v - c) / |v - c|: exact for
+  a translation when c is inside the segment, a tangent of the circle round c otherwise).
+
+Each step's layout is checked exactly (GEOS distances between the moved outlines, every point
+inside) before it is kept: else half and a quarter of the move are tried (the linear model holds
+on the segment to the move), then a shorter step. Turns are linearised; their second-order error
+(r phi^2) and the tilt of a turning segment's line (the points' slide times phi) are kept as
+slack in the rows. The charts keep their shape: a turn and a translation each, never a mirror.
+
+Measured (load ~10-13, from the two-round nesting's layouts): cow 0.629 -> 0.709, camel
+0.632 -> 0.693, suzanne 0.559 -> 0.611 in 40 programs (2.0, 1.9, 0.6 s of CPU); see
+docs/ARCHITECTURE.md.
+"""
+import time
+
+import numpy as np
+
+from .nest import Placement, rotations
+
+STEP = 0.005      # largest move of a point in one step, as a fraction of the square's side
+MARGIN = 1e-5     # separation kept above the padding, as a fraction of the side (0.01 px at 1024)
+TURN_MAX = 0.1    # largest turn of a chart in one step, radians
+REACH = 2.0      # rows for vertex and segment pairs within the separation plus REACH steps
+LINE_SEARCH = (1.0, 0.5, 0.25)  # fractions of a step's move tried in turn
+REL_GAIN = 1e-5   # a program shrinking the side by less than this fraction: a shorter step
+LEAST_STEP = 1e-4  # the compaction ends when the step falls below this fraction of the side
+
+
+def _rings(outlines):
+    """Per point: owner chart, and index of the next point of its ring."""
+    sizes = np.array([len(o) for o in outlines])
+    owner = np.repeat(np.arange(len(outlines)), sizes)
+    starts = np.r_[0, np.cumsum(sizes)[:-1]]
+    nxt = np.arange(len(owner)) + 1
+    nxt[starts + sizes - 1] = starts
+    return owner, nxt
+
+
+def _close(Q, owner, nxt, reach):
+    """Vertex and segment indices of two charts closer than ``reach``."""
+    import shapely
+    tree = shapely.STRtree(shapely.linestrings(np.stack([Q, Q[nxt]], axis=1)))
+    vi, si = tree.query(shapely.points(Q), predicate="dwithin", distance=reach)
+    keep = owner[vi] != owner[si]
+    return vi[keep], si[keep]
+
+
+def _near_pairs(Q, owner, nxt, reach, extra=None):
+    """Vertex / segment pairs of two charts closer than ``reach``, and the ``extra`` pairs
+    (vertex and segment indices): vertex index, the nearest point c of the segment, unit
+    u = (v - c) / |v - c| and the distance (one row per vertex and segment end where the
+    nearest point is an end)."""
+    A, B = Q, Q[nxt]
+    vi, si = _close(Q, owner, nxt, reach)
+    if extra is not None:
+        vi, si = np.concatenate([vi, extra[0]]), np.concatenate([si, extra[1]])
+    a, ab, v = A[si], B[si] - A[si], Q[vi]
+    t = np.clip(np.einsum("ij,ij->i", v - a, ab) / np.maximum(np.einsum("ij,ij->i", ab, ab),
+                                                             1e-300), 0.0, 1.0)
+    key = np.where(t <= 0, si, np.where(t >= 1, nxt[si], len(Q) + si))
+    _, first = np.unique(vi.astype(np.int64) * (2 * len(Q) + 1) + key, return_index=True)
+    vi, si, t = vi[first], si[first], t[first]
+    c = A[si] + t[:, None] * (B[si] - A[si])
+    d = np.linalg.norm(Q[vi] - c, axis=1)
+    return vi, si, c, (Q[vi] - c) / d[:, None], d
+
+
+def _cross(w, u):
+    """u . J w for the quarter turn J (x, y) -> (-y, x): a point's velocity under a unit turn."""
+    return w[:, 0] * u[:, 1] - w[:, 1] * u[:, 0]
+
+
+def _step_lp(Q, owner, nxt, centre, radius, S, pad, pm, tol, step, turn, seconds, extra=None):
+    """One linear program (at most ``seconds`` long): the moves (k,2), turns (k,) in radians and
+    the side reached, or None."""
+    from scipy.optimize import linprog
+    from scipy.sparse import coo_array
+    k = len(centre)
+    nv = 3 * k + 1                    # per chart dx, dy, turn; then S
+    sep = pm * S + 2 * tol
+    # turns: at most ``step`` at the chart's farthest point and TURN_MAX radians; a point's exact
+    # turn departs from the linear one by at most r (1 - cos phi) + r (phi - sin phi) < r phi^2
+    lim = np.minimum(step / np.maximum(radius, 1e-300), TURN_MAX) if turn else np.zeros(k)
+    err = radius * lim ** 2
+    vi, si, c, u, d = _near_pairs(Q, owner, nxt, sep + REACH * step, extra)
+    i, j = owner[vi], owner[si]
+    m = len(vi)
+    ri, rj = _cross(Q[vi] - centre[i], u), _cross(c - centre[j], u)
+    # -u.Di - phi_i ri + u.Dj + phi_j rj + pm S <= d - 2 tol
+    cols = [3 * i, 3 * i + 1, 3 * i + 2, 3 * j, 3 * j + 1, 3 * j + 2, np.full(m, 3 * k)]
+    vals = [-u[:, 0], -u[:, 1], -ri, u[:, 0], u[:, 1], rj, np.full(m, pm)]
+    rows = [np.tile(np.arange(m), 7)]
+    # the segment's own turn tilts its line: |phi_j| times the points' relative slide (each
+    # point moves at most (sqrt 2 + 1) step), second order again
+    rhs = [d - 2 * tol - err[i] - err[j] - 2 * (np.sqrt(2) + 1) * step * lim[j]]
+    n = m
+    # edges: vertices near their chart's extremes, e <= q + D + phi J(q - centre) <= S - e
+    lo = np.full((k, 2), np.inf)
+    hi = np.full((k, 2), -np.inf)
+    np.minimum.at(lo, owner, Q)
+    np.maximum.at(hi, owner, Q)
+    for a in range(2):  # per axis
+        vel = (Q - centre[owner])[:, 1 - a] * (-1 if a == 0 else 1)   # (J (q - centre))_a
+        for sgn, ext in ((-1.0, lo), (1.0, hi)):  # lower edge, upper edge
+            sel = np.flatnonzero(sgn * (Q[:, a] - ext[owner, a]) > -6 * step)
+            o = owner[sel]
+            r = n + np.arange(len(sel))
+            cols += [3 * o + a, 3 * o + 2, np.full(len(sel), 3 * k)]
+            vals += [np.full(len(sel), sgn), sgn * vel[sel],
+                     np.full(len(sel), 0.5 * pad if sgn < 0 else -(1 - 0.5 * pad))]
+            rows += [np.tile(r, 3)]
+            rhs.append(-sgn * Q[sel, a] - tol - err[o])
+            n += len(sel)
+    A = coo_array((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                  shape=(n, nv)).tocsr()
+    cost = np.zeros(nv)
+    cost[-1] = 1.0
+    bounds = np.zeros((nv, 2))
+    bounds[:-1] = np.stack([np.tile([step, step, 0.0], k), np.tile([step, step, 0.0], k)], 1)
+    bounds[2:-1:3, 0] = bounds[2:-1:3, 1] = lim
+    bounds[:-1, 0] *= -1
+    bounds[-1] = (0.0, S)
+    # (dual simplex without presolve: measured 1.5x faster on these small, tall programs)
+    res = linprog(cost, A_ub=A, b_ub=np.concatenate(rhs), bounds=bounds, method="highs-ds",
+                  options={"presolve": False, "time_limit": max(float(seconds), 1e-3)})
+    if res.status != 0:
+        return None
+    x = res.x[:-1].reshape(k, 3)
+    return x[:, :2], x[:, 2], float(res.x[-1])
+
+
+def _placed(outlines, angle, shift):
+    """(n,2) every outline point turned by its chart's angle (degrees) and moved by its shift."""
+    R = rotations(angle)
+    return np.concatenate([o @ R[i].T + shift[i] for i, o in enumerate(outlines)])
+
+
+def _fits(outlines, angle, shift, S, pad, pm, tol):
+    """Exactly: every outline inside [e, S - e]^2 (e = pad S / 2 + tol) and every two at
+    least pm S + 2 tol apart."""
+    import shapely
+    R = rotations(angle)
+    placed = [o @ R[i].T + shift[i] for i, o in enumerate(outlines)]
+    Q = np.concatenate(placed)
+    e = 0.5 * pad * S + tol - 1e-12 * S     # (rounding of the nesting's own placement)
+    if Q.min() < e or Q.max() > S - e:
+        return False
+    polys = [shapely.Polygon(q) for q in placed]
+    tree = shapely.STRtree(polys)
+    # (the linear programs hold their separations with equality: a hair of rounding allowed)
+    i, j = tree.query(polys, predicate="dwithin", distance=(pm * S + 2 * tol) * (1 - 1e-9))
+    return not np.any(i != j)
+
+
+def compact_square(outlines, placement, side, options, tol, seconds, max_programs=None):
+    """Shrink a square layout by compaction steps for at most ``seconds`` (or until the step
+    falls below ``LEAST_STEP`` of the side: no program gains, or no move passes the check).
+
+    Parameters
+    ----------
+    outlines : list of (n_i,2) float arrays, centred outlines
+    placement : Placement in the square [0, side]^2 with the padding kept
+    side : float
+    options : PackOptions (padding; rotate "any": small turns too)
+    tol : float, outline simplification tolerance
+    seconds : float, CPU time of this process to take: on a loaded machine the compaction
+        takes longer but reaches as far (a program's solve is cut at the time left, by its own
+        clock; its exact checks are finished)
+    max_programs : int, optional: at most this many linear programs (deterministic runs)
+
+    Returns
+    -------
+    Placement, side (no larger than given), steps taken
+    """
+    t0 = time.process_time()
+    k = len(outlines)
+    owner, nxt = _rings(outlines)
+    radius = np.array([np.sqrt((o ** 2).sum(axis=1).max()) for o in outlines])
+    turn = options.rotate == "any"
+    pm = options.padding + MARGIN
+    angle, shift, S = placement.angle.copy(), placement.shift.copy(), float(side)
+    step, steps = STEP * side, 0
+    if k < 2 or not _fits(outlines, angle, shift, S, options.padding, options.padding, tol):
+        return placement, side, 0
+    programs = 0
+    while (time.process_time() - t0 < seconds and step > LEAST_STEP * side
+           and (max_programs is None or programs < max_programs)):
+        programs += 1
+        Q = _placed(outlines, angle, shift)
+        extra = None
+        for again in (False, True):  # the program, then once more with the pairs it missed
+            got = _step_lp(Q, owner, nxt, shift, radius, S, options.padding, pm, tol, step,
+                           turn, seconds - (time.process_time() - t0), extra)
+            if got is None or got[2] > S * (1 - REL_GAIN):
+                break   # (the turns' error bound can block a long step)
+            move, phi, S_new = got
+            # a turn is about the chart's centre (its outline is centred on shift)
+            full = (angle + np.rad2deg(phi), shift + move, S_new)
+            checked = not again and _fits(outlines, *full, options.padding, pm, tol)
+            if again or checked:
+                break
+            # pairs closer than the separation after the move, out of reach before it: rows
+            # for them too (the points move up to 2 (sqrt 2 + 1) steps apart, beyond REACH)
+            near = _close(_placed(outlines, full[0], full[1]), owner, nxt,
+                          pm * S_new + 2 * tol + step)
+            extra = near if extra is None else tuple(np.concatenate(z) for z in zip(extra, near))
+            programs += 1
+        if got is None or got[2] > S * (1 - REL_GAIN):
+            step *= 0.5
+            continue
+        # the move, else part of it (the linear model holds on the segment to it; the exact
+        # check decides)
+        for part in LINE_SEARCH:  # per fraction of the move (the whole one maybe checked)
+            new = (angle + part * np.rad2deg(phi), shift + part * move, S + part * (S_new - S))
+            if (part == 1 and checked) or _fits(outlines, *new, options.padding, pm, tol):
+                angle, shift, S = new
+                steps += 1
+                break
+        step = min(2 * step, STEP * side) if part == 1 else step * 0.5
+    return Placement(angle, shift, S), S, steps

@@ -1,0 +1,100 @@
+"""bd_uv.packing.compact: the compaction after the nesting, checked by code that shares nothing
+with it (brute-force segment distances, an even-odd point-in-polygon test, turns recomputed from
+the placed outlines), and through ``pack_islands`` by the atlas's own independent checks."""
+import numpy as np
+import pytest
+
+from bd_uv.packing import PackOptions, pack_islands
+from bd_uv.packing.compact import compact_square
+from bd_uv.packing.outlines import chart_outlines
+from bd_uv.packing.square import square_layout
+from packing_checks import check_layout
+from packing_sets import chart_set, segment_distances
+
+
+def _placed(outlines, pl):
+    """Each outline turned by its angle and moved by its shift (computed here from the angles)."""
+    out = []
+    for xy, a, s in zip(outlines, pl.angle, pl.shift):  # per chart
+        t = np.deg2rad(a)
+        R = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
+        out.append(xy @ R.T + s)
+    return out
+
+
+def _inside(p, ring):
+    """Even-odd test: is point p strictly inside the closed ring (n,2)?"""
+    a, b = ring, np.roll(ring, -1, axis=0)
+    cross = (a[:, 1] > p[1]) != (b[:, 1] > p[1])
+    x = a[:, 0] + (p[1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / np.where(cross, b[:, 1] - a[:, 1], 1)
+    return bool(np.sum(cross & (x > p[0])) % 2)
+
+
+def _least_gap(rings):
+    """Least distance between the boundaries of two different rings (brute force), and whether
+    a ring lies inside another."""
+    gap, nested = np.inf, False
+    for i in range(len(rings)):  # per ring
+        for j in range(i):  # per other ring
+            a0, a1 = rings[i], np.roll(rings[i], -1, axis=0)
+            b0, b1 = rings[j], np.roll(rings[j], -1, axis=0)
+            I, J = np.meshgrid(np.arange(len(a0)), np.arange(len(b0)), indexing="ij")
+            I, J = I.ravel(), J.ravel()
+            gap = min(gap, float(segment_distances(a0[I], a1[I], b0[J], b1[J]).min()))
+            nested |= _inside(rings[i][0], rings[j]) or _inside(rings[j][0], rings[i])
+    return gap, nested
+
+
+@pytest.mark.parametrize("kind, k, rotate", [("boxes", 24, "any"), ("holes", 12, "any"),
+                                              ("slivers", 10, "90"), ("boxes", 16, "none")])
+def test_compaction_shrinks_the_square_and_keeps_the_padding(kind, k, rotate):
+    """From spyrrow's first placement (no search, no compaction: the same every run), 25 linear
+    programs: the square gets smaller, every outline stays inside it with half the padding plus
+    the tolerance, any two outlines stay the padding plus twice the tolerance apart and none
+    inside another; turns change only with rotate "any", and only by small angles."""
+    V, F, uv, lab = chart_set(kind, k, seed=11)
+    options = PackOptions(resolution=1024, padding_px=4, rotate=rotate, solves=1)
+    charts, tol = chart_outlines(V, F, uv, lab, k, options)
+    pl0, side0, _ = square_layout(charts.outlines, options, tol, 0.0)
+    pl, side, steps = compact_square(charts.outlines, pl0, side0, options, tol, 1e9,
+                                     max_programs=25)
+    assert steps >= 1 and side < side0 * (1 - 1e-3)
+    rings = _placed(charts.outlines, pl)
+    pts = np.concatenate(rings)
+    edge = 0.5 * options.padding * side + tol
+    assert pts.min() >= edge * (1 - 1e-9) and pts.max() <= side - edge * (1 - 1e-9)
+    gap, nested = _least_gap(rings)
+    assert gap >= (options.padding * side + 2 * tol) * (1 - 1e-9) and not nested
+    assert pl.width == side
+    turn = (pl.angle - pl0.angle + 180) % 360 - 180
+    if rotate == "any":
+        assert np.all(np.abs(turn) <= 25 * np.rad2deg(0.1) + 1e-9)
+    else:
+        assert np.all(turn == 0)
+    # the placed outlines are the input's turned and moved: pairwise distances within a chart kept
+    for xy, ring in zip(charts.outlines, rings):  # per chart
+        assert np.allclose(np.linalg.norm(xy[1:] - xy[0], axis=1),
+                           np.linalg.norm(ring[1:] - ring[0], axis=1), rtol=1e-12, atol=1e-12)
+
+
+def test_compaction_leaves_a_layout_it_cannot_check_alone():
+    """A layout that does not keep the padding (here: the square given too small) is returned
+    as given, with no step."""
+    V, F, uv, lab = chart_set("boxes", 8, seed=2)
+    options = PackOptions(solves=1)
+    charts, tol = chart_outlines(V, F, uv, lab, 8, options)
+    pl0, side0, _ = square_layout(charts.outlines, options, tol, 0.0)
+    pl, side, steps = compact_square(charts.outlines, pl0, 0.9 * side0, options, tol, 1e9,
+                                     max_programs=5)
+    assert steps == 0 and side == 0.9 * side0 and pl is pl0
+
+
+@pytest.mark.parametrize("kind, k, res, pad", [("huge_tiny", 40, 2048, 4), ("holes", 20, 512, 8)])
+def test_default_packing_with_compaction_is_certified(kind, k, res, pad):
+    """The default path (one nesting solve, then compaction for half the time), packed and
+    checked by the atlas's independent checks (exact triangle overlaps, brute-force gaps)."""
+    V, F, uv, lab = chart_set(kind, k, seed=k)
+    options = PackOptions(resolution=res, padding_px=pad, solve_seconds=1.0)
+    packed = pack_islands(V, F, uv, lab, options)
+    cert = check_layout(V, F, uv, lab, packed, options)
+    assert 0.05 < cert.coverage < 1.0 and packed.solves == 1
