@@ -299,8 +299,37 @@ PINS_ON_ONE_POINT = dict(
     stretch=None, method="lscm", frames="auto", cone="soc", solver_faults=0.0)
 
 
+# seams_mode="needed" (the command line's default), first drawn by this contract in this wave:
+# - a NaN vertex: its faces came back as a failed island with faces but no vertices or triangles
+#   (vertices[tris] != F[faces]) and a message without "island N:" (bd_uv.seams.needed)
+NEEDED_NAN_VERTEX = dict(
+    mesh="nefertiti", patch_size=30, seed=0, noise=0.0, delete=0.0, delete_kind="scattered faces",
+    seams=0, pins=0, pin_kind="from a certified map", defect="nan vertex", nonfinite=np.nan,
+    nonfinite_at="any vertex", nonfinite_count=1, pin_fault=None, bound=1.0, stretch=None,
+    method="lscm", frames="auto", cone="soc", solver_faults=0.0, seams_mode="needed")
+# - every conic solve failing: islands renumbered after the seam search kept their errors' old
+#   numbers (error.island and "island N:" named another island; bd_uv.seams.measure.renumbered)
+NEEDED_RENUMBERED_ERRORS = dict(
+    mesh="nefertiti", patch_size=154, seed=1481, noise=0.0, delete=0.0,
+    delete_kind="scattered faces", seams=5, pins=0, pin_kind="from a certified map",
+    defect="reversed face", nonfinite=np.nan, nonfinite_at="any vertex", nonfinite_count=1,
+    pin_fault=None, bound=1.0, stretch=None, method="lscm", frames="auto", cone="linf",
+    solver_faults=1.0, seams_mode="needed")
+# - a duplicate face is in no island by design (UnwrapResult.duplicate_of); the contract now
+#   checks it as documented (its twin's island and UVs) instead of failing the partition
+NEEDED_DUPLICATE_FACE = dict(
+    mesh="nefertiti", patch_size=175, seed=1417, noise=0.3, delete=0.0,
+    delete_kind="scattered faces", seams=0, pins=0, pin_kind="random", defect="duplicate face",
+    nonfinite=1e160, nonfinite_at="any vertex", nonfinite_count=3, pin_fault=None, bound=1.0,
+    stretch=3.0, method="lscm", frames="auto", cone="soc", solver_faults=0.3,
+    seams_mode="needed")
+
+
 @settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(sc=scenarios())
+@example(sc=NEEDED_NAN_VERTEX)
+@example(sc=NEEDED_RENUMBERED_ERRORS)
+@example(sc=NEEDED_DUPLICATE_FACE)
 @example(sc=PINS_ON_ONE_POINT)
 @example(sc=dict(PINS_ON_ONE_POINT, patch_size=30, seed=0, solver_faults=1.0))
 @example(sc=BOUND_A_HAIR_ABOVE_ONE)
