@@ -20,6 +20,7 @@ from .nest import rotations, tile_layouts
 from .options import PackOptions, udim_tile
 from .outlines import chart_outlines
 from .pinned import chart_boxes, free_square
+from .groups import chart_groups, grouped_layout
 from .square import square_layout
 
 
@@ -48,7 +49,7 @@ class Packed:
     options: PackOptions
 
 
-def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None):
+def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_groups=None):
     """Pack every chart into the square (or UDIM tiles) at one texel density.
 
     Parameters
@@ -61,6 +62,9 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None):
     pinned : (k,) bool array, optional: charts that stay where they are (bit for bit, inside the
         unit square); the others are packed at one density into the largest square beside them
         that keeps the padding (:func:`.pinned.free_square`)
+    face_groups : dict, optional: {"material": (m,) int, "object": (m,) int}, each face's
+        material or object; ``options.group`` other than "none" packs the charts of one group
+        together (:mod:`.groups`) and needs that entry
 
     Returns
     -------
@@ -79,11 +83,25 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None):
                       time.perf_counter() - t0, 0, options)
     if np.any(np.bincount(lab[lab >= 0], minlength=k) == 0):
         raise PackError("chart labels must run from 0 to k-1 without gaps")
+    group = None
+    if options.group != "none":
+        if face_groups is None or face_groups.get(options.group) is None:
+            raise PackError(f"grouping by {options.group} needs each face's {options.group}, "
+                            "which this input does not give")
+        group = chart_groups(F, V, lab, face_groups[options.group], k)
     if pinned is not None and np.any(pinned):
+        if group is not None and group.max() > 0:
+            raise PackError("charts are not grouped around pinned charts: pin none, or pack "
+                            "without grouping")
         return _around_pinned(V, F, uv, lab, options, np.asarray(pinned, dtype=bool), t0)
     charts, tol = chart_outlines(V, F, uv, lab, k, options)
     seconds = options.search_seconds(k, int((lab >= 0).sum()))
-    if options.texel_density is not None:
+    if group is not None and group.max() > 0:
+        f = 1.0 if options.texel_density is None else options.texel_density / options.resolution
+        pl, side, tile, solves = grouped_layout([xy * f for xy in charts.outlines], group,
+                                                options, tol * f, seconds,
+                                                fixed=options.texel_density is not None)
+    elif options.texel_density is not None:
         f = options.texel_density / options.resolution   # tile units per scene unit
         outlines = [xy * f for xy in charts.outlines]
         pl, tile, solves = tile_layouts(outlines, options, tol * f, seconds)

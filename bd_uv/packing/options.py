@@ -4,6 +4,7 @@ from dataclasses import dataclass
 from ..errors import PackError
 
 ROTATIONS = ("none", "90", "any")
+GROUPINGS = ("none", "object", "material")
 # The adaptive time: about a seventh of what Blender 5's exact-shape packer took on the same
 # charts (measured on ten meshes of 2-116 charts, 0.6k-52k faces: about 3 s at least, plus about
 # 0.4 s a chart and 0.3 ms a face, on a quiet machine)
@@ -34,6 +35,9 @@ class PackOptions:
     solves : int, nesting solves for the smallest square (at least 1; default 2), in two
         rounds: (solves + 1) // 2 at once (threads) at strip heights around a guessed density,
         then solves // 2 around the density reached; 1: one solve at the guess
+    group : "none" | "object" | "material", charts of one object (or one material) packed together:
+        one compact block per group, blocks apart by the padding (:mod:`.groups`); "none"
+        (default) packs every chart freely
     seed : int, seed of the nesting heuristic. Its search is bounded in time, not in steps, so
         two runs on the same charts can give different layouts (each one certified); measured:
         suzanne's 27 charts, two runs, different placements
@@ -45,6 +49,7 @@ class PackOptions:
     udim: bool = False
     solve_seconds: float | None = None
     solves: int = 2
+    group: str = "none"
     seed: int = 0
 
     def __post_init__(self):
@@ -66,6 +71,8 @@ class PackOptions:
                 isinstance(self.solve_seconds, (int, float)) and 0 <= self.solve_seconds <= 3600):
             raise PackError(f"solve_seconds must be a number of seconds from 0 to 3600 (or "
                             f"None: adaptive), not {self.solve_seconds!r}")
+        if self.group not in GROUPINGS:
+            raise PackError(f"group must be one of {', '.join(GROUPINGS)}, not {self.group!r}")
         if not (isinstance(self.solves, int) and self.solves >= 1):
             raise PackError(f"solves must be a whole number >= 1, not {self.solves!r}")
 
