@@ -20,6 +20,7 @@ from .nest import rotations, tile_layouts
 from .options import PackOptions, udim_tile
 from .outlines import chart_outlines
 from .pinned import chart_boxes, free_square
+from .around import place_around
 from .groups import chart_groups, grouped_layout
 from .square import square_layout
 
@@ -123,8 +124,12 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_g
 
 
 def _around_pinned(V, F, uv, lab, options, pinned, t0):
-    """Pinned charts kept; the rest packed into the largest free square beside them, with the
-    padding scaled so it stays ``padding_px`` texels once the square is scaled into place."""
+    """Pinned charts kept bit for bit; the rest packed at one density into the free space around
+    the pinned charts' true shapes (:func:`.around.place_around`, a conservative raster
+    placement), or, when that reaches a lower density, into the largest free square beside their
+    bounding boxes (tried only when it could reach further) (spyrrow, the padding scaled so it stays ``padding_px`` texels once the square
+    is scaled into place)."""
+    import shapely
     k = int(lab.max()) + 1
     if len(pinned) != k:
         raise PackError(f"pinned has {len(pinned)} entries for {k} charts")
@@ -142,16 +147,37 @@ def _around_pinned(V, F, uv, lab, options, pinned, t0):
     if not len(moving):
         return Packed(out, lab.copy(), np.full(k, 1001), angle, 0.0,
                       time.perf_counter() - t0, 0, options)
-    corner, side = free_square(lo, hi, 0.5 * options.padding)
-    if side * options.resolution < 8 * max(options.padding_px, 1.0):
-        raise PackError("no room left beside the pinned charts for the others")
-    inner_options = replace(options, padding_px=options.padding_px / side)
     sub = np.full(k, -1)
     sub[moving] = np.arange(len(moving))
-    inner = pack_islands(V, F, uv, np.where(lab >= 0, sub[np.maximum(lab, 0)], -1),
-                         inner_options)
-    sel = (lab >= 0) & ~pinned[np.maximum(lab, 0)]
+    sub_lab = np.where(lab >= 0, sub[np.maximum(lab, 0)], -1)
+    sel = sub_lab >= 0
+    # 1. the free space around the pinned charts' shapes (a raster placement)
+    charts, tol = chart_outlines(V, F, uv, sub_lab, len(moving), options)
+    held = (lab >= 0) & pinned[np.maximum(lab, 0)]
+    shapes = shapely.union_all(shapely.polygons(uv[held]))
+    around = place_around(shapes, charts.outlines, charts.area, options, tol, 1.0 - shapes.area)
+    reached = around[0] if around is not None else 0.0
+    # 2. the largest free square beside the pinned charts' boxes (nested by spyrrow), unless
+    # even every chart in it at full density would not reach the raster's scale
+    corner, side = free_square(lo, hi, 0.5 * options.padding)
+    square = None
+    if (side * options.resolution >= 8 * max(options.padding_px, 1.0)
+            and side / np.sqrt(charts.area.sum()) > reached):
+        inner = pack_islands(V, F, uv, sub_lab, replace(options, padding_px=options.padding_px
+                                                        / side))
+        square = (inner.texel_density * side, inner)
+    if around is not None and (square is None or reached * options.resolution >= square[0]):
+        scale, turn, shift = around
+        R = rotations(turn)
+        x = (charts.uv[sel] - charts.centre[sub_lab[sel]][:, None, :]) * scale
+        out[sel] = np.einsum("fij,fcj->fci", R[sub_lab[sel]], x) + shift[sub_lab[sel]][:, None, :]
+        angle[moving] = turn
+        return Packed(out, lab.copy(), np.full(k, 1001), angle, scale * options.resolution,
+                      time.perf_counter() - t0, 0, options)
+    if square is None:
+        raise PackError("no room left beside the pinned charts for the others")
+    density, inner = square
     out[sel] = inner.corner_uv[sel] * side + corner
     angle[moving] = inner.angle
-    return Packed(out, lab.copy(), np.full(k, 1001), angle, inner.texel_density * side,
+    return Packed(out, lab.copy(), np.full(k, 1001), angle, density,
                   time.perf_counter() - t0, inner.solves, options)

@@ -1,0 +1,153 @@
+"""The charts that move, packed into the free space around pinned charts' true shapes.
+
+spyrrow (0.9.0) nests into an empty strip and takes no fixed obstacles, so this is a raster
+placement (as Blender's packer is), made conservative so the exact layout certificate holds:
+
+- the unit square is a grid of N x N cells; a pinned chart occupies every cell whose centre lies
+  within ``padding / 2 + h sqrt(2) / 2`` of its triangles (h = 1 / N), so every cell that meets the
+  chart grown by half the padding is occupied;
+- a moving chart, turned and scaled, occupies the cells whose centres lie within
+  ``padding / 2 + tol + h sqrt(2) / 2`` of its simplified outline (the true chart is within
+  ``tol`` of it); it is placed at whole-cell offsets where its cells meet no occupied cell (an FFT
+  correlation of the two rasters), so two charts grown by half the padding never meet: every gap
+  is at least the padding, and every chart is at least half of it from the square's edge (its
+  cells stay in the grid);
+- charts go largest first, each at its allowed turns (any angle: its least-square turn and the
+  three quarter turns after it), at the offset whose top edge is lowest, then leftmost;
+- the common scale is bisected on a coarse grid (the largest at which every chart finds room),
+  then raised in steps of ``STEP`` on finer grids (less room lost to whole cells) while the time
+  lasts (``options.search_seconds``; a grid's first try is always made).
+"""
+import time
+
+import numpy as np
+
+from .nest import least_squares, rotations
+
+GRIDS = (128, 256, 512)     # grid cells along the square's side, coarse to fine
+BISECTIONS = 6              # steps of the scale search on the coarsest grid
+STEP = 1.02                 # the scale's steps up on the finer grids
+GROW = 1.005                # buffers approximate arcs by chords: radii grown by this
+
+
+def pinned_cells(polygons, padding, n):
+    """(n,n) bool occupancy, [row = v, column = u], of the pinned charts grown by half the
+    padding (the polygons: a shapely geometry in the unit square, or None)."""
+    import shapely
+    occ = np.zeros((n, n), dtype=bool)
+    if polygons is None or polygons.is_empty:
+        return occ
+    h = 1.0 / n
+    grown = shapely.buffer(polygons, (0.5 * padding + h * np.sqrt(0.5)) * GROW + 1e-12)
+    c = (np.arange(n) + 0.5) * h
+    x, y = np.meshgrid(c, c)
+    occ[:] = shapely.contains_xy(grown, x, y)
+    return occ
+
+
+def _chart_cells(xy, reach, h):
+    """Cells of one placed outline grown by ``reach``: mask (rows, cols) bool and the outline's
+    offset from the mask's corner."""
+    import shapely
+    lo, hi = xy.min(axis=0), xy.max(axis=0)
+    m = reach + h
+    shape = np.ceil((hi - lo + 2 * m) / h).astype(int)
+    grown = shapely.buffer(shapely.Polygon(xy - lo + m), reach * GROW + 1e-12)
+    cu, cv = (np.arange(shape[0]) + 0.5) * h, (np.arange(shape[1]) + 0.5) * h
+    x, y = np.meshgrid(cu, cv)
+    return shapely.contains_xy(grown, x, y), m - lo
+
+
+def _candidates(outlines, options):
+    """Allowed turns of each outline (degrees): a list of arrays."""
+    if options.rotate == "none":
+        return [np.zeros(1)] * len(outlines)
+    quarter = np.arange(4) * 90.0
+    if options.rotate == "90":
+        return [quarter] * len(outlines)
+    _, best = least_squares(outlines, options, step=2.0)
+    return [a + quarter for a in best]
+
+
+def _place(occ, outlines, turns, order, scale, options, tol):
+    """Greedy placement at one scale on the grid ``occ`` (copied). Returns (angle, shift) or None
+    when some chart finds no room."""
+    import scipy.fft as sf
+    n = occ.shape[0]
+    h = 1.0 / n
+    occ = occ.astype(np.float32)
+    reach = 0.5 * options.padding + tol * scale + h * np.sqrt(0.5)
+    angle, shift = np.zeros(len(outlines)), np.zeros((len(outlines), 2))
+    F_occ = sf.rfft2(occ, workers=1)
+    for i in order:  # per chart, largest first
+        best = None
+        for a, R in zip(turns[i], rotations(turns[i])):  # per allowed turn
+            mask, off = _chart_cells(scale * outlines[i] @ R.T, reach, h)
+            rows, cols = mask.shape
+            if rows > n or cols > n:
+                continue
+            F_mask = sf.rfft2(mask.astype(np.float32), s=(n, n), workers=1)
+            hit = sf.irfft2(F_occ * np.conj(F_mask), s=(n, n), workers=1)
+            free = hit[:n - rows + 1, :n - cols + 1] < 0.5
+            if not free.any():
+                continue
+            r = np.flatnonzero(free.any(axis=1))[0]        # lowest top edge: lowest row
+            c = int(np.flatnonzero(free[r])[0])
+            if best is None or (r + rows, c) < best[0]:
+                best = ((r + rows, c), a, r, c, mask, off)
+        if best is None:
+            return None
+        _, angle[i], r, c, mask, off = best
+        occ[r:r + mask.shape[0], c:c + mask.shape[1]] += mask
+        shift[i] = np.array([c, r]) * h + off
+        F_occ = sf.rfft2(occ, workers=1)
+    return angle, shift
+
+
+def place_around(pinned_geometry, outlines, areas, options, tol, free_area, least=0.0):
+    """The largest common scale found (and the placements) at which every moving chart fits the
+    free space around the pinned charts.
+
+    Parameters
+    ----------
+    pinned_geometry : shapely geometry, the pinned charts' triangles in the unit square
+    outlines : list of (n_i,2) float arrays, centred outlines of the moving charts (scene units)
+    areas : (k,) float, their areas (largest placed first)
+    options : PackOptions (padding, rotate, the time: ``search_seconds``)
+    tol : float, outline simplification tolerance in scene units
+    free_area : float, the square's area left by the pinned charts (bounds the scale)
+    least : float, a scale already reached otherwise: only larger ones are searched
+
+    Returns
+    -------
+    (scale, angle (k,), shift (k,2)): UV = scale * R(angle) x + shift for an outline point x;
+    or None when no scale above ``least`` fits.
+    """
+    t0 = time.perf_counter()
+    seconds = options.search_seconds(len(outlines) + 1)
+    order = np.argsort(-np.asarray(areas, dtype=np.float64), kind="stable")
+    turns = _candidates(outlines, options)
+    found = None
+    top = float(np.sqrt(free_area / np.sum(areas)))    # every chart's area in the free area
+    lo, hi = least, top
+    for g, n in enumerate(GRIDS):  # per grid, coarse to fine
+        occ = pinned_cells(pinned_geometry, options.padding, n)
+        for j in range(BISECTIONS if g == 0 else 64):  # per scale tried
+            if g == 0:
+                s = np.sqrt(lo * hi) if lo > 0 else 0.5 * hi
+            else:
+                s = found[0] * STEP ** j
+                if s >= top or (j and time.perf_counter() - t0 > seconds):
+                    break
+            got = _place(occ, outlines, turns, order, s, options, tol)
+            if got is None:
+                if g == 0:
+                    hi = s
+                    continue
+                break
+            if found is None or s >= found[0]:
+                found = (s, *got)
+            lo = max(lo, s)
+        if found is None or time.perf_counter() - t0 > seconds:
+            break
+    return found
