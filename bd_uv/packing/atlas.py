@@ -50,7 +50,7 @@ class Packed:
     options: PackOptions
 
 
-def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_groups=None):
+def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_labels=None):
     """Pack every chart into the square (or UDIM tiles) at one texel density.
 
     Parameters
@@ -63,7 +63,7 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_g
     pinned : (k,) bool array, optional: charts that stay where they are (bit for bit, inside the
         unit square); the others are packed at one density into the largest square beside them
         that keeps the padding (:func:`.pinned.free_square`)
-    face_groups : dict, optional: {"material": (m,) int, "object": (m,) int}, each face's
+    face_labels : dict, optional: {"material": (m,) int, "object": (m,) int}, each face's
         material or object; ``options.group`` other than "none" packs the charts of one group
         together (:mod:`.groups`) and needs that entry
 
@@ -86,10 +86,10 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_g
         raise PackError("chart labels must run from 0 to k-1 without gaps")
     group = None
     if options.group != "none":
-        if face_groups is None or face_groups.get(options.group) is None:
+        if face_labels is None or face_labels.get(options.group) is None:
             raise PackError(f"grouping by {options.group} needs each face's {options.group}, "
                             "which this input does not give")
-        group = chart_groups(F, V, lab, face_groups[options.group], k)
+        group = chart_groups(F, V, lab, face_labels[options.group], k)
     if pinned is not None and np.any(pinned):
         if group is not None and group.max() > 0:
             raise PackError("charts are not grouped around pinned charts: pin none, or pack "

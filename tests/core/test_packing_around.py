@@ -114,7 +114,7 @@ def test_grouped_charts_pack_one_region_per_group(kind, k, groups, res, pad, rot
     material = (10 * chart_group + 3)[lab]            # any labels: not 0..g-1
     options = PackOptions(resolution=res, padding_px=pad, rotate=rotate, group="material",
                           texel_density=density, udim=density is not None, solve_seconds=1)
-    packed = pack_islands(V, F, uv, lab, options, face_groups={"material": material})
+    packed = pack_islands(V, F, uv, lab, options, face_labels={"material": material})
     tiles = sorted(set(packed.tile.tolist()))
     check_layout(V, F, uv, lab, packed, options, tiles=tiles)
     out = packed.corner_uv.astype(np.float32).astype(np.float64)
@@ -138,7 +138,7 @@ def test_a_chart_across_two_materials_goes_with_most_of_its_area():
     a3 = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
     assert a3[0] > 2 * a3[1]
     options = PackOptions(group="material", solve_seconds=0)
-    packed = pack_islands(V, F, uv, lab, options, face_groups={"material": material})
+    packed = pack_islands(V, F, uv, lab, options, face_labels={"material": material})
     check_layout(V, F, uv, lab, packed, options)
     _groups_apart(packed.corner_uv, lab, np.array([1, 0, 0, 1, 1, 1]), 4, 1024)
 
@@ -148,14 +148,14 @@ def test_grouping_needs_the_faces_groups_and_refuses_pins_and_bad_names():
     with pytest.raises(PackError, match="needs each face's object"):
         pack_islands(V, F, uv, lab, PackOptions(group="object"))
     with pytest.raises(PackError, match="needs each face's material"):
-        pack_islands(V, F, uv, lab, PackOptions(group="material"), face_groups={"object": lab})
+        pack_islands(V, F, uv, lab, PackOptions(group="material"), face_labels={"object": lab})
     with pytest.raises(PackError, match="group must be one of"):
         PackOptions(group="colour")
     uv = _pin_ring(uv, lab, [0])
     with pytest.raises(PackError, match="not grouped around pinned"):
-        pack_islands(V, F, uv, lab, PackOptions(group="object"), face_groups={"object": lab},
+        pack_islands(V, F, uv, lab, PackOptions(group="object"), face_labels={"object": lab},
                      pinned=np.array([True, False, False, False]))
     # one group is the same as no grouping: accepted, one region
     one = pack_islands(V, F, uv, lab, PackOptions(group="object", solve_seconds=0),
-                       face_groups={"object": np.zeros(len(lab), int)})
+                       face_labels={"object": np.zeros(len(lab), int)})
     check_layout(V, F, uv, lab, one, PackOptions())

@@ -1,0 +1,85 @@
+"""``--group material|object`` on the command line and the batch: the OBJ's ``usemtl`` and ``o``
+give each face's group; the written UVs (read back) keep each group's charts in one region that
+no other group's chart enters, checked here with shapely on the file's UVs."""
+import json
+
+import numpy as np
+import pytest
+import shapely
+
+from bd_uv import cli
+from bd_uv.meshio import load_mesh
+from packing_sets import least_gap
+from test_packing_cli import grids
+
+SIZES = ((5, 3), (8, 2), (3, 3), (6, 6), (2, 9), (4, 1), (3, 5), (7, 2))
+
+
+def grouped_obj(tmp_path, key):
+    """The grids as an OBJ whose grids alternate between three materials (``usemtl``) or three
+    objects (``o``). Returns the path and each face's group."""
+    src, V, F = grids(tmp_path, SIZES)
+    per = [2 * a * b for a, b in SIZES]
+    group = np.repeat(np.arange(len(SIZES)) % 3, per)
+    path = tmp_path / "grouped.obj"
+    with open(path, "w") as fh:
+        fh.writelines(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V)
+        last = None
+        for f, g in zip(F, group):
+            if g != last:
+                fh.write(f"{key} part{g}\n")
+                last = g
+            fh.write(f"f {f[0] + 1} {f[1] + 1} {f[2] + 1}\n")
+    return path, group
+
+
+def assert_one_region_per_group(uv, group, pad_uv):
+    hulls = [shapely.convex_hull(shapely.multipoints(uv[group == g].reshape(-1, 2)))
+             for g in np.unique(group)]
+    for a in range(len(hulls)):
+        for b in range(a + 1, len(hulls)):
+            assert hulls[a].distance(hulls[b]) >= pad_uv * (1 - 1e-4)
+        others = shapely.polygons(uv[group != a])
+        assert not shapely.intersects(hulls[a], others).any()
+
+
+@pytest.mark.parametrize("key, name", [("usemtl", "material"), ("o", "object")])
+def test_unwrap_groups_charts_by_the_obj_material_or_object(tmp_path, key, name):
+    src, group = grouped_obj(tmp_path, key)
+    out, rep = tmp_path / "g.obj", tmp_path / "g.json"
+    code = cli.main(["unwrap", str(src), "-o", str(out), "--seams", "none", "--bound", "3",
+                     "--resolution", "512", "--padding", "6", "--group", name,
+                     "--pack-seconds", "1", "--report", str(rep)])
+    assert code == 0
+    pack = json.loads(rep.read_text())["pack"]
+    assert pack["certified"] and pack["group"] == name
+    uv = load_mesh(out).corner_uv
+    assert_one_region_per_group(uv, group, 6 / 512)
+    lab = np.repeat(np.arange(len(SIZES)), [2 * a * b for a, b in SIZES])
+    assert least_gap(uv, lab, reach=12 / 512) * 512 >= 6 * (1 - 1e-6)
+    assert uv.min() >= 3 / 512 * (1 - 1e-6) and uv.max() <= 1 - 3 / 512 * (1 - 1e-6)
+
+
+def test_group_of_a_format_without_it_is_a_clear_failure(tmp_path, capsys):
+    src, _, _ = grids(tmp_path)                 # OFF: no materials, no objects
+    out = tmp_path / "g.obj"
+    code = cli.main(["unwrap", str(src), "-o", str(out), "--seams", "none", "--bound", "3",
+                     "--group", "material"])
+    assert code != 0
+    assert "needs each face's material" in capsys.readouterr().err
+    assert not out.exists()
+    assert cli.main(["unwrap", str(src), "-o", str(out), "--no-pack", "--group", "object"]) == 2
+
+
+def test_batch_groups_by_material(tmp_path):
+    src, group = grouped_obj(tmp_path, "usemtl")
+    outdir = tmp_path / "out"
+    code = cli.main(["batch", str(src), "-o", str(outdir), "--seams", "none", "--bound", "3",
+                     "--group", "material", "--pack-seconds", "0.5", "--jobs", "1"])
+    assert code == 0
+    entry = json.loads((outdir / "report.json").read_text())["items"][0]
+    assert entry["pack"]["certified"] and entry["pack"]["group"] == "material"
+    assert json.loads((outdir / "report.json").read_text())["options"]["group"] == "material"
+    written = sorted(outdir.glob("*.obj"))
+    assert len(written) == 1
+    assert_one_region_per_group(load_mesh(written[0]).corner_uv, group, 4 / 1024)
