@@ -39,6 +39,7 @@ def pinned_cells(polygons, padding, n):
         return occ
     h = 1.0 / n
     grown = shapely.buffer(polygons, (0.5 * padding + h * np.sqrt(0.5)) * GROW + 1e-12)
+    shapely.prepare(grown)
     c = (np.arange(n) + 0.5) * h
     x, y = np.meshgrid(c, c)
     occ[:] = shapely.contains_xy(grown, x, y)
@@ -123,6 +124,8 @@ def place_around(pinned_geometry, outlines, areas, options, tol, free_area, leas
     (scale, angle (k,), shift (k,2)): UV = scale * R(angle) x + shift for an outline point x;
     or None when no scale above ``least`` fits.
     """
+    if free_area <= 0:
+        return None
     t0 = time.perf_counter()
     seconds = options.search_seconds(len(outlines) + 1)
     order = np.argsort(-np.asarray(areas, dtype=np.float64), kind="stable")

@@ -154,8 +154,14 @@ def _around_pinned(V, F, uv, lab, options, pinned, t0):
     # 1. the free space around the pinned charts' shapes (a raster placement)
     charts, tol = chart_outlines(V, F, uv, sub_lab, len(moving), options)
     held = (lab >= 0) & pinned[np.maximum(lab, 0)]
-    shapes = shapely.union_all(shapely.polygons(uv[held]))
-    around = place_around(shapes, charts.outlines, charts.area, options, tol, 1.0 - shapes.area)
+    # the pinned triangles and their edges (so a pinned chart of no UV area is avoided too)
+    tris = uv[held]
+    e1, e2 = tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]
+    area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    shapes = shapely.union_all(np.concatenate([
+        shapely.polygons(tris[area > 0]), shapely.linestrings(tris[area <= 0][:, [0, 1, 2, 0]])]))
+    around = place_around(shapes, charts.outlines, charts.area, options, tol,
+                          1.0 - float(area.sum()))
     reached = around[0] if around is not None else 0.0
     # 2. the largest free square beside the pinned charts' boxes (nested by spyrrow), unless
     # even every chart in it at full density would not reach the raster's scale
