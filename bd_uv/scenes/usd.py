@@ -238,7 +238,9 @@ def _mesh_arrays(mesh, where, uv_name, Usd):
             "holes": int(len(holes)),
             "subdivision": str(mesh.GetSubdivisionSchemeAttr().Get())}
     part = {"T": T, "poly": poly, "n_face_vertices": len(indices), "warnings": warnings}
-    return Mesh(V, F, corner_uv, str(mesh.GetPath())), part, info, warnings
+    # one prim is one object (its GeomSubsets' materials are not read: no "material")
+    labels = {"object": np.zeros(len(F), np.int64)}
+    return Mesh(V, F, corner_uv, str(mesh.GetPath()), labels), part, info, warnings
 
 
 def _numbers(value, dtype, what, width=None):

@@ -83,3 +83,39 @@ def test_batch_groups_by_material(tmp_path):
     written = sorted(outdir.glob("*.obj"))
     assert len(written) == 1
     assert_one_region_per_group(load_mesh(written[0]).corner_uv, group, 4 / 1024)
+
+
+def test_gltf_primitive_materials_group_the_charts(tmp_path):
+    """A glTF mesh of three separate grids in three primitives (materials 1, 0 and none): each
+    face's material is its primitive's, and ``--group material`` packs the mesh certified."""
+    from gltf_build import Builder
+    from helpers import grid
+    from bd_uv.scenes import read_scene
+    b = Builder()
+    prims, group = [], []
+    for j, material in enumerate((1, 0, None)):
+        V, F = grid(5 + j, 4, z=lambda x, y: 0.2 * x * y)
+        V = V + [2.0 * j, 0, 0]
+        p = {"attributes": {"POSITION": b.accessor(V.astype(np.float32), 5126, "VEC3",
+                                                   minmax=True)},
+             "indices": b.accessor(F.reshape(-1), 5125, "SCALAR"), "mode": 4}
+        if material is not None:
+            p["material"] = material
+        prims.append(p)
+        group.append(np.full(len(F), -1 if material is None else material))
+    b.doc.update(meshes=[{"primitives": prims}], nodes=[{"mesh": 0}], scenes=[{"nodes": [0]}],
+                 scene=0, materials=[{"name": "a"}, {"name": "b"}])
+    path = tmp_path / "three.gltf"
+    b.write(str(path))
+    mesh = read_scene(str(path)).meshes[0].mesh
+    assert np.array_equal(mesh.labels["material"], np.concatenate(group))
+    assert np.array_equal(mesh.labels["object"], np.zeros(len(mesh.F)))
+    out, rep = tmp_path / "out.gltf", tmp_path / "r.json"
+    code = cli.main(["unwrap", str(path), "-o", str(out), "--seams", "none", "--bound", "3",
+                     "--group", "material", "--pack-seconds", "0.5", "--report", str(rep)])
+    assert code == 0
+    entry = json.loads(rep.read_text())["meshes"][0]
+    assert entry["status"] == "certified" and len(entry["islands"]) == 3
+    assert entry["pack"]["certified"] and entry["pack"]["group"] == "material"
+    written = read_scene(str(out)).meshes[0].mesh.corner_uv       # float32 as the file stores
+    assert_one_region_per_group(written, np.concatenate(group), 4 / 1024)
