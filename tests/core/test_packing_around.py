@@ -91,12 +91,13 @@ def _groups_apart(out, lab, group_of_chart, pad, res):
     """Each group's convex hull: no chart of another group enters it, and hulls are at least
     the padding apart (shapely, exact on the float64 coordinates)."""
     g = group_of_chart[lab]
+    names = np.unique(g)
     hulls = [shapely.convex_hull(shapely.multipoints(out[g == b].reshape(-1, 2)))
-             for b in np.unique(g)]
+             for b in names]
     for a in range(len(hulls)):
         for b in range(a + 1, len(hulls)):
             assert hulls[a].distance(hulls[b]) * res >= pad * (1 - 1e-4)
-    for b, hull in enumerate(hulls):
+    for b, hull in zip(names, hulls):
         others = shapely.polygons(out[g != b])
         assert not shapely.intersects(hull, others).any()
 
