@@ -41,6 +41,8 @@ def free_square_pack(V, F, uv, lab, pinned, options):
     k = int(lab.max()) + 1
     lo, hi = chart_boxes(uv, lab, np.flatnonzero(pinned))
     corner, side = free_square(lo, hi, 0.5 * options.padding)
+    if side * options.resolution < 8 * max(options.padding_px, 1.0):
+        return None, 0.0, time.perf_counter() - t0   # it refused: "no room left beside ..."
     sub = np.full(k, -1)
     sub[~pinned] = np.arange(int((~pinned).sum()))
     sl = np.where(lab >= 0, sub[np.maximum(lab, 0)], -1)
@@ -71,7 +73,10 @@ def main():
         pinned[np.argsort(-area)[::max(k // a.pin, 1)][:a.pin]] = True
         tile = np.full(k, 1001)
         old, d_old, s_old = free_square_pack(m.V, m.F, first, lab, pinned, options)
-        c_old = layout_certificate(m.V, m.F, old.astype(np.float32), lab, tile, a.resolution,
+        if old is None:   # the previous method refused: only the pinned charts' coverage
+            old = np.where(pinned[lab][:, None, None], first, np.nan)
+        held = np.where(np.isfinite(old).all(axis=(1, 2)), lab, -1)
+        c_old = layout_certificate(m.V, m.F, old.astype(np.float32), held, tile, a.resolution,
                                    a.padding)
         new = pack_islands(m.V, m.F, first, lab, options, pinned=pinned)
         assert np.array_equal(new.corner_uv[pinned[lab]], first[pinned[lab]])
@@ -80,7 +85,7 @@ def main():
         print(f"{name} {k} {int(pinned.sum())} | {c_old.coverage:.3f} {c_old.least_gap_px:.2f} "
               f"{s_old:.2f} | {c_new.coverage:.3f} {c_new.least_gap_px:.2f} {new.seconds:.2f} "
               f"{c_new.certified} | {c_new.coverage / c_old.coverage:.3f}x, "
-              f"{new.texel_density / d_old:.3f}x", flush=True)
+              f"{new.texel_density / d_old if d_old else np.inf:.3f}x", flush=True)
     print(f"load {os.getloadavg()[0]:.1f}")
 
 
