@@ -28,6 +28,9 @@ GRIDS = (128, 256, 512)     # grid cells along the square's side, coarse to fine
 BISECTIONS = 6              # steps of the scale search on the coarsest grid
 STEP = 1.02                 # the scale's steps up on the finer grids
 GROW = 1.005                # buffers approximate arcs by chords: radii grown by this
+TURNS = 4                   # any angle: the least-square turn and this many evenly after it
+                            # (measured on cow's 46 charts, 4 pinned: 8 turns reached 0.503
+                            # coverage against 0.533 with 4, in twice the time)
 
 
 def pinned_cells(polygons, padding, n):
@@ -67,7 +70,7 @@ def _candidates(outlines, options):
     if options.rotate == "90":
         return [quarter] * len(outlines)
     _, best = least_squares(outlines, options, step=2.0)
-    return [a + quarter for a in best]
+    return [a + np.arange(TURNS) * (360.0 / TURNS) for a in best]
 
 
 def _place(occ, outlines, turns, order, scale, options, tol):
