@@ -61,8 +61,8 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
     face_island : (m,) int array, chart of each face, labels 0..k-1 (-1: left as it is)
     options : PackOptions, default PackOptions()
     pinned : (k,) bool array, optional: charts that stay where they are (bit for bit, inside the
-        unit square); the others are packed at one density into the largest square beside them
-        that keeps the padding (:func:`.pinned.free_square`)
+        unit square); the others are packed at one density into the free space around their
+        shapes, keeping the padding (:func:`.around.place_around`)
     face_labels : dict, optional: {"material": (m,) int, "object": (m,) int}, each face's
         material or object; ``options.group`` other than "none" packs the charts of one group
         together (:mod:`.groups`) and needs that entry
@@ -126,9 +126,10 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
 def _around_pinned(V, F, uv, lab, options, pinned, t0):
     """Pinned charts kept bit for bit; the rest packed at one density into the free space around
     the pinned charts' true shapes (:func:`.around.place_around`, a conservative raster
-    placement), or, when that reaches a lower density, into the largest free square beside their
-    bounding boxes (tried only when it could reach further) (spyrrow, the padding scaled so it stays ``padding_px`` texels once the square
-    is scaled into place)."""
+    placement). The largest free square beside the pinned charts' bounding boxes (nested by
+    spyrrow, the padding scaled so it stays ``padding_px`` texels once the square is scaled into
+    place: the previous method) is tried too when it could reach a higher density, and kept
+    when it does."""
     import shapely
     k = int(lab.max()) + 1
     if len(pinned) != k:
