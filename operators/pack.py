@@ -30,18 +30,12 @@ GROUP_ITEMS = (('none', "None", "Pack every island freely"),
 
 
 def face_labels(ob, arrays, keep, number, materials):
-    """Each kept triangle's material (the material in its polygon's slot, numbered across
-    objects by ``materials``, a dict name -> number; an empty slot is its own) and object
-    (``number``)."""
-    me = ob.data
-    index = np.zeros(len(me.polygons), dtype=np.int32)
-    if len(me.polygons):
-        me.polygons.foreach_get("material_index", index)
-    slots = [s.material.name if s.material is not None else None for s in ob.material_slots]
-    names = [slots[i] if 0 <= i < len(slots) else None for i in range(max(len(slots), 1))]
+    """Each kept triangle's material (numbered across objects by ``materials``, a dict material
+    name -> number: the same material in two objects is one group; an empty slot is one too) and
+    object (``number``)."""
+    index, names = mesh_data.polygon_materials(ob)
     ids = np.array([materials.setdefault(n, len(materials)) for n in names], dtype=np.int64)
-    tri = np.minimum(index[arrays.tri_poly[keep]], len(ids) - 1)
-    return ids[tri], np.full(int(keep.sum()), number, dtype=np.int64)
+    return ids[index[arrays.tri_poly[keep]]], np.full(int(keep.sum()), number, dtype=np.int64)
 
 
 def pack_atlas(objects, polygons, options):
