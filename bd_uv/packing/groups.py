@@ -1,19 +1,15 @@
 """Grouped packing: the charts of one material (or one object) packed together.
 
-"Together" means one compact block per group, and blocks that do not mix:
+"Together" means one region per group that no chart of another group enters:
 
-1. each group's charts are nested on their own (spyrrow, :func:`.nest.nest`) in a strip about as
-   high as it is wide, with the padding of the final square as their separation;
-2. the group's block is the convex hull of its placed outlines; the blocks are then nested as
-   items into the square (:func:`.square.square_layout`) or the UDIM tiles
-   (:func:`.nest.tile_layouts`), with the padding between them, each turned as a whole;
-3. a chart's placement is its turn in the block followed by the block's.
-
-So each group's charts lie inside its block's convex hull, no chart of another group enters it,
-and blocks are at least the padding apart: a texture artist sees one region per group. The inner
-separation is fixed before the square's side is known: it is the padding of a square guessed
-from the charts' area (density ``BLOCK_DENSITY``); when the square comes out larger, so the
-inner gaps would fall short of the padding in texels, the packing is run again for that side.
+- fitted to the square (no texel density): one column of the square's height per group, side by
+  side (:mod:`.columns`): each group's bounding box holds only its charts;
+- at a fixed texel density (one tile, or UDIM tiles): each group's charts are nested on their own
+  (spyrrow, :func:`.nest.nest`) in a strip about as high as it is wide, with the padding as their
+  separation; the group's block is the convex hull of its placed outlines, and the blocks are
+  nested as items into the tiles (:func:`.nest.tile_layouts`) with the padding between them, each
+  turned as a whole (a chart's placement is its turn in the block followed by the block's). A
+  block larger than a tile is refused.
 
 A chart is in the group of most of its faces' 3D area (a chart across two materials belongs to
 the one it mostly carries; seams are not cut at material borders here).
@@ -22,11 +18,9 @@ import numpy as np
 
 from ..errors import PackError
 from .nest import FIT, Placement, _area, least_squares, nest, rotations, tile_layouts
-from .square import square_layout
+from .columns import column_layout
 
-BLOCK_DENSITY = 0.5     # chart area over the square's area guessed for the inner separation
 INNER_DENSITY = 0.63    # a group's strip height: sqrt(its charts' area / this)
-ATTEMPTS = 4            # runs at growing guessed sides before giving up on the inner padding
 
 
 def chart_groups(F, V, face_island, face_group, k):
@@ -80,7 +74,7 @@ def _block(outlines, sep, options, seconds):
 
 
 def grouped_layout(outlines, group, options, tol, seconds, fixed=False):
-    """Charts packed one block per group (module docstring).
+    """Charts packed one region per group (module docstring).
 
     Parameters
     ----------
@@ -89,9 +83,9 @@ def grouped_layout(outlines, group, options, tol, seconds, fixed=False):
     group : (k,) int array, group of each chart (0..g-1)
     options : PackOptions
     tol : float, outline simplification tolerance in the outlines' units
-    seconds : float, the search time: half for the blocks (shared by chart count), half for the
-        square
-    fixed : bool, a fixed texel density: the square (or each UDIM tile) has side 1
+    seconds : float, the search time (with ``fixed``: half for the blocks, shared by chart
+        count, half for the tiles)
+    fixed : bool, a fixed texel density: each tile has side 1
 
     Returns
     -------
@@ -100,41 +94,28 @@ def grouped_layout(outlines, group, options, tol, seconds, fixed=False):
     """
     group = np.asarray(group, dtype=np.int64)
     k, g = len(outlines), int(group.max()) + 1
-    area = sum(_area(xy) for xy in outlines)
-    guess = 1.0 if fixed else float(np.sqrt(area / BLOCK_DENSITY))
-    for _ in range(ATTEMPTS):  # per guessed side
-        sep = options.padding * guess + 2 * tol
-        angle, shift = np.zeros(k), np.zeros((k, 2))
-        blocks, solves = [], 0
-        for b in range(g):  # per group
-            members = np.flatnonzero(group == b)
-            if len(members) == 1:   # a lone chart is its own block
-                i = members[0]
-                blocks.append(outlines[i])
-                continue
-            share = 0.5 * seconds * len(members) / k
-            pl, hull = _block([outlines[i] for i in members], sep, options, share)
-            solves += 1
-            centre = 0.5 * (hull.min(axis=0) + hull.max(axis=0))
-            angle[members], shift[members] = pl.angle, pl.shift - centre
-            blocks.append(hull - centre)
-        if fixed:
-            try:
-                outer, tile, n = tile_layouts(blocks, options, tol, 0.5 * seconds)
-            except PackError as exc:
-                raise PackError(f"{exc} (grouped: each item is a group's block of charts)") \
-                    from None
-            side = 1.0
-        else:
-            outer, side, n = square_layout(blocks, options, tol, 0.5 * seconds)
-            tile = np.zeros(g, dtype=np.int64)
-        solves += n
-        if fixed or sep - 2 * tol >= options.padding * side * (1 - 1e-12):
-            break
-        guess = side * 1.05   # the square came out larger: the inner gaps would fall short
-    else:
-        raise PackError("the groups' blocks could not keep the padding between their charts")
+    if not fixed:
+        pl, side, solves = column_layout(outlines, group, options, tol, seconds)
+        return pl, side, np.zeros(k, dtype=np.int64), solves
+    sep = options.padding + 2 * tol        # the tiles' padding: known before packing
+    angle, shift = np.zeros(k), np.zeros((k, 2))
+    blocks, solves = [], 0
+    for b in range(g):  # per group
+        members = np.flatnonzero(group == b)
+        if len(members) == 1:   # a lone chart is its own block
+            blocks.append(outlines[members[0]])
+            continue
+        share = 0.5 * seconds * len(members) / k
+        pl, hull = _block([outlines[i] for i in members], sep, options, share)
+        solves += 1
+        centre = 0.5 * (hull.min(axis=0) + hull.max(axis=0))
+        angle[members], shift[members] = pl.angle, pl.shift - centre
+        blocks.append(hull - centre)
+    try:
+        outer, tile, n = tile_layouts(blocks, options, tol, 0.5 * seconds)
+    except PackError as exc:
+        raise PackError(f"{exc} (grouped: each item is a group's block of charts)") from None
     R = rotations(outer.angle)[group]
     return (Placement(angle + outer.angle[group],
-                      np.einsum("kij,kj->ki", R, shift) + outer.shift[group], side),
-            side, tile[group], solves)
+                      np.einsum("kij,kj->ki", R, shift) + outer.shift[group], 1.0),
+            1.0, tile[group], solves + n)

@@ -127,6 +127,15 @@ def test_grouped_charts_pack_one_region_per_group(kind, k, groups, res, pad, rot
             _groups_apart(out[on], sub[on], chart_group, pad, res)
     if density is None:
         _groups_apart(out, lab, chart_group, pad, res)
+        # fitted to the square, each group is a column: the groups' bounding boxes are apart
+        g = chart_group[lab]
+        boxes = [(out[g == b].reshape(-1, 2).min(0), out[g == b].reshape(-1, 2).max(0))
+                 for b in range(groups)]
+        for a in range(groups):
+            for b in range(a + 1, groups):
+                (lo_a, hi_a), (lo_b, hi_b) = boxes[a], boxes[b]
+                apart = np.maximum(lo_b - hi_a, lo_a - hi_b).max()
+                assert apart * res >= pad * (1 - 1e-4)
 
 
 def test_a_chart_across_two_materials_goes_with_most_of_its_area():
