@@ -107,6 +107,8 @@ def _groups_apart(out, lab, group_of_chart, pad, res):
     ("holes", 12, 2, 512, 8, "90", None),
     ("slivers", 15, 4, 2048, 6, "none", None),
     ("boxes", 30, 3, 1024, 4, "any", 60.0),
+    ("boxes", 30, 10, 1024, 4, "any", None),        # many groups: columns in rows
+    ("huge_tiny", 9, 6, 2048, 2, "90", None),        # groups of one chart (no nesting)
 ])
 def test_grouped_charts_pack_one_region_per_group(kind, k, groups, res, pad, rotate, density):
     V, F, uv, lab = chart_set(kind, k, seed=k + groups)
