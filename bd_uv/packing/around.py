@@ -75,7 +75,9 @@ def _candidates(outlines, options):
 
 def _place(occ, outlines, turns, order, scale, options, tol):
     """Greedy placement at one scale on the grid ``occ`` (copied). Returns (angle, shift) or None
-    when some chart finds no room."""
+    when some chart finds no room. The FFT correlation proposes offsets; each one taken is
+    checked cell by cell on the integer rasters first (float rounding cannot let two charts'
+    cells meet)."""
     import scipy.fft as sf
     n = occ.shape[0]
     h = 1.0 / n
@@ -84,21 +86,27 @@ def _place(occ, outlines, turns, order, scale, options, tol):
     angle, shift = np.zeros(len(outlines)), np.zeros((len(outlines), 2))
     F_occ = sf.rfft2(occ, workers=1)
     for i in order:  # per chart, largest first
+        cells = [(a, *_chart_cells(scale * outlines[i] @ R.T, reach, h))
+                 for a, R in zip(turns[i], rotations(turns[i]))]
+        cells = [c for c in cells if c[1].shape[0] <= n and c[1].shape[1] <= n]
+        if not cells:
+            return None
+        stack = np.zeros((len(cells), n, n), np.float32)
+        for j, (_, mask, _) in enumerate(cells):  # per allowed turn
+            stack[j, :mask.shape[0], :mask.shape[1]] = mask
+        hits = sf.irfft2(F_occ * np.conj(sf.rfft2(stack, workers=1)), s=(n, n), workers=1)
         best = None
-        for a, R in zip(turns[i], rotations(turns[i])):  # per allowed turn
-            mask, off = _chart_cells(scale * outlines[i] @ R.T, reach, h)
+        for (a, mask, off), hit in zip(cells, hits):  # per allowed turn
             rows, cols = mask.shape
-            if rows > n or cols > n:
-                continue
-            F_mask = sf.rfft2(mask.astype(np.float32), s=(n, n), workers=1)
-            hit = sf.irfft2(F_occ * np.conj(F_mask), s=(n, n), workers=1)
             free = hit[:n - rows + 1, :n - cols + 1] < 0.5
-            if not free.any():
-                continue
-            r = np.flatnonzero(free.any(axis=1))[0]        # lowest top edge: lowest row
-            c = int(np.flatnonzero(free[r])[0])
-            if best is None or (r + rows, c) < best[0]:
-                best = ((r + rows, c), a, r, c, mask, off)
+            for r in np.flatnonzero(free.any(axis=1)):  # per row, lowest first
+                if best is not None and r + rows >= best[0][0]:
+                    break
+                c = next((int(c) for c in np.flatnonzero(free[r])
+                          if not occ[r:r + rows, c:c + cols][mask].any()), None)
+                if c is not None:
+                    best = ((r + rows, c), a, r, c, mask, off)
+                    break
         if best is None:
             return None
         _, angle[i], r, c, mask, off = best
@@ -145,6 +153,8 @@ def place_around(pinned_geometry, outlines, areas, options, tol, free_area, leas
                 s = found[0] * STEP ** j
                 if s >= top or (j and time.perf_counter() - t0 > seconds):
                     break
+            if g == 0 and found is not None and time.perf_counter() - t0 > seconds:
+                break
             got = _place(occ, outlines, turns, order, s, options, tol)
             if got is None:
                 if g == 0:
