@@ -171,3 +171,24 @@ def test_grouping_needs_the_faces_groups_and_refuses_pins_and_bad_names():
     one = pack_islands(V, F, uv, lab, PackOptions(group="object", solve_seconds=0),
                        face_labels={"object": np.zeros(len(lab), int)})
     check_layout(V, F, uv, lab, one, PackOptions())
+
+
+def test_the_free_square_is_kept_when_the_raster_reaches_less(monkeypatch):
+    """On a 16-cell grid the raster wastes most of the room (whole cells of 1/16): the largest
+    free square beside the pinned box (nested by spyrrow) reaches further and is kept; the layout
+    is certified the same way and the pinned chart stays bit for bit."""
+    import bd_uv.packing.around as around
+    V, F, uv, lab = chart_set("boxes", 8, seed=6)
+    P = uv[lab == 0]
+    lo, hi = P.reshape(-1, 2).min(0), P.reshape(-1, 2).max(0)
+    uv[lab == 0] = (P - lo) * (0.2 / (hi - lo).max()) + 0.01       # small, in a corner
+    pinned = np.zeros(8, bool)
+    pinned[0] = True
+    options = PackOptions(resolution=1024, padding_px=4, solve_seconds=0.5)
+    fine = pack_islands(V, F, uv, lab, options, pinned=pinned)
+    monkeypatch.setattr(around, "GRIDS", (16,))
+    coarse = pack_islands(V, F, uv, lab, options, pinned=pinned)
+    check_layout(V, F, uv, lab, coarse, options, pinned=pinned)
+    check_layout(V, F, uv, lab, fine, options, pinned=pinned)
+    assert coarse.solves >= 1              # spyrrow's free square, not the raster (0 solves)
+    assert fine.texel_density > 0 and coarse.texel_density > 0
