@@ -16,10 +16,9 @@ import numpy as np
 import shapely
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-from bd_uv.meshio import load_mesh  # noqa: E402
 from bd_uv.packing import PackOptions, layout_certificate, pack_islands  # noqa: E402
 from bd_uv.packing.groups import chart_groups  # noqa: E402
-from bench_pinned import SHARED, charts  # noqa: E402
+from bench_pinned import each_mesh  # noqa: E402
 
 
 def hull_figures(uv, lab, group_of_chart, resolution):
@@ -43,9 +42,7 @@ def main():
     print(f"load {os.getloadavg()[0]:.1f}")
     print("mesh charts groups | none: coverage s | material: coverage s certified | "
           "hull gap px, chart in another group's hull | coverage ratio")
-    for name in a.meshes:
-        m = load_mesh(os.path.join(SHARED, name))
-        uv, lab = charts(m.V, m.F)
+    for name, m, uv, lab in each_mesh(a.meshes):
         z = m.V[m.F].mean(axis=1)[:, 2]
         cuts = np.quantile(z, np.linspace(0, 1, a.groups + 1)[1:-1])
         material = np.searchsorted(cuts, z)

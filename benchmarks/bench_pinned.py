@@ -34,6 +34,14 @@ def charts(V, F):
     return lay.corner_uv.astype(np.float64), lay.face_island
 
 
+def each_mesh(names):
+    """(name, mesh, corner_uv, label) of the product's charts of each named shared mesh."""
+    for name in names:  # per mesh
+        m = load_mesh(os.path.join(SHARED, name))
+        uv, lab = charts(m.V, m.F)
+        yield name, m, uv, lab
+
+
 def free_square_pack(V, F, uv, lab, pinned, options):
     """The previous method: the moving charts nested into the largest square beside the pinned
     charts' bounding boxes."""
@@ -64,9 +72,7 @@ def main():
     print(f"load {os.getloadavg()[0]:.1f}")
     print("mesh charts pinned | first pack (nothing pinned) coverage | before: coverage gap_px s "
           "| after: coverage gap_px s certified | after/before coverage, moved density")
-    for name in a.meshes:
-        m = load_mesh(os.path.join(SHARED, name))
-        uv, lab = charts(m.V, m.F)
+    for name, m, uv, lab in each_mesh(a.meshes):
         k = int(lab.max()) + 1
         first = pack_islands(m.V, m.F, uv, lab, options).corner_uv
         c_first = layout_certificate(m.V, m.F, first.astype(np.float32), lab, np.full(k, 1001),
