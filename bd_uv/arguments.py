@@ -145,9 +145,9 @@ def add_layout_options(p):
                         "about 0.4 s + 0.06 s a chart); 0: the first placements found only, "
                         "for a little less coverage")
     p.add_argument("--group", choices=GROUPINGS, default=PACK_DEFAULTS["group"],
-                   help="pack the charts of one material (OBJ usemtl, glTF primitive material) "
-                        "or one object (OBJ o) together: one compact block per group, blocks "
-                        "apart by the padding (default none)")
+                   help="pack the charts of one material (OBJ usemtl, glTF primitive material, "
+                        "USD materialBind subset) or one object (OBJ o) together, one region per "
+                        "group the padding apart (default none)")
     p.add_argument("--udim", action="store_true",
                    help="with --texel-density: charts that do not fit tile 1001 spill into 1002, "
                         "1003, ... (Blender's UDIM numbering)")

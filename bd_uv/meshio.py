@@ -24,8 +24,8 @@ class Mesh:
     name : str
     labels : dict or None, what each face belongs to, for packing by group
         (``bd_uv.packing.pack_islands``' ``face_labels``): "material" (m,) int64 (OBJ
-        ``usemtl``, glTF primitive materials; -1: none) and "object" (m,) int64 (OBJ ``o``);
-        None when the format says nothing of it (OFF, PLY)
+        ``usemtl``, glTF primitive materials, USD "materialBind" GeomSubsets; -1: none) and
+        "object" (m,) int64 (OBJ ``o``); None when the format says nothing of it (OFF, PLY)
     """
     V: np.ndarray
     F: np.ndarray

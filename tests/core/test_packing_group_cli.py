@@ -121,3 +121,42 @@ def test_gltf_primitive_materials_group_the_charts(tmp_path):
     assert entry["pack"]["certified"] and entry["pack"]["group"] == "material"
     back = read_scene(str(out)).meshes[0].mesh          # float32 as the file stores
     assert_one_region_per_group(back.corner_uv, back.labels["material"], 4 / 1024)
+
+
+def test_usd_material_subsets_group_the_charts(tmp_path):
+    """A USD mesh of three separate grids: the faces of the first two in two "materialBind"
+    GeomSubsets (one material each), the third in none. Each face's material is its subset's,
+    and ``--group material`` writes each material's charts in a region of their own."""
+    from pxr import Usd, UsdGeom, UsdShade, Vt
+    from bd_uv.scenes import read_scene
+    from usd_build import quad_grid
+    grids = [quad_grid(6, 5, bump=False), quad_grid(5, 4, bump=False), quad_grid(4, 4, False)]
+    V = np.vstack([g[0] + [3.0 * j, 0, 0] for j, g in enumerate(grids)])
+    first = np.cumsum([0] + [len(g[0]) for g in grids])
+    counts = np.concatenate([g[1] for g in grids])
+    idx = np.concatenate([g[2] + first[j] for j, g in enumerate(grids)])
+    face_of = np.repeat(np.arange(3), [len(g[1]) for g in grids])
+    path = str(tmp_path / "three.usda")
+    stage = Usd.Stage.CreateNew(path)
+    mesh = UsdGeom.Mesh.Define(stage, "/Three")
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(V.astype(np.float32)))
+    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(counts.astype(np.int32)))
+    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(idx.astype(np.int32)))
+    binding = UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim())
+    for j in range(2):
+        mat = UsdShade.Material.Define(stage, f"/Looks/M{j}")
+        faces = np.flatnonzero(face_of == j)
+        subset = binding.CreateMaterialBindSubset(f"part{j}", Vt.IntArray(faces.tolist()))
+        UsdShade.MaterialBindingAPI.Apply(subset.GetPrim()).Bind(mat)
+    stage.GetRootLayer().Save()
+    m = read_scene(path).meshes[0].mesh
+    per_triangle = np.repeat(np.where(face_of < 2, face_of, -1), counts - 2)   # quads: 2 each
+    assert np.array_equal(m.labels["material"], per_triangle)
+    out, rep = tmp_path / "out.usda", tmp_path / "r.json"
+    code = cli.main(["unwrap", path, "-o", str(out), "--seams", "none", "--bound", "3",
+                     "--group", "material", "--pack-seconds", "0.5", "--report", str(rep)])
+    assert code == 0
+    entry = json.loads(rep.read_text())["meshes"][0]
+    assert entry["pack"]["certified"] and entry["pack"]["group"] == "material"
+    back = read_scene(str(out)).meshes[0].mesh
+    assert_one_region_per_group(back.corner_uv, back.labels["material"], 4 / 1024)
