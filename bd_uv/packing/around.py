@@ -14,9 +14,13 @@ placement (as Blender's packer is), made conservative so the exact layout certif
   cells stay in the grid);
 - charts go largest first, each at its allowed turns (any angle: its least-square turn and the
   three quarter turns after it), at the offset whose top edge is lowest, then leftmost;
-- the common scale is bisected on a coarse grid (the largest at which every chart finds room),
-  then raised in steps of ``STEP`` on finer grids (less room lost to whole cells) while the time
-  lasts (``options.search_seconds``; a grid's first try is always made).
+- the common scale: on a coarse grid, down from every chart's area filling the free area in
+  steps of ``DESCEND`` until every chart finds room (a try that fails stops at the first chart
+  without room, so tries far too large cost little), the last step then halved twice; on finer
+  grids (less room lost to whole cells) raised in steps of ``STEP`` while the time lasts
+  (``options.search_seconds``; a grid's first try is always made). Measured on cow's 46 charts
+  with 4 pinned (load 8.5): 0.536 coverage in 1.7 s, against 0.533 in 3.7 s bisecting from half
+  the largest scale.
 """
 import time
 
@@ -25,7 +29,7 @@ import numpy as np
 from .nest import least_squares, rotations
 
 GRIDS = (128, 256, 512)     # grid cells along the square's side, coarse to fine
-BISECTIONS = 6              # steps of the scale search on the coarsest grid
+DESCEND = 0.95              # the coarse search's steps down from the largest scale conceivable
 STEP = 1.02                 # the scale's steps up on the finer grids
 GROW = 1.005                # buffers approximate arcs by chords: radii grown by this
 TURNS = 4                   # any angle: the least-square turn and this many evenly after it
@@ -146,24 +150,28 @@ def place_around(pinned_geometry, outlines, areas, options, tol, free_area, leas
     lo, hi = least, top
     for g, n in enumerate(GRIDS):  # per grid, coarse to fine
         occ = pinned_cells(pinned_geometry, options.padding, n)
-        for j in range(BISECTIONS if g == 0 else 64):  # per scale tried
+        for j in range(64):  # per scale tried
             if g == 0:
-                s = np.sqrt(lo * hi) if lo > 0 else 0.5 * hi
-            else:
-                s = found[0] * STEP ** j
+                # down from the top in steps of DESCEND while failing (a failure stops at the
+                # first chart without room: cheap far above the answer), then the last step
+                # halved twice
+                if found is not None and (hi / lo < DESCEND ** -0.25
+                                          or time.perf_counter() - t0 > seconds):
+                    break
+                s = hi * DESCEND if found is None else np.sqrt(lo * hi)
+                if s <= least:
+                    break
+            else:   # a step above the scale found (the same scale again would gain nothing)
+                s = found[0] * STEP
                 if s >= top or (j and time.perf_counter() - t0 > seconds):
                     break
-            if g == 0 and found is not None and time.perf_counter() - t0 > seconds:
-                break
             got = _place(occ, outlines, turns, order, s, options, tol)
             if got is None:
                 if g == 0:
                     hi = s
                     continue
                 break
-            if found is None or s >= found[0]:
-                found = (s, *got)
-            lo = max(lo, s)
+            found, lo = (s, *got), s
         if found is None or time.perf_counter() - t0 > seconds:
             break
     return found
