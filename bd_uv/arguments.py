@@ -8,7 +8,7 @@ import argparse
 from .options import (AUTO_SEAMS_STRETCH, BOUNDARIES, CONES, ENTRY_SEAMS_MODE, FRAMES, METHODS,
                       OVERLAPS, UnwrapOptions)
 from .errors import OptionError
-from .packing import ROTATIONS, PackOptions
+from .packing import GROUPINGS, ROTATIONS, PackOptions
 
 # Every default below is UnwrapOptions' own: changing one there changes it here.
 DEFAULTS = UnwrapOptions()
@@ -16,7 +16,7 @@ DEFAULTS = UnwrapOptions()
 TIME_BUDGET = 120.0
 # The packing options' defaults (``--udim`` is a flag): with ``--no-pack`` any other is refused.
 PACK_DEFAULTS = dict(resolution=1024, padding=4.0, texel_density=None, rotate="any", udim=False,
-                     pack_seconds=None)
+                     pack_seconds=None, group="none")
 
 
 def bound_arg(text):
@@ -144,6 +144,10 @@ def add_layout_options(p):
                    help="seconds the nesting and compaction may take for the smallest square "
                         "(default auto: about 6 ms sqrt(charts x faces)); 0: the first "
                         "placements found only, for less coverage")
+    p.add_argument("--group", choices=GROUPINGS, default=PACK_DEFAULTS["group"],
+                   help="pack the charts of one material (OBJ usemtl, glTF primitive material, "
+                        "USD materialBind subset) or one object (OBJ o) together, one region per "
+                        "group the padding apart (default none)")
     p.add_argument("--udim", action="store_true",
                    help="with --texel-density: charts that do not fit tile 1001 spill into 1002, "
                         "1003, ... (Blender's UDIM numbering)")
@@ -175,5 +179,6 @@ def layout_kwargs(args):
                                          "not with --no-pack")
     options = PackOptions(resolution=args.resolution, padding_px=args.padding,
                           texel_density=args.texel_density, rotate=args.rotate,
-                          udim=args.udim, solve_seconds=args.pack_seconds) if pack else None
+                          udim=args.udim, solve_seconds=args.pack_seconds,
+                          group=args.group) if pack else None
     return dict(pack=pack, cut=args.overlap == "cut", pack_options=options)

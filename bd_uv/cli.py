@@ -91,7 +91,8 @@ def run_unwrap(args):
                          options=options)
         progress.stage("storing: cut, pack and certify the UVs as stored")
         layout, res, _ = stored_layout_with_headroom(mesh.V, mesh.F, res,
-                                                     stretch=options.stretch, **layout_options)
+                                                     stretch=options.stretch,
+                                                     face_labels=mesh.labels, **layout_options)
     if options.seams_mode == "needed":
         _print_needed(res, options, args.output)
     islands = layout.island_entries(res)

@@ -134,7 +134,7 @@ class Layout:
 
 
 def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float64,
-                  pack_options=None):
+                  pack_options=None, face_labels=None):
     """Turn an :class:`UnwrapResult` into the UVs to store, and certify them as stored.
 
     1. islands the unwrap certified are checked for self-overlap; with ``cut`` an overlapping one
@@ -156,6 +156,8 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
     dtype : numpy dtype the UVs are stored in
     pack_options : bd_uv.packing.PackOptions, optional: pack with the atlas packer; its layout
         certificate (on the stored, written islands) goes into ``Layout.pack``
+    face_labels : dict, optional: each face's "material" and "object" (``Mesh.labels``), for
+        ``pack_options.group``
 
     Returns
     -------
@@ -192,7 +194,7 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
     packed = None
     if pack and pack_options is not None and len(source):
         from .packing import pack_islands as pack_atlas
-        packed = pack_atlas(V, F, uv, new, pack_options)
+        packed = pack_atlas(V, F, uv, new, pack_options, face_labels=face_labels)
         uv = packed.corner_uv
     elif pack:
         uv = pack_islands(uv, new, margin)
@@ -227,4 +229,5 @@ def _pack_report(V, F, stored, face_island, packed):
     o = packed.options
     cert = layout_certificate(V, F, stored, face_island, packed.tile, o.resolution, o.padding_px)
     return dict(seconds=round(packed.seconds, 4), **cert.summary(),
-                texel_density=packed.texel_density, rotate=o.rotate, solves=packed.solves)
+                texel_density=packed.texel_density, rotate=o.rotate, group=o.group,
+                solves=packed.solves)

@@ -22,11 +22,16 @@ class Mesh:
     F : (m,3) int64 (polygons fan-triangulated)
     corner_uv : (m,3,2) float64 or None, the file's UVs per face corner (OBJ ``vt``)
     name : str
+    labels : dict or None, what each face belongs to, for packing by group
+        (``bd_uv.packing.pack_islands``' ``face_labels``): "material" (m,) int64 (OBJ
+        ``usemtl``, glTF primitive materials, USD "materialBind" GeomSubsets; -1: none) and
+        "object" (m,) int64 (OBJ ``o``); None when the format says nothing of it (OFF, PLY)
     """
     V: np.ndarray
     F: np.ndarray
     corner_uv: np.ndarray = None
     name: str = ""
+    labels: dict = None
 
     def uv_seams(self):
         """Edges where the file's UVs are discontinuous, (s,2) vertex pairs; None without UVs."""
@@ -49,8 +54,9 @@ def load_mesh(path):
     ext = os.path.splitext(path)[1].lower()
     name = os.path.splitext(os.path.basename(path))[0]
     try:
+        labels = None
         if ext == ".obj":
-            V, F, cuv = _read_obj(path)
+            V, F, cuv, labels = _read_obj(path)
         elif ext in (".off", ".ply"):
             import trimesh
             m = trimesh.load(path, process=False, force="mesh")
@@ -65,14 +71,22 @@ def load_mesh(path):
         raise InvalidMeshError(f"{path}: cannot read the mesh ({exc})") from exc
     if len(F) == 0:
         raise InvalidMeshError(f"{path}: the file holds no faces")
-    return Mesh(V, F.reshape(-1, 3), cuv, name)
+    return Mesh(V, F.reshape(-1, 3), cuv, name, labels)
 
 
 def _read_obj(path):
-    vs, vts, faces, tfaces = [], [], [], []
+    """V, F, corner UVs or None, and each face's material (``usemtl``) and object (``o``), each
+    numbered in order of first use by a face (faces before any ``usemtl`` or ``o`` make a
+    material or object of their own)."""
+    vs, vts, faces, tfaces, mats, objs = [], [], [], [], [], []
+    mat, obj = None, None
     with open(path, "r", encoding="utf-8", errors="replace") as fh:
         for line in fh:
-            if line.startswith("v "):
+            if line.startswith(("usemtl ", "usemtl\t")):
+                mat = line.split(None, 1)[1].strip() if len(line.split()) > 1 else ""
+            elif line.startswith(("o ", "o\t")):
+                obj = line.split(None, 1)[1].strip() if len(line.split()) > 1 else ""
+            elif line.startswith("v "):
                 vs.append(line.split()[1:4])
             elif line.startswith("vt "):
                 vts.append(line.split()[1:3])
@@ -85,6 +99,8 @@ def _read_obj(path):
                 for j in range(1, len(vi) - 1):  # fan-triangulate polygons
                     faces.append((vi[0], vi[j], vi[j + 1]))
                     tfaces.append((ti[0], ti[j], ti[j + 1]))
+                    mats.append(mat)
+                    objs.append(obj)
     V = np.asarray(vs, dtype=np.float64).reshape(-1, 3)
     F = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     F = np.where(F < 0, F + len(V), F - 1)  # OBJ is 1-based; negative indices count back
@@ -94,7 +110,14 @@ def _read_obj(path):
         VT = np.asarray(vts, dtype=np.float64).reshape(-1, 2)
         T = np.where(T < 0, T + len(VT), T - 1)
         cuv = VT[T]
-    return V, F, cuv
+    labels = {"material": _first_use(mats), "object": _first_use(objs)}
+    return V, F, cuv, labels
+
+
+def _first_use(names):
+    """(m,) int64: each name's number in order of first appearance."""
+    numbers = {}
+    return np.asarray([numbers.setdefault(n, len(numbers)) for n in names], dtype=np.int64)
 
 
 def uv_seams(F, corner_uv):

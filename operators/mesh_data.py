@@ -398,6 +398,17 @@ def set_vertex_positions(mesh, vertices, co):
     mesh.update()
 
 
+def polygon_materials(ob):
+    """Each polygon's material: (P,) int64 index into the returned names (the material in the
+    polygon's slot; None for an empty slot or no slots; an index past the last slot reads the last
+    one, as Blender draws it)."""
+    me = ob.data
+    index = _get(me.polygons, "material_index", np.int32, len(me.polygons)).astype(np.int64)
+    names = [s.material.name if s.material is not None else None for s in ob.material_slots]
+    names = names or [None]
+    return np.clip(index, 0, len(names) - 1), names
+
+
 def polygon_sizes(mesh):
     """(P,) int: corners of each polygon (3 for a triangle)."""
     return _get(mesh.polygons, "loop_total", np.int32, len(mesh.polygons)).astype(np.int64)

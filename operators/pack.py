@@ -3,7 +3,8 @@
 Any UV islands, bd-uv's or not, of the selected faces of every mesh in Edit Mode are packed
 together into one square (or UDIM tiles) by ``bd_uv.packing.pack_islands``: turns only, the
 padding in texels, one texel density; islands holding a pinned UV stay where they are and the
-others are packed beside them. The UVs are written as float32 and the layout certificate
+others are packed into the free space around them; optionally the islands of one material (the
+faces' material slots) or of one object packed together. The UVs are written as float32 and the layout certificate
 is measured on them as written; the status bar gets its figures. One undo step. ``pack_atlas``
 is also what ``uv.bd_unwrap`` packs with by default.
 """
@@ -21,6 +22,20 @@ from .editmode import edit_mesh_objects, object_mode
 ROTATE_ITEMS = (('any', "Any Angle", "Turn charts by any angle (never mirrored)"),
                 ('90', "Quarter Turns", "Turn charts by multiples of 90 degrees"),
                 ('none', "None", "Keep every chart's orientation"))
+GROUP_ITEMS = (('none', "None", "Pack every island freely"),
+               ('material', "Material", "Pack the islands of one material together: one block "
+                "per material, blocks apart by the padding"),
+               ('object', "Object", "Pack the islands of one object together (several objects "
+                "in Edit Mode): one block per object"))
+
+
+def face_labels(ob, arrays, keep, number, materials):
+    """Each kept triangle's material (numbered across objects by ``materials``, a dict material
+    name -> number: the same material in two objects is one group; an empty slot is one too) and
+    object (``number``)."""
+    index, names = mesh_data.polygon_materials(ob)
+    ids = np.array([materials.setdefault(n, len(materials)) for n in names], dtype=np.int64)
+    return ids[index[arrays.tri_poly[keep]]], np.full(int(keep.sum()), number, dtype=np.int64)
 
 
 def pack_atlas(objects, polygons, options):
@@ -30,7 +45,8 @@ def pack_atlas(objects, polygons, options):
     ----------
     objects : list of bpy.types.Object (meshes, not in Edit Mode)
     polygons : list of (P_i,) bool, the polygons to pack of each object
-    options : bd_uv.packing.PackOptions
+    options : bd_uv.packing.PackOptions (``group``: islands of one material, from the faces'
+        material slots, or of one object packed together)
 
     Returns
     -------
@@ -40,7 +56,8 @@ def pack_atlas(objects, polygons, options):
     faces, a pinned island outside the square, or a layout that fails its certificate.
     """
     parts, Vs, Fs, uvs, labs, pins, nv, nl = [], [], [], [], [], [], 0, 0
-    for ob, mask in zip(objects, polygons):
+    mats, obs, materials = [], [], {}
+    for number, (ob, mask) in enumerate(zip(objects, polygons)):
         if not mask.any():
             continue
         arrays = mesh_data.mesh_arrays(ob, scale=tuple(ob.scale))
@@ -58,13 +75,18 @@ def pack_atlas(objects, polygons, options):
         Fs.append(arrays.F[keep] + nv)
         uvs.append(arrays.corner_uv[keep])
         labs.append(np.where(lab >= 0, lab + nl, -1))
+        mat, obj = face_labels(ob, arrays, keep, number, materials)
+        mats.append(mat)
+        obs.append(obj)
         nv += len(arrays.V)
         nl += int(lab.max()) + 1
     if not parts:
         return None
     V, F, uv, lab = map(np.concatenate, (Vs, Fs, uvs, labs))
     pinned = np.concatenate(pins)
-    packed = pack_islands(V, F, uv, lab, options, pinned=pinned if pinned.any() else None)
+    labels = {"material": np.concatenate(mats), "object": np.concatenate(obs)}
+    packed = pack_islands(V, F, uv, lab, options, pinned=pinned if pinned.any() else None,
+                          face_labels=labels)
     stored = packed.corner_uv.astype(np.float32)
     cert = layout_certificate(V, F, stored, lab, packed.tile, options.resolution,
                                             options.padding_px)
@@ -114,6 +136,8 @@ class UV_OT_bd_pack(bpy.types.Operator):
     udim: BoolProperty(name="UDIM Tiles", default=False,
                        description="With a fixed texel density: islands that do not fit tile "
                        "1001 spill into 1002, 1003, ...")
+    group: EnumProperty(name="Group", items=GROUP_ITEMS, default='none',
+                        description="Pack the islands of one material or one object together")
 
     @classmethod
     def poll(cls, context):
@@ -124,6 +148,7 @@ class UV_OT_bd_pack(bpy.types.Operator):
         layout.prop(self, "resolution")
         layout.prop(self, "padding")
         layout.prop(self, "rotate")
+        layout.prop(self, "group")
         layout.prop(self, "use_texel_density")
         row = layout.row()
         row.active = self.use_texel_density
@@ -136,7 +161,7 @@ class UV_OT_bd_pack(bpy.types.Operator):
         return PackOptions(
             resolution=self.resolution, padding_px=self.padding, rotate=self.rotate,
             texel_density=self.texel_density if self.use_texel_density else None,
-            udim=self.udim and self.use_texel_density)
+            udim=self.udim and self.use_texel_density, group=self.group)
 
     def execute(self, context):
         t0 = time.perf_counter()

@@ -20,7 +20,7 @@ from ..bd_uv.unwrapping.storage import with_predicted_headroom
 from . import auto_seams, needed_seams, session
 from .background import BackgroundSolve
 from .editmode import edit_mesh_objects, object_mode
-from .pack import pack_atlas, pack_message
+from .pack import GROUP_ITEMS, pack_atlas, pack_message
 
 # The background job's solve function (tests substitute a gated one to control timing).
 SOLVE = bd_uv.unwrap
@@ -138,6 +138,9 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                                  description="Texture size the atlas padding is measured at")
     pack_padding: FloatProperty(name="Padding", default=4.0, min=0.0, soft_max=32.0,
                                 description="Least gap between islands in texels (atlas packer)")
+    pack_group: EnumProperty(name="Group", items=GROUP_ITEMS, default='none',
+                             description="Atlas packer: pack the islands of one material or one "
+                             "object together")
     show_distortion: BoolProperty(name="Colour by Distortion", default=False,
                                   description="Colour faces by their distortion afterwards")
     use_object_scale: BoolProperty(name="Use Object Scale", default=True,
@@ -189,7 +192,8 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
         row.active = self.pack
         row.prop(self, "pack_shape")
         atlas = self.pack_shape == 'ATLAS'
-        for name in (("pack_resolution", "pack_padding") if atlas else ("margin",)):
+        for name in (("pack_resolution", "pack_padding", "pack_group") if atlas
+                     else ("margin",)):
             row = layout.row()
             row.active = self.pack
             row.prop(self, name)
@@ -205,7 +209,8 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
         if any(part.pinned_faces.any() for part in batch.parts):
             session.pack(context, written, self.margin, 'AABB')
             return "packed by Blender's packer (pinned islands stay put)"
-        options = PackOptions(resolution=self.pack_resolution, padding_px=self.pack_padding)
+        options = PackOptions(resolution=self.pack_resolution, padding_px=self.pack_padding,
+                              group=self.pack_group)
         try:
             with object_mode(context):
                 obs = [bpy.data.objects.get(w.object_name) for w in written]

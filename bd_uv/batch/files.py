@@ -58,7 +58,8 @@ def _unwrap_file(task, options, seams_mode):
             if mesh.corner_uv is None:
                 raise BDError(f"{task.path} has no UVs, so --seams uv has nothing to cut along")
             seams = mesh.uv_seams()
-        job = Job(mesh.name, mesh.V, mesh.F, seams=seams, corner_uv=mesh.corner_uv)
+        job = Job(mesh.name, mesh.V, mesh.F, seams=seams, corner_uv=mesh.corner_uv,
+                  face_labels=mesh.labels)
         result = unwrap_job(job, options, png=task.png)
         entry = {**base, **result.entry}
         if entry["status"] != "failed":

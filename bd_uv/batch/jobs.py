@@ -22,7 +22,8 @@ from ..pack import MARGIN
 from ..packing import PackOptions
 
 # The atlas packer's options as they appear in an options mapping and in the report.
-PACK_FIELDS = ("resolution", "padding_px", "texel_density", "rotate", "udim", "solve_seconds")
+PACK_FIELDS = ("resolution", "padding_px", "texel_density", "rotate", "udim", "solve_seconds",
+               "group")
 from ..scheduling.atomic import atomic_path
 from ..scheduling.entries import failed_entry
 
@@ -41,6 +42,8 @@ class Job:
     pin_uv : (p,2) float64, or None
     corner_uv : (m,3,2) float64 current UVs (for ``frames="input-uv"``), or None
     face_groups : (m,) int64 polygon of each triangle (a cut never splits a polygon), or None
+    face_labels : dict or None, each face's "material" and "object" (``bd_uv.meshio.Mesh.labels``)
+        for packing by group
     """
     name: str
     V: np.ndarray
@@ -50,6 +53,7 @@ class Job:
     pin_uv: np.ndarray = None
     corner_uv: np.ndarray = None
     face_groups: np.ndarray = None
+    face_labels: dict = None
 
 
 @dataclass(frozen=True)
@@ -167,7 +171,8 @@ def unwrap_job(job, options, png=None):
             res, _ = with_predicted_headroom(job.V, job.F, res)
         layout, res, _ = stored_layout_with_headroom(
             job.V, job.F, res, stretch=o.stretch, pack=options.pack, cut=options.cut,
-            margin=options.margin, pack_options=options.pack_options)
+            margin=options.margin, pack_options=options.pack_options,
+            face_labels=job.face_labels)
     except Exception as exc:  # a bad mesh, or a bug: either way it stays this job's failure
         entry.update(error=type(exc).__name__, message=str(exc),
                      seconds=round(time.perf_counter() - t0, 4))

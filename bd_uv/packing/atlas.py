@@ -21,6 +21,8 @@ from .nest import rotations, tile_layouts
 from .options import PackOptions, udim_tile
 from .outlines import chart_outlines
 from .pinned import chart_boxes, free_square
+from .around import place_around
+from .groups import chart_groups, grouped_layout
 from .square import square_layout
 
 
@@ -49,7 +51,7 @@ class Packed:
     options: PackOptions
 
 
-def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None):
+def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_labels=None):
     """Pack every chart into the square (or UDIM tiles) at one texel density.
 
     Parameters
@@ -60,8 +62,11 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None):
     face_island : (m,) int array, chart of each face, labels 0..k-1 (-1: left as it is)
     options : PackOptions, default PackOptions()
     pinned : (k,) bool array, optional: charts that stay where they are (bit for bit, inside the
-        unit square); the others are packed at one density into the largest square beside them
-        that keeps the padding (:func:`.pinned.free_square`)
+        unit square); the others are packed at one density into the free space around their
+        shapes, keeping the padding (:func:`.around.place_around`)
+    face_labels : dict, optional: {"material": (m,) int, "object": (m,) int}, each face's
+        material or object; ``options.group`` other than "none" packs the charts of one group
+        together (:mod:`.groups`) and needs that entry
 
     Returns
     -------
@@ -80,11 +85,25 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None):
                       time.perf_counter() - t0, 0, options)
     if np.any(np.bincount(lab[lab >= 0], minlength=k) == 0):
         raise PackError("chart labels must run from 0 to k-1 without gaps")
+    group = None
+    if options.group != "none":
+        if face_labels is None or face_labels.get(options.group) is None:
+            raise PackError(f"grouping by {options.group} needs each face's {options.group}, "
+                            "which this input does not give")
+        group = chart_groups(F, V, lab, face_labels[options.group], k)
     if pinned is not None and np.any(pinned):
+        if group is not None and group.max() > 0:
+            raise PackError("charts are not grouped around pinned charts: pin none, or pack "
+                            "without grouping")
         return _around_pinned(V, F, uv, lab, options, np.asarray(pinned, dtype=bool), t0)
     charts, tol = chart_outlines(V, F, uv, lab, k, options)
     seconds = options.search_seconds(k, int((lab >= 0).sum()))
-    if options.texel_density is not None:
+    if group is not None and group.max() > 0:
+        f = 1.0 if options.texel_density is None else options.texel_density / options.resolution
+        pl, side, tile, solves = grouped_layout([xy * f for xy in charts.outlines], group,
+                                                options, tol * f, seconds,
+                                                fixed=options.texel_density is not None)
+    elif options.texel_density is not None:
         f = options.texel_density / options.resolution   # tile units per scene unit
         outlines = [xy * f for xy in charts.outlines]
         pl, tile, solves = tile_layouts(outlines, options, tol * f, seconds)
@@ -106,8 +125,13 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None):
 
 
 def _around_pinned(V, F, uv, lab, options, pinned, t0):
-    """Pinned charts kept; the rest packed into the largest free square beside them, with the
-    padding scaled so it stays ``padding_px`` texels once the square is scaled into place."""
+    """Pinned charts kept bit for bit; the rest packed at one density into the free space around
+    the pinned charts' true shapes (:func:`.around.place_around`, a conservative raster
+    placement). The largest free square beside the pinned charts' bounding boxes (nested by
+    spyrrow, the padding scaled so it stays ``padding_px`` texels once the square is scaled into
+    place: the previous method) is tried too when it could reach a higher density, and kept
+    when it does."""
+    import shapely
     k = int(lab.max()) + 1
     if len(pinned) != k:
         raise PackError(f"pinned has {len(pinned)} entries for {k} charts")
@@ -125,16 +149,43 @@ def _around_pinned(V, F, uv, lab, options, pinned, t0):
     if not len(moving):
         return Packed(out, lab.copy(), np.full(k, 1001), angle, 0.0,
                       time.perf_counter() - t0, 0, options)
-    corner, side = free_square(lo, hi, 0.5 * options.padding)
-    if side * options.resolution < 8 * max(options.padding_px, 1.0):
-        raise PackError("no room left beside the pinned charts for the others")
-    inner_options = replace(options, padding_px=options.padding_px / side)
     sub = np.full(k, -1)
     sub[moving] = np.arange(len(moving))
-    inner = pack_islands(V, F, uv, np.where(lab >= 0, sub[np.maximum(lab, 0)], -1),
-                         inner_options)
-    sel = (lab >= 0) & ~pinned[np.maximum(lab, 0)]
+    sub_lab = np.where(lab >= 0, sub[np.maximum(lab, 0)], -1)
+    sel = sub_lab >= 0
+    # 1. the free space around the pinned charts' shapes (a raster placement)
+    charts, tol = chart_outlines(V, F, uv, sub_lab, len(moving), options)
+    held = (lab >= 0) & pinned[np.maximum(lab, 0)]
+    # the pinned triangles and their edges (so a pinned chart of no UV area is avoided too)
+    tris = uv[held]
+    e1, e2 = tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0]
+    area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    shapes = shapely.union_all(np.concatenate([
+        shapely.polygons(tris[area > 0]), shapely.linestrings(tris[area <= 0][:, [0, 1, 2, 0]])]))
+    around = place_around(shapes, charts.outlines, charts.area, options, tol,
+                          1.0 - float(area.sum()))
+    reached = around[0] if around is not None else 0.0
+    # 2. the largest free square beside the pinned charts' boxes (nested by spyrrow), unless
+    # even every chart in it at full density would not reach the raster's scale
+    corner, side = free_square(lo, hi, 0.5 * options.padding)
+    square = None
+    if (side * options.resolution >= 8 * max(options.padding_px, 1.0)
+            and side / np.sqrt(charts.area.sum()) > reached):
+        inner = pack_islands(V, F, uv, sub_lab, replace(options, padding_px=options.padding_px
+                                                        / side))
+        square = (inner.texel_density * side, inner)
+    if around is not None and (square is None or reached * options.resolution >= square[0]):
+        scale, turn, shift = around
+        R = rotations(turn)
+        x = (charts.uv[sel] - charts.centre[sub_lab[sel]][:, None, :]) * scale
+        out[sel] = np.einsum("fij,fcj->fci", R[sub_lab[sel]], x) + shift[sub_lab[sel]][:, None, :]
+        angle[moving] = turn
+        return Packed(out, lab.copy(), np.full(k, 1001), angle, scale * options.resolution,
+                      time.perf_counter() - t0, 0, options)
+    if square is None:
+        raise PackError("no room left beside the pinned charts for the others")
+    density, inner = square
     out[sel] = inner.corner_uv[sel] * side + corner
     angle[moving] = inner.angle
-    return Packed(out, lab.copy(), np.full(k, 1001), angle, inner.texel_density * side,
+    return Packed(out, lab.copy(), np.full(k, 1001), angle, density,
                   time.perf_counter() - t0, inner.solves, options)

@@ -6,6 +6,7 @@ import numpy as np
 from ..errors import PackError
 
 ROTATIONS = ("none", "90", "any")
+GROUPINGS = ("none", "object", "material")
 # The adaptive time: about an eighth of what Blender 5's exact-shape packer takes on the same
 # charts. Its time went about as 0.045 s sqrt(charts x faces) (quiet: suzanne 27 charts 968 faces
 # 7.3 s, cow 46/5804 28.9 s, dino 36/7828 22.1 s, camel 29/19536 26.0 s; within about 30 % on
@@ -38,6 +39,9 @@ class PackOptions:
         a guessed density, then compaction, :mod:`.compact`); above 1, two rounds:
         (solves + 1) // 2 at once (threads) at strip heights around the guess, then solves // 2
         around the density reached (each solve pays its first placement again)
+    group : "none" | "object" | "material", charts of one object (or one material) packed together:
+        one compact block per group, blocks apart by the padding (:mod:`.groups`); "none"
+        (default) packs every chart freely
     seed : int, seed of the nesting heuristic. Its search is bounded in time, not in steps, so
         two runs on the same charts can give different layouts (each one certified); measured:
         suzanne's 27 charts, two runs, different placements
@@ -49,6 +53,7 @@ class PackOptions:
     udim: bool = False
     solve_seconds: float | None = None
     solves: int = 1
+    group: str = "none"
     seed: int = 0
 
     def __post_init__(self):
@@ -70,6 +75,8 @@ class PackOptions:
                 isinstance(self.solve_seconds, (int, float)) and 0 <= self.solve_seconds <= 3600):
             raise PackError(f"solve_seconds must be a number of seconds from 0 to 3600 (or "
                             f"None: adaptive), not {self.solve_seconds!r}")
+        if self.group not in GROUPINGS:
+            raise PackError(f"group must be one of {', '.join(GROUPINGS)}, not {self.group!r}")
         if not (isinstance(self.solves, int) and self.solves >= 1):
             raise PackError(f"solves must be a whole number >= 1, not {self.solves!r}")
 

@@ -1,6 +1,7 @@
 """Room beside pinned charts: the largest empty square of the unit square that keeps a margin to
-every pinned chart's bounding box. The charts that move are packed into it (``pack_islands``
-with ``pinned``); the pinned ones keep their UVs bit for bit."""
+every pinned chart's bounding box. ``pack_islands`` with ``pinned`` packs the charts that move
+into the free space around the pinned charts' shapes (:mod:`.around`), and into this square
+instead only when it reaches a higher density; the pinned ones keep their UVs bit for bit."""
 import numpy as np
 
 

@@ -245,7 +245,11 @@ def _mesh_arrays(gf, label, prims, uv_set, name):
         raise SceneFileError(f"{gf.path}: {label} has no triangles")
     W, G = welded(V, F)
     corner_uv = np.concatenate(UVs) if UVs else None
-    return Mesh(W, G, corner_uv, name), part
+    # each face's material: its primitive's (-1: none); one glTF mesh is one object
+    material = np.concatenate([np.full(len(Fj), prims[i][1].get("material", -1), np.int64)
+                               for i, (_, _, _, Fj) in enumerate(part)])
+    labels = {"material": material, "object": np.zeros(len(G), np.int64)}
+    return Mesh(W, G, corner_uv, name, labels), part
 
 
 def _patch_primitive(gf, mesh, j, corner_vertex, uv32, uv_set, writer, name):

@@ -238,7 +238,27 @@ def _mesh_arrays(mesh, where, uv_name, Usd):
             "holes": int(len(holes)),
             "subdivision": str(mesh.GetSubdivisionSchemeAttr().Get())}
     part = {"T": T, "poly": poly, "n_face_vertices": len(indices), "warnings": warnings}
-    return Mesh(V, F, corner_uv, str(mesh.GetPath())), part, info, warnings
+    # one prim is one object; each face's material from its "materialBind" GeomSubset
+    labels = {"object": np.zeros(len(F), np.int64),
+              "material": _subset_materials(mesh, len(counts))[poly]}
+    return Mesh(V, F, corner_uv, str(mesh.GetPath()), labels), part, info, warnings
+
+
+def _subset_materials(mesh, n_faces):
+    """(n_faces,) int64: each face's material, numbered by the material its "materialBind"
+    GeomSubset binds (two subsets bound to one material are one; a subset without a binding is
+    its own); faces in no such subset share the prim's own (number -1)."""
+    from pxr import UsdGeom, UsdShade
+    out = np.full(n_faces, -1, dtype=np.int64)
+    names = {}
+    for subset in UsdGeom.Subset.GetGeomSubsets(mesh, UsdGeom.Tokens.face, "materialBind"):
+        material, _ = UsdShade.MaterialBindingAPI(subset.GetPrim()).ComputeBoundMaterial()
+        key = str(material.GetPath()) if material else str(subset.GetPath())
+        faces = _numbers(subset.GetIndicesAttr().Get() or [], np.int64,
+                         f"{subset.GetPath()}: indices")
+        faces = faces[(faces >= 0) & (faces < n_faces)]
+        out[faces] = names.setdefault(key, len(names))
+    return out
 
 
 def _numbers(value, dtype, what, width=None):
