@@ -48,11 +48,16 @@ def clusters(mass, centroid, pairs, group, g):
     with np.errstate(invalid="ignore", divide="ignore"):
         q = np.floor(centroid / np.maximum(h, 1e-300)[group][:, None])
     q = np.where(coarse[:, None] & np.isfinite(q), q, 0).astype(np.int64)
-    q -= q.min(axis=0)
-    # One key per (chart, cell), a node of a small chart its own (negative) key.
-    span = q.max(axis=0) + 1
-    cell = (q[:, 0] * span[1] + q[:, 1]) * span[2] + q[:, 2]
-    key = np.where(coarse, group * int(span.prod()) + cell, -1 - np.arange(k))
+    low = np.full((g, 3), np.iinfo(np.int64).max)
+    np.minimum.at(low, group, q)
+    q -= low[group]                         # cells counted from each chart's corner
+    # One key per (chart, cell), built an axis at a time (each step's key < k: no overflow);
+    # a node of a small chart its own key.
+    key = group
+    for d in range(3):
+        _, key = np.unique(key * (int(q[:, d].max()) + 1) + q[:, d], return_inverse=True)
+        key = key.ravel()
+    key = np.where(coarse, key, k + np.arange(k))
     same = key[pairs[:, 0]] == key[pairs[:, 1]]
     gr = sp.csr_matrix((np.ones(int(same.sum())), (pairs[same, 0], pairs[same, 1])), shape=(k, k))
     _, label = connected_components(gr, directed=False)
