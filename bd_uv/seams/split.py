@@ -7,6 +7,7 @@ from scipy.sparse.csgraph import breadth_first_order, connected_components, maxi
 
 from ..solvers.threads import halves, map_blocks
 from .charts import spd_solver
+from . import cluster_fiedler
 
 # Neither side of a split may hold less than this share of the chart's area.
 MIN_SIDE = 0.05
@@ -140,9 +141,15 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost)
     return side, split
 
 
-def _fiedler_many(pairs, w, mass, centroid, offsets, group, iters=12):
+def _fiedler_many(pairs, w, mass, centroid, offsets, group, iters=12, coarsen=True):
     """``_fiedler_block`` of all charts; two runs of charts factor side by side when each is
-    large enough (``solvers.threads``; each chart's vector is its own either way)."""
+    large enough (``solvers.threads``; each chart's vector is its own either way). Charts above
+    ``cluster_fiedler.COARSE_NODES`` nodes get theirs from a graph of clusters of their nodes
+    (``cluster_fiedler.coarse_fiedler``)."""
+    if coarsen and (np.diff(offsets) > cluster_fiedler.COARSE_NODES).any():
+        def again(*a, coarsen):
+            return _fiedler_many(*a, iters=iters, coarsen=coarsen)
+        return cluster_fiedler.coarse_fiedler(pairs, w, mass, centroid, offsets, group, again)
     j = halves(np.diff(offsets), PARALLEL_NODES)
     if j is None:
         return _fiedler_block(pairs, w, mass, centroid, offsets, group, iters)
