@@ -67,6 +67,21 @@ def least_gap(uv, lab, reach):
     e0 = uv.reshape(-1, 2)
     e1 = uv[:, [1, 2, 0]].reshape(-1, 2)
     el = np.repeat(lab, 3)
+    # edges longer than a few median edges cut into pieces of at most that length: the search
+    # radius is twice the longest piece, and one huge island's edges (or a sliver's) set beside
+    # thousands of tiny ones made every pair a candidate (24 GB at 5,000 islands); the least
+    # distance between two edges is the least between their pieces
+    length = np.linalg.norm(e1 - e0, axis=1)
+    piece = max(4.0 * float(np.median(length)), float(reach), 1e-300)
+    n = np.clip(np.ceil(length / piece), 1, None).astype(np.int64)
+    if n.max() > 1:
+        own = np.repeat(np.arange(len(e0)), n)
+        t = np.arange(len(own)) - np.repeat(np.cumsum(n) - n, n)
+        a, b = t / n[own], (t + 1) / n[own]
+        d = e1 - e0
+        e0, e1 = e0[own] + a[:, None] * d[own], np.where(
+            (b == 1)[:, None], e1[own], e0[own] + b[:, None] * d[own])
+        el = el[own]
     mid = 0.5 * (e0 + e1)
     half = 0.5 * np.linalg.norm(e1 - e0, axis=1).max()
     pairs = cKDTree(mid).query_pairs(2 * half + reach, output_type="ndarray")
