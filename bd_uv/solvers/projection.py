@@ -25,9 +25,9 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.csgraph as csgraph
 
 from ..errors import CancelledError
+from ..geometry import components
 from .factor import factor_spd
 from .local_projection import nearest_jacobian_parts, project_singular_values
 
@@ -94,10 +94,8 @@ class ProjectionSolver:
         self.Gy = sp.csr_array((ops.Bim - ops.Aim)[:, :nv])
         tris = np.asarray(tris, dtype=np.int64)
         self.ops, self.tris = ops, tris
-        adj = sp.coo_array((np.ones(2 * k), (np.concatenate([tris[:, 0], tris[:, 1]]),
-                                              np.concatenate([tris[:, 1], tris[:, 2]]))),
-                           shape=(nv, nv))
-        self.n_components, comp = csgraph.connected_components(adj, directed=False)
+        self.n_components, comp = components(nv, np.concatenate([tris[:, 0], tris[:, 1]]),
+                                             np.concatenate([tris[:, 1], tris[:, 2]]))
         self.component = comp.astype(np.int64)
         self.face_comp = self.component[tris[:, 0]]
         fixed = np.unique(np.asarray(fixed_idx, dtype=np.int64))
