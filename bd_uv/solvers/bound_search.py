@@ -27,8 +27,8 @@ iterations against 176 for C 1.03506 against 1.03502; mushroom 72 against 92).
 import time
 
 import numpy as np
-import scipy.sparse as sp
 
+from .face_operators import alpha_beta_lift
 from .projection import ProjectionSolver
 
 __all__ = ["BoundSearch", "framed_cone_projection"]
@@ -121,13 +121,8 @@ class BoundSearch:
         iteration made on the (u_x, u_y; v_x, v_y) rows."""
         if self._B is None:
             s = self.solver
-            Gx, Gy = s.Gx, s.Gy
-            B = sp.csr_array(sp.bmat([[Gx, Gy], [-Gy, Gx], [Gx, -Gy], [Gy, Gx]]))
-            free2 = np.concatenate([s.free, s.free + s.nv])
-            A4 = np.tile(0.5 * s.area, 4)
-            BtA = sp.csr_array(B.T[free2] @ sp.diags_array(A4))
-            B.sort_indices()
-            BtA.sort_indices()
+            gx, gy = s.face_gradients()
+            B, BtA = alpha_beta_lift(gx, gy, s.area, s.tris, s.free, s.nv)
             self._B, self._BtA = _matvec(B), _matvec(BtA)
         return self._B, self._BtA
 
