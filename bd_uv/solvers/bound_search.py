@@ -153,13 +153,22 @@ class BoundSearch:
         kappa Re(w alpha)``; only faces outside it move. On whole arrays rather than on the faces
         outside: the cone moves only ``x = Re(w alpha)`` (alpha by ``conj(w) dx``; ``w2`` is
         ``(Re w, -Im w)``) and scales beta (``framed_cone_projection``'s point)."""
-        x = w2[0] * Q[0] + w2[1] * Q[1]                          # Re(w alpha)
+        # With t = max(x + kappa |beta|, 0) / (1 + kappa^2) (the boundary ray's point),
+        # kappa t / |beta| >= 1 and t - x <= 0 exactly inside the cone, and < 1, >= 0 outside:
+        # beta scales by min(1, kappa t / |beta|), x moves by max(t - x, 0), no mask needed.
+        x = w2[0] * Q[0]
+        x += w2[1] * Q[1]                                        # Re(w alpha)
         nb = np.hypot(Q[2], Q[3])
-        out = nb > kappa * x
-        t = np.maximum(x + kappa * nb, 0.0) * (1.0 / (1.0 + kappa * kappa))
-        # outside: beta scaled by kappa t / |beta| (0 where |beta| = 0: then t = 0 too)
-        Q[2:] *= 1.0 + out * (kappa * t / np.maximum(nb, 1e-300) - 1.0)
-        Q[:2] += w2 * (out * (t - x))
+        t = kappa * nb
+        t += x
+        np.maximum(t, 0.0, out=t)
+        t *= 1.0 / (1.0 + kappa * kappa)
+        f = (kappa * t) / np.maximum(nb, 1e-300)
+        np.minimum(f, 1.0, out=f)
+        Q[2:] *= f
+        t -= x
+        np.maximum(t, 0.0, out=t)
+        Q[:2] += w2 * t
         return Q
 
     def run(self, U, w, C, D_best, cancel=None):
