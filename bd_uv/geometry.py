@@ -110,3 +110,43 @@ def cycle_labels(nxt):
         least, ptr = lower, ptr[ptr]
     least, label = np.unique(least, return_inverse=True)
     return least, label.ravel()
+
+
+# ``components`` hooks graphs of up to HOOK_VERTICES vertices itself (measured: 2x cheaper than
+# scipy at 1.7k vertices, 3x dearer at 8k), handing a graph to scipy
+# after HOOK_ROUNDS rounds (a mesh's graphs take ~10-20); larger graphs go to scipy directly,
+# whose fixed cost is then small against the work.
+HOOK_VERTICES = 4000
+HOOK_ROUNDS = 40
+
+
+def components(n, a, b):
+    """Connected components of the undirected graph on 0..n-1 with edges (a[i], b[i]).
+
+    Min-label hooking with pointer jumping, a few vectorised operations per round: on the graphs
+    of a small mesh it is ~5x cheaper than building a sparse matrix for
+    ``scipy.sparse.csgraph.connected_components`` (whose set-up is a fixed cost of ~0.5 ms), which
+    takes graphs over ``HOOK_VERTICES`` vertices and those not done in ``HOOK_ROUNDS`` rounds.
+
+    Returns
+    -------
+    (count, labels (n,) int64), numbered by each component's least vertex, as scipy numbers them
+    """
+    a = np.asarray(a, dtype=np.int64)
+    b = np.asarray(b, dtype=np.int64)
+    lab = np.arange(n, dtype=np.int64)
+    for _ in range(HOOK_ROUNDS if n <= HOOK_VERTICES else 0):
+        la, lb = lab[a], lab[b]
+        if np.array_equal(la, lb):
+            # Every edge joins equal labels: each component carries its least vertex's label.
+            uniq, labels = np.unique(lab, return_inverse=True)
+            return len(uniq), labels.ravel().astype(np.int64)
+        lo = np.minimum(la, lb)
+        np.minimum.at(lab, la, lo)      # hook each label onto the least one it meets
+        np.minimum.at(lab, lb, lo)
+        lab = lab[lab[lab]]             # lab[x] <= x throughout: jumping only lowers it
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+    count, labels = connected_components(sp.coo_array((np.ones(len(a)), (a, b)), shape=(n, n)),
+                                         directed=False)
+    return count, labels.astype(np.int64)

@@ -7,13 +7,11 @@ that vertex without crossing a seam, so a seam through an island opens it up.
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components
 
 from .errors import (ClosedIslandError, DegenerateFacesError, DuplicateFacesError,
                      InvalidMeshError, NonFiniteError, NonManifoldError, OrientationError,
                      TopologyError)
-from .geometry import cycle_labels, face_areas
+from .geometry import components, cycle_labels, face_areas
 
 # A face is degenerate when twice its area is below this fraction of its longest edge squared.
 DEGENERATE_RATIO = 1e-12
@@ -143,8 +141,7 @@ def islands(V, F, seams=None):
     consistent = src[h1] == dst[h2]
 
     # Islands: faces connected across the joined edges.
-    adj = sp.coo_array((np.ones(len(f1)), (f1, f2)), shape=(m, m))
-    n_isl, face_isl = connected_components(adj, directed=False)
+    n_isl, face_isl = components(m, f1, f2)
 
     # Cut vertices: corners glued across joined edges. Corner of src[h] is h; of dst[h] is next(h).
     nxt = lambda h: (h // 3) * 3 + (h % 3 + 1) % 3
@@ -152,8 +149,7 @@ def islands(V, F, seams=None):
     cb = np.where(consistent, h2, nxt(h2))
     rows = np.concatenate([h1, nxt(h1)])
     cols = np.concatenate([ca, cb])
-    cadj = sp.coo_array((np.ones(len(rows)), (rows, cols)), shape=(3 * m, 3 * m))
-    _, corner_vertex = connected_components(cadj, directed=False)
+    _, corner_vertex = components(3 * m, rows, cols)
 
     # Non-manifold vertices: several corner fans of one vertex, ignoring seams, in one island.
     if join.all():      # no seam between two faces: the fans are the cut vertices
@@ -163,8 +159,7 @@ def islands(V, F, seams=None):
         gcons = src[g1] == dst[g2]
         rows = np.concatenate([g1, nxt(g1)])
         cols = np.concatenate([np.where(gcons, nxt(g2), g2), np.where(gcons, g2, nxt(g2))])
-        fan_adj = sp.coo_array((np.ones(len(rows)), (rows, cols)), shape=(3 * m, 3 * m))
-        _, fan = connected_components(fan_adj, directed=False)
+        _, fan = components(3 * m, rows, cols)
     # A fan holds corners of one vertex; (vertex, island) pairs reached by several fans are
     # bow-ties. Integer keys, not np.unique(axis=0) (a structured sort, slow on small meshes too).
     corner_isl = np.repeat(face_isl, 3)

@@ -158,14 +158,18 @@ def touching_pairs(p, q, group=None):
     if len(p) < 2:
         return np.zeros((0, 2), dtype=np.int64)
     if len(p) <= ALL_PAIRS:
-        # Few segments (a small island): every pair is decided at once, no tree to build; the
-        # same pairs as the tree's candidates decided alike (segments whose boxes are apart
-        # cannot meet).
+        # Few segments (a small island): every pair's boxes are compared at once, no tree to
+        # build; the same candidates as the tree's, decided alike (segments whose boxes are
+        # apart cannot meet).
         i, j = np.triu_indices(len(p), 1)
+        lo, hi = np.minimum(p, q), np.maximum(p, q)
+        # boxes that meet (touching included), as the tree's candidates; then one island's
+        keep = ((lo[i, 0] <= hi[j, 0]) & (lo[j, 0] <= hi[i, 0])
+                & (lo[i, 1] <= hi[j, 1]) & (lo[j, 1] <= hi[i, 1]))
         if group is not None:
             g = np.asarray(group)
-            keep = g[i] == g[j]
-            i, j = i[keep], j[keep]
+            keep &= g[i] == g[j]
+        i, j = i[keep], j[keep]
         meets = segments_meet(p, q, i, j)
         return np.stack([i[meets], j[meets]], axis=1).astype(np.int64)
     import shapely

@@ -27,7 +27,9 @@ iterations against 176 for C 1.03506 against 1.03502; mushroom 72 against 92).
 import time
 
 import numpy as np
+import scipy.sparse as sp
 
+from .face_operators import alpha_beta_lift
 from .projection import ProjectionSolver
 
 __all__ = ["BoundSearch", "framed_cone_projection"]
@@ -46,6 +48,31 @@ STALL = 12          # a target is out of reach after this many iterations ...
 PROGRESS = 0.01     # ... that did not lower the max by this share of its excess over 1,
 FLIPPING = 6        # or after this many flipping iterates in a row from its start
 ALPHA = 1.5         # ADMM over-relaxation (hemisphere: 196 iterations against 240 at 1.0)
+# Up to this many faces the lift and the right-hand side are one product each with the (4k, 2nv)
+# operator (fewer calls: small islands pay per call); above, two products each with the (2k, nv)
+# gradient operator (half the multiply-adds: lion-head, 16.7k faces, 1.9 -> 0.95 ms an iteration).
+ONE_PRODUCT_FACES = 1000
+
+
+def _matvec(M):
+    """``x, out -> out = M @ x`` for a csr float64 matrix M into a preallocated ``out``: the
+    compiled product straight, without scipy's dispatch (~10 us a call, two calls an iteration,
+    against ~5 us of arithmetic on a 500-face island); ``M @ x`` where scipy lacks it."""
+    try:
+        from scipy.sparse._sparsetools import csr_matvec
+    except ImportError:     # a scipy that moved it: the public product
+        def mv(x, out):
+            out[...] = M @ x
+            return out
+        return mv
+    m, n = M.shape
+    indptr, indices, data = M.indptr, M.indices, M.data
+
+    def mv(x, out):
+        out.fill(0.0)
+        csr_matvec(m, n, indptr, indices, data, x, out)    # out += M x
+        return out
+    return mv
 
 
 def framed_cone_projection(x, br, bi, kappa):
@@ -85,55 +112,108 @@ class BoundSearch:
     def __init__(self, ops, nv, tris, fixed):
         self.solver = s = ProjectionSolver(ops, nv, fixed, tris=tris)
         self.k = len(s.area)
-        self.area2 = np.concatenate([s.area, s.area])
-        self.GTf = s.GT[s.free]
         self.UF = None
         self.iterations = 0
+        self._B = None
 
-    def max_distortion(self, R):
-        """Max conformal distortion (eq. 4.9) of the map with gradients R (2, 2k): rows
-        ``(u_x; u_y)`` and ``(v_x; v_y)``; inf when a face flips or collapses."""
-        k = self.k
-        ux, uy, vx, vy = R[0, :k], R[0, k:], R[1, :k], R[1, k:]
+    def _operators(self):
+        """The lift of a map straight to every face's doubled alpha and beta (eq. 4.19), one
+        sparse product: ``B`` (4k, 2nv) takes ``[u; v]`` to rows ``Re 2alpha = u_x + v_y``,
+        ``Im 2alpha = v_x - u_y``, ``Re 2beta = u_x - v_y``, ``Im 2beta = v_x + u_y``. The
+        Jacobians' Frobenius norm is half this one's, so the area-weighted least-squares step in
+        these coordinates is the same step (its right-hand side ``B_free^T A (z - lam) / 2``), and
+        the cone projection needs no change of coordinates: about half the array operations an
+        iteration made on the (u_x, u_y; v_x, v_y) rows. Returns (lift, rhs), each
+        ``f(x, out)``: above ONE_PRODUCT_FACES faces by the gradient operator
+        (``_two_products``), the same values."""
+        if self._B is None:
+            s = self.solver
+            if self.k <= ONE_PRODUCT_FACES:
+                gx, gy = s.face_gradients()
+                B, BtA = alpha_beta_lift(gx, gy, s.area, s.tris, s.free, s.nv)
+                self._B, self._BtA = _matvec(B), _matvec(BtA)
+            else:
+                G = s.G
+                GTA = s.GT[s.free] @ sp.diags_array(np.concatenate([s.area, s.area]))
+                self._B, self._BtA = self._two_products(G, sp.csr_array(GTA))
+        return self._B, self._BtA
+
+    def _two_products(self, G, GTA):
+        """The lift and the right-hand side operator (as ``_operators``) by products with the
+        gradient operator ``G`` (2k, nv) and ``GTA = (G^T diag(A, A))[free]``, coordinate by
+        coordinate."""
+        k, nv, nf = self.k, self.solver.nv, len(self.solver.free)
+        g, h = _matvec(G), _matvec(GTA)
+        gu, gv = np.empty(2 * k), np.empty(2 * k)
+        tu, tv = np.empty(2 * k), np.empty(2 * k)
+
+        def lift(x, out):
+            g(x[:nv], gu)
+            g(x[nv:], gv)
+            W = out.reshape(4, k)
+            np.add(gu[:k], gv[k:], out=W[0])            # u_x + v_y
+            np.subtract(gv[:k], gu[k:], out=W[1])       # v_x - u_y
+            np.subtract(gu[:k], gv[k:], out=W[2])       # u_x - v_y
+            np.add(gv[:k], gu[k:], out=W[3])            # v_x + u_y
+            return out
+
+        def rhs(z, out):
+            Z = z.reshape(4, k)
+            np.add(Z[0], Z[2], out=tu[:k])              # 2 u_x target
+            np.subtract(Z[3], Z[1], out=tu[k:])         # 2 u_y
+            np.add(Z[1], Z[3], out=tv[:k])              # 2 v_x
+            np.subtract(Z[0], Z[2], out=tv[k:])         # 2 v_y
+            np.multiply(tu, 0.5, out=tu)
+            np.multiply(tv, 0.5, out=tv)
+            h(tu, out[:nf])
+            h(tv, out[nf:])
+            return out
+        return lift, rhs
+
+    def max_distortion(self, W):
+        """Max conformal distortion (eq. 4.9) of the map with doubled alpha and beta W (4, k)
+        (``_operators``); inf when a face flips or collapses."""
         with np.errstate(invalid="ignore", divide="ignore"):
-            r = float(np.max((np.square(ux - vy) + np.square(vx + uy))
-                             / (np.square(ux + vy) + np.square(vx - uy))))   # |beta|^2 / |alpha|^2
+            return self._max_distortion(W)
+
+    @staticmethod
+    def _max_distortion(W):
+        """``max_distortion`` where the caller has silenced division warnings."""
+        sq = W * W
+        r = float(np.max((sq[2] + sq[3]) / (sq[0] + sq[1])))        # |beta|^2 / |alpha|^2
         if not r < 1.0:
             return np.inf
         r = np.sqrt(r)
         return (1.0 + r) / (1.0 - r)
 
-    def _project(self, Q, wr, wi, kappa):
-        """Every face's Jacobian of Q (2, 2k), in place, onto its cone ``|beta| <= kappa Re(w
-        alpha)``; only faces outside it move (alpha and beta are carried doubled). On whole
-        arrays rather than on the faces outside: the cone moves only ``x = Re(w alpha)`` (alpha
-        by ``conj(w) dx``) and scales beta (``framed_cone_projection``'s point, nefertiti: 206 us
-        -> ~40 us a call)."""
-        k = self.k
-        ux, uy, vx, vy = Q[0, :k], Q[0, k:], Q[1, :k], Q[1, k:]
-        ar, ai, br, bi = ux + vy, vx - uy, ux - vy, vx + uy
-        x = wr * ar - wi * ai                                    # Re(w alpha)
-        nb = np.sqrt(br * br + bi * bi)
-        out = nb > kappa * x
-        t = np.maximum(x + kappa * nb, 0.0) * (1.0 / (1.0 + kappa * kappa))
-        # outside: beta scaled by kappa t / |beta| (0 where |beta| = 0: then t = 0 too)
-        f = 1.0 + out * (kappa * t / np.maximum(nb, 1e-300) - 1.0)
-        dx = out * (t - x)
-        ar += wr * dx
-        ai -= wi * dx
-        br *= f
-        bi *= f
-        np.multiply(ar + br, 0.5, out=Q[0, :k])
-        np.multiply(bi - ai, 0.5, out=Q[0, k:])
-        np.multiply(ai + bi, 0.5, out=Q[1, :k])
-        np.multiply(ar - br, 0.5, out=Q[1, k:])
-        return Q
+    def _lift(self, U, out=None):
+        """(4, k) doubled alpha and beta of the map U (2, nv) (into ``out`` when given)."""
+        out = np.empty((4, self.k)) if out is None else out
+        self._B(U.ravel(), out.reshape(-1))
+        return out
 
-    def _gradients(self, U):
-        """G applied to each coordinate of U (2, nv) -> (2, 2k) (two single-vector products:
-        scipy's product with a two-column block is several times slower)."""
-        G = self.solver.G
-        return np.stack([G @ U[0], G @ U[1]])
+    def _project(self, Q, w2, kappa):
+        """Every face's doubled (alpha, beta) of Q (4, k), in place, onto its cone ``|beta| <=
+        kappa Re(w alpha)``; only faces outside it move. On whole arrays rather than on the faces
+        outside: the cone moves only ``x = Re(w alpha)`` (alpha by ``conj(w) dx``; ``w2`` is
+        ``(Re w, -Im w)``) and scales beta (``framed_cone_projection``'s point)."""
+        # With t = max(x + kappa |beta|, 0) / (1 + kappa^2) (the boundary ray's point),
+        # kappa t / |beta| >= 1 and t - x <= 0 exactly inside the cone, and < 1, >= 0 outside:
+        # beta scales by min(1, kappa t / |beta|), x moves by max(t - x, 0), no mask needed.
+        x = w2[0] * Q[0]
+        x += w2[1] * Q[1]                                        # Re(w alpha)
+        nb = np.hypot(Q[2], Q[3])
+        t = kappa * nb
+        t += x
+        np.maximum(t, 0.0, out=t)
+        t *= 1.0 / (1.0 + kappa * kappa)
+        f = (kappa * t) / np.maximum(nb, 1e-300)
+        np.minimum(f, 1.0, out=f)
+        Q[2:] *= f
+        t -= x
+        np.maximum(t, 0.0, out=t)
+        Q[:2] += w2 * t
+        return Q
 
     def run(self, U, w, C, D_best, cancel=None):
         """ADMM towards F_C with frames w (unit complex, (k,)), from U (2, nv): rows u and v.
@@ -144,18 +224,28 @@ class BoundSearch:
         Cm = 1.0 + MARGIN * (C - 1.0)
         kappa = (Cm - 1.0) / (Cm + 1.0)
         solve = s.factorize()
-        free, GTf = s.free, self.GTf
-        rhs_fixed = (s._L_fF @ self.UF).T
-        wr, wi = w.real, w.imag
+        BtA = self._operators()[1]
+        nf = len(s.free)
+        rhs_fixed = (s._L_fF @ self.UF).T.ravel()
+        w2 = np.stack([w.real, -w.imag])
         U = U.copy()
-        GU = self._gradients(U)
+        GU = self._lift(U)
         lam = np.zeros_like(GU)
+        rhs = np.empty(2 * nf)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            best, D_best = self._iterate(U, GU, lam, rhs, w2, kappa, C, D_best, solve, BtA,
+                                         rhs_fixed, cancel)
+        return best, D_best, best is not None and D_best <= C
+
+    def _iterate(self, U, GU, lam, rhs, w2, kappa, C, D_best, solve, BtA, rhs_fixed, cancel):
+        """``run``'s iterations, on its buffers (U, GU, lam, rhs updated in place)."""
+        free, nf = self.solver.free, len(self.solver.free)
         best, since, mark = None, 0, D_best
         for it in range(MAX_ITER + 1):
             if cancel is not None and cancel.is_set():
                 break
             if it:
-                D = self.max_distortion(GU)
+                D = self._max_distortion(GU)
                 if D < D_best:
                     best, D_best = U.copy(), D
                     if D <= C:
@@ -166,21 +256,23 @@ class BoundSearch:
                     since += 1
                     # out of reach: no progress for STALL iterations, or FLIPPING flipping
                     # iterates in a row (three_peaks: a target that flips stays flipped)
-                    if since >= (FLIPPING if np.isinf(D) and since == it else STALL):
+                    if since >= (FLIPPING if D == np.inf and since == it else STALL):
                         break
                 if it == MAX_ITER:
                     break
-            Z = self._project(GU + lam, wr, wi, kappa)
+            Z = self._project(GU + lam, w2, kappa)
             if ALPHA != 1.0:  # over-relaxation
-                Z = ALPHA * Z + (1.0 - ALPHA) * GU
-            X = self.area2 * (Z - lam)
-            for c in (0, 1):
-                U[c, free] = solve(GTf @ X[c] - rhs_fixed[c])
-            GU = self._gradients(U)
-            lam += GU
-            lam -= Z
+                Z *= ALPHA
+                Z += (1.0 - ALPHA) * GU
+            Z -= lam                            # z - lam: the least-squares target
+            BtA(Z.ravel(), rhs)
+            rhs -= rhs_fixed
+            U[0, free] = solve(rhs[:nf])
+            U[1, free] = solve(rhs[nf:])
+            self._lift(U, GU)
+            np.subtract(GU, Z, out=lam)         # lam + G x - z
             self.iterations += 1
-        return best, D_best, best is not None and D_best <= C
+        return best, D_best
 
     def search(self, u, frames_of, report=None, deadline=None, cancel=None):
         """The least max distortion reached from the flip-free map u (nv,) complex.
@@ -200,7 +292,8 @@ class BoundSearch:
         U = np.stack([u.real, u.imag])
         self.UF = U[:, self.solver.fixed].T
         self.solver._assemble()
-        D = self.max_distortion(self._gradients(U))
+        self._operators()
+        D = self.max_distortion(self._lift(U))
         step, small = STEP, 0
         out_of_time = False
         while np.isfinite(D) and D > 1.0:

@@ -25,9 +25,10 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.csgraph as csgraph
 
 from ..errors import CancelledError
+from ..geometry import components
+from .face_operators import face_gradients, laplacian_blocks
 from .factor import factor_spd
 from .local_projection import nearest_jacobian_parts, project_singular_values
 
@@ -94,10 +95,8 @@ class ProjectionSolver:
         self.Gy = sp.csr_array((ops.Bim - ops.Aim)[:, :nv])
         tris = np.asarray(tris, dtype=np.int64)
         self.ops, self.tris = ops, tris
-        adj = sp.coo_array((np.ones(2 * k), (np.concatenate([tris[:, 0], tris[:, 1]]),
-                                              np.concatenate([tris[:, 1], tris[:, 2]]))),
-                           shape=(nv, nv))
-        self.n_components, comp = csgraph.connected_components(adj, directed=False)
+        self.n_components, comp = components(nv, np.concatenate([tris[:, 0], tris[:, 1]]),
+                                             np.concatenate([tris[:, 1], tris[:, 2]]))
         self.component = comp.astype(np.int64)
         self.face_comp = self.component[tris[:, 0]]
         fixed = np.unique(np.asarray(fixed_idx, dtype=np.int64))
@@ -113,23 +112,38 @@ class ProjectionSolver:
         counts = np.bincount(self.face_comp, minlength=self.n_components)
         self._starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
         self._has_faces = counts > 0
-        self._L_ff = self._L_fF = None
-        self.G = sp.csr_array(sp.vstack([self.Gx, self.Gy]))  # (2k, nv): rows d/dx, then d/dy
-        self.GT = sp.csr_array(self.G.T)
+        self._L_ff = self._L_fF = self._G = self._GT = self._g = None
         self._solve, self.backend = None, backend
         self.setup_seconds = time.perf_counter() - t0
         self.factor_seconds = 0.0
 
+    @property
+    def G(self):
+        """(2k, nv) csr: rows d/dx of every face, then d/dy (made on first use)."""
+        if self._G is None:
+            self._G = sp.csr_array(sp.vstack([self.Gx, self.Gy]))
+        return self._G
+
+    @property
+    def GT(self):
+        if self._GT is None:
+            self._GT = sp.csr_array(self.G.T)
+        return self._GT
+
+    def face_gradients(self):
+        """(gx, gy), each (k,3): every face's gradient coefficients on its corners."""
+        if self._g is None:
+            self._g = face_gradients(self.Gx, self.Gy, self.tris)
+        return self._g
+
     def _assemble(self):
         """The global step's normal matrix, scalar and shared by both coordinates:
         ``L = sum_j A_j G_j^T G_j`` (minimises ``sum_j A_j |J_j - P_j|_F^2``), split into free and
-        fixed columns."""
+        fixed columns (``face_operators.laplacian_blocks``: from each face's coefficients)."""
         if self._L_ff is None:
-            W = sp.diags_array(self.area)
-            L = (self.Gx.T @ W @ self.Gx + self.Gy.T @ W @ self.Gy).tocsr()
-            Lf = L[self.free]
-            self._L_ff = sp.csc_array(Lf[:, self.free])
-            self._L_fF = sp.csc_array(Lf[:, self.fixed])
+            gx, gy = self.face_gradients()
+            self._L_ff, self._L_fF = laplacian_blocks(gx, gy, self.area, self.tris, self.free,
+                                                      self.fixed, self.nv)
 
     def _continue_on(self, comps, U, C, scale, kw):
         """Project the components ``comps`` (c,) bool on their own, from ``U``.

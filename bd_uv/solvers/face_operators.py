@@ -1,0 +1,96 @@
+"""Sparse operators of an island assembled straight from each face's three corner coefficients.
+
+Every face's gradient of a linear function is ``gx . u[tris]``, ``gy . u[tris]`` (three numbers
+each), so the global step's Laplacian ``L = sum_f A_f (gx gx^T + gy gy^T)`` and the lift of a map to
+every face's alpha and beta are written as triplets in a few whole-array operations, with one
+conversion to a compressed matrix, rather than by products and slices of scipy matrices (a fixed
+cost of ~3 ms on a 223-face island against ~0.5 ms here: issue 21, "no fixed costs").
+"""
+import numpy as np
+import scipy.sparse as sp
+
+__all__ = ["face_gradients", "laplacian_blocks", "alpha_beta_lift"]
+
+
+def face_gradients(Gx, Gy, tris):
+    """Per-face gradient coefficients of the csr operators ``Gx``, ``Gy`` (k, nv), whose row f
+    has its entries among the columns ``tris[f]`` (entries that are exact zeros may be absent).
+
+    Returns
+    -------
+    gx, gy : (k,3) float64, the coefficient of each corner of each face (0 where absent)
+    """
+    k = len(tris)
+    out = []
+    for G in (Gx, Gy):
+        G = sp.csr_array(G)
+        rows = np.repeat(np.arange(k), np.diff(G.indptr))
+        corner = np.argmax(tris[rows] == G.indices[:, None], axis=1)
+        g = np.zeros((k, 3))
+        np.add.at(g, (rows, corner), G.data)
+        out.append(g)
+    return out[0], out[1]
+
+
+def _csr(rows, cols, vals, shape):
+    """Compressed rows of the triplets as they come (duplicates kept: products sum them)."""
+    order = np.argsort(rows, kind="stable")
+    indptr = np.zeros(shape[0] + 1, dtype=np.int64)
+    np.cumsum(np.bincount(rows, minlength=shape[0]), out=indptr[1:])
+    return sp.csr_array((vals[order], cols[order], indptr), shape=shape)
+
+
+def laplacian_blocks(gx, gy, area, tris, free, fixed, nv):
+    """``L = sum_f A_f (gx gx^T + gy gy^T)`` split into its free-free block (csc, canonical:
+    duplicates summed, indices sorted) and its free-fixed block (csc).
+
+    Parameters
+    ----------
+    gx, gy : (k,3) from ``face_gradients``; area : (k,); tris : (k,3) int64
+    free, fixed : sorted vertex ids (a partition of 0..nv-1)
+    """
+    vals = area[:, None, None] * (gx[:, :, None] * gx[:, None, :] + gy[:, :, None] * gy[:, None, :])
+    r = np.broadcast_to(tris[:, :, None], vals.shape).ravel()
+    c = np.broadcast_to(tris[:, None, :], vals.shape).ravel()
+    vals = vals.ravel()
+    pos = np.empty(nv, dtype=np.int64)
+    pos[free] = np.arange(len(free))
+    pos[fixed] = np.arange(len(fixed))
+    is_free = np.zeros(nv, dtype=bool)
+    is_free[free] = True
+    fr, fc = is_free[r], is_free[c]
+    ff, fF = fr & fc, fr & ~fc
+    L_ff = sp.csc_array((vals[ff], (pos[r[ff]], pos[c[ff]])), shape=(len(free), len(free)))
+    L_fF = sp.csc_array((vals[fF], (pos[r[fF]], pos[c[fF]])), shape=(len(free), len(fixed)))
+    L_ff.sum_duplicates()
+    return L_ff, L_fF
+
+
+def alpha_beta_lift(gx, gy, area, tris, free, nv):
+    """The lift of a map ``[u; v]`` (2nv) to every face's doubled alpha and beta (4k): rows
+    ``u_x + v_y``, ``v_x - u_y``, ``u_x - v_y``, ``v_x + u_y`` (csr, six entries a row), and the
+    least-squares step's right-hand side operator ``B_free^T diag(A, A, A, A) / 2`` (csr, rows the
+    free unknowns ``[free; free + nv]``).
+
+    Returns
+    -------
+    B : (4k, 2nv) csr; BtA : (2 len(free), 4k) csr
+    """
+    k = len(tris)
+    cu, cv = tris, tris + nv
+    # per block row: (coefficients on u, coefficients on v)
+    blocks = [(gx, gy), (-gy, gx), (gx, -gy), (gy, gx)]
+    data = np.concatenate([np.concatenate([a, b], axis=1) for a, b in blocks])      # (4k, 6)
+    cols = np.tile(np.concatenate([cu, cv], axis=1), (4, 1))                        # (4k, 6)
+    B = sp.csr_array((data.ravel(), cols.ravel(), np.arange(0, 24 * k + 1, 6)),
+                     shape=(4 * k, 2 * nv))
+    pos = np.full(2 * nv, -1, dtype=np.int64)
+    nf = len(free)
+    pos[free] = np.arange(nf)
+    pos[free + nv] = np.arange(nf, 2 * nf)
+    rows_b = np.repeat(np.arange(4 * k), 6)
+    tr = pos[cols.ravel()]
+    keep = tr >= 0
+    w = (0.5 * np.tile(area, 4))[rows_b]
+    BtA = _csr(tr[keep], rows_b[keep], (data.ravel() * w)[keep], (2 * nf, 4 * k))
+    return B, BtA
