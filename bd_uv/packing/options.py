@@ -14,6 +14,10 @@ GROUPINGS = ("none", "object", "material")
 # follow it (dino has more faces than cow and takes less time, suzanne's charts take 0.27 s
 # each, camel's 0.9 s)
 AUTO_SECONDS_PER_ROOT = 0.006   # seconds per sqrt(charts x faces)
+# and at most this much a chart: Blender took at least 0.2 s a chart on those meshes, and the
+# root alone overshot on meshes of many faces in few charts (camel: 4.5 s of search, 5.2 s in
+# all, against Blender's 19.2 s in the same run, 0.27x; 2026-11-27, load 3.5)
+AUTO_SECONDS_PER_CHART = 0.08
 AUTO_SECONDS_MAX = 20.0
 
 
@@ -82,14 +86,14 @@ class PackOptions:
 
     def search_seconds(self, charts, faces=0):
         """Seconds of nesting for ``charts`` charts of ``faces`` faces: ``solve_seconds``, or
-        adaptive: ``AUTO_SECONDS_PER_ROOT`` sqrt(charts x faces), at most ``AUTO_SECONDS_MAX``
-        (0 for one chart)."""
+        adaptive: ``AUTO_SECONDS_PER_ROOT`` sqrt(charts x faces), at most
+        ``AUTO_SECONDS_PER_CHART`` a chart and ``AUTO_SECONDS_MAX`` (0 for one chart)."""
         if self.solve_seconds is not None:
             return float(self.solve_seconds)
         if charts < 2:
             return 0.0
         return min(AUTO_SECONDS_PER_ROOT * float(np.sqrt(charts * max(faces, charts))),
-                   AUTO_SECONDS_MAX)
+                   AUTO_SECONDS_PER_CHART * charts, AUTO_SECONDS_MAX)
 
     @property
     def padding(self):

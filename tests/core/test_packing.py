@@ -41,11 +41,13 @@ def test_constructive_placement_only_is_certified_too():
 
 
 def test_nesting_time_is_adaptive_or_as_given():
-    """None (the default): 6 ms sqrt(charts x faces), at most 20 s, nothing for one chart; a
-    number of seconds, fractional too, is taken as given; anything else refused."""
+    """None (the default): 6 ms sqrt(charts x faces), at most 80 ms a chart and 20 s, nothing
+    for one chart; a number of seconds, fractional too, is taken as given; anything else
+    refused."""
     auto = PackOptions()
     assert auto.search_seconds(1, 10_000) == 0.0
     assert auto.search_seconds(46, 5804) == pytest.approx(0.006 * (46 * 5804) ** 0.5)
+    assert auto.search_seconds(29, 19536) == pytest.approx(0.08 * 29)    # camel's charts
     assert auto.search_seconds(5000, 10 ** 6) == 20.0
     assert PackOptions(solve_seconds=0.25).search_seconds(46, 5804) == 0.25
     for bad in ("1", -0.5, 1e9):
