@@ -143,8 +143,8 @@ def add_layout_options(p):
                    metavar="S|auto",
                    help="seconds the nesting and compaction may take for the smallest square, "
                         "half each, the compaction's in CPU time (default auto: about 6 ms "
-                        "sqrt(charts x faces)); 0: the first placements found only, for less "
-                        "coverage")
+                        "sqrt(charts x faces), at most 80 ms a chart); 0: the first placements "
+                        "found only, for less coverage")
     p.add_argument("--group", choices=GROUPINGS, default=PACK_DEFAULTS["group"],
                    help="pack the charts of one material (OBJ usemtl, glTF primitive material, "
                         "USD materialBind subset) or one object (OBJ o) together, one region per "
