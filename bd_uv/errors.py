@@ -1,6 +1,7 @@
 """Typed errors. Every error bd_uv raises or records derives from :class:`BDError`, so a caller
 (the Blender operator, the batch tool) can catch precisely and show ``str(error)`` to the user: each
 message names the problem and what to do about it."""
+import re
 
 
 class BDError(Exception):
@@ -30,6 +31,16 @@ class IslandError(BDError):
         super().__init__(message)
         self.island = island
         self.faces = faces
+
+    def renumber(self, island):
+        """Make this the error of island ``island``: its ``island`` and the "island N" its
+        message starts with (islands are renumbered when results are merged or spliced)."""
+        msg = str(self)
+        if msg.startswith("island "):
+            msg = re.sub(r"^island \d+", f"island {island}", msg, count=1)
+        self.args = (msg,) + tuple(self.args[1:])
+        self.island = island
+        return self
 
 
 class ClosedIslandError(IslandError):

@@ -52,11 +52,8 @@ def renumbered(r, j):
         return r
     if r.error is None:
         return dataclasses.replace(r, index=j)
-    old, new = f"island {r.index}:", f"island {j}:"
-    err = copy.copy(r.error)
-    err.args = (str(r.error).replace(old, new, 1),) + tuple(r.error.args[1:])
-    err.island = j
-    msg = r.message.replace(old, new, 1) if r.message else r.message
+    err = copy.copy(r.error).renumber(j)
+    msg = str(err) if r.message == str(r.error) else r.message
     return dataclasses.replace(r, index=j, error=err, message=msg)
 
 

@@ -219,7 +219,7 @@ def _solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=Non
                                                       o.raise_bound, o.bound_limit, o.cone, cancel,
                                                       report, stretch)
         except IslandError as exc:
-            exc.island = island.index
+            exc.renumber(island.index)
             return with_premises(_failed(island, exc, t0, bound, FRAMES_NAME), island)
         except BDError as exc:
             err = SolverError(f"island {island.index}: {exc}", island.index)
@@ -229,7 +229,7 @@ def _solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=Non
         prob = IslandProblem(island, V, pins, method, o.cone, cancel)
         start = start_map(prob, o.frames, initial_uv, report, lscm=lscm)
     except IslandError as exc:
-        exc.island = island.index
+        exc.renumber(island.index)
         return _failed(island, exc, t0, bound)
     except BDError as exc:
         return _failed(island, SolverError(f"island {island.index}: {exc}", island.index), t0,
