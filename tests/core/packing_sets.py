@@ -63,7 +63,8 @@ def segment_distances(a0, a1, b0, b1):
 
 def least_gap(uv, lab, reach):
     """Least distance between triangle edges of two different charts, among edges whose midpoints
-    are within ``reach`` plus their half lengths (a k-d tree on midpoints); inf if none."""
+    are within ``reach`` plus their half lengths (a k-d tree on midpoints); inf if none. Exact
+    when it is at most ``reach``; above, an upper bound (only nearby pairs are measured)."""
     e0 = uv.reshape(-1, 2)
     e1 = uv[:, [1, 2, 0]].reshape(-1, 2)
     el = np.repeat(lab, 3)
