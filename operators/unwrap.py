@@ -199,16 +199,14 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
             row.prop(self, name)
         layout.prop(self, "show_distortion")
 
-    def _pack(self, context, batch, written):
-        """Pack the written islands: the atlas packer (unless pinned islands must stay put, or it
-        cannot certify a layout: then Blender's, said in the note), or Blender's. Returns the
-        note for the report line."""
+    def _pack(self, context, written):
+        """Pack the written islands: the atlas packer (islands holding a pinned UV stay where
+        they are and the rest pack around their true shapes; when it cannot, e.g. a pinned island
+        lies outside the square, or its layout is not certified: Blender's, said in the note), or
+        Blender's. Returns the note for the report line."""
         if self.pack_shape != 'ATLAS':
             session.pack(context, written, self.margin, self.pack_shape)
             return ""
-        if any(part.pinned_faces.any() for part in batch.parts):
-            session.pack(context, written, self.margin, 'AABB')
-            return "packed by Blender's packer (pinned islands stay put)"
         options = PackOptions(resolution=self.pack_resolution, padding_px=self.pack_padding,
                               group=self.pack_group)
         try:
@@ -320,7 +318,7 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
         verified, packed_note = None, ""
         if any(w.faces.any() for w in written):
             if self.pack:
-                packed_note = self._pack(context, batch, written)
+                packed_note = self._pack(context, written)
             with object_mode(context):
                 verified = session.verify_written(batch, result, written, stretch)
         summary = session.summarise(batch, result, written, seconds, verified, packed=self.pack,

@@ -126,3 +126,41 @@ def test_unwrap_packs_with_the_atlas_packer_by_default(addon):
     assert least_gap(uv, lab, reach=8 / 1024) * 1024 >= 4 * (1 - 1e-4)
     d = texel_densities(V, F, uv, lab)
     assert np.allclose(d, np.median(d), rtol=1e-3)
+
+
+def test_unwrap_with_a_pinned_island_packs_the_rest_around_it_with_the_atlas_packer(addon):
+    """A second unwrap with one island's UVs all pinned: that island stays bit for bit where the
+    first unwrap packed it and the others are packed around it by the atlas packer (padding in
+    texels, one density among them), not by Blender's bounding boxes."""
+    from conftest import add_suzanne_with_seams, triangle_distortion
+    from bd_uv_addon.bd_uv.packing import uv_islands
+    ob = add_suzanne_with_seams()
+    set_mode(ob, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=3.0) == {'FINISHED'}
+    set_mode(ob, 'OBJECT')
+    V, F, loops = triangles(ob)
+    first = loop_uv_array(ob.data)[loops].astype(np.float64)
+    lab = uv_islands(F, first)
+    big = np.argmax(np.bincount(lab))                  # pin every UV of the largest island
+    pins = np.zeros(len(ob.data.loops), bool)
+    pins[loops[lab == big].ravel()] = True
+    layer = ob.data.uv_layers.active
+    layer.pin_ensure()
+    layer.pin.foreach_set("value", pins)
+    set_mode(ob, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=3.0) == {'FINISHED'}
+    set_mode(ob, 'OBJECT')
+    uv = loop_uv_array(ob.data)[loops].astype(np.float64)
+    kept = lab == big
+    assert np.array_equal(uv[kept], first[kept])                     # the pinned island stays
+    assert np.array_equal(uv_islands(F, uv), lab)
+    D, det = triangle_distortion(V, F, uv)
+    assert (det > 0).all() and D.max() <= 3.0 * (1 + 1e-5)
+    assert uv.min() >= 2 / 1024 * (1 - 1e-4) and uv.max() <= 1 - 2 / 1024 * (1 - 1e-4)
+    pairs = overlapping_triangle_pairs(uv)
+    assert not np.any(lab[pairs[:, 0]] != lab[pairs[:, 1]])
+    assert least_gap(uv, lab, reach=8 / 1024) * 1024 >= 4 * (1 - 1e-4)   # the atlas's padding
+    d = texel_densities(V, F, uv, lab)[np.unique(lab) != big]
+    assert np.allclose(d, np.median(d), rtol=1e-3)                   # one density for the rest
