@@ -129,6 +129,15 @@ def add_layout_options(p):
     """How the UVs are stored (``unwrap`` and ``batch``): cut overlaps, pack and its options."""
     p.add_argument("--no-pack", action="store_true",
                    help="keep each island at (0, 0) instead of packing them into the unit square")
+    add_pack_options(p)
+    p.add_argument("--overlap", choices=OVERLAPS, default=DEFAULTS.overlap,
+                   help="an island whose UVs lie over themselves: cut it into overlap-free "
+                        "pieces (default, the cut edges are reported), or fail it")
+
+
+def add_pack_options(p):
+    """The atlas packer's options (``unwrap``, ``batch`` and the Blender script): defaults
+    ``PACK_DEFAULTS``, read back by :func:`pack_options_of`."""
     p.add_argument("--resolution", type=int, default=PACK_DEFAULTS["resolution"],
                    help="texture size in texels the packing is measured at (default 1024)")
     p.add_argument("--padding", type=float, default=PACK_DEFAULTS["padding"],
@@ -152,9 +161,34 @@ def add_layout_options(p):
     p.add_argument("--udim", action="store_true",
                    help="with --texel-density: charts that do not fit tile 1001 spill into 1002, "
                         "1003, ... (Blender's UDIM numbering)")
-    p.add_argument("--overlap", choices=OVERLAPS, default=DEFAULTS.overlap,
-                   help="an island whose UVs lie over themselves: cut it into overlap-free "
-                        "pieces (default, the cut edges are reported), or fail it")
+
+
+def pack_options_given(args):
+    """The atlas packing options set to other than their defaults, as flags (``--padding``):
+    refused where nothing is packed by the atlas packer (never accepted and ignored)."""
+    return ["--" + name.replace("_", "-") for name, default in PACK_DEFAULTS.items()
+            if getattr(args, name) != default]
+
+
+def pack_options_of(args):
+    """The PackOptions of parsed :func:`add_pack_options` (bad values raise PackError)."""
+    return PackOptions(resolution=args.resolution, padding_px=args.padding,
+                       texel_density=args.texel_density, rotate=args.rotate, udim=args.udim,
+                       solve_seconds=args.pack_seconds, group=args.group)
+
+
+def pack_flags(options):
+    """PackOptions as the command-line flags of :func:`add_pack_options` (what
+    ``python -m bd_uv batch`` hands the Blender script)."""
+    out = ["--resolution", str(options.resolution), "--padding", repr(options.padding_px),
+           "--rotate", options.rotate, "--group", options.group]
+    if options.texel_density is not None:
+        out += ["--texel-density", repr(options.texel_density)]
+    if options.solve_seconds is not None:
+        out += ["--pack-seconds", repr(options.solve_seconds)]
+    if options.udim:
+        out.append("--udim")
+    return out
 
 
 def _seconds(text):
@@ -173,13 +207,9 @@ def layout_kwargs(args):
     ``PackError`` here, before anything is solved."""
     pack = not args.no_pack
     if not pack:   # an option is never accepted and ignored
-        given = ["--" + name.replace("_", "-") for name, default in PACK_DEFAULTS.items()
-                 if getattr(args, name) != default]
+        given = pack_options_given(args)
         if given:
             raise OptionError("no_pack", f"{', '.join(given)} set how islands are packed: "
                                          "not with --no-pack")
-    options = PackOptions(resolution=args.resolution, padding_px=args.padding,
-                          texel_density=args.texel_density, rotate=args.rotate,
-                          udim=args.udim, solve_seconds=args.pack_seconds,
-                          group=args.group) if pack else None
+    options = pack_options_of(args) if pack else None
     return dict(pack=pack, cut=args.overlap == "cut", pack_options=options)

@@ -228,6 +228,12 @@ def _pack_report(V, F, stored, face_island, packed):
     from .packing import layout_certificate
     o = packed.options
     cert = layout_certificate(V, F, stored, face_island, packed.tile, o.resolution, o.padding_px)
+    return pack_summary(packed, cert)
+
+
+def pack_summary(packed, cert):
+    """The ``pack`` report object of a packing (``Packed``) and its layout certificate."""
+    o = packed.options
     return dict(seconds=round(packed.seconds, 4), **cert.summary(),
                 texel_density=packed.texel_density, rotate=o.rotate, group=o.group,
                 solves=packed.solves)

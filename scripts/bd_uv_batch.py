@@ -21,8 +21,9 @@ Each object is unwrapped along its marked seams, with seams added (and marked) o
 that cannot be certified as they are (``--seams needed``, the default; closed meshes need no
 seams marked first) and the mesh repaired where it is not a manifold, keeping its pinned UVs
 exactly (an object with pins is unwrapped as marked), with the object's scale
-applied like the ``uv.bd_unwrap`` operator, and with ``--pack`` the islands are packed by Blender's
-Pack Islands as the operator does. Then each island is certified again from the UV map as it will
+applied like the ``uv.bd_unwrap`` operator, and with ``--pack`` the islands are packed as the
+operator does: by the atlas packer (``operators/pack.pack_atlas``, its layout certified) or Blender's
+Pack Islands (``--pack-shape``). Then each island is certified again from the UV map as it will
 be saved (float32, packed or not) with its own bound, and an island that fails is put back before
 saving: no island that failed is ever saved. The report's figures and the PNG are those of the
 saved map; faces are also counted as Blender's polygons. Arrays come from the add-on's
@@ -45,6 +46,8 @@ import bpy
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+PACK_SHAPES = ("ATLAS", "AABB", "CONVEX", "CONCAVE")
+MARGIN = 0.001   # Blender's packer's margin by default
 
 
 def _extension_package():
@@ -81,6 +84,14 @@ def _import_addon():
                   "operators.session", "operators.stored", "operators.formats"))
 
 
+def _import_packing():
+    """The atlas packing's modules: the add-on's ``pack`` (``pack_atlas``), ``bd_uv.layout``
+    (its report) and ``bd_uv.errors``."""
+    pkg = _extension_package().__name__
+    return tuple(importlib.import_module(f"{pkg}.{name}") for name in
+                 ("operators.pack", "bd_uv.layout", "bd_uv.errors"))
+
+
 def split_argv(argv):
     """(.blend files, options): the files are those before ``--`` when this runs with the bpy
     module (``python bd_uv_batch.py FILE -- ...``); inside Blender, Blender opened the file."""
@@ -109,12 +120,18 @@ def build_parser(arguments):
     p.add_argument("--no-object-scale", action="store_true",
                    help="unwrap the mesh data as is, ignoring the objects' scale")
     p.add_argument("--pack", action="store_true",
-                   help="pack the unwrapped islands with Blender's Pack Islands, like the "
-                        "operator (islands with pinned UVs stay where they are)")
-    p.add_argument("--margin", type=float, default=0.001, help="space between packed islands")
-    p.add_argument("--pack-shape", choices=("AABB", "CONVEX", "CONCAVE"), default="AABB",
-                   help="island shape for packing: bounding box (fastest, default), convex hull "
-                        "or exact shape (tighter; either can take seconds on thousands of faces)")
+                   help="pack each object's unwrapped islands into its UV square, like the "
+                        "operator: with the atlas packer (--pack-shape ATLAS, the default) or "
+                        "Blender's Pack Islands; islands with pinned UVs stay where they are")
+    p.add_argument("--pack-shape", choices=PACK_SHAPES, default="ATLAS",
+                   help="ATLAS (default): bd-uv's atlas packer, charts by their true shapes, "
+                        "turned only, the padding in texels, the layout certified (Blender's "
+                        "AABB when it cannot, e.g. a pinned island outside the square, said in "
+                        "the report); AABB, CONVEX, CONCAVE: Blender's Pack Islands with "
+                        "that island shape and --margin")
+    p.add_argument("--margin", type=float, default=None,
+                   help=f"space between islands for Blender's packer (default {MARGIN})")
+    arguments.add_pack_options(p)
     p.add_argument("--input", metavar="FILE",
                    help="an FBX, Alembic, Collada or STL file to import (inside Blender; with the "
                         "bpy module it may also come before '--')")
@@ -234,14 +251,39 @@ class Written:
         self.result, self.initial_uv = result, initial_uv
 
 
-def pack(written, session, margin, shape):
-    """Blender's Pack Islands on each object's written islands, as the operator does; islands
-    with pinned UVs stay put.
+def pack_settings(args, arguments, errors):
+    """(the atlas packer's PackOptions or None, an error line or None): packing options that
+    would be accepted and ignored are refused, as are bad values."""
+    atlas = args.pack and args.pack_shape == "ATLAS"
+    given = arguments.pack_options_given(args)
+    if given and not atlas:
+        return None, (f"{', '.join(given)} set the atlas packer: give --pack (its --pack-shape "
+                      "ATLAS is the default)")
+    if args.pack_shape != "ATLAS" and not args.pack:
+        return None, f"--pack-shape {args.pack_shape} packs with --pack only"
+    if args.margin is not None and (atlas or not args.pack):
+        return None, ("--margin is Blender's packer's: give --pack --pack-shape "
+                      "AABB|CONVEX|CONCAVE (the atlas packer's gap is --padding in texels)")
+    if not atlas:
+        return None, None
+    try:
+        return arguments.pack_options_of(args), None
+    except errors.BDError as exc:
+        return None, str(exc)
+
+
+def pack(written, session, args, atlas, modules):
+    """Pack each object's written islands, as the operator does: with the atlas packer when
+    ``atlas`` (PackOptions; the entry gets its ``pack`` report, or a ``pack_note`` when it cannot
+    and Blender's AABB packs instead), else Blender's Pack Islands with ``--pack-shape`` and
+    ``--margin``. Islands with pinned UVs stay put.
 
     Each object is packed on its own, into its own UV space: packed together with another
     object's pinned island lying outside the unit square, Blender's packer shrank a whole object
     to a dot (1e-5 wide, where float32 UVs no longer hold its shape).
     """
+    packer, layout, errors = modules
+    margin = MARGIN if args.margin is None else args.margin
     for w in written:
         entry, ob, arrays, ok = w.entry, w.ob, w.arrays, w.ok
         bpy.ops.object.select_all(action='DESELECT')
@@ -249,15 +291,29 @@ def pack(written, session, margin, shape):
         polygons[arrays.tri_poly[ok]] = True
         ob.select_set(True)
         bpy.context.view_layer.objects.active = ob
-        # Pack Islands works on the active UV map: make it the one written, for the moment.
+        # Both packers work on the active UV map: make it the one written, for the moment.
         layers = ob.data.uv_layers
         active = layers.active.name
         layers.active = layers[entry["uv_map"]]
-        bpy.ops.object.mode_set(mode='EDIT')
         try:
-            session.pack(bpy.context, [session.Written(ob.name, ok, polygons)], margin, shape)
+            shape = args.pack_shape
+            if atlas is not None:
+                try:
+                    done = packer.pack_atlas([ob], [polygons], atlas)
+                except errors.BDError as exc:
+                    entry["pack_note"] = f"packed by Blender's packer (AABB): {exc}"
+                    shape = "AABB"
+                else:
+                    if done is not None:
+                        entry["pack"] = layout.pack_summary(done[0], done[1])
+                    continue
+            bpy.ops.object.mode_set(mode='EDIT')
+            try:
+                session.pack(bpy.context, [session.Written(ob.name, ok, polygons)], margin,
+                             shape)
+            finally:
+                bpy.ops.object.mode_set(mode='OBJECT')
         finally:
-            bpy.ops.object.mode_set(mode='OBJECT')
             layers.active = layers[active]
 
 
@@ -358,6 +414,9 @@ def check_saved(written, mesh_data, stored, packed):
                  if len(np.unique(kept_labels[kept_labels >= 0])) > 1 else [])
         entry["island_overlaps"] = None if pairs is None else [
             [int(a), int(b)] for a, b in np.asarray(pairs).reshape(-1, 2)]
+        # the layout as saved (packed or not), not the core's unpacked one
+        entry["layout_overlaps"] = (None if pairs is None
+                                    else len(entry["island_overlaps"]))
 
 
 def draw_saved(written, core, batch, mesh_data, options, args):
@@ -384,8 +443,13 @@ def main(argv):
     imported = [f for f in blends if not f.lower().endswith(".blend")] + (
         [args.input] if args.input else [])
     blends = [f for f in blends if f.lower().endswith(".blend")]
-    # Blender packs (--pack): the core neither packs nor cuts what it stores.
+    # Packed here (--pack): the core neither packs nor cuts what it stores.
     options = batch.JobOptions(arguments.unwrap_options_of(args))
+    packing = _import_packing()
+    atlas, problem = pack_settings(args, arguments, packing[2])
+    if problem:
+        print(f"error: {problem}", file=sys.stderr)
+        return 2
     if args.png and importlib.util.find_spec("matplotlib") is None:
         print("error: --png needs matplotlib, which this Python (Blender's own) does not have: "
               "install it into Blender's Python (<blender python> -m pip install matplotlib), "
@@ -433,7 +497,7 @@ def main(argv):
         print(batch.item_line(e), flush=True)
     done, written = unwrap_objects(objects, args, batch, options, mesh_data, session, source)
     if written and args.pack:
-        pack(written, session, args.margin, args.pack_shape)
+        pack(written, session, args, atlas, packing)
     check_saved(written, mesh_data, stored, args.pack)
     written = [w for w in written if w.ok.any()]
     for w in written:   # the seams added, where the artist sees them: marked on the mesh saved
@@ -454,7 +518,12 @@ def main(argv):
             w.entry["output"] = output
     wall = time.perf_counter() - t0
 
-    report = batch.batch_report(items, options, wall, jobs=1,
+    echoed = options.as_dict()
+    if args.pack:   # packed here, not by the core: the options say how
+        echoed.update(pack=True, pack_shape=args.pack_shape, **(
+            {k: getattr(atlas, k) for k in batch.jobs.PACK_FIELDS} if atlas is not None
+            else {"margin": MARGIN if args.margin is None else args.margin}))
+    report = batch.batch_report(items, echoed, wall, jobs=1,
                                 files=[source] if source else [])
     report.update(tool="bd_uv_batch.py", output=output if (written or args.output) else None)
     if args.report:

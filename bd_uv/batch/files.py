@@ -15,6 +15,7 @@ import time
 import traceback
 from dataclasses import dataclass
 
+from ..arguments import pack_flags
 from ..errors import BDError
 from ..meshio import load_mesh, write_obj
 from ..scenes import BLENDER_SUFFIXES, SCENE_SUFFIXES, blender_command
@@ -120,6 +121,10 @@ def _script_options(options):
     if o.stretch is not None:
         out += ["--stretch", str(o.stretch)]
     out += ["--seams", "needed" if o.seams_mode == "needed" else "marked"]
+    job = JobOptions.of(options)
+    if job.pack:   # packed by the script, each object into its own square
+        out += (["--pack", *pack_flags(job.pack_options)] if job.pack_options is not None
+                else ["--pack", "--pack-shape", "AABB", "--margin", repr(job.margin)])
     return out
 
 

@@ -280,3 +280,67 @@ def test_stretch_and_method_reach_the_script(scene_blend, tmp_path):
         s = np.linalg.svd(J, compute_uv=False)
         k = np.sqrt(areas.sum() / np.sum(np.linalg.det(J) * areas))  # one island each (one pin)
         assert s[:, 1].min() * k >= (1 - 1e-4) / S and s[:, 0].max() * k <= S * (1 + 1e-4)
+
+
+def test_folder_batch_packs_a_blend_with_the_atlas_packer(tmp_path, empty_scene):
+    """``python -m bd_uv batch`` packs a .blend's islands as it packs an OBJ's (it used to hand
+    the script no packing at all: 102 islands saved on top of each other). The saved layout is
+    checked independently: inside the square with half the padding to its edge, no two islands
+    overlapping (exact triangle test), least gap >= the padding, one texel density; the report's
+    ``pack`` figures are those of the saved UVs."""
+    sys.path.insert(0, str(REPO_ROOT / "tests" / "core"))
+    from overlap_shapes import overlapping_triangle_pairs
+    from packing_sets import least_gap, texel_densities
+    from conftest import add_suzanne_with_seams
+    add_suzanne_with_seams().name = "Suzanne"
+    src = tmp_path / "suzanne.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(src))
+    out = tmp_path / "out"
+    proc = subprocess.run([sys.executable, "-m", "bd_uv", "batch", str(src), "-o", str(out),
+                           "--jobs", "1", "--padding", "6", "--resolution", "512"],
+                          capture_output=True, text=True, cwd=REPO_ROOT)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    rep = json.loads((out / "report.json").read_text())
+    (e,) = rep["items"]
+    assert e["status"] == "certified" and rep["summary"]["layout_overlaps"] == 0
+    assert rep["options"]["padding_px"] == 6.0 and rep["options"]["resolution"] == 512
+
+    bpy.ops.wm.open_mainfile(filepath=str(out / "suzanne.blend"))
+    ob = bpy.data.objects["Suzanne"]
+    D, det, areas, _ = measured(ob)
+    assert np.all(det > 0) and D.max() <= e["bound_certified"] * (1 + 1e-5)
+    tris, loops = loop_tris(ob.data)
+    uv = loop_uv_array(ob.data)[loops].astype(np.float64)             # float32 as saved
+    from bd_uv.packing import uv_islands
+    lab = uv_islands(tris, uv)
+    assert lab.max() + 1 == len(e["islands"]) > 10
+    assert uv.min() >= 3 / 512 * (1 - 1e-4) and uv.max() <= 1 - 3 / 512 * (1 - 1e-4)
+    pairs = overlapping_triangle_pairs(uv)
+    assert not np.any(lab[pairs[:, 0]] != lab[pairs[:, 1]])
+    assert least_gap(uv, lab, reach=12 / 512) * 512 >= 6 * (1 - 1e-4)
+    co = np.empty(len(ob.data.vertices) * 3, np.float32)
+    ob.data.vertices.foreach_get("co", co)
+    d = texel_densities(co.reshape(-1, 3).astype(np.float64), tris, uv, lab)
+    assert np.allclose(d, np.median(d), rtol=1e-3)
+    e1, e2 = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
+    coverage = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]).sum()
+    p = e["pack"]
+    assert p["certified"] and p["tiles"] == [1001] and p["overlapping_pairs"] == 0
+    assert p["coverage"] == pytest.approx(coverage, rel=1e-3) and coverage > 0.4
+    assert p["least_gap_px"] >= 6 * (1 - 1e-4)
+
+
+def test_script_refuses_atlas_options_it_would_ignore(scene_blend, tmp_path):
+    """--padding without --pack, or with Blender's packer, and --margin with the atlas packer,
+    would be accepted and ignored: exit 2 with one line, nothing saved."""
+    out = tmp_path / "out.blend"
+    for flags, says in ((["--padding", "8"], "--padding set the atlas packer"),
+                        (["--pack", "--pack-shape", "CONCAVE", "--rotate", "90"], "--rotate"),
+                        (["--pack", "--margin", "0.01"], "--margin is Blender's packer's"),
+                        (["--pack-shape", "AABB"], "packs with --pack only"),
+                        (["--pack", "--padding", "900"], "padding must be")):
+        proc = run_script(scene_blend, "--output", str(out), *flags)
+        assert proc.returncode == 2, (flags, proc.stdout + proc.stderr)
+        assert says in proc.stderr and "Traceback" not in proc.stderr
+        assert len(proc.stderr.strip().splitlines()) == 1
+        assert not out.exists()
