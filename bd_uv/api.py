@@ -7,6 +7,10 @@ mesh into charts, which it certifies through ``bd_uv.unwrapping.unwrap``; otherw
 seams go straight to ``bd_uv.unwrapping.unwrap``. Living here, above ``seams`` and
 ``unwrapping``, the choice needs no import from ``unwrapping`` back up to ``seams``.
 """
+import dataclasses
+
+import numpy as np
+
 from .errors import OptionError
 from .options import unwrap_options
 from .seams import unwrap_auto
@@ -61,6 +65,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
         return unwrap_needed(V, F, seams, polygons=face_groups, options=opts,
                              progress=progress, cancel=cancel)
     # face_groups (polygons) are kept whole by the seams added too: unwrap_auto's polygons.
-    return unwrap_auto(V, F, seams=seams, bound=opts.bound, stretch=opts.seams_stretch,
-                       method=opts.method, frames=opts.frames, cone=opts.cone, progress=progress,
-                       cancel=cancel, polygons=face_groups)[0]
+    res, added, _ = unwrap_auto(V, F, seams=seams, bound=opts.bound, stretch=opts.seams_stretch,
+                                method=opts.method, frames=opts.frames, cone=opts.cone,
+                                progress=progress, cancel=cancel, polygons=face_groups)
+    return dataclasses.replace(res, seams_added=np.asarray(added, dtype=np.int64).reshape(-1, 2))

@@ -109,11 +109,13 @@ def build_parser(arguments):
     p.add_argument("--objects", nargs="+", metavar="NAME",
                    help="mesh objects to unwrap (default: every mesh object with faces)")
     arguments.add_solver_options(p)
-    p.add_argument("--seams", choices=("needed", "marked"), default=None,
+    p.add_argument("--seams", choices=("needed", "marked", "auto"), default=None,
                    help="needed (the default): the marked seams kept, the mesh repaired where "
                         "it is not a manifold, seams added (and marked) only on islands that "
                         "cannot be certified as they are; marked: the marked seams only, every "
-                        "island must be a disk. Objects with pinned UVs are unwrapped as marked")
+                        "island must be a disk; auto: seams searched on every island (as "
+                        "python -m bd_uv's --seams auto), added and marked. Objects with pinned "
+                        "UVs are unwrapped as marked")
     p.add_argument("--uv-map", metavar="NAME",
                    help="UV map to read pins from and write (default: the active one; created "
                         "when missing)")

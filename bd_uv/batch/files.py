@@ -120,7 +120,7 @@ def _script_options(options):
         out += ["--boundary", o.boundary]
     if o.stretch is not None:
         out += ["--stretch", str(o.stretch)]
-    out += ["--seams", "needed" if o.seams_mode == "needed" else "marked"]
+    out += ["--seams", o.seams_mode if o.seams_mode in ("needed", "auto") else "marked"]
     job = JobOptions.of(options)
     if job.pack:   # packed by the script, each object into its own square
         out += (["--pack", *pack_flags(job.pack_options)] if job.pack_options is not None

@@ -106,7 +106,7 @@ class UnwrapResult:
 
     def seams_report(self):
         """``seams_added`` (vertex pairs) and ``repair`` (sentences) for the JSON report, when
-        seams were added where needed (``seams_mode="needed"``); {} otherwise."""
+        seams were added (``seams_mode="needed"`` or ``"auto"``); {} otherwise."""
         if self.seams_added is None:
             return {}
         return {"seams_added": np.asarray(self.seams_added).tolist(),

@@ -344,3 +344,33 @@ def test_script_refuses_atlas_options_it_would_ignore(scene_blend, tmp_path):
         assert says in proc.stderr and "Traceback" not in proc.stderr
         assert len(proc.stderr.strip().splitlines()) == 1
         assert not out.exists()
+
+
+def test_folder_batch_seams_auto_reaches_a_blend_and_marks_its_seams(tmp_path, empty_scene):
+    """``--seams auto`` on a .blend: the script searches seams (it used to get ``--seams
+    marked`` and fail a closed torus as no disk), marks the seams it added on the saved mesh and
+    lists them in the report; the saved map is certified (checked independently)."""
+    bpy.ops.mesh.primitive_torus_add(major_segments=24, minor_segments=12)
+    bpy.context.active_object.name = "Torus"
+    src = tmp_path / "torus.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(src))
+    out = tmp_path / "out"
+    proc = subprocess.run([sys.executable, "-m", "bd_uv", "batch", str(src), "-o", str(out),
+                           "--jobs", "1", "--seams", "auto"],
+                          capture_output=True, text=True, cwd=REPO_ROOT)
+    assert proc.returncode == 0, proc.stdout + proc.stderr
+    (e,) = json.loads((out / "report.json").read_text())["items"]
+    assert e["status"] == "certified" and e["layout_overlaps"] == 0
+    added = np.asarray(e["seams_added"])
+    assert len(added) > 0 and e["seams_marked"] == len(added)
+    bpy.ops.wm.open_mainfile(filepath=str(out / "torus.blend"))
+    ob = bpy.data.objects["Torus"]
+    me = ob.data
+    seam = np.zeros(len(me.edges), bool)
+    me.edges.foreach_get("use_seam", seam)
+    ev = np.empty(2 * len(me.edges), np.int32)
+    me.edges.foreach_get("vertices", ev)
+    marked = {tuple(sorted(p)) for p in ev.reshape(-1, 2)[seam].tolist()}
+    assert marked == {tuple(sorted(p)) for p in added.tolist()}
+    D, det, _, _ = measured(ob)
+    assert np.all(det > 0) and D.max() <= e["bound_certified"] * (1 + 1e-5)
