@@ -106,18 +106,20 @@ def test_bd_pack_is_one_undo_step_in_the_uv_menu(addon):
                for menu, draw in menus._menus())
 
 
-def test_unwrap_packs_with_the_atlas_packer_by_default(addon):
-    from conftest import add_suzanne_with_seams, triangle_distortion
-    from bd_uv_addon.bd_uv.packing import uv_islands
-    ob = add_suzanne_with_seams()
+def unwrapped_uvs(ob):
+    """bd_unwrap (bound 3) on every face of ``ob``: (V, F, loops, corner UVs as stored)."""
     set_mode(ob, 'EDIT')
     bpy.ops.mesh.select_all(action='SELECT')
     assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=3.0) == {'FINISHED'}
     set_mode(ob, 'OBJECT')
     V, F, loops = triangles(ob)
-    uv = loop_uv_array(ob.data)[loops].astype(np.float64)
-    lab = uv_islands(F, uv)
-    assert lab.max() >= 2
+    return V, F, loops, loop_uv_array(ob.data)[loops].astype(np.float64)
+
+
+def assert_atlas_layout(V, F, uv, lab, density=None):
+    """Certified at 3, inside the square with half the 4 px padding to its edge, no two islands
+    overlapping, least gap >= 4 px, one texel density on the islands ``density`` (default all)."""
+    from conftest import triangle_distortion
     D, det = triangle_distortion(V, F, uv)
     assert (det > 0).all() and D.max() <= 3.0 * (1 + 1e-5)
     assert uv.min() >= 2 / 1024 * (1 - 1e-4) and uv.max() <= 1 - 2 / 1024 * (1 - 1e-4)
@@ -125,22 +127,27 @@ def test_unwrap_packs_with_the_atlas_packer_by_default(addon):
     assert not np.any(lab[pairs[:, 0]] != lab[pairs[:, 1]])
     assert least_gap(uv, lab, reach=8 / 1024) * 1024 >= 4 * (1 - 1e-4)
     d = texel_densities(V, F, uv, lab)
+    d = d if density is None else d[density]
     assert np.allclose(d, np.median(d), rtol=1e-3)
+
+
+def test_unwrap_packs_with_the_atlas_packer_by_default(addon):
+    from conftest import add_suzanne_with_seams
+    from bd_uv_addon.bd_uv.packing import uv_islands
+    V, F, _, uv = unwrapped_uvs(add_suzanne_with_seams())
+    lab = uv_islands(F, uv)
+    assert lab.max() >= 2
+    assert_atlas_layout(V, F, uv, lab)
 
 
 def test_unwrap_with_a_pinned_island_packs_the_rest_around_it_with_the_atlas_packer(addon):
     """A second unwrap with one island's UVs all pinned: that island stays bit for bit where the
     first unwrap packed it and the others are packed around it by the atlas packer (padding in
     texels, one density among them), not by Blender's bounding boxes."""
-    from conftest import add_suzanne_with_seams, triangle_distortion
+    from conftest import add_suzanne_with_seams
     from bd_uv_addon.bd_uv.packing import uv_islands
     ob = add_suzanne_with_seams()
-    set_mode(ob, 'EDIT')
-    bpy.ops.mesh.select_all(action='SELECT')
-    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=3.0) == {'FINISHED'}
-    set_mode(ob, 'OBJECT')
-    V, F, loops = triangles(ob)
-    first = loop_uv_array(ob.data)[loops].astype(np.float64)
+    V, F, loops, first = unwrapped_uvs(ob)
     lab = uv_islands(F, first)
     big = np.argmax(np.bincount(lab))                  # pin every UV of the largest island
     pins = np.zeros(len(ob.data.loops), bool)
@@ -148,19 +155,8 @@ def test_unwrap_with_a_pinned_island_packs_the_rest_around_it_with_the_atlas_pac
     layer = ob.data.uv_layers.active
     layer.pin_ensure()
     layer.pin.foreach_set("value", pins)
-    set_mode(ob, 'EDIT')
-    bpy.ops.mesh.select_all(action='SELECT')
-    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', bound=3.0) == {'FINISHED'}
-    set_mode(ob, 'OBJECT')
-    uv = loop_uv_array(ob.data)[loops].astype(np.float64)
+    _, _, _, uv = unwrapped_uvs(ob)
     kept = lab == big
     assert np.array_equal(uv[kept], first[kept])                     # the pinned island stays
     assert np.array_equal(uv_islands(F, uv), lab)
-    D, det = triangle_distortion(V, F, uv)
-    assert (det > 0).all() and D.max() <= 3.0 * (1 + 1e-5)
-    assert uv.min() >= 2 / 1024 * (1 - 1e-4) and uv.max() <= 1 - 2 / 1024 * (1 - 1e-4)
-    pairs = overlapping_triangle_pairs(uv)
-    assert not np.any(lab[pairs[:, 0]] != lab[pairs[:, 1]])
-    assert least_gap(uv, lab, reach=8 / 1024) * 1024 >= 4 * (1 - 1e-4)   # the atlas's padding
-    d = texel_densities(V, F, uv, lab)[np.unique(lab) != big]
-    assert np.allclose(d, np.median(d), rtol=1e-3)                   # one density for the rest
+    assert_atlas_layout(V, F, uv, lab, density=np.unique(lab) != big)
