@@ -109,13 +109,15 @@ def build_parser(arguments):
     p.add_argument("--objects", nargs="+", metavar="NAME",
                    help="mesh objects to unwrap (default: every mesh object with faces)")
     arguments.add_solver_options(p)
-    p.add_argument("--seams", choices=("needed", "marked", "auto"), default=None,
+    p.add_argument("--seams", choices=("needed", "marked", "auto", "uv", "none"), default=None,
                    help="needed (the default): the marked seams kept, the mesh repaired where "
                         "it is not a manifold, seams added (and marked) only on islands that "
                         "cannot be certified as they are; marked: the marked seams only, every "
                         "island must be a disk; auto: seams searched on every island (as "
-                        "python -m bd_uv's --seams auto), added and marked. Objects with pinned "
-                        "UVs are unwrapped as marked")
+                        "python -m bd_uv's --seams auto), added and marked; uv: cut where the "
+                        "UV map (--uv-map) is discontinuous, marked seams left out; none: no "
+                        "seams, the islands are the mesh's parts. Objects with pinned UVs are "
+                        "unwrapped as marked")
     p.add_argument("--uv-map", metavar="NAME",
                    help="UV map to read pins from and write (default: the active one; created "
                         "when missing)")
@@ -218,7 +220,16 @@ def unwrap_objects(objects, args, batch, options, mesh_data, session, source):
         try:
             scale = (1.0, 1.0, 1.0) if args.no_object_scale else tuple(abs(c) for c in ob.scale)
             arrays = mesh_data.mesh_arrays(ob, uv_name=args.uv_map, scale=scale)
-            job = batch.Job(ob.name, arrays.V, arrays.F, seams=arrays.seams,
+            seams = arrays.seams
+            if args.seams == "none":
+                seams = None
+            elif args.seams == "uv":
+                if arrays.corner_uv is None:
+                    raise ValueError(f"{ob.name} has no UV map, so --seams uv has nothing to "
+                                     "cut along")
+                meshio = importlib.import_module(f"{_extension_package().__name__}.bd_uv.meshio")
+                seams = meshio.uv_seams(arrays.F, arrays.corner_uv)
+            job = batch.Job(ob.name, arrays.V, arrays.F, seams=seams,
                             pin_corners=arrays.pin_corners, pin_uv=arrays.pin_uv,
                             corner_uv=arrays.corner_uv, face_groups=arrays.tri_poly)
             result = batch.unwrap_job(job, options)

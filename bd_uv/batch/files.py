@@ -49,7 +49,7 @@ def _unwrap_file(task, options, seams_mode):
     try:
         ext = os.path.splitext(task.path)[1].lower()
         if ext in BLENDER_SUFFIXES:   # FBX, Alembic, Collada, STL too: Blender reads them
-            return _unwrap_blend(task, options, base)
+            return _unwrap_blend(task, options, base, seams_mode)
         if ext in SCENE_SUFFIXES:     # glTF and USD: read and written whole by bd_uv.scenes
             return unwrap_scene_file(task.path, task.output, options, seams_mode, png=task.png,
                                      base=base)
@@ -78,9 +78,9 @@ def _unwrap_file(task, options, seams_mode):
         return [entry]
 
 
-def _unwrap_blend(task, options, base):
+def _unwrap_blend(task, options, base, seams_mode=None):
     """A .blend (or FBX, Alembic, Collada, STL) goes through the Blender script in a child
-    process (it needs ``bpy``)."""
+    process (it needs ``bpy``); ``seams_mode`` is the batch's ``--seams`` (None: not given)."""
     if importlib.util.find_spec("bpy") is None:
         raise BDError(f"{task.path}: reading {os.path.splitext(task.path)[1]} files needs the bpy "
                       f"module (pip install bpy) or Blender itself: {blender_command(task.path)}")
@@ -91,7 +91,7 @@ def _unwrap_blend(task, options, base):
     with tempfile.TemporaryDirectory() as tmp:
         report = os.path.join(tmp, "report.json")
         cmd = [sys.executable, SCRIPT, task.path, "--", "--output", task.output,
-               "--report", report, *_script_options(options)]
+               "--report", report, *_script_options(options, seams_mode)]
         if task.png:
             cmd += ["--png", os.path.dirname(task.png), "--png-prefix",
                     os.path.splitext(os.path.basename(task.png))[0] + "-"]
@@ -107,8 +107,9 @@ def _unwrap_blend(task, options, base):
     return [{**base, **item, "input": base["input"]} for item in items]
 
 
-def _script_options(options):
-    """``options`` (JobOptions) as the Blender script's command-line flags."""
+def _script_options(options, seams_mode=None):
+    """``options`` (JobOptions) and the batch's ``--seams`` (``seams_mode``: "uv" and "none" are
+    the script's too; None: the options' own mode) as the Blender script's command-line flags."""
     o = JobOptions.of(options).unwrap
     out = ["--method", o.method, "--bound", str(o.bound), "--frames", o.frames,
            "--bound-limit", str(o.bound_limit), "--cone", o.cone]
@@ -120,7 +121,8 @@ def _script_options(options):
         out += ["--boundary", o.boundary]
     if o.stretch is not None:
         out += ["--stretch", str(o.stretch)]
-    out += ["--seams", o.seams_mode if o.seams_mode in ("needed", "auto") else "marked"]
+    out += ["--seams", seams_mode if seams_mode in ("uv", "none") else
+            o.seams_mode if o.seams_mode in ("needed", "auto") else "marked"]
     job = JobOptions.of(options)
     if job.pack:   # packed by the script, each object into its own square
         out += (["--pack", *pack_flags(job.pack_options)] if job.pack_options is not None

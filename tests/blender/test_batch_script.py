@@ -374,3 +374,23 @@ def test_folder_batch_seams_auto_reaches_a_blend_and_marks_its_seams(tmp_path, e
     assert marked == {tuple(sorted(p)) for p in added.tolist()}
     D, det, _, _ = measured(ob)
     assert np.all(det > 0) and D.max() <= e["bound_certified"] * (1 + 1e-5)
+
+
+def test_script_seams_none_and_uv(scene_blend, tmp_path):
+    """``--seams none`` leaves the marked seam out: the tube is an annulus, mapped as a ring (far
+    from isometric); ``--seams uv`` cuts where the UV map is discontinuous (the cylinder's own UVs
+    are cut along one side), so the tube is unrolled nearly isometrically without its marked seam.
+    Either way every saved map is certified (checked independently)."""
+    for mode in ("none", "uv"):
+        out, report = tmp_path / f"{mode}.blend", tmp_path / f"{mode}.json"
+        proc = run_script(scene_blend, "--seams", mode, "--output", str(out), "--report",
+                          str(report))
+        assert proc.returncode == 0, proc.stdout + proc.stderr
+        items = {e["object"]: e for e in json.loads(report.read_text())["items"]}
+        assert all(e["status"] == "certified" for e in items.values())
+        tube = items["Tube"]
+        assert len(tube["islands"]) == 1
+        assert tube["max_distortion"] > 1.5 if mode == "none" else tube["max_distortion"] < 1.05
+        bpy.ops.wm.open_mainfile(filepath=str(out))
+        D, det, _, _ = measured(bpy.data.objects["Tube"])
+        assert np.all(det > 0) and D.max() == pytest.approx(tube["max_distortion"], rel=1e-6)

@@ -247,3 +247,26 @@ def test_file_timeout_and_memory_limit_fail_only_their_file(tmp_path, monkeypatc
     assert items["greedy.off"]["error"] == "MemoryLimit"
     assert "--memory-limit 400 MB" in items["greedy.off"]["message"]
     assert sorted(os.listdir(out)) == ["a.obj", "report.json"]     # no temporary file left
+
+
+def test_a_blend_gets_the_batch_s_seams_and_packing_options():
+    """What ``python -m bd_uv batch`` hands the Blender script for a .blend: its --seams (uv and
+    none too, which the options alone cannot tell from marked) and every packing option."""
+    from bd_uv.batch.files import _script_options
+    from bd_uv.packing import PackOptions
+    from bd_uv.options import UnwrapOptions
+    job = batch.JobOptions(UnwrapOptions(seams_mode="needed"), pack=True, pack_options=PackOptions(
+        resolution=2048, padding_px=6.0, rotate="90", texel_density=300.0, udim=True,
+        group="material", solve_seconds=1.5))
+    flags = _script_options(job)
+    assert flags[flags.index("--seams") + 1] == "needed"
+    for given in ("uv", "none"):
+        out = _script_options(job, given)
+        assert out[out.index("--seams") + 1] == given
+    auto = _script_options(batch.JobOptions(UnwrapOptions(seams_mode="auto")), "auto")
+    assert auto[auto.index("--seams") + 1] == "auto"
+    i = flags.index("--pack")
+    assert flags[i:] == ["--pack", "--resolution", "2048", "--padding", "6.0", "--rotate", "90",
+                         "--group", "material", "--texel-density", "300.0",
+                         "--pack-seconds", "1.5", "--udim"]
+    assert "--pack" not in _script_options(batch.JobOptions(pack=False))
