@@ -178,6 +178,23 @@ def mesh_objects(names):
     return unique, missing
 
 
+def nothing_to_unwrap():
+    """Why a file has no mesh object to unwrap: linked libraries that are missing, collection
+    instances (their meshes are in another file, or need making real)."""
+    text = "the file holds no mesh object with faces"
+    lost = [lib.filepath for lib in bpy.data.libraries
+            if not os.path.exists(bpy.path.abspath(lib.filepath))]
+    if lost:
+        text += (f"; {len(lost)} linked librar{'y is' if len(lost) == 1 else 'ies are'} "
+                 f"missing ({', '.join(lost[:3])}), so their meshes could not be read")
+    inst = [ob.name for ob in bpy.data.objects
+            if ob.instance_type == 'COLLECTION' and ob.instance_collection is not None]
+    if inst:
+        text += (f"; collection instances ({', '.join(inst[:3])}) are not unwrapped: unwrap the "
+                 "file they link, or make them real (Object > Apply > Make Instances Real)")
+    return text
+
+
 def _leave_edit_mode(objects):
     view_layer = bpy.context.view_layer
     for ob in objects:
@@ -506,6 +523,10 @@ def main(argv):
     _leave_edit_mode(objects)
     items = [batch.failed_entry(name, "ObjectError", message, input=source, object=name,
                                 output=None, uv_map=None) for name, message in missing]
+    if not objects and not items:   # say why there is nothing, in the file's terms
+        items.append(batch.failed_entry(os.path.basename(source or "scene"), "ObjectError",
+                                        nothing_to_unwrap(), input=source, object=None,
+                                        output=None, uv_map=None))
     for e in items:
         print(batch.item_line(e), flush=True)
     done, written = unwrap_objects(objects, args, batch, options, mesh_data, session, source)

@@ -394,3 +394,35 @@ def test_script_seams_none_and_uv(scene_blend, tmp_path):
         bpy.ops.wm.open_mainfile(filepath=str(out))
         D, det, _, _ = measured(bpy.data.objects["Tube"])
         assert np.all(det > 0) and D.max() == pytest.approx(tube["max_distortion"], rel=1e-6)
+
+
+def test_script_says_why_a_file_has_nothing_to_unwrap(tmp_path, empty_scene):
+    """A scene whose only object instances a collection linked from a library that is gone (as
+    glTF-Blender-IO's 01_linked_collection.blend): one failed entry that names the missing library
+    and the instance, not an empty report."""
+    bpy.ops.mesh.primitive_cube_add()
+    kit = bpy.data.collections.new("Kit")
+    bpy.context.scene.collection.children.link(kit)
+    cube = bpy.context.active_object
+    for c in list(cube.users_collection):
+        c.objects.unlink(cube)
+    kit.objects.link(cube)
+    library = tmp_path / "kit.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(library))
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    with bpy.data.libraries.load(str(library), link=True) as (data_from, data_to):
+        data_to.collections = ["Kit"]
+    inst = bpy.data.objects.new("KitInstance", None)
+    inst.instance_type = 'COLLECTION'
+    inst.instance_collection = data_to.collections[0]
+    bpy.context.scene.collection.objects.link(inst)
+    scene = tmp_path / "scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(scene))
+    library.unlink()
+    report = tmp_path / "r.json"
+    proc = run_script(scene, "--output", str(tmp_path / "out.blend"), "--report", str(report))
+    assert proc.returncode == 1
+    (e,) = json.loads(report.read_text())["items"]
+    assert e["status"] == "failed" and e["error"] == "ObjectError"
+    assert "kit.blend" in e["message"] and "missing" in e["message"]
+    assert "KitInstance" in e["message"]
