@@ -123,15 +123,20 @@ class UsdScene:
         os.makedirs(out_dir, exist_ok=True)
         with tempfile.TemporaryDirectory(prefix=".bd-uv-tmp-", dir=out_dir) as folder:
             layer_path = os.path.join(folder, os.path.splitext(os.path.basename(path))[0] + ".usdc")
-            result = self._write_layer(layer_path, charts)
+            # a package's own files (textures) beside the new layer, at their paths inside it,
+            # so the new package holds them as the input did
+            local = self.path.lower().endswith(".usdz") and _unpack(self.path, folder,
+                                                                     os.path.basename(layer_path))
+            result = self._write_layer(layer_path, charts, local)
             with atomic_path(path) as ztmp:
                 if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(layer_path), ztmp):
                     raise SceneFileError(f"{path}: the .usdz package could not be written")
         return result
 
-    def _write_layer(self, layer_path, charts):
-        """A copy of the input's root layer at ``layer_path`` with asset paths re-anchored there,
-        and the new primvars authored in it."""
+    def _write_layer(self, layer_path, charts, package_local=False):
+        """A copy of the input's root layer at ``layer_path`` with asset paths re-anchored there
+        (``package_local``: the input package's files are unpacked beside it), and the new
+        primvars authored in it."""
         Sdf, Usd, UsdGeom, UsdUtils, Vt = _pxr()
         src = Sdf.Layer.FindOrOpen(self.path)
         if src is None:
@@ -139,7 +144,7 @@ class UsdScene:
         layer = Sdf.Layer.CreateNew(layer_path)
         layer.TransferContent(src)
         folder = os.path.dirname(os.path.abspath(layer_path))
-        UsdUtils.ModifyAssetPaths(layer, lambda p: _reanchor(src, p, folder))
+        UsdUtils.ModifyAssetPaths(layer, lambda p: _reanchor(src, p, folder, package_local))
         stage = Usd.Stage.Open(layer)
         result = {k: self._author(stage, k, ch, UsdGeom, Sdf, Vt) for k, ch in charts.items()}
         layer.Save()
@@ -181,16 +186,41 @@ class UsdScene:
         return certs, warnings + part["warnings"]
 
 
-def _reanchor(src, asset, out_dir):
-    """A relative asset path of the input layer, rewritten to resolve from ``out_dir``."""
+def _unpack(package, folder, layer_name):
+    """Extract a .usdz's files but its root layer into ``folder`` at their paths inside it (none
+    leaving ``folder``, none named ``layer_name``). Returns True."""
+    import zipfile
+    with zipfile.ZipFile(package) as z:
+        names = z.namelist()
+        for name in names[1:]:   # the first file of a package is its root layer
+            target = os.path.normpath(os.path.join(folder, name))
+            if (os.path.isabs(name) or not target.startswith(os.path.join(folder, ""))
+                    or name.endswith("/") or os.path.basename(target) == layer_name):
+                continue
+            os.makedirs(os.path.dirname(target), exist_ok=True)
+            with z.open(name) as fin, open(target, "wb") as fout:
+                fout.write(fin.read())
+    return True
+
+
+def _reanchor(src, asset, out_dir, package_local=False):
+    """A relative asset path of the input layer, rewritten to resolve from ``out_dir``; one
+    inside the input package is read from that package, or (``package_local``) from the copy of
+    its files in ``out_dir``, where it keeps its path."""
     if not asset or "://" in asset or os.path.isabs(asset) or asset.startswith("@"):
         return asset
     inner = ""
     if asset.endswith("]") and "[" in asset:     # a file inside a package: pkg.usdz[tex.png]
         asset, inner = asset[:asset.index("[")], asset[asset.index("["):]
     full = src.ComputeAbsolutePath(asset)
-    if not full or "[" in full:                  # inside the input package: left as it was
+    if not full:
         return asset + inner
+    if "[" in full:   # inside the input package (pkg.usdz[tex.png]): read from that package
+        package, inside = full[:full.index("[")], full[full.index("["):]
+        if package_local or inner or not os.path.isfile(package):
+            return asset + inner
+        rel = os.path.relpath(package, out_dir).replace(os.sep, "/")
+        return (rel if rel.startswith("../") else "./" + rel) + inside
     if not asset.startswith(("./", "../")) and not os.path.exists(full):
         return asset + inner                     # a search path, resolved by the resolver
     rel = os.path.relpath(full, out_dir).replace(os.sep, "/")

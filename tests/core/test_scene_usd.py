@@ -157,6 +157,42 @@ def test_usdz_out(tmp_path):
     assert not [f for f in os.listdir(out.parent) if f.startswith(".")]
 
 
+@pytest.mark.parametrize("out_name", ["out.usdz", "out.usda"])
+def test_a_usdz_s_own_files_come_along(tmp_path, out_name):
+    """A .usdz input whose texture and referenced asset live inside the package (as
+    usd-wg/assets' CesiumMan.usdz): a .usdz output packages them at the same paths (it used to
+    fail: "the .usdz package could not be written"), a .usda output reads them from the input
+    package; every dependency resolves, to the same bytes."""
+    import zipfile
+    from pxr import UsdUtils
+    shot, _ = build_stage(str(tmp_path / "src"))
+    package = tmp_path / "in" / "shot.usdz"
+    package.parent.mkdir()
+    assert UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(shot), str(package))
+    inside = dict((n, zipfile.ZipFile(package).read(n))
+                  for n in zipfile.ZipFile(package).namelist())
+    texture = next(n for n in inside if n.endswith("wood.png"))
+    before = package.read_bytes()
+    out = tmp_path / "out" / out_name
+    assert main(["unwrap", str(package), "-o", str(out), "--bound", "3"]) == 0
+    assert package.read_bytes() == before
+    _, assets, unresolved = UsdUtils.ComputeAllDependencies(Sdf.AssetPath(str(out)))
+    assert not unresolved
+    stage = Usd.Stage.Open(str(out))
+    assert stage.GetPrimAtPath("/World/Prop/Geo/Rock").IsValid()      # the referenced asset
+    _check_st(stage, "/World/Panel", 3.0)
+    tex = stage.GetPrimAtPath("/World/Looks/Wood/Tex").GetAttribute("inputs:file").Get()
+    where = tex.resolvedPath
+    assert where.endswith(f"[{texture}]")
+    pkg = where[:where.index("[")]
+    assert zipfile.ZipFile(pkg).read(texture) == inside[texture]
+    if out_name.endswith(".usdz"):
+        assert os.path.samefile(pkg, out)
+        assert not [f for f in os.listdir(out.parent) if f.startswith(".")]
+    else:
+        assert os.path.samefile(pkg, package)
+
+
 def test_malformed_stage_names_the_prim(tmp_path, capsys):
     stage = Usd.Stage.CreateNew(str(tmp_path / "bad.usda"))
     V, counts, idx = quad_grid(4, 3, bump=False)
