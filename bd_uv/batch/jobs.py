@@ -44,6 +44,8 @@ class Job:
     face_groups : (m,) int64 polygon of each triangle (a cut never splits a polygon), or None
     face_labels : dict or None, each face's "material" and "object" (``bd_uv.meshio.Mesh.labels``)
         for packing by group
+    uv_dtype : the type the UVs are stored in: float64 (OBJ), float32 (glTF, USD, Blender);
+        the layout is certified, and islands failing are re-solved, as stored in it
     """
     name: str
     V: np.ndarray
@@ -54,6 +56,7 @@ class Job:
     corner_uv: np.ndarray = None
     face_groups: np.ndarray = None
     face_labels: dict = None
+    uv_dtype: type = np.float64
 
 
 @dataclass(frozen=True)
@@ -172,7 +175,7 @@ def unwrap_job(job, options, png=None):
         layout, res, _ = stored_layout_with_headroom(
             job.V, job.F, res, stretch=o.stretch, pack=options.pack, cut=options.cut,
             margin=options.margin, pack_options=options.pack_options,
-            face_labels=job.face_labels)
+            face_labels=job.face_labels, dtype=job.uv_dtype)
     except Exception as exc:  # a bad mesh, or a bug: either way it stays this job's failure
         entry.update(error=type(exc).__name__, message=str(exc),
                      seconds=round(time.perf_counter() - t0, 4))

@@ -18,6 +18,7 @@ import dataclasses
 
 import numpy as np
 
+from ..errors import InfeasibleError
 from ..layout import stored_layout
 from ..geometry import face_areas
 from ..metrics import conformal_distortion, signed_uv_areas, singular_values
@@ -80,6 +81,8 @@ def solve_with_stretch(V, F, island, bound, method="lscm", ladder=STRETCH_LADDER
                      seams_mode="marked")
         if len(sub.islands) == 1 and sub.islands[0].status == "certified":
             return sub, S
+        if any(isinstance(r.error, InfeasibleError) for r in sub.islands):
+            break   # no map within S at this bound: none within a tighter S either
     return None, None
 
 
@@ -190,6 +193,41 @@ def predicted_to_fail(V, F, res, dtype=np.float32, coverage=0.25):
                 or not np.isfinite(rounding_distortion(V, f, u, h)).all()):
             out.append(i)
     return out
+
+
+def beyond_headroom(V, F, res, ladder=STRETCH_LADDER):
+    """Certified islands whose texel density varies more than the loosest stretch limit could
+    hold: the largest to smallest face scale (sqrt of UV over 3D area) above ``ladder[0]``
+    squared. Their smallest faces get less than a texel where their largest get thousands, no
+    float32 texture may hold them (:func:`predicted_to_fail` flags them at some packed scale),
+    and a stretch re-solve would have to move the map far from itself and seldom certifies
+    (measured: two 3,300-face shells of Khronos' BrainStem, spread 1e10 and 5e13, failed every S
+    of the ladder in 16 s); seams serve them (``seams.needed``).
+
+    Returns
+    -------
+    list of int, island indices
+    """
+    k = len(res.islands)
+    lab = np.asarray(res.face_island, dtype=np.int64)
+    ok = np.array([r.status == "certified" for r in res.islands], dtype=bool)
+    use = (lab >= 0) & (lab < k)
+    use[use] = ok[lab[use]]
+    if not use.any():
+        return []
+    V = np.asarray(V, dtype=np.float64)
+    faces = np.flatnonzero(use)
+    a3 = face_areas(V, np.asarray(F, dtype=np.int64)[faces])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = np.sqrt(np.abs(signed_uv_areas(
+            np.asarray(res.corner_uv, dtype=np.float64)[faces])) / a3)
+    good = np.isfinite(scale) & (a3 > 0)
+    lab, scale = lab[faces][good], scale[good]
+    hi = np.full(k, -np.inf)
+    lo = np.full(k, np.inf)
+    np.maximum.at(hi, lab, scale)
+    np.minimum.at(lo, lab, scale)
+    return np.flatnonzero(hi > float(ladder[0]) ** 2 * lo).tolist()
 
 
 def with_predicted_headroom(V, F, res, dtype=np.float32, ladder=STRETCH_LADDER):

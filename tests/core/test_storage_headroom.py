@@ -107,3 +107,44 @@ def test_batch_job_saves_the_teapot_certified_as_float32():
     held = batch.unwrap_job(batch.Job("teapot", V, F), {"stretch": 8.0})
     assert not any(f.startswith("storage_stretch_") for r in held.result.islands
                    for f in r.flags)
+
+
+def test_seams_needed_re_solves_or_cuts_what_float32_would_not_hold(monkeypatch):
+    """``seams_mode="needed"`` checks the islands it keeps for storage: the finger (certified as
+    it is, its tip ~1e-5 of its rim's texel density, measured here as sqrt(UV area / 3D area)) is
+    re-solved under a stretch limit and kept whole; when no stretch limit certifies it (as for two
+    shells of Khronos' BrainStem, forced here), it goes to the seam search instead of failing once
+    stored. Either way every island stores certified in float32; the teapot keeps its parts."""
+    import bd_uv.unwrapping.storage as storage
+    V, F = teapot_and_finger()
+    P = V[F]
+    a3 = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+    finger_faces = np.arange(len(triangulated(6)[1]), len(F))
+
+    def spread(res, faces):
+        s = np.sqrt(np.abs(_signed_areas(res.corner_uv[faces])) / (2 * a3[faces]))
+        return s.max() / s.min()
+
+    marked = bd_uv.unwrap(V, F)
+    assert spread(marked, finger_faces) > 1e4
+    kept = bd_uv.unwrap(V, F, seams_mode="needed")
+    assert not len(kept.seams_added) and len(kept.islands) == 5
+    (f,) = [r for r in kept.islands if np.isin(r.faces, finger_faces).all()]
+    assert spread(kept, f.faces) <= 64.0 ** 2 * (1 + 1e-6)        # within S = 64 of its scale
+    real = storage.solve_with_stretch
+
+    def none_for_the_finger(V, F, island, *args, **kwargs):
+        if len(island.faces) == len(finger_faces):
+            return None, None
+        return real(V, F, island, *args, **kwargs)
+
+    monkeypatch.setattr(storage, "solve_with_stretch", none_for_the_finger)
+    cut = bd_uv.unwrap(V, F, seams_mode="needed")
+    assert len(cut.seams_added) and np.isin(cut.seams_added, F[finger_faces]).all()
+    on_finger = [r for r in cut.islands if np.isin(r.faces, finger_faces).all()]
+    assert len(on_finger) >= 1 and sum(len(r.faces) for r in on_finger) == len(finger_faces)
+    assert all(spread(cut, r.faces) <= 4.0 * (1 + 1e-6) for r in on_finger)   # S = 2 charts
+    for res in (kept, cut):
+        assert all(r.status == "certified" for r in res.islands)
+        layout = stored_layout(V, F, res, dtype=np.float32, pack_options=PACK)
+        assert all(c.certified for c in layout.certificates)
