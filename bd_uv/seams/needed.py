@@ -6,10 +6,9 @@ marked seams kept, and seams added only to the islands that cannot be certified 
    the solve (they get their twin's UVs), zero-area faces left out (named, their UVs untouched);
 2. the islands the marked seams make are unwrapped at C with C never raised (``unwrap``);
 3. only the islands that fail (closed, higher genus, no certified map within C, overlapping
-   themselves, or certified with a texel density so uneven that float32 UVs would not hold it
-   or it varies over 4096 times across the island (``unwrapping.storage.predicted_to_fail``,
-   ``beyond_headroom``) and no stretch limit of ``STRETCH_LADDER`` certifies it) go to the seam
-   search
+   themselves, or certified with a texel density varying over 4096 times across the island,
+   which no texture serves and float32 UVs seldom hold (``unwrapping.storage.beyond_headroom``),
+   when no stretch limit of ``STRETCH_LADDER`` certifies it) go to the seam search
    (``unwrap_auto``) at ``min(C, AUTO_BOUND)`` and stretch S, keeping the marked seams. A mesh whose marked seams already make certifiable disks gets no
    new seam.
 
@@ -30,7 +29,7 @@ from ..errors import (ClosedIslandError, DegenerateFacesError, InfeasibleError, 
 from ..options import unwrap_options
 from ..repair import repair_mesh, twin_corners
 from ..unwrapping.results import IslandResult, UnwrapResult
-from ..unwrapping.storage import beyond_headroom, predicted_to_fail, with_storage_headroom
+from ..unwrapping.storage import beyond_headroom, with_storage_headroom
 from ..unwrapping.unwrap import unwrap
 from .auto import unwrap_auto
 from .measure import splice
@@ -96,8 +95,9 @@ def unwrap_needed(V, F, seams=None, polygons=None, options=None, marked_stretch=
         bad = [r for r in res.islands
                if r.status != "certified" and needs_seams(r, opts.overlap)]
         # certified, but with texel densities too uneven to texture or to store in float32:
-        # re-solved under a stretch limit where one certifies, given seams where none does
-        flagged = sorted(set(predicted_to_fail(V2, F2, res)) | set(beyond_headroom(V2, F2, res)))
+        # re-solved under a stretch limit where one certifies, given seams where none does (the
+        # milder cases float32 may still break are re-solved after, ``with_predicted_headroom``)
+        flagged = beyond_headroom(V2, F2, res)
         if flagged:
             res, done = with_storage_headroom(V2, F2, res, flagged)
             bad += [res.islands[i] for i in flagged if i not in done]
