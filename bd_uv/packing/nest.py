@@ -12,6 +12,9 @@ import numpy as np
 
 from ..errors import PackError
 
+# A sliver's outline is grown to this fraction of the strip's height when spyrrow's own inward
+# offset empties it ("Offset resulted in an empty polygon")
+EMPTY_RETRY = 1e-3
 FEASIBLE = (0, 3, 4)  # spyrrow's ReportType of feasible layouts: ExplFeas, CmprFeas, Final
 # Room the least side leaves the widest chart: spyrrow samples spots and gives up (a panic:
 # "strip-width is running away, item does not seem to fit") when a chart has under about 1 % of
@@ -43,7 +46,8 @@ def rotations(angle):
     return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
 
 
-def nest(outlines, height, separation, options, seconds=0.0, reports=None, workers=None):
+def nest(outlines, height, separation, options, seconds=0.0, reports=None, workers=None,
+         retry=True):
     """One spyrrow solve: every outline in a strip of ``height``, ``separation`` apart.
 
     Parameters
@@ -57,6 +61,7 @@ def nest(outlines, height, separation, options, seconds=0.0, reports=None, worke
     reports : list, optional: every feasible layout the search passes through is appended to it
         as a Placement (a narrower strip is a better one; the last is the result)
     workers : int, optional: threads of spyrrow's search (default: one per core)
+    retry : bool, when spyrrow's offsets empty a polygon, nest the outlines grown instead
 
     Returns
     -------
@@ -83,7 +88,15 @@ def nest(outlines, height, separation, options, seconds=0.0, reports=None, worke
     except BaseException as exc:  # a Rust panic arrives as pyo3's PanicException (BaseException)
         if type(exc).__name__ != "PanicException":
             raise
-        raise PackError(f"the nesting failed on these charts: {exc}") from None
+        first = (str(exc).strip().splitlines() or [""])[0]   # no Rust backtrace in a message
+        if "empty polygon" in first and retry:
+            # spyrrow's strip (or a sliver) offset inwards by half the separation came out
+            # empty: slivers whose area is a hair above NARROW's reach (found at 2,000 deep, 93
+            # boxes and slivers at 64 px, no padding). Nested as NARROW ones are: grown by half
+            # the separation (a hair of the height when there is none), with none between.
+            return _nest_grown(outlines, height, max(separation, EMPTY_RETRY * height), options,
+                               seconds, reports, workers)
+        raise PackError(f"the nesting failed on these charts: {first}") from None
     if queue is not None:
         reports.extend(_placement(s, len(outlines)) for kind, s in queue.drain()
                        if int(kind) in FEASIBLE)
@@ -125,7 +138,7 @@ def _nest_grown(outlines, height, separation, options, seconds=0.0, reports=None
         shapely.buffer(shapely.Polygon(xy), half, join_style="mitre").exterior))))[:-1]
         for xy in outlines]
     more = [] if reports is not None else None
-    pl = nest(grown, height - separation, 0.0, options, seconds, more, workers)
+    pl = nest(grown, height - separation, 0.0, options, seconds, more, workers, retry=False)
     if reports is not None:
         reports.extend(Placement(r.angle, r.shift + half, r.width + separation) for r in more)
     return Placement(pl.angle, pl.shift + half, pl.width + separation)
