@@ -204,7 +204,9 @@ class BoundSearch:
         # beta scales by min(1, kappa t / |beta|), x moves by max(t - x, 0), no mask needed.
         x = w2[0] * Q[0]
         x += w2[1] * Q[1]                                        # Re(w alpha)
-        nb = np.hypot(Q[2], Q[3])
+        nb = Q[2] * Q[2]        # |beta|: hypot's careful scaling is not needed at these sizes
+        nb += Q[3] * Q[3]
+        np.sqrt(nb, out=nb)
         t = kappa * nb
         t += x
         np.maximum(t, 0.0, out=t)
