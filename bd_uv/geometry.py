@@ -98,7 +98,8 @@ def cycle_labels(nxt):
     successor along its loop), each labelled by its least member.
 
     Pointer doubling: after k steps each entry holds the least of the 2^k entries from it on, so
-    about log2 of the longest cycle steps, each a few vectorised operations (no graph is built).
+    about log2 of the longest cycle steps, each a few vectorised operations (no graph is built);
+    up to ``WALK_BOUNDARY`` entries walked in Python instead (cheaper than the steps' calls).
 
     Parameters
     ----------
@@ -110,6 +111,10 @@ def cycle_labels(nxt):
     label : (b,) int64, the cycle of each entry (0..c-1, numbered by least member, as
         ``scipy.sparse.csgraph.connected_components`` numbers them)
     """
+    if len(nxt) <= WALK_BOUNDARY:
+        walked = _walk_labels(nxt)
+        if walked is not None:
+            return walked
     least, ptr = np.arange(len(nxt)), np.asarray(nxt, dtype=np.int64)
     while True:
         lower = np.minimum(least, least[ptr])
@@ -124,6 +129,25 @@ def cycle_labels(nxt):
 # tenths of a microsecond a step); above, ranked by pointer jumping in whole-array steps (each a
 # few numpy calls, ~0.3 ms on a 200-face island's 51 boundary edges).
 WALK_BOUNDARY = 1024
+
+
+def _walk_labels(nxt):
+    """``cycle_labels`` one step at a time (short boundaries); None when ``nxt`` is not a
+    permutation."""
+    nl = np.asarray(nxt).tolist()
+    if len(set(nl)) != len(nl) or (nl and (min(nl) < 0 or max(nl) >= len(nl))):
+        return None
+    label = [-1] * len(nl)
+    least = []
+    for i in range(len(nl)):
+        if label[i] >= 0:
+            continue
+        c, j = len(least), i
+        least.append(i)
+        while label[j] < 0:
+            label[j] = c
+            j = nl[j]
+    return np.array(least, dtype=np.int64), np.array(label, dtype=np.int64)
 
 
 def ordered_loops(nxt, owner, verts, n_owners):
@@ -145,7 +169,8 @@ def ordered_loops(nxt, owner, verts, n_owners):
 def _walk_loops(nxt, lisl, verts, n_isl):
     """``ordered_loops`` one step at a time."""
     nl = nxt.tolist()
-    if len(set(nl)) != len(nl) or (nl and min(nl) < 0):   # not a permutation: the general path
+    if len(set(nl)) != len(nl) or (nl and (min(nl) < 0 or max(nl) >= len(nl))):   # not a
+        # permutation: the general path
         return _ranked_loops(nxt, lisl, verts, n_isl)
     seen = [False] * len(nl)
     starts, by_isl = [], [[] for _ in range(n_isl)]
