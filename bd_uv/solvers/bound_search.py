@@ -181,8 +181,9 @@ class BoundSearch:
     @staticmethod
     def _max_distortion(W):
         """``max_distortion`` where the caller has silenced division warnings."""
-        sq = W * W
-        r = float(np.max((sq[2] + sq[3]) / (sq[0] + sq[1])))        # |beta|^2 / |alpha|^2
+        num = np.einsum("ij,ij->j", W[2:], W[2:])                   # |2 beta|^2
+        num /= np.einsum("ij,ij->j", W[:2], W[:2])                  # over |2 alpha|^2
+        r = float(num.max())                                        # |beta|^2 / |alpha|^2
         if not r < 1.0:
             return np.inf
         r = np.sqrt(r)
@@ -202,11 +203,9 @@ class BoundSearch:
         # With t = max(x + kappa |beta|, 0) / (1 + kappa^2) (the boundary ray's point),
         # kappa t / |beta| >= 1 and t - x <= 0 exactly inside the cone, and < 1, >= 0 outside:
         # beta scales by min(1, kappa t / |beta|), x moves by max(t - x, 0), no mask needed.
-        x = w2[0] * Q[0]
-        x += w2[1] * Q[1]                                        # Re(w alpha)
-        nb = Q[2] * Q[2]        # |beta|: hypot's careful scaling is not needed at these sizes
-        nb += Q[3] * Q[3]
-        np.sqrt(nb, out=nb)
+        x = np.einsum("ij,ij->j", w2, Q[:2])                    # Re(w alpha)
+        # |beta| (one product-sum and a root: hypot's careful scaling is not needed here)
+        nb = np.sqrt(np.einsum("ij,ij->j", Q[2:], Q[2:]))
         t = kappa * nb
         t += x
         np.maximum(t, 0.0, out=t)
