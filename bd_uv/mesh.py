@@ -188,11 +188,14 @@ def islands(V, F, seams=None):
     # that the face's squared edges or area overflow (nothing downstream could measure it).
     nonfinite_face = ~(np.all(np.isfinite(P), axis=(1, 2)) & np.isfinite(lmax2) & np.isfinite(A))
     many = np.flatnonzero(he_count >= 3)
-    if len(many):
+    # Every edge in at most two faces and no face repeating a vertex (whose two sides of one edge
+    # would pair with each other): each half-edge's only possible twin is its pair's other half.
+    simple = not len(many) and not bool(np.any(src == dst))
+    if not simple:
         duplicate = _repeated_rows(np.sort(F, axis=1))
     else:
-        # Every edge in at most two faces: two faces on the same three vertices share each edge
-        # as a pair, so they are the pairs whose third (opposite) corners are the same vertex.
+        # Two faces on the same three vertices share each edge as a pair, so they are the pairs
+        # whose third (opposite) corners are the same vertex.
         opp = F[:, [2, 0, 1]].ravel()
         dup = opp[g1] == opp[g2]
         duplicate = np.zeros(m, dtype=bool)
@@ -226,9 +229,9 @@ def islands(V, F, seams=None):
     tris_all = local[cv]
 
     # Boundary half-edges of the cut mesh: those with no reverse in cut vertex ids. A reverse
-    # lies on the same mesh edge, so with every edge in at most two faces only the pairs need
-    # comparing (np.isin over all half-edges otherwise).
-    if len(many):
+    # lies on the same mesh edge, so in a simple mesh only the pairs need comparing (np.isin
+    # over all half-edges otherwise).
+    if not simple:
         interior = None
     else:
         cdst = corner_vertex[(np.arange(3 * m) // 3) * 3 + (np.arange(3 * m) % 3 + 1) % 3]
