@@ -129,8 +129,10 @@ class ProjectionSolver:
 
     @property
     def Gy(self):
-        """(k, nv) csr: d/dy of a scalar function on every face (see ``Gx``)."""
-        return self.Gx is not None and self._Gy
+        """(k, nv) csr: d/dy of a scalar function on every face (made with ``Gx``)."""
+        if self._Gy is None:
+            self.Gx
+        return self._Gy
 
     @property
     def G(self):
