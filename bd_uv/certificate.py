@@ -96,8 +96,11 @@ def certify_islands(V, F, corner_uv, face_island, bounds, rtol=RTOL):
     uv64 = uv[faces].astype(np.float64)
     finite = np.isfinite(uv64).all(axis=(1, 2))
     with np.errstate(invalid="ignore", over="ignore"):
-        D = np.where(finite, conformal_distortion(V, F[faces], np.where(
-            finite[:, None, None], uv64, 0.0)), np.inf)
+        if finite.all():
+            D = conformal_distortion(V, F[faces], uv64)
+        else:
+            D = np.where(finite, conformal_distortion(V, F[faces], np.where(
+                finite[:, None, None], uv64, 0.0)), np.inf)
         flip = flipped_faces(V, F[faces], uv64) | ~finite
     n_faces = np.bincount(fl, minlength=k)
     n_flip = np.bincount(fl, weights=flip, minlength=k).astype(np.int64)

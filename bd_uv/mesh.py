@@ -112,6 +112,11 @@ def islands(V, F, seams=None):
     list of Island, ordered by their smallest face index.
     """
     V, F = check_arrays(V, F)
+    return checked_islands(V, F, seams)
+
+
+def checked_islands(V, F, seams=None):
+    """``islands`` of arrays ``check_arrays`` already returned (float64 V, int64 F in range)."""
     n, m = len(V), len(F)
     # Half-edges: corner (f, k) starts the directed edge F[f,k] -> F[f,k+1].
     src = F.ravel()

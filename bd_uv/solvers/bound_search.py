@@ -115,6 +115,7 @@ class BoundSearch:
         self.solver = s = ProjectionSolver(ops, nv, fixed, tris=tris)
         self.k = len(s.area)
         self.UF = None
+        self._rhs_fixed = None      # (UF, its share of the right-hand side)
         self.iterations = 0
         self._B = None
 
@@ -229,7 +230,10 @@ class BoundSearch:
         solve = s.factorize()
         BtA = self._operators()[1]
         nf = len(s.free)
-        rhs_fixed = (s._L_fF @ self.UF).T.ravel()
+        if self._rhs_fixed is None or self._rhs_fixed[0] is not self.UF:
+            # the fixed vertices' share of the right-hand side: the same for every target
+            self._rhs_fixed = (self.UF, (s._L_fF @ self.UF).T.ravel())
+        rhs_fixed = self._rhs_fixed[1]
         w2 = np.stack([w.real, -w.imag])
         U = U.copy()
         GU = self._lift(U)
