@@ -96,8 +96,11 @@ def certify_islands(V, F, corner_uv, face_island, bounds, rtol=RTOL):
     uv64 = uv[faces].astype(np.float64)
     finite = np.isfinite(uv64).all(axis=(1, 2))
     with np.errstate(invalid="ignore", over="ignore"):
-        D = np.where(finite, conformal_distortion(V, F[faces], np.where(
-            finite[:, None, None], uv64, 0.0)), np.inf)
+        if finite.all():
+            D = conformal_distortion(V, F[faces], uv64)
+        else:
+            D = np.where(finite, conformal_distortion(V, F[faces], np.where(
+                finite[:, None, None], uv64, 0.0)), np.inf)
         flip = flipped_faces(V, F[faces], uv64) | ~finite
     n_faces = np.bincount(fl, minlength=k)
     n_flip = np.bincount(fl, weights=flip, minlength=k).astype(np.int64)
@@ -111,7 +114,7 @@ def certify_islands(V, F, corner_uv, face_island, bounds, rtol=RTOL):
     with np.errstate(invalid="ignore", divide="ignore"):
         meanD = np.where(wsum > 0, dsum / wsum, np.inf)
     ov = island_overlaps(F, uv, lab, k)
-    width = _island_widths(uv64, fl, k)
+    width = None        # measured only to word a failure (``_island_widths``)
     certs = []
     for i in range(k):  # one small record per island, no per-face work
         why = []
@@ -126,6 +129,8 @@ def certify_islands(V, F, corner_uv, face_island, bounds, rtol=RTOL):
         elif ov.bad_loops[i]:
             why.append(f"{ov.bad_loops[i]} UV boundary loop(s) wound the wrong way (a hole "
                        "outside its island, or the island lying over itself)")
+        if why and width is None:
+            width = _island_widths(uv64, fl, k)
         if why and width[i] < TINY:
             why.append(f"the island is {width[i]:.2g} of the UV square across, too small to "
                        "measure: raise the texel density")

@@ -14,13 +14,18 @@ from .geometry import gradient_operators
 @dataclass(frozen=True)
 class JacobianOperators:
     """Sparse (k, 2nv) operators with ``Are @ x = Re(alpha)`` and so on; ``area`` (k,);
-    ``tris`` (k,3) the faces they were built on (for the vertex mass of "biharmonic")."""
+    ``tris`` (k,3) the faces they were built on (for the vertex mass of "biharmonic");
+    ``gx``, ``gy`` (k,3) each face's gradient coefficients on its corners ``tris`` (d/dx and d/dy
+    of a linear function, ``geometry.gradient_operators``), when built from them: the projection
+    solver's global step is written from them without reading them back out of the operators."""
     Are: sp.csr_array
     Aim: sp.csr_array
     Bre: sp.csr_array
     Bim: sp.csr_array
     area: np.ndarray
     tris: np.ndarray = None
+    gx: np.ndarray = None
+    gy: np.ndarray = None
 
 
 def jacobian_operators(Z, tris, nv):
@@ -56,7 +61,7 @@ def jacobian_operators(Z, tris, nv):
     area = 0.5 * np.abs(((Z[:, 1] - Z[:, 0]).conj() * (Z[:, 2] - Z[:, 0])).imag)
     return JacobianOperators(op(0.5 * g0, 0.5 * g1), op(-0.5 * g1, 0.5 * g0),
                              op(0.5 * g0, -0.5 * g1), op(0.5 * g1, 0.5 * g0), area,
-                            np.asarray(tris, dtype=np.int64))
+                             np.asarray(tris, dtype=np.int64), G[:, 0, :], G[:, 1, :])
 
 
 def rotated_alpha(ops, w):

@@ -11,7 +11,7 @@ import numpy as np
 from .errors import (ClosedIslandError, DegenerateFacesError, DuplicateFacesError,
                      InvalidMeshError, NonFiniteError, NonManifoldError, OrientationError,
                      TopologyError)
-from .geometry import components, cycle_labels, face_areas
+from .geometry import components, face_areas, ordered_loops
 
 # A face is degenerate when twice its area is below this fraction of its longest edge squared.
 DEGENERATE_RATIO = 1e-12
@@ -112,12 +112,27 @@ def islands(V, F, seams=None):
     list of Island, ordered by their smallest face index.
     """
     V, F = check_arrays(V, F)
+    return checked_islands(V, F, seams)
+
+
+def checked_islands(V, F, seams=None):
+    """``islands`` of arrays ``check_arrays`` already returned (float64 V, int64 F in range)."""
     n, m = len(V), len(F)
     # Half-edges: corner (f, k) starts the directed edge F[f,k] -> F[f,k+1].
     src = F.ravel()
-    dst = np.roll(F, -1, axis=1).ravel()
+    dst = F[:, [1, 2, 0]].ravel()
     key = _edge_keys(src, dst, n)
-    uniq, inv, count = np.unique(key, return_inverse=True, return_counts=True)
+    # Half-edges grouped by undirected edge (in increasing order within a group): one sort for
+    # np.unique's answer and the grouping both.
+    order = np.argsort(key, kind="stable")
+    ks = key[order]
+    new_edge = np.empty(len(ks), dtype=bool)
+    new_edge[0] = True
+    np.not_equal(ks[1:], ks[:-1], out=new_edge[1:])
+    first = np.flatnonzero(new_edge)                       # each edge's first half-edge
+    count = np.diff(np.append(first, len(ks)))
+    inv = np.empty(len(ks), dtype=np.int64)
+    inv[order] = np.cumsum(new_edge) - 1
     he_count = count[inv]
     if seams is not None and len(seams):
         S = as_indices(seams, "seam vertex indices")
@@ -131,10 +146,9 @@ def islands(V, F, seams=None):
         is_seam = np.zeros(len(key), dtype=bool)
 
     # Pair the two half-edges of each edge used by exactly two faces.
-    order = np.argsort(inv, kind="stable")
-    first = np.searchsorted(inv[order], np.arange(len(uniq)))
     two = np.flatnonzero(count == 2)
     h1, h2 = order[first[two]], order[first[two] + 1]
+    g1, g2 = h1, h2                                        # every pair, seams included
     join = ~is_seam[h1]
     h1, h2 = h1[join], h2[join]
     f1, f2 = h1 // 3, h2 // 3
@@ -155,7 +169,6 @@ def islands(V, F, seams=None):
     if join.all():      # no seam between two faces: the fans are the cut vertices
         fan = corner_vertex
     else:
-        g1, g2 = order[first[two]], order[first[two] + 1]
         gcons = src[g1] == dst[g2]
         rows = np.concatenate([g1, nxt(g1)])
         cols = np.concatenate([np.where(gcons, nxt(g2), g2), np.where(gcons, g2, nxt(g2))])
@@ -179,9 +192,22 @@ def islands(V, F, seams=None):
     # The one place non-finite vertex coordinates are caught: NaN or inf, and coordinates so large
     # that the face's squared edges or area overflow (nothing downstream could measure it).
     nonfinite_face = ~(np.all(np.isfinite(P), axis=(1, 2)) & np.isfinite(lmax2) & np.isfinite(A))
-    duplicate = _repeated_rows(np.sort(F, axis=1))
+    many = np.flatnonzero(he_count >= 3)
+    # Every edge in at most two faces and no face repeating a vertex (whose two sides of one edge
+    # would pair with each other): each half-edge's only possible twin is its pair's other half.
+    simple = not len(many) and not bool(np.any(src == dst))
+    if not simple:
+        duplicate = _repeated_rows(np.sort(F, axis=1))
+    else:
+        # Two faces on the same three vertices share each edge as a pair, so they are the pairs
+        # whose third (opposite) corners are the same vertex.
+        opp = F[:, [2, 0, 1]].ravel()
+        dup = opp[g1] == opp[g2]
+        duplicate = np.zeros(m, dtype=bool)
+        duplicate[g1[dup] // 3] = True
+        duplicate[g2[dup] // 3] = True
     nonmanifold_face = np.zeros(m, dtype=bool)
-    nonmanifold_face[np.flatnonzero(he_count >= 3) // 3] = True
+    nonmanifold_face[many // 3] = True
     inconsistent_face = np.zeros(m, dtype=bool)
     inconsistent_face[f1[~consistent]] = True
     inconsistent_face[f2[~consistent]] = True
@@ -207,12 +233,24 @@ def islands(V, F, seams=None):
     cv = corner_vertex.reshape(m, 3)[order]                # (m,3) cut ids, island by island
     tris_all = local[cv]
 
+    # Boundary half-edges of the cut mesh: those with no reverse in cut vertex ids. A reverse
+    # lies on the same mesh edge, so in a simple mesh only the pairs need comparing (np.isin
+    # over all half-edges otherwise).
+    if not simple:
+        interior = None
+    else:
+        cdst = corner_vertex[(np.arange(3 * m) // 3) * 3 + (np.arange(3 * m) % 3 + 1) % 3]
+        rev = (corner_vertex[g1] == cdst[g2]) & (cdst[g1] == corner_vertex[g2])
+        interior = np.zeros(3 * m, dtype=bool)
+        interior[g1[rev]] = True
+        interior[g2[rev]] = True
+        interior = interior.reshape(m, 3)[order].ravel()
     problem = (degenerate | nonfinite_face | duplicate | nonmanifold_face | inconsistent_face)
     if len(bowtie):
         problem |= np.isin(src, bowtie[:, 0]).reshape(m, 3).any(axis=1)
     bad_isl = np.bincount(fisl, problem, minlength=n_isl) > 0
     loops_of, topo_err = _all_boundary_loops(cv, fisl[order], n_isl, ncut, fbounds, ~bad_isl,
-                                             local)
+                                             local, interior)
     out = []
     for idx in range(n_isl):
         f0, f1 = fbounds[idx], fbounds[idx + 1]
@@ -279,7 +317,7 @@ def _validate(idx, faces, tris, vertices, V, degenerate, nonfinite, duplicate, n
     return None
 
 
-def _all_boundary_loops(cv, hisl, n_isl, ncut, fbounds, valid, local):
+def _all_boundary_loops(cv, hisl, n_isl, ncut, fbounds, valid, local, interior=None):
     """Boundary loops of every valid island at once, and the topology check.
 
     Parameters
@@ -288,6 +326,7 @@ def _all_boundary_loops(cv, hisl, n_isl, ncut, fbounds, valid, local):
     hisl : (m,) int, island of each face (grouped)
     valid : (n_isl,) bool, islands whose loops are wanted
     local : (ncut,) int, island-local id of each cut vertex
+    interior : (3m,) bool or None, the half-edges (of ``cv``) with a reverse, when known
 
     Returns
     -------
@@ -296,50 +335,22 @@ def _all_boundary_loops(cv, hisl, n_isl, ncut, fbounds, valid, local):
     """
     k = np.diff(fbounds)
     a = cv.ravel()
-    b = np.roll(cv, -1, axis=1).ravel()
+    b = cv[:, [1, 2, 0]].ravel()
     eisl = np.repeat(hisl, 3)
-    fwd = a * ncut + b
-    boundary = ~np.isin(fwd, b * ncut + a)
+    boundary = ~np.isin(a * ncut + b, b * ncut + a) if interior is None else ~interior
     nb = np.bincount(eisl, boundary, minlength=n_isl).astype(np.int64)
     nv = np.bincount(_island_of_vertices(a, eisl, ncut), minlength=n_isl)
     n_edges = (3 * k + nb) // 2
     euler = nv - n_edges + k
     keep = boundary & valid[eisl]
     ba, bb = a[keep], b[keep]
-    # Each boundary vertex has one outgoing boundary half-edge (pinched vertices were rejected):
-    # rank every vertex along its loop by pointer jumping, starting each loop at the source of its
-    # first boundary half-edge (in face order), as a depth-first walk from there would.
+    # Each boundary vertex has one outgoing boundary half-edge (pinched vertices were rejected).
     pos = np.full(ncut, -1, dtype=np.int64)
     pos[ba] = np.arange(len(ba))
     nxt = pos[bb]
-    start, lab = cycle_labels(nxt)                         # the loops: the cycles of nxt
-    n_loops = len(start)
-    prev = np.empty(len(ba), dtype=np.int64)
-    prev[nxt] = np.arange(len(ba))
-    ptr = nxt.copy()
-    ptr[prev[start]] = prev[start]                         # the loop's last vertex ends it
-    rank = (ptr != np.arange(len(ba))).astype(np.int64)
-    while True:
-        nptr = ptr[ptr]
-        if np.array_equal(nptr, ptr):
-            break
-        rank = rank + rank[ptr]
-        ptr = nptr
     lisl = eisl[keep]
-    loops_per_isl = np.bincount(lisl[start], minlength=n_isl) if n_loops else np.zeros(n_isl, int)
-    ordr = np.lexsort((-rank, lab))
-    lens = np.bincount(lab, minlength=n_loops)
-    cuts = np.concatenate([[0], np.cumsum(lens)])
-    loop_isl = lisl[start]
-    by_isl = np.argsort(loop_isl, kind="stable")
-    ibounds = np.searchsorted(loop_isl[by_isl], np.arange(n_isl + 1))
-    verts = local[ba[ordr]]
-    loops_of = []
-    for idx in range(n_isl):
-        mine = by_isl[ibounds[idx]:ibounds[idx + 1]]
-        loops = [verts[cuts[j]:cuts[j + 1]].astype(np.int64) for j in mine]
-        loops.sort(key=len, reverse=True)
-        loops_of.append(tuple(loops))
+    start, loops_of = ordered_loops(nxt, lisl, local[ba], n_isl)
+    loops_per_isl = np.bincount(lisl[start], minlength=n_isl) if len(start) else np.zeros(n_isl, int)
     genus2 = 2 - loops_per_isl - euler
 
     def topo_err(idx, faces):

@@ -68,10 +68,14 @@ def conformal_distortion(V, F, corner_uv):
         ``inf`` for flipped, collapsed or degenerate faces.
     """
     alpha, beta = face_jacobians(V, F, corner_uv)
-    a, b = np.abs(alpha), np.abs(beta)
+    return _distortion(np.abs(alpha), np.abs(beta), flipped_faces(V, F, corner_uv))
+
+
+def _distortion(a, b, flipped):
+    """``conformal_distortion`` from |alpha|, |beta| and the flipped faces."""
     with np.errstate(invalid="ignore", divide="ignore"):
         D = (a + b) / (a - b)
-    bad = ~(a > b) | ~np.isfinite(D) | flipped_faces(V, F, corner_uv)
+    bad = ~(a > b) | ~np.isfinite(D) | flipped
     D[bad] = np.inf
     return D
 
@@ -95,13 +99,36 @@ def singular_values(V, F, corner_uv, normalize=True):
         ``smin`` is negative for a flipped face (``|beta| > |alpha|``); NaN for degenerate faces.
     """
     alpha, beta = face_jacobians(V, F, corner_uv)
-    a, b = np.abs(alpha), np.abs(beta)
+    return _singular(V, F, signed_uv_areas(corner_uv), np.abs(alpha), np.abs(beta), normalize)
+
+
+def _singular(V, F, signed_area, a, b, normalize):
+    """``singular_values`` from the signed UV areas, |alpha| and |beta|."""
     smax, smin = a + b, a - b
     if normalize:
-        uv_area = np.sum(np.abs(signed_uv_areas(corner_uv)))
+        uv_area = np.sum(np.abs(signed_area))
         scale = np.sqrt(np.sum(face_areas(V, F)) / uv_area) if uv_area > 0 else np.nan
         smax, smin = smax * scale, smin * scale
     return smax, smin
+
+
+def certify_measured(V, F, corner_uv, bound, normalize=True, rtol=1e-6):
+    """``certify`` and ``singular_values`` of one map from one evaluation of its Jacobians (the
+    same numbers as the two calls).
+
+    Returns
+    -------
+    ok, D, n_flipped : as ``certify``
+    smax, smin : as ``singular_values``
+    """
+    alpha, beta = face_jacobians(V, F, corner_uv)
+    a, b = np.abs(alpha), np.abs(beta)
+    signed = signed_uv_areas(corner_uv)
+    flipped = ~(signed > 0)
+    D = _distortion(a, b, flipped)
+    n_flipped = int(flipped.sum())
+    ok = n_flipped == 0 and bool(np.all(D <= bound * (1.0 + rtol)))
+    return (ok, D, n_flipped) + _singular(V, F, signed, a, b, normalize)
 
 
 def certify(V, F, corner_uv, bound, rtol=1e-6):

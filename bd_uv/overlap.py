@@ -83,9 +83,10 @@ def uv_boundary(F, corner_uv, face_island):
     use = (lab >= 0) & np.isfinite(uv).all(axis=(1, 2))
     faces = np.flatnonzero(use)
     h = (3 * faces[:, None] + np.arange(3)).ravel()                 # flat corner ids
-    f, k = h // 3, h % 3
-    a, b = F[f, k], F[f, (k + 1) % 3]
-    ua, ub = uv[f, k], uv[f, (k + 1) % 3]
+    f = np.repeat(faces, 3)
+    Ff, uvf = F[faces], uv[faces]
+    a, b = Ff.ravel(), Ff[:, [1, 2, 0]].ravel()
+    ua, ub = uvf.reshape(-1, 2), uvf[:, [1, 2, 0]].reshape(-1, 2)
     isl = lab[f]
     # Pair half-edges of one island on the same undirected edge; interior iff exactly two, opposite
     # directions, and the same UV at each end.
@@ -161,15 +162,18 @@ def touching_pairs(p, q, group=None):
         # Few segments (a small island): every pair's boxes are compared at once, no tree to
         # build; the same candidates as the tree's, decided alike (segments whose boxes are
         # apart cannot meet).
-        i, j = np.triu_indices(len(p), 1)
         lo, hi = np.minimum(p, q), np.maximum(p, q)
-        # boxes that meet (touching included), as the tree's candidates; then one island's
-        keep = ((lo[i, 0] <= hi[j, 0]) & (lo[j, 0] <= hi[i, 0])
-                & (lo[i, 1] <= hi[j, 1]) & (lo[j, 1] <= hi[i, 1]))
+        # boxes that meet (touching included), as the tree's candidates; then one island's:
+        # the (b, b) table at once, its upper triangle read off (pairs i < j, by i then j)
+        x0, y0, x1, y1 = lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1]
+        keep = x0[:, None] <= x1[None, :]
+        keep &= x0[None, :] <= x1[:, None]
+        keep &= y0[:, None] <= y1[None, :]
+        keep &= y0[None, :] <= y1[:, None]
         if group is not None:
             g = np.asarray(group)
-            keep &= g[i] == g[j]
-        i, j = i[keep], j[keep]
+            keep &= g[:, None] == g[None, :]
+        i, j = np.nonzero(np.triu(keep, 1))
         meets = segments_meet(p, q, i, j)
         return np.stack([i[meets], j[meets]], axis=1).astype(np.int64)
     import shapely

@@ -55,11 +55,12 @@ ONE_PRODUCT_FACES = 1000
 
 
 def _matvec(M):
-    """``x, out -> out = M @ x`` for a csr float64 matrix M into a preallocated ``out``: the
-    compiled product straight, without scipy's dispatch (~10 us a call, two calls an iteration,
-    against ~5 us of arithmetic on a 500-face island); ``M @ x`` where scipy lacks it."""
+    """``x, out -> out = M @ x`` for a csr or csc float64 matrix M into a preallocated ``out``:
+    the compiled product straight, without scipy's dispatch (~10 us a call, two calls an
+    iteration, against ~5 us of arithmetic on a 500-face island); ``M @ x`` where scipy lacks
+    it."""
     try:
-        from scipy.sparse._sparsetools import csr_matvec
+        from scipy.sparse._sparsetools import csc_matvec, csr_matvec
     except ImportError:     # a scipy that moved it: the public product
         def mv(x, out):
             out[...] = M @ x
@@ -67,10 +68,11 @@ def _matvec(M):
         return mv
     m, n = M.shape
     indptr, indices, data = M.indptr, M.indices, M.data
+    product = csc_matvec if M.format == "csc" else csr_matvec
 
     def mv(x, out):
         out.fill(0.0)
-        csr_matvec(m, n, indptr, indices, data, x, out)    # out += M x
+        product(m, n, indptr, indices, data, x, out)    # out += M x
         return out
     return mv
 
@@ -113,6 +115,7 @@ class BoundSearch:
         self.solver = s = ProjectionSolver(ops, nv, fixed, tris=tris)
         self.k = len(s.area)
         self.UF = None
+        self._rhs_fixed = None      # (UF, its share of the right-hand side)
         self.iterations = 0
         self._B = None
 
@@ -179,8 +182,9 @@ class BoundSearch:
     @staticmethod
     def _max_distortion(W):
         """``max_distortion`` where the caller has silenced division warnings."""
-        sq = W * W
-        r = float(np.max((sq[2] + sq[3]) / (sq[0] + sq[1])))        # |beta|^2 / |alpha|^2
+        num = np.einsum("ij,ij->j", W[2:], W[2:])                   # |2 beta|^2
+        num /= np.einsum("ij,ij->j", W[:2], W[:2])                  # over |2 alpha|^2
+        r = float(num.max())                                        # |beta|^2 / |alpha|^2
         if not r < 1.0:
             return np.inf
         r = np.sqrt(r)
@@ -200,9 +204,9 @@ class BoundSearch:
         # With t = max(x + kappa |beta|, 0) / (1 + kappa^2) (the boundary ray's point),
         # kappa t / |beta| >= 1 and t - x <= 0 exactly inside the cone, and < 1, >= 0 outside:
         # beta scales by min(1, kappa t / |beta|), x moves by max(t - x, 0), no mask needed.
-        x = w2[0] * Q[0]
-        x += w2[1] * Q[1]                                        # Re(w alpha)
-        nb = np.hypot(Q[2], Q[3])
+        x = np.einsum("ij,ij->j", w2, Q[:2])                    # Re(w alpha)
+        # |beta| (one product-sum and a root: hypot's careful scaling is not needed here)
+        nb = np.sqrt(np.einsum("ij,ij->j", Q[2:], Q[2:]))
         t = kappa * nb
         t += x
         np.maximum(t, 0.0, out=t)
@@ -226,7 +230,10 @@ class BoundSearch:
         solve = s.factorize()
         BtA = self._operators()[1]
         nf = len(s.free)
-        rhs_fixed = (s._L_fF @ self.UF).T.ravel()
+        if self._rhs_fixed is None or self._rhs_fixed[0] is not self.UF:
+            # the fixed vertices' share of the right-hand side: the same for every target
+            self._rhs_fixed = (self.UF, (s._L_fF @ self.UF).T.ravel())
+        rhs_fixed = self._rhs_fixed[1]
         w2 = np.stack([w.real, -w.imag])
         U = U.copy()
         GU = self._lift(U)

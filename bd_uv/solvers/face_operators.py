@@ -32,14 +32,6 @@ def face_gradients(Gx, Gy, tris):
     return out[0], out[1]
 
 
-def _csr(rows, cols, vals, shape):
-    """Compressed rows of the triplets as they come (duplicates kept: products sum them)."""
-    order = np.argsort(rows, kind="stable")
-    indptr = np.zeros(shape[0] + 1, dtype=np.int64)
-    np.cumsum(np.bincount(rows, minlength=shape[0]), out=indptr[1:])
-    return sp.csr_array((vals[order], cols[order], indptr), shape=shape)
-
-
 def laplacian_blocks(gx, gy, area, tris, free, fixed, nv):
     """``L = sum_f A_f (gx gx^T + gy gy^T)`` split into its free-free block (csc, canonical:
     duplicates summed, indices sorted) and its free-fixed block (csc).
@@ -69,28 +61,35 @@ def laplacian_blocks(gx, gy, area, tris, free, fixed, nv):
 def alpha_beta_lift(gx, gy, area, tris, free, nv):
     """The lift of a map ``[u; v]`` (2nv) to every face's doubled alpha and beta (4k): rows
     ``u_x + v_y``, ``v_x - u_y``, ``u_x - v_y``, ``v_x + u_y`` (csr, six entries a row), and the
-    least-squares step's right-hand side operator ``B_free^T diag(A, A, A, A) / 2`` (csr, rows the
-    free unknowns ``[free; free + nv]``).
+    least-squares step's right-hand side operator ``B_free^T diag(A, A, A, A) / 2`` (csc: the
+    compressed rows of the weighted lift on the free unknowns read as columns, so no sort; rows
+    the free unknowns ``[free; free + nv]``).
 
     Returns
     -------
-    B : (4k, 2nv) csr; BtA : (2 len(free), 4k) csr
+    B : (4k, 2nv) csr; BtA : (2 len(free), 4k) csc
     """
     k = len(tris)
     cu, cv = tris, tris + nv
     # per block row: (coefficients on u, coefficients on v)
-    blocks = [(gx, gy), (-gy, gx), (gx, -gy), (gy, gx)]
-    data = np.concatenate([np.concatenate([a, b], axis=1) for a, b in blocks])      # (4k, 6)
-    cols = np.tile(np.concatenate([cu, cv], axis=1), (4, 1))                        # (4k, 6)
-    B = sp.csr_array((data.ravel(), cols.ravel(), np.arange(0, 24 * k + 1, 6)),
-                     shape=(4 * k, 2 * nv))
+    data = np.empty((4, k, 6))
+    data[0, :, :3], data[0, :, 3:] = gx, gy
+    data[1, :, :3], data[1, :, 3:] = -gy, gx
+    data[2, :, :3], data[2, :, 3:] = gx, -gy
+    data[3, :, :3], data[3, :, 3:] = gy, gx
+    data = data.reshape(-1)
+    cols = np.empty((4, k, 6), dtype=np.int64)
+    cols[:, :, :3], cols[:, :, 3:] = cu, cv
+    cols = cols.reshape(-1)
+    B = sp.csr_array((data, cols, np.arange(0, 24 * k + 1, 6)), shape=(4 * k, 2 * nv))
     pos = np.full(2 * nv, -1, dtype=np.int64)
     nf = len(free)
     pos[free] = np.arange(nf)
     pos[free + nv] = np.arange(nf, 2 * nf)
-    rows_b = np.repeat(np.arange(4 * k), 6)
-    tr = pos[cols.ravel()]
+    tr = pos[cols]
     keep = tr >= 0
-    w = (0.5 * np.tile(area, 4))[rows_b]
-    BtA = _csr(tr[keep], rows_b[keep], (data.ravel() * w)[keep], (2 * nf, 4 * k))
+    w = np.broadcast_to((0.5 * area)[None, :, None], (4, k, 6)).reshape(-1)
+    indptr = np.zeros(4 * k + 1, dtype=np.int64)
+    np.cumsum(keep.reshape(4 * k, 6).sum(axis=1), out=indptr[1:])
+    BtA = sp.csc_array(((data * w)[keep], tr[keep], indptr), shape=(2 * nf, 4 * k))
     return B, BtA

@@ -31,6 +31,21 @@ def _backends():
     return found
 
 
+def upper_triangle(M):
+    """``sp.triu(M, format="csc")`` of a canonical csc matrix (the entries on and above
+    the diagonal, in their order), without scipy's round trip through triplets (~0.2 ms on a
+    300-vertex island); scipy's for any other matrix."""
+    M = sp.csc_array(M)
+    if not M.has_canonical_format:
+        return sp.triu(M, format="csc")
+    n = M.shape[1]
+    col = np.repeat(np.arange(n), np.diff(M.indptr))
+    keep = M.indices <= col
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(col[keep], minlength=n), out=indptr[1:])
+    return sp.csc_array((M.data[keep], M.indices[keep], indptr), shape=M.shape)
+
+
 def factor_spd(M, backend="auto"):
     """Factorise a sparse symmetric positive definite matrix once.
 
@@ -67,7 +82,7 @@ def factor_spd(M, backend="auto"):
     elif backend == "qdldl":
         if qdldl is None:
             raise ImportError("qdldl is not installed")
-        fac = qdldl.Solver(sp.triu(M, format="csc"), upper=True)
+        fac = qdldl.Solver(upper_triangle(M), upper=True)
 
         def solve(B):
             B = np.asarray(B, dtype=np.float64)

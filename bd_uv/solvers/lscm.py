@@ -148,6 +148,12 @@ def _lscm_system(cbw, cb, tris, n, idx, val):
     rows = np.concatenate([pd, pl, pd + nf, pl + nf, bl, bh])
     cols = np.concatenate([pd, ph, pd + nf, ph + nf, bh + nf, bl + nf])
     vals = np.concatenate([diag[free], re_e, diag[free], re_e, -im_b, im_b])
-    A = sp.csc_matrix((vals, (rows, cols)), shape=(2 * nf, 2 * nf))
+    # No two entries share a place (one per free vertex, per edge, per boundary edge and side),
+    # so the compressed columns are the entries sorted by (column, row): no triplet conversion
+    # (scipy's is ~0.4 ms of fixed cost on a 200-face island).
+    order = np.argsort(cols * (2 * nf) + rows)
+    indptr = np.zeros(2 * nf + 1, dtype=np.int64)
+    np.cumsum(np.bincount(cols, minlength=2 * nf), out=indptr[1:])
+    A = sp.csc_matrix((vals[order], rows[order], indptr), shape=(2 * nf, 2 * nf))
     rhs = np.concatenate([rhs_c.real[free], rhs_c.imag[free]])
     return A, rhs, u0, free

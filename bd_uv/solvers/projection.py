@@ -89,10 +89,7 @@ class ProjectionSolver:
         self.nv = nv = int(nv)
         self.area = np.asarray(ops.area, dtype=np.float64)
         k = len(self.area)
-        # Gradient operators of a scalar function (k, nv): with J = [[u_x, u_y], [v_x, v_y]],
-        # Re a = (u_x + v_y)/2, Im a = (v_x - u_y)/2, Re b = (u_x - v_y)/2, Im b = (v_x + u_y)/2.
-        self.Gx = sp.csr_array((ops.Are + ops.Bre)[:, :nv])
-        self.Gy = sp.csr_array((ops.Bim - ops.Aim)[:, :nv])
+        self._Gx = self._Gy = None     # the gradient operators, made on first use (``Gx``)
         tris = np.asarray(tris, dtype=np.int64)
         self.ops, self.tris = ops, tris
         self.n_components, comp = components(nv, np.concatenate([tris[:, 0], tris[:, 1]]),
@@ -105,7 +102,9 @@ class ProjectionSolver:
             raise ValueError("every connected component needs at least one fixed vertex")
         self.fixed = fixed
         self.fixed_given = np.asarray(fixed_idx, dtype=np.int64)
-        self.free = np.setdiff1d(np.arange(nv), fixed)
+        is_free = np.ones(nv, dtype=bool)
+        is_free[fixed] = False
+        self.free = np.flatnonzero(is_free)     # np.setdiff1d's answer without its sort
         self.free_comp = self.component[self.free]
         # Faces sorted by component, for per-component maxima.
         self._order = np.argsort(self.face_comp, kind="stable")
@@ -116,6 +115,24 @@ class ProjectionSolver:
         self._solve, self.backend = None, backend
         self.setup_seconds = time.perf_counter() - t0
         self.factor_seconds = 0.0
+
+    @property
+    def Gx(self):
+        """(k, nv) csr: d/dx of a scalar function on every face. With J = [[u_x, u_y], [v_x,
+        v_y]], Re a = (u_x + v_y)/2, Im a = (v_x - u_y)/2, Re b = (u_x - v_y)/2, Im b = (v_x +
+        u_y)/2, so ``Gx`` is (Are + Bre) and ``Gy`` (Bim - Aim) on the u columns."""
+        if self._Gx is None:
+            ops, nv = self.ops, self.nv
+            self._Gx = sp.csr_array((ops.Are + ops.Bre)[:, :nv])
+            self._Gy = sp.csr_array((ops.Bim - ops.Aim)[:, :nv])
+        return self._Gx
+
+    @property
+    def Gy(self):
+        """(k, nv) csr: d/dy of a scalar function on every face (made with ``Gx``)."""
+        if self._Gy is None:
+            self.Gx
+        return self._Gy
 
     @property
     def G(self):
@@ -133,7 +150,10 @@ class ProjectionSolver:
     def face_gradients(self):
         """(gx, gy), each (k,3): every face's gradient coefficients on its corners."""
         if self._g is None:
-            self._g = face_gradients(self.Gx, self.Gy, self.tris)
+            o = self.ops
+            own = getattr(o, "gx", None) is not None and o.tris is not None and (
+                o.tris.shape == self.tris.shape and np.array_equal(o.tris, self.tris))
+            self._g = (o.gx, o.gy) if own else face_gradients(self.Gx, self.Gy, self.tris)
         return self._g
 
     def _assemble(self):

@@ -142,7 +142,8 @@ def _far_pairs(P, islands, voff):
     nxt = np.arange(len(lv)) + 1
     last = start + lens - 1
     nxt[last] = start
-    seg = np.linalg.norm(P[lv[nxt]] - P[lv], axis=1)
+    d = P[lv[nxt]] - P[lv]
+    seg = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])   # norm, same bits
     cum = np.cumsum(seg)
     before = cum - seg                      # arc length from the loop's first vertex
     before = before - before[start][owner]

@@ -7,7 +7,7 @@ import time
 import numpy as np
 
 from ..errors import SolverError
-from ..metrics import certify, mean_distortion, singular_values
+from ..metrics import certify_measured, mean_distortion
 from .bounded import uv_area
 from .problem import STORE_HEADROOM
 from .results import IslandResult
@@ -49,8 +49,8 @@ def finish(prob, u, C, bound, frames_name, flags, t0, stretch=None):
         uv[prob.pin_idx] = np.stack([prob.pin_val.real, prob.pin_val.imag], axis=1)
     t = time.perf_counter()
     target = C if bound != "auto" else certified_bound(C)
-    ok, D, n_flipped = certify(prob.V, isl.tris, uv[isl.tris], target)
-    smax, smin = singular_values(prob.V, isl.tris, uv[isl.tris], normalize=npins < 2)
+    ok, D, n_flipped, smax, smin = certify_measured(prob.V, isl.tris, uv[isl.tris], target,
+                                                    normalize=npins < 2)
     lo_s, hi_s = float(np.min(smin)), float(np.max(smax))
     if stretch is not None:  # section 6.3: 1/S <= gamma <= Gamma <= S, certified from the UVs
         ok = ok and lo_s >= (1.0 - 1e-6) / stretch and hi_s <= stretch * (1.0 + 1e-6)

@@ -178,7 +178,9 @@ class IslandProblem:
         nv = self.nv
         self.fixed = np.concatenate([idx, idx + nv])
         self.xfix = np.concatenate([np.real(val), np.imag(val)])
-        self.free = np.setdiff1d(np.arange(2 * nv), self.fixed)
+        free = np.ones(2 * nv, dtype=bool)
+        free[self.fixed] = False
+        self.free = np.flatnonzero(free)    # np.setdiff1d's answer without its sort
 
     def anchor_to(self, u_start):
         """Formulation that keeps a start map's scale: no global floor (issue 9).

@@ -61,8 +61,10 @@ def minimise(prob, start, limit, budget, flags, report, t0):
     if np.isfinite(start.D) and start.D <= limit:
         best = (start.u, start.D)   # the start is certified at its own distortion
         u, D = search(prob, start.u, report, budget, flags, t0)
-        if D < best[1] and prob.check(u, D)[0]:
-            best = projected = (u, prob.distortion(u))
+        if D < best[1]:
+            ok, D = prob.check(u, D)    # the map's max distortion, measured anew
+            if ok:
+                best = projected = (u, D)
     if best is None or steps:  # the conic programs' anchors, weights and scale, at the map
         formulate(prob, start if projected is None else  # the steps start from
                   Start(projected[0], frames_from_map(prob.alpha(projected[0])), start.name,
@@ -70,7 +72,9 @@ def minimise(prob, start, limit, budget, flags, report, t0):
     if best is None:
         best = first_certified(prob, start, limit, budget, flags, report, t0)
         steps = True
-    mean0 = prob.mean_distortion(best[0]) if best is not None else np.inf
+    # the mean before any conic step (measured only where a step ran or may run)
+    mean0 = (prob.mean_distortion(best[0]) if best is not None and (steps or prob.solves)
+             else np.inf)
     while steps and best is not None and prob.solves < AUTO_MAX_SOLVES:
         if budget is not None and time.perf_counter() - t0 > budget and (
                 prob.solves or projected is not None):

@@ -16,7 +16,7 @@ import numpy as np
 
 from ..errors import (BDError, CancelledError, InvalidMeshError, IslandError, OptionError,
                       SolverError)
-from ..mesh import as_indices, as_reals, check_arrays, islands as split_islands
+from ..mesh import as_indices, as_reals, check_arrays, checked_islands as split_islands
 from ..options import unwrap_options
 from . import bounded as within, strategies
 from . import stretch as stretch_search

@@ -293,6 +293,17 @@ def test_duplicate_isolated_triangle_leaves_the_other_island_solved():
     assert type(res.islands[1].error) is bd_uv.DuplicateFacesError
 
 
+def test_isolated_face_repeating_a_vertex_is_degenerate_not_a_duplicate():
+    # its two sides of one edge make that edge look shared by two faces (found by comparing
+    # mesh.islands' edge-pair shortcuts with the general path)
+    tri = (np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]), np.array([[0, 0, 1]]))
+    V, F = combine(grid(), tri)
+    res = unwrap_checked(V, F)
+    assert [i.status for i in res.islands] == ["certified", "failed"]
+    assert type(res.islands[1].error) is bd_uv.DegenerateFacesError
+    assert np.array_equal(res.islands[1].error.faces, [len(F) - 1])
+
+
 @pytest.mark.parametrize("case", ["coincident", "collinear"])
 def test_zero_area_faces_fail_with_their_indices(case):
     V, F = grid(bump=0.0)
