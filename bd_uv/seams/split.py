@@ -3,8 +3,9 @@ import functools
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import breadth_first_order, connected_components, maximum_flow
+from scipy.sparse.csgraph import breadth_first_order, maximum_flow
 
+from ..geometry import components
 from ..solvers.threads import halves, map_blocks
 from .charts import spd_solver
 from . import cluster_fiedler
@@ -129,8 +130,7 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost)
     # Pieces cut off from their side's bulk (a few nodes) go to the other side; a chart left
     # all on one side keeps its snapped cut.
     same = side[pairs[:, 0]] == side[pairs[:, 1]]
-    gr = sp.coo_array((np.ones(int(same.sum())), (pairs[same, 0], pairs[same, 1])), shape=(k, k))
-    _, comp = connected_components(gr, directed=False)
+    _, comp = components(k, pairs[same, 0], pairs[same, 1])
     csize = np.bincount(comp)
     side = side ^ (csize[comp] < np.maximum(3, 0.02 * size)[group])
     ones = np.bincount(group, side, g)
