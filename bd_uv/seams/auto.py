@@ -33,6 +33,7 @@ from .measure import measure_charts, splice
 from .merge import merge_charts
 from .split import fiedler_split_many
 from .topology import charts, cut_mesh
+from .trim import release_memory
 
 MAX_ROUNDS = 60
 # The charts of the given seams (the first round's) pass with a mean up to this share of
@@ -126,6 +127,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     invalid = frozen.copy()
     known = {}                              # conformal maps of charts that passed, by faces
     geom = face_geometry(V, F)
+    release_memory(m)                       # the set-up's temporaries
     rounds = 0
     for rounds in range(1, MAX_ROUNDS + 1):
         if cancel is not None and cancel.is_set():
@@ -142,6 +144,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             break
     if merge:
         merge_charts(V, F, E, cut, keep, invalid, S, C, known=known, geom=geom)
+    release_memory(m)
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last
     # round lets ``unwrap`` cut what still overlaps.

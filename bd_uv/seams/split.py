@@ -9,6 +9,7 @@ from ..geometry import components
 from ..solvers.threads import halves, map_blocks
 from .charts import spd_solver
 from . import cluster_fiedler
+from .trim import release_memory
 
 # Neither side of a split may hold less than this share of the chart's area.
 MIN_SIDE = 0.05
@@ -63,6 +64,7 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost)
     split : (g,) bool, whether each chart was split (else its ``side`` means nothing)
     """
     k, g = len(face_area), len(offsets) - 1
+    release_memory(k)                       # the round's freed arrays, before the factors
     size = np.diff(offsets)
     group = np.repeat(np.arange(g), size)
     split = np.zeros(g, dtype=bool)
