@@ -124,7 +124,8 @@ def chart_maps(V, charts, geom=None, limits=None):
     j = halves(nvs, PARALLEL_VERTICES)
     if j is None:
         u = _lscm_pinned(cbw, cbf, tris, n, idx, val)
-    else:                   # two runs of charts, factored side by side (one system each)
+    else:                   # two runs of charts, one system each: side by side, or one after
+        #                     the other above SEQUENTIAL_VERTICES (one factor at a time)
         def run(r):
             (a, b), (fa, fb) = r, (foff[r[0]], foff[r[1]])
             return _lscm_pinned(cbw[fa:fb], cbf[fa:fb], tris[fa:fb] - voff[a],
