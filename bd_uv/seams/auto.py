@@ -33,6 +33,7 @@ from .measure import measure_charts, splice
 from .merge import merge_charts
 from .split import fiedler_split_many
 from .topology import charts, cut_mesh
+from .trim import release_memory
 
 MAX_ROUNDS = 60
 # The charts of the given seams (the first round's) pass with a mean up to this share of
@@ -126,6 +127,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     invalid = frozen.copy()
     known = {}                              # conformal maps of charts that passed, by faces
     geom = face_geometry(V, F)
+    release_memory(m)                       # the set-up's temporaries
     rounds = 0
     for rounds in range(1, MAX_ROUNDS + 1):
         if cancel is not None and cancel.is_set():
@@ -142,17 +144,20 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             break
     if merge:
         merge_charts(V, F, E, cut, keep, invalid, S, C, known=known, geom=geom)
+    release_memory(m)
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last
     # round lets ``unwrap`` cut what still overlaps.
-    result = _unwrap_charts(V, F, E, cut, known, not invalid.any(),
-                            chart_options.replace(overlap="cut" if FINISH_ROUNDS == 0 else "fail"),
-                            unwrap_options)
+    result, chs = _unwrap_charts(V, F, E, cut, known, not invalid.any(),
+                                 chart_options.replace(overlap="cut" if FINISH_ROUNDS == 0
+                                                       else "fail"), unwrap_options)
+    known = None                            # the maps of charts merged since: no longer needed
     measured = None                         # (st, cr) of ``result`` on the current cut
     for finish in range(FINISH_ROUNDS):
         # Charts the certified map leaves beyond S or crossing itself are split again and only
         # their faces unwrapped anew.
-        st, cr = measured = measure_charts(V, F, E, cut, result)
+        st, cr = measured = measure_charts(V, F, E, cut, result, chs)
+        chs = None                          # the charts of this cut, not of the next
         bad = [r for r, s, c in zip(result.islands, st, cr)
                if len(r.faces) > 1 and ((r.status == "certified" and (s > S * (1 + 1e-9) or c))
                                         or isinstance(r.error, (InfeasibleError, SolverError,
@@ -188,8 +193,8 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         if r.cut_edges is not None and len(r.cut_edges):
             k = E.keys(r.cut_edges, n)
             cut[k[k >= 0]] = True
-            measured = None
-    st, cr = measured if measured is not None else measure_charts(V, F, E, cut, result)
+            measured = chs = None
+    st, cr = measured if measured is not None else measure_charts(V, F, E, cut, result, chs)
     result = dataclasses.replace(result, seconds=time.perf_counter() - t0)
     added = E.ends[cut & ~original]
     info = {"charts": len(result.islands),
@@ -203,24 +208,31 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
 
 def _unwrap_charts(V, F, E, cut, known, valid, options, run):
     """``unwrap`` of the mesh cut along ``cut`` with ``options`` (UnwrapOptions: C, not raised),
-    the conformal maps in ``known`` (charts that passed) certified rather than solved again;
+    the conformal maps in ``known`` (charts that passed) certified rather than solved again
+    (``known`` is emptied before the unwrap: the maps of charts merged since are garbage);
     ``run``: progress, cancel and face_groups as ``unwrap`` takes them.
 
     Where the mesh is ``valid`` (``_valid_everywhere``, nothing frozen as invalid) and every
     chart is a disk, the charts are the islands ``mesh.islands`` would find (numbered alike), so
     they go to ``unwrap_islands`` as they are; otherwise ``unwrap`` finds and checks them.
+
+    Returns
+    -------
+    (UnwrapResult, the charts of ``cut`` (``topology.charts``) or None where not found)
     """
     chs = charts(F, E, cut) if valid else []
     if not valid or any(c.kind != "disk" for c in chs):
-        return unwrap(V, F, seams=E.ends[cut], options=options, **run)
+        known.clear()
+        return unwrap(V, F, seams=E.ends[cut], options=options, **run), (chs or None)
     isl = [Island(j, c.faces, c.vertices, c.tris, c.loops) for j, c in enumerate(chs)]
     conformal = {}
     for j, c in enumerate(chs):
         u = known.get(c.faces.tobytes())
         if u is not None:
             conformal[j] = u
+    known.clear()                           # the maps are in ``conformal`` now
     return unwrap_islands(V, F, isl, pin_arrays(None, None, len(F)), options, conformal=conformal,
-                          **run)
+                          **run), chs
 
 
 def _valid_everywhere(V, F, E, A):

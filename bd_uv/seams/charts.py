@@ -9,9 +9,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..solvers.lscm import FaceGeometry, face_geometry, lscm_pinned, spd_solver  # noqa: F401
+from ..solvers.lscm import FaceGeometry, face_geometry, spd_solver  # noqa: F401
+from ..solvers.lscm import _lscm_system   # lscm_pinned's assembly, to free memory before factoring
 from ..solvers.threads import halves, map_blocks
 from .crossings import boundary_crossings
+from .trim import release_memory
 from ..unwrapping.batched import _far_pairs
 
 # Charts are accepted a little inside S: bending a map into C moves its stretch slightly.
@@ -26,6 +28,10 @@ MEAN_SLOPE = 0.07
 # Charts of one solve are split into two systems factored side by side (``solvers.threads``)
 # when each holds at least this many vertices (below it, the split costs more than it saves).
 PARALLEL_VERTICES = 1500
+# ... but a batch of more vertices than this has its two systems factored one after the other:
+# the LDL^T factor is the seam search's memory peak (measured on a 500k-face mesh: ~450 MB for
+# its first round's two charts, 250k vertices), and two at once add up.
+SEQUENTIAL_VERTICES = 100_000
 
 
 def mean_cap(C):
@@ -117,14 +123,17 @@ def chart_maps(V, charts, geom=None, limits=None):
     val = np.tile(np.array([0.0, 1.0], np.complex128), k)
     j = halves(nvs, PARALLEL_VERTICES)
     if j is None:
-        u = lscm_pinned(cbw, cbf, tris, n, idx, val)
-    else:                   # two runs of charts, factored side by side (one system each)
+        u = _lscm_pinned(cbw, cbf, tris, n, idx, val)
+    else:                   # two runs of charts, one system each: side by side, or one after
+        #                     the other above SEQUENTIAL_VERTICES (one factor at a time)
         def run(r):
             (a, b), (fa, fb) = r, (foff[r[0]], foff[r[1]])
-            return lscm_pinned(cbw[fa:fb], cbf[fa:fb], tris[fa:fb] - voff[a],
-                               int(voff[b] - voff[a]),
+            return _lscm_pinned(cbw[fa:fb], cbf[fa:fb], tris[fa:fb] - voff[a],
+                                int(voff[b] - voff[a]),
                                 idx[2 * a:2 * b] - voff[a], val[2 * a:2 * b])
-        u = np.concatenate(map_blocks(run, [(0, j), (j, k)]))
+        runs = [(0, j), (j, k)]
+        u = np.concatenate([run(r) for r in runs] if n > SEQUENTIAL_VERTICES
+                           else map_blocks(run, runs))
     u_solved = u
     cbw = cbf = None                        # the factorisations' inputs, freed before more arrays
     ca, cb = geom.ca[faces] * root, geom.cb[faces] * root
@@ -159,6 +168,17 @@ def chart_maps(V, charts, geom=None, limits=None):
         cross[ask] = boundary_crossings(uv, [charts[j].loops[0] + voff[j] for j in ask])
     return ChartMaps(uv, voff, foff, D, St, maxD, maxS, cross, np.stack([a + b, a - b], axis=1),
                      meanD, u_solved)
+
+
+def _lscm_pinned(cbw, cb, tris, n, idx, val):
+    """``solvers.lscm.lscm_pinned``, with the memory its assembly freed handed back to the
+    operating system before the factorisation (``trim.release_memory``: large charts only)."""
+    A, rhs, u, free = _lscm_system(cbw, cb, tris, n, idx, val)
+    release_memory(len(tris))
+    x = spd_solver(A, upper=True)(rhs)
+    nf = len(free)
+    u[free] = x[:nf] + 1j * x[nf:]
+    return u
 
 
 def piece_stretch(sigma, area3, label, k):

@@ -3,7 +3,9 @@ its boundary loops (tree-cotree, Eppstein 2003; greedy shortest loops, Erickson 
 2005)."""
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.csgraph import connected_components, dijkstra, minimum_spanning_tree
+from scipy.sparse.csgraph import dijkstra, minimum_spanning_tree
+
+from ..geometry import components
 
 # Roots tried (farthest-point samples) for the loops of a closed chart of genus >= 1.
 ROOT_TRIES = 6
@@ -46,8 +48,7 @@ def cut_graph(tris, nv, weight):
     ba, bb = a[boundary], b[boundary]
     # Cap each boundary loop with a virtual vertex nv + loop and a fan of faces (bb, ba, cap).
     if len(ba):
-        g = sp.coo_array((np.ones(len(ba)), (ba, bb)), shape=(nv, nv))
-        _, comp = connected_components(g, directed=False)
+        _, comp = components(nv, ba, bb)
         labels, loop_of = np.unique(comp[ba], return_inverse=True)
         caps = nv + loop_of.ravel()
         n_caps = len(labels)
@@ -66,19 +67,24 @@ def cut_graph(tris, nv, weight):
     w = np.full(len(uniq), 0.0)
     w[real] = weight(ends[real])
     w = quantised_weights(w, real)
+    # What every root shares: the edge graph, and each edge's two faces.
+    G = sp.csr_matrix(sp.coo_array((w, (ends[:, 0], ends[:, 1])), shape=(N, N)))
+    order = np.argsort(inv, kind="stable")
+    first = np.searchsorted(inv[order], np.arange(len(uniq)))
+    f0, f1 = order[first] // 3, order[first + 1] // 3
+    graph = (G, uniq, ends, w, f0, f1, len(all_tris), N, nv, n_caps)
     if n_caps:
-        return _loops_from(nv, uniq, ends, inv, w, all_tris, N, nv, n_caps)[0]
+        return _loops_from(nv, graph)[0]
     # Closed: the loops all pass through the root, so try a few roots spread over the chart
     # and keep the shortest system of loops.
-    best = _loops_from(0, uniq, ends, inv, w, all_tris, N, nv, n_caps)
+    best = _loops_from(0, graph)
     if len(best[0]) == 0:
         return best[0]                     # a sphere: no loop to cut
-    G = sp.csr_matrix(sp.coo_array((w, (ends[:, 0], ends[:, 1])), shape=(N, N)))
     far = dijkstra(G, directed=False, indices=0)
     for _ in range(ROOT_TRIES):
         # The first of the farthest vertices, up to TIE (not a rounding-level winner) ...
         r = int(np.flatnonzero(far >= far.max() * (1.0 - TIE))[0])
-        trial = _loops_from(r, uniq, ends, inv, w, all_tris, N, nv, n_caps)
+        trial = _loops_from(r, graph)
         if trial[1] < best[1] * (1.0 - TIE):     # ... and only a clearly shorter system wins
             best = trial
         far = np.minimum(far, dijkstra(G, directed=False, indices=r))
@@ -107,9 +113,13 @@ def quantised_weights(w, real):
     return np.clip(k, 1.0, 2.0 ** 40)
 
 
-def _loops_from(root, uniq, ends, inv, w, all_tris, N, nv, n_caps):
-    """Tree-cotree cut from ``root``: (cut (c,2) chart vertex pairs, its total weight)."""
-    G = sp.csr_matrix(sp.coo_array((w, (ends[:, 0], ends[:, 1])), shape=(N, N)))
+def _loops_from(root, graph):
+    """Tree-cotree cut from ``root``: (cut (c,2) chart vertex pairs, its total weight).
+
+    ``graph``: (G the weighted edge graph (csr), uniq the edges' keys, ends (e,2), w (e,)
+    weights, f0, f1 (e,) each edge's two faces, nf faces, N vertices with the caps, nv chart
+    vertices, n_caps), the same for every root."""
+    G, uniq, ends, w, f0, f1, nf, N, nv, n_caps = graph
     dist, pred = dijkstra(G, directed=False, indices=root, return_predecessors=True)
     in_tree = np.zeros(len(uniq), dtype=bool)
     child = np.flatnonzero(pred >= 0)
@@ -117,13 +127,9 @@ def _loops_from(root, uniq, ends, inv, w, all_tris, N, nv, n_caps):
     in_tree[np.searchsorted(uniq, tk)] = True
     # Dual spanning tree over edges not in T, keeping the longest loops (so the leftover edges
     # close the shortest ones).
-    order = np.argsort(inv, kind="stable")
-    first = np.searchsorted(inv[order], np.arange(len(uniq)))
-    f0, f1 = order[first] // 3, order[first + 1] // 3
     loop_len = dist[ends[:, 0]] + dist[ends[:, 1]] + w
     dual = ~in_tree
     big = loop_len[dual].max(initial=0.0) + 1.0
-    nf = len(all_tris)
     D = sp.coo_array((big - loop_len[dual] + 1e-12, (f0[dual], f1[dual])), shape=(nf, nf))
     mst = minimum_spanning_tree(sp.csr_matrix(D)).tocoo()
     cot = np.zeros(len(uniq), dtype=bool)

@@ -120,13 +120,17 @@ class Fans:
     all corners fan by fan, each fan from its first corner (a boundary vertex's fan starts
     where the boundary does; a closed fan at its smallest corner); ``first[i]`` marks the
     start of a fan in ``order`` and ``ring[i]`` a closed fan's start (its last corner turns
-    back to it).
+    back to it). ``fan[c]`` (int32) is the fan of corner ``c``, which occupies
+    ``order[starts[fan]:starts[fan + 1]]`` (so the fans of a few faces are read without a pass
+    over the whole mesh).
     """
     next: np.ndarray
     edge: np.ndarray
     order: np.ndarray
     first: np.ndarray
     ring: np.ndarray
+    fan: np.ndarray
+    starts: np.ndarray
 
 
 def _fans(F, face_edges, faces, ends, corners):
@@ -168,5 +172,8 @@ def _fans(F, face_edges, faces, ends, corners):
         p = p[p]
     order = np.lexsort((rank, start))
     first = np.r_[True, start[order][1:] != start[order][:-1]]
-    return Fans(nxt, edge, order, first, first & ring[order])
+    fan = np.empty(3 * m, dtype=np.int32)
+    fan[order] = np.cumsum(first) - 1
+    starts = np.append(np.flatnonzero(first), 3 * m)
+    return Fans(nxt, edge, order, first, first & ring[order], fan, starts)
 

@@ -12,9 +12,10 @@ from .crossings import boundary_crossings
 from .topology import charts
 
 
-def measure_charts(V, F, E, cut, result):
-    """Per island of a result: max stretch and boundary self-crossings from its final UVs."""
-    isl = {int(c.faces[0]): c for c in charts(F, E, cut)}
+def measure_charts(V, F, E, cut, result, chs=None):
+    """Per island of a result: max stretch and boundary self-crossings from its final UVs
+    (``chs``: ``topology.charts(F, E, cut)`` where the caller has them already)."""
+    isl = {int(c.faces[0]): c for c in (charts(F, E, cut) if chs is None else chs)}
     rs = [r for r in result.islands if r.uv is not None and r.status == "certified"]
     st = np.full(len(result.islands), np.nan)
     cr = np.zeros(len(result.islands), dtype=np.int64)

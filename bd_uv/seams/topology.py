@@ -10,6 +10,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
+from ..geometry import HOOK_VERTICES, components
+
 
 @dataclass(frozen=True)
 class Chart:
@@ -56,7 +58,7 @@ def cut_mesh(F, E, cut, faces=None):
     # Only the corners of the faces asked for take part.
     corners = np.flatnonzero(np.repeat(mask, 3))
     if E.fans is not None:
-        corner = _fan_runs(E.fans, cut, mask)[corners]
+        corner = _fan_runs(E.fans, cut, mask, corners)
     else:                                   # not an oriented manifold: a graph search
         on = np.zeros(len(E.ends), dtype=bool)
         on[E.face_edges[mask].ravel()] = True
@@ -76,42 +78,54 @@ def cut_mesh(F, E, cut, faces=None):
     return Fc.reshape(m, 3), voc
 
 
-def _fan_runs(fans, cut, mask):
+def _fan_runs(fans, cut, mask, corners):
     """Cut vertex of every corner from the fans: the corners around a vertex split into runs
     at every cut edge and every face not asked for, each run one cut vertex.
 
     Runs are numbered by their smallest corner, as a graph search over the corners would number
-    its components (so the charts come out the same either way).
+    its components (so the charts come out the same either way). When the corners asked for are
+    a small share of the mesh's, only their fans are read (the late rounds of a seam search ask
+    about a few small charts of a large mesh).
 
     Parameters
     ----------
     fans : edges.Fans, cut : (e,) bool, mask : (m,) bool faces asked for
+    corners : (k,) int64, the corners of the faces asked for, increasing
 
     Returns
     -------
-    (3m,) int64, each corner's cut vertex, 0.. in the order of their smallest corner (meaningless
-    on corners of faces not asked for)
+    (k,) int64, the cut vertex of each of ``corners``, 0.. in the order of their smallest corner
     """
-    c = fans.order
+    sub = 4 * len(corners) < len(fans.order)
+    if sub:                                 # the positions of the fans the corners lie in
+        f = np.unique(fans.fan[corners])
+        lo, hi = fans.starts[f], fans.starts[f + 1]
+        lens = hi - lo
+        at = np.arange(int(lens.sum())) + np.repeat(lo - (np.cumsum(lens) - lens), lens)
+        c, first, ring = fans.order[at], fans.first[at], fans.ring[at]
+    else:
+        c, first, ring = fans.order, fans.first, fans.ring
     nx = fans.next[c]
     # Whether position i turns to the next corner of its fan (or a ring's last to its first).
     joined = (nx >= 0) & ~cut[fans.edge[c]] & mask[c // 3] & mask[np.maximum(nx, 0) // 3]
-    new = fans.first.copy()
+    new = first.copy()
     new[1:] |= ~joined[:-1]
     starts = np.flatnonzero(new)
     low = np.minimum.reduceat(c, starts)
     run = np.cumsum(new) - 1
     # A closed fan whose last corner turns back to its first: its first and last runs are one.
-    fan_first = np.flatnonzero(fans.first)
+    fan_first = np.flatnonzero(first)
     fan_last = np.append(fan_first[1:] - 1, len(c) - 1)
-    join = fans.ring[fan_first] & joined[fan_last] & (run[fan_first] != run[fan_last])
+    join = ring[fan_first] & joined[fan_last] & (run[fan_first] != run[fan_last])
     a, b = run[fan_first[join]], run[fan_last[join]]
     low[a] = low[b] = np.minimum(low[a], low[b])
-    label = np.empty(len(c), dtype=np.int64)
+    label = np.empty(len(fans.order), dtype=np.int64)
     label[c] = low[run]
-    used = np.zeros(len(c), dtype=bool)
-    used[label[np.repeat(mask, 3)]] = True
-    return (np.cumsum(used) - 1)[label]
+    if sub:
+        return np.unique(label[corners], return_inverse=True)[1].ravel()
+    used = np.zeros(len(label), dtype=bool)
+    used[label[corners]] = True
+    return (np.cumsum(used) - 1)[label[corners]]
 
 
 def charts(F, E, cut, faces=None):
@@ -192,10 +206,15 @@ def _components(indptr, indices, n):
     CSR rows (``indptr``, ``indices``), built directly: no COO conversion or index checks, a
     measurable share of a small mesh's seam search, which asks every round.
 
+    Graphs of up to ``geometry.HOOK_VERTICES`` nodes go to ``geometry.components`` (min-label
+    hooking, no sparse set-up: the charts of a small mesh's rounds), numbered alike.
+
     Returns
     -------
-    (count, (n,) int32 labels), numbered as ``connected_components`` numbers them
+    (count, (n,) int labels), numbered as ``connected_components`` numbers them
     """
+    if n <= HOOK_VERTICES:
+        return components(n, np.repeat(np.arange(n), np.diff(indptr)), indices)
     g = sp.csr_matrix((np.ones(len(indices)), indices.astype(np.int32),
                        indptr.astype(np.int32)), shape=(n, n))
     return connected_components(g, directed=True, connection="weak")

@@ -81,6 +81,54 @@ def test_chart_maps_in_two_threads_equal_one_system(monkeypatch):
     # And with the mesh's face geometry computed once (the search's path).
     three = charts_mod.chart_maps(V, chs, charts_mod.face_geometry(V, F))
     np.testing.assert_allclose(three.u, one.u, atol=1e-9)
+    # A batch above SEQUENTIAL_VERTICES factors its two runs one after the other: each run's
+    # map is its own, so the same maps bit for bit as side by side.
+    monkeypatch.setattr(charts_mod, "SEQUENTIAL_VERTICES", 0)
+    four = charts_mod.chart_maps(V, chs)
+    np.testing.assert_array_equal(four.u, two.u)
+    np.testing.assert_array_equal(four.max_stretch, two.max_stretch)
+
+
+def test_release_memory_trims_only_large_work(monkeypatch):
+    """``trim.release_memory`` calls ``malloc_trim(0)`` from TRIM_FACES faces on, never below."""
+    from bd_uv.seams import trim
+    calls = []
+    monkeypatch.setattr(trim, "_trim", calls.append)
+    trim.release_memory(trim.TRIM_FACES - 1)
+    assert calls == []
+    trim.release_memory(trim.TRIM_FACES)
+    assert calls == [0]
+
+
+def test_release_memory_hands_freed_heap_back():
+    """On glibc, heap memory numpy freed (after glibc raised its mmap threshold) stays resident
+    until ``release_memory``; after it, the resident set is back near where it started."""
+    import ctypes.util
+    import subprocess
+    import sys
+    if not sys.platform.startswith("linux") or "libc" not in (ctypes.util.find_library("c") or ""):
+        pytest.skip("glibc only")
+    code = """if True:
+        import numpy as np
+        from bd_uv.seams import trim
+        def rss():
+            with open("/proc/self/statm") as f:
+                return int(f.read().split()[1]) * 4096 / 2**20
+        big = np.ones(16 * 2**17); del big     # a freed 16 MB map raises the mmap threshold
+        base = rss()
+        held = [np.ones(2**17) for _ in range(100)]   # 100 MB in 1 MB arrays, from the heap
+        last = np.ones(2**17)                  # keeps the heap's top in use
+        del held
+        freed = rss()
+        trim.release_memory(trim.TRIM_FACES)
+        print(base, freed, rss())
+    """
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    base, freed, after = map(float, out)
+    if freed - base < 50:
+        pytest.skip(f"this allocator returned the memory itself ({base:.0f} -> {freed:.0f} MB)")
+    assert after - base < 0.2 * (freed - base), (base, freed, after)
 
 
 def _islands_of(V, F, E, cut):
