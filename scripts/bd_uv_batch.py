@@ -315,20 +315,18 @@ def pack(written, session, args, atlas, modules):
     """
     packer, layout, errors = modules
     margin = MARGIN if args.margin is None else args.margin
+    view_layer = bpy.context.view_layer
     for w in written:
         entry, ob, arrays, ok = w.entry, w.ob, w.arrays, w.ok
-        bpy.ops.object.select_all(action='DESELECT')
         polygons = np.zeros(len(ob.data.polygons), dtype=bool)
         polygons[arrays.tri_poly[ok]] = True
-        ob.select_set(True)
-        bpy.context.view_layer.objects.active = ob
         # Both packers work on the active UV map: make it the one written, for the moment.
         layers = ob.data.uv_layers
         active = layers.active.name
         layers.active = layers[entry["uv_map"]]
         try:
             shape = args.pack_shape
-            if atlas is not None:
+            if atlas is not None:   # on the mesh data: no selection, mode or view layer needed
                 try:
                     done = packer.pack_atlas([ob], [polygons], atlas)
                 except errors.BDError as exc:
@@ -338,14 +336,30 @@ def pack(written, session, args, atlas, modules):
                     if done is not None:
                         entry["pack"] = layout.pack_summary(done[0], done[1])
                     continue
-            bpy.ops.object.mode_set(mode='EDIT')
-            try:
-                session.pack(bpy.context, [session.Written(ob.name, ok, polygons)], margin,
-                             shape)
-            finally:
-                bpy.ops.object.mode_set(mode='OBJECT')
+            if ob.name not in view_layer.objects:
+                entry["pack_note"] = (f"not packed: {ob.name} is not in the view layer "
+                                      f"{view_layer.name!r}, where Blender's packer works")
+                continue
+            _blender_pack(ob, ok, polygons, session, margin, shape)
         finally:
             layers.active = layers[active]
+
+
+def _blender_pack(ob, ok, polygons, session, margin, shape):
+    """Blender's Pack Islands on one object's polygons (Object Mode first: the file may have been
+    saved in Pose Mode or another object's Edit Mode)."""
+    view_layer = bpy.context.view_layer
+    if view_layer.objects.active is not None and bpy.context.mode != 'OBJECT':
+        bpy.ops.object.mode_set(mode='OBJECT')
+    for other in view_layer.objects:
+        other.select_set(False)
+    ob.select_set(True)
+    view_layer.objects.active = ob
+    bpy.ops.object.mode_set(mode='EDIT')
+    try:
+        session.pack(bpy.context, [session.Written(ob.name, ok, polygons)], margin, shape)
+    finally:
+        bpy.ops.object.mode_set(mode='OBJECT')
 
 
 def _put_back(w, undo, mesh_data, stored):

@@ -426,3 +426,46 @@ def test_script_says_why_a_file_has_nothing_to_unwrap(tmp_path, empty_scene):
     assert e["status"] == "failed" and e["error"] == "ObjectError"
     assert "kit.blend" in e["message"] and "missing" in e["message"]
     assert "KitInstance" in e["message"]
+
+
+def test_script_packs_a_file_saved_in_pose_mode_with_a_mesh_outside_the_view_layer(
+        tmp_path, empty_scene):
+    """As glTF-Blender-IO's 00_drivers_multiple_actions.blend (saved with an armature in Pose
+    Mode) and 39_parenting_*.blend (a mesh in no view layer) did, the script used to die in its
+    packing with a traceback. The atlas packer works on the mesh data (both packed, certified as
+    saved); Blender's needs the view layer, so the hidden one is left unpacked, said in its
+    entry, and nothing fails."""
+    from conftest import add_suzanne_with_seams
+    add_suzanne_with_seams().name = "Shown"
+    hidden = add_suzanne_with_seams()
+    hidden.name = "Hidden"
+    away = bpy.data.collections.new("Away")
+    bpy.context.scene.collection.children.link(away)
+    for c in list(hidden.users_collection):
+        c.objects.unlink(hidden)
+    away.objects.link(hidden)
+    bpy.context.view_layer.layer_collection.children["Away"].exclude = True
+    bpy.ops.object.armature_add()
+    bpy.ops.object.mode_set(mode='POSE')
+    scene = tmp_path / "posed.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(scene))
+    for shape in ("ATLAS", "AABB"):
+        report, out = tmp_path / f"{shape}.json", tmp_path / f"{shape}.blend"
+        proc = run_script(scene, "--pack", "--pack-shape", shape, "--output", str(out),
+                          "--report", str(report))
+        assert proc.returncode == 0 and "Traceback" not in proc.stderr, proc.stderr
+        items = {e["object"]: e for e in json.loads(report.read_text())["items"]}
+        assert set(items) == {"Shown", "Hidden"}
+        assert all(e["status"] == "certified" for e in items.values())
+        if shape == "ATLAS":
+            assert all(e["pack"]["certified"] and e["layout_overlaps"] == 0
+                       for e in items.values())
+        else:
+            assert "not in the view layer" in items["Hidden"]["pack_note"]
+            assert items["Shown"]["layout_overlaps"] == 0
+        bpy.ops.wm.open_mainfile(filepath=str(out))
+        for name, e in items.items():
+            D, det, _, uv = measured(bpy.data.objects[name])
+            assert np.all(det > 0) and D.max() <= e["bound_certified"] * (1 + 1e-5)
+            if shape == "ATLAS" or name == "Shown":
+                assert uv.min() >= 0 and uv.max() <= 1
