@@ -182,6 +182,10 @@ def nothing_to_unwrap():
     """Why a file has no mesh object to unwrap: linked libraries that are missing, collection
     instances (their meshes are in another file, or need making real)."""
     text = "the file holds no mesh object with faces"
+    empty = [ob.name for ob in bpy.data.objects if ob.type == 'MESH' and not len(ob.data.polygons)]
+    if empty:
+        text += (f"; mesh object(s) {', '.join(empty[:3])}{' ...' if len(empty) > 3 else ''} "
+                 "have edges or points only")
     lost = [lib.filepath for lib in bpy.data.libraries
             if not os.path.exists(bpy.path.abspath(lib.filepath))]
     if lost:

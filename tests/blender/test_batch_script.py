@@ -397,9 +397,9 @@ def test_script_seams_none_and_uv(scene_blend, tmp_path):
 
 
 def test_script_says_why_a_file_has_nothing_to_unwrap(tmp_path, empty_scene):
-    """A scene whose only object instances a collection linked from a library that is gone (as
-    glTF-Blender-IO's 01_linked_collection.blend): one failed entry that names the missing library
-    and the instance, not an empty report."""
+    """A scene whose objects are a collection instance linked from a library that is gone (as
+    glTF-Blender-IO's 01_linked_collection.blend) and a mesh of edges only: one failed entry that
+    names the missing library, the instance and the mesh, not an empty report."""
     bpy.ops.mesh.primitive_cube_add()
     kit = bpy.data.collections.new("Kit")
     bpy.context.scene.collection.children.link(kit)
@@ -416,6 +416,9 @@ def test_script_says_why_a_file_has_nothing_to_unwrap(tmp_path, empty_scene):
     inst.instance_type = 'COLLECTION'
     inst.instance_collection = data_to.collections[0]
     bpy.context.scene.collection.objects.link(inst)
+    wire = bpy.data.meshes.new("Wire")                      # edges only, as 32_weights_*.blend
+    wire.from_pydata([(0, 0, 0), (1, 0, 0)], [(0, 1)], [])
+    bpy.context.scene.collection.objects.link(bpy.data.objects.new("Wire", wire))
     scene = tmp_path / "scene.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(scene))
     library.unlink()
@@ -425,7 +428,7 @@ def test_script_says_why_a_file_has_nothing_to_unwrap(tmp_path, empty_scene):
     (e,) = json.loads(report.read_text())["items"]
     assert e["status"] == "failed" and e["error"] == "ObjectError"
     assert "kit.blend" in e["message"] and "missing" in e["message"]
-    assert "KitInstance" in e["message"]
+    assert "KitInstance" in e["message"] and "Wire" in e["message"]
 
 
 def test_script_packs_a_file_saved_in_pose_mode_with_a_mesh_outside_the_view_layer(
