@@ -89,11 +89,13 @@ def nest(outlines, height, separation, options, seconds=0.0, reports=None, worke
         if type(exc).__name__ != "PanicException":
             raise
         first = (str(exc).strip().splitlines() or [""])[0]   # no Rust backtrace in a message
-        if "empty polygon" in first and retry:
+        if retry:
             # spyrrow's strip (or a sliver) offset inwards by half the separation came out
-            # empty: slivers whose area is a hair above NARROW's reach (found at 2,000 deep, 93
-            # boxes and slivers at 64 px, no padding). Nested as NARROW ones are: grown by half
-            # the separation (a hair of the height when there is none), with none between.
+            # empty ("Offset resulted in an empty polygon": slivers whose area is a hair above
+            # NARROW's reach, found at 2,000 deep, 93 boxes and slivers at 64 px, no padding), or
+            # a chart's outline is too thin for its pole of inaccessibility ("no pole found":
+            # a bishop of the ASWF's OpenChessSet). Nested as NARROW ones are: grown by half the
+            # separation (a hair of the height when there is none), with none between.
             return _nest_grown(outlines, height, max(separation, EMPTY_RETRY * height), options,
                                seconds, reports, workers)
         raise PackError(f"the nesting failed on these charts: {first}") from None

@@ -207,3 +207,25 @@ def test_pinned_chart_outside_the_square_is_a_clear_error():
     pinned = np.array([True, False, False, False])
     with pytest.raises(PackError, match="outside the unit square"):
         pack_islands(V, F, uv + 10.0, lab, PackOptions(), pinned=pinned)
+
+
+def test_a_chart_too_thin_for_spyrrow_is_nested_grown():
+    """A bishop of the ASWF's OpenChessSet has a chart 1.9e-3 long and 3e-9 high: spyrrow found
+    no pole of inaccessibility for it and panicked ("no pole found with 10 levels of recursion"),
+    failing the whole mesh. Nested grown by a hair instead: every outline inside the strip, the
+    grown ones apart, so the charts themselves are too (checked on their placed outlines)."""
+    import shapely
+    from bd_uv.packing import PackOptions
+    from bd_uv.packing.nest import nest, rotations
+    sliver = np.array([[-0.00092851144, -1.4638434e-9], [0.00092851144, -6.656209e-10],
+                       [0.0005803199, -5.097549e-10], [0.00092851114, 1.4638434e-9]])
+    box = np.array([[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [-0.1, 0.1]])
+    outlines = [sliver * 50, box, box * 0.5, sliver]
+    pl = nest(outlines, 1.0, 0.0, PackOptions(), 0.0)
+    placed = [xy @ rotations(a).T + s for xy, a, s in zip(outlines, pl.angle, pl.shift)]
+    for q in placed:
+        assert np.isfinite(q).all() and q[:, 1].min() >= -1e-9 and q[:, 1].max() <= 1 + 1e-9
+    polys = [shapely.Polygon(q) for q in placed]
+    for i in range(len(polys)):
+        for j in range(i):
+            assert not polys[i].intersects(polys[j]) or polys[i].intersection(polys[j]).area == 0
