@@ -191,21 +191,30 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
             moved.append(len(pieces) > 1)
         cuts.append(cut_edges)
     source = np.asarray(source, dtype=np.int64)
-    packed = None
-    if pack and pack_options is not None and len(source):
-        from .packing import pack_islands as pack_atlas
-        packed = pack_atlas(V, F, uv, new, pack_options, face_labels=face_labels)
-        uv = packed.corner_uv
-    elif pack:
-        uv = pack_islands(uv, new, margin)
-    elif any(moved):
-        lo, _ = island_boxes(uv, new, len(source))
-        shift = np.where(np.asarray(moved)[:, None], lo, 0.0)
-        sel = new >= 0
-        uv = uv.copy()
-        uv[sel] -= shift[new[sel]][:, None, :]
-    stored = uv.astype(dtype).astype(np.float64)
-    certs = certify_islands(V, F, stored, new, bounds[source] if len(source) else [])
+    unpacked = uv
+    for again in (True, False):   # a second round only for pieces cut as stored (below)
+        uv, packed = _place(V, F, unpacked, new, source, moved, pack, pack_options, margin,
+                            face_labels)
+        stored = uv.astype(dtype).astype(np.float64)
+        certs = certify_islands(V, F, stored, new, bounds[source] if len(source) else [])
+        # Rounding can make a boundary that touched itself in float64 cross (a piece of the
+        # ASWF's OpenChessSet pawn, of Khronos' BrainStem): cut such pieces again, on their
+        # UVs as stored, and place everything again.
+        recut = [j for j, c in enumerate(certs) if again and cut and not c.overlap_free
+                 and np.isfinite(stored[new == j]).all()]
+        grown = False
+        for j in recut:   # per piece that crosses itself as stored
+            pieces, cut_edges = split_overlapping(V, F, stored, np.flatnonzero(new == j))
+            for p in pieces[1:]:
+                new[p] = len(source)
+                source = np.append(source, source[j])
+                moved.append(True)
+                grown = True
+            moved[j] = moved[j] or len(pieces) > 1
+            if len(cut_edges):
+                cuts[source[j]] = np.concatenate([cuts[source[j]], cut_edges])
+        if not grown:
+            break
     passed = np.array([c.certified for c in certs], dtype=bool)
     written = np.where(new >= 0, passed[np.maximum(new, 0)] if len(passed) else False, False)
     face_island = np.where(written, new, -1)
@@ -221,6 +230,24 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
         face_island[d] = face_island[tw]
     return Layout(stored, face_island, source, certs, unwrapped, cuts, overlaps, bool(pack),
                   report)
+
+
+def _place(V, F, uv, new, source, moved, pack, pack_options, margin, face_labels):
+    """The pieces ``new`` of ``uv`` placed: (UVs, Packed or None): by the atlas packer with
+    ``pack_options``, on shelves (``pack``), or each moved piece to (0, 0)."""
+    if pack and pack_options is not None and len(source):
+        from .packing import pack_islands as pack_atlas
+        packed = pack_atlas(V, F, uv, new, pack_options, face_labels=face_labels)
+        return packed.corner_uv, packed
+    if pack:
+        return pack_islands(uv, new, margin), None
+    if any(moved):
+        lo, _ = island_boxes(uv, new, len(source))
+        shift = np.where(np.asarray(moved)[:, None], lo, 0.0)
+        sel = new >= 0
+        uv = uv.copy()
+        uv[sel] -= shift[new[sel]][:, None, :]
+    return uv, None
 
 
 def _pack_report(V, F, stored, face_island, packed):

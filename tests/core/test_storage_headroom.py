@@ -148,3 +148,40 @@ def test_seams_needed_re_solves_or_cuts_what_float32_would_not_hold(monkeypatch)
         assert all(r.status == "certified" for r in res.islands)
         layout = stored_layout(V, F, res, dtype=np.float32, pack_options=PACK)
         assert all(c.certified for c in layout.certificates)
+
+
+def _c_shape(gap, n=40, r0=1.0, r1=1.3):
+    """A flat ring cut open: a "C" of 2n triangles whose two ends are ``gap`` apart (z = 0)."""
+    th = np.linspace(0.0, 2 * np.pi, n + 1)
+    th[-1] = 2 * np.pi - gap / r0
+    V = np.concatenate([np.stack([r0 * np.cos(th), r0 * np.sin(th), 0 * th], 1),
+                        np.stack([r1 * np.cos(th), r1 * np.sin(th), 0 * th], 1)])
+    F = [[i, i + 1, n + 2 + i] for i in range(n)] + [[i, n + 2 + i, n + 1 + i] for i in range(n)]
+    return V, np.array(F)
+
+
+def test_a_boundary_that_crosses_itself_once_rounded_is_cut_as_stored():
+    """The "C"'s ends are 2e-8 apart: certified one-to-one in float64, its boundary crosses
+    itself once the UVs are rounded to float32 (measured here on a plain placement), as pieces of
+    the ASWF's OpenChessSet pawn and of Khronos' BrainStem did, and the island was not written.
+    stored_layout now cuts such a piece again on its UVs as stored: every piece certified, no two
+    pieces overlapping and none flipped (exact triangle tests on the float32 UVs)."""
+    from overlap_shapes import overlapping_triangle_pairs
+    from bd_uv.certificate import certify_islands
+    V, F = _c_shape(2e-8)
+    res = bd_uv.unwrap(V, F)
+    assert res.islands[0].status == "certified" and res.certificates[0].overlap_free
+    uv = res.corner_uv
+    plain = (uv / np.abs(uv).max() * 0.9 + 0.05).astype(np.float32).astype(np.float64)
+    assert certify_islands(V, F, plain, np.zeros(len(F), int), [5.0])[0].crossings >= 1
+    layout = stored_layout(V, F, res, dtype=np.float32)
+    assert len(layout.certificates) >= 2 and all(c.certified for c in layout.certificates)
+    assert len(layout.cut_edges[0]) >= 1
+    out = layout.corner_uv
+    assert (layout.face_island >= 0).all()
+    assert out.astype(np.float32).astype(np.float64).tobytes() == out.tobytes()
+    pairs = overlapping_triangle_pairs(out)
+    lab = layout.face_island
+    assert not np.any(lab[pairs[:, 0]] != lab[pairs[:, 1]])
+    D, flipped = reference_distortion(V, F, out)
+    assert not flipped.any() and D.max() <= 5.0
