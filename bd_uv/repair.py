@@ -17,7 +17,7 @@ manifold, consistently oriented surface:
 
 A clean mesh comes back unchanged (same vertex ids, same faces).
 """
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
@@ -45,9 +45,6 @@ class Repair:
     nonmanifold_edges : (e1,2) int64, input vertex pairs of edges of three or more faces (cut)
     orientation_edges : (e2,2) int64, input vertex pairs of edges whose two faces are oriented
         alike (cut: each differently oriented part is unwrapped on its own)
-    back_to_back : (d,) int64, input faces on the same three vertices as another in the opposite
-        order (a double-sided triangle): not glued to each other, each unwrapped apart (as a
-        duplicate sharing its twin's UVs it would be mirrored there, a flip)
     """
 
     V: np.ndarray
@@ -60,15 +57,13 @@ class Repair:
     split_vertices: np.ndarray
     nonmanifold_edges: np.ndarray
     orientation_edges: np.ndarray
-    back_to_back: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
     @property
     def changed(self):
         """Whether anything was split, cut or left out."""
         return bool(len(self.zero_area) or len(self.non_finite) or (self.twin >= 0).any()
                     or len(self.split_vertices)
-                    or len(self.nonmanifold_edges) or len(self.orientation_edges)
-                    or len(self.back_to_back))
+                    or len(self.nonmanifold_edges) or len(self.orientation_edges))
 
     def seams(self, pairs):
         """The (s,2) input vertex pairs ``pairs`` as edges of ``F`` (every copy of a split one).
@@ -114,10 +109,6 @@ class Repair:
         if len(dup):
             out.append(f"{count(dup)} duplicate face(s) left out of the solve, given their twin's "
                        f"UVs" + which("faces", _some(dup)))
-        if len(self.back_to_back):
-            out.append(f"{count(self.back_to_back)} back-to-back face(s) (the same three vertices "
-                       f"as another, the opposite way round) unwrapped apart from their twin"
-                       + which("faces", _some(self.back_to_back)))
         if len(self.zero_area) and indices:
             out.append(f"{len(self.zero_area)} zero-area face(s) cannot be certified: their UVs "
                        f"are left as they were (faces {_some(self.zero_area)})")
@@ -210,17 +201,9 @@ def repair_mesh(V, F):
     two = np.flatnonzero(count == 2)
     h1, h2 = order[first[two]], order[first[two] + 1]
     opposite = src[h1] == dst[h2]
-    # Back-to-back faces (the same three vertices, opposite orders: same-order ones are twins,
-    # left out above) glue into a flat closed pillow of two faces: not glued to each other.
-    tri = np.sort(Fk, axis=1)
-    _, tri_inv, tri_count = np.unique(tri, axis=0, return_inverse=True, return_counts=True)
-    tri_inv = tri_inv.ravel()
-    paired = tri_count[tri_inv] > 1                  # (k,) faces with a back-to-back twin
-    glue = opposite & ~(paired[h1 // 3] & paired[h2 // 3]
-                        & (tri_inv[h1 // 3] == tri_inv[h2 // 3]))
     nxt = lambda h: h - h % 3 + (h % 3 + 1) % 3
     # Corners glued across an edge of two faces oriented oppositely: the corner of src[h] is h.
-    g1, g2 = h1[glue], h2[glue]
+    g1, g2 = h1[opposite], h2[opposite]
     rows = np.concatenate([g1, nxt(g1)])
     cols = np.concatenate([nxt(g2), g2])
     adj = sp.coo_array((np.ones(len(rows)), (rows, cols)), shape=(3 * k, 3 * k))
@@ -240,4 +223,4 @@ def repair_mesh(V, F):
                   twin, np.flatnonzero(zero).astype(np.int64),
                   np.flatnonzero(bad).astype(np.int64),
                   np.unique(pairs[extra, 0]).astype(np.int64), ends[count >= 3],
-                  ends[two[~opposite]], faces[paired].astype(np.int64))
+                  ends[two[~opposite]])

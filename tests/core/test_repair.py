@@ -175,31 +175,3 @@ def test_clean_mesh_is_left_as_it_is():
     assert not rep.changed and rep.notes() == []
     np.testing.assert_array_equal(rep.F, F)
     np.testing.assert_array_equal(rep.V, V)
-
-
-def test_back_to_back_faces_are_unwrapped_apart():
-    """A double-sided flap: two faces on the same three vertices, opposite ways round, on the
-    edge of a grid (as in glTF-Blender-IO's 02_suzanne.blend). Glued, they made a flat closed
-    pillow that failed as duplicate faces; sharing UVs, one would be mirrored. Each is now its own
-    chart: every face certified and unflipped (measured independently)."""
-    n = 4
-    g = np.linspace(0.0, 1.0, n + 1)
-    X, Y = np.meshgrid(g, g)
-    V = np.stack([X.ravel(), Y.ravel(), 0.1 * X.ravel() ** 2], axis=1)
-    F = []
-    for i in range(n):
-        for j in range(n):
-            a = i * (n + 1) + j
-            F += [[a, a + 1, a + n + 2], [a, a + n + 2, a + n + 1]]
-    flap = len(V)
-    V = np.vstack([V, [[0.5 * g[1], -0.3, 0.2]]])
-    F = np.array(F + [[0, flap, 1], [1, flap, 0]])
-    rep = repair_mesh(V, F)
-    assert rep.back_to_back.tolist() == [len(F) - 2, len(F) - 1]
-    assert any("back-to-back" in note for note in rep.notes())
-    res = unwrap_needed(V, F)
-    assert all(r.status == "certified" for r in res.islands)
-    D, flipped = reference_distortion(V, F, res.corner_uv)
-    assert not flipped.any() and D.max() <= max(r.bound_certified for r in res.islands) + 1e-6
-    isl = res.face_island
-    assert isl[-1] != isl[-2]
