@@ -46,8 +46,6 @@ import bpy
 import numpy as np
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-PACK_SHAPES = ("ATLAS", "AABB", "CONVEX", "CONCAVE")
-MARGIN = 0.001   # Blender's packer's margin by default
 
 
 def _extension_package():
@@ -85,11 +83,8 @@ def _import_addon():
 
 
 def _import_packing():
-    """The atlas packing's modules: the add-on's ``pack`` (``pack_atlas``), ``bd_uv.layout``
-    (its report) and ``bd_uv.errors``."""
-    pkg = _extension_package().__name__
-    return tuple(importlib.import_module(f"{pkg}.{name}") for name in
-                 ("operators.pack", "bd_uv.layout", "bd_uv.errors"))
+    """The add-on's ``operators/batch_pack.py``: this script's packing (both packers)."""
+    return importlib.import_module(f"{_extension_package().__name__}.operators.batch_pack")
 
 
 def split_argv(argv):
@@ -101,7 +96,7 @@ def split_argv(argv):
     return (argv[1:argv.index("--")] if "--" in argv else argv[1:]), rest
 
 
-def build_parser(arguments):
+def build_parser(arguments, packing):
     p = argparse.ArgumentParser(
         prog="bd_uv_batch.py",
         description="Unwrap the mesh objects of a .blend with bd-uv (certified bounded "
@@ -127,14 +122,15 @@ def build_parser(arguments):
                    help="pack each object's unwrapped islands into its UV square, like the "
                         "operator: with the atlas packer (--pack-shape ATLAS, the default) or "
                         "Blender's Pack Islands; islands with pinned UVs stay where they are")
-    p.add_argument("--pack-shape", choices=PACK_SHAPES, default="ATLAS",
+    p.add_argument("--pack-shape", choices=packing.PACK_SHAPES, default="ATLAS",
                    help="ATLAS (default): bd-uv's atlas packer, charts by their true shapes, "
                         "turned only, the padding in texels, the layout certified (Blender's "
                         "AABB when it cannot, e.g. a pinned island outside the square, said in "
                         "the report); AABB, CONVEX, CONCAVE: Blender's Pack Islands with "
                         "that island shape and --margin")
     p.add_argument("--margin", type=float, default=None,
-                   help=f"space between islands for Blender's packer (default {MARGIN})")
+                   help=f"space between islands for Blender's packer (default "
+                        f"{packing.MARGIN})")
     arguments.add_pack_options(p)
     p.add_argument("--input", metavar="FILE",
                    help="an FBX, Alembic, Collada or STL file to import (inside Blender; with the "
@@ -286,86 +282,6 @@ class Written:
         self.result, self.initial_uv = result, initial_uv
 
 
-def pack_settings(args, arguments, errors):
-    """(the atlas packer's PackOptions or None, an error line or None): packing options that
-    would be accepted and ignored are refused, as are bad values."""
-    atlas = args.pack and args.pack_shape == "ATLAS"
-    given = arguments.pack_options_given(args)
-    if given and not atlas:
-        return None, (f"{', '.join(given)} set the atlas packer: give --pack (its --pack-shape "
-                      "ATLAS is the default)")
-    if args.pack_shape != "ATLAS" and not args.pack:
-        return None, f"--pack-shape {args.pack_shape} packs with --pack only"
-    if args.margin is not None and (atlas or not args.pack):
-        return None, ("--margin is Blender's packer's: give --pack --pack-shape "
-                      "AABB|CONVEX|CONCAVE (the atlas packer's gap is --padding in texels)")
-    if not atlas:
-        return None, None
-    try:
-        return arguments.pack_options_of(args), None
-    except errors.BDError as exc:
-        return None, str(exc)
-
-
-def pack(written, session, args, atlas, modules):
-    """Pack each object's written islands, as the operator does: with the atlas packer when
-    ``atlas`` (PackOptions; the entry gets its ``pack`` report, or a ``pack_note`` when it cannot
-    and Blender's AABB packs instead), else Blender's Pack Islands with ``--pack-shape`` and
-    ``--margin``. Islands with pinned UVs stay put.
-
-    Each object is packed on its own, into its own UV space: packed together with another
-    object's pinned island lying outside the unit square, Blender's packer shrank a whole object
-    to a dot (1e-5 wide, where float32 UVs no longer hold its shape).
-    """
-    packer, layout, errors = modules
-    margin = MARGIN if args.margin is None else args.margin
-    view_layer = bpy.context.view_layer
-    for w in written:
-        entry, ob, arrays, ok = w.entry, w.ob, w.arrays, w.ok
-        polygons = np.zeros(len(ob.data.polygons), dtype=bool)
-        polygons[arrays.tri_poly[ok]] = True
-        # Both packers work on the active UV map: make it the one written, for the moment.
-        layers = ob.data.uv_layers
-        active = layers.active.name
-        layers.active = layers[entry["uv_map"]]
-        try:
-            shape = args.pack_shape
-            if atlas is not None:   # on the mesh data: no selection, mode or view layer needed
-                try:
-                    done = packer.pack_atlas([ob], [polygons], atlas)
-                except errors.BDError as exc:
-                    entry["pack_note"] = f"packed by Blender's packer (AABB): {exc}"
-                    shape = "AABB"
-                else:
-                    if done is not None:
-                        entry["pack"] = layout.pack_summary(done[0], done[1])
-                    continue
-            if ob.name not in view_layer.objects:
-                entry["pack_note"] = (f"not packed: {ob.name} is not in the view layer "
-                                      f"{view_layer.name!r}, where Blender's packer works")
-                continue
-            _blender_pack(ob, ok, polygons, session, margin, shape)
-        finally:
-            layers.active = layers[active]
-
-
-def _blender_pack(ob, ok, polygons, session, margin, shape):
-    """Blender's Pack Islands on one object's polygons (Object Mode first: the file may have been
-    saved in Pose Mode or another object's Edit Mode)."""
-    view_layer = bpy.context.view_layer
-    if view_layer.objects.active is not None and bpy.context.mode != 'OBJECT':
-        bpy.ops.object.mode_set(mode='OBJECT')
-    for other in view_layer.objects:
-        other.select_set(False)
-    ob.select_set(True)
-    view_layer.objects.active = ob
-    bpy.ops.object.mode_set(mode='EDIT')
-    try:
-        session.pack(bpy.context, [session.Written(ob.name, ok, polygons)], margin, shape)
-    finally:
-        bpy.ops.object.mode_set(mode='OBJECT')
-
-
 def _put_back(w, undo, mesh_data, stored):
     """Give the triangles ``undo`` (m,) bool their UVs from before the unwrap; a map created
     here is restored to what it held, or removed when nothing written is left on it. UVs that
@@ -488,14 +404,14 @@ def draw_saved(written, core, batch, mesh_data, options, args):
 def main(argv):
     blends, rest = split_argv(argv)
     core, batch, arguments, mesh_data, session, stored, formats = _import_addon()
-    args = build_parser(arguments).parse_args(rest)
+    packing = _import_packing()
+    args = build_parser(arguments, packing).parse_args(rest)
     imported = [f for f in blends if not f.lower().endswith(".blend")] + (
         [args.input] if args.input else [])
     blends = [f for f in blends if f.lower().endswith(".blend")]
     # Packed here (--pack): the core neither packs nor cuts what it stores.
     options = batch.JobOptions(arguments.unwrap_options_of(args))
-    packing = _import_packing()
-    atlas, problem = pack_settings(args, arguments, packing[2])
+    atlas, problem = packing.pack_settings(args, arguments)
     if problem:
         print(f"error: {problem}", file=sys.stderr)
         return 2
@@ -550,7 +466,7 @@ def main(argv):
         print(batch.item_line(e), flush=True)
     done, written = unwrap_objects(objects, args, batch, options, mesh_data, session, source)
     if written and args.pack:
-        pack(written, session, args, atlas, packing)
+        packing.pack(written, args, atlas)
     check_saved(written, mesh_data, stored, args.pack)
     written = [w for w in written if w.ok.any()]
     for w in written:   # the seams added, where the artist sees them: marked on the mesh saved
@@ -575,7 +491,7 @@ def main(argv):
     if args.pack:   # packed here, not by the core: the options say how
         echoed.update(pack=True, pack_shape=args.pack_shape, **(
             {k: getattr(atlas, k) for k in batch.jobs.PACK_FIELDS} if atlas is not None
-            else {"margin": MARGIN if args.margin is None else args.margin}))
+            else {"margin": packing.MARGIN if args.margin is None else args.margin}))
     report = batch.batch_report(items, echoed, wall, jobs=1,
                                 files=[source] if source else [])
     report.update(tool="bd_uv_batch.py", output=output if (written or args.output) else None)
