@@ -134,7 +134,7 @@ class Layout:
 
 
 def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float64,
-                  pack_options=None, face_labels=None):
+                  pack_options=None, face_labels=None, face_groups=None):
     """Turn an :class:`UnwrapResult` into the UVs to store, and certify them as stored.
 
     1. islands the unwrap certified are checked for self-overlap; with ``cut`` an overlapping one
@@ -158,6 +158,8 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
         certificate (on the stored, written islands) goes into ``Layout.pack``
     face_labels : dict, optional: each face's "material" and "object" (``Mesh.labels``), for
         ``pack_options.group``
+    face_groups : (m,) int array, optional, the polygon of each face: a cut never splits one
+        (a scene stores one UV per face-vertex, Blender one per loop)
 
     Returns
     -------
@@ -184,7 +186,7 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
         faces = np.flatnonzero(lab == i)
         pieces, cut_edges = ([faces] if ok[i] else []), np.zeros((0, 2), dtype=np.int64)
         if ok[i] and cut and not before[i].overlap_free:
-            pieces, cut_edges = split_overlapping(V, F, uv, faces)
+            pieces, cut_edges = split_overlapping(V, F, uv, faces, face_groups)
         for p in pieces:
             new[p] = len(source)
             source.append(i)
@@ -204,7 +206,8 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
                  and np.isfinite(stored[new == j]).all()]
         grown = False
         for j in recut:   # per piece that crosses itself as stored
-            pieces, cut_edges = split_overlapping(V, F, stored, np.flatnonzero(new == j))
+            pieces, cut_edges = split_overlapping(V, F, stored, np.flatnonzero(new == j),
+                                                  face_groups)
             for p in pieces[1:]:
                 new[p] = len(source)
                 source = np.append(source, source[j])

@@ -175,7 +175,7 @@ def unwrap_job(job, options, png=None):
         layout, res, _ = stored_layout_with_headroom(
             job.V, job.F, res, stretch=o.stretch, pack=options.pack, cut=options.cut,
             margin=options.margin, pack_options=options.pack_options,
-            face_labels=job.face_labels, dtype=job.uv_dtype)
+            face_labels=job.face_labels, dtype=job.uv_dtype, face_groups=job.face_groups)
     except Exception as exc:  # a bad mesh, or a bug: either way it stays this job's failure
         entry.update(error=type(exc).__name__, message=str(exc),
                      seconds=round(time.perf_counter() - t0, 4))
