@@ -185,3 +185,23 @@ def test_a_boundary_that_crosses_itself_once_rounded_is_cut_as_stored():
     assert not np.any(lab[pairs[:, 0]] != lab[pairs[:, 1]])
     D, flipped = reference_distortion(V, F, out)
     assert not flipped.any() and D.max() <= 5.0
+
+
+def test_a_float32_job_certifies_its_layout_as_float32():
+    """``Job.uv_dtype=float32`` (scenes, the Blender script): the layout handed to the writer is
+    the float32 one and its certificate was measured on it (a float64 certificate let Khronos'
+    BrainStem reach the scene writer's own float32 check and fail there); the default keeps
+    float64 for OBJ files. Checked independently on the UVs handed over."""
+    from bd_uv import batch
+    from bd_uv.batch import JobOptions
+    V, F = teapot_and_finger()
+    opts = JobOptions(pack=True, cut=True, pack_options=PACK)
+    f32 = batch.unwrap_job(batch.Job("teapot", V, F, uv_dtype=np.float32), opts)
+    uv = f32.layout.corner_uv
+    assert np.array_equal(uv.astype(np.float32).astype(np.float64), uv)
+    assert f32.entry["status"] == "certified" and all(c.certified for c in f32.layout.certificates)
+    D, flipped = reference_distortion(V, F, uv)
+    assert not flipped.any() and D.max() <= 5.0 * (1 + 1e-9)
+    f64 = batch.unwrap_job(batch.Job("teapot", V, F), opts)
+    uv64 = f64.layout.corner_uv
+    assert not np.array_equal(uv64.astype(np.float32).astype(np.float64), uv64)
