@@ -137,6 +137,8 @@ class GltfScene:
         out = {}
         for k, ch in charts.items():
             out[k] = self._patch(k, ch, writer)
+        if not any(all(c.certified for c in certs) for certs, _ in out.values()):
+            return out   # nothing certified as stored: no file at ``path`` that looks like one
         data = writer.finish()
         if glb_out:
             with atomic_path(path) as tmp:

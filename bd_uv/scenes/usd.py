@@ -116,8 +116,11 @@ class UsdScene:
             raise SceneFileError(f"{path} would overwrite a layer {self.path} uses; choose "
                                  "another output name or folder")
         if not path.lower().endswith(".usdz"):
-            with atomic_path(path) as tmp:
-                return self._write_layer(tmp, charts)
+            try:
+                with atomic_path(path) as tmp:
+                    return self._write_layer(tmp, charts)
+            except _NothingCertified as nothing:
+                return nothing.result
         import tempfile
         out_dir = os.path.dirname(os.path.abspath(path))
         os.makedirs(out_dir, exist_ok=True)
@@ -127,7 +130,10 @@ class UsdScene:
             # so the new package holds them as the input did
             local = self.path.lower().endswith(".usdz") and _unpack(self.path, folder,
                                                                      os.path.basename(layer_path))
-            result = self._write_layer(layer_path, charts, local)
+            try:
+                result = self._write_layer(layer_path, charts, local)
+            except _NothingCertified as nothing:
+                return nothing.result
             with atomic_path(path) as ztmp:
                 if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(layer_path), ztmp):
                     raise SceneFileError(f"{path}: the .usdz package could not be written")
@@ -147,6 +153,8 @@ class UsdScene:
         UsdUtils.ModifyAssetPaths(layer, lambda p: _reanchor(src, p, folder, package_local))
         stage = Usd.Stage.Open(layer)
         result = {k: self._author(stage, k, ch, UsdGeom, Sdf, Vt) for k, ch in charts.items()}
+        if not any(all(c.certified for c in certs) for certs, _ in result.values()):
+            raise _NothingCertified(result)   # no file at the output that looks like a result
         layer.Save()
         return result
 
@@ -184,6 +192,14 @@ class UsdScene:
         pv.Set(Vt.Vec2fArray.FromNumpy(values))
         pv.SetIndices(Vt.IntArray.FromNumpy(index.astype(np.int32)))
         return certs, warnings + part["warnings"]
+
+
+class _NothingCertified(Exception):
+    """No mesh's UVs certify as stored: the layer is not written (``result`` says why)."""
+
+    def __init__(self, result):
+        super().__init__("no mesh certified as stored")
+        self.result = result
 
 
 def _unpack(package, folder, layer_name):
