@@ -1,0 +1,145 @@
+"""Splitting the charts that fail, in batches: one level of Fiedler splits for every chart at
+once (``bisect``, on polygons when given), or several levels while the restriction of a chart's
+map to a piece still breaks S far (``split_deep``); the cost of cutting a vertex pair
+(``edge_weight``). Used by ``auto.unwrap_auto``'s rounds.
+"""
+import numpy as np
+
+from .charts import MARGIN, piece_stretch
+from .split import fiedler_split_many
+
+# Levels a failing chart is split at once while its restricted map still breaks S.
+SPLIT_DEPTH = 4
+# ... while the restricted map's stretch exceeds S by this factor (a piece's own map is better
+# than the restriction of its chart's map: nearer S it is left to its own map).
+DEEPER = 4.0
+
+
+def split_deep(todo, E, cut, A, cen, S, poly=None):
+    """Split charts, and split their pieces again while a chart's conformal map restricted to a
+    piece (``piece_stretch``: no new solve) still breaks S by the factor ``DEEPER``.
+
+    A piece whose restricted map is nearer S is left for the next round to map on its own; the
+    restriction saves the rounds (and solves) a chart far beyond S would take one split at a
+    time. Pieces on flipped faces of the chart's map are left to their own map too. Every
+    level splits all its pieces in one batch (``bisect``).
+
+    Parameters
+    ----------
+    todo : list of (faces (k,) int64 sorted global face ids, sigma (k,2) float64 or None): the
+        charts, with their map's singular values per face (``ChartMaps.sigma``); None: split
+        once
+
+    Returns
+    -------
+    (len(todo),) bool, whether each chart was split
+    """
+    split = np.zeros(len(todo), dtype=bool)
+    stack = [(faces, j) for j, (faces, _) in enumerate(todo)]
+    for _ in range(SPLIT_DEPTH):
+        sides = bisect([f for f, _ in stack], E, cut, A, cen, poly)
+        pieces = []                         # (piece, chart) of charts with a map
+        for (f, j), two in zip(stack, sides):
+            if two is None:
+                continue
+            split[j] = True
+            if todo[j][1] is not None:
+                pieces += [(piece, j) for piece in two]
+        if not pieces:
+            break
+        # Every piece's restricted stretch at once.
+        sig = np.concatenate([todo[j][1][np.searchsorted(todo[j][0], piece)]
+                              for piece, j in pieces])
+        fa = np.concatenate([piece for piece, _ in pieces])
+        label = np.repeat(np.arange(len(pieces)), [len(piece) for piece, _ in pieces])
+        st = piece_stretch(sig, A[fa], label, len(pieces))
+        stack = [(piece, j) for (piece, j), s_ in zip(pieces, st)
+                 if np.isfinite(s_) and s_ > DEEPER * S * MARGIN and len(piece) > 1]
+        if not stack:
+            break
+    return split
+
+
+def edge_weight(E, pairs, n, diag=None):
+    """Cost of cutting each vertex pair (length times crease discount; inside a polygon, a
+    million times that, so cut graphs run along polygon edges)."""
+    k = E.keys(pairs, n)
+    w = np.where(k >= 0, E.length[k] * E.cost[k], np.inf)
+    if diag is not None:
+        w = np.where((k >= 0) & diag[np.maximum(k, 0)], 1e6 * w, w)
+    return w
+
+
+def polygon_edges(polygons, E, m):
+    """Checked polygon ids (m,) int64 (None without) and the edges inside a polygon (e,) bool."""
+    diag = np.zeros(len(E.ends), dtype=bool)
+    if polygons is None:
+        return None, diag
+    poly = np.asarray(polygons)
+    if poly.shape != (m,) or not np.issubdtype(poly.dtype, np.integer):
+        raise ValueError(f"polygons must be ({m},) integers, one polygon id per triangle, got "
+                         f"shape {poly.shape} of {poly.dtype}")
+    poly = poly.astype(np.int64)
+    inner = E.faces[:, 1] >= 0
+    diag[inner] = poly[E.faces[inner, 0]] == poly[E.faces[inner, 1]]
+    return poly, diag
+
+
+def bisect(pieces, E, cut, A, cen, poly=None):
+    """Split charts by ``fiedler_split_many`` (all at once) and mark the new seams.
+
+    With ``poly`` (polygon of each face) the split runs on the polygons (each one node of the
+    dual graph, its area and area-weighted centroid), so no polygon is cut.
+
+    Parameters
+    ----------
+    pieces : list of (k_i,) int64, sorted global face ids of disjoint charts
+
+    Returns
+    -------
+    list of (faces_a, faces_b) sorted global face ids of the two sides, or None where a chart
+    is not split
+    """
+    out = [None] * len(pieces)
+    if not pieces:
+        return out
+    m = len(E.face_edges)
+    sizes = np.array([len(f) for f in pieces], dtype=np.int64)
+    fa = np.concatenate(pieces)
+    owner = np.repeat(np.arange(len(pieces)), sizes)
+    local = np.full(m, -1, dtype=np.int64)
+    local[fa] = np.arange(len(fa))
+    fe = np.unique(E.face_edges[fa].ravel())
+    fe = fe[(E.faces[fe, 1] >= 0) & ~cut[fe]]
+    la, lb = local[E.faces[fe, 0]], local[E.faces[fe, 1]]
+    inside = (la >= 0) & (lb >= 0)
+    inside[inside] = owner[la[inside]] == owner[lb[inside]]
+    fe, la, lb = fe[inside], la[inside], lb[inside]
+    # Nodes: the faces, or the polygons (grouped by chart either way).
+    if poly is None:
+        node = np.arange(len(fa))
+        mass, pcen = A[fa], cen[fa]
+    else:
+        key = owner * (int(poly.max()) + 1) + poly[fa]
+        _, node = np.unique(key, return_inverse=True)
+        node = node.ravel()
+        mass = np.bincount(node, A[fa])
+        pcen = np.stack([np.bincount(node, A[fa] * cen[fa, d]) for d in range(3)], 1)
+        pcen /= np.maximum(mass, 1e-300)[:, None]
+    nowner = np.zeros(len(mass), dtype=np.int64)
+    nowner[node] = owner
+    offsets = np.searchsorted(nowner, np.arange(len(pieces) + 1))
+    na, nb = node[la], node[lb]
+    across = na != nb
+    side, split = fiedler_split_many(mass, pcen, offsets, np.stack([na[across], nb[across]], 1),
+                                     E.length[fe[across]], E.cost[fe[across]])
+    fside = side[node]
+    new = fe[fside[la] != fside[lb]]
+    cut[new[split[owner[local[E.faces[new, 0]]]]]] = True
+    for j in np.flatnonzero(split):
+        f = pieces[j]
+        sj = fside[local[f]]
+        out[j] = (f[sj], f[~sj])
+    return out
+
+
