@@ -72,7 +72,13 @@ def split_overlapping(V, F, corner_uv, faces_of_island, face_groups=None):
         dist = shortest_path(gsub, unweighted=True, indices=seed_g)[g]
         seed = int(np.flatnonzero(g == seed_g)[0])
         lo, hi = 0, int(np.max(dist[np.isfinite(dist)]))
-        best = np.array([seed])
+        # radius 0 is the seed's group (its polygon): whole when that is overlap-free, else the
+        # seed face alone (a polygon folded over itself in UV cannot stay whole)
+        best = np.flatnonzero(dist <= 0)
+        _, lab = connected_components(sub[best][:, best], directed=False)
+        best = best[lab == lab[np.searchsorted(best, seed)]]
+        if not _overlap_free(Fi, uvi, comp[best]):
+            best = np.array([seed])
         while lo < hi:  # largest radius whose ball (its part around the seed) is overlap-free
             t = (lo + hi + 1) // 2
             ball = np.flatnonzero(dist <= t)

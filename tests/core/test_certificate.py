@@ -228,6 +228,35 @@ def test_split_overlapping_cuts_an_overlapping_map_into_certified_pieces():
         assert len(overlapping_triangle_pairs(uv[p])) == 0
 
 
+def test_split_overlapping_keeps_a_peripheral_polygon_whole():
+    """The cut starts from a peripheral polygon: when the polygon alone is overlap-free but no
+    ball around it is, the first piece is the whole polygon, not one of its triangles (one UV
+    per face-vertex, as USD and Blender store them, cannot hold a polygon split between pieces:
+    OpenChessSet's rooks, stored with max distortion 1,700). A fan around one vertex, open, its
+    angles 80, 80, 80, 170, 100 and 100 degrees (610 in all, so it overlaps itself), the last two
+    triangles one quad."""
+    angles = np.radians([80, 80, 80, 170, 100, 100])
+    theta = np.concatenate([[0.0], np.cumsum(angles)])
+    ring = np.stack([np.cos(theta), np.sin(theta)], 1)
+    V = np.zeros((len(ring) + 1, 3))
+    V[1:, 0] = theta   # an unrolled cone: the surface only names the triangles here
+    V[1:, 1] = 1.0
+    F = np.array([[0, i + 1, i + 2] for i in range(len(angles))])
+    uv = np.concatenate([np.zeros((len(F), 1, 2)), ring[F[:, 1:] - 1]], axis=1)
+    assert (np.cross(uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]) > 0).all()   # none flipped
+    groups = np.array([0, 1, 2, 3, 4, 4])
+    pieces, cut = split_overlapping(V, F, uv, np.arange(len(F)), groups)
+    piece_of = np.full(len(F), -1)
+    for i, p in enumerate(pieces):
+        piece_of[p] = i
+    assert piece_of[4] == piece_of[5]          # the quad stays whole
+    assert len(pieces) >= 2
+    for p in pieces:                           # every piece overlap-free, checked on its own
+        assert len(overlapping_triangle_pairs(uv[p])) == 0
+    # cut edges join different pieces and never run inside the quad (its diagonal: 0-6)
+    assert not any(sorted(e) == [0, 6] for e in cut.tolist())
+
+
 def test_stored_layout_cuts_packs_and_recertifies():
     """The write paths' safety net: a result holding an overlapping island is cut, packed and
     re-certified as stored (unwrap() itself never returns one)."""
