@@ -19,7 +19,8 @@ from .unwrapping import unwrap as unwrap_given_seams
 
 
 def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
-           face_groups=None, progress=None, cancel=None, options=None, **values):
+           face_groups=None, progress=None, cancel=None, options=None, precision=None,
+           **values):
     """Map a triangle mesh to the plane with no flipped face and conformal distortion <= C.
 
     Parameters
@@ -35,6 +36,9 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     face_groups : (m,) int array, optional, the polygon each triangle comes from: no cut, and no
         seam added, goes through one
     options : bd_uv.UnwrapOptions, optional (default: the defaults)
+    precision : the float type ``V`` was stored in, optional (``np.float32`` for glTF, USD and
+        Blender positions): with ``seams_mode="needed"``, faces thinner than one step of it at
+        their coordinates are left out with the zero-area faces (``repair.zero_area_faces``)
     **values : UnwrapOptions fields replacing those of ``options``: ``bd_uv.unwrap(V, F,
         bound=3.0, method="arap")``
 
@@ -63,7 +67,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
                           "or mark seams")
     if opts.seams_mode == "needed":
         return unwrap_needed(V, F, seams, polygons=face_groups, options=opts,
-                             progress=progress, cancel=cancel)
+                             progress=progress, cancel=cancel, precision=precision)
     # face_groups (polygons) are kept whole by the seams added too: unwrap_auto's polygons.
     res, added, _ = unwrap_auto(V, F, seams=seams, bound=opts.bound, stretch=opts.seams_stretch,
                                 method=opts.method, frames=opts.frames, cone=opts.cone,

@@ -130,14 +130,24 @@ def _pairs(pairs, k=4):
     return s + (f", ... ({len(pairs)} in all)" if len(pairs) > k else "")
 
 
-def zero_area_faces(V, F):
+def zero_area_faces(V, F, precision=None):
     """(m,) bool: faces with finite corners and twice their area below ``DEGENERATE_RATIO``
-    times their longest edge squared (``mesh.islands``' test)."""
+    times their longest edge squared (``mesh.islands``' test). With ``precision``, the float
+    type the positions were stored in (``np.float32``: glTF, USD, Blender), also the faces whose
+    height (twice the area over the longest edge) is below one step of that type at their
+    largest coordinate: three points that precision cannot tell from a line (Khronos' and
+    OpenChessSet's bishops hold hundreds), whose angles, and so whose distortion, are rounding
+    noise, and whose UVs no float32 store keeps apart."""
     P = V[F]
     A = face_areas(V, F)
     lmax2 = np.max(np.sum((P - np.roll(P, -1, axis=1)) ** 2, axis=2), axis=1)
-    with np.errstate(invalid="ignore"):
-        return ~(2 * A > DEGENERATE_RATIO * lmax2) & np.isfinite(P).all(axis=(1, 2))
+    finite = np.isfinite(P).all(axis=(1, 2))
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+        zero = ~(2 * A > DEGENERATE_RATIO * lmax2)
+        if precision is not None and np.dtype(precision) != np.float64:
+            step = np.spacing(np.abs(P).max(axis=(1, 2)).astype(precision)).astype(np.float64)
+            zero |= ~(2 * A > step * np.sqrt(lmax2))
+    return zero & finite
 
 
 def duplicate_twins(F, skip=None):
@@ -166,13 +176,14 @@ def twin_corners(F, faces, twins):
     return np.argmax(F[faces][:, :, None] == F[twins][:, None, :], axis=2)
 
 
-def repair_mesh(V, F):
+def repair_mesh(V, F, precision=None):
     """Split, cut and leave out what keeps a mesh from being unwrapped piece by piece.
 
     Parameters
     ----------
     V : (n,3) float array
     F : (m,3) int array
+    precision : float type the positions were stored in, optional (``zero_area_faces``)
 
     Returns
     -------
@@ -184,7 +195,7 @@ def repair_mesh(V, F):
     """
     V, F = check_arrays(V, F)
     n, m = len(V), len(F)
-    zero = zero_area_faces(V, F)
+    zero = zero_area_faces(V, F, precision)
     bad = ~np.isfinite(V[F]).all(axis=(1, 2))
     twin = duplicate_twins(F, skip=zero | bad)
     faces = np.flatnonzero(~zero & ~bad & (twin < 0))

@@ -249,7 +249,7 @@ def unwrap_objects(objects, args, batch, options, mesh_data, session, source):
             job = batch.Job(ob.name, arrays.V, arrays.F, seams=seams,
                             pin_corners=arrays.pin_corners, pin_uv=arrays.pin_uv,
                             corner_uv=arrays.corner_uv, face_groups=arrays.tri_poly,
-                            uv_dtype=np.float32)
+                            uv_dtype=np.float32, position_dtype=np.float32)
             result = batch.unwrap_job(job, options)
             entry = {"input": source, "object": ob.name, "output": None, "uv_map": None,
                      "polygons": int(len(np.unique(arrays.tri_poly))), **result.entry}

@@ -19,6 +19,7 @@ from ..unwrapping.storage import stored_layout_with_headroom, with_predicted_hea
 from ..metrics import conformal_distortion
 from ..options import OPTION_NAMES, UnwrapOptions
 from ..pack import MARGIN
+from ..repair import zero_area_faces
 from ..packing import PackOptions
 
 # The atlas packer's options as they appear in an options mapping and in the report.
@@ -46,6 +47,9 @@ class Job:
         for packing by group
     uv_dtype : the type the UVs are stored in: float64 (OBJ), float32 (glTF, USD, Blender);
         the layout is certified, and islands failing are re-solved, as stored in it
+    position_dtype : the type ``V`` was stored in: float64 (OBJ, OFF, PLY as read), float32
+        (glTF, USD, Blender): faces it cannot tell from a line are left out as zero-area when
+        they keep islands from certifying (``unwrap_job``; ``bd_uv.unwrap``'s ``precision``)
     """
     name: str
     V: np.ndarray
@@ -57,6 +61,7 @@ class Job:
     face_groups: np.ndarray = None
     face_labels: dict = None
     uv_dtype: type = np.float64
+    position_dtype: type = np.float64
 
 
 @dataclass(frozen=True)
@@ -142,6 +147,12 @@ def _num(x):
 def unwrap_job(job, options, png=None):
     """Unwrap one job; never raises (a failure goes into the entry, with a traceback if a bug).
 
+    Positions stored in float32 (``job.position_dtype``): when faces fail and some of them are
+    faces float32 cannot tell from a line (``repair.zero_area_faces``' precision), the job runs
+    again with those left out as zero-area, and the run leaving fewer faces uncertified is kept.
+    Not the first time round: such a face alone is often certified as stored (the storage
+    headroom's stretch); in clusters (OpenChessSet's bishops, 380 of them) they refuse islands.
+
     Parameters
     ----------
     job : Job
@@ -157,6 +168,26 @@ def unwrap_job(job, options, png=None):
         certified islands), max_distortion, mean_distortion (area-weighted over certified
         faces), flipped, seconds, error (exception type) and message.
     """
+    out = _unwrap_job(job, options, png, None)
+    if np.dtype(job.position_dtype) == np.float64 or out.entry["status"] == "certified":
+        return out
+    left = _uncertified(out, len(job.F))
+    flat = zero_area_faces(job.V, job.F, job.position_dtype) & ~zero_area_faces(job.V, job.F)
+    if not (left & flat).any():
+        return out
+    again = _unwrap_job(job, options, png, job.position_dtype)
+    if _uncertified(again, len(job.F)).sum() >= left.sum():
+        return out
+    again.entry["seconds"] = round(again.entry["seconds"] + out.entry["seconds"], 4)
+    return again
+
+
+def _uncertified(out, m):
+    """(m,) bool: the faces a job's layout left without certified UVs."""
+    return np.ones(m, bool) if out.layout is None else out.layout.face_island < 0
+
+
+def _unwrap_job(job, options, png, precision):
     t0 = time.perf_counter()
     m = int(len(job.F))
     entry = failed_entry(job.name, None, "", faces=m, seconds=0.0)
@@ -169,7 +200,7 @@ def unwrap_job(job, options, png=None):
             o = o.replace(seams_mode="marked")   # pinned UVs: the islands as they are marked
         res = unwrap(job.V, job.F, job.seams, job.pin_corners, job.pin_uv,
                      initial_uv=job.corner_uv if o.frames == "input-uv" else None,
-                     face_groups=job.face_groups, options=o)
+                     face_groups=job.face_groups, options=o, precision=precision)
         if o.stretch is None:   # its UVs are saved as float32 too (Blender script, scenes)
             res, _ = with_predicted_headroom(job.V, job.F, res)
         layout, res, _ = stored_layout_with_headroom(

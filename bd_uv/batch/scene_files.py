@@ -12,7 +12,7 @@ import time
 import numpy as np
 
 from ..certificate import certificate_totals
-from ..errors import BDError
+from ..errors import BDError, DegenerateFacesError
 from ..scenes import Charts, read_scene
 from ..scheduling.entries import failed_entry
 from .jobs import Job, JobOptions, unwrap_job
@@ -52,7 +52,8 @@ def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=Non
         try:
             job = Job(sm.name, sm.mesh.V, sm.mesh.F, seams=_seams(sm, seams_mode, path),
                       corner_uv=sm.mesh.corner_uv, face_groups=sm.face_groups,
-                      face_labels=sm.mesh.labels, uv_dtype=np.float32)   # as written
+                      face_labels=sm.mesh.labels, uv_dtype=np.float32,   # as written
+                      position_dtype=np.float32)                         # as read
             result = unwrap_job(job, options, png=png_k)
         except BDError as exc:
             entries.append(failed_entry(sm.name, type(exc).__name__, str(exc),
@@ -60,9 +61,21 @@ def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=Non
             continue
         entry = {**where, **result.entry, "warnings": list(sm.warnings)}
         lay = result.layout
-        if lay is not None and entry["status"] == "certified" and (lay.face_island >= 0).all():
+        zero = _zero_area(result.result, len(sm.mesh.F))
+        if (lay is not None and entry["status"] != "failed" and not (zero & (lay.face_island >= 0)).any()
+                and ((lay.face_island >= 0) | zero).all()
+                and all(e["status"] == "certified" or e.get("error") == "DegenerateFacesError"
+                        for e in entry["islands"])):
             bounds = np.array([c.bound for c in lay.certificates], dtype=np.float64)
-            charts[k] = Charts(lay.corner_uv, lay.face_island, bounds)
+            charts[k] = Charts(with_neighbour_uvs(sm.mesh.F, lay.corner_uv, zero),
+                               lay.face_island, bounds)
+            if zero.any():   # every face with an area is certified: the mesh is
+                entry.update(status="certified", error=None, message="",
+                             zero_area_faces=int(zero.sum()))
+                entry["warnings"].append(
+                    f"{int(zero.sum())} face(s) of zero area at the float32 precision of their "
+                    "positions have no shape to map or certify: their corners take the UVs of "
+                    "the same vertices in neighbouring faces")
         elif entry["status"] != "failed":
             entry["warnings"].append("not every face was certified: the mesh keeps the UVs it "
                                      "had")
@@ -85,6 +98,31 @@ def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=Non
         else:
             entry["output"] = os.path.abspath(output)
     return entries
+
+
+def _zero_area(res, m):
+    """(m,) bool: the faces the unwrap left out as zero-area (``DegenerateFacesError``)."""
+    zero = np.zeros(m, bool)
+    for r in (res.islands if res is not None else ()):
+        if isinstance(r.error, DegenerateFacesError):
+            zero[r.faces] = True
+    return zero
+
+
+def with_neighbour_uvs(F, corner_uv, faces):
+    """``corner_uv`` (m,3,2) with the corners of ``faces`` (m,) bool given the UVs of the same
+    vertex in some other face (0 where no other face has one): a zero-area face's corners then
+    lie where its neighbours put them, so it adds no seam and stays (near) degenerate in UV."""
+    out = np.array(corner_uv, dtype=np.float64, copy=True)
+    if not faces.any():
+        return out
+    F = np.asarray(F, np.int64)
+    have = np.repeat(~faces, 3) & np.isfinite(out.reshape(-1, 2)).all(1)
+    v = F.reshape(-1)
+    uv = np.zeros((int(v.max()) + 1, 2))
+    uv[v[have]] = out.reshape(-1, 2)[have]
+    out[faces] = uv[F[faces]]
+    return out
 
 
 def _seams(sm, seams_mode, path):

@@ -165,7 +165,10 @@ class UsdScene:
         nfv = part["n_face_vertices"]
         fv_uv = np.zeros((nfv, 2), np.float32)
         T = part["T"]
-        fv_uv[T.reshape(-1)] = uv32.reshape(-1, 2)
+        # faces of no island (zero-area, given their neighbours' UVs) first, so that where a
+        # polygon also holds a certified triangle, the face-vertices they share keep its UVs
+        order = np.argsort(np.asarray(ch.face_island) >= 0, kind="stable")
+        fv_uv[T[order].reshape(-1)] = uv32[order].reshape(-1, 2)
         values, index = np.unique(fv_uv, axis=0, return_inverse=True)
         index = index.reshape(-1)
         back = values[index][T].astype(np.float64)        # the stored UVs, per triangle corner

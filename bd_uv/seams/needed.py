@@ -50,7 +50,7 @@ def needs_seams(island, overlap="cut"):
 
 
 def unwrap_needed(V, F, seams=None, polygons=None, options=None, marked_stretch=None,
-                  repair=True, progress=None, cancel=None):
+                  repair=True, progress=None, cancel=None, precision=None):
     """Unwrap with the given (marked) seams, adding seams only to islands that cannot be
     certified as they are.
 
@@ -71,6 +71,9 @@ def unwrap_needed(V, F, seams=None, polygons=None, options=None, marked_stretch=
     repair : bool, repair the mesh first (``repair.repair_mesh``); without, a messy island
         fails as it does with ``seams_mode="marked"``
     progress, cancel : as for ``bd_uv.unwrap``
+    precision : the float type the positions were stored in, optional (``np.float32``: glTF,
+        USD, Blender): faces it cannot tell from a line are zero-area faces too
+        (``repair.zero_area_faces``)
 
     Returns
     -------
@@ -82,7 +85,7 @@ def unwrap_needed(V, F, seams=None, polygons=None, options=None, marked_stretch=
     opts = unwrap_options(options)
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F)
-    rep = repair_mesh(V, F) if repair else None
+    rep = repair_mesh(V, F, precision) if repair else None
     V2, F2 = (rep.V, rep.F) if rep is not None else (V, np.asarray(F, np.int64))
     faces = rep.faces if rep is not None else np.arange(len(F2))
     seams2 = rep.seams(seams) if rep is not None else seams

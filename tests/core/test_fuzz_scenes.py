@@ -30,7 +30,7 @@ from bd_uv.errors import BDError
 from bd_uv.scenes import read_scene
 from gltf_build import Builder, Reader, seamed_grid
 from usd_build import quad_grid
-from helpers import reference_distortion
+from helpers import float32_flat, reference_distortion
 from overlap_shapes import overlapping_triangle_pairs
 
 EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "40"))
@@ -147,10 +147,14 @@ def _check_written(out, report):
             uv = np.stack([uv[:, 0], 1.0 - uv[:, 1]], -1).reshape(-1, 3, 2)
             F = np.arange(len(P)).reshape(-1, 3)
             assert np.isfinite(uv).all()
-            D, flipped = reference_distortion(P, F, uv)
+            # faces of no area at the positions' float32 precision are outside the certificate
+            # (their corners take neighbouring UVs), and the report counts them
+            flat = float32_flat(P, F)
+            assert flat.sum() <= sum(m.get("zero_area_faces", 0) for m in written), report
+            D, flipped = reference_distortion(P, F[~flat], uv[~flat])
             assert not flipped.any()
-            assert D.max() <= bound * (1 + 1e-9)
-            assert len(overlapping_triangle_pairs(uv)) == 0
+            assert D.max(initial=1.0) <= bound * (1 + 1e-9)
+            assert len(overlapping_triangle_pairs(uv[~flat])) == 0
 
 
 @settings(max_examples=EXAMPLES, deadline=None,
@@ -286,9 +290,12 @@ def _check_stage(out, report):
         T = np.array([(s, s + i, s + i + 1) for k, (s, c) in enumerate(zip(start, counts))
                       if k not in holes for i in range(1, c - 1)]).reshape(-1, 3)
         assert np.isfinite(uv[T]).all()
+        flat = float32_flat(P, idx[T])   # outside the certificate, counted by the report
+        assert flat.sum() <= sum(m.get("zero_area_faces", 0) for m in written), report
+        T = T[~flat]
         D, flipped = reference_distortion(P, idx[T], uv[T])
         assert not flipped.any()
-        assert D.max() <= bound * (1 + 1e-9)
+        assert D.max(initial=1.0) <= bound * (1 + 1e-9)
         assert len(overlapping_triangle_pairs(uv[T])) == 0
 
 

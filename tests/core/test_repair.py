@@ -175,3 +175,18 @@ def test_clean_mesh_is_left_as_it_is():
     assert not rep.changed and rep.notes() == []
     np.testing.assert_array_equal(rep.F, F)
     np.testing.assert_array_equal(rep.V, V)
+
+
+def test_zero_area_at_float32_precision():
+    """With ``precision=np.float32`` a triangle whose height is below one float32 step of its
+    largest coordinate is zero-area (its positions cannot tell it from a line); in float64 it is
+    not (twice its area over its longest edge squared, 4e-9, is far above DEGENERATE_RATIO)."""
+    from bd_uv.repair import zero_area_faces
+    V = np.array([[0.0, 0.0, 1.0], [0.25, 0.0, 1.0], [0.125, 1e-9, 1.0], [0.125, 1e-6, 1.0]])
+    F = np.array([[0, 1, 2], [0, 1, 3]])
+    h = np.array([1e-9, 1e-6])
+    step = np.spacing(np.float32(1.0))            # 1.19e-7 at the largest coordinate, 1.0
+    assert (h < step).tolist() == [True, False]
+    assert zero_area_faces(V, F).tolist() == [False, False]
+    assert zero_area_faces(V, F, np.float32).tolist() == [True, False]
+    assert zero_area_faces(V, F, np.float64).tolist() == [False, False]

@@ -13,7 +13,7 @@ from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt  # usd-core: requirements-dev.tx
 from bd_uv.cli import main
 from bd_uv.errors import SceneFileError
 from bd_uv.scenes import read_scene
-from helpers import reference_distortion
+from helpers import float32_flat, reference_distortion
 from overlap_shapes import overlapping_triangle_pairs
 from usd_build import build_stage, quad_grid
 
@@ -145,6 +145,57 @@ def test_seams_only_along_polygon_edges_on_a_closed_quad_mesh(tmp_path):
     (e,) = json.loads((tmp_path / "r.json").read_text())["meshes"]
     assert len(e["islands"]) >= 2
     _check_st(Usd.Stage.Open(str(out)), "/Box", e["bound_certified"])
+
+
+def test_zero_area_faces_do_not_refuse_their_mesh(tmp_path):
+    """Production meshes carry faces of no area (OpenChessSet's bishops hold hundreds, most of
+    them three points within one float32 step of a line). No map certifies them, and each refused
+    its whole mesh: nothing written. Now the mesh is written when every face with an area is
+    certified: the zero-area faces' corners take the UVs of the same vertices in neighbouring
+    faces, and the report counts them. Here a quad grid is split along a row of points whose
+    copies lie 1e-9 above them (the same float32 values): a strip of 4 quads, 8 triangles of no
+    area, between the halves."""
+    V, counts, idx = quad_grid(5, 4, bump=False)
+    polys = [list(p) for p in np.split(idx, np.cumsum(counts)[:-1])]
+    row = np.arange(5, 10)
+    copy = {int(r): len(V) + i for i, r in enumerate(row)}
+    V = np.vstack([V, V[row] + [0.0, 1e-9, 0.0]]).astype(np.float32)
+    for p in polys[4:]:                          # the quads above the row use the copies
+        p[:] = [copy.get(int(v), int(v)) for v in p]
+    strip = [[int(row[i]), int(row[i + 1]), copy[int(row[i + 1])], copy[int(row[i])]]
+             for i in range(4)]
+    polys = polys[:4] + strip + polys[4:]
+    counts = np.array([len(p) for p in polys])
+    idx = np.concatenate(polys)
+    stage = Usd.Stage.CreateNew(str(tmp_path / "strip.usda"))
+    mesh = UsdGeom.Mesh.Define(stage, "/Strip")
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(V))
+    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(counts.astype(np.int32)))
+    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(idx.astype(np.int32)))
+    stage.GetRootLayer().Save()
+    out = tmp_path / "strip_uv.usda"
+    assert main(["unwrap", str(tmp_path / "strip.usda"), "-o", str(out),
+                 "--report", str(tmp_path / "r.json")]) == 0
+    (e,) = json.loads((tmp_path / "r.json").read_text())["meshes"]
+    assert e["status"] == "certified" and e["zero_area_faces"] == 8
+    assert any("zero area" in w for w in e["warnings"])
+    stage_out = Usd.Stage.Open(str(out))
+    pv = UsdGeom.PrimvarsAPI(stage_out.GetPrimAtPath("/Strip")).GetPrimvar("st")
+    uv = np.asarray(pv.Get(), np.float64)[np.asarray(pv.GetIndices())]   # per face-vertex
+    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    T = np.array([(s, s + i, s + i + 1) for s, c in zip(start, counts) for i in range(1, c - 1)])
+    P = V.astype(np.float64)
+    flat = float32_flat(P, idx[T])
+    assert np.flatnonzero(flat).tolist() == list(range(8, 16))   # the strip's triangles alone
+    D, flipped = reference_distortion(P, idx[T[~flat]], uv[T[~flat]])
+    assert not flipped.any() and D.max() <= e["bound_certified"] * (1 + 1e-9)
+    assert len(overlapping_triangle_pairs(uv[T[~flat]])) == 0
+    # each strip corner lies where a certified face puts that point
+    fv_point = idx
+    certified_fv = T[~flat].reshape(-1)
+    for fv in T[flat].reshape(-1):
+        same = certified_fv[fv_point[certified_fv] == fv_point[fv]]
+        assert any(np.array_equal(uv[fv], uv[o]) for o in same)
 
 
 def test_usdz_out(tmp_path):
