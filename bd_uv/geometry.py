@@ -249,12 +249,14 @@ def components(n, a, b):
     for _ in range(HOOK_ROUNDS if n <= HOOK_VERTICES else 0):
         la, lb = lab[a], lab[b]
         if np.array_equal(la, lb):
-            # Every edge joins equal labels: each component carries its least vertex's label.
-            uniq, labels = np.unique(lab, return_inverse=True)
-            return len(uniq), labels.ravel().astype(np.int64)
+            # Every edge joins equal labels: each component carries its least vertex's label,
+            # so its least vertex is the one labelled itself; components are numbered in the
+            # order of those (no sort).
+            root = lab == np.arange(n)
+            return int(root.sum()), (np.cumsum(root) - 1)[lab]
         lo = np.minimum(la, lb)
-        np.minimum.at(lab, la, lo)      # hook each label onto the least one it meets
-        np.minimum.at(lab, lb, lo)
+        # Hook each label onto the least one it meets (both ends in one call).
+        np.minimum.at(lab, np.concatenate([la, lb]), np.concatenate([lo, lo]))
         lab = lab[lab[lab]]             # lab[x] <= x throughout: jumping only lowers it
     import scipy.sparse as sp
     from scipy.sparse.csgraph import connected_components
