@@ -7,6 +7,7 @@ apex's angles to 2 pi, and a linear map of conformal distortion K turns an angle
 the 3D angles alone) of the bisection on sum 2 atan(K tan(a_i / 2)) = 2 pi. At C = 0.7 K* the
 island cannot certify, whatever the solver does."""
 import numpy as np
+import pytest
 
 from bd_uv.energies import jacobian_operators
 from bd_uv.frames import lscm_map
@@ -162,3 +163,26 @@ def test_needed_mode_cuts_the_cone_after_a_window_with_the_same_charts(monkeypat
     assert sum(r.iterations for r in rb) >= 600
     assert sum(r.iterations for r in ra) <= 4 * REACH_WINDOW
     assert all(r.out_of_reach.all() for r in ra if not r.all_converged)
+
+
+@pytest.mark.parametrize("shrink", [0.9, 0.0])
+def test_union_gives_up_on_the_cone_once_the_other_island_certified(shrink):
+    # The cone beside a flat grid (certified at once): the cone continues alone on a smaller
+    # system (shrink 0.9) or in the union (0), and is given up; the grid is untouched.
+    V, F = cone()
+    K = apex_bound(V, F)
+    Vc, ic, _, uc = _island(V, F)
+    Vg, ig, _, ug = _island(*grid(8, 7))
+    nc = len(Vc)
+    tris = np.concatenate([ic.tris, ig.tris + nc])
+    Z = np.concatenate([local_coordinates(Vc, ic.tris), local_coordinates(Vg, ig.tris)])
+    ops = jacobian_operators(Z, tris, nc + len(Vg))
+    u0 = np.concatenate([uc, ug + 5.0])
+    fixed = [ic.loops[0][0], ig.loops[0][0] + nc]
+    S = ProjectionSolver(ops, nc + len(Vg), fixed, tris=tris)
+    r = S.project(u0, 0.7 * K, max_iter=300, shrink=shrink)
+    cone_c, grid_c = r.component[0], r.component[nc]
+    assert r.converged[grid_c] and not r.converged[cone_c]
+    assert r.out_of_reach[cone_c] and not r.out_of_reach[grid_c]
+    assert r.iterations <= 2 * REACH_WINDOW
+    assert np.array_equal(r.u[nc:], u0[nc:])
