@@ -5,7 +5,7 @@ solve. With frames ``w`` from a map, F_C (Lipman 2012, eq. 4.15) is convex: ever
 lies in the cone ``|beta| <= k Re(w alpha)``, ``k = (C - 1) / (C + 1)``. A map in it is found by
 ADMM (Douglas-Rachford splitting) between the maps, lifted to their Jacobians by ``G``, and that
 product of cones; the area-weighted least-squares step is the projection iterations' global step
-(``projection.ProjectionSolver``: one factorisation of ``L = G^T A G``, reused for every C):
+(``global_step.GlobalStep``: one factorisation of ``L = G^T A G``, reused for every C):
 
     x   = argmin_x |G x - (z - lam)|_A^2    one back-solve, fixed vertices held
     z   = Proj_K(G x + lam)                 closed form per face (``framed_cone_projection``)
@@ -30,7 +30,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .face_operators import alpha_beta_lift
-from .projection import ProjectionSolver
+from .global_step import GlobalStep
 
 __all__ = ["BoundSearch", "framed_cone_projection"]
 
@@ -112,7 +112,7 @@ class BoundSearch:
     """
 
     def __init__(self, ops, nv, tris, fixed):
-        self.solver = s = ProjectionSolver(ops, nv, fixed, tris=tris)
+        self.solver = s = GlobalStep(ops, nv, fixed, tris=tris)
         self.k = len(s.area)
         self.UF = None
         self._rhs_fixed = None      # (UF, its share of the right-hand side)

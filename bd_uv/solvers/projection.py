@@ -16,21 +16,21 @@ back to the plain alternating step in an iteration where the tangent step would 
 distance to the set.
 
 Iterations stop as soon as the actual map (recomputed from ``u``, flips included) is within ``C``
-on every face of every component: a component that certifies is frozen at that iterate. Projecting
+on every face of every component: a component that certifies is frozen at that iterate. They also
+stop once every other component has stalled or is clearly out of reach (``reach.Progress``: no
+progress over a window, scale-free, far above C), so that the caller falls back sooner. Projecting
 onto a tighter bound ``C' = margin * C`` (0.9 C by default; 0.97 C gave three_peaks a 0.2% higher
 mean) makes iterates cross into the set instead of approaching its boundary from outside.
 """
-import time
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
 
 from ..errors import CancelledError
-from ..geometry import components
-from .face_operators import face_gradients, laplacian_blocks
-from .factor import factor_spd
+from .global_step import GlobalStep
 from .local_projection import nearest_jacobian_parts, project_singular_values
+from .reach import REACH_WINDOW, Progress
 
 __all__ = ["ProjectionResult", "ProjectionSolver"]
 
@@ -49,6 +49,8 @@ class ProjectionResult:
     component : (nv,) int64, component of each vertex
     iterations_per_component : (c,) int64, iterations until each component certified (or the
         total when it did not)
+    out_of_reach : (c,) bool, components the iterations gave up on as clearly out of reach
+        (``reach.Progress``)
     """
     u: np.ndarray
     iterations: int
@@ -56,114 +58,17 @@ class ProjectionResult:
     max_distortion: np.ndarray
     component: np.ndarray
     iterations_per_component: np.ndarray
+    out_of_reach: np.ndarray
 
     @property
     def all_converged(self):
         return bool(np.all(self.converged))
 
 
-class ProjectionSolver:
-    """Bounded-distortion projection iterations with one factorisation (Kovalsky et al. 2015).
-
-    Works on one island or on a union of disjoint islands (operators built over the concatenated
-    triangles); every connected component needs at least one fixed vertex.
-
-    Parameters
-    ----------
-    ops : energies.JacobianOperators over (k, 2 nv)
-    nv : int
-    fixed_idx : (p,) int, vertices held at given values (at least one per component)
-    tris : (k,3) int, the triangles ``ops`` was built over (for the connected components)
-    backend : see :func:`factor_spd`
-
-    Attributes
-    ----------
-    n_components : int
-    setup_seconds : float, operators and components
-    factor_seconds : float, the factorisation (0 until an iteration needed it)
-    backend : str
+class ProjectionSolver(GlobalStep):
+    """Bounded-distortion projection iterations with one factorisation (Kovalsky et al. 2015),
+    over ``GlobalStep`` (its parameters and attributes).
     """
-
-    def __init__(self, ops, nv, fixed_idx, tris, backend="auto"):
-        t0 = time.perf_counter()
-        self.nv = nv = int(nv)
-        self.area = np.asarray(ops.area, dtype=np.float64)
-        k = len(self.area)
-        self._Gx = self._Gy = None     # the gradient operators, made on first use (``Gx``)
-        tris = np.asarray(tris, dtype=np.int64)
-        self.ops, self.tris = ops, tris
-        self.n_components, comp = components(nv, np.concatenate([tris[:, 0], tris[:, 1]]),
-                                             np.concatenate([tris[:, 1], tris[:, 2]]))
-        self.component = comp.astype(np.int64)
-        self.face_comp = self.component[tris[:, 0]]
-        fixed = np.unique(np.asarray(fixed_idx, dtype=np.int64))
-        if not len(fixed) or np.any(np.bincount(self.component[fixed],
-                                                minlength=self.n_components) == 0):
-            raise ValueError("every connected component needs at least one fixed vertex")
-        self.fixed = fixed
-        self.fixed_given = np.asarray(fixed_idx, dtype=np.int64)
-        is_free = np.ones(nv, dtype=bool)
-        is_free[fixed] = False
-        self.free = np.flatnonzero(is_free)     # np.setdiff1d's answer without its sort
-        self.free_comp = self.component[self.free]
-        # Faces sorted by component, for per-component maxima.
-        self._order = np.argsort(self.face_comp, kind="stable")
-        counts = np.bincount(self.face_comp, minlength=self.n_components)
-        self._starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-        self._has_faces = counts > 0
-        self._L_ff = self._L_fF = self._G = self._GT = self._g = None
-        self._solve, self.backend = None, backend
-        self.setup_seconds = time.perf_counter() - t0
-        self.factor_seconds = 0.0
-
-    @property
-    def Gx(self):
-        """(k, nv) csr: d/dx of a scalar function on every face. With J = [[u_x, u_y], [v_x,
-        v_y]], Re a = (u_x + v_y)/2, Im a = (v_x - u_y)/2, Re b = (u_x - v_y)/2, Im b = (v_x +
-        u_y)/2, so ``Gx`` is (Are + Bre) and ``Gy`` (Bim - Aim) on the u columns."""
-        if self._Gx is None:
-            ops, nv = self.ops, self.nv
-            self._Gx = sp.csr_array((ops.Are + ops.Bre)[:, :nv])
-            self._Gy = sp.csr_array((ops.Bim - ops.Aim)[:, :nv])
-        return self._Gx
-
-    @property
-    def Gy(self):
-        """(k, nv) csr: d/dy of a scalar function on every face (made with ``Gx``)."""
-        if self._Gy is None:
-            self.Gx
-        return self._Gy
-
-    @property
-    def G(self):
-        """(2k, nv) csr: rows d/dx of every face, then d/dy (made on first use)."""
-        if self._G is None:
-            self._G = sp.csr_array(sp.vstack([self.Gx, self.Gy]))
-        return self._G
-
-    @property
-    def GT(self):
-        if self._GT is None:
-            self._GT = sp.csr_array(self.G.T)
-        return self._GT
-
-    def face_gradients(self):
-        """(gx, gy), each (k,3): every face's gradient coefficients on its corners."""
-        if self._g is None:
-            o = self.ops
-            own = getattr(o, "gx", None) is not None and o.tris is not None and (
-                o.tris.shape == self.tris.shape and np.array_equal(o.tris, self.tris))
-            self._g = (o.gx, o.gy) if own else face_gradients(self.Gx, self.Gy, self.tris)
-        return self._g
-
-    def _assemble(self):
-        """The global step's normal matrix, scalar and shared by both coordinates:
-        ``L = sum_j A_j G_j^T G_j`` (minimises ``sum_j A_j |J_j - P_j|_F^2``), split into free and
-        fixed columns (``face_operators.laplacian_blocks``: from each face's coefficients)."""
-        if self._L_ff is None:
-            gx, gy = self.face_gradients()
-            self._L_ff, self._L_fF = laplacian_blocks(gx, gy, self.area, self.tris, self.free,
-                                                      self.fixed, self.nv)
 
     def _continue_on(self, comps, U, C, scale, kw):
         """Project the components ``comps`` (c,) bool on their own, from ``U``.
@@ -187,56 +92,10 @@ class ProjectionSolver:
         self.factor_seconds += sub.factor_seconds
         return sub, V_a, r
 
-    def global_matrix(self):
-        """The global step's matrix over the free vertices, (nf, nf) csc, symmetric positive
-        definite."""
-        self._assemble()
-        return self._L_ff
-
-    def factorize(self):
-        """Factorise the global step's matrix (done on the first iteration that needs it, so a
-        map that already fits costs no factorisation)."""
-        if self._solve is None:
-            t0 = time.perf_counter()
-            self._assemble()
-            self._solve, self.backend = factor_spd(self._L_ff, self.backend)
-            self.factor_seconds = time.perf_counter() - t0
-        return self._solve
-
-    # -- pieces -------------------------------------------------------------------------------
-    def jacobians(self, U):
-        """Lift: per-face (u_x, u_y, v_x, v_y) of ``U`` (nv, 2) real, as four (k,) arrays."""
-        return (self.Gx @ U[:, 0], self.Gy @ U[:, 0], self.Gx @ U[:, 1], self.Gy @ U[:, 1])
-
-    @staticmethod
-    def _alpha_beta(J):
-        ux, uy, vx, vy = J
-        return 0.5 * ((ux + vy) + 1j * (vx - uy)), 0.5 * ((ux - vy) + 1j * (vx + uy))
-
-    def _per_comp_max(self, v):
-        if self.n_components == 1:
-            return np.array([v.max() if len(v) else -np.inf])
-        out = np.full(self.n_components, -np.inf)
-        if len(v):
-            m = np.maximum.reduceat(v[self._order], self._starts[self._has_faces])
-            out[self._has_faces] = m
-        return out
-
-    def component_scale(self, u):
-        """sqrt(UV area / 3D area) of each component, from unsigned face areas, (c,)."""
-        U = np.stack([u.real, u.imag], 1)
-        a, b = self._alpha_beta(self.jacobians(U))
-        uv = self.area * np.abs(np.abs(a) ** 2 - np.abs(b) ** 2)
-        A = np.bincount(self.face_comp, weights=self.area, minlength=self.n_components)
-        S = np.bincount(self.face_comp, weights=uv, minlength=self.n_components)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            s = np.sqrt(S / A)
-        return np.where(np.isfinite(s) & (s > 0), s, 1.0)
-
     # -- the iterations -------------------------------------------------------------------------
     def project(self, u0, C, fixed_values=None, *, margin=0.9, smin=None, smax=None, scale=None,
-                stretch_margin=0.01, floor=1e-3, max_iter=200, stall=30, accelerate=True,
-                shrink=0.5, cancel=None):
+                stretch_margin=0.01, floor=1e-3, max_iter=200, stall=30, reach=REACH_WINDOW,
+                accelerate=True, shrink=0.5, cancel=None):
         """Iterate local projections and global back-solves until the map is within the bounds.
 
         Parameters
@@ -255,6 +114,8 @@ class ProjectionSolver:
         stall : int, stop when no unconverged component's distance to the bounded set (area-weighted
             squared Frobenius distance of its Jacobians) has dropped by 1% over this many
             iterations
+        reach : int or None, stop a component after this many iterations without progress while
+            its max distortion stays far above C (``reach.Progress``; None: never)
         accelerate : bool, use the tangent step of Kovalsky et al.
         shrink : float, when the unconverged components hold fewer than this fraction of the
             faces, they continue alone on a smaller system (factorised anew; the iterates are
@@ -294,8 +155,8 @@ class ProjectionSolver:
         U_saved = U.copy()
         U_best = U.copy()
         best_key = np.full(ncomp, np.inf)
-        best_viol = np.full(ncomp, np.inf)
-        best_at = np.zeros(ncomp, dtype=np.int64)
+        progress = Progress(C, ncomp, stall, reach)
+        out_of_reach = np.zeros(ncomp, dtype=bool)
         prev_err = np.full(ncomp, np.inf)
         use_tan = np.full(ncomp, bool(accelerate))
         k = len(self.area)
@@ -334,8 +195,8 @@ class ProjectionSolver:
                 # Most islands are certified: continue on a smaller system of the others.
                 sub, V_a, r = self._continue_on(~done, U, C, scale, dict(
                     margin=margin, smin=smin, smax=smax, stretch_margin=stretch_margin,
-                    floor=floor, max_iter=max_iter - it, stall=stall, accelerate=accelerate,
-                    shrink=shrink, cancel=cancel))
+                    floor=floor, max_iter=max_iter - it, stall=stall, reach=reach,
+                    accelerate=accelerate, shrink=shrink, cancel=cancel))
                 Ua = np.stack([r.u.real, r.u.imag], 1)
                 outer = np.zeros(sub.n_components, dtype=np.int64)
                 outer[sub.component] = self.component[V_a]
@@ -344,6 +205,7 @@ class ProjectionSolver:
                 took = np.zeros(ncomp, dtype=bool)
                 took[outer[~r.converged & (r.max_distortion < best_key[outer])]] = True
                 done_at[outer] = it + r.iterations_per_component
+                out_of_reach[outer[r.out_of_reach]] = True
                 done |= conv
                 vc, vt = conv[self.component[V_a]], took[self.component[V_a]]
                 frozen_v[V_a[vc]] = True
@@ -367,10 +229,14 @@ class ProjectionSolver:
             err = np.bincount(self.face_comp[m], weights=self.area[m] * (
                 N[m, 0] ** 2 + N[k + m, 0] ** 2 + N[m, 1] ** 2 + N[k + m, 1] ** 2),
                 minlength=ncomp)
-            improved = err < best_viol * (1 - 1e-2)
-            best_viol = np.where(improved, err, best_viol)
-            best_at = np.where(improved, it, best_at)
-            if np.all(done | (it - best_at >= stall)):
+            # the size of the projected Jacobians: a distance to the set that shrinking does not
+            # lower is err / size
+            w = self.area * np.einsum("ij,ij->i", P[:k], P[:k]) + self.area * np.einsum(
+                "ij,ij->i", P[k:], P[k:])
+            size = (np.array([w.sum()]) if ncomp == 1 else
+                    np.bincount(self.face_comp, weights=w, minlength=ncomp))
+            if np.all(done | progress.update(it, err, size, key)):
+                out_of_reach |= progress.out_of_reach & ~done
                 break
             # Global step: L_ff x = G^T A P - L_fF x_F, per coordinate, plus the tangent
             # constraint's direction G^T n for each component (one back-solve, 4 columns).
@@ -417,4 +283,5 @@ class ProjectionSolver:
         mx[~self._has_faces] = 1.0
         return ProjectionResult(u=u, iterations=it, converged=done.copy(), max_distortion=mx,
                                 component=self.component,
-                                iterations_per_component=np.where(done, done_at, it))
+                                iterations_per_component=np.where(done, done_at, it),
+                                out_of_reach=out_of_reach)
