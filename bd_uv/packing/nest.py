@@ -22,6 +22,11 @@ FEASIBLE = (0, 3, 4)  # spyrrow's ReportType of feasible layouts: ExplFeas, Cmpr
 # slivers at 22 px padding on 179 px, huge with tiny charts at 4 px on 128 px, rotate none)
 FIT = {"any": 1.01, "90": 1.03, "none": 1.03}
 NARROW = 1.05         # outlines of area below NARROW * separation * height are grown (_nest_grown)
+# spyrrow finds no pole of inaccessibility ("no pole found with 10 levels of recursion", a panic
+# whose text Rust prints on stderr even when it is caught) for an outline thinner than about
+# 1/1000 of its length (measured: a 1:1000 rectangle nests, 1:3300 panics; a 1:1000 triangle
+# can panic); such outlines are nested grown from the start (_nest_grown)
+THIN = 1e-3
 
 
 @dataclass(frozen=True)
@@ -71,6 +76,9 @@ def nest(outlines, height, separation, options, seconds=0.0, reports=None, worke
     area = sum(_area(xy) for xy in outlines)
     if separation > 0 and area <= NARROW * separation * height:
         return _nest_grown(outlines, height, separation, options, seconds, reports, workers)
+    if retry and any(_thin(xy) for xy in outlines):
+        return _nest_grown(outlines, height, max(separation, EMPTY_RETRY * height), options,
+                           seconds, reports, workers)
     items = [spyrrow.Item(str(i), [tuple(p) for p in xy], demand=1,
                           allowed_orientations=options.orientations())
              for i, xy in enumerate(outlines)]
@@ -114,6 +122,14 @@ def _placement(sol, k):
         angle[i] = p.rotation
         shift[i] = p.translation
     return Placement(angle, shift, float(sol.width))
+
+
+def _thin(xy):
+    """True for an outline (n,2) thinner than ``THIN`` of its length: twice its area over its
+    perimeter (its width, for a strip) against the larger side of its box."""
+    perimeter = np.sum(np.linalg.norm(xy - np.roll(xy, 1, axis=0), axis=1))
+    length = float(np.max(xy.max(axis=0) - xy.min(axis=0)))
+    return not 2 * _area(xy) > THIN * length * perimeter
 
 
 def _area(xy):
