@@ -28,9 +28,6 @@ import numpy as np
 
 from ..errors import PackError
 from .compact import compact_square
-from .recreate import recreate_square
-_F = float(os.environ.get("RR_F", 1.0))
-_MODE = int(os.environ.get("RR_MODE", 1))
 from .nest import (FIT, Placement, _area, _strip, least_squares, nest, rotations,
                    single_layout)
 
@@ -38,7 +35,7 @@ DENSITY_GUESS = 0.63  # strip density expected (measured 0.58-0.70 on 27-46 char
 START_PER_CHART = 0.015  # seconds of a solve's first placement per chart (measured, quiet)
 HEADROOM = 1.10       # a strip's separation is the padding of a square this much larger
 SPREAD = (0.07, 0.025)  # each round's densities: its guess times 1 -+ SPREAD[round]
-COMPACT_SHARE = float(os.environ.get("RR_SHARE", 0.5))     # of the time: compaction of the best layout found (.compact)
+COMPACT_SHARE = 0.5     # of the time: compaction of the best layout found (.compact)
 # above this many charts a compaction step (one linear program over every chart) is too slow to
 # pay: measured under load ~11, 400 charts 4 steps in 10 s (+0.6 % coverage), 2,000 charts none
 COMPACT_MAX_CHARTS = 200
@@ -125,8 +122,6 @@ def square_layout(outlines, options, tol, seconds):
     t0 = time.perf_counter()
     share = COMPACT_SHARE if k <= COMPACT_MAX_CHARTS else 0.0
     nesting = (1 - share) * seconds
-    if _MODE == 2:
-        nesting = 0.0
     # (solves + 1) // 2 solves at once around the guess, then solves // 2 around the density the
     # one nearest to a square reached
     rounds = 1 if options.solves == 1 else 2
@@ -173,14 +168,5 @@ def square_layout(outlines, options, tol, seconds):
     if not share:
         return best[0], best[1], solves
     # its share of the time, in CPU seconds: compaction of the best layout
-    c0 = time.process_time()
-    budget = share * seconds
-    if _MODE == 2:
-        # the search's time (its share less the first placement, as measured) goes here
-        budget = share * seconds + max((1 - share) * seconds - START_PER_CHART * k, 0.0)
-    pl, side, _ = compact_square(outlines, best[0], best[1], options, tol,
-                                 _F * budget)
-    if _F < 1:
-        pl, side, _ = recreate_square(outlines, pl, side, options, tol,
-                                      budget - (time.process_time() - c0))
+    pl, side, _ = compact_square(outlines, best[0], best[1], options, tol, share * seconds)
     return pl, side, solves
