@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 from matplotlib.image import imread
 
+import bd_uv
 from bd_uv import batch
 from bd_uv.scheduling import Progress
 from helpers import DATA, grid, reference_distortion
@@ -270,3 +271,49 @@ def test_a_blend_gets_the_batch_s_seams_and_packing_options():
                          "--group", "material", "--texel-density", "300.0",
                          "--pack-seconds", "1.5", "--udim"]
     assert "--pack" not in _script_options(batch.JobOptions(pack=False))
+
+
+def _split_grid(scale=100.0, steps=1):
+    """A curved quad grid (float32 positions) split along its second row of points, the copies
+    ``steps`` float32 steps above them: a strip of 4 quads, 8 triangles that float32 positions
+    cannot tell from a line, between the halves. Triangles, their polygons."""
+    from usd_build import quad_grid
+    V, counts, idx = quad_grid(5, 4, bump=False)
+    V = V * scale
+    polys = [list(p) for p in np.split(idx, np.cumsum(counts)[:-1])]
+    row = np.arange(5, 10)
+    copy = {int(r): len(V) + i for i, r in enumerate(row)}
+    eps = steps * float(np.spacing(np.float32(V[5, 1])))
+    V = np.vstack([V, V[row] + [0.0, eps, 0.0]]).astype(np.float32).astype(np.float64)
+    for p in polys[4:]:
+        p[:] = [copy.get(int(v), int(v)) for v in p]
+    strip = [[int(row[i]), int(row[i + 1]), copy[int(row[i + 1])], copy[int(row[i])]]
+             for i in range(4)]
+    polys = polys[:4] + strip + polys[4:]
+    F = np.array([[p[0], p[i], p[i + 1]] for p in polys for i in range(1, len(p) - 1)])
+    groups = np.repeat(np.arange(len(polys)), [len(p) - 2 for p in polys])
+    return V, F, groups
+
+
+def test_a_float32_job_leaves_out_faces_float32_cannot_tell_from_a_line_when_they_fail():
+    """The strip's faces are one float32 step high: certified in float64, they collapse once the
+    UVs are stored in float32, and the whole island fails. A job whose positions were float32
+    (scenes, the Blender script) runs again with them left out as zero-area, and every other face
+    certifies as stored; with float64 positions nothing is left out and the island fails."""
+    from helpers import float32_flat
+    V, F, groups = _split_grid()
+    flat = float32_flat(V, F)
+    assert np.flatnonzero(flat).tolist() == list(range(8, 16))
+    opts = batch.JobOptions(bd_uv.UnwrapOptions(seams_mode="needed"), pack=True, cut=True,
+                            pack_options=bd_uv.PackOptions())
+    f64 = batch.unwrap_job(batch.Job("g", V, F, face_groups=groups, uv_dtype=np.float32), opts)
+    assert f64.entry["status"] == "failed" and (f64.layout.face_island < 0).all()
+    out = batch.unwrap_job(batch.Job("g", V, F, face_groups=groups, uv_dtype=np.float32,
+                                     position_dtype=np.float32), opts)
+    left = out.layout.face_island < 0
+    assert np.array_equal(left, flat)                      # the strip alone is left out
+    assert "zero-area" in out.entry["message"]
+    uv = out.layout.corner_uv[~left]
+    assert np.array_equal(uv, uv.astype(np.float32))       # as stored
+    D, flipped = reference_distortion(V, F[~left], uv)
+    assert not flipped.any() and D.max() <= out.entry["bound_certified"] * (1 + 1e-9)
