@@ -25,7 +25,9 @@ NARROW = 1.05         # outlines of area below NARROW * separation * height are 
 # spyrrow finds no pole of inaccessibility ("no pole found with 10 levels of recursion", a panic
 # whose text Rust prints on stderr even when it is caught) for an outline thinner than about
 # 1/1000 of its length (measured: a 1:1000 rectangle nests, 1:3300 panics; a 1:1000 triangle
-# can panic); such outlines are nested grown from the start (_nest_grown)
+# can panic); such outlines, and outlines that pass a vertex twice (a chart whose boundary
+# touches itself: "Simple polygon has non-consecutive duplicate vertices", OpenChessSet's
+# bishops), are nested grown from the start (_nest_grown), which spyrrow takes
 THIN = 1e-3
 
 
@@ -125,8 +127,11 @@ def _placement(sol, k):
 
 
 def _thin(xy):
-    """True for an outline (n,2) thinner than ``THIN`` of its length: twice its area over its
-    perimeter (its width, for a strip) against the larger side of its box."""
+    """True for an outline (n,2) thinner than ``THIN`` of its length (twice its area over its
+    perimeter, its width for a strip, against the larger side of its box), or passing one point
+    twice."""
+    if len(np.unique(xy, axis=0)) < len(xy):
+        return True
     perimeter = np.sum(np.linalg.norm(xy - np.roll(xy, 1, axis=0), axis=1))
     length = float(np.max(xy.max(axis=0) - xy.min(axis=0)))
     return not 2 * _area(xy) > THIN * length * perimeter
