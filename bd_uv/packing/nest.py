@@ -129,8 +129,8 @@ def _placement(sol, k):
 def _thin(xy):
     """True for an outline (n,2) thinner than ``THIN`` of its length (twice its area over its
     perimeter, its width for a strip, against the larger side of its box), or passing one point
-    twice."""
-    if len(np.unique(xy, axis=0)) < len(xy):
+    twice once in float32, as spyrrow reads it."""
+    if len(np.unique(xy.astype(np.float32), axis=0)) < len(xy):   # spyrrow works in float32
         return True
     perimeter = np.sum(np.linalg.norm(xy - np.roll(xy, 1, axis=0), axis=1))
     length = float(np.max(xy.max(axis=0) - xy.min(axis=0)))

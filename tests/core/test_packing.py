@@ -234,17 +234,21 @@ def test_a_chart_too_thin_for_spyrrow_is_nested_grown(capfd):
             assert not polys[i].intersects(polys[j]) or polys[i].intersection(polys[j]).area == 0
 
 
-def test_an_outline_passing_a_point_twice_is_nested_grown(capfd):
+@pytest.mark.parametrize("apart", [0.0, 1e-9])
+def test_an_outline_passing_a_point_twice_is_nested_grown(capfd, apart):
     """A chart whose outline touches itself at one point (two triangles joined at a vertex; some
     of OpenChessSet's bishop charts): spyrrow panics ("Simple polygon has non-consecutive
     duplicate vertices"), and Rust prints that on stderr even though the panic is caught and the
     charts retried. Nested grown from the start instead: no panic text, every outline in the
-    strip, the placed outlines at least the separation apart (GEOS distances)."""
+    strip, the placed outlines at least the separation apart (GEOS distances). ``apart``: the
+    two passes 1e-9 apart, one point in float32, which spyrrow reads."""
     import shapely
     from bd_uv.packing import PackOptions
     from bd_uv.packing.nest import nest, rotations
     pinched = np.array([[0, 0], [0.2, -0.1], [0.2, 0.1], [0, 0], [-0.2, 0.1], [-0.2, -0.1]],
-                       dtype=float)
+                       dtype=float) + [0.25, 0.125]
+    pinched[3, 0] += apart
+    assert len(np.unique(pinched.astype(np.float32), axis=0)) == 5
     box = np.array([[-0.1, -0.1], [0.1, -0.1], [0.1, 0.1], [-0.1, 0.1]])
     outlines = [pinched, box, box * 0.5]
     pl = nest(outlines, 1.0, 0.01, PackOptions(), 0.0)
