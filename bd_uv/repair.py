@@ -135,8 +135,8 @@ def zero_area_faces(V, F, precision=None):
     times their longest edge squared (``mesh.islands``' test). With ``precision``, the float
     type the positions were stored in (``np.float32``: glTF, USD, Blender), also the faces whose
     height (twice the area over the longest edge) is below one step of that type at their
-    largest coordinate: three points that precision cannot tell from a line (Khronos' and
-    OpenChessSet's bishops hold hundreds), whose angles, and so whose distortion, are rounding
+    largest coordinate: three points that precision cannot tell from a line (OpenChessSet's
+    bishops hold hundreds), whose angles, and so whose distortion, are rounding
     noise, and whose UVs no float32 store keeps apart."""
     P = V[F]
     A = face_areas(V, F)

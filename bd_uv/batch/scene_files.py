@@ -62,10 +62,9 @@ def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=Non
         entry = {**where, **result.entry, "warnings": list(sm.warnings)}
         lay = result.layout
         zero = _zero_area(result.result, len(sm.mesh.F))
-        if (lay is not None and entry["status"] != "failed" and not (zero & (lay.face_island >= 0)).any()
-                and ((lay.face_island >= 0) | zero).all()
-                and all(e["status"] == "certified" or e.get("error") == "DegenerateFacesError"
-                        for e in entry["islands"])):
+        # written when every face is certified but the zero-area ones (and some face is)
+        if (lay is not None and entry["status"] != "failed"
+                and ((lay.face_island >= 0) | zero).all()):
             bounds = np.array([c.bound for c in lay.certificates], dtype=np.float64)
             charts[k] = Charts(with_neighbour_uvs(sm.mesh.F, lay.corner_uv, zero),
                                lay.face_island, bounds)
