@@ -12,10 +12,10 @@ import time
 import numpy as np
 
 from ..certificate import certificate_totals
-from ..errors import BDError, DegenerateFacesError
+from ..errors import BDError
 from ..scenes import Charts, read_scene
 from ..scheduling.entries import failed_entry
-from .jobs import Job, JobOptions, unwrap_job
+from .jobs import Job, JobOptions, unwrap_job, zero_area_left_out
 
 
 def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=None):
@@ -61,7 +61,7 @@ def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=Non
             continue
         entry = {**where, **result.entry, "warnings": list(sm.warnings)}
         lay = result.layout
-        zero = _zero_area(result.result, len(sm.mesh.F))
+        zero = zero_area_left_out(result.result, len(sm.mesh.F))
         # written when every face is certified but the zero-area ones (and some face is)
         if (lay is not None and entry["status"] != "failed"
                 and ((lay.face_island >= 0) | zero).all()):
@@ -97,15 +97,6 @@ def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=Non
         else:
             entry["output"] = os.path.abspath(output)
     return entries
-
-
-def _zero_area(res, m):
-    """(m,) bool: the faces the unwrap left out as zero-area (``DegenerateFacesError``)."""
-    zero = np.zeros(m, bool)
-    for r in (res.islands if res is not None else ()):
-        if isinstance(r.error, DegenerateFacesError):
-            zero[r.faces] = True
-    return zero
 
 
 def with_neighbour_uvs(F, corner_uv, faces):

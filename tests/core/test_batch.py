@@ -317,3 +317,37 @@ def test_a_float32_job_leaves_out_faces_float32_cannot_tell_from_a_line_when_the
     assert np.array_equal(uv, uv.astype(np.float32))       # as stored
     D, flipped = reference_distortion(V, F[~left], uv)
     assert not flipped.any() and D.max() <= out.entry["bound_certified"] * (1 + 1e-9)
+
+
+def test_the_float32_rerun_is_kept_when_it_fails_only_faces_without_area(monkeypatch):
+    """unwrap_job compares its two runs by the faces with an area they leave uncertified, then
+    by all. A bishop of OpenChessSet run under load: the first run happened to fail fewer faces
+    (some with an area) than the rerun left out (608 faces of zero area, which a scene writes
+    around), and counting all faces alone kept the first run, so nothing was written. Here the
+    rerun is the real one on the split grid; the first run is that result with six of the strip's
+    eight faces certified and three faces with an area failed instead (5 faces < 8)."""
+    import dataclasses
+    from bd_uv.batch import jobs
+    from helpers import float32_flat
+    V, F, groups = _split_grid()
+    flat = float32_flat(V, F)
+    opts = batch.JobOptions(bd_uv.UnwrapOptions(seams_mode="needed"), pack=True, cut=True,
+                            pack_options=bd_uv.PackOptions())
+    job = batch.Job("g", V, F, face_groups=groups, uv_dtype=np.float32,
+                    position_dtype=np.float32)
+    again = jobs._unwrap_job(job, opts, None, np.float32)
+    assert np.array_equal(again.layout.face_island < 0, flat)       # 8 faces, none with area
+    island = again.layout.face_island.copy()
+    island[np.flatnonzero(flat)[2:]] = island[~flat][0]
+    island[np.flatnonzero(~flat)[:3]] = -1
+    res = dataclasses.replace(again.result, islands=[r for r in again.result.islands
+                                                     if r.error is None])
+    first = jobs.JobResult(dict(again.entry, status="partial"), again.corner_uv, res,
+                           dataclasses.replace(again.layout, face_island=island))
+    assert ((island < 0) & flat).sum() == 2 and (island < 0).sum() == 5 < flat.sum()
+    runs = iter([first, again])
+    monkeypatch.setattr(jobs, "_unwrap_job", lambda *a: next(runs))
+    assert batch.unwrap_job(job, opts) is again      # 0 faces with an area left against 3
+    runs = iter([again, first])                      # the other way round: the first stays
+    monkeypatch.setattr(jobs, "_unwrap_job", lambda *a: next(runs))
+    assert batch.unwrap_job(job, opts) is again
