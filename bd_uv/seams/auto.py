@@ -30,7 +30,7 @@ from .charts import MARGIN, chart_maps, face_geometry, mean_cap
 from .cut_graph import cut_graph
 from .edges import edge_table
 from .measure import measure_charts, splice
-from .merge import merge_charts
+from .merge import chart_key, merge_charts
 from .bisect import bisect, edge_weight, polygon_edges, split_deep
 from .topology import charts, cut_mesh
 from .trim import release_memory
@@ -121,6 +121,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
                 frozen[i.faces] = True
     invalid = frozen.copy()
     known = {}                              # conformal maps of charts that passed, by faces
+    failed = {}                             # max stretch of disks whose map failed, by chart
     geom = face_geometry(V, F)
     release_memory(m)                       # the set-up's temporaries
     rounds = 0
@@ -134,11 +135,13 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         # must not be cut again for triangulation noise in its mean.
         changed = _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag,
                           cap=mean_cap(C) + GIVEN_SLACK * (mean_cap(C) - 1.0)
-                          if rounds == 1 else mean_cap(C), known=known, geom=geom)
+                          if rounds == 1 else mean_cap(C), known=known, geom=geom,
+                          failed=failed)
         if not changed:
             break
     if merge:
-        merge_charts(V, F, E, cut, keep, invalid, S, C, known=known, geom=geom)
+        merge_charts(V, F, E, cut, keep, invalid, S, C, known=known, geom=geom,
+                     failed=failed)
     release_memory(m)
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last
@@ -167,11 +170,13 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             group[r.faces] = g
         bisect([np.sort(r.faces) for r in bad], E, cut, A, cen, poly)
         for _ in range(MAX_ROUNDS):
-            if not _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag, geom=geom):
+            if not _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag, geom=geom,
+                           failed=failed):
                 break
         if merge:
             # The pieces may now merge with their neighbours (never with each other).
-            merge_charts(V, F, E, cut, keep, invalid, S, C, group=group, geom=geom)
+            merge_charts(V, F, E, cut, keep, invalid, S, C, group=group, geom=geom,
+                         failed=failed)
         # Unwrap anew every chart holding a piece (with the neighbours it took in).
         redo = np.zeros(m, dtype=bool)
         for c in charts(F, E, cut):
@@ -271,13 +276,14 @@ def _valid_everywhere(V, F, E, A):
 
 
 def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None, known=None,
-            geom=None):
+            geom=None, failed=None):
     """One top-down round over the charts not yet accepted; True when a seam was added.
 
     Handles are cut first; the charts to split (closed spheres, open charts no cut graph
     changes, disks whose map fails) are all split in one batch (``bisect.split_deep``). A disk
     passes with a mean distortion up to ``cap`` (default ``mean_cap(C)``); its conformal map goes
-    into ``known`` (``ChartMaps.remember``).
+    into ``known`` (``ChartMaps.remember``). A disk that fails (at ``cap`` >= ``mean_cap(C)``, so
+    at merging's test too) goes into ``failed`` (``merge.chart_key`` -> its map's max stretch).
     """
     sub = np.flatnonzero(~frozen)
     if len(sub) == 0:
@@ -311,6 +317,8 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=Non
             if ok[j] or len(c.faces) < 2:
                 frozen[c.faces] = True
             else:
+                if failed is not None:
+                    failed[chart_key(c)] = float(cm.max_stretch[j])
                 todo.append((c.faces, cm.sigma[cm.foff[j]:cm.foff[j + 1]]))
     if todo:
         split = split_deep(todo, E, cut, A, cen, S, poly)

@@ -1,6 +1,8 @@
 """Bottom-up: neighbouring charts merged pairwise while the union's conformal map still passes
 (``charts.chart_maps``: flip-free, stretch within S, mean within ``charts.mean_cap(C)``, boundary
 not crossing itself)."""
+import hashlib
+
 import numpy as np
 
 from .charts import MARGIN, chart_maps, mean_cap
@@ -19,8 +21,16 @@ MERGE_LAYERS = 1
 
 
 
+def chart_key(chart):
+    """A disk chart as it stands: a digest of its sorted faces, its vertex and boundary loop
+    counts (a seam kept inside the faces, a material boundary, shows in both). 16 bytes of
+    digest, not the faces: the search's failed charts cover a large mesh several times over."""
+    return (hashlib.blake2b(chart.faces, digest_size=16).digest(), len(chart.faces),
+            len(chart.vertices), len(chart.loops[0]))
+
+
 def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, known=None,
-                 geom=None):
+                 geom=None, failed=None):
     """Merge neighbouring charts pairwise while the union's conformal map still passes.
 
     Each round tests a matching of neighbouring pairs (dearest shared seam first: length times
@@ -38,7 +48,11 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
     known : dict, optional: the conformal maps of the unions that pass go in
         (``ChartMaps.remember``)
     geom : charts.FaceGeometry of (V, F), optional
+    failed : dict, optional, ``chart_key`` -> max stretch of disks whose conformal map
+        failed this test before (the search's, which then split them): a union that is one
+        fails without a new solve (the same pairs are tried and the same charts come out)
     """
+    failed = {} if failed is None else failed
     tried = set()
     # A face of each of two charts whose union was far beyond S: charts holding them are not
     # tried together again (a union of larger charts around them fares no better).
@@ -101,14 +115,21 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
             if not any(layers):
                 return
             continue
-        cm = chart_maps(V, [c for c, _, _ in disks], geom, limits=(S * MARGIN, mean_cap(C)))
-        ok = (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
-              & (cm.crossings == 0) & (cm.mean_distortion <= mean_cap(C)))
-        if known is not None:
-            cm.remember([c for c, _, _ in disks], ok, known)
+        # Unions the search already mapped and split fail as they did; the rest in one solve.
+        stretch = np.array([failed.get(chart_key(c), np.nan) for c, _, _ in disks])
+        ok = np.zeros(len(disks), dtype=bool)
+        new = np.flatnonzero(np.isnan(stretch))
+        if len(new):
+            union = [disks[j][0] for j in new]
+            cm = chart_maps(V, union, geom, limits=(S * MARGIN, mean_cap(C)))
+            ok[new] = (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
+                       & (cm.crossings == 0) & (cm.mean_distortion <= mean_cap(C)))
+            stretch[new] = cm.max_stretch
+            if known is not None:
+                cm.remember(union, ok[new], known)
         pair = np.array([p for _, _, p in disks], dtype=np.int64)
         px, py = uk[pair] // len(chs), uk[pair] % len(chs)
-        for j in np.flatnonzero(~(cm.max_stretch <= HOPELESS * S)):
+        for j in np.flatnonzero(~(stretch <= HOPELESS * S)):
             far_a.append(int(chs[px[j]].faces[0]))
             far_b.append(int(chs[py[j]].faces[0]))
         merged = np.zeros(len(chs), dtype=bool)

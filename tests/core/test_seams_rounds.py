@@ -1,0 +1,87 @@
+"""Work the seam search saves without changing its charts.
+
+- ``bisect.split_deep`` splits a piece again in the same round while its chart's map restricted
+  to it breaks S by 4x, or breaks S at all when the piece holds ``MOST`` of its chart's faces;
+- ``merge.merge_charts`` does not solve a union the search already mapped and split: the same
+  charts come out with and without that shortcut.
+"""
+import numpy as np
+import pytest
+
+from bd_uv.seams import auto as auto_mod
+from bd_uv.seams import bisect as bisect_mod
+from bd_uv.seams import merge as merge_mod
+from bd_uv.seams.charts import MARGIN
+from seams_helpers import uv_sphere
+
+
+def _levels(monkeypatch, stretch, n=200, S=2.0):
+    """The pieces ``split_deep`` hands to each level's ``bisect`` for one chart of n faces whose
+    map has the same singular values (stretch, 1/stretch) on every face (so every piece's
+    restricted stretch is ``stretch``), each piece split 10 % / 90 % by a stand-in ``bisect``."""
+    calls = []
+
+    def tenth(pieces, E, cut, A, cen, poly=None):
+        calls.append([len(p) for p in pieces])
+        return [(p[:max(1, len(p) // 10)], p[max(1, len(p) // 10):]) if len(p) > 1 else None
+                for p in pieces]
+    monkeypatch.setattr(bisect_mod, "bisect", tenth)
+    faces = np.arange(n, dtype=np.int64)
+    sigma = np.tile([stretch, 1.0 / stretch], (n, 1))
+    done = bisect_mod.split_deep([(faces, sigma)], None, None, np.ones(n), None, S)
+    return calls, done
+
+
+def test_split_deep_splits_a_large_piece_again_while_its_map_breaks_s(monkeypatch):
+    S = 2.0
+    s = 3.0                                  # beyond S, within DEEPER S
+    assert S * MARGIN < s < bisect_mod.DEEPER * S * MARGIN
+    calls, done = _levels(monkeypatch, s, S=S)
+    assert done.tolist() == [True]
+    # 200 -> 20 + 180 (90 %: again) -> 18 + 162 (81 %: again) -> 16 + 146 (73 %: left to its
+    # own map in the next round); the small pieces are never split again here.
+    assert calls == [[200], [180], [162]]
+    assert 162 / 200 >= bisect_mod.MOST > 146 / 200
+
+
+def test_split_deep_far_beyond_s_splits_every_piece_and_within_s_none(monkeypatch):
+    calls, _ = _levels(monkeypatch, 9.0)     # beyond DEEPER S: every piece of 2+ faces
+    # (a piece of one face is never split: 2 -> 1 + 1 ends there)
+    assert calls == [[200], [20, 180], [2, 18, 18, 162], [17, 17, 16, 146]]
+    assert len(calls) == bisect_mod.SPLIT_DEPTH
+    calls, _ = _levels(monkeypatch, 1.5)     # within S: one split, its pieces mapped next
+    assert calls == [[200]]
+
+
+def test_merging_skips_unions_the_search_failed_with_the_same_charts(monkeypatch):
+    V, F, _ = uv_sphere(32, 16)
+    runs = {}
+    for skip in (True, False):
+        solved, failed = [], {}
+        chart_maps = merge_mod.chart_maps
+        merge_charts = merge_mod.merge_charts
+
+        def recorded(V_, chs, *a, **k):
+            solved.extend(merge_mod.chart_key(c) for c in chs)
+            return chart_maps(V_, chs, *a, **k)
+
+        def merging(*a, **k):
+            failed.update(k.get("failed") or {})
+            if not skip:
+                k["failed"] = None
+            return merge_charts(*a, **k)
+        monkeypatch.setattr(merge_mod, "chart_maps", recorded)
+        monkeypatch.setattr(auto_mod, "merge_charts", merging)
+        result, added, info = auto_mod.unwrap_auto(V, F, bound=2.0, stretch=2.0)
+        monkeypatch.undo()
+        assert all(r.status == "certified" for r in result.islands)
+        runs[skip] = (solved, failed, added, info["charts"])
+    with_skip, without = runs[True], runs[False]
+    # Without the shortcut merging solves a union the search had mapped and split ...
+    again = [k for k in without[0] if k in without[1]]
+    assert len(again) >= 1
+    # ... with it, never, and it solves every other union it solved before, and no more.
+    assert not any(k in with_skip[1] for k in with_skip[0])
+    assert with_skip[0] == [k for k in without[0] if k not in without[1]]
+    np.testing.assert_array_equal(with_skip[2], without[2])
+    assert with_skip[3] == without[3]
