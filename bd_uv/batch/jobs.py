@@ -147,13 +147,15 @@ def _num(x):
 def unwrap_job(job, options, png=None):
     """Unwrap one job; never raises (a failure goes into the entry, with a traceback if a bug).
 
-    Positions stored in float32 (``job.position_dtype``): when faces fail and some of them are
-    faces float32 cannot tell from a line (``repair.zero_area_faces``' precision), the job runs
-    again with those left out as zero-area, and the run leaving fewer faces uncertified is kept.
-    Not the first time round: such a face alone is often certified as stored (the storage
-    headroom's stretch); in clusters (OpenChessSet's bishops, 380 of them) they refuse islands.
-    The runs are compared by the faces with an area they leave uncertified (a scene writes a
-    mesh whose only uncertified faces are the ones left out as zero-area), then by all of them.
+    Positions stored in float32 (``job.position_dtype``) may hold faces float32 cannot tell from
+    a line (``repair.zero_area_faces``' precision). Two of them side by side (OpenChessSet's
+    bishops: 608, in strips) refuse their island as stored at any stretch, and trying costs
+    (a bishop: 400 s of conic stretch solves, against 45 s for the whole job without them):
+    such faces are left out as zero-area from the start. A face that stands alone is often
+    certified as stored (the storage headroom's stretch), so it is tried; when faces fail and
+    some of them are such faces, the job runs again with them left out, and the run leaving
+    fewer faces with an area uncertified (a scene writes a mesh whose only uncertified faces
+    are the ones left out as zero-area), then fewer faces at all, is kept.
 
     Parameters
     ----------
@@ -170,11 +172,13 @@ def unwrap_job(job, options, png=None):
         certified islands), max_distortion, mean_distortion (area-weighted over certified
         faces), flipped, seconds, error (exception type) and message.
     """
+    flat = _flat_at_precision(job)
+    if flat is not None and _side_by_side(job.F, flat):
+        return _unwrap_job(job, options, png, job.position_dtype)
     out = _unwrap_job(job, options, png, None)
-    if np.dtype(job.position_dtype) == np.float64 or out.entry["status"] == "certified":
+    if flat is None or out.entry["status"] == "certified":
         return out
     left = _uncertified(out, len(job.F))
-    flat = zero_area_faces(job.V, job.F, job.position_dtype) & ~zero_area_faces(job.V, job.F)
     if not (left & flat).any():
         return out
     again = _unwrap_job(job, options, png, job.position_dtype)
@@ -182,6 +186,28 @@ def unwrap_job(job, options, png=None):
         return out
     again.entry["seconds"] = round(again.entry["seconds"] + out.entry["seconds"], 4)
     return again
+
+
+def _flat_at_precision(job):
+    """(m,) bool: the faces the float type ``job``'s positions were stored in cannot tell from
+    a line, though float64 can (``repair.zero_area_faces``); None for float64 positions, for
+    none, and for a mesh the unwrap will refuse anyway (non-finite positions, bad indices)."""
+    if np.dtype(job.position_dtype) == np.float64:
+        return None
+    try:
+        with np.errstate(all="ignore"):
+            flat = (zero_area_faces(job.V, job.F, job.position_dtype)
+                    & ~zero_area_faces(job.V, job.F))
+    except (ValueError, IndexError, TypeError):
+        return None
+    return flat if flat.any() else None
+
+
+def _side_by_side(F, faces):
+    """True when two of ``faces`` ((m,) bool) share an edge."""
+    f = np.asarray(F, np.int64)[faces]
+    e = np.sort(f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    return len(np.unique(e, axis=0)) < len(e)
 
 
 def _uncertified(out, m):

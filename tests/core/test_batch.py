@@ -295,12 +295,17 @@ def _split_grid(scale=100.0, steps=1):
     return V, F, groups
 
 
-def test_a_float32_job_leaves_out_faces_float32_cannot_tell_from_a_line_when_they_fail():
+def test_a_float32_job_leaves_out_faces_float32_cannot_tell_from_a_line_when_they_fail(
+        monkeypatch):
     """The strip's faces are one float32 step high: certified in float64, they collapse once the
     UVs are stored in float32, and the whole island fails. A job whose positions were float32
-    (scenes, the Blender script) runs again with them left out as zero-area, and every other face
-    certifies as stored; with float64 positions nothing is left out and the island fails."""
+    (scenes, the Blender script) leaves them out as zero-area, and every other face certifies as
+    stored; with float64 positions nothing is left out and the island fails. Side by side, as
+    here, they are left out from the start: one run, not a failed one first."""
+    from bd_uv.batch import jobs
     from helpers import float32_flat
+    runs, real = [], jobs._unwrap_job
+    monkeypatch.setattr(jobs, "_unwrap_job", lambda *a: runs.append(a[3]) or real(*a))
     V, F, groups = _split_grid()
     flat = float32_flat(V, F)
     assert np.flatnonzero(flat).tolist() == list(range(8, 16))
@@ -312,6 +317,7 @@ def test_a_float32_job_leaves_out_faces_float32_cannot_tell_from_a_line_when_the
                                      position_dtype=np.float32), opts)
     left = out.layout.face_island < 0
     assert np.array_equal(left, flat)                      # the strip alone is left out
+    assert runs == [None, np.float32]                      # float64 once; float32 once
     assert "zero-area" in out.entry["message"]
     uv = out.layout.corner_uv[~left]
     assert np.array_equal(uv, uv.astype(np.float32))       # as stored
@@ -325,7 +331,8 @@ def test_the_float32_rerun_is_kept_when_it_fails_only_faces_without_area(monkeyp
     (some with an area) than the rerun left out (608 faces of zero area, which a scene writes
     around), and counting all faces alone kept the first run, so nothing was written. Here the
     rerun is the real one on the split grid; the first run is that result with six of the strip's
-    eight faces certified and three faces with an area failed instead (5 faces < 8)."""
+    eight faces certified and three faces with an area failed instead (5 faces < 8). The
+    strip's faces are taken as standing apart: side by side they are left out from the start."""
     import dataclasses
     from bd_uv.batch import jobs
     from helpers import float32_flat
@@ -345,6 +352,7 @@ def test_the_float32_rerun_is_kept_when_it_fails_only_faces_without_area(monkeyp
     first = jobs.JobResult(dict(again.entry, status="partial"), again.corner_uv, res,
                            dataclasses.replace(again.layout, face_island=island))
     assert ((island < 0) & flat).sum() == 2 and (island < 0).sum() == 5 < flat.sum()
+    monkeypatch.setattr(jobs, "_side_by_side", lambda F_, faces: False)
     runs = iter([first, again])
     monkeypatch.setattr(jobs, "_unwrap_job", lambda *a: next(runs))
     assert batch.unwrap_job(job, opts) is again      # 0 faces with an area left against 3
