@@ -18,7 +18,7 @@ from ..errors import (BDError, CancelledError, InvalidMeshError, IslandError, Op
                       SolverError)
 from ..mesh import as_indices, as_reals, check_arrays, checked_islands as split_islands
 from ..options import unwrap_options
-from . import bounded as within, strategies
+from . import bounded as within, one_disk, strategies
 from . import stretch as stretch_search
 from .batched import conformal_islands
 from .finish import finish
@@ -83,8 +83,25 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             raise OptionError("frames", "frames='input-uv' needs initial_uv (m,3,2)")
         initial_uv = np.asarray(initial_uv, dtype=np.float64).reshape(m, 3, 2)
     pins = pin_arrays(pin_corners, pin_uv, m)
-    return unwrap_islands(V, F, split_islands(V, F, seams), pins, opts, initial_uv=initial_uv,
-                          face_groups=face_groups, progress=progress, cancel=cancel, t0=t0)
+    conformal, disk = None, None
+    if (seams is None or not len(seams)) and not len(pins[0]) and _batched_options(opts) \
+            and opts.boundary == "free" and opts.stretch is None:
+        disk = one_disk.find(V, F)   # one clean disk: found, solved, certified in one pass
+    if disk is not None:
+        done, u = one_disk.unwrap_disk(V, F, disk, None if opts.bound == "auto" else
+                                       float(opts.bound), t0, progress, cancel)
+        if done is not None:
+            return done
+        conformal = {0: u}
+    return unwrap_islands(V, F, [disk.island] if disk is not None else
+                          split_islands(V, F, seams), pins, opts, initial_uv=initial_uv,
+                          face_groups=face_groups, progress=progress, cancel=cancel,
+                          conformal=conformal, t0=t0)
+
+
+def _batched_options(options):
+    """Do these options solve unpinned islands by the batched conformal map first?"""
+    return options.method == "lscm" and options.frames in ("auto", "conformal")
 
 
 def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, progress=None,
@@ -191,7 +208,7 @@ def _batched(V, isl, pins, face_island, options, progress, cancel, conformal=Non
     factorisation for all, 3-4x faster than per-island ``frames.lscm_map`` on nefertiti). Returns
     (results by island index, conformal starts of the islands not certified here)."""
     bound = options.bound
-    if options.method != "lscm" or options.frames not in ("auto", "conformal"):
+    if not _batched_options(options):
         return {}, {}
     pinned = np.zeros(len(isl), dtype=bool)
     if len(pins[0]):
