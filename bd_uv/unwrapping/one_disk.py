@@ -214,6 +214,13 @@ def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
                         certificates=(cert,)), None
 
 
+def certify(disk, corner_uv, C):
+    """The ``Certificate`` of a ``Disk``'s UVs as stored at the bound C, or None where
+    ``disk_certificate`` does not clear them (``overlap_certificate`` decides then)."""
+    G = gradient_operators(local_frame(disk.e01, disk.e02))
+    return certify_disk(np.asarray(corner_uv, dtype=np.float64), G, disk, C)[0]
+
+
 def _report(progress, cancel, fraction, message):
     if progress is not None:
         progress(fraction, message)

@@ -10,6 +10,7 @@ With ``boundary`` other than "free", steps 1-2 are replaced by a solve with the 
 boundary fixed on a circle, a rectangle or its pinned polygon (``fixed_boundary``, section 5),
 certified the same way and checked for Theorems 5.1/5.2's premises (``bijective``).
 """
+import dataclasses
 import time
 
 import numpy as np
@@ -96,7 +97,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     return unwrap_islands(V, F, [disk.island] if disk is not None else
                           split_islands(V, F, seams), pins, opts, initial_uv=initial_uv,
                           face_groups=face_groups, progress=progress, cancel=cancel,
-                          conformal=conformal, t0=t0)
+                          conformal=conformal, t0=t0, disk=disk)
 
 
 def _batched_options(options):
@@ -105,7 +106,7 @@ def _batched_options(options):
 
 
 def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, progress=None,
-                   cancel=None, conformal=None, t0=None):
+                   cancel=None, conformal=None, t0=None, disk=None):
     """``unwrap`` on islands already found (``mesh.islands``, or charts of a validated mesh).
 
     Parameters
@@ -119,6 +120,9 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
         ``_far_pairs`` pinned at 0 and 1), already known (the seam search's chart maps); only
         used where the batched path would solve it. Everything is certified from the final UVs
         as ever.
+    disk : one_disk.Disk, optional, when ``isl`` is that disk's island: a certified map is
+        certified by ``disk_certificate`` first (the general overlap certificate where it does
+        not clear it)
 
     Returns
     -------
@@ -159,9 +163,14 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
             corner_uv[island.faces] = res.uv[island.tris]
         results.append(res)
         done += share
-    pinned = set(face_island[pins[0] // 3].tolist())
-    results, face_island, corner_uv, certs = overlap_certificate(
-        V, F, results, face_island, corner_uv, pinned, o.overlap == "cut", face_groups)
+    cert = (one_disk.certify(disk, corner_uv, results[0].bound_certified)
+            if disk is not None and results[0].status == "certified" else None)
+    if cert is not None:
+        results, certs = [dataclasses.replace(results[0], overlap_free=True)], (cert,)
+    else:
+        pinned = set(face_island[pins[0] // 3].tolist())
+        results, face_island, corner_uv, certs = overlap_certificate(
+            V, F, results, face_island, corner_uv, pinned, o.overlap == "cut", face_groups)
     if progress is not None:
         progress(1.0, "done")
     return UnwrapResult(corner_uv, face_island, results, time.perf_counter() - t0, o.method,

@@ -55,11 +55,12 @@ def test_the_island_is_checked_islands_one(name):
 
 
 @pytest.mark.parametrize("name", sorted(DISKS))
-@pytest.mark.parametrize("bound", [5.0, 1.05])
+@pytest.mark.parametrize("bound", [5.0, 1.05, "auto"])
 def test_the_one_pass_gives_the_general_paths_map_and_certificate(name, bound):
     """At C = 5 the conformal map fits; at 1.05 it does not (but for the one face) and the
-    general path bends it from the same conformal map. The same UVs bit for bit, the same
-    certificate, the island's figures as its certificate measures them."""
+    general path bends it from the same conformal map; "auto" searches from it and is certified
+    by the one-disk certificate. The same UVs bit for bit, the same certificate, the island's
+    figures as its certificate measures them."""
     V, F = DISKS[name]()
     fast = bd_uv.unwrap(V, F, bound=bound)
     ref = general(V, np.asarray(F, np.int64), bound=bound)
@@ -214,3 +215,18 @@ def test_the_polygon_tests_agree_with_island_overlaps():
             assert truth
         seen[truth] += 1
     assert seen[True] > 50 and seen[False] > 50 and star > 20
+
+
+def test_the_free_unknowns_iterations_reach_the_whole_maps_bound(monkeypatch):
+    """bound="auto" on a small island iterates on the free unknowns (``BoundSearch._run_free``);
+    the iterations on the whole map (the path of islands over ONE_PRODUCT_FACES faces) reach the
+    same bound, to rounding."""
+    import bd_uv.solvers.bound_search as bs
+    V, F = load_off("nefertiti.off")
+    small = bd_uv.unwrap(V, F, bound="auto")
+    monkeypatch.setattr(bs, "ONE_PRODUCT_FACES", 0)
+    whole = bd_uv.unwrap(V, F, bound="auto")
+    a, b = small.islands[0], whole.islands[0]
+    assert a.iterations == b.iterations
+    assert abs(a.max_distortion - b.max_distortion) < 1e-9
+    assert small.certificates[0].certified and whole.certificates[0].certified
