@@ -108,11 +108,32 @@ def _simple_ccw(p, q):
     gap = np.abs(i - j)
     other = (gap != 1) & (gap != nb - 1)                  # consecutive pairs share their end
     i, j = i[other], j[other]
-    if len(i) and segments_meet(p, q, i, j).any():
+    if len(i) and _meet(p, q, i, j):
         return False
     twice_area = np.bincount(np.zeros(nb, dtype=np.int64),
                              p[:, 0] * q[:, 1] - p[:, 1] * q[:, 0], 1)[0]
     return bool(twice_area > 0)
+
+
+def _meet(p, q, i, j):
+    """Does any segment i meet its segment j, segments with no end in common? The four
+    orientation signs (``overlap._orient``) when all are clear of their rounding bound, else
+    ``overlap.segments_meet``'s robust predicate."""
+    # orientations of c and d against segment (a, b), of a and b against (c, d): (4, k) arrays
+    # of their points (p's rows, then q's), the arithmetic of overlap._orient
+    k, nb = len(i), len(p)
+    ends = np.concatenate([p, q])
+    first = np.concatenate([i, i, j, j])
+    s = ends.take(first, axis=0).reshape(4, k, 2)
+    t = ends.take(first + nb, axis=0).reshape(4, k, 2)
+    u = ends.take(np.concatenate([j, j + nb, i, i + nb]), axis=0).reshape(4, k, 2)
+    l = (t[..., 0] - s[..., 0]) * (u[..., 1] - s[..., 1])
+    r = (t[..., 1] - s[..., 1]) * (u[..., 0] - s[..., 0])
+    o = l - r
+    if not (np.abs(o) > 1e-15 * (np.abs(l) + np.abs(r))).all():
+        return bool(segments_meet(p, q, i, j).any())
+    sign = o > 0
+    return bool(((sign[0] != sign[1]) & (sign[2] != sign[3])).any())
 
 
 def _box_pairs(p, q):

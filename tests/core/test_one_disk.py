@@ -201,11 +201,18 @@ def _polygons(rng):
         yield p
 
 
+TOUCHING = [np.array([[0, 0], [4, 0], [4, 4], [2, 0], [0, 4]], float),   # a point on an edge
+            np.array([[0, 0], [4, 0], [4, 4], [2, 4], [2, 6], [2, 2], [0, 4]], float),  # overlap
+            np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)]                 # a square
+
+
 def test_the_polygon_tests_agree_with_island_overlaps():
+    """Random polygons (star-shaped about the origin or elsewhere, clockwise, noisy, pinched,
+    folded) and exact touching ones (orientations exactly 0: decided by GEOS)."""
     rng = np.random.default_rng(20261127)
     seen = {True: 0, False: 0}
     star = 0
-    for p in _polygons(rng):
+    for p in [*_polygons(rng), *TOUCHING]:
         q = np.concatenate([p[1:], p[:1]])
         F, uv = _fan(p)
         truth = bool(island_overlaps(F, uv, np.zeros(len(F), np.int64)).overlap_free[0])
