@@ -30,7 +30,15 @@ def jagged():
     return V[used], inv.reshape(-1, 3)
 
 
+def unused_vertex():
+    """A grid whose vertex list holds a vertex no face uses (first and in the middle)."""
+    V, F = curved_grid(6)
+    V = np.r_[[[9.0, 9.0, 9.0]], V[:20], [[7.0, 7.0, 7.0]], V[20:]]
+    return V, np.where(F >= 20, F + 2, F + 1)
+
+
 DISKS = {"grid": curved_grid, "nefertiti": lambda: load_off("nefertiti.off"), "jagged": jagged,
+         "unused vertex": unused_vertex,
          "one face": lambda: (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.5]], float),
                               np.array([[0, 1, 2]]))}
 
