@@ -245,3 +245,40 @@ def test_the_free_unknowns_iterations_reach_the_whole_maps_bound(monkeypatch):
     assert a.iterations == b.iterations
     assert abs(a.max_distortion - b.max_distortion) < 1e-9
     assert small.certificates[0].certified and whole.certificates[0].certified
+
+
+@pytest.mark.parametrize("name", ["grid", "nefertiti", "jagged"])
+@pytest.mark.parametrize("precision", [None, np.float32])
+def test_a_clean_disk_needs_no_repair(name, precision, monkeypatch):
+    """seams="needed" (the command line's and Blender's default) skips repair.repair_mesh on a
+    clean disk: the same result as with the repair run."""
+    import bd_uv.seams.needed as needed
+    V, F = DISKS[name]()
+    assert needed.clean_disk(V, F, precision)
+    fast = bd_uv.unwrap(V, F, seams="needed", precision=precision)
+    monkeypatch.setattr(needed, "clean_disk", lambda *a: False)
+    ref = bd_uv.unwrap(V, F, seams="needed", precision=precision)
+    assert np.array_equal(fast.corner_uv, ref.corner_uv, equal_nan=True)
+    assert np.array_equal(fast.face_island, ref.face_island)
+    assert fast.repair == ref.repair == () and fast.seams_added.shape == ref.seams_added.shape
+    assert [(r.status, r.flags, r.bound_certified, r.max_distortion) for r in fast.islands] == \
+        [(r.status, r.flags, r.bound_certified, r.max_distortion) for r in ref.islands]
+    assert np.array_equal(fast.islands[0].faces, ref.islands[0].faces)
+    assert np.array_equal(fast.islands[0].vertices, ref.islands[0].vertices)
+
+
+def test_a_face_float32_cannot_tell_from_a_line_is_repaired():
+    """A disk with one face thinner than a float32 step at its coordinates: clean in float64,
+    so only the float32 precision sends it to the repair, which leaves that face out."""
+    import bd_uv.seams.needed as needed
+    V, F = curved_grid(6)
+    V = V + 1000.0                        # float32 steps of 6e-5 there
+    f = F[len(F) // 2]
+    V[f[2]] = 0.5 * (V[f[0]] + V[f[1]]) + [0.0, 0.0, 1e-6]   # the face's third corner on its edge
+    assert needed.clean_disk(V, F, None) == (one_disk.find(V, F) is not None)
+    assert not needed.clean_disk(V, F, np.float32)
+    res = bd_uv.unwrap(V, F, seams="needed", precision=np.float32)
+    thin = len(F) // 2
+    assert len(res.repair) == 1 and f"faces {thin})" in res.repair[0]
+    (failed,) = [r for r in res.islands if r.status == "failed"]
+    assert failed.faces.tolist() == [thin] and type(failed.error) is bd_uv.DegenerateFacesError
