@@ -49,15 +49,19 @@ def local_coordinates(V, F):
         non-degenerate face).
     """
     P = np.asarray(V, dtype=np.float64)[F]
-    e01 = P[:, 1] - P[:, 0]
-    e02 = P[:, 2] - P[:, 0]
+    return local_frame(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
+
+
+def local_frame(e01, e02):
+    """``local_coordinates`` of faces given by their two edges from the first corner, e01 and
+    e02 (m,3) float64."""
     # np.linalg.norm(e01, axis=1)'s sum in its order (the same bits), without its dispatch
     l01 = np.sqrt(e01[:, 0] * e01[:, 0] + e01[:, 1] * e01[:, 1] + e01[:, 2] * e01[:, 2])
     with np.errstate(invalid="ignore", divide="ignore"):
         e1 = e01 / l01[:, None]
         x2 = np.einsum("ij,ij->i", e02, e1)
         y2 = _cross_norm(e1, e02)
-    Z = np.zeros((len(F), 3), dtype=np.complex128)
+    Z = np.zeros((len(e01), 3), dtype=np.complex128)
     Z[:, 1] = l01
     Z[:, 2] = x2 + 1j * y2
     return Z

@@ -24,10 +24,12 @@ import dataclasses
 
 import numpy as np
 
-from ..errors import (ClosedIslandError, DegenerateFacesError, InfeasibleError, NonFiniteError,
-                      OverlapError, SolverError, TopologyError)
+from ..errors import (ClosedIslandError, DegenerateFacesError, InfeasibleError, InvalidMeshError,
+                      NonFiniteError, OverlapError, SolverError, TopologyError)
+from ..mesh import check_arrays
 from ..options import unwrap_options
-from ..repair import repair_mesh, twin_corners
+from ..repair import repair_mesh, twin_corners, zero_area_faces
+from ..unwrapping import one_disk
 from ..unwrapping.results import IslandResult, UnwrapResult
 from ..unwrapping.storage import beyond_headroom, with_storage_headroom
 from ..unwrapping.unwrap import unwrap
@@ -85,7 +87,7 @@ def unwrap_needed(V, F, seams=None, polygons=None, options=None, marked_stretch=
     opts = unwrap_options(options)
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F)
-    rep = repair_mesh(V, F, precision) if repair else None
+    rep = repair_mesh(V, F, precision) if repair and not clean_disk(V, F, precision) else None
     V2, F2 = (rep.V, rep.F) if rep is not None else (V, np.asarray(F, np.int64))
     faces = rep.faces if rep is not None else np.arange(len(F2))
     seams2 = rep.seams(seams) if rep is not None else seams
@@ -123,6 +125,20 @@ def unwrap_needed(V, F, seams=None, polygons=None, options=None, marked_stretch=
     added = np.unique(np.sort(added, axis=1), axis=0) if len(added) else added.reshape(0, 2)
     return dataclasses.replace(result, seams_added=added.astype(np.int64),
                                repair=tuple(rep.notes()) if rep is not None else ())
+
+
+def clean_disk(V, F, precision=None):
+    """Is the mesh one clean disk (``unwrapping.one_disk.find``) with no face ``precision``
+    cannot tell from a line (``repair.zero_area_faces``)? Then ``repair.repair_mesh`` would give
+    it back unchanged (nothing to split, cut or leave out), so it is not called: on a small disk
+    it cost ~2 ms, more than the unwrap (issue 21 item 2)."""
+    try:
+        V, F = check_arrays(V, F)
+    except InvalidMeshError:
+        return False
+    return one_disk.find(V, F) is not None and not (
+        precision is not None and np.dtype(precision) != np.float64
+        and zero_area_faces(V, F, precision).any())
 
 
 def pairs_in(pairs, voc):

@@ -58,7 +58,7 @@ def laplacian_blocks(gx, gy, area, tris, free, fixed, nv):
     return L_ff, L_fF
 
 
-def alpha_beta_lift(gx, gy, area, tris, free, nv):
+def alpha_beta_lift(gx, gy, area, tris, free, nv, free_lift=False):
     """The lift of a map ``[u; v]`` (2nv) to every face's doubled alpha and beta (4k): rows
     ``u_x + v_y``, ``v_x - u_y``, ``u_x - v_y``, ``v_x + u_y`` (csr, six entries a row), and the
     least-squares step's right-hand side operator ``B_free^T diag(A, A, A, A) / 2`` (csc: the
@@ -67,7 +67,8 @@ def alpha_beta_lift(gx, gy, area, tris, free, nv):
 
     Returns
     -------
-    B : (4k, 2nv) csr; BtA : (2 len(free), 4k) csc
+    B : (4k, 2nv) csr; BtA : (2 len(free), 4k) csc; with ``free_lift`` also B's columns of the
+    free unknowns ``[free; free + nv]``, (4k, 2 len(free)) csr (the same arrays as BtA's)
     """
     k = len(tris)
     cu, cv = tris, tris + nv
@@ -92,4 +93,6 @@ def alpha_beta_lift(gx, gy, area, tris, free, nv):
     indptr = np.zeros(4 * k + 1, dtype=np.int64)
     np.cumsum(keep.reshape(4 * k, 6).sum(axis=1), out=indptr[1:])
     BtA = sp.csc_array(((data * w)[keep], tr[keep], indptr), shape=(2 * nf, 4 * k))
+    if free_lift:
+        return B, BtA, sp.csr_array((data[keep], tr[keep], indptr), shape=(4 * k, 2 * nf))
     return B, BtA

@@ -18,7 +18,7 @@ try:  # LDL^T with AMD ordering; SuperLU without it
 except ImportError:  # pragma: no cover - exercised where qdldl is absent
     qdldl = None
 
-__all__ = ["FaceGeometry", "face_geometry", "lscm_pinned", "spd_solver"]
+__all__ = ["FaceGeometry", "face_geometry", "face_geometry_of", "lscm_pinned", "spd_solver"]
 
 
 @dataclass(frozen=True)
@@ -44,11 +44,16 @@ class FaceGeometry:
 def face_geometry(V, F):
     """``FaceGeometry`` of every face of (V, F)."""
     Z = local_coordinates(V, F)
-    G = gradient_operators(Z)
+    return face_geometry_of(Z, gradient_operators(Z), face_areas(V, F))
+
+
+def face_geometry_of(Z, G, area):
+    """``FaceGeometry`` of faces with local corner coordinates Z (m,3) complex
+    (``geometry.local_coordinates``), their gradient operators G (m,2,3)
+    (``geometry.gradient_operators``) and areas (m,)."""
     zarea = 0.5 * np.abs(((Z[:, 1] - Z[:, 0]).conj() * (Z[:, 2] - Z[:, 0])).imag)
     cb = 0.5 * (G[:, 0] + 1j * G[:, 1])
-    return FaceGeometry(face_areas(V, F), 0.5 * (G[:, 0] - 1j * G[:, 1]), cb,
-                        zarea[:, None] * cb.conj())
+    return FaceGeometry(area, 0.5 * (G[:, 0] - 1j * G[:, 1]), cb, zarea[:, None] * cb.conj())
 
 
 def spd_solver(A, upper=False):
@@ -83,7 +88,7 @@ def spd_solver(A, upper=False):
     return lu.solve
 
 
-def lscm_pinned(cbw, cb, tris, n, idx, val):
+def lscm_pinned(cbw, cb, tris, n, idx, val, sides=None):
     """LSCM (minimise ``sum_f area_f |beta_f|^2``) with vertices ``idx`` fixed to ``val``.
 
     The energy is ``u^H H u`` with ``H = sum_f h_f`` (n x n Hermitian, ``h_f = area_f cb_f^*
@@ -98,12 +103,15 @@ def lscm_pinned(cbw, cb, tris, n, idx, val):
     cbw, cb : (f,3) complex128, each face's term of H as ``cbw cb^T`` (``FaceGeometry``);
     tris : (f,3) int64 into n vertices
     idx : (p,) int64, pinned vertices; val : (p,) complex128, their positions
+    sides : (s1, s2, sb) int64 arrays, optional, the edges when known (``unwrapping.one_disk``):
+        face sides (flat ``3 f + k``, the side from corner k to k + 1) of each interior edge,
+        s1 < s2, and of each boundary edge; found by sorting the sides otherwise
 
     Returns
     -------
     u : (n,) complex128
     """
-    A, rhs, u0, free = _lscm_system(cbw, cb, tris, n, idx, val)
+    A, rhs, u0, free = _lscm_system(cbw, cb, tris, n, idx, val, sides)
     x = spd_solver(A, upper=True)(rhs)
     u = u0
     nf = len(free)
@@ -111,7 +119,7 @@ def lscm_pinned(cbw, cb, tris, n, idx, val):
     return u
 
 
-def _lscm_system(cbw, cb, tris, n, idx, val):
+def _lscm_system(cbw, cb, tris, n, idx, val, sides=None):
     """``lscm_pinned``'s system: Q's upper triangle on the free unknowns (csc), the right-hand
     side, the map with the pinned values set (zeros elsewhere), the free vertices. Its own
     function so that the assembly's temporaries (a few times the matrix) are freed before the
@@ -132,16 +140,26 @@ def _lscm_system(cbw, cb, tris, n, idx, val):
     hjk = (cbw * cb[:, [1, 2, 0]]).ravel()
     lo, hi = np.minimum(J, K).ravel(), np.maximum(J, K).ravel()
     im = np.where((J < K).ravel(), hjk.imag, -hjk.imag)
-    edge, inv, count = np.unique(lo * n + hi, return_inverse=True, return_counts=True)
-    inv = inv.ravel()
-    re_e, im_e = np.bincount(inv, hjk.real, len(edge)), np.bincount(inv, im, len(edge))
-    lo, hi = edge // n, edge % n
+    if sides is None:
+        edge, inv, count = np.unique(lo * n + hi, return_inverse=True, return_counts=True)
+        inv = inv.ravel()
+        re_e, im_e = np.bincount(inv, hjk.real, len(edge)), np.bincount(inv, im, len(edge))
+        lo, hi, rim = edge // n, edge % n, count == 1
+    else:   # the edges known: each interior edge's two sides (in increasing order), then the
+        # boundary's; the same sums as bincount's (0 + first + second)
+        s1, s2, sb = sides
+        re = hjk.real
+        lo, hi = np.concatenate([lo[s1], lo[sb]]), np.concatenate([hi[s1], hi[sb]])
+        re_e = np.concatenate([re[s1] + re[s2], re[sb]])
+        im_e = np.concatenate([np.zeros(len(s1)), im[sb]])
+        rim = np.zeros(len(lo), dtype=bool)
+        rim[len(s1):] = True
     on = ~pinned[lo] & ~pinned[hi]
     pl, ph, re_e = pos[lo[on]], pos[hi[on]], re_e[on]
     # Im H is the signed area term: the two faces of an interior edge cancel (to rounding), so
     # only boundary edges couple the real and imaginary parts. Leaving the interior zeros out
     # keeps the two Laplacian blocks apart but for the boundary: half the fill to factor.
-    rim = on & (count == 1)
+    rim &= on
     bl, bh, im_b = pos[lo[rim]], pos[hi[rim]], im_e[rim]
     free = np.flatnonzero(~pinned)
     pd = pos[free]

@@ -48,12 +48,15 @@ def conformal_islands(V, islands, C, known=None):
     verts = np.concatenate([i.vertices for i in islands])
     tris = np.concatenate([i.tris for i in islands]) + voff[face_isl][:, None]
     P = V[verts]
+    known = {} if known is None else known
+    have = np.array([i.index in known for i in islands], dtype=bool)
+    if have.all() and C is None:    # nothing to solve or certify
+        return {}, {i.index: np.asarray(known[i.index], dtype=np.complex128) / 1.0
+                    for i in islands}
     # alpha = sum ca u, beta = sum cb u per face (eq. 4.19); each island normalised to unit area
     # (as IslandProblem does): the coefficients grow by sqrt(area), the LSCM terms do not change.
     geom = face_geometry(P, tris)
     area = np.bincount(face_isl, geom.area, minlength=k)
-    known = {} if known is None else known
-    have = np.array([i.index in known for i in islands], dtype=bool)
     if have.all():
         u = np.concatenate([np.asarray(known[i.index], dtype=np.complex128) for i in islands])
     else:

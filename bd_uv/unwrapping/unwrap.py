@@ -10,6 +10,7 @@ With ``boundary`` other than "free", steps 1-2 are replaced by a solve with the 
 boundary fixed on a circle, a rectangle or its pinned polygon (``fixed_boundary``, section 5),
 certified the same way and checked for Theorems 5.1/5.2's premises (``bijective``).
 """
+import dataclasses
 import time
 
 import numpy as np
@@ -18,7 +19,7 @@ from ..errors import (BDError, CancelledError, InvalidMeshError, IslandError, Op
                       SolverError)
 from ..mesh import as_indices, as_reals, check_arrays, checked_islands as split_islands
 from ..options import unwrap_options
-from . import bounded as within, strategies
+from . import bounded as within, one_disk, strategies
 from . import stretch as stretch_search
 from .batched import conformal_islands
 from .finish import finish
@@ -83,12 +84,29 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             raise OptionError("frames", "frames='input-uv' needs initial_uv (m,3,2)")
         initial_uv = np.asarray(initial_uv, dtype=np.float64).reshape(m, 3, 2)
     pins = pin_arrays(pin_corners, pin_uv, m)
-    return unwrap_islands(V, F, split_islands(V, F, seams), pins, opts, initial_uv=initial_uv,
-                          face_groups=face_groups, progress=progress, cancel=cancel, t0=t0)
+    conformal, disk = None, None
+    if (seams is None or not len(seams)) and not len(pins[0]) and _batched_options(opts) \
+            and opts.boundary == "free" and opts.stretch is None:
+        disk = one_disk.find(V, F)   # one clean disk: found, solved, certified in one pass
+    if disk is not None:
+        done, u = one_disk.unwrap_disk(V, F, disk, None if opts.bound == "auto" else
+                                       float(opts.bound), t0, progress, cancel)
+        if done is not None:
+            return done
+        conformal = {0: u}
+    return unwrap_islands(V, F, [disk.island] if disk is not None else
+                          split_islands(V, F, seams), pins, opts, initial_uv=initial_uv,
+                          face_groups=face_groups, progress=progress, cancel=cancel,
+                          conformal=conformal, t0=t0, disk=disk)
+
+
+def _batched_options(options):
+    """Do these options solve unpinned islands by the batched conformal map first?"""
+    return options.method == "lscm" and options.frames in ("auto", "conformal")
 
 
 def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, progress=None,
-                   cancel=None, conformal=None, t0=None):
+                   cancel=None, conformal=None, t0=None, disk=None):
     """``unwrap`` on islands already found (``mesh.islands``, or charts of a validated mesh).
 
     Parameters
@@ -102,6 +120,9 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
         ``_far_pairs`` pinned at 0 and 1), already known (the seam search's chart maps); only
         used where the batched path would solve it. Everything is certified from the final UVs
         as ever.
+    disk : one_disk.Disk, optional, when ``isl`` is that disk's island: a certified map is
+        certified by ``disk_certificate`` first (the general overlap certificate where it does
+        not clear it)
 
     Returns
     -------
@@ -142,9 +163,14 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
             corner_uv[island.faces] = res.uv[island.tris]
         results.append(res)
         done += share
-    pinned = set(face_island[pins[0] // 3].tolist())
-    results, face_island, corner_uv, certs = overlap_certificate(
-        V, F, results, face_island, corner_uv, pinned, o.overlap == "cut", face_groups)
+    cert = (one_disk.certify(disk, corner_uv, results[0].bound_certified)
+            if disk is not None and results[0].status == "certified" else None)
+    if cert is not None:
+        results, certs = [dataclasses.replace(results[0], overlap_free=True)], (cert,)
+    else:
+        pinned = set(face_island[pins[0] // 3].tolist())
+        results, face_island, corner_uv, certs = overlap_certificate(
+            V, F, results, face_island, corner_uv, pinned, o.overlap == "cut", face_groups)
     if progress is not None:
         progress(1.0, "done")
     return UnwrapResult(corner_uv, face_island, results, time.perf_counter() - t0, o.method,
@@ -191,7 +217,7 @@ def _batched(V, isl, pins, face_island, options, progress, cancel, conformal=Non
     factorisation for all, 3-4x faster than per-island ``frames.lscm_map`` on nefertiti). Returns
     (results by island index, conformal starts of the islands not certified here)."""
     bound = options.bound
-    if options.method != "lscm" or options.frames not in ("auto", "conformal"):
+    if not _batched_options(options):
         return {}, {}
     pinned = np.zeros(len(isl), dtype=bool)
     if len(pins[0]):

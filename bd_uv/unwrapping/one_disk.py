@@ -1,0 +1,228 @@
+"""A mesh that is one clean disk, unwrapped in one pass (issue 21 item 2: no fixed costs on small
+meshes).
+
+An artist unwraps small pieces all day, most of them one disk: no seam, no pin, one boundary
+loop. For such a mesh the general path (``mesh.checked_islands``, ``batched.conformal_islands``,
+``overlap_certificate``) builds per-island tables, cut vertices and boundary loops for any number
+of islands, and measures each face's geometry three times; here one pass over the half-edges finds
+the island and everything its conformal map and certificate need, the geometry is measured once,
+and the stored UVs are certified by ``disk_certificate``.
+
+Nothing is assumed: ``find`` accepts only a mesh that ``mesh.checked_islands`` would make one
+island with no error (every edge in at most two faces, consistently oriented, no repeated or
+degenerate face, finite coordinates, one component, one boundary loop and Euler characteristic 1,
+which together leave no bow-tie vertex and no handle), with the same vertex order, triangles and
+loop. Anything else, a map over the bound or a boundary the certificate cannot clear at once goes
+the general way, which words its errors, bends maps and cuts overlaps.
+"""
+from dataclasses import dataclass
+import time
+
+import numpy as np
+
+from ..errors import CancelledError
+from ..geometry import components, gradient_operators, local_frame
+from ..mesh import DEGENERATE_RATIO, Island
+from ..solvers.lscm import face_geometry_of, lscm_pinned
+from .disk_certificate import certify_disk
+from .problem import STORE_HEADROOM
+from .results import IslandResult, UnwrapResult
+
+# Up to this many boundary edges the loop is walked in Python (a few tenths of a microsecond a
+# step); a longer one goes the general way (``geometry.ordered_loops``' pointer jumping).
+WALK = 4096
+
+
+@dataclass(frozen=True)
+class Disk:
+    """A mesh found to be one clean disk.
+
+    Attributes
+    ----------
+    island : mesh.Island, as ``mesh.checked_islands`` makes it (index 0, every face)
+    twins : (2, h) int64, the two half-edges (flat corners ``3 f + k``: the side from corner k to
+        k + 1) of every interior edge
+    loop : (b,) int64, the boundary half-edges in order along the loop (``island.loops[0]`` are
+        their start vertices)
+    first : (nv,) int64, each island vertex's first corner (flat)
+    e01, e02 : (m,3) float64, each face's edges from its first corner
+    area : (m,) float64, each face's area (``geometry.face_areas``' bits)
+    """
+    island: Island
+    twins: np.ndarray
+    loop: np.ndarray
+    first: np.ndarray
+    e01: np.ndarray
+    e02: np.ndarray
+    area: np.ndarray
+
+
+_NEXT = np.array([1, 2, 0])
+# A face is accepted here when twice its area exceeds DEGENERATE_RATIO times its longest edge
+# squared by this factor more: its squared edges are summed in another order than
+# checked_islands', which this covers many times over.
+_CLEAR = 1.0 + 1e-9
+
+
+def find(V, F):
+    """The ``Disk`` of checked arrays (V float64, F int64 in range), or None when the mesh is not
+    one clean disk (``mesh.checked_islands`` decides then)."""
+    n, m = len(V), len(F)
+    src = F.ravel()
+    dst = F.take(_NEXT, axis=1).ravel()
+    key = np.minimum(src, dst) * n + np.maximum(src, dst)
+    order = key.argsort()
+    ks = key.take(order)
+    same = ks[1:] == ks[:-1]
+    if (same[1:] & same[:-1]).any():                       # an edge in three faces or more
+        return None
+    i = np.flatnonzero(same)
+    h1, h2 = order.take(i), order.take(i + 1)
+    if not (src.take(h1) == dst.take(h2)).all():           # oriented against a neighbour
+        return None
+    # Degenerate or not finite (a face repeating a vertex has no area; coordinates that overflow
+    # make an area or a squared edge inf or NaN).
+    P = V.take(F, axis=0)
+    e01 = P[:, 1] - P[:, 0]
+    e02 = P[:, 2] - P[:, 0]
+    e12 = P[:, 2] - P[:, 1]
+    with np.errstate(invalid="ignore", over="ignore"):
+        area = 0.5 * _cross_norm(e01, e02)
+        lmax2 = np.maximum(np.maximum(np.einsum("ij,ij->i", e01, e01),
+                                      np.einsum("ij,ij->i", e02, e02)),
+                           np.einsum("ij,ij->i", e12, e12))
+        if not ((2 * area > (DEGENERATE_RATIO * _CLEAR) * lmax2).all()
+                and np.isfinite(area).all()):
+            return None
+    interior = np.zeros(3 * m, dtype=bool)
+    interior[h1] = True
+    interior[h2] = True
+    bnd = np.flatnonzero(~interior)
+    nb = len(bnd)
+    if nb == 0 or nb > WALK:
+        return None
+    # One boundary loop: every boundary vertex starts one boundary half-edge, and the walk from
+    # the first comes back to it after all of them.
+    bsrc = src.take(bnd)
+    pos = np.full(n, -1, dtype=np.int64)
+    pos[bsrc] = np.arange(nb)
+    nxt = pos.take(dst.take(bnd))
+    if not (pos.take(bsrc) == np.arange(nb)).all() or nxt.min() < 0:
+        return None
+    seq = _walk(nxt.tolist())
+    if seq is None:
+        return None
+    # Vertices numbered by their first corner, as checked_islands numbers cut vertices.
+    first = np.full(n, 3 * m, dtype=np.int64)
+    first[src[::-1]] = np.arange(3 * m)[::-1]
+    first_corner = np.flatnonzero(first.take(src) == np.arange(3 * m))
+    verts = src.take(first_corner)
+    nv = len(verts)
+    # Euler characteristic 1 with one boundary loop: genus 0 and no bow-tie (a vertex of several
+    # corner fans would count once here and once per fan in the cut mesh), given one component
+    # (which also leaves out two faces on the same three vertices: a closed piece of their own).
+    if nv - (len(h1) + nb) + m != 1 or components(m, h1 // 3, h2 // 3)[0] != 1:
+        return None
+    local = np.empty(n, dtype=np.int64)
+    local[verts] = np.arange(nv)
+    tris = local.take(F)
+    loop = bnd.take(seq)
+    island = Island(0, np.arange(m, dtype=np.int64), verts, tris, (local.take(bsrc.take(seq)),))
+    return Disk(island, np.stack([h1, h2]), loop, first_corner, e01, e02, area)
+
+
+def _cross_norm(a, b):
+    """``geometry._cross_norm``'s arithmetic (the same bits as ``geometry.face_areas``)."""
+    c0 = a[:, 1] * b[:, 2] - a[:, 2] * b[:, 1]
+    c1 = a[:, 2] * b[:, 0] - a[:, 0] * b[:, 2]
+    c2 = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    return np.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+
+
+def _walk(nl):
+    """The order of a successor list that is one cycle through every entry, from entry 0; None
+    when it is not."""
+    seq, j, b = [0], nl[0], len(nl)
+    while j != 0 and len(seq) < b:
+        seq.append(j)
+        j = nl[j]
+    return seq if j == 0 and len(seq) == b else None
+
+
+def _far_pair(P, lv):
+    """``batched._far_pairs`` of one loop ``lv`` (island vertex ids along it) of vertices at P:
+    its first vertex and the one about half the loop's length from it, the same arithmetic."""
+    Q = P.take(lv, axis=0)
+    d = np.concatenate([Q[1:], Q[:1]]) - Q
+    seg = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])
+    cum = np.cumsum(seg)
+    total = np.bincount(np.zeros(len(seg), dtype=np.int64), seg, 1)[0]
+    return np.array([lv[0], lv[int(np.argmin(np.abs((cum - seg) - 0.5 * total)))]])
+
+
+def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
+    """The conformal map of a ``Disk`` at the bound C, certified from its UVs as stored.
+
+    Returns
+    -------
+    (UnwrapResult, None) when the conformal map fits C (with STORE_HEADROOM) and the certificate
+    clears it; else (None, u), u (nv,) complex128 the conformal map as
+    ``batched.conformal_islands`` solves it, for the general path to start from.
+
+    Raises
+    ------
+    CancelledError when ``cancel`` is set after a progress report (as ``unwrap_islands``)
+    """
+    isl = disk.island
+    _report(progress, cancel, 0.01, "conformal maps of 1 islands")
+    Z = local_frame(disk.e01, disk.e02)
+    G = gradient_operators(Z)
+    geom = face_geometry_of(Z, G, disk.area)
+    nv = len(isl.vertices)
+    idx = _far_pair(V.take(isl.vertices, axis=0), isl.loops[0])
+    u = lscm_pinned(geom.cbw, geom.cb, isl.tris, nv, idx, np.array([0.0, 1.0], complex),
+                    (disk.twins[0], disk.twins[1], disk.loop))
+    if C is None:
+        return None, u
+    # UV area = 3D area, bounding box at (0, 0), as the batched path places an island.
+    uc = u.take(isl.tris)
+    e1, e2 = uc[:, 1] - uc[:, 0], uc[:, 2] - uc[:, 0]
+    one = np.zeros(len(F), dtype=np.int64)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        s = np.sqrt(np.bincount(one, disk.area, 1)[0]
+                    / np.bincount(one, 0.5 * (e1.conj() * e2).imag, 1)[0])
+    us = u * s
+    us -= us.real.min() + 1j * us.imag.min()
+    uv = us.view(np.float64).reshape(nv, 2)
+    corner_uv = uv.take(isl.tris, axis=0)
+    cert, D, smin, smax = certify_disk(corner_uv, G, disk, C)
+    if cert is None or not cert.max_distortion * (1.0 + STORE_HEADROOM) <= C:
+        return None, u
+    mx = cert.max_distortion
+    res = IslandResult(
+        0, isl.faces, isl.vertices, isl.tris, uv=uv, status="certified",
+        message=f"island 0: {len(F)} faces, max distortion {mx:.3f} <= {C:.4g}, 0 flipped",
+        bound_requested=C, bound_certified=float(C), max_distortion=mx,
+        mean_distortion=cert.mean_distortion, flipped=0, frames="conformal",
+        seconds=time.perf_counter() - t0, distortion=D, flags=("initial_map",),
+        overlap_free=True, min_singular=smin, max_singular=smax,
+        timings={"setup": 0.0, "solve": 0.0, "certify": 0.0})
+    _report(progress, cancel, 1.0, "island 1/1: the conformal map fits the bound")
+    if progress is not None:
+        progress(1.0, "done")
+    return UnwrapResult(corner_uv, one, [res], time.perf_counter() - t0, "lscm",
+                        certificates=(cert,)), None
+
+
+def certify(disk, corner_uv, C):
+    """The ``Certificate`` of a ``Disk``'s UVs as stored at the bound C, or None where
+    ``disk_certificate`` does not clear them (``overlap_certificate`` decides then)."""
+    G = gradient_operators(local_frame(disk.e01, disk.e02))
+    return certify_disk(np.asarray(corner_uv, dtype=np.float64), G, disk, C)[0]
+
+
+def _report(progress, cancel, fraction, message):
+    if progress is not None:
+        progress(fraction, message)
+    if cancel is not None and cancel.is_set():
+        raise CancelledError("unwrap cancelled; nothing was changed")

@@ -1,0 +1,284 @@
+"""A mesh that is one clean disk, found, solved and certified in one pass (``unwrapping.one_disk``,
+``unwrapping.disk_certificate``): the same island, map and certificate as the general path, and
+nothing accepted that the general path would refuse or word otherwise."""
+import numpy as np
+import pytest
+
+import bd_uv
+from bd_uv.certificate import certify_islands
+from bd_uv.mesh import checked_islands
+from bd_uv.options import unwrap_options
+from bd_uv.overlap import island_overlaps
+from bd_uv.unwrapping import disk_certificate, one_disk
+from bd_uv.unwrapping.unwrap import pin_arrays, unwrap_islands
+from helpers import grid, load_off
+
+
+def curved_grid(n=8):
+    return grid(n, n, z=lambda x, y: 0.3 * np.sin(3 * x) * np.cos(2 * y))
+
+
+def jagged():
+    """A grid with every other boundary face of its bottom row taken out: a sawtooth boundary,
+    not star-shaped from any point once mapped."""
+    V, F = curved_grid(10)
+    # the bottom row's triangles on the boundary edge (the first of each square's two)
+    bottom = np.flatnonzero(V[F].max(axis=1)[:, 1] < 0.1)
+    bottom = bottom[bottom < len(F) // 2]
+    F = np.delete(F, bottom[::2], axis=0)
+    used, inv = np.unique(F, return_inverse=True)
+    return V[used], inv.reshape(-1, 3)
+
+
+def unused_vertex():
+    """A grid whose vertex list holds a vertex no face uses (first and in the middle)."""
+    V, F = curved_grid(6)
+    V = np.r_[[[9.0, 9.0, 9.0]], V[:20], [[7.0, 7.0, 7.0]], V[20:]]
+    return V, np.where(F >= 20, F + 2, F + 1)
+
+
+DISKS = {"grid": curved_grid, "nefertiti": lambda: load_off("nefertiti.off"), "jagged": jagged,
+         "unused vertex": unused_vertex,
+         "one face": lambda: (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.5]], float),
+                              np.array([[0, 1, 2]]))}
+
+
+def general(V, F, **kw):
+    """The general path on the same arrays: checked_islands, the batched conformal map, the
+    overlap certificate."""
+    return unwrap_islands(V, F, checked_islands(V, F), pin_arrays(None, None, len(F)),
+                          unwrap_options(None, **kw))
+
+
+@pytest.mark.parametrize("name", sorted(DISKS))
+def test_the_island_is_checked_islands_one(name):
+    V, F = DISKS[name]()
+    disk = one_disk.find(V, F.astype(np.int64))
+    (isl,) = checked_islands(V, F.astype(np.int64))
+    assert disk is not None and isl.error is None
+    a = disk.island
+    assert np.array_equal(a.faces, isl.faces) and np.array_equal(a.vertices, isl.vertices)
+    assert np.array_equal(a.tris, isl.tris)
+    assert len(a.loops) == len(isl.loops) == 1 and np.array_equal(a.loops[0], isl.loops[0])
+
+
+@pytest.mark.parametrize("name", sorted(DISKS))
+@pytest.mark.parametrize("bound", [5.0, 1.05, "auto"])
+def test_the_one_pass_gives_the_general_paths_map_and_certificate(name, bound):
+    """At C = 5 the conformal map fits; at 1.05 it does not (but for the one face) and the
+    general path bends it from the same conformal map; "auto" searches from it and is certified
+    by the one-disk certificate. The same UVs bit for bit, the same certificate, the island's
+    figures as its certificate measures them."""
+    V, F = DISKS[name]()
+    fast = bd_uv.unwrap(V, F, bound=bound)
+    ref = general(V, np.asarray(F, np.int64), bound=bound)
+    assert np.array_equal(fast.corner_uv, ref.corner_uv, equal_nan=True)
+    assert fast.certificates == ref.certificates
+    (r,) = fast.islands
+    (g,) = ref.islands
+    assert r.status == g.status == "certified" and r.flags == g.flags
+    assert r.bound_certified == g.bound_certified
+    assert np.isclose(r.max_distortion, g.max_distortion, rtol=1e-12, atol=0)
+    assert np.isclose(r.mean_distortion, g.mean_distortion, rtol=1e-12, atol=0)
+    assert np.allclose(r.distortion, g.distortion, rtol=1e-12, atol=0)
+    assert np.isclose(r.min_singular, g.min_singular, rtol=1e-12)
+    assert np.isclose(r.max_singular, g.max_singular, rtol=1e-12)
+    (c,) = certify_islands(V, F, fast.corner_uv, fast.face_island, [r.bound_certified])
+    assert c.certified and c == fast.certificates[0]
+    assert r.max_distortion == c.max_distortion
+
+
+def test_the_known_edges_build_the_sorted_edges_system():
+    from bd_uv.solvers.lscm import _lscm_system, face_geometry
+    V, F = load_off("nefertiti.off")
+    disk = one_disk.find(V, F)
+    isl = disk.island
+    g = face_geometry(V[isl.vertices], isl.tris)
+    idx, val = one_disk._far_pair(V[isl.vertices], isl.loops[0]), np.array([0.0, 1.0], complex)
+    A, rhs, _, _ = _lscm_system(g.cbw, g.cb, isl.tris, len(isl.vertices), idx, val)
+    B, rhs2, _, _ = _lscm_system(g.cbw, g.cb, isl.tris, len(isl.vertices), idx, val,
+                                 (disk.twins[0], disk.twins[1], disk.loop))
+    assert np.array_equal(A.indptr, B.indptr) and np.array_equal(A.indices, B.indices)
+    assert np.array_equal(A.data, B.data) and np.array_equal(rhs, rhs2)
+
+
+def torus(nu=10, nv=6):
+    u, v = np.meshgrid(np.arange(nu) * 2 * np.pi / nu, np.arange(nv) * 2 * np.pi / nv,
+                       indexing="ij")
+    V = np.stack([(2 + 0.7 * np.cos(v)) * np.cos(u), (2 + 0.7 * np.cos(v)) * np.sin(u),
+                  0.7 * np.sin(v)], -1).reshape(-1, 3)
+    i, j = np.meshgrid(np.arange(nu), np.arange(nv), indexing="ij")
+    idx = lambda i, j: (i % nu) * nv + (j % nv)
+    a, b, c, d = idx(i, j), idx(i + 1, j), idx(i + 1, j + 1), idx(i, j + 1)
+    return V, np.stack([np.stack([a, b, c], -1), np.stack([a, c, d], -1)], -2).reshape(-1, 3)
+
+
+def _with(V, F, V2, F2, shift=5.0):
+    return np.r_[V, V2 + [shift, 0, 0]], np.r_[F, F2 + len(V)]
+
+
+def _not_disks():
+    V, F = curved_grid(6)
+    n = 6
+    out = {}
+    # Euler characteristic 1 + 0 and one boundary loop: only the component count tells
+    out["disk and torus"] = _with(V, F, *torus())
+    out["two disks"] = _with(V, F, V, F)
+    W, G = V.copy(), F.copy()
+    G[G == 4 * n + 4] = n + 1             # two interior vertices made one: a bow-tie of two
+    out["closed fans pinched"] = (W, G)   # closed fans (only the Euler characteristic tells)
+    G = F.copy()
+    G[G == n - 1] = 0                     # two boundary vertices made one: a pinched boundary
+    out["boundary pinched"] = (V, G)
+    out["hole"] = (V, F[~(F == 2 * n + 2).any(axis=1)])     # the fan of an inner vertex out
+    G = F.copy()
+    G[3] = G[3, ::-1]
+    out["flipped face"] = (V, G)
+    W = V.copy()
+    W[F[0, 2]] = W[F[0, 0]]
+    out["degenerate face"] = (W, F)
+    W = V.copy()
+    W[7, 2] = np.nan
+    out["NaN"] = (W, F)
+    out["overflow"] = (V * 1e200, F)
+    out["edge in three faces"] = (np.r_[V, [[0.1, 0.1, 1.0]]], np.r_[F, [[F[0, 0], F[0, 1],
+                                                                         len(V)]]])
+    out["repeated face"] = (V, np.r_[F, F[:1]])
+    out["repeated vertex"] = (V, np.r_[F, [[F[0, 0], F[0, 0], F[0, 1]]]])
+    Vt = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
+    out["closed"] = (Vt, np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]]))
+    return out
+
+
+@pytest.mark.parametrize("name", sorted(_not_disks()))
+def test_what_is_not_one_clean_disk_goes_the_general_way(name):
+    V, F = _not_disks()[name]
+    F = np.asarray(F, np.int64)
+    assert one_disk.find(V, F) is None
+    isl = checked_islands(V, F)
+    assert len(isl) > 1 or isl[0].error is not None or len(isl[0].loops) != 1
+
+
+def test_an_overlapping_conformal_map_is_cut_by_the_general_path():
+    """A strip wound one and a half times round a low helix: nearly flat, its conformal map is
+    an annulus sector of ~3 pi, lying over itself. The one pass finds the disk but does not clear
+    its certificate; the general path cuts it, as it would have anyway."""
+    t = np.linspace(0, 3 * np.pi, 150)
+    n = len(t)
+    V = np.r_[np.stack([np.cos(t), np.sin(t), 0.1 * t], 1),
+              np.stack([1.3 * np.cos(t), 1.3 * np.sin(t), 0.1 * t], 1)]
+    j = np.arange(n - 1)
+    F = np.r_[np.c_[j, n + j, j + 1], np.c_[n + j, n + j + 1, j + 1]].astype(np.int64)
+    assert one_disk.find(V, F) is not None
+    res = bd_uv.unwrap(V, F, bound=5.0)
+    ref = general(V, F, bound=5.0)
+    assert len(res.islands) == 2 and all("cut" in r.flags for r in res.islands)
+    assert np.array_equal(res.corner_uv, ref.corner_uv, equal_nan=True)
+    assert [r.flags for r in res.islands] == [r.flags for r in ref.islands]
+    assert [c.certified for c in certify_islands(V, F, res.corner_uv, res.face_island,
+                                                 [5.0, 5.0])] == [True, True]
+
+
+def _fan(p):
+    """A triangle fan over the polygon p (k,2): its faces and corner UVs, whose UV boundary is
+    the polygon (faces may flip: the boundary is what island_overlaps reads)."""
+    k = len(p)
+    j = np.arange(1, k - 1)
+    F = np.c_[np.zeros_like(j), j, j + 1]
+    return F, p[F]
+
+
+def _polygons(rng):
+    for _ in range(300):
+        k = int(rng.integers(3, 40))
+        ang = np.sort(rng.uniform(0, 2 * np.pi, k))
+        rad = rng.uniform(0.2, 1.0, k)
+        p = np.c_[rad * np.cos(ang), rad * np.sin(ang)]
+        kind = rng.integers(0, 6)
+        if kind == 1:
+            p = p[::-1]                                    # clockwise
+        elif kind == 2:
+            p = p + rng.normal(0, 0.3, p.shape)            # often crossing itself
+        elif kind == 3 and k > 4:
+            p[k // 2] = p[0]                               # a pinch
+        elif kind == 4:
+            p = p + [rng.uniform(-2, 2), rng.uniform(-2, 2)]   # star-shaped but not about 0
+            p[:, 0] *= rng.uniform(0.05, 3)
+        elif kind == 5 and k > 4:
+            p[2] = p[1] + 0.5 * (p[1] - p[0]) * -1        # folds back onto the segment before
+        yield p
+
+
+TOUCHING = [np.array([[0, 0], [4, 0], [4, 4], [2, 0], [0, 4]], float),   # a point on an edge
+            np.array([[0, 0], [4, 0], [4, 4], [2, 4], [2, 6], [2, 2], [0, 4]], float),  # overlap
+            np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float)]                 # a square
+
+
+def test_the_polygon_tests_agree_with_island_overlaps():
+    """Random polygons (star-shaped about the origin or elsewhere, clockwise, noisy, pinched,
+    folded) and exact touching ones (orientations exactly 0: decided by GEOS)."""
+    rng = np.random.default_rng(20261127)
+    seen = {True: 0, False: 0}
+    star = 0
+    for p in [*_polygons(rng), *TOUCHING]:
+        q = np.concatenate([p[1:], p[:1]])
+        F, uv = _fan(p)
+        truth = bool(island_overlaps(F, uv, np.zeros(len(F), np.int64)).overlap_free[0])
+        assert disk_certificate._simple_ccw(p, q) == truth
+        if disk_certificate._star_shaped(p, q):
+            star += 1
+            assert truth
+        seen[truth] += 1
+    assert seen[True] > 50 and seen[False] > 50 and star > 20
+
+
+def test_the_free_unknowns_iterations_reach_the_whole_maps_bound(monkeypatch):
+    """bound="auto" on a small island iterates on the free unknowns (``BoundSearch._run_free``);
+    the iterations on the whole map (the path of islands over ONE_PRODUCT_FACES faces) reach the
+    same bound, to rounding."""
+    import bd_uv.solvers.bound_search as bs
+    V, F = load_off("nefertiti.off")
+    small = bd_uv.unwrap(V, F, bound="auto")
+    monkeypatch.setattr(bs, "ONE_PRODUCT_FACES", 0)
+    whole = bd_uv.unwrap(V, F, bound="auto")
+    a, b = small.islands[0], whole.islands[0]
+    assert a.iterations == b.iterations
+    assert abs(a.max_distortion - b.max_distortion) < 1e-9
+    assert small.certificates[0].certified and whole.certificates[0].certified
+
+
+@pytest.mark.parametrize("name", ["grid", "nefertiti", "jagged"])
+@pytest.mark.parametrize("precision", [None, np.float32])
+def test_a_clean_disk_needs_no_repair(name, precision, monkeypatch):
+    """seams="needed" (the command line's and Blender's default) skips repair.repair_mesh on a
+    clean disk: the same result as with the repair run."""
+    import bd_uv.seams.needed as needed
+    V, F = DISKS[name]()
+    assert needed.clean_disk(V, F, precision)
+    fast = bd_uv.unwrap(V, F, seams="needed", precision=precision)
+    monkeypatch.setattr(needed, "clean_disk", lambda *a: False)
+    ref = bd_uv.unwrap(V, F, seams="needed", precision=precision)
+    assert np.array_equal(fast.corner_uv, ref.corner_uv, equal_nan=True)
+    assert np.array_equal(fast.face_island, ref.face_island)
+    assert fast.repair == ref.repair == () and fast.seams_added.shape == ref.seams_added.shape
+    assert [(r.status, r.flags, r.bound_certified, r.max_distortion) for r in fast.islands] == \
+        [(r.status, r.flags, r.bound_certified, r.max_distortion) for r in ref.islands]
+    assert np.array_equal(fast.islands[0].faces, ref.islands[0].faces)
+    assert np.array_equal(fast.islands[0].vertices, ref.islands[0].vertices)
+
+
+def test_a_face_float32_cannot_tell_from_a_line_is_repaired():
+    """A disk with one face thinner than a float32 step at its coordinates: clean in float64,
+    so only the float32 precision sends it to the repair, which leaves that face out."""
+    import bd_uv.seams.needed as needed
+    V, F = curved_grid(6)
+    V = V + 1000.0                        # float32 steps of 6e-5 there
+    f = F[len(F) // 2]
+    V[f[2]] = 0.5 * (V[f[0]] + V[f[1]]) + [0.0, 0.0, 1e-6]   # the face's third corner on its edge
+    assert needed.clean_disk(V, F, None) == (one_disk.find(V, F) is not None)
+    assert not needed.clean_disk(V, F, np.float32)
+    res = bd_uv.unwrap(V, F, seams="needed", precision=np.float32)
+    thin = len(F) // 2
+    assert len(res.repair) == 1 and f"faces {thin})" in res.repair[0]
+    (failed,) = [r for r in res.islands if r.status == "failed"]
+    assert failed.faces.tolist() == [thin] and type(failed.error) is bd_uv.DegenerateFacesError
