@@ -24,6 +24,9 @@ docs/ARCHITECTURE.md.
 import time
 
 import numpy as np
+# (at import, as bd_uv imports scipy.sparse: imported inside the first compaction, scipy.optimize
+# took 0.2 s of its CPU budget, 0.48 s on suzanne, the first mesh of benchmarks/bench_pack.py)
+from scipy.optimize import linprog
 
 from .nest import Placement, rotations
 
@@ -83,7 +86,6 @@ def _cross(w, u):
 def _step_lp(Q, owner, nxt, centre, radius, S, pad, pm, tol, step, turn, seconds, extra=None):
     """One linear program (at most ``seconds`` long): the moves (k,2), turns (k,) in radians and
     the side reached, or None."""
-    from scipy.optimize import linprog
     from scipy.sparse import coo_array
     k = len(centre)
     nv = 3 * k + 1                    # per chart dx, dy, turn; then S
