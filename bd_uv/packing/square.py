@@ -115,7 +115,8 @@ def square_layout(outlines, options, tol, seconds):
     area = sum(_area(xy) for xy in outlines)
     points = np.concatenate(outlines)
     owner = np.repeat(np.arange(k), [len(xy) for xy in outlines])
-    widest = float(least_squares(outlines, options)[0].max())
+    boxes = least_squares(outlines, options)[0]
+    widest = float(boxes.max())
     # the strip must hold the widest chart with the separation to both its edges: its height is
     # S (1 + p HEADROOM) + 2 tol, the chart's extent at most S (1 - p HEADROOM) - 2 tol
     least = (widest + 2 * tol) / (1 - options.padding * HEADROOM) * FIT[options.rotate]
@@ -168,5 +169,9 @@ def square_layout(outlines, options, tol, seconds):
     if not share:
         return best[0], best[1], solves
     # its share of the time, in CPU seconds: compaction of the best layout
-    pl, side, _ = compact_square(outlines, best[0], best[1], options, tol, share * seconds)
+    # (no layout is smaller than the widest chart's least square with the padding; sampled
+    # every 0.05 degrees, a hair above it)
+    fine = float(least_squares([outlines[int(np.argmax(boxes))]], options, step=0.05)[0][0])
+    pl, side, _ = compact_square(outlines, best[0], best[1], options, tol, share * seconds,
+                                 least_side=(fine + 2 * tol) / (1 - options.padding))
     return pl, side, solves
