@@ -24,6 +24,9 @@ docs/ARCHITECTURE.md.
 import time
 
 import numpy as np
+# (at import, as bd_uv imports scipy.sparse: imported inside the first compaction, scipy.optimize
+# took 0.2 s of its CPU budget, 0.48 s on suzanne, the first mesh of benchmarks/bench_pack.py)
+from scipy.optimize import linprog
 
 from .nest import Placement, rotations
 
@@ -34,6 +37,7 @@ REACH = 2.0      # rows for vertex and segment pairs within the separation plus 
 LINE_SEARCH = (1.0, 0.5, 0.25)  # fractions of a step's move tried in turn
 REL_GAIN = 1e-5   # a program shrinking the side by less than this fraction: a shorter step
 LEAST_STEP = 1e-4  # the compaction ends when the step falls below this fraction of the side
+NEAR_LEAST = 1e-3  # ... or when the side is within this fraction of the least one conceivable
 
 
 def _rings(outlines):
@@ -83,7 +87,6 @@ def _cross(w, u):
 def _step_lp(Q, owner, nxt, centre, radius, S, pad, pm, tol, step, turn, seconds, extra=None):
     """One linear program (at most ``seconds`` long): the moves (k,2), turns (k,) in radians and
     the side reached, or None."""
-    from scipy.optimize import linprog
     from scipy.sparse import coo_array
     k = len(centre)
     nv = 3 * k + 1                    # per chart dx, dy, turn; then S
@@ -162,9 +165,11 @@ def _fits(outlines, angle, shift, S, pad, pm, tol):
     return not np.any(i != j)
 
 
-def compact_square(outlines, placement, side, options, tol, seconds, max_programs=None):
+def compact_square(outlines, placement, side, options, tol, seconds, max_programs=None,
+                   least_side=0.0):
     """Shrink a square layout by compaction steps for at most ``seconds`` (or until the step
-    falls below ``LEAST_STEP`` of the side: no program gains, or no move passes the check).
+    falls below ``LEAST_STEP`` of the side: no program gains, or no move passes the check; or
+    until the side is within ``NEAR_LEAST`` of ``least_side``).
 
     Parameters
     ----------
@@ -177,6 +182,8 @@ def compact_square(outlines, placement, side, options, tol, seconds, max_program
         takes longer but reaches as far (a program's solve is cut at the time left, by its own
         clock; its exact checks are finished)
     max_programs : int, optional: at most this many linear programs (deterministic runs)
+    least_side : float, a side no layout reaches (the largest chart's least square with the
+        padding): nothing is left to gain near it (fandisk's 3 charts start there)
 
     Returns
     -------
@@ -194,6 +201,7 @@ def compact_square(outlines, placement, side, options, tol, seconds, max_program
         return placement, side, 0
     programs = 0
     while (time.process_time() - t0 < seconds and step > LEAST_STEP * side
+           and S > least_side * (1 + NEAR_LEAST)
            and (max_programs is None or programs < max_programs)):
         programs += 1
         Q = _placed(outlines, angle, shift)

@@ -19,6 +19,10 @@ AUTO_SECONDS_PER_ROOT = 0.006   # seconds per sqrt(charts x faces)
 # all, against Blender's 19.2 s in the same run, 0.27x; 2026-11-27, load 3.5)
 AUTO_SECONDS_PER_CHART = 0.08
 AUTO_SECONDS_MAX = 20.0
+# and at least this much (two charts or more): on eight's 6 charts (634 faces) the root gave
+# 0.37 s and coverage 0.558 (8 seeds, load ~8); 0.6 s gave 0.586. Blender's exact-shape packer
+# took at least 4 s on every mesh measured (eight 6.4 s, fandisk's 3 charts 7.4 s)
+AUTO_SECONDS_MIN = 0.6
 
 
 @dataclass(frozen=True)
@@ -87,13 +91,14 @@ class PackOptions:
     def search_seconds(self, charts, faces=0):
         """Seconds of nesting for ``charts`` charts of ``faces`` faces: ``solve_seconds``, or
         adaptive: ``AUTO_SECONDS_PER_ROOT`` sqrt(charts x faces), at most
-        ``AUTO_SECONDS_PER_CHART`` a chart and ``AUTO_SECONDS_MAX`` (0 for one chart)."""
+        ``AUTO_SECONDS_PER_CHART`` a chart and ``AUTO_SECONDS_MAX``, at least
+        ``AUTO_SECONDS_MIN`` (0 for one chart)."""
         if self.solve_seconds is not None:
             return float(self.solve_seconds)
         if charts < 2:
             return 0.0
-        return min(AUTO_SECONDS_PER_ROOT * float(np.sqrt(charts * max(faces, charts))),
-                   AUTO_SECONDS_PER_CHART * charts, AUTO_SECONDS_MAX)
+        return max(min(AUTO_SECONDS_PER_ROOT * float(np.sqrt(charts * max(faces, charts))),
+                       AUTO_SECONDS_PER_CHART * charts, AUTO_SECONDS_MAX), AUTO_SECONDS_MIN)
 
     @property
     def padding(self):

@@ -98,3 +98,65 @@ def test_default_packing_with_compaction_is_certified(kind, k, res, pad):
     packed = pack_islands(V, F, uv, lab, options)
     cert = check_layout(V, F, uv, lab, packed, options)
     assert 0.05 < cert.coverage < 1.0 and packed.solves == 1
+
+
+def test_compaction_stops_at_the_widest_charts_least_square():
+    """A right triangle (legs 1: its least square box is 1 x 1, at no turn) and a small square
+    that fits beside its hypotenuse: no layout's side is below (1 + 2 tol) / (1 - padding).
+    Given that side, the compaction stops within ``NEAR_LEAST`` of it, in fewer programs than
+    without it, with every outline inside and the padding kept (checked here by brute force)."""
+    from bd_uv.packing.nest import Placement
+    options = PackOptions(resolution=1024, padding_px=4, rotate="any")
+    tol = 1e-4
+    tri = np.array([[-0.5, -0.5], [0.5, -0.5], [-0.5, 0.5]])
+    box = 0.05 * np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    side0 = 1.3
+    edge0 = 0.5 * options.padding * side0 + tol
+    pl0 = Placement(np.zeros(2), np.array([[edge0 + 0.5, edge0 + 0.5],
+                                           [side0 - edge0 - 0.07, side0 - edge0 - 0.07]]), side0)
+    least = (1 + 2 * tol) / (1 - options.padding)
+    runs = {}
+    for bound in (0.0, least):  # without the least side, then with it
+        runs[bound] = compact_square([tri, box], pl0, side0, options, tol, 1e9,
+                                     max_programs=400, least_side=bound)
+    pl, side, steps = runs[least]
+    assert least * (1 - 1e-9) <= side <= least * (1 + 1e-3)
+    assert steps < runs[0.0][2] and runs[0.0][1] >= least * (1 - 1e-9)
+    rings = _placed([tri, box], pl)
+    pts = np.concatenate(rings)
+    edge = 0.5 * options.padding * side + tol
+    assert pts.min() >= edge * (1 - 1e-9) and pts.max() <= side - edge * (1 - 1e-9)
+    gap, nested = _least_gap(rings)
+    assert gap >= (options.padding * side + 2 * tol) * (1 - 1e-9) and not nested
+
+
+def test_a_first_layout_too_wide_for_its_square_is_nested_again_as_wide_as_high(monkeypatch):
+    """When no layout of the first solve fits its square (here a row of four unit squares in a
+    strip 2.7 high), the next strip is the one whose height squares the density reached:
+    area / (height x width), recomputed here, not 5 % below it."""
+    import bd_uv.packing.square as square
+    from bd_uv.packing.nest import Placement
+    options = PackOptions(resolution=1024, padding_px=4, solves=1)
+    tol = 1e-4
+    unit = 0.5 * np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    outlines = [unit.copy() for _ in range(4)]
+    asked = []
+
+    def fake(outlines_, sides, options_, tol_, seconds):
+        asked.append(list(sides))
+        if len(asked) == 1:    # a row: 4.6 wide
+            shift = np.array([[0.6 + 1.15 * i, 1.0] for i in range(4)])
+            return [[Placement(np.zeros(4), shift, 4.6)]], None
+        edge = 0.5 * options.padding * 2.3 * 1.1 + tol
+        shift = np.array([[x, y] for x in (0.5, 1.65) for y in (0.5, 1.65)]) + edge
+        return [[Placement(np.zeros(4), shift, 2.3)]], None
+
+    monkeypatch.setattr(square, "_solve_all", fake)
+    square.square_layout(outlines, options, tol, 0.0)
+    assert len(asked) == 2
+    p, h = options.padding, square.HEADROOM
+    side0 = asked[0][0]
+    height = side0 + 2 * (p * side0 * h + 2 * tol - (0.5 * p * side0 * h + tol))
+    dens = 4.0 / (height * 4.6)
+    expect = max((np.sqrt(4.0 / dens) - 2 * tol) / (1 + p * h), 1.05 * side0)
+    assert asked[1][0] == pytest.approx(expect, rel=1e-12)
