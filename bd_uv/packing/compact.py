@@ -24,9 +24,6 @@ docs/ARCHITECTURE.md.
 import time
 
 import numpy as np
-# (at import, as bd_uv imports scipy.sparse: imported inside the first compaction, scipy.optimize
-# took 0.2 s of its CPU budget, 0.48 s on suzanne, the first mesh of benchmarks/bench_pack.py)
-from scipy.optimize import linprog
 
 from .nest import Placement, rotations
 
@@ -87,6 +84,7 @@ def _cross(w, u):
 def _step_lp(Q, owner, nxt, centre, radius, S, pad, pm, tol, step, turn, seconds, extra=None):
     """One linear program (at most ``seconds`` long): the moves (k,2), turns (k,) in radians and
     the side reached, or None."""
+    from scipy.optimize import linprog
     from scipy.sparse import coo_array
     k = len(centre)
     nv = 3 * k + 1                    # per chart dx, dy, turn; then S
@@ -189,6 +187,10 @@ def compact_square(outlines, placement, side, options, tol, seconds, max_program
     -------
     Placement, side (no larger than given), steps taken
     """
+    # imported before the clock starts: inside the first compaction, scipy.optimize took 0.2 s
+    # of its CPU budget (0.48 s on suzanne, the first mesh of benchmarks/bench_pack.py); at
+    # bd_uv's import it would add ~0.1 s to every process that never packs
+    import scipy.optimize  # noqa: F401
     t0 = time.process_time()
     k = len(outlines)
     owner, nxt = _rings(outlines)
