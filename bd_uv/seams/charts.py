@@ -118,25 +118,24 @@ def chart_maps(V, charts, geom=None, limits=None):
     A3 = geom.area[faces]
     area = np.bincount(face_c, A3, minlength=k)
     root = np.sqrt(area)[face_c][:, None]
-    cbw, cbf = geom.cbw[faces], geom.cb[faces]
     idx = _far_pairs(P, charts, voff)
     val = np.tile(np.array([0.0, 1.0], np.complex128), k)
     j = halves(nvs, PARALLEL_VERTICES)
     if j is None:
-        u = _lscm_pinned(cbw, cbf, tris, n, idx, val)
+        u = _lscm_pinned(geom, faces, tris, n, idx, val)
     else:                   # two runs of charts, one system each: side by side, or one after
         #                     the other above SEQUENTIAL_VERTICES (one factor at a time)
         def run(r):
             (a, b), (fa, fb) = r, (foff[r[0]], foff[r[1]])
-            return _lscm_pinned(cbw[fa:fb], cbf[fa:fb], tris[fa:fb] - voff[a],
+            return _lscm_pinned(geom, faces[fa:fb], tris[fa:fb] - voff[a],
                                 int(voff[b] - voff[a]),
                                 idx[2 * a:2 * b] - voff[a], val[2 * a:2 * b])
         runs = [(0, j), (j, k)]
         u = np.concatenate([run(r) for r in runs] if n > SEQUENTIAL_VERTICES
                            else map_blocks(run, runs))
     u_solved = u
-    cbw = cbf = None                        # the factorisations' inputs, freed before more arrays
-    ca, cb = geom.ca[faces] * root, geom.cb[faces] * root
+    cb = geom.cb[faces] * root
+    ca = cb.conj()
     # Scale each chart so its UV area equals its (unit-normalised) 3D area: sigma are then the
     # singular values of the map with the chart at its 3D size.
     e1 = u[tris[:, 1]] - u[tris[:, 0]]
@@ -170,10 +169,11 @@ def chart_maps(V, charts, geom=None, limits=None):
                      meanD, u_solved)
 
 
-def _lscm_pinned(cbw, cb, tris, n, idx, val):
-    """``solvers.lscm.lscm_pinned``, with the memory its assembly freed handed back to the
-    operating system before the factorisation (``trim.release_memory``: large charts only)."""
-    A, rhs, u, free = _lscm_system(cbw, cb, tris, n, idx, val)
+def _lscm_pinned(geom, faces, tris, n, idx, val):
+    """``solvers.lscm.lscm_pinned`` on the terms of ``faces`` (``geom``: FaceGeometry), formed
+    here and dropped with the assembly's temporaries before the factorisation, whose memory is
+    handed back to the operating system first (``trim.release_memory``: large charts only)."""
+    A, rhs, u, free = _lscm_system(geom.cbw(faces), geom.cb[faces], tris, n, idx, val)
     release_memory(len(tris))
     x = spd_solver(A, upper=True)(rhs)
     nf = len(free)

@@ -66,12 +66,13 @@ def conformal_islands(V, islands, C, known=None):
             own = ~have[np.repeat(np.arange(k), 2)]
             idx = np.concatenate([idx[own], kv])
             val = np.concatenate([val[own], kidx])
-        u = lscm_pinned(geom.cbw, geom.cb, tris, len(verts), idx, val)
+        u = lscm_pinned(geom.cbw(), geom.cb, tris, len(verts), idx, val)
     if C is None:
         return {}, {isl.index: u[voff[j]:voff[j + 1]] / 1.0 for j, isl in enumerate(islands)}
     root = np.sqrt(area)[face_isl]
     uc = u[tris]
-    a = np.abs(np.einsum("fk,fk->f", geom.ca, uc)) * root
+    ca = geom.ca()
+    a = np.abs(np.einsum("fk,fk->f", ca, uc)) * root
     b = np.abs(np.einsum("fk,fk->f", geom.cb, uc)) * root
     with np.errstate(invalid="ignore", divide="ignore"):
         D = np.where(a > b, (a + b) / (a - b), np.inf)
@@ -92,7 +93,7 @@ def conformal_islands(V, islands, C, known=None):
     # and beta (eq. 4.19 on its corner UVs, coefficients of its 3D local frame), its signed UV
     # area; D = inf where flipped, collapsed or not finite (as metrics.conformal_distortion).
     cu = us[tris]
-    alpha = np.einsum("fk,fk->f", geom.ca, cu)
+    alpha = np.einsum("fk,fk->f", ca, cu)
     beta = np.einsum("fk,fk->f", geom.cb, cu)
     e1, e2 = cu[:, 1] - cu[:, 0], cu[:, 2] - cu[:, 0]
     unflipped = 0.5 * (e1.conj() * e2).imag > 0
