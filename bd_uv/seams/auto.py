@@ -191,7 +191,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             measured = chs = None
     st, cr = measured if measured is not None else measure_charts(V, F, E, cut, result, chs)
     result = dataclasses.replace(result, seconds=time.perf_counter() - t0)
-    added = E.ends[cut & ~original]
+    added = E.ends[cut & ~original].astype(np.int64)
     info = {"charts": len(result.islands),
             "seam_length": float(E.length[cut].sum()),
             "added_length": float(E.length[cut & ~original].sum()),
