@@ -85,13 +85,17 @@ def uv_boundary(F, corner_uv, face_island):
     # Half-edge i runs corner h[i] = 3 f + k -> its next corner in face f = faces[i // 3]. Only
     # the (h,) columns the sort needs are made for every half-edge; UVs are read per pair (a
     # 500k-face layout held ~250 MB of per-half-edge copies here, now ~100 MB).
-    h = (3 * faces[:, None] + np.arange(3)).ravel()                 # flat corner ids
+    # The columns in int32 where every id fits (the outputs are int64 as documented).
+    small = 3 * len(F) < 2**31 - 1 and (F.size == 0 or int(F.max()) < 2**31 - 1) \
+        and (lab.size == 0 or int(lab.max()) < 2**31 - 1)
+    it = np.int32 if small else np.int64
+    h = (3 * faces[:, None].astype(it) + np.arange(3, dtype=it)).ravel()   # flat corner ids
     hn = h - h % 3 + (h % 3 + 1) % 3
     Fr = F.ravel()
-    a, b = Fr[h], Fr[hn]
+    a, b = Fr[h].astype(it), Fr[hn].astype(it)
     del Fr
     flat_uv = uv.reshape(-1, 2)
-    isl = np.repeat(lab[faces], 3)
+    isl = np.repeat(lab[faces].astype(it), 3)
     # Pair half-edges of one island on the same undirected edge; interior iff exactly two, opposite
     # directions, and the same UV at each end.
     lo, hi = np.minimum(a, b), np.maximum(a, b)
@@ -117,12 +121,13 @@ def uv_boundary(F, corner_uv, face_island):
     interior[y[match]] = True
     bnd = np.flatnonzero(~interior)
     del interior
-    p, q, bi = flat_uv[h[bnd]], flat_uv[hn[bnd]], isl[bnd]
+    p, q, bi = flat_uv[h[bnd]], flat_uv[hn[bnd]], isl[bnd].astype(np.int64)
     ids = _row_ids(np.concatenate([bi, bi]), _bits(np.concatenate([p[:, 0], q[:, 0]])),
                    _bits(np.concatenate([p[:, 1], q[:, 1]])))
     nb = len(bnd)
-    return Boundary(p, q, bi, faces[bnd // 3], np.stack([a[bnd], b[bnd]], axis=1), ids[:nb],
-                    ids[nb:], np.stack([h[x[match]], h[y[match]]], axis=1))
+    return Boundary(p, q, bi, faces[bnd // 3],
+                    np.stack([a[bnd], b[bnd]], axis=1).astype(np.int64), ids[:nb], ids[nb:],
+                    np.stack([h[x[match]], h[y[match]]], axis=1).astype(np.int64))
 
 
 def _equal_next(col, order):
