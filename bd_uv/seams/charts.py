@@ -28,10 +28,13 @@ MEAN_SLOPE = 0.07
 # Charts of one solve are split into two systems factored side by side (``solvers.threads``)
 # when each holds at least this many vertices (below it, the split costs more than it saves).
 PARALLEL_VERTICES = 1500
-# ... but a batch of more vertices than this has its two systems factored one after the other:
-# the LDL^T factor is the seam search's memory peak (measured on a 500k-face mesh: ~450 MB for
-# its first round's two charts, 250k vertices), and two at once add up.
+# ... but a batch of more vertices than this is solved one system at a time, each of charts
+# holding at most RUN_VERTICES vertices together (a larger chart alone): the LDL^T factors are
+# the seam search's memory peaks (measured on a 500k-face mesh: ~310 MB at its largest, a
+# 183k-vertex chart; a merge round's batch of unions in two halves: ~250k vertices, ~200 MB
+# each), and two at once add up.
 SEQUENTIAL_VERTICES = 100_000
+RUN_VERTICES = 50_000
 
 
 def mean_cap(C):
@@ -120,19 +123,19 @@ def chart_maps(V, charts, geom=None, limits=None):
     root = np.sqrt(area)[face_c][:, None]
     idx = _far_pairs(P, charts, voff)
     val = np.tile(np.array([0.0, 1.0], np.complex128), k)
+
+    def run(r):             # the system of charts r[0]:r[1] alone
+        (a, b), (fa, fb) = r, (foff[r[0]], foff[r[1]])
+        return _lscm_pinned(geom, faces[fa:fb], tris[fa:fb] - voff[a], int(voff[b] - voff[a]),
+                            idx[2 * a:2 * b] - voff[a], val[2 * a:2 * b])
     j = halves(nvs, PARALLEL_VERTICES)
-    if j is None:
+    if n > SEQUENTIAL_VERTICES:     # one factor at a time, none of more than RUN_VERTICES
+        #                             vertices but a chart's own
+        u = np.concatenate([run(r) for r in _runs(nvs, RUN_VERTICES)])
+    elif j is None:
         u = _lscm_pinned(geom, faces, tris, n, idx, val)
-    else:                   # two runs of charts, one system each: side by side, or one after
-        #                     the other above SEQUENTIAL_VERTICES (one factor at a time)
-        def run(r):
-            (a, b), (fa, fb) = r, (foff[r[0]], foff[r[1]])
-            return _lscm_pinned(geom, faces[fa:fb], tris[fa:fb] - voff[a],
-                                int(voff[b] - voff[a]),
-                                idx[2 * a:2 * b] - voff[a], val[2 * a:2 * b])
-        runs = [(0, j), (j, k)]
-        u = np.concatenate([run(r) for r in runs] if n > SEQUENTIAL_VERTICES
-                           else map_blocks(run, runs))
+    else:                   # two runs of charts, one system each, side by side
+        u = np.concatenate(map_blocks(run, [(0, j), (j, k)]))
     u_solved = u
     cb = geom.cb[faces] * root
     ca = cb.conj()
@@ -179,6 +182,19 @@ def _lscm_pinned(geom, faces, tris, n, idx, val):
     nf = len(free)
     u[free] = x[:nf] + 1j * x[nf:]
     return u
+
+
+def _runs(sizes, limit):
+    """Consecutive runs ``(a, b)`` of charts of ``sizes`` vertices, each as many as fit within
+    ``limit`` together (at least one)."""
+    runs, a, total = [], 0, 0
+    for j, s in enumerate(sizes.tolist()):
+        if j > a and total + s > limit:
+            runs.append((a, j))
+            a, total = j, 0
+        total += s
+    runs.append((a, len(sizes)))
+    return runs
 
 
 def piece_stretch(sigma, area3, label, k):
