@@ -3,6 +3,9 @@
 - ``cluster_fiedler.clusters``: connected clusters of one chart each, small charts untouched;
 - a chart split through its cluster graph is cut where the node graph cuts it (a long tube:
   across its middle, one circumference of seam);
+- a chart above ``auto.MAP_VERTICES`` is split unmapped, and a region that passes whole is merged
+  back into one certified chart;
+- ``charts.chart_maps`` in bounded runs solves each chart as it would alone.
 """
 import numpy as np
 from scipy.sparse import coo_array
