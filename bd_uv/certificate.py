@@ -14,6 +14,8 @@ from .overlap import island_overlaps
 
 # Same relative tolerance as metrics.certify: the bound is met up to rounding.
 RTOL = 1e-6
+# Faces measured at a time (per-face numbers, so the same whatever the chunk).
+CHUNK = 65536
 # an island narrower than this (UV units) that fails certification is named too small in its reason:
 # measures at that scale fall below what the overlap test and float32 storage resolve
 TINY = 2.0 ** -20
@@ -68,6 +70,26 @@ class Certificate:
                 "faces": int(self.faces), "reason": self.reason}
 
 
+def _measure_faces(V, F, uv, faces):
+    """Conformal distortion and flipped-or-not of ``faces`` (``D = inf`` where a UV is not
+    finite), ``CHUNK`` faces at a time: every face's numbers are its own, and the temporaries
+    of a 500k-face layout (local frames, gradients, float64 UV copies: ~150 MB) stay a chunk's."""
+    D = np.empty(len(faces))
+    flip = np.empty(len(faces), dtype=bool)
+    for i in range(0, len(faces), CHUNK):
+        f = faces[i:i + CHUNK]
+        uv64 = uv[f].astype(np.float64)
+        finite = np.isfinite(uv64).all(axis=(1, 2))
+        with np.errstate(invalid="ignore", over="ignore"):
+            if finite.all():
+                D[i:i + CHUNK] = conformal_distortion(V, F[f], uv64)
+            else:
+                D[i:i + CHUNK] = np.where(finite, conformal_distortion(V, F[f], np.where(
+                    finite[:, None, None], uv64, 0.0)), np.inf)
+            flip[i:i + CHUNK] = flipped_faces(V, F[f], uv64) | ~finite
+    return D, flip
+
+
 def certify_islands(V, F, corner_uv, face_island, bounds, rtol=RTOL):
     """Certify every island of a layout from its UVs as stored.
 
@@ -93,21 +115,14 @@ def certify_islands(V, F, corner_uv, face_island, bounds, rtol=RTOL):
     lab = np.where(lab < k, lab, -1)
     faces = np.flatnonzero(lab >= 0)
     fl = lab[faces]
-    uv64 = uv[faces].astype(np.float64)
-    finite = np.isfinite(uv64).all(axis=(1, 2))
-    with np.errstate(invalid="ignore", over="ignore"):
-        if finite.all():
-            D = conformal_distortion(V, F[faces], uv64)
-        else:
-            D = np.where(finite, conformal_distortion(V, F[faces], np.where(
-                finite[:, None, None], uv64, 0.0)), np.inf)
-        flip = flipped_faces(V, F[faces], uv64) | ~finite
+    D, flip = _measure_faces(V, F, uv, faces)
     n_faces = np.bincount(fl, minlength=k)
     n_flip = np.bincount(fl, weights=flip, minlength=k).astype(np.int64)
     maxD = np.full(k, -np.inf)
     np.maximum.at(maxD, fl, D)
     maxD[n_faces == 0] = np.nan
-    A = face_areas(V, F[faces])
+    A = np.concatenate([face_areas(V, F[faces[i:i + CHUNK]])
+                        for i in range(0, len(faces), CHUNK)]) if len(faces) else np.zeros(0)
     ok_d = np.isfinite(D) & np.isfinite(A)
     wsum = np.bincount(fl[ok_d], weights=A[ok_d], minlength=k)
     dsum = np.bincount(fl[ok_d], weights=(A * D)[ok_d], minlength=k)
@@ -130,7 +145,7 @@ def certify_islands(V, F, corner_uv, face_island, bounds, rtol=RTOL):
             why.append(f"{ov.bad_loops[i]} UV boundary loop(s) wound the wrong way (a hole "
                        "outside its island, or the island lying over itself)")
         if why and width is None:
-            width = _island_widths(uv64, fl, k)
+            width = _island_widths(uv[faces].astype(np.float64), fl, k)
         if why and width[i] < TINY:
             why.append(f"the island is {width[i]:.2g} of the UV square across, too small to "
                        "measure: raise the texel density")

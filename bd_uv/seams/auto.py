@@ -41,6 +41,12 @@ MAX_ROUNDS = 60
 GIVEN_SLACK = 0.25
 # Passes that split charts the certified map leaves beyond S.
 FINISH_ROUNDS = 4
+# A chart of more vertices than this is split without its conformal map: the map's LDL^T factor
+# was the search's memory peak on a 500k-face mesh (~310 MB for its first round's 183k-vertex
+# chart, against ~95 MB at this size), and a chart that large passes rarely (a wide, nearly
+# developable region). Where it would, its pieces pass and merging (``merge_charts``, which
+# maps unions of any size) joins them again.
+MAP_VERTICES = 60_000
 def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merge=True,
                 method="lscm", frames="auto", cone="soc", progress=None, cancel=None,
                 polygons=None):
@@ -196,7 +202,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             measured = chs = None
     st, cr = measured if measured is not None else measure_charts(V, F, E, cut, result, chs)
     result = dataclasses.replace(result, seconds=time.perf_counter() - t0)
-    added = E.ends[cut & ~original]
+    added = E.ends[cut & ~original].astype(np.int64)
     info = {"charts": len(result.islands),
             "seam_length": float(E.length[cut].sum()),
             "added_length": float(E.length[cut & ~original].sum()),
@@ -280,7 +286,8 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=Non
     """One top-down round over the charts not yet accepted; True when a seam was added.
 
     Handles are cut first; the charts to split (closed spheres, open charts no cut graph
-    changes, disks whose map fails) are all split in one batch (``bisect.split_deep``). A disk
+    changes, disks of more than ``MAP_VERTICES`` vertices, disks whose map fails) are all split
+    in one batch (``bisect.split_deep``). A disk
     passes with a mean distortion up to ``cap`` (default ``mean_cap(C)``); its conformal map goes
     into ``known`` (``ChartMaps.remember``). A disk that fails (at ``cap`` >= ``mean_cap(C)``, so
     at merging's test too) goes into ``failed`` (``merge.chart_key`` -> its map's max stretch).
@@ -305,7 +312,14 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=Non
                 continue
         if c.kind in ("open", "sphere"):    # a sphere: split along its neck
             todo.append((c.faces, None))
-    disks = [c for c in chs if c.kind == "disk"]
+    disks = []
+    for c in chs:
+        if c.kind != "disk":
+            continue
+        if len(c.vertices) > MAP_VERTICES and len(c.faces) >= 2:
+            todo.append((c.faces, None))    # split unmapped; merging may join it again
+        else:
+            disks.append(c)
     if disks:
         cap = mean_cap(C) if cap is None else cap
         cm = chart_maps(V, disks, geom, limits=(S * MARGIN, cap))

@@ -28,10 +28,13 @@ MEAN_SLOPE = 0.07
 # Charts of one solve are split into two systems factored side by side (``solvers.threads``)
 # when each holds at least this many vertices (below it, the split costs more than it saves).
 PARALLEL_VERTICES = 1500
-# ... but a batch of more vertices than this has its two systems factored one after the other:
-# the LDL^T factor is the seam search's memory peak (measured on a 500k-face mesh: ~450 MB for
-# its first round's two charts, 250k vertices), and two at once add up.
+# ... but a batch of more vertices than this is solved one system at a time, each of charts
+# holding at most RUN_VERTICES vertices together (a larger chart alone): the LDL^T factors are
+# the seam search's memory peaks (measured on a 500k-face mesh: ~310 MB at its largest, a
+# 183k-vertex chart; a merge round's batch of unions in two halves: ~250k vertices, ~200 MB
+# each), and two at once add up.
 SEQUENTIAL_VERTICES = 100_000
+RUN_VERTICES = 50_000
 
 
 def mean_cap(C):
@@ -118,25 +121,24 @@ def chart_maps(V, charts, geom=None, limits=None):
     A3 = geom.area[faces]
     area = np.bincount(face_c, A3, minlength=k)
     root = np.sqrt(area)[face_c][:, None]
-    cbw, cbf = geom.cbw[faces], geom.cb[faces]
     idx = _far_pairs(P, charts, voff)
     val = np.tile(np.array([0.0, 1.0], np.complex128), k)
+
+    def run(r):             # the system of charts r[0]:r[1] alone
+        (a, b), (fa, fb) = r, (foff[r[0]], foff[r[1]])
+        return _lscm_pinned(geom, faces[fa:fb], tris[fa:fb] - voff[a], int(voff[b] - voff[a]),
+                            idx[2 * a:2 * b] - voff[a], val[2 * a:2 * b])
     j = halves(nvs, PARALLEL_VERTICES)
-    if j is None:
-        u = _lscm_pinned(cbw, cbf, tris, n, idx, val)
-    else:                   # two runs of charts, one system each: side by side, or one after
-        #                     the other above SEQUENTIAL_VERTICES (one factor at a time)
-        def run(r):
-            (a, b), (fa, fb) = r, (foff[r[0]], foff[r[1]])
-            return _lscm_pinned(cbw[fa:fb], cbf[fa:fb], tris[fa:fb] - voff[a],
-                                int(voff[b] - voff[a]),
-                                idx[2 * a:2 * b] - voff[a], val[2 * a:2 * b])
-        runs = [(0, j), (j, k)]
-        u = np.concatenate([run(r) for r in runs] if n > SEQUENTIAL_VERTICES
-                           else map_blocks(run, runs))
+    if n > SEQUENTIAL_VERTICES:     # one factor at a time, none of more than RUN_VERTICES
+        #                             vertices but a chart's own
+        u = np.concatenate([run(r) for r in _runs(nvs, RUN_VERTICES)])
+    elif j is None:
+        u = _lscm_pinned(geom, faces, tris, n, idx, val)
+    else:                   # two runs of charts, one system each, side by side
+        u = np.concatenate(map_blocks(run, [(0, j), (j, k)]))
     u_solved = u
-    cbw = cbf = None                        # the factorisations' inputs, freed before more arrays
-    ca, cb = geom.ca[faces] * root, geom.cb[faces] * root
+    cb = geom.cb[faces] * root
+    ca = cb.conj()
     # Scale each chart so its UV area equals its (unit-normalised) 3D area: sigma are then the
     # singular values of the map with the chart at its 3D size.
     e1 = u[tris[:, 1]] - u[tris[:, 0]]
@@ -170,15 +172,29 @@ def chart_maps(V, charts, geom=None, limits=None):
                      meanD, u_solved)
 
 
-def _lscm_pinned(cbw, cb, tris, n, idx, val):
-    """``solvers.lscm.lscm_pinned``, with the memory its assembly freed handed back to the
-    operating system before the factorisation (``trim.release_memory``: large charts only)."""
-    A, rhs, u, free = _lscm_system(cbw, cb, tris, n, idx, val)
+def _lscm_pinned(geom, faces, tris, n, idx, val):
+    """``solvers.lscm.lscm_pinned`` on the terms of ``faces`` (``geom``: FaceGeometry), formed
+    here and dropped with the assembly's temporaries before the factorisation, whose memory is
+    handed back to the operating system first (``trim.release_memory``: large charts only)."""
+    A, rhs, u, free = _lscm_system(geom.cbw(faces), geom.cb[faces], tris, n, idx, val)
     release_memory(len(tris))
     x = spd_solver(A, upper=True)(rhs)
     nf = len(free)
     u[free] = x[:nf] + 1j * x[nf:]
     return u
+
+
+def _runs(sizes, limit):
+    """Consecutive runs ``(a, b)`` of charts of ``sizes`` vertices, each as many as fit within
+    ``limit`` together (at least one)."""
+    runs, a, total = [], 0, 0
+    for j, s in enumerate(sizes.tolist()):
+        if j > a and total + s > limit:
+            runs.append((a, j))
+            a, total = j, 0
+        total += s
+    runs.append((a, len(sizes)))
+    return runs
 
 
 def piece_stretch(sigma, area3, label, k):

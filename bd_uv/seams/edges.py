@@ -16,13 +16,17 @@ class EdgeTable:
 
     Attributes
     ----------
-    ends : (e,2) int64, vertex pair of each edge (smaller index first)
-    faces : (e,2) int64, the two faces of each interior edge; ``faces[:,1] = -1`` on the boundary
+    ends : (e,2) int32, vertex pair of each edge (smaller index first)
+    faces : (e,2) int32, the two faces of each interior edge; ``faces[:,1] = -1`` on the boundary
     length : (e,) float64, 3D length
     cost : (e,) float64, seam cost per unit length in (0, 1]: 1 on flat edges, lower on creases
-    face_edges : (m,3) int64, edge of each face corner's outgoing half-edge F[f,k] -> F[f,k+1]
-    corners : (e,2,2) int64, ``corners[e,s,t]``: the corner (``3 f + k``) of ``ends[e,t]`` in
+    face_edges : (m,3) int32, edge of each face corner's outgoing half-edge F[f,k] -> F[f,k+1]
+    corners : (e,2,2) int32, ``corners[e,s,t]``: the corner (``3 f + k``) of ``ends[e,t]`` in
         ``faces[e,s]`` (-1 where there is no such face)
+
+    The indices are int32 (``INDEX``: int64 from 2**31 corners on): the table is held through
+    the whole seam search, 114 MB in int64 on a 500k-face mesh; arithmetic on them that can
+    pass 2**31 (vertex pair keys) is done in int64.
     fans : Fans or None, the corners around each vertex in order (None where the mesh is not
         an oriented manifold: then cuts are found by a graph search)
     """
@@ -38,9 +42,14 @@ class EdgeTable:
         """Edge index of each vertex pair (s,2), -1 where the pair is not an edge."""
         pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
         k = np.minimum(pairs[:, 0], pairs[:, 1]) * n + np.maximum(pairs[:, 0], pairs[:, 1])
-        mine = self.ends[:, 0] * n + self.ends[:, 1]
+        mine = self.ends[:, 0].astype(np.int64) * n + self.ends[:, 1]
         pos = np.clip(np.searchsorted(mine, k), 0, len(mine) - 1)
         return np.where(mine[pos] == k, pos, -1)
+
+
+def index_dtype(size):
+    """int32 for indices below ``size`` when it fits, else int64."""
+    return np.int32 if size < 2**31 - 1 else np.int64
 
 
 def edge_table(V, F, face_groups=None, crease_angle=np.radians(30.0)):
@@ -62,19 +71,23 @@ def edge_table(V, F, face_groups=None, crease_angle=np.radians(30.0)):
         half over the first ``CONCAVE_FULL`` of turn).
     """
     n, m = len(V), len(F)
+    idx = index_dtype(3 * m)
     a = F.ravel()
     b = np.roll(F, -1, axis=1).ravel()
     key = np.minimum(a, b) * n + np.maximum(a, b)
     uniq, inv = np.unique(key, return_inverse=True)
-    inv = inv.ravel()
+    del key
+    inv = inv.ravel().astype(idx)
     e = len(uniq)
-    ends = np.stack([uniq // n, uniq % n], axis=1)
-    order = np.argsort(inv, kind="stable")
-    first = np.searchsorted(inv[order], np.arange(e))
+    ends = np.stack([uniq // n, uniq % n], axis=1).astype(idx)
+    del uniq
+    order = np.argsort(inv, kind="stable").astype(idx)
+    first = np.searchsorted(inv[order], np.arange(e, dtype=idx)).astype(idx)
     count = np.bincount(inv, minlength=e)
-    faces = np.full((e, 2), -1, dtype=np.int64)
+    faces = np.full((e, 2), -1, dtype=idx)
     faces[:, 0] = order[first] // 3
     two = count >= 2
+    del count
     faces[two, 1] = order[first[two] + 1] // 3
     P = V[ends]
     length = np.linalg.norm(P[:, 1] - P[:, 0], axis=1)
@@ -99,13 +112,15 @@ def edge_table(V, F, face_groups=None, crease_angle=np.radians(30.0)):
         c = np.where(g[f0] != g[f1], min(c.min(initial=1.0), np.exp(-np.pi / crease_angle)), c)
     cost[two] = np.maximum(c, 1e-3)
     # Corners of each edge's ends in its faces: its half-edge h runs corner h -> the next one.
-    corners = np.full((e, 2, 2), -1, dtype=np.int64)
+    del N, P, Ff1, off_edge, opp, concave, half, theta, c
+    corners = np.full((e, 2, 2), -1, dtype=idx)
     for s_, h in ((0, order[first]), (1, order[first[two] + 1])):
         sel = slice(None) if s_ == 0 else two
         nxt = h - h % 3 + (h % 3 + 1) % 3
         forward = a[h] == ends[sel, 0]
         corners[sel, s_, 0] = np.where(forward, h, nxt)
         corners[sel, s_, 1] = np.where(forward, nxt, h)
+    del order, first, h, nxt, forward
     face_edges = inv.reshape(m, 3)
     return EdgeTable(ends, faces, length, cost, face_edges, corners,
                      _fans(F, face_edges, faces, ends, corners))
@@ -175,5 +190,7 @@ def _fans(F, face_edges, faces, ends, corners):
     fan = np.empty(3 * m, dtype=np.int32)
     fan[order] = np.cumsum(first) - 1
     starts = np.append(np.flatnonzero(first), 3 * m)
-    return Fans(nxt, edge, order, first, first & ring[order], fan, starts)
+    idx = index_dtype(3 * m)
+    return Fans(nxt.astype(idx, copy=False), edge.astype(idx, copy=False), order.astype(idx),
+                first, first & ring[order], fan, starts.astype(idx))
 

@@ -11,6 +11,10 @@ from ..unwrapping.results import UnwrapResult
 from .crossings import boundary_crossings
 from .topology import charts
 
+# Faces measured at a time (the numbers are per face; a 500k-face result's Jacobian temporaries
+# at once were the search's last memory peak).
+CHUNK = 65536
+
 
 def measure_charts(V, F, E, cut, result, chs=None):
     """Per island of a result: max stretch and boundary self-crossings from its final UVs
@@ -29,13 +33,18 @@ def measure_charts(V, F, E, cut, result, chs=None):
     P = V[np.concatenate([r.vertices for r in rs])]
     uv = np.concatenate([r.uv for r in rs])
     tris = np.concatenate([r.tris for r in rs]) + voff[fc][:, None]
-    corner = uv[tris]
-    alpha, beta = face_jacobians(P, tris, corner)
-    a, b = np.abs(alpha), np.abs(beta)
-    e1 = corner[:, 1] - corner[:, 0]
-    e2 = corner[:, 2] - corner[:, 0]
-    uv_area = np.bincount(fc, 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]), len(rs))
-    s = np.sqrt(np.bincount(fc, face_areas(P, tris), len(rs)) / np.maximum(uv_area, 1e-300))[fc]
+    a, b, sa, A3 = (np.empty(len(tris)) for _ in range(4))
+    for i in range(0, len(tris), CHUNK):     # per-face numbers, a chunk's temporaries at a time
+        t = tris[i:i + CHUNK]
+        corner = uv[t]
+        alpha, beta = face_jacobians(P, t, corner)
+        a[i:i + CHUNK], b[i:i + CHUNK] = np.abs(alpha), np.abs(beta)
+        e1 = corner[:, 1] - corner[:, 0]
+        e2 = corner[:, 2] - corner[:, 0]
+        sa[i:i + CHUNK] = 0.5 * (e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+        A3[i:i + CHUNK] = face_areas(P, t)
+    uv_area = np.bincount(fc, sa, len(rs))
+    s = np.sqrt(np.bincount(fc, A3, len(rs)) / np.maximum(uv_area, 1e-300))[fc]
     with np.errstate(divide="ignore", invalid="ignore"):
         fs = np.where(a > b, np.maximum(s * (a + b), 1.0 / (s * (a - b))), np.inf)
     idx = np.array([r.index for r in rs])

@@ -117,6 +117,10 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost)
     tg = np.zeros(g, dtype=np.int64)
     tg[gp[first]] = t[first]
     side = rank < tg[group]
+    # The sweep's ~25 per-node arrays are dead now: dropped before the min cut and the filters
+    # (a 500k-node sphere's first split was the search's memory peak).
+    del x, q, order, pos, rank, lo, hi, diff, cutw, acum, base, p, t, gp, valid, A, small
+    del raw_score, score, none, sscale, fin, sq, best, first, tg
     side = _snap_many(side, pairs, c, group, g)
     raw = side.copy()
     # Majority filter: a node with two or three neighbours across moves over (never two

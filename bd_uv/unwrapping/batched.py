@@ -15,6 +15,9 @@ from ..solvers.lscm import face_geometry, lscm_pinned
 from .problem import STORE_HEADROOM
 from .results import IslandResult
 
+# Faces whose per-face numbers are computed at a time.
+CHUNK = 65536
+
 
 def conformal_islands(V, islands, C, known=None):
     """Conformal maps of many islands in one solve, and the results of those that fit C.
@@ -69,37 +72,46 @@ def conformal_islands(V, islands, C, known=None):
             own = ~have[np.repeat(np.arange(k), 2)]
             idx = np.concatenate([idx[own], kv])
             val = np.concatenate([val[own], kidx])
-        u = lscm_pinned(geom.cbw, geom.cb, tris, len(verts), idx, val)
+        u = lscm_pinned(geom.cbw(), geom.cb, tris, len(verts), idx, val)
     if C is None:
         return {}, {isl.index: u[voff[j]:voff[j + 1]] / 1.0 for j, isl in enumerate(islands)}
     root = np.sqrt(area)[face_isl]
-    uc = u[tris]
-    a = np.abs(np.einsum("fk,fk->f", geom.ca, uc)) * root
-    b = np.abs(np.einsum("fk,fk->f", geom.cb, uc)) * root
+    m = len(tris)
+    # Per-face numbers CHUNK faces at a time (the same bits; the whole of a 500k-face mesh's
+    # corner maps and coefficients at once were the seam search's last memory peak).
+    a, b, sa = np.empty(m), np.empty(m), np.empty(m)
+    for i in range(0, m, CHUNK):
+        f = slice(i, i + CHUNK)
+        uc = u[tris[f]]
+        a[f] = np.abs(np.einsum("fk,fk->f", geom.ca(f), uc)) * root[f]
+        b[f] = np.abs(np.einsum("fk,fk->f", geom.cb[f], uc)) * root[f]
+        e1 = uc[:, 1] - uc[:, 0]
+        e2 = uc[:, 2] - uc[:, 0]
+        sa[f] = 0.5 * (e1.conj() * e2).imag
     with np.errstate(invalid="ignore", divide="ignore"):
         D = np.where(a > b, (a + b) / (a - b), np.inf)
     maxD = np.maximum.reduceat(D, foff[:-1])
     fit = maxD * (1.0 + STORE_HEADROOM) <= C
 
     # Fitting islands: UV area = 3D area, bounding box at (0, 0), as IslandProblem's finish.
-    e1 = uc[:, 1] - uc[:, 0]
-    e2 = uc[:, 2] - uc[:, 0]
-    uv_area = np.bincount(face_isl, 0.5 * (e1.conj() * e2).imag, minlength=k)
+    uv_area = np.bincount(face_isl, sa, minlength=k)
     with np.errstate(invalid="ignore", divide="ignore"):
         s = np.sqrt(area / uv_area)
     us = u * s[vert_isl]
     lo = (np.minimum.reduceat(us.real, voff[:-1]) + 1j * np.minimum.reduceat(us.imag, voff[:-1]))
     us = us - lo[vert_isl]
     uv = np.stack([us.real, us.imag], axis=1)
-    # Certify from the final UVs in the input geometry, every face at once: each face's alpha
+    # Certify from the final UVs in the input geometry, CHUNK faces at a time: each face's alpha
     # and beta (eq. 4.19 on its corner UVs, coefficients of its 3D local frame), its signed UV
     # area; D = inf where flipped, collapsed or not finite (as metrics.conformal_distortion).
-    cu = us[tris]
-    alpha = np.einsum("fk,fk->f", geom.ca, cu)
-    beta = np.einsum("fk,fk->f", geom.cb, cu)
-    e1, e2 = cu[:, 1] - cu[:, 0], cu[:, 2] - cu[:, 0]
-    unflipped = 0.5 * (e1.conj() * e2).imag > 0
-    ac, bc = np.abs(alpha), np.abs(beta)
+    ac, bc, unflipped = np.empty(m), np.empty(m), np.empty(m, dtype=bool)
+    for i in range(0, m, CHUNK):
+        f = slice(i, i + CHUNK)
+        cu = us[tris[f]]
+        ac[f] = np.abs(np.einsum("fk,fk->f", geom.ca(f), cu))
+        bc[f] = np.abs(np.einsum("fk,fk->f", geom.cb[f], cu))
+        e1, e2 = cu[:, 1] - cu[:, 0], cu[:, 2] - cu[:, 0]
+        unflipped[f] = 0.5 * (e1.conj() * e2).imag > 0
     with np.errstate(invalid="ignore", divide="ignore"):
         Dc = (ac + bc) / (ac - bc)
     Dc[~(ac > bc) | ~np.isfinite(Dc) | ~unflipped] = np.inf

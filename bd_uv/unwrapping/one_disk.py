@@ -180,7 +180,7 @@ def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
     geom = face_geometry_of(Z, G, disk.area)
     nv = len(isl.vertices)
     idx = _far_pair(V.take(isl.vertices, axis=0), isl.loops[0])
-    u = lscm_pinned(geom.cbw, geom.cb, isl.tris, nv, idx, np.array([0.0, 1.0], complex),
+    u = lscm_pinned(geom.cbw(), geom.cb, isl.tris, nv, idx, np.array([0.0, 1.0], complex),
                     (disk.twins[0], disk.twins[1], disk.loop))
     if C is None:
         return None, u

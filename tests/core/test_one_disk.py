@@ -95,8 +95,8 @@ def test_the_known_edges_build_the_sorted_edges_system():
     isl = disk.island
     g = face_geometry(V[isl.vertices], isl.tris)
     idx, val = one_disk._far_pair(V[isl.vertices], isl.loops[0]), np.array([0.0, 1.0], complex)
-    A, rhs, _, _ = _lscm_system(g.cbw, g.cb, isl.tris, len(isl.vertices), idx, val)
-    B, rhs2, _, _ = _lscm_system(g.cbw, g.cb, isl.tris, len(isl.vertices), idx, val,
+    A, rhs, _, _ = _lscm_system(g.cbw(), g.cb, isl.tris, len(isl.vertices), idx, val)
+    B, rhs2, _, _ = _lscm_system(g.cbw(), g.cb, isl.tris, len(isl.vertices), idx, val,
                                  (disk.twins[0], disk.twins[1], disk.loop))
     assert np.array_equal(A.indptr, B.indptr) and np.array_equal(A.indices, B.indices)
     assert np.array_equal(A.data, B.data) and np.array_equal(rhs, rhs2)

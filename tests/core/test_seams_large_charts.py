@@ -3,6 +3,9 @@
 - ``cluster_fiedler.clusters``: connected clusters of one chart each, small charts untouched;
 - a chart split through its cluster graph is cut where the node graph cuts it (a long tube:
   across its middle, one circumference of seam);
+- a chart above ``auto.MAP_VERTICES`` is split unmapped, and a region that passes whole is merged
+  back into one certified chart;
+- ``charts.chart_maps`` in bounded runs solves each chart as it would alone.
 """
 import numpy as np
 from scipy.sparse import coo_array
@@ -94,3 +97,74 @@ def test_a_long_tube_is_cut_across_its_middle_through_its_cluster_graph(monkeypa
     # Both cut at the same ring, up to a few rings of faces.
     ring = lambda s: min(cen[s, 2].max(), cen[~s, 2].max())
     assert abs(ring(fine) - ring(coarse)) <= 3 * 20.0 / 120
+
+
+def _wavy_sheet(n=40):
+    """A gently waved square sheet, ``n`` x ``n`` vertices: one chart passes C = 2, S = 2."""
+    x, y = np.meshgrid(np.linspace(0, 1, n), np.linspace(0, 1, n))
+    V = np.stack([x.ravel(), y.ravel(), 0.05 * np.sin(3 * x.ravel())], 1)
+    i = (np.arange(n - 1)[:, None] * n + np.arange(n - 1)[None, :]).ravel()
+    F = np.concatenate([np.stack([i, i + 1, i + n + 1], 1), np.stack([i, i + n + 1, i + n], 1)])
+    return V, F.astype(np.int64)
+
+
+def test_a_chart_above_map_vertices_is_split_unmapped_and_merged_back(monkeypatch):
+    """The search maps no chart above ``MAP_VERTICES`` vertices top-down (its factor was the
+    memory peak); a sheet that passes whole is still one chart, its pieces merged again."""
+    from bd_uv.seams import auto
+    from tests.core.seams_helpers import face_singular_values
+    V, F = _wavy_sheet()
+    monkeypatch.setattr(auto, "MAP_VERTICES", 200)
+    mapped = []
+    real = auto.chart_maps
+
+    def spy(V_, charts, *a, **k):
+        mapped.extend(len(c.vertices) for c in charts)
+        return real(V_, charts, *a, **k)
+    monkeypatch.setattr(auto, "chart_maps", spy)
+    result, added, info = auto.unwrap_auto(V, F, bound=2, stretch=2)
+    assert mapped and max(mapped) <= 200           # the top-down rounds mapped pieces only
+    assert info["charts"] == 1 and len(added) == 0
+    (isl,) = result.islands
+    assert isl.status == "certified" and len(isl.faces) == len(F)
+    s1, s2, det = face_singular_values(V, F, result.corner_uv)
+    assert (det > 0).all()
+    P = V[F]
+    area3 = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+    scale = np.sqrt(area3.sum() / np.sum(s1 * s2 * area3))   # to 3D area
+    assert max((scale * s1).max(), 1.0 / (scale * s2).min()) <= 2.0
+    assert (s1 / s2).max() <= 2.0 * (1 + 1e-6)
+
+
+def test_chart_maps_in_bounded_runs_solve_each_chart_as_alone(monkeypatch):
+    """A batch above ``SEQUENTIAL_VERTICES`` is solved in runs of at most ``RUN_VERTICES``
+    vertices (a larger chart alone), one factor at a time; each chart's map is its own solve."""
+    from bd_uv.mesh import islands
+    from bd_uv.seams import charts as charts_mod
+    # Four separate tubes of rising lengths, each cut open along a line (a disk).
+    Vs, Fs, seams, off = [], [], [], 0
+    for j, nv in enumerate((6, 10, 14, 30)):
+        v, f = _tube(nu=12, nv=nv)
+        Vs.append(v + [0.0, 0.0, 40.0 * j])
+        Fs.append(f + off)
+        seams.append(np.stack([np.arange(nv) * 12, np.arange(1, nv + 1) * 12], 1) + off)
+        off += len(v)
+    V, F, seams = np.concatenate(Vs), np.concatenate(Fs), np.concatenate(seams)
+    isl = [i for i in islands(V, F, seams) if i.error is None]
+    assert len(isl) == 4 and all(len(i.loops) == 1 for i in isl)
+    sizes = [len(i.vertices) for i in isl]
+    solved = []
+    real = charts_mod._lscm_pinned
+
+    def spy(geom, faces, tris, n, idx, val):
+        solved.append(n)
+        return real(geom, faces, tris, n, idx, val)
+    monkeypatch.setattr(charts_mod, "_lscm_pinned", spy)
+    monkeypatch.setattr(charts_mod, "SEQUENTIAL_VERTICES", 10)
+    monkeypatch.setattr(charts_mod, "RUN_VERTICES", sizes[0] + sizes[1])
+    runs = charts_mod.chart_maps(V, isl)
+    assert solved == [sizes[0] + sizes[1], sizes[2], sizes[3]]
+    for i, one in enumerate(isl):
+        alone = charts_mod.chart_maps(V, [one])
+        np.testing.assert_allclose(runs.uv[runs.voff[i]:runs.voff[i + 1]], alone.uv,
+                                   rtol=0, atol=1e-9 * np.abs(alone.uv).max())
