@@ -101,6 +101,46 @@ def framed_cone_projection(x, br, bi, kappa):
     return np.where(inside, x, np.where(polar, 0.0, t)), f * br, f * bi
 
 
+class _Watch:
+    """One target's iterations watched: the least max distortion so far (``best``), and when
+    to stop. Out of reach: no progress for STALL iterations, or FLIPPING flipping iterates in a
+    row from the start (three_peaks: a target that flips stays flipped)."""
+
+    def __init__(self, best):
+        self.best, self.since, self.mark = best, 0, best
+
+    def seen(self, D, it, C):
+        """(better, stop) after iteration ``it`` (>= 1) reached the max distortion D."""
+        better = D < self.best
+        if better:
+            self.best = D
+            if D <= C:
+                return True, True
+        if D < self.mark - PROGRESS * (self.mark - 1.0):
+            self.since, self.mark = 0, D
+        else:
+            self.since += 1
+            if self.since >= (FLIPPING if D == np.inf and self.since == it else STALL):
+                return better, True
+        return better, it == MAX_ITER
+
+    def iterate(self, step, measure, keep, C, cancel):
+        """``step()`` up to MAX_ITER times; before each but the first, ``measure()`` the max
+        distortion, ``kept = keep()`` (a copy of the iterate) when it is the least yet, and stop
+        when ``seen`` says so or ``cancel`` is set."""
+        self.kept = None
+        for it in range(MAX_ITER + 1):
+            if cancel is not None and cancel.is_set():
+                break
+            if it:
+                better, stop = self.seen(measure(), it, C)
+                if better:
+                    self.kept = keep()
+                if stop:
+                    break
+            step()
+
+
 class BoundSearch:
     """Lower a flip-free map's max conformal distortion by ADMM onto F_C with frames.
 
@@ -251,39 +291,24 @@ class BoundSearch:
     def _iterate(self, U, GU, lam, rhs, w2, kappa, C, D_best, solve, BtA, rhs_fixed, cancel):
         """``run``'s iterations, on its buffers (U, GU, lam, rhs updated in place)."""
         free, nf = self.solver.free, len(self.solver.free)
-        best, since, mark = None, 0, D_best
-        for it in range(MAX_ITER + 1):
-            if cancel is not None and cancel.is_set():
-                break
-            if it:
-                D = self._max_distortion(GU)
-                if D < D_best:
-                    best, D_best = U.copy(), D
-                    if D <= C:
-                        break
-                if D < mark - PROGRESS * (mark - 1.0):
-                    since, mark = 0, D
-                else:
-                    since += 1
-                    # out of reach: no progress for STALL iterations, or FLIPPING flipping
-                    # iterates in a row (three_peaks: a target that flips stays flipped)
-                    if since >= (FLIPPING if D == np.inf and since == it else STALL):
-                        break
-                if it == MAX_ITER:
-                    break
+
+        def step():
             Z = self._project(GU + lam, w2, kappa)
             if ALPHA != 1.0:  # over-relaxation
                 Z *= ALPHA
                 Z += (1.0 - ALPHA) * GU
             Z -= lam                            # z - lam: the least-squares target
             BtA(Z.ravel(), rhs)
-            rhs -= rhs_fixed
+            np.subtract(rhs, rhs_fixed, out=rhs)
             U[0, free] = solve(rhs[:nf])
             U[1, free] = solve(rhs[nf:])
             self._lift(U, GU)
             np.subtract(GU, Z, out=lam)         # lam + G x - z
             self.iterations += 1
-        return best, D_best
+
+        watch = _Watch(D_best)
+        watch.iterate(step, lambda: self._max_distortion(GU), U.copy, C, cancel)
+        return watch.kept, watch.best
 
     def _run_free(self, U, w2, kappa, C, D_best, cancel):
         """``run`` on a small island (up to ONE_PRODUCT_FACES faces), whose iterations pay per
@@ -308,44 +333,32 @@ class BoundSearch:
         GU = self._lift(U)
         lam, Q = np.zeros_like(GU), np.empty_like(GU)
         flat_q, flat_gu = Q.reshape(-1), GU.reshape(-1)
-        best, since, mark = None, 0, D_best
+
+        def step():
+            np.add(GU, lam, out=Q)
+            self._project(Q, w2, kappa)
+            if ALPHA != 1.0:  # over-relaxation
+                np.multiply(Q, ALPHA, out=Q)
+                np.add(Q, (1.0 - ALPHA) * GU, out=Q)
+            np.subtract(Q, lam, out=Q)          # z - lam: the least-squares target
+            np.copyto(rhs, rhs_fixed)
+            rhs_of(flat_q, rhs)
+            xu[...] = solve(ru)
+            xv[...] = solve(rv)
+            np.copyto(flat_gu, lift_fixed)
+            lift(x, flat_gu)
+            np.subtract(GU, Q, out=lam)         # lam + G x - z
+            self.iterations += 1
+
+        watch = _Watch(D_best)
         with np.errstate(invalid="ignore", divide="ignore"):
-            for it in range(MAX_ITER + 1):
-                if cancel is not None and cancel.is_set():
-                    break
-                if it:
-                    D = self._max_distortion(GU)
-                    if D < D_best:
-                        best, D_best = x.copy(), D
-                        if D <= C:
-                            break
-                    if D < mark - PROGRESS * (mark - 1.0):
-                        since, mark = 0, D
-                    else:
-                        since += 1
-                        if since >= (FLIPPING if D == np.inf and since == it else STALL):
-                            break
-                    if it == MAX_ITER:
-                        break
-                np.add(GU, lam, out=Q)
-                self._project(Q, w2, kappa)
-                if ALPHA != 1.0:  # over-relaxation
-                    Q *= ALPHA
-                    Q += (1.0 - ALPHA) * GU
-                Q -= lam                            # z - lam: the least-squares target
-                np.copyto(rhs, rhs_fixed)
-                rhs_of(flat_q, rhs)
-                xu[...] = solve(ru)
-                xv[...] = solve(rv)
-                np.copyto(flat_gu, lift_fixed)
-                lift(x, flat_gu)
-                np.subtract(GU, Q, out=lam)         # lam + G x - z
-                self.iterations += 1
+            watch.iterate(step, lambda: self._max_distortion(GU), x.copy, C, cancel)
+        best = watch.kept
         if best is not None:
             U = U.copy()
             U[0, s.free], U[1, s.free] = best[:nf], best[nf:]
             best = U
-        return best, D_best, best is not None and D_best <= C
+        return best, watch.best, best is not None and watch.best <= C
 
     def search(self, u, frames_of, report=None, deadline=None, cancel=None):
         """The least max distortion reached from the flip-free map u (nv,) complex.
