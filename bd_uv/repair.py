@@ -150,6 +150,38 @@ def zero_area_faces(V, F, precision=None):
     return zero & finite
 
 
+def flat_at_precision(V, F, precision):
+    """(m,) bool: the faces ``precision`` (the float type the positions were stored in) cannot
+    tell from a line though float64 can (``zero_area_faces``); None for float64, for no such
+    face, and for arrays the unwrap refuses anyway (non-finite positions, bad indices)."""
+    if precision is None or np.dtype(precision) == np.float64:
+        return None
+    try:
+        V, F = np.asarray(V, np.float64), np.asarray(F, np.int64)
+        with np.errstate(all="ignore"):
+            flat = zero_area_faces(V, F, precision) & ~zero_area_faces(V, F)
+    except (ValueError, IndexError, TypeError):
+        return None
+    return flat if flat.any() else None
+
+
+def side_by_side(F, faces):
+    """True when two of ``faces`` ((m,) bool) share an edge: faces ``flat_at_precision`` finds
+    side by side refuse their island as stored at any stretch (OpenChessSet's bishops: 608 in
+    strips), where one alone is often certified as stored (the storage headroom's stretch)."""
+    f = np.asarray(F, np.int64)[faces]
+    e = np.sort(f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    return len(np.unique(e, axis=0)) < len(e)
+
+
+def stored_precision(V, F, precision):
+    """``precision`` when faces it cannot tell from a line lie side by side, else None: what
+    ``bd_uv.unwrap(seams="needed", precision=)`` and ``repair_mesh`` take to leave them out as
+    zero-area from the start (the Blender operator; ``batch.unwrap_job``)."""
+    flat = flat_at_precision(V, F, precision)
+    return precision if flat is not None and side_by_side(F, flat) else None
+
+
 def duplicate_twins(F, skip=None):
     """(m,) int64: for each face on the same three vertices, in the same cyclic order, as an
     earlier face, that face's index; -1 otherwise. Faces in ``skip`` (m,) bool are ignored."""

@@ -12,6 +12,7 @@ import numpy as np
 
 from ..bd_uv.errors import OptionError
 from ..bd_uv.options import UnwrapOptions
+from ..bd_uv.repair import stored_precision
 from . import mesh_data
 
 
@@ -187,10 +188,13 @@ def auto_arguments(batch, *, method, bound, minimise, stretch, frames):
 def needed_arguments(batch, *, method, bound, stretch, frames, overlap, limit_stretch):
     """Positional and keyword arguments of :func:`needed_seams.solve` (Seams "Add Where
     Needed"): those of :func:`auto_arguments`, the Overlaps choice for the marked islands and,
-    with Limit Stretch, its S for them too."""
+    with Limit Stretch, its S for them too. Blender stores positions in float32: faces it
+    cannot tell from a line, side by side, are left out as zero-area (``precision``; they fail
+    their island as stored at any stretch, and trying costs minutes on OpenChessSet's bishops)."""
     args, kwargs = auto_arguments(batch, method=method, bound=bound, minimise=False,
                                   stretch=stretch, frames=frames)
     kwargs["overlap"] = overlap
+    kwargs["precision"] = stored_precision(batch.V, batch.F, np.float32)
     if limit_stretch:
         kwargs["marked_stretch"] = float(stretch)
     return args, kwargs

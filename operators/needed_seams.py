@@ -34,7 +34,7 @@ def applies(minimise, frames, boundary, pinned):
 
 def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0,
           marked_stretch=None, face_groups=None, method="lscm", frames="auto", overlap="cut",
-          progress=None, cancel=None):
+          precision=None, progress=None, cancel=None):
     """Unwrap with seams added only where an island cannot be certified.
 
     Parameters
@@ -49,6 +49,9 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
     face_groups : (m,) int, optional, material of each triangle (seams prefer its boundaries)
     overlap : "cut" | "fail", an island of the marked seams whose map lies over itself: cut
         (and, failing that, given seams) or left as it was and named (Overlaps "Keep as One")
+    precision : float type, optional, as for ``bd_uv.unwrap`` (``np.float32``: the faces it
+        cannot tell from a line are left out as zero-area; ``gather.needed_arguments`` gives it
+        when such faces lie side by side)
     method, frames, progress, cancel : as for ``bd_uv.unwrap``
 
     Returns
@@ -60,7 +63,7 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
     F = np.asarray(F, np.int64)
     tri_poly = np.asarray(tri_poly, np.int64)
     tri_loops = np.asarray(tri_loops, np.int64)
-    rep = repair_mesh(V, F)
+    rep = repair_mesh(V, F, precision)
     V2, F2, keep = rep.V, rep.F, rep.faces
     tp, tl = tri_poly[keep], tri_loops[keep]
     seams2 = rep.seams(seams)

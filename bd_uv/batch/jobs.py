@@ -19,7 +19,7 @@ from ..unwrapping.storage import stored_layout_with_headroom, with_predicted_hea
 from ..metrics import conformal_distortion
 from ..options import OPTION_NAMES, UnwrapOptions
 from ..pack import MARGIN
-from ..repair import zero_area_faces
+from ..repair import flat_at_precision, side_by_side
 from ..packing import PackOptions
 
 # The atlas packer's options as they appear in an options mapping and in the report.
@@ -172,8 +172,8 @@ def unwrap_job(job, options, png=None):
         certified islands), max_distortion, mean_distortion (area-weighted over certified
         faces), flipped, seconds, error (exception type) and message.
     """
-    flat = _flat_at_precision(job)
-    if flat is not None and _side_by_side(job.F, flat):
+    flat = flat_at_precision(job.V, job.F, job.position_dtype)
+    if flat is not None and side_by_side(job.F, flat):
         return _unwrap_job(job, options, png, job.position_dtype)
     out = _unwrap_job(job, options, png, None)
     if flat is None or out.entry["status"] == "certified":
@@ -186,28 +186,6 @@ def unwrap_job(job, options, png=None):
         return out
     again.entry["seconds"] = round(again.entry["seconds"] + out.entry["seconds"], 4)
     return again
-
-
-def _flat_at_precision(job):
-    """(m,) bool: the faces the float type ``job``'s positions were stored in cannot tell from
-    a line, though float64 can (``repair.zero_area_faces``); None for float64 positions, for
-    none, and for a mesh the unwrap will refuse anyway (non-finite positions, bad indices)."""
-    if np.dtype(job.position_dtype) == np.float64:
-        return None
-    try:
-        with np.errstate(all="ignore"):
-            flat = (zero_area_faces(job.V, job.F, job.position_dtype)
-                    & ~zero_area_faces(job.V, job.F))
-    except (ValueError, IndexError, TypeError):
-        return None
-    return flat if flat.any() else None
-
-
-def _side_by_side(F, faces):
-    """True when two of ``faces`` ((m,) bool) share an edge."""
-    f = np.asarray(F, np.int64)[faces]
-    e = np.sort(f[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    return len(np.unique(e, axis=0)) < len(e)
 
 
 def _uncertified(out, m):

@@ -352,7 +352,7 @@ def test_the_float32_rerun_is_kept_when_it_fails_only_faces_without_area(monkeyp
     first = jobs.JobResult(dict(again.entry, status="partial"), again.corner_uv, res,
                            dataclasses.replace(again.layout, face_island=island))
     assert ((island < 0) & flat).sum() == 2 and (island < 0).sum() == 5 < flat.sum()
-    monkeypatch.setattr(jobs, "_side_by_side", lambda F_, faces: False)
+    monkeypatch.setattr(jobs, "side_by_side", lambda F_, faces: False)
     runs = iter([first, again])
     monkeypatch.setattr(jobs, "_unwrap_job", lambda *a: next(runs))
     assert batch.unwrap_job(job, opts) is again      # 0 faces with an area left against 3

@@ -190,3 +190,24 @@ def test_zero_area_at_float32_precision():
     assert zero_area_faces(V, F).tolist() == [False, False]
     assert zero_area_faces(V, F, np.float32).tolist() == [True, False]
     assert zero_area_faces(V, F, np.float64).tolist() == [False, False]
+
+
+def test_stored_precision_only_for_flat_faces_side_by_side():
+    """Faces float32 cannot tell from a line are left out from the start (``stored_precision``
+    gives float32) only when two of them share an edge; one standing alone, none, float64
+    positions, or arrays the unwrap refuses give None (tried as they are)."""
+    from bd_uv.repair import flat_at_precision, side_by_side, stored_precision
+    V = np.array([[0.0, 0.0, 1.0], [0.25, 0.0, 1.0], [0.125, 1e-9, 1.0], [0.125, -1e-9, 1.0],
+                  [0.125, 0.5, 1.0], [0.6, 0.0, 1.0], [0.6, 1e-9, 1.0]])
+    apart = np.array([[0, 1, 2], [0, 4, 1], [1, 5, 6]])        # two flat faces, no edge shared
+    beside = np.array([[0, 1, 2], [1, 0, 3], [0, 4, 1]])       # two flat faces on edge 0-1
+    for F, flat in ((apart, [True, False, True]), (beside, [True, True, False])):
+        assert flat_at_precision(V, F, np.float32).tolist() == flat
+        assert flat_at_precision(V, F, np.float64) is None
+    assert not side_by_side(apart, np.array([True, False, True]))
+    assert side_by_side(beside, np.array([True, True, False]))
+    assert stored_precision(V, apart, np.float32) is None
+    assert stored_precision(V, beside, np.float32) is np.float32
+    assert stored_precision(V, beside, np.float64) is None
+    assert stored_precision(V, np.array([[0, 4, 1]]), np.float32) is None
+    assert stored_precision(V, np.array([[0, 1, 99]]), np.float32) is None   # a bad index
