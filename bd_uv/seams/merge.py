@@ -8,6 +8,7 @@ import numpy as np
 from .charts import MARGIN, chart_maps, mean_cap
 from .split import _quantize
 from .topology import charts
+from .trim import release_memory
 
 # Rounds of pairwise merging (each merges a matching of neighbouring charts).
 MERGE_ROUNDS = 15
@@ -60,6 +61,7 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
     chs = charts(F, E, cut)
     original = keep
     for _ in range(MERGE_ROUNDS if rounds is None else rounds):
+        release_memory(len(F))              # the last round's freed heap (its factors' arrays)
         label = np.empty(len(F), dtype=np.int64)
         for j, c in enumerate(chs):
             label[c.faces] = j

@@ -80,6 +80,7 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost)
     x = _fiedler_many(pairs, w, face_area, centroid, offsets, group)
     if x is None:
         return side, split
+    release_memory(k)                       # the factors' freed heap, before the sweep's arrays
     # Sweep per chart: order by rounded x (ties by node), prefixes of 1..k_j-1 nodes.
     start = offsets[:-1]
     scale = np.zeros(g)

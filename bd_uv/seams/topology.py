@@ -11,6 +11,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from ..geometry import HOOK_VERTICES, components
+from .edges import index_dtype
 
 
 @dataclass(frozen=True)
@@ -50,6 +51,17 @@ def cut_mesh(F, E, cut, faces=None):
     voc : (nc,) int64, the input vertex of each cut vertex
     """
     m = len(F)
+    corners, corner, voc = _cut_corners(F, E, cut, faces)
+    Fc = np.full(3 * m, -1, dtype=np.int64)
+    Fc[corners] = corner
+    return Fc.reshape(m, 3), voc
+
+
+def _cut_corners(F, E, cut, faces):
+    """``cut_mesh``'s cut vertices for the corners of ``faces`` only: (corners (k,) int64
+    increasing, corner (k,) int32 (int64 from 2**31 corners on) the cut vertex of each,
+    voc). ``charts`` reads them without the (m,3) array over the whole mesh."""
+    m = len(F)
     if faces is None:
         mask = np.ones(m, dtype=bool)
     else:
@@ -71,11 +83,10 @@ def cut_mesh(F, E, cut, faces=None):
         rows, cols = pos[np.concatenate(rows)], pos[np.concatenate(cols)]
         g = sp.coo_array((np.ones(len(rows)), (rows, cols)), shape=(len(corners), len(corners)))
         _, corner = connected_components(g, directed=False)
-    voc = np.empty(corner.max() + 1 if len(corner) else 0, dtype=np.int64)
+    corner = corner.astype(index_dtype(3 * m), copy=False)
+    voc = np.empty(int(corner.max()) + 1 if len(corner) else 0, dtype=np.int64)
     voc[corner] = F.ravel()[corners]
-    Fc = np.full(3 * m, -1, dtype=np.int64)
-    Fc[corners] = corner
-    return Fc.reshape(m, 3), voc
+    return corners, corner, voc
 
 
 def _fan_runs(fans, cut, mask, corners):
@@ -112,20 +123,23 @@ def _fan_runs(fans, cut, mask, corners):
     new[1:] |= ~joined[:-1]
     starts = np.flatnonzero(new)
     low = np.minimum.reduceat(c, starts)
-    run = np.cumsum(new) - 1
+    run = np.cumsum(new, dtype=c.dtype) - 1
     # A closed fan whose last corner turns back to its first: its first and last runs are one.
     fan_first = np.flatnonzero(first)
     fan_last = np.append(fan_first[1:] - 1, len(c) - 1)
     join = ring[fan_first] & joined[fan_last] & (run[fan_first] != run[fan_last])
     a, b = run[fan_first[join]], run[fan_last[join]]
     low[a] = low[b] = np.minimum(low[a], low[b])
-    label = np.empty(len(fans.order), dtype=np.int64)
+    del nx, joined, new
+    label = np.empty(len(fans.order), dtype=low.dtype)
     label[c] = low[run]
+    del run
     if sub:
         return np.unique(label[corners], return_inverse=True)[1].ravel()
-    used = np.zeros(len(label), dtype=bool)
-    used[label[corners]] = True
-    return (np.cumsum(used) - 1)[label[corners]]
+    label = label[corners]
+    used = np.zeros(len(fans.order), dtype=bool)
+    used[label] = True
+    return (np.cumsum(used, dtype=label.dtype) - 1)[label]
 
 
 def charts(F, E, cut, faces=None):
@@ -143,35 +157,43 @@ def charts(F, E, cut, faces=None):
     list of Chart, ordered by their smallest face id
     """
     faces = np.arange(len(F)) if faces is None else np.sort(np.asarray(faces, dtype=np.int64))
-    Fc, voc = cut_mesh(F, E, cut, faces)
-    T = Fc[faces]
+    corners, corner, voc = _cut_corners(F, E, cut, faces)
+    T = corner.reshape(-1, 3)               # the distinct faces' corners, in face order
+    if len(T) != len(faces):
+        T = T[np.searchsorted(np.unique(faces), faces)]
+    del corners, corner
     # Compact the cut vertices used; faces connected through a shared cut vertex (a corner
-    # glued across an uncut edge) form one chart.
+    # glued across an uncut edge) form one chart. The per-corner arrays are int32 where the
+    # ids fit (the whole-mesh call before the final unwrap held ~160 MB of them in int64 on a
+    # 500k-face mesh).
     used = np.zeros(len(voc), dtype=bool)
     used[T.ravel()] = True
     ids = np.flatnonzero(used)
-    compact = np.cumsum(used) - 1
-    tri = compact[T]
+    tri = (np.cumsum(used, dtype=T.dtype) - 1)[T]
+    del T, used
     nv, k = len(ids), len(faces)
-    rows = np.repeat(np.arange(k), 3)
+    idx = index_dtype(3 * k + nv + 1)
     # Faces and cut vertices, each face joined to its three corners' vertices.
-    n_c, comp = _components(np.concatenate([np.arange(0, 3 * k + 1, 3), np.full(nv, 3 * k)]),
-                            k + tri.ravel(), k + nv)
+    n_c, comp = _components(np.concatenate([np.arange(0, 3 * k + 1, 3, dtype=idx),
+                                            np.full(nv, 3 * k, dtype=idx)]),
+                            np.add(tri.ravel(), k, dtype=idx), k + nv)
     fl, vl = comp[:k], comp[k:]
     # Boundary half-edges: on a seam, on the mesh boundary, or next to a face not asked for
     # (the half-edge F[f,j] -> F[f,j+1] runs along edge E.face_edges[f,j]).
-    a, b = tri.ravel(), np.roll(tri, -1, axis=1).ravel()
     inset = np.zeros(len(F), dtype=bool)
     inset[faces] = True
     fe = E.face_edges[faces].ravel()
     f0, f1 = E.faces[fe, 0], E.faces[fe, 1]
     bnd = cut[fe] | (f1 < 0) | ~inset[f0] | ~inset[np.maximum(f1, 0)]
-    nb = np.bincount(fl[rows[bnd]], minlength=n_c)
+    del fe, f0, f1, inset
+    hb = np.flatnonzero(bnd)                # boundary half-edges, as corners of ``tri``
+    del bnd
+    ba, bb = tri.ravel()[hb], np.roll(tri, -1, axis=1).ravel()[hb]
+    nb = np.bincount(fl[hb // 3], minlength=n_c)
     nf = np.bincount(fl, minlength=n_c)
     nvc = np.bincount(vl, minlength=n_c)
     ne = (3 * nf + nb) // 2
     chi = nvc - ne + nf
-    ba, bb = a[bnd], b[bnd]
     bo = np.argsort(ba, kind="stable")
     _, lab = _components(np.concatenate([[0], np.cumsum(np.bincount(ba, minlength=nv))]),
                          bb[bo], nv)
@@ -215,8 +237,8 @@ def _components(indptr, indices, n):
     """
     if n <= HOOK_VERTICES:
         return components(n, np.repeat(np.arange(n), np.diff(indptr)), indices)
-    g = sp.csr_matrix((np.ones(len(indices)), indices.astype(np.int32),
-                       indptr.astype(np.int32)), shape=(n, n))
+    g = sp.csr_matrix((np.ones(len(indices)), indices.astype(np.int32, copy=False),
+                       indptr.astype(np.int32, copy=False)), shape=(n, n))
     return connected_components(g, directed=True, connection="weak")
 
 
