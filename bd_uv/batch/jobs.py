@@ -203,12 +203,16 @@ def _refusals(out, m):
 
 
 def zero_area_left_out(res, m):
-    """(m,) bool: the faces an ``UnwrapResult`` left out as zero-area (``DegenerateFacesError``
-    islands); none for no result."""
+    """(m,) bool: the faces an ``UnwrapResult`` left out as zero-area: those a
+    ``DegenerateFacesError`` names. Seams "needed" makes them an island of their own; the marked
+    and automatic seams refuse the island holding them, whose faces with an area are left
+    uncertified, not out (counting them as zero-area wrote such a scene mesh as certified). None
+    for no result."""
     zero = np.zeros(m, bool)
     for r in (res.islands if res is not None else ()):
         if isinstance(r.error, DegenerateFacesError):
-            zero[r.faces] = True
+            named = r.error.faces
+            zero[r.faces if named is None else np.intersect1d(r.faces, named)] = True
     return zero
 
 

@@ -198,6 +198,35 @@ def test_zero_area_faces_do_not_refuse_their_mesh(tmp_path):
         assert any(np.array_equal(uv[fv], uv[o]) for o in same)
 
 
+def test_an_island_refused_whole_for_a_zero_area_face_is_not_written_as_certified(tmp_path):
+    """``--seams none`` takes the islands as they are: one holding a zero-area face is refused
+    whole (``DegenerateFacesError``), its faces with an area uncertified. Counting all of them as
+    zero-area (left out) wrote this mesh as certified, 17 "zero-area" faces whose UVs were
+    borrowed; now it is partial, nothing is written and the report names the one face."""
+    V, counts, idx = quad_grid(5, 3, bump=False)
+    polys = [list(p) for p in np.split(idx, np.cumsum(counts)[:-1])]
+    n = len(V)
+    V = np.vstack([V, V + [10.0, 0.0, 0.0], [[11.5, 0.0, V[1, 2] / 2 + V[2, 2] / 2]]])
+    polys += [[v + n for v in p] for p in polys] + [[n + 2, n + 1, 2 * n]]
+    V[2 * n] = (V[n + 1] + V[n + 2]) / 2               # on the edge it hangs from: no area
+    counts = np.array([len(p) for p in polys])
+    stage = Usd.Stage.CreateNew(str(tmp_path / "two.usda"))
+    mesh = UsdGeom.Mesh.Define(stage, "/Two")
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(V.astype(np.float32)))
+    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(counts.astype(np.int32)))
+    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(np.concatenate(polys).astype(np.int32)))
+    stage.GetRootLayer().Save()
+    out = tmp_path / "two_uv.usda"
+    main(["unwrap", str(tmp_path / "two.usda"), "-o", str(out), "--seams", "none",
+          "--report", str(tmp_path / "r.json"), "-q"])
+    (e,) = json.loads((tmp_path / "r.json").read_text())["meshes"]
+    assert e["status"] == "partial" and "zero_area_faces" not in e, e
+    refused = [i for i in e["islands"] if i["status"] != "certified"]
+    assert len(refused) == 1 and refused[0]["error"] == "DegenerateFacesError"
+    assert refused[0]["faces"] == 17 and "1 zero-area face" in refused[0]["message"]
+    assert not out.exists()
+
+
 def test_usdz_out(tmp_path):
     shot, _ = build_stage(str(tmp_path / "in"))
     out = tmp_path / "pkg" / "shot.usdz"
