@@ -93,7 +93,7 @@ def gradient_operators(Z):
         G[:, 0, 2] = -b / det
         G[:, 1, 1] = -c / det
         G[:, 1, 2] = a / det
-    G[:, :, 0] = -G[:, :, 1] - G[:, :, 2]
+        G[:, :, 0] = -G[:, :, 1] - G[:, :, 2]   # inf - inf on a zero-area face: NaN, quietly
     return G
 
 

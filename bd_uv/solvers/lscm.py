@@ -68,7 +68,8 @@ def face_geometry(V, F):
         Z = local_coordinates(V, f)
         G = gradient_operators(Z)
         zarea[i:i + CHUNK] = 0.5 * np.abs(((Z[:, 1] - Z[:, 0]).conj() * (Z[:, 2] - Z[:, 0])).imag)
-        cb[i:i + CHUNK] = 0.5 * (G[:, 0] + 1j * G[:, 1])
+        with np.errstate(invalid="ignore"):    # NaN gradients of zero-area faces
+            cb[i:i + CHUNK] = 0.5 * (G[:, 0] + 1j * G[:, 1])
         area[i:i + CHUNK] = face_areas(V, f)
     return FaceGeometry(area, cb, zarea)
 
