@@ -37,8 +37,11 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
         seam added, goes through one
     options : bd_uv.UnwrapOptions, optional (default: the defaults)
     precision : the float type ``V`` was stored in, optional (``np.float32`` for glTF, USD and
-        Blender positions): with ``seams_mode="needed"``, faces thinner than one step of it at
-        their coordinates are left out with the zero-area faces (``repair.zero_area_faces``)
+        Blender positions): faces thinner than one step of it at their coordinates are
+        zero-area faces (``mesh.thinner_than_precision``): left out with them with
+        ``seams_mode="needed"``; with "marked" they refuse their island
+        (``DegenerateFacesError``) at once, rather than after solves that cannot certify it as
+        stored. "auto" does not take it: its search cuts such faces into charts of their own
     **values : UnwrapOptions fields replacing those of ``options``: ``bd_uv.unwrap(V, F,
         bound=3.0, method="arap")``
 
@@ -60,7 +63,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     if opts.seams_mode == "marked":
         return unwrap_given_seams(V, F, seams, pin_corners, pin_uv, initial_uv=initial_uv,
                                   face_groups=face_groups, progress=progress, cancel=cancel,
-                                  options=opts)
+                                  options=opts, precision=precision)
     if pin_corners is not None and len(pin_corners):
         raise OptionError("seams_mode", f"seams_mode={opts.seams_mode!r} does not take pins or "
                           "the current UVs: call bd_uv.seams.unwrap_auto for material groups, "

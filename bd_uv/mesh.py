@@ -96,7 +96,20 @@ def _edge_keys(a, b, n):
     return np.minimum(a, b) * n + np.maximum(a, b)
 
 
-def islands(V, F, seams=None):
+def thinner_than_precision(P, A, lmax2, precision):
+    """(m,) bool: faces (corners ``P`` (m,3,3), areas ``A``, longest edges squared ``lmax2``)
+    whose height, twice the area over the longest edge, is below one step of ``precision`` (the
+    float type the positions were stored in: ``np.float32`` for glTF, USD, Blender) at their
+    largest coordinate: three points that precision cannot tell from a line. None or float64:
+    none."""
+    if precision is None or np.dtype(precision) == np.float64:
+        return np.zeros(len(A), dtype=bool)
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+        step = np.spacing(np.abs(P).max(axis=(1, 2)).astype(precision)).astype(np.float64)
+        return ~(2 * A > step * np.sqrt(lmax2))
+
+
+def islands(V, F, seams=None, precision=None):
     """Cut the mesh along seams and split it into validated islands.
 
     Parameters
@@ -106,17 +119,21 @@ def islands(V, F, seams=None):
     seams : (s,2) int array, optional
         Vertex pairs of the edges to cut along. Pairs that are not mesh edges (including indices
         outside 0..n-1) are ignored.
+    precision : float type the positions were stored in, optional: faces it cannot tell from a
+        line are zero-area too (``thinner_than_precision``)
 
     Returns
     -------
     list of Island, ordered by their smallest face index.
     """
     V, F = check_arrays(V, F)
-    return checked_islands(V, F, seams)
+    return checked_islands(V, F, seams, precision)
 
 
-def checked_islands(V, F, seams=None):
-    """``islands`` of arrays ``check_arrays`` already returned (float64 V, int64 F in range)."""
+def checked_islands(V, F, seams=None, precision=None):
+    """``islands`` of arrays ``check_arrays`` already returned (float64 V, int64 F in range).
+    With ``precision``, the float type the positions were stored in, faces it cannot tell from a
+    line count as zero-area too (``thinner_than_precision``)."""
     n, m = len(V), len(F)
     # Half-edges: corner (f, k) starts the directed edge F[f,k] -> F[f,k+1].
     src = F.ravel()
@@ -189,6 +206,7 @@ def checked_islands(V, F, seams=None):
     with np.errstate(invalid="ignore", over="ignore"):
         lmax2 = np.max(np.sum((P - np.roll(P, -1, axis=1)) ** 2, axis=2), axis=1)
         degenerate = ~(2 * A > DEGENERATE_RATIO * lmax2)
+    degenerate |= thinner_than_precision(P, A, lmax2, precision)
     # The one place non-finite vertex coordinates are caught: NaN or inf, and coordinates so large
     # that the face's squared edges or area overflow (nothing downstream could measure it).
     nonfinite_face = ~(np.all(np.isfinite(P), axis=(1, 2)) & np.isfinite(lmax2) & np.isfinite(A))

@@ -24,7 +24,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from .geometry import face_areas
-from .mesh import DEGENERATE_RATIO, check_arrays
+from .mesh import DEGENERATE_RATIO, check_arrays, thinner_than_precision
 
 
 @dataclass(frozen=True)
@@ -144,9 +144,7 @@ def zero_area_faces(V, F, precision=None):
     finite = np.isfinite(P).all(axis=(1, 2))
     with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
         zero = ~(2 * A > DEGENERATE_RATIO * lmax2)
-        if precision is not None and np.dtype(precision) != np.float64:
-            step = np.spacing(np.abs(P).max(axis=(1, 2)).astype(precision)).astype(np.float64)
-            zero |= ~(2 * A > step * np.sqrt(lmax2))
+    zero |= thinner_than_precision(P, A, lmax2, precision)
     return zero & finite
 
 

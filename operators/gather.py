@@ -128,6 +128,9 @@ def unwrap_arguments(batch, *, method, bound, minimise, raise_bound, bound_limit
                      overlap="cut", boundary="free", stretch=None):
     """Positional and keyword arguments of ``bd_uv.unwrap`` for ``batch`` (``stretch`` S: Limit
     Stretch, singular values within [1/S, S]): the mesh's data and its ``UnwrapOptions``.
+    Blender stores positions in float32: faces it cannot tell from a line, side by side, refuse
+    their island at once as zero-area faces (``precision``), not after minutes of solves that
+    cannot certify it as stored.
 
     Raises
     ------
@@ -138,7 +141,8 @@ def unwrap_arguments(batch, *, method, bound, minimise, raise_bound, bound_limit
                        overlap=overlap, boundary=boundary,
                        stretch=None if stretch is None else float(stretch))
     kwargs = dict(seams=batch.seams, options=options,
-                  face_groups=batch.tri_polygons)  # an overlap cut never splits a polygon
+                  face_groups=batch.tri_polygons,  # an overlap cut never splits a polygon
+                  precision=stored_precision(batch.V, batch.F, np.float32))
     if len(batch.pin_corners):
         kwargs.update(pin_corners=batch.pin_corners, pin_uv=batch.pin_uv)
     if frames == "input-uv":

@@ -30,7 +30,8 @@ from .problem import Cancelled, IslandProblem
 from .results import IslandResult, UnwrapResult
 
 def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
-           face_groups=None, progress=None, cancel=None, options=None, **values):
+           face_groups=None, progress=None, cancel=None, options=None, precision=None,
+           **values):
     """Map a triangle mesh, cut along the given seams, to the plane with no flipped face and
     conformal distortion <= C.
 
@@ -49,6 +50,9 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     progress : callable(fraction, message), optional
     cancel : object with ``is_set()``, optional
     options : bd_uv.UnwrapOptions, optional (default: the defaults)
+    precision : the float type ``V`` was stored in, optional (``np.float32``): faces it cannot
+        tell from a line are zero-area, and refuse their island (``DegenerateFacesError``) as
+        a zero-area face does (``mesh.thinner_than_precision``)
     **values : UnwrapOptions fields replacing those of ``options`` (``bound=3.0``, ...). How each
         works: ``method`` "biharmonic" (eq. 6.1) with a free boundary is held at two boundary
         vertices of the start map; "stretch-l1" (section 6.1) holds the island's scale (the
@@ -86,7 +90,8 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     pins = pin_arrays(pin_corners, pin_uv, m)
     conformal, disk = None, None
     if (seams is None or not len(seams)) and not len(pins[0]) and _batched_options(opts) \
-            and opts.boundary == "free" and opts.stretch is None:
+            and opts.boundary == "free" and opts.stretch is None \
+            and (precision is None or np.dtype(precision) == np.float64):
         disk = one_disk.find(V, F)   # one clean disk: found, solved, certified in one pass
     if disk is not None:
         done, u = one_disk.unwrap_disk(V, F, disk, None if opts.bound == "auto" else
@@ -95,7 +100,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             return done
         conformal = {0: u}
     return unwrap_islands(V, F, [disk.island] if disk is not None else
-                          split_islands(V, F, seams), pins, opts, initial_uv=initial_uv,
+                          split_islands(V, F, seams, precision), pins, opts, initial_uv=initial_uv,
                           face_groups=face_groups, progress=progress, cancel=cancel,
                           conformal=conformal, t0=t0, disk=disk)
 

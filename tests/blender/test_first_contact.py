@@ -267,12 +267,9 @@ def test_batch_script_unwraps_closed_primitives_with_its_defaults(empty_scene, t
         _certified_as_stored(obj)
 
 
-def test_faces_float32_cannot_tell_from_a_line_side_by_side_are_left_out(addon, capsys):
-    """A curved quad grid at scale 100 split by a strip of 4 quads one float32 step high
-    (OpenChessSet's bishops hold 608 such faces in strips). Blender stores positions in float32;
-    no UV store keeps the strip's 8 triangles apart, at any stretch, and trying failed the whole
-    grid. They are left out as zero-area from the start (named), every other face certified as
-    stored (recomputed here)."""
+def _split_grid():
+    """A curved quad grid at scale 100 split by a strip of 4 quads one float32 step high, as a
+    Blender object: (object, number of grid quads, the strip's edges as vertex pairs)."""
     nx, ny = 5, 4
     xs, ys = np.meshgrid(np.linspace(0.0, 1.0, nx), np.linspace(0.0, 1.0, ny))
     x, y = xs.ravel(), ys.ravel()
@@ -293,12 +290,43 @@ def test_faces_float32_cannot_tell_from_a_line_side_by_side_are_left_out(addon, 
     mesh.update()
     obj = bpy.data.objects.new("split", mesh)
     bpy.context.scene.collection.objects.link(obj)
+    sides = {frozenset(q[:2]) for q in strip} | {frozenset(q[2:]) for q in strip}
+    return obj, len(quads), sides
+
+
+def test_faces_float32_cannot_tell_from_a_line_side_by_side_are_left_out(addon, capsys):
+    """A curved quad grid at scale 100 split by a strip of 4 quads one float32 step high
+    (OpenChessSet's bishops hold 608 such faces in strips). Blender stores positions in float32;
+    no UV store keeps the strip's 8 triangles apart, at any stretch, and trying failed the whole
+    grid. They are left out as zero-area from the start (named), every other face certified as
+    stored (recomputed here)."""
+    obj, n_quads, _ = _split_grid()
     result, reports = _unwrap_defaults(capsys, obj)
     assert result == {'FINISHED'}, reports
     assert any("zero-area" in m for _, m in reports), reports
     Vt, tris, loops, poly = _loop_triangles(obj)
-    keep = poly < len(quads)
+    keep = poly < n_quads
     assert (~keep).sum() == 8
+    uv = loop_uv_array(obj.data)
+    D, det = triangle_distortion(Vt, tris[keep], uv[loops[keep]])
+    assert (det > 0).all() and D.max() <= C * SLACK
+
+
+def test_marked_seams_refuse_float32_flat_faces_at_once(addon, capsys):
+    """Seams "Marked" on the same grid with the strip's two long sides marked: the strip's
+    island, which no float32 store keeps apart, is refused at once as zero-area (named), not
+    after solves that cannot certify it; the two halves are certified as stored (recomputed)."""
+    obj, n_quads, sides = _split_grid()
+    for e in obj.data.edges:
+        e.use_seam = frozenset(e.vertices) in sides
+    set_mode(obj, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    result, reports = run(capsys, seams='MARKED')
+    set_mode(obj, 'OBJECT')
+    assert result == {'FINISHED'}, reports
+    assert any("zero-area" in m for _, m in reports), reports
+    Vt, tris, loops, poly = _loop_triangles(obj)
+    keep = poly < n_quads
     uv = loop_uv_array(obj.data)
     D, det = triangle_distortion(Vt, tris[keep], uv[loops[keep]])
     assert (det > 0).all() and D.max() <= C * SLACK

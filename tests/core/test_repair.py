@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from bd_uv.layout import stored_layout
-from bd_uv.repair import repair_mesh
+from bd_uv.repair import repair_mesh, stored_precision
 from bd_uv.seams.needed import unwrap_needed
 from helpers import reference_distortion
 from overlap_shapes import overlapping_triangle_pairs
@@ -211,3 +211,67 @@ def test_stored_precision_only_for_flat_faces_side_by_side():
     assert stored_precision(V, beside, np.float64) is None
     assert stored_precision(V, np.array([[0, 4, 1]]), np.float32) is None
     assert stored_precision(V, np.array([[0, 1, 99]]), np.float32) is None   # a bad index
+
+
+def _split_grid():
+    """A curved quad grid at scale 100 split by a strip of 4 quads one float32 step high (as in
+    OpenChessSet's bishops), positions rounded to float32; the strip's 8 triangles last."""
+    nx, ny = 5, 4
+    xs, ys = np.meshgrid(np.linspace(0.0, 1.0, nx), np.linspace(0.0, 1.0, ny))
+    x, y = xs.ravel(), ys.ravel()
+    V = 100.0 * np.stack([x, y, 0.25 * (x - 0.4) ** 2 + 0.1 * y], axis=1)
+    i = np.arange(nx * ny).reshape(ny, nx)
+    quads = np.stack([i[:-1, :-1].ravel(), i[:-1, 1:].ravel(), i[1:, 1:].ravel(),
+                      i[1:, :-1].ravel()], axis=1)
+    row = i[1]
+    copy = np.arange(nx * ny)
+    copy[row] = nx * ny + np.arange(nx)
+    eps = float(np.spacing(np.float32(V[row[0], 1])))
+    V = np.vstack([V, V[row] + [0.0, eps, 0.0]]).astype(np.float32).astype(np.float64)
+    quads[nx - 1:] = copy[quads[nx - 1:]]       # the rows above the split take the copies
+    strip = np.stack([row[:-1], row[1:], copy[row[1:]], copy[row[:-1]]], axis=1)
+    q = np.vstack([quads, strip])
+    F = np.vstack([q[:, [0, 1, 2]], q[:, [0, 2, 3]]])
+    order = np.argsort(np.r_[np.arange(len(q)), np.arange(len(q))], kind="stable")
+    F = F[order]                                 # the two triangles of a quad side by side
+    seams = np.concatenate([np.stack([row[:-1], row[1:]], 1),
+                            np.stack([copy[row[:-1]], copy[row[1:]]], 1)])
+    return V, F, seams, np.arange(len(F)) >= 2 * len(quads)
+
+
+def test_marked_seams_refuse_float32_flat_faces_at_once():
+    """``precision=np.float32`` with the marked seams: faces float32 cannot tell from a line
+    are zero-area there too. Marked seams around the flat strip leave the grid's
+    two halves certified (recomputed here) and the strip's island refused as zero-area, named;
+    without ``precision`` float64 tells the strip from a line and does not refuse it."""
+    import bd_uv
+    from bd_uv.errors import DegenerateFacesError
+    V, F, seams, flat = _split_grid()
+    assert stored_precision(V, F, np.float32) is np.float32
+    res = bd_uv.unwrap(V, F, seams=seams, precision=np.float32)
+    refused = [r for r in res.islands if r.status != "certified"]
+    assert len(refused) == 1 and isinstance(refused[0].error, DegenerateFacesError)
+    assert sorted(refused[0].faces) == np.flatnonzero(flat).tolist()
+    assert "zero-area" in str(refused[0].error)
+    ok = ~flat
+    D, flipped = reference_distortion(V, F[ok], res.corner_uv[ok])
+    assert not flipped.any() and D.max() <= 5.0 * (1 + 1e-6)
+    plain = bd_uv.unwrap(V, F, seams=seams)
+    assert not any(isinstance(r.error, DegenerateFacesError) for r in plain.islands)
+
+
+def test_a_zero_area_face_prints_no_numpy_warning(recwarn):
+    """A zero-area face's gradients are NaN (0/0 and inf - inf): measured quietly, not printed
+    as RuntimeWarnings to a pipeline's log, with every seams mode; the face is refused, named."""
+    import bd_uv
+    from bd_uv.errors import DegenerateFacesError
+    V, F = _grid()
+    V = np.vstack([V, (V[F[0, 0]] + V[F[0, 1]]) / 2])
+    F = np.vstack([F, [F[0, 1], F[0, 0], len(V) - 1]])     # hangs from face 0's first edge
+    for seams in (None, "auto", "needed"):
+        res = bd_uv.unwrap(V, F, seams=seams)
+        named = np.concatenate([r.error.faces for r in res.islands
+                                if isinstance(r.error, DegenerateFacesError)])
+        assert named.tolist() == [len(F) - 1], seams
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)], \
+        [str(w.message) for w in recwarn]
