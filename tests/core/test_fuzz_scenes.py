@@ -34,6 +34,9 @@ from helpers import float32_flat, reference_distortion
 from overlap_shapes import overlapping_triangle_pairs
 
 EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "40"))
+# every --seams mode: the default "needed" twice as often (each takes a scene's islands, and
+# its zero-area faces, its own way)
+SEAMS = ("needed", "needed", "none", "uv", "auto")
 BREAKAGES = ("none", "index range", "position range", "index ctype", "position ctype",
              "sparse position", "no indices", "degenerate", "nan position", "view range",
              "buffer short", "bad mode", "inf position")
@@ -96,11 +99,11 @@ def _digest(folder):
             for f in sorted(os.listdir(folder))}
 
 
-def _spoil_and_unwrap(name, src, tmp, flips, cut, out_name, spoil=None):
+def _spoil_and_unwrap(name, src, tmp, flips, cut, out_name, spoil=None, seams="needed"):
     """Corrupt bytes of the file ``spoil`` (default: the scene ``name`` itself; ``flips``: (where,
     xor) pairs) and truncate it at ``cut``; read the scene, then unwrap it through the command
-    line. Never a crash, never a traceback, the input folder ``src`` byte-identical afterwards.
-    Returns (exit code, stderr, -o, --report)."""
+    line with ``--seams seams``. Never a crash, never a traceback, the input folder ``src``
+    byte-identical afterwards. Returns (exit code, stderr, -o, --report)."""
     spoil = spoil or name
     raw = bytearray(open(spoil, "rb").read())
     for at, x in flips:                             # corrupted bytes
@@ -118,7 +121,7 @@ def _spoil_and_unwrap(name, src, tmp, flips, cut, out_name, spoil=None):
     err = io.StringIO()
     with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
         try:
-            rc = main(["unwrap", name, "-o", out, "--report", rep])
+            rc = main(["unwrap", name, "-o", out, "--report", rep, "--seams", seams])
         except SystemExit as e:
             rc = e.code
     msg = err.getvalue()
@@ -162,23 +165,25 @@ def _check_written(out, report):
 # found by this contract (seed 7): a flipped byte in a base64 data URI was binascii.Error out of
 # read_scene (gltf_io._buffer_bytes; test_scene_gltf's test_a_damaged_data_uri_is_a_scene_error)
 @example(breakage="none", copies=1, glb=False, seed=0, cut=None, flips=[(0.25, 1)],
-         spoil="data URI")
+         spoil="data URI", seams="needed")
 # and (seed 8): indices of a signed component type (5120) whose .bin byte was flipped held -107,
 # and only indices >= the vertex count were refused: IndexError in weld (gltf._mesh_arrays)
 @example(breakage="index ctype", copies=1, glb=False, seed=1, cut=None, flips=[(0.75, 128)],
-         spoil="its .bin")
+         spoil="its .bin", seams="needed")
 # and (2,000 deep, seed 99991, after 1,606 examples): two flipped bytes of a 21-copy .glb made a
 # sliver chart; its layout certified in float32, but glTF stores 1 - v, which rounds otherwise,
 # and the writer's own check refused the only mesh after the .glb was written: a file at -o with
 # no certified mesh. The writers (glTF, USD) now write nothing when no mesh certifies as stored.
 @example(breakage="none", copies=21, glb=True, seed=0, cut=None,
-         flips=[(0.849154883563951, 16), (0.849154883563951, 96)], spoil="scene")
+         flips=[(0.849154883563951, 16), (0.849154883563951, 96)], spoil="scene",
+         seams="needed")
 @given(breakage=st.sampled_from(BREAKAGES), copies=st.integers(1, 40), glb=st.booleans(),
        seed=st.integers(0, 2 ** 16), cut=st.one_of(st.none(), st.floats(0.0, 0.999)),
        flips=st.lists(st.tuples(st.floats(0, 0.999), st.integers(1, 255)), max_size=3),
-       spoil=st.sampled_from(["scene", "scene", "its .bin", "its .bin gone", "data URI"]))
+       spoil=st.sampled_from(["scene", "scene", "its .bin", "its .bin gone", "data URI"]),
+       seams=st.sampled_from(SEAMS))
 def test_scene_files_never_crash_or_write_an_uncertified_result(breakage, copies, glb, seed,
-                                                                  cut, flips, spoil):
+                                                                  cut, flips, spoil, seams):
     """``spoil`` (a .gltf only): corrupt and truncate the .gltf, or its external .bin, or delete
     the .bin, or carry the buffer inside the .gltf as a base64 data URI."""
     with tempfile.TemporaryDirectory() as tmp:
@@ -191,7 +196,8 @@ def test_scene_files_never_crash_or_write_an_uncertified_result(breakage, copies
         if spoil == "its .bin gone":
             os.remove(bins[0])
         target = bins[0] if spoil == "its .bin" else None
-        rc, msg, out, rep = _spoil_and_unwrap(name, src, tmp, flips, cut, "out.glb", target)
+        rc, msg, out, rep = _spoil_and_unwrap(name, src, tmp, flips, cut, "out.glb", target,
+                                              seams)
         if rc == 2:
             assert msg.strip(), "a failure says why"
             assert not os.path.exists(out)
@@ -206,7 +212,7 @@ def test_scene_files_never_crash_or_write_an_uncertified_result(breakage, copies
 
 USD_BREAKAGES = ("none", "polygon counts", "index range", "counts sum", "nan point", "empty stage",
                  "no points", "instanced", "instanceable", "time-sampled points", "holes",
-                 "inf point")
+                 "inf point", "zero-area island")
 
 
 def _stage(path, breakage, seed):
@@ -232,6 +238,11 @@ def _stage(path, breakage, seed):
         idx[int(rng.integers(len(idx)))] = 10 ** 6
     elif breakage == "counts sum":
         counts.append(4)
+    elif breakage == "zero-area island":   # a second grid beside, one of its polygons no area
+        n = len(V)
+        hang = V[1] + (V[2] - V[1]) * rng.choice([0.5, 0.25])   # on the edge it hangs from
+        V = np.vstack([V, V + [10.0, 0.0, 0.0], [hang + [10.0, 0.0, 0.0]]])
+        counts, idx = counts + counts + [3], idx + [v + n for v in idx] + [n + 2, n + 1, 2 * n]
     elif breakage in ("nan point", "inf point"):
         V = V.copy()
         V[int(rng.integers(len(V))), int(rng.integers(3))] = \
@@ -303,27 +314,33 @@ def _check_stage(out, report):
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 # found by this contract: a byte >= 0x80 in a .usda made pxr's error unprintable (str() of its
 # Tf.ErrorException raised UnicodeDecodeError out of read_scene): usd._pxr_message
-@example(breakage="none", seed=0, cut=None, flips=[(0.5, 128)], suffix=".usda")
+@example(breakage="none", seed=0, cut=None, flips=[(0.5, 128)], suffix=".usda", seams="needed")
 # found by this contract: a flipped byte left points of an unknown type (Sdf.UnregisteredValue),
 # and numpy's TypeError left read_scene (usd._numbers; test_scene_usd's
 # test_a_value_of_an_unknown_type_is_a_scene_error)
-@example(breakage="inf point", seed=2, cut=None, flips=[(0.4, 99)], suffix=".usda")
+@example(breakage="inf point", seed=2, cut=None, flips=[(0.4, 99)], suffix=".usda",
+         seams="needed")
 # and (seed 7 once .usdc was drawn): a crate file's values are decompressed when read, so a
 # flipped byte raised pxr's Tf.ErrorException (LZ4) from points.Get() out of read_scene
-@example(breakage="none", seed=0, cut=None, flips=[(0.171875, 1)], suffix=".usdc")
+@example(breakage="none", seed=0, cut=None, flips=[(0.171875, 1)], suffix=".usdc",
+         seams="needed")
+# an island the marked seams refused for one zero-area face was written as certified, its 16
+# faces with an area "zero-area" with borrowed UVs (jobs.zero_area_left_out)
+@example(breakage="zero-area island", seed=0, cut=None, flips=[], suffix=".usda", seams="none")
 @given(breakage=st.sampled_from(USD_BREAKAGES), seed=st.integers(0, 2 ** 16),
        cut=st.one_of(st.none(), st.floats(0.0, 0.999)),
        flips=st.lists(st.tuples(st.floats(0, 0.999), st.integers(1, 255)), max_size=2),
-       suffix=st.sampled_from([".usda", ".usda", ".usdc"]))
+       suffix=st.sampled_from([".usda", ".usda", ".usdc"]), seams=st.sampled_from(SEAMS))
 def test_usd_stages_never_crash_or_write_an_uncertified_result(breakage, seed, cut, flips,
-                                                                suffix):
+                                                                suffix, seams):
     """``suffix``: the stage as text, or as a binary crate file (its bytes corrupted and cut)."""
     with tempfile.TemporaryDirectory() as tmp:
         src = os.path.join(tmp, "in")
         os.mkdir(src)
         name = os.path.join(src, "shot" + suffix)
         _stage(name, breakage, seed)
-        rc, msg, out, rep = _spoil_and_unwrap(name, src, tmp, flips, cut, "out" + suffix)
+        rc, msg, out, rep = _spoil_and_unwrap(name, src, tmp, flips, cut, "out" + suffix,
+                                              seams=seams)
         if rc == 2:
             assert msg.strip() and not os.path.exists(out)
         if rc != 0 and breakage not in ("none", "empty stage") and not flips and cut is None:
