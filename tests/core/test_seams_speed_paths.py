@@ -3,7 +3,9 @@
 - ``solvers.threads``: blocks factored side by side give each block's own result, in order;
 - ``chart_maps`` of two runs of charts (threads) equals the one-system solve;
 - ``unwrap_islands`` with the search's known conformal maps certifies what ``unwrap`` certifies,
-  and a wrong "known" map is not trusted: the UVs written are certified from scratch here.
+  and a wrong "known" map is not trusted: the UVs written are certified from scratch here;
+- ``boundary_crossings`` (box pre-test, later edges only) counts what a pair-by-pair test counts,
+  and ``cut_graph``'s percentile and compressed rows are numpy's and scipy's.
 """
 import importlib
 
