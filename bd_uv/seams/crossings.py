@@ -43,11 +43,14 @@ def boundary_crossings(uv, loops):
     if int((lens * lens).sum()) <= ALL_PAIRS:
         # Short loops: every pair of each loop's edges (fewer steps than the grid below; two
         # edges that cross share a grid cell, so the count is the same).
-        reps = lens * lens
-        grp = np.repeat(np.arange(k), reps)
-        r = np.arange(int(reps.sum())) - np.repeat(np.cumsum(reps) - reps, reps)
-        i, j = start[grp] + r // lens[grp], start[grp] + r % lens[grp]
-        keep = (i < j) & (nxt[i] != j) & (nxt[j] != i)
+        # Each edge with every later edge of its loop (i < j).
+        later = (start + lens)[owner] - 1 - np.arange(len(p))
+        i = np.repeat(np.arange(len(p)), later)
+        j = i + 1 + np.arange(len(i)) - np.repeat(np.cumsum(later) - later, later)
+        keep = (nxt[i] != j) & (nxt[j] != i)
+        # Only edges whose boxes meet (touching included) can cross: a few comparisons per
+        # pair before the orientation tests, on the few pairs left.
+        keep &= _boxes_meet(p, q, i, j)
         i, j = i[keep], j[keep]
         hit = _segments_cross(p[i], q[i], p[j], q[j])
         return np.bincount(owner[i[hit]], minlength=k).astype(np.int64)
@@ -90,10 +93,19 @@ def boundary_crossings(uv, loops):
     if len(pair) == 0:
         return np.zeros(k, np.int64)
     i, j = pair // nseg, pair % nseg
-    adjacent = (nxt[i] == j) | (nxt[j] == i)
-    i, j = i[~adjacent], j[~adjacent]
+    keep = (nxt[i] != j) & (nxt[j] != i)
+    keep &= _boxes_meet(p, q, i, j)
+    i, j = i[keep], j[keep]
     hit = _segments_cross(p[i], q[i], p[j], q[j])
     return np.bincount(owner[i[hit]], minlength=k).astype(np.int64)
+
+
+def _boxes_meet(p, q, i, j):
+    """Whether the bounding boxes of edges ``i`` and ``j`` (``p -> q``) meet, touching included:
+    edges that cross do, so the orientation tests run only on these pairs."""
+    x0, x1 = np.minimum(p.real, q.real), np.maximum(p.real, q.real)
+    y0, y1 = np.minimum(p.imag, q.imag), np.maximum(p.imag, q.imag)
+    return (x0[i] <= x1[j]) & (x0[j] <= x1[i]) & (y0[i] <= y1[j]) & (y0[j] <= y1[i])
 
 
 def _segments_cross(p1, q1, p2, q2):

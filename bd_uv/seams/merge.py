@@ -54,6 +54,8 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
         fails without a new solve (the same pairs are tried and the same charts come out)
     """
     failed = {} if failed is None else failed
+    # The counts of the failed charts: a union of other counts is not hashed (``chart_key``).
+    sizes = {key[1:] for key in failed}
     tried = set()
     # A face of each of two charts whose union was far beyond S: charts holding them are not
     # tried together again (a union of larger charts around them fares no better).
@@ -118,7 +120,9 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
                 return
             continue
         # Unions the search already mapped and split fail as they did; the rest in one solve.
-        stretch = np.array([failed.get(chart_key(c), np.nan) for c, _, _ in disks])
+        stretch = np.array([failed.get(chart_key(c), np.nan)
+                            if (len(c.faces), len(c.vertices), len(c.loops[0])) in sizes
+                            else np.nan for c, _, _ in disks])
         ok = np.zeros(len(disks), dtype=bool)
         new = np.flatnonzero(np.isnan(stretch))
         if len(new):

@@ -3,8 +3,12 @@
 - ``solvers.threads``: blocks factored side by side give each block's own result, in order;
 - ``chart_maps`` of two runs of charts (threads) equals the one-system solve;
 - ``unwrap_islands`` with the search's known conformal maps certifies what ``unwrap`` certifies,
-  and a wrong "known" map is not trusted: the UVs written are certified from scratch here.
+  and a wrong "known" map is not trusted: the UVs written are certified from scratch here;
+- ``boundary_crossings`` (box pre-test, later edges only) counts what a pair-by-pair test counts,
+  and ``cut_graph``'s percentile and compressed rows are numpy's and scipy's.
 """
+import importlib
+
 import numpy as np
 import pytest
 
@@ -245,3 +249,74 @@ def test_boundary_crossings_all_pairs_equals_the_grid(monkeypatch):
     bowtie = np.array([0, 1 + 1j, 1, 1j])      # edges 0 and 2 cross at (0.5, 0.5)
     monkeypatch.setattr(crossings, "ALL_PAIRS", 10 ** 9)
     assert crossings.boundary_crossings(bowtie, [np.arange(4)]).tolist() == [1]
+
+
+def _crossing_pairs_brute(uv, loop):
+    """Pairs of non-adjacent edges of a closed loop that meet (touching counts), by the
+    textbook closed-segment test (orientations, then an endpoint on the other segment) on
+    every pair: the reference for ``boundary_crossings``."""
+    L = len(loop)
+    pts = [complex(uv[v]) for v in loop]
+
+    def orient(a, b, c):
+        return (b.real - a.real) * (c.imag - a.imag) - (b.imag - a.imag) * (c.real - a.real)
+
+    def on(a, b, c):                        # c, on the line ab, within the segment
+        return (min(a.real, b.real) <= c.real <= max(a.real, b.real)
+                and min(a.imag, b.imag) <= c.imag <= max(a.imag, b.imag))
+
+    count = 0
+    for i in range(L):
+        for j in range(i + 1, L):
+            if j == i + 1 or (i == 0 and j == L - 1):
+                continue                    # edges sharing a corner
+            p1, q1, p2, q2 = pts[i], pts[(i + 1) % L], pts[j], pts[(j + 1) % L]
+            d1, d2 = orient(p2, q2, p1), orient(p2, q2, q1)
+            d3, d4 = orient(p1, q1, p2), orient(p1, q1, q2)
+            count += bool((d1 * d2 < 0 and d3 * d4 < 0)
+                          or (d1 == 0 and on(p2, q2, p1)) or (d2 == 0 and on(p2, q2, q1))
+                          or (d3 == 0 and on(p1, q1, p2)) or (d4 == 0 and on(p1, q1, q2)))
+    return count
+
+
+def test_boundary_crossings_count_what_every_pair_test_counts(monkeypatch):
+    """Both of ``boundary_crossings``' paths (every later edge of the loop; grid cells), with
+    their bounding-box pre-test, count what a pair-by-pair orientation test counts, on loops
+    with integer corners (exact arithmetic: crossings, touching corners, collinear overlaps)."""
+    rng = np.random.default_rng(7)
+    for _ in range(60):
+        loops, pts, off = [], [], 0
+        for _ in range(int(rng.integers(1, 4))):
+            L = int(rng.integers(3, 25))
+            z = rng.integers(0, 6, L) + 1j * rng.integers(0, 6, L)
+            pts.append(z.astype(np.complex128))
+            loops.append(np.arange(off, off + L))
+            off += L
+        uv = np.concatenate(pts)
+        want = [_crossing_pairs_brute(uv, lp) for lp in loops]
+        for limit in (10 ** 9, -1):
+            monkeypatch.setattr(crossings, "ALL_PAIRS", limit)
+            assert crossings.boundary_crossings(uv, loops).tolist() == want
+
+
+def test_cut_graph_helpers_equal_numpy_and_scipy():
+    """``cut_graph``'s percentile and compressed rows are numpy's and scipy's to the bit."""
+    import scipy.sparse as sp
+    cg = importlib.import_module("bd_uv.seams.cut_graph")
+    rng = np.random.default_rng(3)
+    for _ in range(2000):
+        x = rng.random(int(rng.integers(1, 200))) * 10.0 ** rng.uniform(-6, 6)
+        if rng.random() < 0.3:
+            x = np.round(x, 1)
+        assert cg._percentile10(x) == float(np.percentile(x, 10))
+    for _ in range(50):
+        n = int(rng.integers(1, 40))
+        k = int(rng.integers(0, 120))
+        r, c = rng.integers(0, n, k), rng.integers(0, n, k)
+        v = rng.random(k)
+        got = cg._csr(v, r, c, n)
+        want = sp.csr_matrix(sp.coo_array((v, (r, c)), shape=(n, n)))
+        want.sum_duplicates()
+        assert np.array_equal(got.indptr, want.indptr)
+        assert np.array_equal(got.indices, want.indices)
+        assert np.allclose(got.data, want.data, rtol=1e-15, atol=0)
