@@ -30,6 +30,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from .face_operators import alpha_beta_lift
+from .free_admm import FreeLift, run_free, sparse_product
 from .global_step import GlobalStep
 
 __all__ = ["BoundSearch", "framed_cone_projection"]
@@ -55,27 +56,16 @@ ONE_PRODUCT_FACES = 1000
 
 
 def _matvec(M):
-    """``x, out -> out = M @ x`` for a csr or csc float64 matrix M into a preallocated ``out``:
-    the compiled product straight, without scipy's dispatch (~10 us a call, two calls an
-    iteration, against ~5 us of arithmetic on a 500-face island); ``M @ x`` where scipy lacks
-    it."""
-    try:
-        from scipy.sparse._sparsetools import csc_matvec, csr_matvec
-    except ImportError:     # a scipy that moved it: the public product
-        def mv(x, out):
-            out[...] = M @ x
-            return out
-        mv.add = lambda x, out: out.__iadd__(M @ x)
-        return mv
-    m, n = M.shape
-    indptr, indices, data = M.indptr, M.indices, M.data
-    product = csc_matvec if M.format == "csc" else csr_matvec
+    """``x, out -> out = M @ x`` for a csr or csc float64 matrix M into a preallocated ``out``
+    (``free_admm.sparse_product``: the compiled product straight); ``.add`` accumulates."""
+    add = sparse_product(M.format, M.shape, M.indptr, M.indices)
+    data = M.data
 
     def mv(x, out):
         out.fill(0.0)
-        product(m, n, indptr, indices, data, x, out)    # out += M x
+        add(data, x, out)
         return out
-    mv.add = lambda x, out: product(m, n, indptr, indices, data, x, out)   # out += M x
+    mv.add = lambda x, out: add(data, x, out)
     return mv
 
 
@@ -176,7 +166,7 @@ class BoundSearch:
             if self.k <= ONE_PRODUCT_FACES:
                 gx, gy = s.face_gradients()
                 B, BtA, Bf = alpha_beta_lift(gx, gy, s.area, s.tris, s.free, s.nv, True)
-                self._B, self._BtA, self._Bf = _matvec(B), _matvec(BtA), _matvec(Bf)
+                self._B, self._BtA, self._Bf = _matvec(B), _matvec(BtA), (Bf, BtA)
             else:
                 G = s.G
                 GTA = s.GT[s.free] @ sp.diags_array(np.concatenate([s.area, s.area]))
@@ -270,7 +260,7 @@ class BoundSearch:
         Cm = 1.0 + MARGIN * (C - 1.0)
         kappa = (Cm - 1.0) / (Cm + 1.0)
         if self.k <= ONE_PRODUCT_FACES:
-            return self._run_free(U, np.stack([w.real, -w.imag]), kappa, C, D_best, cancel)
+            return self._run_free(U, w, kappa, C, D_best, cancel)
         solve = s.factorize()
         BtA = self._operators()[1]
         nf = len(s.free)
@@ -310,55 +300,30 @@ class BoundSearch:
         watch.iterate(step, lambda: self._max_distortion(GU), U.copy, C, cancel)
         return watch.kept, watch.best
 
-    def _run_free(self, U, w2, kappa, C, D_best, cancel):
-        """``run`` on a small island (up to ONE_PRODUCT_FACES faces), whose iterations pay per
-        array operation more than for arithmetic: the free unknowns ``x = [u_free; v_free]`` in
-        one vector (back-solved into its halves, no scatter into the whole map), lifted by the
-        free columns onto the fixed vertices' share, the right-hand side built onto its fixed
-        share: ~6 fewer array operations an iteration (one back-solve on the global matrix twice
-        on its diagonal saves 3 us an iteration and costs 0.2-0.4 ms more to factorise)."""
+    def _run_free(self, U, w, kappa, C, D_best, cancel):
+        """``run`` on a small island (up to ONE_PRODUCT_FACES faces): ``free_admm.run_free``, the
+        iterations on the free unknowns in every face's frame."""
         s, nf = self.solver, len(self.solver.free)
-        B, BtA = self._operators()
+        self._operators()
         if self._rhs_fixed is None or self._rhs_fixed[0] is not self.UF:
             # the fixed vertices' shares of the lift and the right-hand side, every target's
             Ufix = np.zeros((2, s.nv))
             Ufix[:, s.fixed] = self.UF.T
-            self._rhs_fixed = (self.UF, -(s._L_fF @ self.UF).T.ravel(),
-                               B(Ufix.ravel(), np.empty(4 * self.k)))
-        _, rhs_fixed, lift_fixed = self._rhs_fixed
-        solve, lift, rhs_of = s.factorize(), self._Bf.add, BtA.add
-        rhs = np.empty(2 * nf)
-        x = np.concatenate([U[0, s.free], U[1, s.free]])
-        xu, xv, ru, rv = x[:nf], x[nf:], rhs[:nf], rhs[nf:]
-        GU = self._lift(U)
-        lam, Q = np.zeros_like(GU), np.empty_like(GU)
-        flat_q, flat_gu = Q.reshape(-1), GU.reshape(-1)
+            Bf, BtA = self._Bf
+            self._rhs_fixed = (self.UF, FreeLift(Bf, BtA, self._B(Ufix.ravel(),
+                                                                  np.empty(4 * self.k)),
+                                                 -(s._L_fF @ self.UF).T.ravel()))
+        x0 = np.concatenate([U[0, s.free], U[1, s.free]])
+        best, D = run_free(self._rhs_fixed[1], s.factorize(), x0, w, kappa, C, _Watch(D_best),
+                           ALPHA, cancel, self._count)
+        if best is None:
+            return None, D, False
+        U = U.copy()
+        U[0, s.free], U[1, s.free] = best[:nf], best[nf:]
+        return U, D, D <= C
 
-        def step():
-            np.add(GU, lam, out=Q)
-            self._project(Q, w2, kappa)
-            if ALPHA != 1.0:  # over-relaxation
-                np.multiply(Q, ALPHA, out=Q)
-                np.add(Q, (1.0 - ALPHA) * GU, out=Q)
-            np.subtract(Q, lam, out=Q)          # z - lam: the least-squares target
-            np.copyto(rhs, rhs_fixed)
-            rhs_of(flat_q, rhs)
-            xu[...] = solve(ru)
-            xv[...] = solve(rv)
-            np.copyto(flat_gu, lift_fixed)
-            lift(x, flat_gu)
-            np.subtract(GU, Q, out=lam)         # lam + G x - z
-            self.iterations += 1
-
-        watch = _Watch(D_best)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            watch.iterate(step, lambda: self._max_distortion(GU), x.copy, C, cancel)
-        best = watch.kept
-        if best is not None:
-            U = U.copy()
-            U[0, s.free], U[1, s.free] = best[:nf], best[nf:]
-            best = U
-        return best, watch.best, best is not None and watch.best <= C
+    def _count(self):
+        self.iterations += 1
 
     def search(self, u, frames_of, report=None, deadline=None, cancel=None):
         """The least max distortion reached from the flip-free map u (nv,) complex.

@@ -1,0 +1,173 @@
+"""``bound_search``'s ADMM iterations on a small island, on its free unknowns, in every face's frame.
+
+Up to ``bound_search.ONE_PRODUCT_FACES`` faces an iteration pays per array operation more than
+for arithmetic (k = 223: ~1.6 us a call of a few hundred multiply-adds), so it is written for few
+calls:
+- the unknowns are the free vertices' ``x = [u_free; v_free]`` in one vector (back-solved into its
+  halves, no scatter into the whole map), lifted by the free columns onto the fixed vertices'
+  share, the right-hand side built onto its fixed share;
+- the lift is turned into every face's frame once per target: rows ``Re(w 2alpha)``,
+  ``Im(w 2alpha)``, ``Re 2beta``, ``Im 2beta`` (the lift's alpha rows rotated by the frame ``w``;
+  an orthogonal change of coordinates per face, so the area-weighted least-squares step is the
+  same step). The cone ``|beta| <= kappa Re(w alpha)`` then reads on the first row alone: the
+  projection moves only that row and scales the beta rows (no product with the frames and back an
+  iteration);
+- the max distortion ``|beta|^2 / |alpha|^2`` (rotation-invariant) from one square of the lift;
+- the compiled sparse products straight (``bound_search._matvec``'s), buffers preallocated, the
+  loop inlined (the search's watch decides each stop, as for the large islands).
+"""
+import itertools
+
+import numpy as np
+import scipy.sparse as sp
+
+__all__ = ["FreeLift", "run_free", "sparse_product"]
+
+
+def sparse_product(fmt, shape, indptr, indices):
+    """``data, x, out -> out += M x`` for the csr or csc float64 matrix M of the given index
+    arrays, any data of their pattern: the compiled product straight, without scipy's dispatch
+    (~10 us a call against ~5 us of arithmetic on a 500-face island); scipy's product where
+    scipy lacks it."""
+    try:
+        from scipy.sparse._sparsetools import csc_matvec, csr_matvec
+    except ImportError:     # a scipy that moved it: the public product
+        make = sp.csc_array if fmt == "csc" else sp.csr_array
+        return lambda data, x, out: out.__iadd__(make((data, indices, indptr), shape=shape) @ x)
+    m, n = shape
+    product = csc_matvec if fmt == "csc" else csr_matvec
+    return lambda data, x, out: product(m, n, indptr, indices, data, x, out)
+
+
+class FreeLift:
+    """The lift on the free unknowns of a small island and its transpose, ready to be turned into
+    any frames.
+
+    Parameters
+    ----------
+    Bf : (4k, 2nf) csr, the lift's free columns (``face_operators.alpha_beta_lift``, rows ``Re
+        2alpha``, ``Im 2alpha``, ``Re 2beta``, ``Im 2beta``)
+    BtA : (2nf, 4k) csc, the right-hand side operator, the same index arrays as ``Bf`` (its
+        compressed rows read as columns), data weighted by half each face's area
+    lift_fixed : (4k,) the fixed vertices' share of the lift
+    rhs_fixed : (2nf,) the fixed vertices' share of the right-hand side
+    """
+
+    def __init__(self, Bf, BtA, lift_fixed, rhs_fixed):
+        k = Bf.shape[0] // 4
+        self.k, self.nf = k, Bf.shape[1] // 2
+        self.indptr, self.indices = Bf.indptr, Bf.indices
+        self.data, self.wdata = Bf.data, BtA.data
+        self.n1 = int(Bf.indptr[k])         # entries of the Re 2alpha rows (as many as Im's)
+        rows = np.repeat(np.arange(k), np.diff(Bf.indptr[:k + 1]))
+        self.rows = rows                    # the face of each Re 2alpha entry
+        self.lift_fixed, self.rhs_fixed = lift_fixed, rhs_fixed
+        self.lift = sparse_product("csr", Bf.shape, self.indptr, self.indices)
+        self.rhs = sparse_product("csc", BtA.shape, self.indptr, self.indices)
+
+    def framed(self, w):
+        """(lift data, right-hand side data, fixed share of the lift) turned into the frames w
+        (k,) unit complex: the alpha rows ``a0 = Re 2alpha``, ``a1 = Im 2alpha`` become ``c a0 - s
+        a1`` and ``s a0 + c a1`` (``c + i s = w``), the beta rows stay."""
+        n1 = self.n1
+        c, s = w.real.take(self.rows), w.imag.take(self.rows)
+        d, wd = self.data.copy(), self.wdata.copy()
+        for src, dst in ((self.data, d), (self.wdata, wd)):
+            a0, a1 = src[:n1], src[n1:2 * n1]
+            dst[:n1] = c * a0 - s * a1
+            dst[n1:2 * n1] = s * a0 + c * a1
+        k = self.k
+        lf = self.lift_fixed.copy()
+        a0, a1 = self.lift_fixed[:k], self.lift_fixed[k:2 * k]
+        lf[:k] = w.real * a0 - w.imag * a1
+        lf[k:2 * k] = w.imag * a0 + w.real * a1
+        return d, wd, lf
+
+
+def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
+    """ADMM towards F_C with frames ``w`` from the free unknowns ``x0`` (2nf,) of a small island
+    (``bound_search.BoundSearch.run``'s iterations, in the frames: see the module's docstring).
+
+    Parameters
+    ----------
+    lift : FreeLift; solve : the global step's back-solve (nf,) -> (nf,)
+    w : (k,) unit complex frames; kappa : float, the cones' aperture; C : float, the target
+    watch : ``bound_search``'s watch of a target (``seen(D, it, C) -> (better, stop)``, ``best``)
+    alpha : float, the over-relaxation
+    count : callable(), called once an iteration (the search's iteration count)
+
+    Returns
+    -------
+    (x of the least max distortion below the watch's start or None, that max)
+    """
+    k, nf = lift.k, lift.nf
+    data, wdata, lift_fixed = lift.framed(w)
+    rhs_fixed = lift.rhs_fixed
+    c = 1.0 / (1.0 + kappa * kappa)
+    x = x0.copy()
+    xu, xv = x[:nf], x[nf:]
+    rhs = np.empty(2 * nf)
+    ru, rv = rhs[:nf], rhs[nf:]
+    GU = np.empty((4, k))
+    flat_gu = GU.reshape(-1)
+    np.copyto(flat_gu, lift_fixed)
+    lift.lift(data, x, flat_gu)
+    lam = np.zeros_like(GU)
+    Q = np.empty_like(GU)
+    flat_q = Q.reshape(-1)
+    sq = np.empty_like(GU)
+    nb, t, f = np.empty(k), np.empty(k), np.empty(k)
+    q0, qb = Q[0], Q[2:]
+    kept = None
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        for it in itertools.count():
+            if cancel is not None and cancel.is_set():
+                break
+            if it:
+                # max |beta|^2 / |alpha|^2 (rotation-invariant), as bound_search's
+                np.multiply(GU, GU, out=sq)
+                np.add(sq[2], sq[3], out=nb)
+                np.add(sq[0], sq[1], out=t)
+                np.divide(nb, t, out=nb)
+                r = float(nb.max())
+                if not r < 1.0:
+                    D = np.inf
+                else:
+                    r = np.sqrt(r)
+                    D = (1.0 + r) / (1.0 - r)
+                better, stop = watch.seen(D, it, C)
+                if better:
+                    kept = x.copy()
+                if stop:
+                    break
+            np.add(GU, lam, out=Q)
+            # the cone |beta| <= kappa x on the first row (framed_cone_projection's point):
+            # t = max(x + kappa |beta|, 0) / (1 + kappa^2) on the boundary ray; beta scales by
+            # min(1, kappa t / |beta|), x becomes max(x, t) (t <= x exactly inside the cone)
+            np.multiply(qb, qb, out=sq[2:])
+            np.add(sq[2], sq[3], out=nb)
+            np.sqrt(nb, out=nb)
+            np.multiply(nb, kappa, out=t)
+            t += q0
+            np.maximum(t, 0.0, out=t)
+            t *= c
+            np.multiply(t, kappa, out=f)
+            np.maximum(nb, 1e-300, out=nb)
+            np.divide(f, nb, out=f)
+            np.minimum(f, 1.0, out=f)
+            qb *= f
+            np.maximum(q0, t, out=q0)
+            # over-relaxation, then z - lam: the least-squares target
+            Q *= alpha
+            np.multiply(GU, 1.0 - alpha, out=sq)
+            Q += sq
+            Q -= lam
+            np.copyto(rhs, rhs_fixed)
+            lift.rhs(wdata, flat_q, rhs)
+            xu[...] = solve(ru)
+            xv[...] = solve(rv)
+            np.copyto(flat_gu, lift_fixed)
+            lift.lift(data, x, flat_gu)
+            np.subtract(GU, Q, out=lam)         # lam + G x - z
+            count()
+    return kept, watch.best
