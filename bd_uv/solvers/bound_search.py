@@ -29,6 +29,7 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
+from ..frames import frames_from_map
 from .face_operators import alpha_beta_lift
 from .free_admm import FreeLift, run_free, sparse_product
 from .global_step import GlobalStep
@@ -222,6 +223,11 @@ class BoundSearch:
         r = np.sqrt(r)
         return (1.0 + r) / (1.0 - r)
 
+    def _alpha2(self, U):
+        """(k,) complex, every face's doubled alpha of the map U (2, nv)."""
+        W = self._lift(U)
+        return W[0] + 1j * W[1]
+
     def _lift(self, U, out=None):
         """(4, k) doubled alpha and beta of the map U (2, nv) (into ``out`` when given)."""
         out = np.empty((4, self.k)) if out is None else out
@@ -325,12 +331,14 @@ class BoundSearch:
     def _count(self):
         self.iterations += 1
 
-    def search(self, u, frames_of, report=None, deadline=None, cancel=None):
+    def search(self, u, frames_of=None, report=None, deadline=None, cancel=None):
         """The least max distortion reached from the flip-free map u (nv,) complex.
 
         Parameters
         ----------
-        frames_of : callable(u) -> (k,) unit frames of a map (eq. 4.21)
+        frames_of : callable(u) -> (k,) unit frames of a map (eq. 4.21), optional: by default
+            from the map's own lift (``frames.frames_from_map`` of its doubled alpha: one sparse
+            product, not the island problem's two)
         report : callable(message), optional, called before each target
         deadline : float (``time.perf_counter()``) or None: no new target after it
 
@@ -354,7 +362,9 @@ class BoundSearch:
             C = 1.0 + (D - 1.0) * (1.0 - step)
             if report is not None:
                 report(D, C)
-            Ub, Db, reached = self.run(U, frames_of(U[0] + 1j * U[1]), C, D, cancel=cancel)
+            w = (frames_from_map(self._alpha2(U)) if frames_of is None
+                 else frames_of(U[0] + 1j * U[1]))
+            Ub, Db, reached = self.run(U, w, C, D, cancel=cancel)
             if cancel is not None and cancel.is_set():
                 break
             gain = (D - Db) / (D - 1.0) if Ub is not None else 0.0

@@ -103,6 +103,7 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
     k, nf = lift.k, lift.nf
     data, wdata, lift_fixed = lift.framed(w)
     rhs_fixed = lift.rhs_fixed
+    solve = getattr(solve, "vector", solve)
     c = 1.0 / (1.0 + kappa * kappa)
     x = x0.copy()
     xu, xv = x[:nf], x[nf:]
@@ -112,12 +113,16 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
     flat_gu = GU.reshape(-1)
     np.copyto(flat_gu, lift_fixed)
     lift.lift(data, x, flat_gu)
-    lam = np.zeros_like(GU)
-    Q = np.empty_like(GU)
-    flat_q = Q.reshape(-1)
+    # ADMM with the multipliers lam = GU - T folded in: T is the last least-squares target, the
+    # projection's point is GU + lam = 2 GU - T, and the next target z - lam = alpha P + (1 -
+    # alpha) GU - lam = T + alpha (P - GU) (two array operations fewer an iteration)
+    T = GU.copy()                       # lam = 0
+    flat_t = T.reshape(-1)
+    P = np.empty_like(GU)
     sq = np.empty_like(GU)
     nb, t, f = np.empty(k), np.empty(k), np.empty(k)
-    q0, qb = Q[0], Q[2:]
+    p0, pb, sb = P[0], P[2:], sq[2:]
+    kc = kappa * c
     kept = None
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for it in itertools.count():
@@ -140,34 +145,32 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
                     kept = x.copy()
                 if stop:
                     break
-            np.add(GU, lam, out=Q)
+            np.subtract(GU, T, out=P)
+            P += GU
             # the cone |beta| <= kappa x on the first row (framed_cone_projection's point):
-            # t = max(x + kappa |beta|, 0) / (1 + kappa^2) on the boundary ray; beta scales by
-            # min(1, kappa t / |beta|), x becomes max(x, t) (t <= x exactly inside the cone)
-            np.multiply(qb, qb, out=sq[2:])
-            np.add(sq[2], sq[3], out=nb)
+            # with t = max(x + kappa |beta|, 0), the boundary ray's point is t / (1 + kappa^2);
+            # beta scales by min(1, kappa t / ((1 + kappa^2) |beta|)) (fmin: 1 where |beta| = 0),
+            # x becomes max(x, t / (1 + kappa^2)) (no larger than x exactly inside the cone)
+            np.multiply(pb, pb, out=sb)
+            np.add(sb[0], sb[1], out=nb)
             np.sqrt(nb, out=nb)
             np.multiply(nb, kappa, out=t)
-            t += q0
+            t += p0
             np.maximum(t, 0.0, out=t)
-            t *= c
-            np.multiply(t, kappa, out=f)
-            np.maximum(nb, 1e-300, out=nb)
+            np.multiply(t, kc, out=f)
             np.divide(f, nb, out=f)
-            np.minimum(f, 1.0, out=f)
-            qb *= f
-            np.maximum(q0, t, out=q0)
-            # over-relaxation, then z - lam: the least-squares target
-            Q *= alpha
-            np.multiply(GU, 1.0 - alpha, out=sq)
-            Q += sq
-            Q -= lam
+            np.fmin(f, 1.0, out=f)
+            pb *= f
+            t *= c
+            np.maximum(p0, t, out=p0)
+            P -= GU                             # the target T + alpha (P - GU)
+            P *= alpha
+            T += P
             np.copyto(rhs, rhs_fixed)
-            lift.rhs(wdata, flat_q, rhs)
+            lift.rhs(wdata, flat_t, rhs)
             xu[...] = solve(ru)
             xv[...] = solve(rv)
             np.copyto(flat_gu, lift_fixed)
             lift.lift(data, x, flat_gu)
-            np.subtract(GU, Q, out=lam)         # lam + G x - z
             count()
     return kept, watch.best

@@ -30,7 +30,7 @@ from .problem import Cancelled, IslandProblem
 from .results import IslandResult, UnwrapResult
 
 def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
-           face_groups=None, progress=None, cancel=None, options=None, **values):
+           face_groups=None, progress=None, cancel=None, options=None, disk=None, **values):
     """Map a triangle mesh, cut along the given seams, to the plane with no flipped face and
     conformal distortion <= C.
 
@@ -49,6 +49,8 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     progress : callable(fraction, message), optional
     cancel : object with ``is_set()``, optional
     options : bd_uv.UnwrapOptions, optional (default: the defaults)
+    disk : one_disk.Disk, optional, ``one_disk.find(V, F)`` where the caller has found it
+        already (``seams.needed.clean_disk``): not found again; used where ``find`` would be
     **values : UnwrapOptions fields replacing those of ``options`` (``bound=3.0``, ...). How each
         works: ``method`` "biharmonic" (eq. 6.1) with a free boundary is held at two boundary
         vertices of the start map; "stretch-l1" (section 6.1) holds the island's scale (the
@@ -84,10 +86,13 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             raise OptionError("frames", "frames='input-uv' needs initial_uv (m,3,2)")
         initial_uv = np.asarray(initial_uv, dtype=np.float64).reshape(m, 3, 2)
     pins = pin_arrays(pin_corners, pin_uv, m)
-    conformal, disk = None, None
+    conformal = None
     if (seams is None or not len(seams)) and not len(pins[0]) and _batched_options(opts) \
             and opts.boundary == "free" and opts.stretch is None:
-        disk = one_disk.find(V, F)   # one clean disk: found, solved, certified in one pass
+        if disk is None:   # one clean disk: found, solved, certified in one pass
+            disk = one_disk.find(V, F)
+    else:
+        disk = None
     if disk is not None:
         done, u = one_disk.unwrap_disk(V, F, disk, None if opts.bound == "auto" else
                                        float(opts.bound), t0, progress, cancel)
