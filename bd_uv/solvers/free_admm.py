@@ -45,42 +45,52 @@ class FreeLift:
 
     Parameters
     ----------
-    Bf : (4k, 2nf) csr, the lift's free columns (``face_operators.alpha_beta_lift``, rows ``Re
-        2alpha``, ``Im 2alpha``, ``Re 2beta``, ``Im 2beta``)
-    BtA : (2nf, 4k) csc, the right-hand side operator, the same index arrays as ``Bf`` (its
-        compressed rows read as columns), data weighted by half each face's area
-    lift_fixed : (4k,) the fixed vertices' share of the lift
+    arrays : ``face_operators.free_lift_arrays``' answer: the lift's compressed rows on the free
+        unknowns (4k, 2nf) (rows ``Re 2alpha``, ``Im 2alpha``, ``Re 2beta``, ``Im 2beta``), the
+        same data weighted by half each face's area (the right-hand side operator's columns), the
+        entries on the fixed vertices
+    Ufix : (2nv,) ``[u; v]`` with the fixed vertices' values (anything elsewhere)
     rhs_fixed : (2nf,) the fixed vertices' share of the right-hand side
     """
 
-    def __init__(self, Bf, BtA, lift_fixed, rhs_fixed):
-        k = Bf.shape[0] // 4
-        self.k, self.nf = k, Bf.shape[1] // 2
-        self.indptr, self.indices = Bf.indptr, Bf.indices
-        self.data, self.wdata = Bf.data, BtA.data
-        self.n1 = int(Bf.indptr[k])         # entries of the Re 2alpha rows (as many as Im's)
-        rows = np.repeat(np.arange(k), np.diff(Bf.indptr[:k + 1]))
-        self.rows = rows                    # the face of each Re 2alpha entry
-        self.lift_fixed, self.rhs_fixed = lift_fixed, rhs_fixed
-        self.lift = sparse_product("csr", Bf.shape, self.indptr, self.indices)
-        self.rhs = sparse_product("csc", BtA.shape, self.indptr, self.indices)
+    def __init__(self, arrays, Ufix, rhs_fixed):
+        indptr, indices, data, wdata, (frows, fcols, fdata) = arrays
+        self.k = k = (len(indptr) - 1) // 4
+        self.nf = nf = len(rhs_fixed) // 2
+        self.indptr, self.indices, self.data, self.wdata = indptr, indices, data, wdata
+        # the fixed vertices' share of the lift, row by row in the entries' order
+        self.lift_fixed = np.bincount(frows, weights=fdata * Ufix.take(fcols), minlength=4 * k)
+        self.rhs_fixed = rhs_fixed
+        self.n1 = int(indptr[k])            # entries of the Re 2alpha rows (as many as Im's)
+        self.rows = np.repeat(np.arange(k), np.diff(indptr[:k + 1]))   # their faces
+        self.lift = sparse_product("csr", (4 * k, 2 * nf), indptr, indices)
+        self.rhs = sparse_product("csc", (2 * nf, 4 * k), indptr, indices)
+        self._framed = (data.copy(), wdata.copy(), self.lift_fixed.copy())
+
+    def lift_map(self, x, out=None):
+        """(4, k) doubled alpha and beta of the map of free unknowns x (2nf,)."""
+        out = np.empty((4, self.k)) if out is None else out
+        flat = out.reshape(-1)
+        np.copyto(flat, self.lift_fixed)
+        self.lift(self.data, x, flat)
+        return out
 
     def framed(self, w):
         """(lift data, right-hand side data, fixed share of the lift) turned into the frames w
         (k,) unit complex: the alpha rows ``a0 = Re 2alpha``, ``a1 = Im 2alpha`` become ``c a0 - s
-        a1`` and ``s a0 + c a1`` (``c + i s = w``), the beta rows stay."""
-        n1 = self.n1
+        a1`` and ``s a0 + c a1`` (``c + i s = w``), the beta rows stay. In buffers of this
+        lift's, overwritten by the next call."""
+        n1, k = self.n1, self.k
         c, s = w.real.take(self.rows), w.imag.take(self.rows)
-        d, wd = self.data.copy(), self.wdata.copy()
-        for src, dst in ((self.data, d), (self.wdata, wd)):
-            a0, a1 = src[:n1], src[n1:2 * n1]
-            dst[:n1] = c * a0 - s * a1
-            dst[n1:2 * n1] = s * a0 + c * a1
-        k = self.k
-        lf = self.lift_fixed.copy()
-        a0, a1 = self.lift_fixed[:k], self.lift_fixed[k:2 * k]
-        lf[:k] = w.real * a0 - w.imag * a1
-        lf[k:2 * k] = w.imag * a0 + w.real * a1
+        d, wd, lf = self._framed
+        for src, dst, cc, ss in ((self.data, d, c, s), (self.wdata, wd, c, s),
+                                 (self.lift_fixed, lf, w.real, w.imag)):
+            m = n1 if dst is not lf else k
+            a0, a1 = src[:m], src[m:2 * m]
+            np.multiply(cc, a0, out=dst[:m])
+            dst[:m] -= ss * a1
+            np.multiply(ss, a0, out=dst[m:2 * m])
+            dst[m:2 * m] += cc * a1
         return d, wd, lf
 
 
