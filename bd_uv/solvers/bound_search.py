@@ -116,7 +116,7 @@ class BoundSearch:
         self.solver = s = GlobalStep(ops, nv, fixed, tris=tris)
         self.k = len(s.area)
         self.UF = None
-        self._rhs_fixed = None      # (UF, its share of the right-hand side)
+        self._rhs_fixed = None      # (UF, its share of the right-hand side; small: its FreeLift)
         self.iterations = 0
         self._B = self._free = None
 

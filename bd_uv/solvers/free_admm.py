@@ -1,4 +1,4 @@
-"""``bound_search``'s ADMM iterations on a small island, on its free unknowns, in every face's frame.
+"""``bound_search``'s ADMM iterations on a small island: its free unknowns, in every face's frame.
 
 Up to ``bound_search.ONE_PRODUCT_FACES`` faces an iteration pays per array operation more than
 for arithmetic (k = 223: ~1.6 us a call of a few hundred multiply-adds), so it is written for few
