@@ -23,13 +23,19 @@ multipliers from zero; every iterate whose max distortion is below D becomes the
 stops bettering the best for STALL iterations halves it, until the step is below TOLERANCE or two
 targets in a row fell short while gaining less than SMALL of D - 1 (at STALL 20, hemisphere: 156
 iterations against 176 for C 1.03506 against 1.03502; mushroom 72 against 92).
+
+The iterations: up to ONE_PRODUCT_FACES faces on the free unknowns in every face's frame
+(``free_admm``), above on the whole map by the gradient operator (``framed_cone``).
 """
 import time
 
 import numpy as np
 import scipy.sparse as sp
 
-from .face_operators import alpha_beta_lift
+from ..frames import frames_from_map
+from .face_operators import free_lift_arrays
+from .framed_cone import framed_cone_projection, gradient_products, project_framed
+from .free_admm import FreeLift, run_free
 from .global_step import GlobalStep
 
 __all__ = ["BoundSearch", "framed_cone_projection"]
@@ -52,53 +58,6 @@ ALPHA = 1.5         # ADMM over-relaxation (hemisphere: 196 iterations against 2
 # operator (fewer calls: small islands pay per call); above, two products each with the (2k, nv)
 # gradient operator (half the multiply-adds: lion-head, 16.7k faces, 1.9 -> 0.95 ms an iteration).
 ONE_PRODUCT_FACES = 1000
-
-
-def _matvec(M):
-    """``x, out -> out = M @ x`` for a csr or csc float64 matrix M into a preallocated ``out``:
-    the compiled product straight, without scipy's dispatch (~10 us a call, two calls an
-    iteration, against ~5 us of arithmetic on a 500-face island); ``M @ x`` where scipy lacks
-    it."""
-    try:
-        from scipy.sparse._sparsetools import csc_matvec, csr_matvec
-    except ImportError:     # a scipy that moved it: the public product
-        def mv(x, out):
-            out[...] = M @ x
-            return out
-        mv.add = lambda x, out: out.__iadd__(M @ x)
-        return mv
-    m, n = M.shape
-    indptr, indices, data = M.indptr, M.indices, M.data
-    product = csc_matvec if M.format == "csc" else csr_matvec
-
-    def mv(x, out):
-        out.fill(0.0)
-        product(m, n, indptr, indices, data, x, out)    # out += M x
-        return out
-    mv.add = lambda x, out: product(m, n, indptr, indices, data, x, out)   # out += M x
-    return mv
-
-
-def framed_cone_projection(x, br, bi, kappa):
-    """Nearest point of the cone ``|b| <= kappa x`` to ``(x, b)``, per face (Euclidean in
-    ``(x, Re b, Im b)``: the Frobenius distance of Jacobians with the other part of alpha held).
-
-    Parameters
-    ----------
-    x : (k,) float, Re(w alpha); br, bi : (k,) float, beta; kappa : float > 0
-
-    Returns
-    -------
-    x, br, bi : (k,) float64, the projected point
-    """
-    nb = np.hypot(br, bi)
-    inside = nb <= kappa * x
-    polar = kappa * nb <= -x
-    t = (x + kappa * nb) / (1.0 + kappa * kappa)   # on the cone's boundary ray
-    with np.errstate(invalid="ignore", divide="ignore"):
-        f = np.where(nb > 0, kappa * t / nb, 0.0)
-    f = np.where(inside, 1.0, np.where(polar, 0.0, f))
-    return np.where(inside, x, np.where(polar, 0.0, t)), f * br, f * bi
 
 
 class _Watch:
@@ -157,9 +116,9 @@ class BoundSearch:
         self.solver = s = GlobalStep(ops, nv, fixed, tris=tris)
         self.k = len(s.area)
         self.UF = None
-        self._rhs_fixed = None      # (UF, its share of the right-hand side)
+        self._rhs_fixed = None      # (UF, its share of the right-hand side; small: its FreeLift)
         self.iterations = 0
-        self._B = None
+        self._B = self._free = None
 
     def _operators(self):
         """The lift of a map straight to every face's doubled alpha and beta (eq. 4.19), one
@@ -170,50 +129,19 @@ class BoundSearch:
         the cone projection needs no change of coordinates: about half the array operations an
         iteration made on the (u_x, u_y; v_x, v_y) rows. Returns (lift, rhs), each
         ``f(x, out)``: above ONE_PRODUCT_FACES faces by the gradient operator
-        (``_two_products``), the same values."""
-        if self._B is None:
+        (``framed_cone.gradient_products``), the same values."""
+        if self._B is None and self._free is None:
             s = self.solver
             if self.k <= ONE_PRODUCT_FACES:
                 gx, gy = s.face_gradients()
-                B, BtA, Bf = alpha_beta_lift(gx, gy, s.area, s.tris, s.free, s.nv, True)
-                self._B, self._BtA, self._Bf = _matvec(B), _matvec(BtA), _matvec(Bf)
+                self._B = self._BtA = None      # the free lift's (``_free_lift``)
+                self._free = free_lift_arrays(gx, gy, s.area, s.tris, s.free, s.nv)
             else:
                 G = s.G
                 GTA = s.GT[s.free] @ sp.diags_array(np.concatenate([s.area, s.area]))
-                self._B, self._BtA = self._two_products(G, sp.csr_array(GTA))
+                self._B, self._BtA = gradient_products(G, sp.csr_array(GTA), self.k, s.nv,
+                                                         len(s.free))
         return self._B, self._BtA
-
-    def _two_products(self, G, GTA):
-        """The lift and the right-hand side operator (as ``_operators``) by products with the
-        gradient operator ``G`` (2k, nv) and ``GTA = (G^T diag(A, A))[free]``, coordinate by
-        coordinate."""
-        k, nv, nf = self.k, self.solver.nv, len(self.solver.free)
-        g, h = _matvec(G), _matvec(GTA)
-        gu, gv = np.empty(2 * k), np.empty(2 * k)
-        tu, tv = np.empty(2 * k), np.empty(2 * k)
-
-        def lift(x, out):
-            g(x[:nv], gu)
-            g(x[nv:], gv)
-            W = out.reshape(4, k)
-            np.add(gu[:k], gv[k:], out=W[0])            # u_x + v_y
-            np.subtract(gv[:k], gu[k:], out=W[1])       # v_x - u_y
-            np.subtract(gu[:k], gv[k:], out=W[2])       # u_x - v_y
-            np.add(gv[:k], gu[k:], out=W[3])            # v_x + u_y
-            return out
-
-        def rhs(z, out):
-            Z = z.reshape(4, k)
-            np.add(Z[0], Z[2], out=tu[:k])              # 2 u_x target
-            np.subtract(Z[3], Z[1], out=tu[k:])         # 2 u_y
-            np.add(Z[1], Z[3], out=tv[:k])              # 2 v_x
-            np.subtract(Z[0], Z[2], out=tv[k:])         # 2 v_y
-            np.multiply(tu, 0.5, out=tu)
-            np.multiply(tv, 0.5, out=tv)
-            h(tu, out[:nf])
-            h(tv, out[nf:])
-            return out
-        return lift, rhs
 
     def max_distortion(self, W):
         """Max conformal distortion (eq. 4.9) of the map with doubled alpha and beta W (4, k)
@@ -232,34 +160,29 @@ class BoundSearch:
         r = np.sqrt(r)
         return (1.0 + r) / (1.0 - r)
 
+    def _alpha2(self, U):
+        """(k,) complex, every face's doubled alpha of the map U (2, nv)."""
+        W = self._lift(U)
+        return W[0] + 1j * W[1]
+
     def _lift(self, U, out=None):
         """(4, k) doubled alpha and beta of the map U (2, nv) (into ``out`` when given)."""
+        if self._free is not None:
+            free = self.solver.free
+            return self._free_lift().lift_map(np.concatenate([U[0, free], U[1, free]]), out)
         out = np.empty((4, self.k)) if out is None else out
         self._B(U.ravel(), out.reshape(-1))
         return out
 
-    def _project(self, Q, w2, kappa):
-        """Every face's doubled (alpha, beta) of Q (4, k), in place, onto its cone ``|beta| <=
-        kappa Re(w alpha)``; only faces outside it move. On whole arrays rather than on the faces
-        outside: the cone moves only ``x = Re(w alpha)`` (alpha by ``conj(w) dx``; ``w2`` is
-        ``(Re w, -Im w)``) and scales beta (``framed_cone_projection``'s point)."""
-        # With t = max(x + kappa |beta|, 0) / (1 + kappa^2) (the boundary ray's point),
-        # kappa t / |beta| >= 1 and t - x <= 0 exactly inside the cone, and < 1, >= 0 outside:
-        # beta scales by min(1, kappa t / |beta|), x moves by max(t - x, 0), no mask needed.
-        x = np.einsum("ij,ij->j", w2, Q[:2])                    # Re(w alpha)
-        # |beta| (one product-sum and a root: hypot's careful scaling is not needed here)
-        nb = np.sqrt(np.einsum("ij,ij->j", Q[2:], Q[2:]))
-        t = kappa * nb
-        t += x
-        np.maximum(t, 0.0, out=t)
-        t *= 1.0 / (1.0 + kappa * kappa)
-        f = (kappa * t) / np.maximum(nb, 1e-300)
-        np.minimum(f, 1.0, out=f)
-        Q[2:] *= f
-        t -= x
-        np.maximum(t, 0.0, out=t)
-        Q[:2] += w2 * t
-        return Q
+    def _free_lift(self):
+        """The small island's ``free_admm.FreeLift`` at the fixed vertices' values ``UF``."""
+        if self._rhs_fixed is None or self._rhs_fixed[0] is not self.UF:
+            s = self.solver
+            Ufix = np.zeros((2, s.nv))
+            Ufix[:, s.fixed] = self.UF.T
+            self._rhs_fixed = (self.UF, FreeLift(self._free, Ufix.ravel(),
+                                                 -(s._L_fF @ self.UF).T.ravel()))
+        return self._rhs_fixed[1]
 
     def run(self, U, w, C, D_best, cancel=None):
         """ADMM towards F_C with frames w (unit complex, (k,)), from U (2, nv): rows u and v.
@@ -270,7 +193,7 @@ class BoundSearch:
         Cm = 1.0 + MARGIN * (C - 1.0)
         kappa = (Cm - 1.0) / (Cm + 1.0)
         if self.k <= ONE_PRODUCT_FACES:
-            return self._run_free(U, np.stack([w.real, -w.imag]), kappa, C, D_best, cancel)
+            return self._run_free(U, w, kappa, C, D_best, cancel)
         solve = s.factorize()
         BtA = self._operators()[1]
         nf = len(s.free)
@@ -293,7 +216,7 @@ class BoundSearch:
         free, nf = self.solver.free, len(self.solver.free)
 
         def step():
-            Z = self._project(GU + lam, w2, kappa)
+            Z = project_framed(GU + lam, w2, kappa)
             if ALPHA != 1.0:  # over-relaxation
                 Z *= ALPHA
                 Z += (1.0 - ALPHA) * GU
@@ -310,62 +233,31 @@ class BoundSearch:
         watch.iterate(step, lambda: self._max_distortion(GU), U.copy, C, cancel)
         return watch.kept, watch.best
 
-    def _run_free(self, U, w2, kappa, C, D_best, cancel):
-        """``run`` on a small island (up to ONE_PRODUCT_FACES faces), whose iterations pay per
-        array operation more than for arithmetic: the free unknowns ``x = [u_free; v_free]`` in
-        one vector (back-solved into its halves, no scatter into the whole map), lifted by the
-        free columns onto the fixed vertices' share, the right-hand side built onto its fixed
-        share: ~6 fewer array operations an iteration (one back-solve on the global matrix twice
-        on its diagonal saves 3 us an iteration and costs 0.2-0.4 ms more to factorise)."""
+    def _run_free(self, U, w, kappa, C, D_best, cancel):
+        """``run`` on a small island (up to ONE_PRODUCT_FACES faces): ``free_admm.run_free``, the
+        iterations on the free unknowns in every face's frame."""
         s, nf = self.solver, len(self.solver.free)
-        B, BtA = self._operators()
-        if self._rhs_fixed is None or self._rhs_fixed[0] is not self.UF:
-            # the fixed vertices' shares of the lift and the right-hand side, every target's
-            Ufix = np.zeros((2, s.nv))
-            Ufix[:, s.fixed] = self.UF.T
-            self._rhs_fixed = (self.UF, -(s._L_fF @ self.UF).T.ravel(),
-                               B(Ufix.ravel(), np.empty(4 * self.k)))
-        _, rhs_fixed, lift_fixed = self._rhs_fixed
-        solve, lift, rhs_of = s.factorize(), self._Bf.add, BtA.add
-        rhs = np.empty(2 * nf)
-        x = np.concatenate([U[0, s.free], U[1, s.free]])
-        xu, xv, ru, rv = x[:nf], x[nf:], rhs[:nf], rhs[nf:]
-        GU = self._lift(U)
-        lam, Q = np.zeros_like(GU), np.empty_like(GU)
-        flat_q, flat_gu = Q.reshape(-1), GU.reshape(-1)
+        self._operators()
+        x0 = np.concatenate([U[0, s.free], U[1, s.free]])
+        best, D = run_free(self._free_lift(), s.factorize(), x0, w, kappa, C, _Watch(D_best),
+                           ALPHA, cancel, self._count)
+        if best is None:
+            return None, D, False
+        U = U.copy()
+        U[0, s.free], U[1, s.free] = best[:nf], best[nf:]
+        return U, D, D <= C
 
-        def step():
-            np.add(GU, lam, out=Q)
-            self._project(Q, w2, kappa)
-            if ALPHA != 1.0:  # over-relaxation
-                np.multiply(Q, ALPHA, out=Q)
-                np.add(Q, (1.0 - ALPHA) * GU, out=Q)
-            np.subtract(Q, lam, out=Q)          # z - lam: the least-squares target
-            np.copyto(rhs, rhs_fixed)
-            rhs_of(flat_q, rhs)
-            xu[...] = solve(ru)
-            xv[...] = solve(rv)
-            np.copyto(flat_gu, lift_fixed)
-            lift(x, flat_gu)
-            np.subtract(GU, Q, out=lam)         # lam + G x - z
-            self.iterations += 1
+    def _count(self):
+        self.iterations += 1
 
-        watch = _Watch(D_best)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            watch.iterate(step, lambda: self._max_distortion(GU), x.copy, C, cancel)
-        best = watch.kept
-        if best is not None:
-            U = U.copy()
-            U[0, s.free], U[1, s.free] = best[:nf], best[nf:]
-            best = U
-        return best, watch.best, best is not None and watch.best <= C
-
-    def search(self, u, frames_of, report=None, deadline=None, cancel=None):
+    def search(self, u, frames_of=None, report=None, deadline=None, cancel=None):
         """The least max distortion reached from the flip-free map u (nv,) complex.
 
         Parameters
         ----------
-        frames_of : callable(u) -> (k,) unit frames of a map (eq. 4.21)
+        frames_of : callable(u) -> (k,) unit frames of a map (eq. 4.21), optional: by default
+            from the map's own lift (``frames.frames_from_map`` of its doubled alpha: one sparse
+            product, not the island problem's two)
         report : callable(message), optional, called before each target
         deadline : float (``time.perf_counter()``) or None: no new target after it
 
@@ -389,7 +281,9 @@ class BoundSearch:
             C = 1.0 + (D - 1.0) * (1.0 - step)
             if report is not None:
                 report(D, C)
-            Ub, Db, reached = self.run(U, frames_of(U[0] + 1j * U[1]), C, D, cancel=cancel)
+            w = (frames_from_map(self._alpha2(U)) if frames_of is None
+                 else frames_of(U[0] + 1j * U[1]))
+            Ub, Db, reached = self.run(U, w, C, D, cancel=cancel)
             if cancel is not None and cancel.is_set():
                 break
             gain = (D - Db) / (D - 1.0) if Ub is not None else 0.0

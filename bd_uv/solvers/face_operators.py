@@ -9,7 +9,7 @@ cost of ~3 ms on a 223-face island against ~0.5 ms here: issue 21, "no fixed cos
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["face_gradients", "laplacian_blocks", "alpha_beta_lift"]
+__all__ = ["face_gradients", "laplacian_blocks", "alpha_beta_lift", "free_lift_arrays"]
 
 
 def face_gradients(Gx, Gy, tris):
@@ -58,6 +58,39 @@ def laplacian_blocks(gx, gy, area, tris, free, fixed, nv):
     return L_ff, L_fF
 
 
+def _lift_entries(gx, gy, tris, nv):
+    """The lift's entries, six a row (row-major): data (24k,) and columns (24k,) into
+    ``[u; v]`` (2nv), rows ``u_x + v_y``, ``v_x - u_y``, ``u_x - v_y``, ``v_x + u_y``."""
+    k = len(tris)
+    cu, cv = tris, tris + nv
+    # per block row: (coefficients on u, coefficients on v)
+    data = np.empty((4, k, 6))
+    data[0, :, :3], data[0, :, 3:] = gx, gy
+    data[1, :, :3], data[1, :, 3:] = -gy, gx
+    data[2, :, :3], data[2, :, 3:] = gx, -gy
+    data[3, :, :3], data[3, :, 3:] = gy, gx
+    cols = np.empty((4, k, 6), dtype=np.int64)
+    cols[:, :, :3], cols[:, :, 3:] = cu, cv
+    return data.reshape(-1), cols.reshape(-1)
+
+
+def _free_entries(data, cols, area, free, nv):
+    """The entries on the free unknowns ``[free; free + nv]``: (their positions there, the
+    mask of them among all, the compressed rows' pointer (4k + 1,), each entry's weight: half
+    its face's area)."""
+    k = len(area)
+    pos = np.full(2 * nv, -1, dtype=np.int64)
+    nf = len(free)
+    pos[free] = np.arange(nf)
+    pos[free + nv] = np.arange(nf, 2 * nf)
+    tr = pos[cols]
+    keep = tr >= 0
+    w = np.broadcast_to((0.5 * area)[None, :, None], (4, k, 6)).reshape(-1)
+    indptr = np.zeros(4 * k + 1, dtype=np.int64)
+    np.cumsum(keep.reshape(4 * k, 6).sum(axis=1), out=indptr[1:])
+    return tr, keep, indptr, w
+
+
 def alpha_beta_lift(gx, gy, area, tris, free, nv, free_lift=False):
     """The lift of a map ``[u; v]`` (2nv) to every face's doubled alpha and beta (4k): rows
     ``u_x + v_y``, ``v_x - u_y``, ``u_x - v_y``, ``v_x + u_y`` (csr, six entries a row), and the
@@ -70,29 +103,27 @@ def alpha_beta_lift(gx, gy, area, tris, free, nv, free_lift=False):
     B : (4k, 2nv) csr; BtA : (2 len(free), 4k) csc; with ``free_lift`` also B's columns of the
     free unknowns ``[free; free + nv]``, (4k, 2 len(free)) csr (the same arrays as BtA's)
     """
-    k = len(tris)
-    cu, cv = tris, tris + nv
-    # per block row: (coefficients on u, coefficients on v)
-    data = np.empty((4, k, 6))
-    data[0, :, :3], data[0, :, 3:] = gx, gy
-    data[1, :, :3], data[1, :, 3:] = -gy, gx
-    data[2, :, :3], data[2, :, 3:] = gx, -gy
-    data[3, :, :3], data[3, :, 3:] = gy, gx
-    data = data.reshape(-1)
-    cols = np.empty((4, k, 6), dtype=np.int64)
-    cols[:, :, :3], cols[:, :, 3:] = cu, cv
-    cols = cols.reshape(-1)
+    k, nf = len(tris), len(free)
+    data, cols = _lift_entries(gx, gy, tris, nv)
     B = sp.csr_array((data, cols, np.arange(0, 24 * k + 1, 6)), shape=(4 * k, 2 * nv))
-    pos = np.full(2 * nv, -1, dtype=np.int64)
-    nf = len(free)
-    pos[free] = np.arange(nf)
-    pos[free + nv] = np.arange(nf, 2 * nf)
-    tr = pos[cols]
-    keep = tr >= 0
-    w = np.broadcast_to((0.5 * area)[None, :, None], (4, k, 6)).reshape(-1)
-    indptr = np.zeros(4 * k + 1, dtype=np.int64)
-    np.cumsum(keep.reshape(4 * k, 6).sum(axis=1), out=indptr[1:])
+    tr, keep, indptr, w = _free_entries(data, cols, area, free, nv)
     BtA = sp.csc_array(((data * w)[keep], tr[keep], indptr), shape=(2 * nf, 4 * k))
     if free_lift:
         return B, BtA, sp.csr_array((data[keep], tr[keep], indptr), shape=(4 * k, 2 * nf))
     return B, BtA
+
+
+def free_lift_arrays(gx, gy, area, tris, free, nv):
+    """``alpha_beta_lift``'s free columns as bare arrays (no scipy matrix is made: a small
+    island's search pays per call): ``(indptr, indices, data, wdata, fixed)``, the compressed
+    rows of the lift on the free unknowns ``[free; free + nv]`` (4k, 2 len(free)), ``wdata``
+    their data weighted by half each face's area (the right-hand side operator's, its columns
+    these rows), and ``fixed = (rows, columns into [u; v], data)`` of the entries on the fixed
+    vertices (the fixed vertices' share of the lift)."""
+    k = len(tris)
+    data, cols = _lift_entries(gx, gy, tris, nv)
+    tr, keep, indptr, w = _free_entries(data, cols, area, free, nv)
+    d = data[keep]
+    drop = ~keep
+    rows = np.repeat(np.arange(4 * k), 6)[drop]
+    return indptr, tr[keep], d, d * w[keep], (rows, cols[drop], data[drop])

@@ -18,7 +18,12 @@ except ImportError:  # pragma: no cover - exercised where qdldl is absent
     qdldl = None
 
 
+_FOUND = []     # ``_backends``' answer, once a process (a failed import is ~0.3 ms each time)
+
+
 def _backends():
+    if _FOUND:
+        return _FOUND
     found = []
     try:
         import cholespy  # noqa: F401
@@ -28,6 +33,7 @@ def _backends():
     if qdldl is not None:
         found.append("qdldl")
     found.append("splu")
+    _FOUND[:] = found
     return found
 
 
@@ -58,7 +64,8 @@ def factor_spd(M, backend="auto"):
 
     Returns
     -------
-    solve : callable, ``solve(B)`` with B (n,) or (n, r) float64 -> same shape
+    solve : callable, ``solve(B)`` with B (n,) or (n, r) float64 -> same shape; where the
+        backend has it, ``solve.vector(b)`` for a contiguous float64 b (n,) without the checks
     name : str, the backend used
     """
     if backend == "auto":
@@ -90,6 +97,7 @@ def factor_spd(M, backend="auto"):
                 return fac.solve(B)
             return np.stack([fac.solve(np.ascontiguousarray(B[:, i]))
                              for i in range(B.shape[1])], axis=1)
+        solve.vector = fac.solve    # for a contiguous float64 (n,) alone, without the checks
     elif backend == "splu":
         lu = spla.splu(M, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                        options={"SymmetricMode": True})

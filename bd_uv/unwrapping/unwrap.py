@@ -31,7 +31,7 @@ from .results import IslandResult, UnwrapResult
 
 def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
            face_groups=None, progress=None, cancel=None, options=None, precision=None,
-           **values):
+           disk=None, **values):
     """Map a triangle mesh, cut along the given seams, to the plane with no flipped face and
     conformal distortion <= C.
 
@@ -53,6 +53,9 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     precision : the float type ``V`` was stored in, optional (``np.float32``): faces it cannot
         tell from a line are zero-area, and refuse their island (``DegenerateFacesError``) as
         a zero-area face does (``mesh.thinner_than_precision``)
+    disk : one_disk.Disk, optional, ``one_disk.find(V, F)`` where the caller has found it
+        already (``seams.needed.clean_disk``): not found again; used only where ``find`` would
+        be called
     **values : UnwrapOptions fields replacing those of ``options`` (``bound=3.0``, ...). How each
         works: ``method`` "biharmonic" (eq. 6.1) with a free boundary is held at two boundary
         vertices of the start map; "stretch-l1" (section 6.1) holds the island's scale (the
@@ -88,11 +91,14 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             raise OptionError("frames", "frames='input-uv' needs initial_uv (m,3,2)")
         initial_uv = np.asarray(initial_uv, dtype=np.float64).reshape(m, 3, 2)
     pins = pin_arrays(pin_corners, pin_uv, m)
-    conformal, disk = None, None
+    conformal = None
     if (seams is None or not len(seams)) and not len(pins[0]) and _batched_options(opts) \
             and opts.boundary == "free" and opts.stretch is None \
             and (precision is None or np.dtype(precision) == np.float64):
-        disk = one_disk.find(V, F)   # one clean disk: found, solved, certified in one pass
+        if disk is None:   # one clean disk: found, solved, certified in one pass
+            disk = one_disk.find(V, F)
+    else:
+        disk = None
     if disk is not None:
         done, u = one_disk.unwrap_disk(V, F, disk, None if opts.bound == "auto" else
                                        float(opts.bound), t0, progress, cancel)

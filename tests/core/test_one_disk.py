@@ -267,6 +267,26 @@ def test_a_clean_disk_needs_no_repair(name, precision, monkeypatch):
     assert np.array_equal(fast.islands[0].vertices, ref.islands[0].vertices)
 
 
+def test_needed_mode_finds_a_clean_disk_once(monkeypatch):
+    """seams="needed" finds the disk once (``seams.needed.clean_disk``) and the unwrap takes it
+    as found: the same corner UVs as ``seams="marked"``, which finds it itself."""
+    V, F = DISKS["nefertiti"]()
+    calls = []
+    real = one_disk.find
+
+    def counted(*args):
+        calls.append(1)
+        return real(*args)
+    monkeypatch.setattr(one_disk, "find", counted)
+    res = bd_uv.unwrap(V, F, seams="needed")
+    assert len(calls) == 1
+    calls.clear()
+    ref = bd_uv.unwrap(V, F)
+    assert len(calls) == 1
+    assert np.array_equal(res.corner_uv, ref.corner_uv)
+    assert res.islands[0].bound_certified == ref.islands[0].bound_certified
+
+
 def test_a_face_float32_cannot_tell_from_a_line_is_repaired():
     """A disk with one face thinner than a float32 step at its coordinates: clean in float64,
     so only the float32 precision sends it to the repair, which leaves that face out."""
@@ -275,7 +295,7 @@ def test_a_face_float32_cannot_tell_from_a_line_is_repaired():
     V = V + 1000.0                        # float32 steps of 6e-5 there
     f = F[len(F) // 2]
     V[f[2]] = 0.5 * (V[f[0]] + V[f[1]]) + [0.0, 0.0, 1e-6]   # the face's third corner on its edge
-    assert needed.clean_disk(V, F, None) == (one_disk.find(V, F) is not None)
+    assert (needed.clean_disk(V, F, None) is not None) == (one_disk.find(V, F) is not None)
     assert not needed.clean_disk(V, F, np.float32)
     res = bd_uv.unwrap(V, F, seams="needed", precision=np.float32)
     thin = len(F) // 2
