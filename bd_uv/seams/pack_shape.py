@@ -1,17 +1,21 @@
-"""Charts shaped for the atlas: a chart so large and so far from square that it alone caps the
-atlas's coverage is bisected (``bisect``: a short seam along the mesh), where that measurably pays.
+"""Charts shaped for the atlas: a union merging made that alone caps the atlas's coverage is
+bisected (``bisect``: a short seam along the mesh), where that measurably pays.
 
 A chart of 3D-area share ``a`` whose map fills ``q`` of the least square around it (over
 rotations) leaves any square atlas of the charts at most ``q / a`` covered, whatever the packer
-(the chart alone needs that square). Merging knows nothing of this: on fandisk (a CAD mesh) it
-joined 28 charts into 3, the largest 59 % of the area in a long band filling 33 % of its square,
-so every packer (ours, Blender's exact shape) stopped near 0.56 while xatlas reached 0.58 on its
-own 114 charts. Splitting is refused where it does not pay: a chart whose bound ``q / a`` is at
-least ``TARGET`` (the coverage packers reach on charts of good shape) is never cut, so the two
-hemispheres of a sphere (``q / a`` = 1.57), a round disk alone (0.79) or a dozen even charts
-stay whole; a split is kept only when both pieces pass the search's test by their own conformal
-maps and raise the chart's bound by ``GAIN``. Charts bounded by the given seams only (an island
-the user marked) are never cut. Used by ``auto.unwrap_auto`` after merging.
+(the chart alone needs that square). Merging by the conformal test alone knows nothing of this:
+on fandisk (a CAD mesh) it joined 28 charts into 3, the largest 59 % of the area in a band
+filling 33 % of its square, so every packer (ours, Blender's exact shape) stopped near 0.56
+while xatlas reached 0.58 on its own 114 charts.
+
+Only the chart capping the atlas (the lowest ``q / a``) is split, and only while that bound is
+below ``TARGET`` (the coverage packers reach on charts of good shape), the chart is a union of
+charts merging joined, bounded by a seam the search added, and both pieces pass the search's
+test by their own conformal maps and raise ``q / a`` by ``GAIN``; where it cannot be, no split
+pays and the pass stops. So a sphere's hemispheres (``q / a`` = 1.3), the band the search opens
+a torus into (Blender's torus: its handle cuts, no merge), the user's islands and a dozen even
+charts stay as they are. Used by ``auto.unwrap_auto`` after merging, so every packer gets the
+same charts.
 """
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
