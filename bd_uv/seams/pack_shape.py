@@ -35,12 +35,13 @@ ANGLES = 90
 MAX_SPLITS = 16
 
 
-def square_fill(uv, tris):
+def square_fill(uv, tris, loop=None):
     """Area of a planar map over the area of the least square holding it (rotations only).
 
     Parameters
     ----------
     uv : (n,) complex128 chart vertex positions, tris : (k,3) int64
+    loop : (b,) int64, optional, the boundary loop of a disk (its hull is the chart's)
 
     Returns
     -------
@@ -48,7 +49,7 @@ def square_fill(uv, tris):
     """
     e1, e2 = uv[tris[:, 1]] - uv[tris[:, 0]], uv[tris[:, 2]] - uv[tris[:, 0]]
     area = 0.5 * abs(float(np.sum((e1.conjugate() * e2).imag)))
-    pts = np.unique(uv[tris.ravel()])
+    pts = uv[loop] if loop is not None and len(loop) >= 3 else np.unique(uv[tris.ravel()])
     try:
         pts = pts[ConvexHull(np.stack([pts.real, pts.imag], 1)).vertices]
     except (QhullError, ValueError):
@@ -101,7 +102,7 @@ def split_for_packing(V, F, E, cut, before, original, A, cen, S, cap, poly=None,
     inner = E.faces[:, 1] >= 0
 
     def bound(c, u):
-        return square_fill(u, c.tris) / (float(A[c.faces].sum()) / total)
+        return square_fill(u, c.tris, c.loops[0]) / (float(A[c.faces].sum()) / total)
 
     live = []                               # (bound, chart, may it be split)
     for j, c in enumerate(chs):
