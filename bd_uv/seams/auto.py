@@ -31,6 +31,7 @@ from .cut_graph import cut_graph
 from .edges import edge_table
 from .measure import measure_charts, splice
 from .merge import chart_key, merge_charts
+from .pack_shape import split_for_packing
 from .bisect import bisect, edge_weight, polygon_edges, split_deep
 from .topology import charts, cut_mesh
 from .trim import release_memory
@@ -146,8 +147,12 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         if not changed:
             break
     if merge:
+        before = cut.copy()
         merge_charts(V, F, E, cut, keep, invalid, S, C, known=known, geom=geom,
                      failed=failed)
+        # A union that alone caps the atlas's coverage is bisected where that pays.
+        split_for_packing(V, F, E, cut, before, original, A, cen, S, mean_cap(C), poly, geom,
+                          known, invalid)
     release_memory(m)
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last
