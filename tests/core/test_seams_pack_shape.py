@@ -71,9 +71,9 @@ def _charts(res):
 
 
 def long_box():
-    """A closed box 8 x 1 x 1 of 768 triangles: merging joins the search's charts into two
+    """A closed box 10 x 1 x 1 of 768 triangles: merging joins the search's charts into
     long bands (fandisk's case, on a CAD-like mesh of flat faces and sharp creases)."""
-    m = trimesh.creation.box([8.0, 1.0, 1.0]).subdivide().subdivide().subdivide()
+    m = trimesh.creation.box([10.0, 1.0, 1.0]).subdivide().subdivide().subdivide()
     m.merge_vertices()
     return np.asarray(m.vertices, np.float64), np.asarray(m.faces, np.int64)
 
@@ -91,9 +91,10 @@ def test_a_merged_long_band_is_bisected_and_packs_better(monkeypatch):
     assert b_old.min() < pack_shape.TARGET
     assert len(old.islands) < len(res.islands) <= len(old.islands) + 4
     assert b.min() >= pack_shape.GAIN * b_old.min()
-    # Short seams: each piece costs at most a cut around the box (girth 4).
+    # Short seams: each piece costs at most a cut around the box (girth 4) along the triangles'
+    # edges, which zigzag across the grid's diagonals (up to sqrt 2 times as long): 1.5 x 4.
     assert 0 < info["seam_length"] - old_info["seam_length"] <= (len(res.islands)
-                                                                 - len(old.islands)) * 4.0
+                                                                 - len(old.islands)) * 6.0
     cov, cov_old = packed_coverage(V, F, res), packed_coverage(V, F, old)
     print("coverage", cov_old, "->", cov)
     assert cov >= 1.1 * cov_old
