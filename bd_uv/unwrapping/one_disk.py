@@ -24,7 +24,7 @@ from ..errors import CancelledError
 from ..geometry import components, gradient_operators, local_frame
 from ..mesh import DEGENERATE_RATIO, Island
 from ..solvers.lscm import face_geometry_of, lscm_pinned
-from .disk_certificate import certify_disk
+from .disk_certificate import certify_disk, certify_measured_disk
 from .problem import STORE_HEADROOM
 from .results import IslandResult, UnwrapResult
 
@@ -214,11 +214,18 @@ def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
                         certificates=(cert,)), None
 
 
-def certify(disk, corner_uv, C):
+def certify(disk, corner_uv, C, D=None):
     """The ``Certificate`` of a ``Disk``'s UVs as stored at the bound C, or None where
-    ``disk_certificate`` does not clear them (``overlap_certificate`` decides then)."""
+    ``disk_certificate`` does not clear them (``overlap_certificate`` decides then).
+
+    D : (m,) float64, optional, each face's conformal distortion of these very UVs as
+        ``metrics.certify_measured`` measured them (``finish``): not measured again (the same
+        bits); the bound, the boundary and the mean are checked from the UVs as ever."""
+    corner_uv = np.asarray(corner_uv, dtype=np.float64)
+    if D is not None:
+        return certify_measured_disk(corner_uv, D, disk, C)
     G = gradient_operators(local_frame(disk.e01, disk.e02))
-    return certify_disk(np.asarray(corner_uv, dtype=np.float64), G, disk, C)[0]
+    return certify_disk(corner_uv, G, disk, C)[0]
 
 
 def _report(progress, cancel, fraction, message):

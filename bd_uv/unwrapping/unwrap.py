@@ -174,7 +174,10 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
             corner_uv[island.faces] = res.uv[island.tris]
         results.append(res)
         done += share
-    cert = (one_disk.certify(disk, corner_uv, results[0].bound_certified)
+    # the disk's distortion as finish measured it from these UVs (not the batched path's own
+    # arithmetic): measured once, used by both certificates
+    cert = (one_disk.certify(disk, corner_uv, results[0].bound_certified,
+                             None if 0 in batch else results[0].distortion)
             if disk is not None and results[0].status == "certified" else None)
     if cert is not None:
         results, certs = [dataclasses.replace(results[0], overlap_free=True)], (cert,)
