@@ -105,7 +105,7 @@ def _free_entries(data, cols, area, free, nv):
     keep = tr >= 0
     w = np.broadcast_to((0.5 * area)[None, :, None], (4, k, 6)).reshape(-1)
     indptr = np.zeros(4 * k + 1, dtype=np.int64)
-    np.cumsum(keep.reshape(4 * k, 6).sum(axis=1), out=indptr[1:])
+    indptr[1:] = np.cumsum(keep)[5::6]      # kept entries up to each row's end
     return tr, keep, indptr, w
 
 
@@ -143,5 +143,5 @@ def free_lift_arrays(gx, gy, area, tris, free, nv):
     tr, keep, indptr, w = _free_entries(data, cols, area, free, nv)
     d = data[keep]
     drop = ~keep
-    rows = np.repeat(np.arange(4 * k), 6)[drop]
+    rows = np.flatnonzero(drop) // 6        # six entries a row
     return indptr, tr[keep], d, d * w[keep], (rows, cols[drop], data[drop])
