@@ -4,7 +4,7 @@ import numpy as np
 from .geometry import face_areas, gradient_operators, local_coordinates
 
 
-def face_jacobians(V, F, corner_uv):
+def face_jacobians(V, F, corner_uv, G=None):
     """Similarity and anti-similarity parts of each face's affine map (eq. 4.6).
 
     Parameters
@@ -12,13 +12,16 @@ def face_jacobians(V, F, corner_uv):
     V : (n,3) float array
     F : (m,3) int array
     corner_uv : (m,3,2) float array, UV of each face corner
+    G : (m,2,3) float64, optional, ``gradient_operators(local_coordinates(V, F))`` when known
+        (``one_disk.Disk.G``: the same bits)
 
     Returns
     -------
     alpha, beta : (m,) complex128
         The map is ``z -> alpha z + beta conj(z) + delta`` in each face's canonical local frame.
     """
-    G = gradient_operators(local_coordinates(V, F))
+    if G is None:
+        G = gradient_operators(local_coordinates(V, F))
     uv = np.asarray(corner_uv, dtype=np.float64)
     # from the face's first corner: the gradient of a constant is zero, and coordinates far from
     # the origin for the face's size (a piece 5e-14 across at u = 0.98) would cancel in the sum,
@@ -102,33 +105,37 @@ def singular_values(V, F, corner_uv, normalize=True):
     return _singular(V, F, signed_uv_areas(corner_uv), np.abs(alpha), np.abs(beta), normalize)
 
 
-def _singular(V, F, signed_area, a, b, normalize):
-    """``singular_values`` from the signed UV areas, |alpha| and |beta|."""
+def _singular(V, F, signed_area, a, b, normalize, A=None):
+    """``singular_values`` from the signed UV areas, |alpha| and |beta| (A: ``face_areas(V,
+    F)`` when known)."""
     smax, smin = a + b, a - b
     if normalize:
         uv_area = np.sum(np.abs(signed_area))
-        scale = np.sqrt(np.sum(face_areas(V, F)) / uv_area) if uv_area > 0 else np.nan
+        A = face_areas(V, F) if A is None else A
+        scale = np.sqrt(np.sum(A) / uv_area) if uv_area > 0 else np.nan
         smax, smin = smax * scale, smin * scale
     return smax, smin
 
 
-def certify_measured(V, F, corner_uv, bound, normalize=True, rtol=1e-6):
+def certify_measured(V, F, corner_uv, bound, normalize=True, rtol=1e-6, faces=None):
     """``certify`` and ``singular_values`` of one map from one evaluation of its Jacobians (the
-    same numbers as the two calls).
+    same numbers as the two calls). ``faces``: (G, A), the faces' gradient operators and areas
+    in V (``face_jacobians``' G, ``face_areas``) when known: the same bits.
 
     Returns
     -------
     ok, D, n_flipped : as ``certify``
     smax, smin : as ``singular_values``
     """
-    alpha, beta = face_jacobians(V, F, corner_uv)
+    G, A = (None, None) if faces is None else faces
+    alpha, beta = face_jacobians(V, F, corner_uv, G)
     a, b = np.abs(alpha), np.abs(beta)
     signed = signed_uv_areas(corner_uv)
     flipped = ~(signed > 0)
     D = _distortion(a, b, flipped)
     n_flipped = int(flipped.sum())
     ok = n_flipped == 0 and bool(np.all(D <= bound * (1.0 + rtol)))
-    return (ok, D, n_flipped) + _singular(V, F, signed, a, b, normalize)
+    return (ok, D, n_flipped) + _singular(V, F, signed, a, b, normalize, A)
 
 
 def certify(V, F, corner_uv, bound, rtol=1e-6):
@@ -146,9 +153,9 @@ def certify(V, F, corner_uv, bound, rtol=1e-6):
     return ok, D, n_flipped
 
 
-def mean_distortion(V, F, D):
-    """Area-weighted mean of the finite distortions."""
-    A = face_areas(V, F)
+def mean_distortion(V, F, D, A=None):
+    """Area-weighted mean of the finite distortions (A: ``face_areas(V, F)`` when known)."""
+    A = face_areas(V, F) if A is None else A
     finite = np.isfinite(D)
     if not finite.any():
         return float("inf")

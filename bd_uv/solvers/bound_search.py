@@ -110,10 +110,12 @@ class BoundSearch:
     tris : (k,3) int
     fixed : (p,) int, vertices held where the map searched from has them (at least one per
         component)
+    connected : bool, ``tris`` are one connected piece (one ``mesh.Island``): its components
+        are not searched for (``GlobalStep``)
     """
 
-    def __init__(self, ops, nv, tris, fixed):
-        self.solver = s = GlobalStep(ops, nv, fixed, tris=tris)
+    def __init__(self, ops, nv, tris, fixed, connected=False):
+        self.solver = s = GlobalStep(ops, nv, fixed, tris=tris, connected=connected)
         self.k = len(s.area)
         self.UF = None
         self._rhs_fixed = None      # (UF, its share of the right-hand side; small: its FreeLift)

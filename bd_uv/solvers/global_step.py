@@ -31,6 +31,8 @@ class GlobalStep:
     fixed_idx : (p,) int, vertices held at given values (at least one per component)
     tris : (k,3) int, the triangles ``ops`` was built over (for the connected components)
     backend : see :func:`factor.factor_spd`
+    connected : bool, the triangles are known to be one connected piece (a ``mesh.Island``):
+        its components are not searched for
 
     Attributes
     ----------
@@ -40,15 +42,16 @@ class GlobalStep:
     backend : str
     """
 
-    def __init__(self, ops, nv, fixed_idx, tris, backend="auto"):
+    def __init__(self, ops, nv, fixed_idx, tris, backend="auto", connected=False):
         t0 = time.perf_counter()
         self.nv = nv = int(nv)
         self.area = np.asarray(ops.area, dtype=np.float64)
         self._Gx = self._Gy = None     # the gradient operators, made on first use (``Gx``)
         tris = np.asarray(tris, dtype=np.int64)
         self.ops, self.tris = ops, tris
-        self.n_components, comp = components(nv, np.concatenate([tris[:, 0], tris[:, 1]]),
-                                             np.concatenate([tris[:, 1], tris[:, 2]]))
+        self.n_components, comp = ((1, np.zeros(nv, dtype=np.int64)) if connected else
+                                   components(nv, np.concatenate([tris[:, 0], tris[:, 1]]),
+                                              np.concatenate([tris[:, 1], tris[:, 2]])))
         self.component = comp.astype(np.int64)
         self.face_comp = self.component[tris[:, 0]]
         fixed = np.unique(np.asarray(fixed_idx, dtype=np.int64))

@@ -39,7 +39,6 @@ def certify_disk(corner_uv, G, disk, C, rtol=RTOL):
     (Certificate, D (m,) each face's conformal distortion, the least and the largest singular
     value over the faces), or (None, D, nan, nan) when a step fails (``certify_islands`` decides)
     """
-    m = len(corner_uv)
     d = corner_uv - corner_uv[:, :1]
     gx = np.einsum("mkc,mc->mk", G, d[:, :, 0])
     gy = np.einsum("mkc,mc->mk", G, d[:, :, 1])
@@ -47,19 +46,30 @@ def certify_disk(corner_uv, G, disk, C, rtol=RTOL):
     beta = 0.5 * ((gx[:, 0] - gy[:, 1]) + 1j * (gy[:, 0] + gx[:, 1]))
     a, b = np.abs(alpha), np.abs(beta)
     D = _distortion(a, b, ~(signed_uv_areas(corner_uv) > 0))
+    cert = certify_measured_disk(corner_uv, D, disk, C, rtol)
+    if cert is None:
+        return None, D, np.nan, np.nan
+    return cert, D, float((a - b).min()), float((a + b).max())
+
+
+def certify_measured_disk(corner_uv, D, disk, C, rtol=RTOL):
+    """``certify_disk``'s Certificate (or None) where each face's distortion D (m,) of these
+    very UVs is known: measured by ``metrics.certify_measured`` from them (``finish``), the same
+    arithmetic and the same bits as step 1's (the faces' frames from the same edges). Steps 1's
+    bound, 2 and 3 are checked here as ever."""
+    m = len(corner_uv)
     mx = float(D.max())
     if not (mx <= C * (1.0 + rtol) and np.isfinite(corner_uv).all()):
-        return None, D, np.nan, np.nan
+        return None
     if not _simple_ccw_boundary(corner_uv, disk):
-        return None, D, np.nan, np.nan
+        return None
     # the area-weighted mean as certify_islands sums it (bincount's order: the same bits)
     one = np.zeros(m, dtype=np.int64)
     area = np.bincount(one, disk.area, 1)[0]
     mean = np.bincount(one, disk.area * D, 1)[0] / area
-    cert = Certificate(island=0, certified=True, bound=float(C), max_distortion=mx,
+    return Certificate(island=0, certified=True, bound=float(C), max_distortion=mx,
                        mean_distortion=float(mean), flipped=0, overlap_free=True, crossings=0,
                        reason="", faces=m, area=float(area))
-    return cert, D, float((a - b).min()), float((a + b).max())
 
 
 def _simple_ccw_boundary(corner_uv, disk):

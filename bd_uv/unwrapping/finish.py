@@ -50,13 +50,14 @@ def finish(prob, u, C, bound, frames_name, flags, t0, stretch=None):
     t = time.perf_counter()
     target = C if bound != "auto" else certified_bound(C)
     ok, D, n_flipped, smax, smin = certify_measured(prob.V, isl.tris, uv[isl.tris], target,
-                                                    normalize=npins < 2)
+                                                    normalize=npins < 2, faces=prob.faces_3d)
     lo_s, hi_s = float(np.min(smin)), float(np.max(smax))
     if stretch is not None:  # section 6.3: 1/S <= gamma <= Gamma <= S, certified from the UVs
         ok = ok and lo_s >= (1.0 - 1e-6) / stretch and hi_s <= stretch * (1.0 + 1e-6)
     prob.timings["certify"] += time.perf_counter() - t
     maxD = float(np.max(D))
-    meanD = mean_distortion(prob.V, isl.tris, D)
+    meanD = mean_distortion(prob.V, isl.tris, D,
+                            None if prob.faces_3d is None else prob.faces_3d[1])
     seconds = time.perf_counter() - t0
     common = dict(bound_requested=bound, max_distortion=maxD, mean_distortion=meanD,
                   flipped=n_flipped, frames=frames_name, seconds=seconds, solves=prob.solves,

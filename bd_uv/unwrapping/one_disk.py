@@ -16,6 +16,7 @@ loop. Anything else, a map over the bound or a boundary the certificate cannot c
 the general way, which words its errors, bends maps and cuts overlaps.
 """
 from dataclasses import dataclass
+import functools
 import time
 
 import numpy as np
@@ -24,7 +25,7 @@ from ..errors import CancelledError
 from ..geometry import components, gradient_operators, local_frame
 from ..mesh import DEGENERATE_RATIO, Island
 from ..solvers.lscm import face_geometry_of, lscm_pinned
-from .disk_certificate import certify_disk
+from .disk_certificate import certify_disk, certify_measured_disk
 from .problem import STORE_HEADROOM
 from .results import IslandResult, UnwrapResult
 
@@ -47,6 +48,10 @@ class Disk:
     first : (nv,) int64, each island vertex's first corner (flat)
     e01, e02 : (m,3) float64, each face's edges from its first corner
     area : (m,) float64, each face's area (``geometry.face_areas``' bits)
+    Z, G : (m,3) complex128 each face's corners in its local frame and (m,2,3) float64 its
+        gradient operator (``geometry.local_coordinates``, ``gradient_operators``: the same bits
+        as of V and F), made on first use and kept: the conformal map, ``finish``'s measure and
+        the disk certificate share them
     """
     island: Island
     twins: np.ndarray
@@ -55,6 +60,14 @@ class Disk:
     e01: np.ndarray
     e02: np.ndarray
     area: np.ndarray
+
+    @functools.cached_property
+    def Z(self):
+        return local_frame(self.e01, self.e02)
+
+    @functools.cached_property
+    def G(self):
+        return gradient_operators(self.Z)
 
 
 _NEXT = np.array([1, 2, 0])
@@ -175,8 +188,7 @@ def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
     """
     isl = disk.island
     _report(progress, cancel, 0.01, "conformal maps of 1 islands")
-    Z = local_frame(disk.e01, disk.e02)
-    G = gradient_operators(Z)
+    Z, G = disk.Z, disk.G
     geom = face_geometry_of(Z, G, disk.area)
     nv = len(isl.vertices)
     idx = _far_pair(V.take(isl.vertices, axis=0), isl.loops[0])
@@ -214,11 +226,17 @@ def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
                         certificates=(cert,)), None
 
 
-def certify(disk, corner_uv, C):
+def certify(disk, corner_uv, C, D=None):
     """The ``Certificate`` of a ``Disk``'s UVs as stored at the bound C, or None where
-    ``disk_certificate`` does not clear them (``overlap_certificate`` decides then)."""
-    G = gradient_operators(local_frame(disk.e01, disk.e02))
-    return certify_disk(np.asarray(corner_uv, dtype=np.float64), G, disk, C)[0]
+    ``disk_certificate`` does not clear them (``overlap_certificate`` decides then).
+
+    D : (m,) float64, optional, each face's conformal distortion of these very UVs as
+        ``metrics.certify_measured`` measured them (``finish``): not measured again (the same
+        bits); the bound, the boundary and the mean are checked from the UVs as ever."""
+    corner_uv = np.asarray(corner_uv, dtype=np.float64)
+    if D is not None:
+        return certify_measured_disk(corner_uv, D, disk, C)
+    return certify_disk(corner_uv, disk.G, disk, C)[0]
 
 
 def _report(progress, cancel, fraction, message):

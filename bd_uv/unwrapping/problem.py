@@ -58,14 +58,23 @@ class IslandProblem:
     method : "lscm" | "arap" | "dirichlet" | "biharmonic" | "stretch-l1"
     cone : "soc" | "linf"
     cancel : object with ``is_set()`` or None
+    faces_3d : (G (k,2,3), A (k,)), optional, the faces' gradient operators and areas in the
+        input geometry when known (``one_disk.Disk``: ``geometry.gradient_operators`` and
+        ``face_areas``' bits): ``finish`` measures the final UVs with them
+
+    Attributes
+    ----------
+    faces_3d : as the parameter, or None
     """
 
-    def __init__(self, island, V, pins, method, cone, cancel):
+    def __init__(self, island, V, pins, method, cone, cancel, faces_3d=None):
         self.island = island
         self.method, self.cone, self.cancel = method, cone, cancel
+        self.faces_3d = faces_3d
         Vi = V[island.vertices]
         self.V = Vi
-        self.area3d = float(face_areas(Vi, island.tris).sum())
+        self.area3d = float((face_areas(Vi, island.tris) if faces_3d is None
+                             else faces_3d[1]).sum())
         # Normalise: centre and unit total area (huge or tiny coordinates solve alike).
         self.Vn = (Vi - Vi.mean(axis=0)) / np.sqrt(self.area3d)
         self.nv = len(Vi)

@@ -124,7 +124,7 @@ def search(prob, u, report, budget, flags, t0):
     u = u.copy()
     if len(prob.pin_idx):
         u[prob.pin_idx] = prob.pin_val
-    bs = BoundSearch(prob.ops, prob.nv, prob.island.tris, fixed)
+    bs = BoundSearch(prob.ops, prob.nv, prob.island.tris, fixed, connected=True)
 
     def progress(D, C):
         report(0.1, f"minimising C: C* <= {D:.4g}, aiming at {C:.4g}")

@@ -167,14 +167,18 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
                 report(1.0, "the conformal map fits the bound")
             else:
                 res = _solve_island(island, V, pins, o, initial_uv, report, cancel,
-                                    starts.get(island.index))
+                                    starts.get(island.index),
+                                    None if disk is None else (disk.G, disk.area))
         except Cancelled:
             raise CancelledError("unwrap cancelled; nothing was changed") from None
         if res.status == "certified":
             corner_uv[island.faces] = res.uv[island.tris]
         results.append(res)
         done += share
-    cert = (one_disk.certify(disk, corner_uv, results[0].bound_certified)
+    # the disk's distortion as finish measured it from these UVs (not the batched path's own
+    # arithmetic): measured once, used by both certificates
+    cert = (one_disk.certify(disk, corner_uv, results[0].bound_certified,
+                             None if 0 in batch else results[0].distortion)
             if disk is not None and results[0].status == "certified" else None)
     if cert is not None:
         results, certs = [dataclasses.replace(results[0], overlap_free=True)], (cert,)
@@ -243,7 +247,8 @@ def _batched(V, isl, pins, face_island, options, progress, cancel, conformal=Non
     return conformal_islands(V, todo, None if bound == "auto" else float(bound), conformal)
 
 
-def _solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=None):
+def _solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=None,
+                  faces_3d=None):
     t0 = time.perf_counter()
     o = options
     method, bound, boundary, stretch = o.method, o.bound, o.boundary, o.stretch
@@ -263,7 +268,7 @@ def _solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=Non
             return with_premises(_failed(island, err, t0, bound, FRAMES_NAME), island)
         return with_premises(finish(prob, u, C, bound, FRAMES_NAME, flags, t0, stretch), island)
     try:
-        prob = IslandProblem(island, V, pins, method, o.cone, cancel)
+        prob = IslandProblem(island, V, pins, method, o.cone, cancel, faces_3d)
         start = start_map(prob, o.frames, initial_uv, report, lscm=lscm)
     except IslandError as exc:
         exc.renumber(island.index)

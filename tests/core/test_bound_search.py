@@ -65,6 +65,12 @@ def test_search_lowers_the_conformal_maps_max_with_a_certified_map():
     assert D < 1.3 < 1.405 < D0.max()
     assert u[fixed] == pytest.approx(u0[fixed], abs=0)
     assert bs.iterations > 0
+    # an island is one connected piece: told so, the search is the same to the bit
+    one = BoundSearch(prob.ops, prob.nv, isl.tris, fixed, connected=True)
+    u1, D1, _ = one.search(u0, lambda v: frames_from_map(prob.alpha(v)))
+    assert one.solver.n_components == bs.solver.n_components == 1
+    assert np.array_equal(one.solver.component, bs.solver.component)
+    assert np.array_equal(u1, u) and D1 == D and one.iterations == bs.iterations
 
 
 def test_search_keeps_the_pins():

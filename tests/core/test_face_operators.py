@@ -77,3 +77,27 @@ def test_laplacian_blocks_and_lift_match_sparse_products():
     y = rng.normal(size=4 * len(tris))
     full = B.T @ (np.tile(ops.area, 4) * y) / 2
     assert np.allclose(BtA @ y, np.r_[full[free], full[free + nv]], atol=1e-12)
+
+
+def test_summed_csc_is_scipys_conversion_bit_for_bit():
+    """``laplacian_blocks``' conversion (scipy's compiled steps called straight) gives the very
+    arrays of ``sp.csc_array((v, (r, c)))``: index types, order and the sums of duplicates, in
+    triplets given in any order, sorted or not, with or without duplicates."""
+    from bd_uv.solvers.face_operators import _summed_csc
+    rng = np.random.default_rng(7)
+    for t in range(60):
+        nr, nc = int(rng.integers(1, 40)), int(rng.integers(1, 40))
+        n = int(rng.integers(0, 300))
+        r, c = rng.integers(0, nr, n), rng.integers(0, nc, n)
+        if t % 3 == 0:          # sorted by column then row, duplicates adjacent
+            o = np.lexsort((r, c))
+            r, c = r[o], c[o]
+        v = rng.standard_normal(n) * 10.0 ** rng.integers(-8, 8, n)
+        ref = sp.csc_array((v, (r, c)), shape=(nr, nc))
+        ref.sum_duplicates()
+        got = _summed_csc(v, r.astype(np.int64), c.astype(np.int64), nr, nc)
+        assert got.shape == ref.shape and got.has_canonical_format
+        assert got.indptr.dtype == ref.indptr.dtype and got.indices.dtype == ref.indices.dtype
+        assert np.array_equal(got.indptr, ref.indptr)
+        assert np.array_equal(got.indices, ref.indices)
+        assert got.data.tobytes() == ref.data.tobytes()

@@ -302,3 +302,25 @@ def test_a_face_float32_cannot_tell_from_a_line_is_repaired():
     assert len(res.repair) == 1 and f"faces {thin})" in res.repair[0]
     (failed,) = [r for r in res.islands if r.status == "failed"]
     assert failed.faces.tolist() == [thin] and type(failed.error) is bd_uv.DegenerateFacesError
+
+
+@pytest.mark.parametrize("name", ["grid", "nefertiti", "jagged"])
+def test_finishs_measure_certifies_as_the_disk_certificates_own(name):
+    """``bound="auto"``'s disk certificate takes the distortion ``finish`` measured from the
+    same UVs: the same certificate as measured anew, and a distortion over the bound, or UVs
+    whose boundary folds, are still refused."""
+    V, F = DISKS[name]()
+    F = np.asarray(F, np.int64)
+    res = bd_uv.unwrap(V, F, bound="auto")
+    (r,) = res.islands
+    disk = one_disk.find(V, F)
+    C = r.bound_certified
+    anew = one_disk.certify(disk, res.corner_uv, C)
+    assert anew is not None and one_disk.certify(disk, res.corner_uv, C, r.distortion) == anew
+    assert anew == res.certificates[0]
+    over = r.distortion.copy()
+    over[len(over) // 2] = C * 1.01
+    assert one_disk.certify(disk, res.corner_uv, C, over) is None
+    folded = res.corner_uv.copy()
+    folded[..., 0] = -folded[..., 0]        # mirrored: the loop winds clockwise
+    assert one_disk.certify(disk, folded, C, r.distortion) is None
