@@ -8,7 +8,7 @@ import numpy as np
 from .charts import MARGIN, chart_maps, mean_cap
 from .split import _quantize
 from .topology import charts
-from .trim import release_memory
+from ..trim import release_memory
 
 # Rounds of pairwise merging (each merges a matching of neighbouring charts).
 MERGE_ROUNDS = 15

@@ -9,7 +9,7 @@ from ..geometry import components
 from ..solvers.threads import halves, map_blocks
 from .charts import spd_solver
 from . import cluster_fiedler
-from .trim import release_memory
+from ..trim import release_memory
 
 # Neither side of a split may hold less than this share of the chart's area.
 MIN_SIDE = 0.05
