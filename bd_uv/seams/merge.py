@@ -47,7 +47,7 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
         never two charts of one group (the pieces of a chart split because its certified map
         failed: their union is that chart again)
     known : dict, optional: the conformal maps of the unions that pass go in
-        (``ChartMaps.remember``)
+        (``ChartMaps.remember``), those of the charts merged go out
     geom : charts.FaceGeometry of (V, F), optional
     failed : dict, optional, ``chart_key`` -> max stretch of disks whose conformal map
         failed this test before (the search's, which then split them): a union that is one
