@@ -22,7 +22,6 @@ import numpy as np
 
 from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, OverlapError,
                       SolverError, TopologyError)
-from ..geometry import face_areas
 from ..mesh import DEGENERATE_RATIO, Island, check_arrays, islands
 from ..options import UnwrapOptions
 from ..unwrapping.unwrap import pin_arrays, unwrap, unwrap_islands
@@ -32,9 +31,9 @@ from .edges import edge_table
 from .measure import measure_charts, splice
 from .merge import chart_key, merge_charts
 from .pack_shape import split_for_packing
-from .bisect import bisect, edge_weight, polygon_edges, split_deep
+from .bisect import FaceCentroids, bisect, edge_weight, polygon_edges, split_deep
 from .topology import charts, cut_mesh
-from .trim import release_memory
+from ..trim import release_memory
 
 MAX_ROUNDS = 60
 # The charts of the given seams (the first round's) pass with a mean up to this share of
@@ -87,7 +86,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         ``seconds``
     """
     t0 = time.perf_counter()
-    V, F = check_arrays(V, F)
+    V, F = check_arrays(V, F, share=True)     # held to the end: the caller's, not copies
     C, S = float(bound), float(stretch)
     if not (C >= 1.0 and S >= 1.0):
         raise ValueError(f"seams='auto' needs a bound C >= 1 and a stretch S >= 1, not {bound!r}, "
@@ -116,8 +115,9 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         g = np.asarray(face_groups)
         inner = E.faces[:, 1] >= 0
         keep[inner] |= g[E.faces[inner, 0]] != g[E.faces[inner, 1]]
-    A = face_areas(V, F)
-    cen = V[F].mean(axis=1)
+    geom = face_geometry(V, F)
+    A = geom.area                           # the same per-face arithmetic as ``face_areas``
+    cen = FaceCentroids(V, F)               # formed for the faces split, not held per face
     # Islands the seams cannot fix (non-manifold, degenerate, ...) are left to ``unwrap`` to
     # report; the rest of the search works on charts of the validated mesh.
     frozen = np.zeros(m, dtype=bool)
@@ -127,9 +127,10 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
                                                                 TopologyError)):
                 frozen[i.faces] = True
     invalid = frozen.copy()
+    if E.fans is not None:                  # the corner table served the checks above only
+        E = dataclasses.replace(E, corners=None)
     known = {}                              # conformal maps of charts that passed, by faces
     failed = {}                             # max stretch of disks whose map failed, by chart
-    geom = face_geometry(V, F)
     release_memory(m)                       # the set-up's temporaries
     rounds = 0
     for rounds in range(1, MAX_ROUNDS + 1):
@@ -153,6 +154,10 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         # A union that alone caps the atlas's coverage is bisected where that pays.
         split_for_packing(V, F, E, cut, before, original, A, cen, S, mean_cap(C), poly, geom,
                           known, invalid)
+    # The mesh's face geometry (30 MB on a 500k-face mesh) is not held through the final unwrap,
+    # which forms its charts' own: the rounds after it map a few pieces, and ``chart_maps``
+    # forms theirs (the same per-face arithmetic, the same bits).
+    geom = None
     release_memory(m)
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last
@@ -165,6 +170,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     for finish in range(FINISH_ROUNDS):
         # Charts the certified map leaves beyond S or crossing itself are split again and only
         # their faces unwrapped anew.
+        release_memory(m)                   # the unwrap's freed heap, before measuring
         st, cr = measured = measure_charts(V, F, E, cut, result, chs)
         chs = None                          # the charts of this cut, not of the next
         bad = [r for r, s, c in zip(result.islands, st, cr)

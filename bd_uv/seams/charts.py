@@ -13,7 +13,7 @@ from ..solvers.lscm import FaceGeometry, face_geometry, spd_solver  # noqa: F401
 from ..solvers.lscm import _lscm_system   # lscm_pinned's assembly, to free memory before factoring
 from ..solvers.threads import halves, map_blocks
 from .crossings import boundary_crossings
-from .trim import release_memory
+from ..trim import release_memory
 from ..unwrapping.batched import _far_pairs
 
 # Charts are accepted a little inside S: bending a map into C moves its stretch slightly.
@@ -28,13 +28,14 @@ MEAN_SLOPE = 0.07
 # Charts of one solve are split into two systems factored side by side (``solvers.threads``)
 # when each holds at least this many vertices (below it, the split costs more than it saves).
 PARALLEL_VERTICES = 1500
-# ... but a batch of more vertices than this is solved one system at a time, each of charts
-# holding at most RUN_VERTICES vertices together (a larger chart alone): the LDL^T factors are
-# the seam search's memory peaks (measured on a 500k-face mesh: ~310 MB at its largest, a
-# 183k-vertex chart; a merge round's batch of unions in two halves: ~250k vertices, ~200 MB
-# each), and two at once add up.
-SEQUENTIAL_VERTICES = 100_000
-RUN_VERTICES = 50_000
+# ... but a batch of more vertices than this is solved in runs of charts holding at most
+# RUN_VERTICES vertices together (a larger chart alone), two runs side by side: the LDL^T
+# factors are the seam search's memory peaks (measured on a 500k-face mesh: ~310 MB at its
+# largest, a 183k-vertex chart; a merge round's batch of unions in two halves: ~250k vertices,
+# ~200 MB each). Two runs of 25k vertices at once hold about what one of 50k did; halves of a
+# 100k-vertex batch side by side were the search's peak (a merge round, 477-494 MB).
+SEQUENTIAL_VERTICES = 50_000
+RUN_VERTICES = 25_000
 
 
 def mean_cap(C):
@@ -79,9 +80,11 @@ class ChartMaps:
 
     def remember(self, charts, passed, known):
         """Put the maps of the charts that ``passed`` into ``known`` (sorted faces' bytes ->
-        map), for the final unwrap to certify rather than solve again."""
+        map), for the final unwrap to certify rather than solve again. Copies: a view would
+        keep the whole batch's map alive (on a 500k-face mesh ~20 MB of maps held to the end
+        for ~4 MB of charts that passed)."""
         for j in np.flatnonzero(passed):
-            known[charts[j].faces.tobytes()] = self.u[self.voff[j]:self.voff[j + 1]]
+            known[charts[j].faces.tobytes()] = self.u[self.voff[j]:self.voff[j + 1]].copy()
 
 
 def chart_maps(V, charts, geom=None, limits=None):
@@ -129,9 +132,11 @@ def chart_maps(V, charts, geom=None, limits=None):
         return _lscm_pinned(geom, faces[fa:fb], tris[fa:fb] - voff[a], int(voff[b] - voff[a]),
                             idx[2 * a:2 * b] - voff[a], val[2 * a:2 * b])
     j = halves(nvs, PARALLEL_VERTICES)
-    if n > SEQUENTIAL_VERTICES:     # one factor at a time, none of more than RUN_VERTICES
+    if n > SEQUENTIAL_VERTICES:     # two factors at a time, none of more than RUN_VERTICES
         #                             vertices but a chart's own
-        u = np.concatenate([run(r) for r in _runs(nvs, RUN_VERTICES)])
+        runs = _runs(nvs, RUN_VERTICES)
+        u = np.concatenate([x for i in range(0, len(runs), 2)
+                            for x in map_blocks(run, runs[i:i + 2])])
     elif j is None:
         u = _lscm_pinned(geom, faces, tris, n, idx, val)
     else:                   # two runs of charts, one system each, side by side

@@ -22,7 +22,8 @@ class EdgeTable:
     cost : (e,) float64, seam cost per unit length in (0, 1]: 1 on flat edges, lower on creases
     face_edges : (m,3) int32, edge of each face corner's outgoing half-edge F[f,k] -> F[f,k+1]
     corners : (e,2,2) int32, ``corners[e,s,t]``: the corner (``3 f + k``) of ``ends[e,t]`` in
-        ``faces[e,s]`` (-1 where there is no such face)
+        ``faces[e,s]`` (-1 where there is no such face); the seam search drops it (None) once
+        its checks are done where ``fans`` is known (``topology`` reads it only without fans)
 
     The indices are int32 (``INDEX``: int64 from 2**31 corners on): the table is held through
     the whole seam search, 114 MB in int64 on a 500k-face mesh; arithmetic on them that can

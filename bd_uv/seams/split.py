@@ -9,7 +9,7 @@ from ..geometry import components
 from ..solvers.threads import halves, map_blocks
 from .charts import spd_solver
 from . import cluster_fiedler
-from .trim import release_memory
+from ..trim import release_memory
 
 # Neither side of a split may hold less than this share of the chart's area.
 MIN_SIDE = 0.05
@@ -77,6 +77,7 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost)
     d = np.linalg.norm(centroid[pairs[:, 0]] - centroid[pairs[:, 1]], axis=1)
     mean_len = np.bincount(pg, edge_len, g) / np.maximum(npairs, 1)
     w = edge_len * edge_cost / np.maximum(d, 1e-12 * mean_len[pg])
+    del pg, d                               # per pair: dead before the factors
     x = _fiedler_many(pairs, w, face_area, centroid, offsets, group)
     if x is None:
         return side, split
@@ -87,14 +88,18 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost)
     np.maximum.at(scale, group, np.abs(x))
     q = np.maximum(scale * 1e-9, 1e-300)[group]
     order = np.lexsort((np.arange(k), np.round(x / q), group))
-    pos = np.empty(k, dtype=np.int64)
-    pos[order] = np.arange(k)
+    del x, q                                # each dead array dropped as soon as read: the
+    pos = np.empty(k, dtype=np.int64)       # first round's sweep over a 500k-node sphere is
+    pos[order] = np.arange(k)               # one of the search's memory peaks
     rank = pos - start[group]
     c = edge_len * edge_cost
     lo = np.minimum(pos[pairs[:, 0]], pos[pairs[:, 1]])
     hi = np.maximum(pos[pairs[:, 0]], pos[pairs[:, 1]])
+    del pos
     diff = np.bincount(lo + 1, c, minlength=k + 1) - np.bincount(hi + 1, c, minlength=k + 1)
+    del lo, hi
     cutw = np.cumsum(diff)                 # cutw[start_j + t]: prefix of t nodes of chart j
+    del diff
     acum = np.cumsum(face_area[order])
     base = np.concatenate([[0.0], acum])[start]
     total = np.bincount(group, face_area, g)
@@ -104,9 +109,12 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost)
     valid = t >= 1                         # prefix of t >= 1 nodes, t <= k_j - 1
     A = acum[p - 1] - base[gp]             # area of the first t nodes
     A = np.where(valid, A, 0.0)
+    del acum, base
     small = np.minimum(A, total[gp] - A)
     raw_score = np.where(valid, cutw[p] / np.maximum(small, 1e-300), np.inf)
+    del cutw, valid
     score = np.where(small >= MIN_SIDE * total[gp], raw_score, np.inf)
+    del A, small
     none = np.bincount(gp, np.isfinite(score), g) == 0
     score = np.where(none[gp], raw_score, score)
     sscale = np.zeros(g)
@@ -120,8 +128,7 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost)
     side = rank < tg[group]
     # The sweep's ~25 per-node arrays are dead now: dropped before the min cut and the filters
     # (a 500k-node sphere's first split was the search's memory peak).
-    del x, q, order, pos, rank, lo, hi, diff, cutw, acum, base, p, t, gp, valid, A, small
-    del raw_score, score, none, sscale, fin, sq, best, first, tg
+    del order, rank, p, t, gp, raw_score, score, none, sscale, fin, sq, best, first, tg
     side = _snap_many(side, pairs, c, group, g)
     raw = side.copy()
     # Majority filter: a node with two or three neighbours across moves over (never two

@@ -92,9 +92,11 @@ def conformal_islands(V, islands, C, known=None):
         D = np.where(a > b, (a + b) / (a - b), np.inf)
     maxD = np.maximum.reduceat(D, foff[:-1])
     fit = maxD * (1.0 + STORE_HEADROOM) <= C
+    del a, b, D, root                       # dead before the certification's per-face arrays
 
     # Fitting islands: UV area = 3D area, bounding box at (0, 0), as IslandProblem's finish.
     uv_area = np.bincount(face_isl, sa, minlength=k)
+    del sa
     with np.errstate(invalid="ignore", divide="ignore"):
         s = np.sqrt(area / uv_area)
     us = u * s[vert_isl]

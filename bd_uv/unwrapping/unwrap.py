@@ -19,6 +19,7 @@ from ..errors import (BDError, CancelledError, InvalidMeshError, IslandError, Op
                       SolverError)
 from ..mesh import as_indices, as_reals, check_arrays, checked_islands as split_islands
 from ..options import unwrap_options
+from ..trim import release_memory
 from . import bounded as within, one_disk, strategies
 from . import stretch as stretch_search
 from .batched import conformal_islands
@@ -184,6 +185,7 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
         results, certs = [dataclasses.replace(results[0], overlap_free=True)], (cert,)
     else:
         pinned = set(face_island[pins[0] // 3].tolist())
+        release_memory(m)                   # the solves' freed heap, before the certificate
         results, face_island, corner_uv, certs = overlap_certificate(
             V, F, results, face_island, corner_uv, pinned, o.overlap == "cut", face_groups)
     if progress is not None:

@@ -95,7 +95,7 @@ def test_chart_maps_in_two_threads_equal_one_system(monkeypatch):
 
 def test_release_memory_trims_only_large_work(monkeypatch):
     """``trim.release_memory`` calls ``malloc_trim(0)`` from TRIM_FACES faces on, never below."""
-    from bd_uv.seams import trim
+    from bd_uv import trim
     calls = []
     monkeypatch.setattr(trim, "_trim", calls.append)
     trim.release_memory(trim.TRIM_FACES - 1)
@@ -114,7 +114,7 @@ def test_release_memory_hands_freed_heap_back():
         pytest.skip("glibc only")
     code = """if True:
         import numpy as np
-        from bd_uv.seams import trim
+        from bd_uv import trim
         def rss():
             with open("/proc/self/statm") as f:
                 return int(f.read().split()[1]) * 4096 / 2**20
@@ -320,3 +320,25 @@ def test_cut_graph_helpers_equal_numpy_and_scipy():
         assert np.array_equal(got.indptr, want.indptr)
         assert np.array_equal(got.indices, want.indices)
         assert np.allclose(got.data, want.data, rtol=1e-15, atol=0)
+
+
+def test_search_holds_the_callers_arrays_read_only_and_centroids_per_split():
+    """``check_arrays(share=True)`` (the seam search) hands back the caller's float64 / int64
+    arrays as read-only views (writing raises, nothing is copied), converts any other dtype
+    as before; ``FaceCentroids`` gives the rows of ``V[F].mean(axis=1)`` bit for bit."""
+    from bd_uv.mesh import check_arrays
+    from bd_uv.seams.bisect import FaceCentroids
+    V, F = torus(nu=12, nv=8)[:2]
+    V, F = np.asarray(V, np.float64), np.asarray(F, np.int64)
+    Vs, Fs = check_arrays(V, F, share=True)
+    assert np.shares_memory(Vs, V) and np.shares_memory(Fs, F)
+    assert not Vs.flags.writeable and not Fs.flags.writeable and V.flags.writeable
+    with pytest.raises(ValueError):
+        Vs[0, 0] = 1.0
+    V32, F32 = check_arrays(V.astype(np.float32), F.astype(np.int32), share=True)
+    assert V32.dtype == np.float64 and F32.dtype == np.int64 and V32.flags.writeable
+    Vc, Fc = check_arrays(V, F)
+    assert not np.shares_memory(Vc, V) and not np.shares_memory(Fc, F)
+    rows = np.array([5, 0, len(F) - 1, 17])
+    whole = V[F].mean(axis=1)
+    np.testing.assert_array_equal(FaceCentroids(V, F)[rows], whole[rows])

@@ -1,4 +1,5 @@
-"""Freed memory handed back to the operating system between the seam search's large steps.
+"""Freed memory handed back to the operating system between the large steps of a big mesh's
+unwrap (the seam search's rounds, the certificate's overlap test).
 
 numpy frees a large array at once, but glibc's allocator keeps what it freed from its heap for
 reuse, and after the first frees of large arrays it raises its mmap threshold (up to 32 MB), so
