@@ -237,8 +237,9 @@ PINNED_WIDE_GAPS = problem(k=40, kinds=["box", "sliver"], seed=77118, res=4096,
 
 # Found by this contract (2,000 deep, seed 31415926, after 1,334 examples), two at once:
 # - spyrrow panicked ("Offset resulted in an empty polygon") on 93 boxes and slivers at 64 px
-#   with no padding, their area a hair above the reach of nest.NARROW, and the PackError carried
-#   Rust's whole backtrace, many lines; they are now nested grown, as NARROW ones are;
+#   with no padding, their area a hair above the reach of the old nest.NARROW, and the PackError
+#   carried Rust's whole backtrace, many lines; they are now nested grown (as every outline
+#   is: spyrrow is given no separation of its own);
 # - the contract's own bound on float32's change of a chart's density used the chart's box, not
 #   its thinnest triangle: a sliver 4e-5 high in tile 1006 moved 1.8e-3 (bound now 2.3e-2).
 SLIVERS_EMPTY_OFFSET = problem(k=93, kinds=["box", "sliver"], huge_tiny=True, res=64, pad=0.0,

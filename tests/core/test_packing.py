@@ -272,3 +272,30 @@ def test_an_outline_passing_a_point_twice_is_nested_grown(capfd, apart):
     for i in range(len(parts)):
         for j in range(i):
             assert parts[i].distance(parts[j]) >= 0.01 * (1 - 1e-9)
+
+
+def test_outlines_finer_than_the_separation_nest_without_a_panic(capfd):
+    """A chart of OpenChessSet (49 points, 28 pairs of them closer together than the
+    separation): spyrrow's own offset of it by half the separation made a polygon with duplicate
+    vertices and panicked ("Simple polygon has non-consecutive duplicate vertices"); the panic was
+    caught and the charts nested again grown, but Rust printed its text on stderr. The outlines
+    now go to spyrrow grown by shapely, with no separation of spyrrow's: one solve, no panic
+    text, every outline in the strip and the placed outlines the separation apart (GEOS)."""
+    import os
+    import shapely
+    from bd_uv.packing.nest import nest, rotations
+    path = os.path.join(os.path.dirname(__file__), "..", "data", "chess_chart_outline.txt")
+    chart = np.loadtxt(path)
+    sep, height = 0.0008310183253844458, 0.03
+    box = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]]) * 0.004
+    outlines = [chart, box, box * 0.5, chart[::-1] * [-1, 1]]
+    pl = nest(outlines, height, sep, PackOptions(), 0.0)
+    assert "panicked" not in capfd.readouterr().err
+    placed = [xy @ rotations(a).T + s for xy, a, s in zip(outlines, pl.angle, pl.shift)]
+    edge = 0.5 * sep * (1 - 1e-6)
+    for q in placed:
+        assert q[:, 1].min() >= edge and q[:, 1].max() <= height - edge
+    polys = [shapely.Polygon(q) for q in placed]
+    for i in range(len(polys)):
+        for j in range(i):
+            assert polys[i].distance(polys[j]) >= sep * (1 - 1e-9)
