@@ -6,6 +6,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import dijkstra, minimum_spanning_tree
 
 from ..geometry import components
+from .compressed import compressed
 
 # Roots tried (farthest-point samples) for the loops of a closed chart of genus >= 1.
 ROOT_TRIES = 6
@@ -174,16 +175,6 @@ def _percentile10(x):
 
 def _csr(vals, rows, cols, n):
     """``sp.csr_matrix(sp.coo_array((vals, (rows, cols)), shape=(n, n)))`` (duplicates summed,
-    indices sorted), built directly: scipy's conversion and checks cost ~0.5 ms a matrix, and
-    the cut graph of a chart of a few dozen faces is mostly such fixed costs."""
-    key = rows.astype(np.int64) * n + cols
-    order = np.argsort(key, kind="stable")
-    key = key[order]
-    first = np.ones(len(key), dtype=bool)
-    first[1:] = key[1:] != key[:-1]
-    starts = np.flatnonzero(first)
-    data = np.add.reduceat(vals[order], starts) if len(starts) else vals[:0]
-    key = key[starts]
-    indptr = np.zeros(n + 1, dtype=np.int32)
-    np.cumsum(np.bincount(key // n, minlength=n), out=indptr[1:])
-    return sp.csr_matrix((data, (key % n).astype(np.int32), indptr), shape=(n, n))
+    indices sorted), built directly (``compressed``): the cut graph of a chart of a few dozen
+    faces is mostly scipy's fixed costs otherwise."""
+    return sp.csr_matrix(compressed(rows, cols, vals, n), shape=(n, n))

@@ -9,6 +9,7 @@ from ..geometry import components
 from ..solvers.threads import halves, map_blocks
 from .charts import spd_solver
 from . import cluster_fiedler
+from .compressed import compressed
 from ..trim import release_memory
 
 # Neither side of a split may hold less than this share of the chart's area.
@@ -215,7 +216,7 @@ def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12):
     shift = 1e-8 * (np.bincount(group, deg, g) / cnt) / np.maximum(total / cnt, 1e-300)
     idx = np.arange(k)
     # Upper triangle only (the factorisation reads no more).
-    K = sp.csc_matrix(_compressed(np.concatenate([pairs.max(axis=1), idx]),
+    K = sp.csc_matrix(compressed(np.concatenate([pairs.max(axis=1), idx]),
                                   np.concatenate([pairs.min(axis=1), idx]),
                                   np.concatenate([-w, deg + shift[group] * mass]), k),
                       shape=(k, k))
@@ -291,7 +292,7 @@ def _snap_many(side, pairs, cost, group, g, rings=BAND_RINGS):
     na, nb_ = node[pairs[:, 0]], node[pairs[:, 1]]
     on = (na >= 0) & (nb_ >= 0) & (na != nb_) & ((na < nb) | (nb_ < nb))
     pa, pb, cp = na[on], nb_[on], cap[on]
-    data, indices, indptr = _compressed(np.concatenate([pa, pb]), np.concatenate([pb, pa]),
+    data, indices, indptr = compressed(np.concatenate([pa, pb]), np.concatenate([pb, pa]),
                                         np.concatenate([cp, cp]), nb + 2)
     G = sp.csr_matrix((np.minimum(data, 2 ** 30).astype(np.int32), indices, indptr),
                       shape=(nb + 2, nb + 2))
@@ -315,24 +316,6 @@ def _snap_many(side, pairs, cost, group, g, rings=BAND_RINGS):
     out = side.copy()
     out[live] = new[:nb]
     return out
-
-
-def _compressed(major, minor, vals, n):
-    """Canonical compressed rows (or columns) of the n x n matrix with entries ``vals`` at
-    (``major``, ``minor``), duplicates summed in their given order: (data, indices, indptr) for
-    ``csr_matrix`` (``csc_matrix`` with rows as ``minor``), without scipy's COO conversion and
-    checks (a fixed cost of ~0.3 ms, paid several times per split)."""
-    key = major.astype(np.int64) * n + minor
-    order = np.argsort(key, kind="stable")
-    key = key[order]
-    first = np.ones(len(key), dtype=bool)
-    first[1:] = key[1:] != key[:-1]
-    starts = np.flatnonzero(first)
-    data = np.add.reduceat(vals[order], starts) if len(starts) else vals[:0]
-    key = key[starts]
-    indptr = np.zeros(n + 1, dtype=np.int32)
-    np.cumsum(np.bincount(key // n, minlength=n), out=indptr[1:])
-    return data, (key % n).astype(np.int32), indptr
 
 
 def _principal_axes(c, mass, offsets, group):
