@@ -240,7 +240,9 @@ def _stage(path, breakage, seed):
         counts.append(4)
     elif breakage == "zero-area island":   # a second grid beside, one of its polygons no area
         n = len(V)
-        hang = V[1] + (V[2] - V[1]) * rng.choice([0.5, 0.25])   # on the edge it hangs from
+        # on the edge it hangs from: at its first corner (no area at any precision) or inside
+        # it (a float32 sliver, which a packed layout may store certified)
+        hang = V[1] + (V[2] - V[1]) * rng.choice([0.0, 0.0, 0.5, 0.25])
         V = np.vstack([V, V + [10.0, 0.0, 0.0], [hang + [10.0, 0.0, 0.0]]])
         counts, idx = counts + counts + [3], idx + [v + n for v in idx] + [n + 2, n + 1, 2 * n]
     elif breakage in ("nan point", "inf point"):
@@ -326,7 +328,7 @@ def _check_stage(out, report):
          seams="needed")
 # an island the marked seams refused for one zero-area face was written as certified, its 16
 # faces with an area "zero-area" with borrowed UVs (jobs.zero_area_left_out)
-@example(breakage="zero-area island", seed=0, cut=None, flips=[], suffix=".usda", seams="none")
+@example(breakage="zero-area island", seed=1, cut=None, flips=[], suffix=".usda", seams="none")
 @given(breakage=st.sampled_from(USD_BREAKAGES), seed=st.integers(0, 2 ** 16),
        cut=st.one_of(st.none(), st.floats(0.0, 0.999)),
        flips=st.lists(st.tuples(st.floats(0, 0.999), st.integers(1, 255)), max_size=2),

@@ -208,7 +208,8 @@ def test_an_island_refused_whole_for_a_zero_area_face_is_not_written_as_certifie
     n = len(V)
     V = np.vstack([V, V + [10.0, 0.0, 0.0], [[11.5, 0.0, V[1, 2] / 2 + V[2, 2] / 2]]])
     polys += [[v + n for v in p] for p in polys] + [[n + 2, n + 1, 2 * n]]
-    V[2 * n] = (V[n + 1] + V[n + 2]) / 2               # on the edge it hangs from: no area
+    V[2 * n] = V[n + 1]          # a corner on another: no area at any precision (a point on
+    # the edge's middle keeps a float32 sliver, which a packed layout may store certified)
     counts = np.array([len(p) for p in polys])
     stage = Usd.Stage.CreateNew(str(tmp_path / "two.usda"))
     mesh = UsdGeom.Mesh.Define(stage, "/Two")
