@@ -23,6 +23,11 @@ AUTO_SECONDS_MAX = 20.0
 # 0.37 s and coverage 0.558 (8 seeds, load ~8); 0.6 s gave 0.586. Blender's exact-shape packer
 # took at least 4 s on every mesh measured (eight 6.4 s, fandisk's 3 charts 7.4 s)
 AUTO_SECONDS_MIN = 0.6
+# but no more than this a chart below six charts: Blender's exact shape takes 0.8-1.6 s a chart
+# on so few (quiet, 2026-11-27: fandisk's 4 charts 3.2 s, Blender's UV sphere's 3 charts 4.7 s),
+# and 0.6 s for fandisk's 4 was 0.217x its time; 0.4 s reached the same coverage (0.663-0.664,
+# 3 seeds), 0.3 s for the sphere's 3 charts too (0.713-0.717)
+AUTO_SECONDS_MIN_PER_CHART = 0.1
 
 
 @dataclass(frozen=True)
@@ -92,13 +97,15 @@ class PackOptions:
         """Seconds of nesting for ``charts`` charts of ``faces`` faces: ``solve_seconds``, or
         adaptive: ``AUTO_SECONDS_PER_ROOT`` sqrt(charts x faces), at most
         ``AUTO_SECONDS_PER_CHART`` a chart and ``AUTO_SECONDS_MAX``, at least
-        ``AUTO_SECONDS_MIN`` (0 for one chart)."""
+        ``AUTO_SECONDS_MIN`` or ``AUTO_SECONDS_MIN_PER_CHART`` a chart, the less (0 for one
+        chart)."""
         if self.solve_seconds is not None:
             return float(self.solve_seconds)
         if charts < 2:
             return 0.0
         return max(min(AUTO_SECONDS_PER_ROOT * float(np.sqrt(charts * max(faces, charts))),
-                       AUTO_SECONDS_PER_CHART * charts, AUTO_SECONDS_MAX), AUTO_SECONDS_MIN)
+                       AUTO_SECONDS_PER_CHART * charts, AUTO_SECONDS_MAX),
+                   min(AUTO_SECONDS_MIN, AUTO_SECONDS_MIN_PER_CHART * charts))
 
     @property
     def padding(self):
