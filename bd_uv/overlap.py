@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .geometry import cycle_labels
+from .segments import cross, touching_pairs
 
 
 @dataclass(frozen=True)
@@ -137,109 +138,6 @@ def _equal_next(col, order):
     return s[1:] == s[:-1]
 
 
-# Up to this many boundary segments every pair is tested (2016 pairs at 64) rather than the
-# candidates of an STRtree, whose set-up costs more than the pairs below it.
-ALL_PAIRS = 64
-
-
-def _cross(u, v):
-    return u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]
-
-
-def _orient(a, b, c):
-    """Twice the signed area of (a, b, c) and a bound on its rounding error (Shewchuk's
-    ``ccwerrboundA`` is 3.3e-16 times the same sum; 1e-15 leaves room)."""
-    l = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1])
-    r = (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-    return l - r, 1e-15 * (np.abs(l) + np.abs(r))
-
-
-def touching_pairs(p, q, group=None):
-    """Pairs of segments that intersect or touch, each pair once (i < j).
-
-    Bounding-box candidates come from ``shapely.STRtree`` (every pair, up to ``ALL_PAIRS``
-    segments); each candidate is decided by the four
-    orientation signs in float64 when all four are clear of their rounding error bound, and by
-    GEOS's robust predicate otherwise (touching, collinear and near-degenerate pairs). Segments
-    with an identical end touch.
-
-    Parameters
-    ----------
-    p, q : (b,2) float arrays, segment ends
-    group : (b,) int array, optional: only pairs within one group are wanted (the segments of
-        each island). Many islands stacked at (0, 0) would otherwise make every pair of islands a
-        candidate (1000 islands: 21 s); the candidates are then searched among the segments'
-        boxes moved apart group by group, and decided on the segments themselves.
-
-    Returns
-    -------
-    (k,2) int64
-    """
-    p = np.asarray(p, dtype=np.float64)
-    q = np.asarray(q, dtype=np.float64)
-    if len(p) < 2:
-        return np.zeros((0, 2), dtype=np.int64)
-    if len(p) <= ALL_PAIRS:
-        # Few segments (a small island): every pair's boxes are compared at once, no tree to
-        # build; the same candidates as the tree's, decided alike (segments whose boxes are
-        # apart cannot meet).
-        lo, hi = np.minimum(p, q), np.maximum(p, q)
-        # boxes that meet (touching included), as the tree's candidates; then one island's:
-        # the (b, b) table at once, its upper triangle read off (pairs i < j, by i then j)
-        x0, y0, x1, y1 = lo[:, 0], lo[:, 1], hi[:, 0], hi[:, 1]
-        keep = x0[:, None] <= x1[None, :]
-        keep &= x0[None, :] <= x1[:, None]
-        keep &= y0[:, None] <= y1[None, :]
-        keep &= y0[None, :] <= y1[:, None]
-        if group is not None:
-            g = np.asarray(group)
-            keep &= g[:, None] == g[None, :]
-        i, j = np.nonzero(np.triu(keep, 1))
-        meets = segments_meet(p, q, i, j)
-        return np.stack([i[meets], j[meets]], axis=1).astype(np.int64)
-    import shapely
-    geoms = shapely.linestrings(np.stack([p, q], axis=1))
-    if group is None:
-        boxes = geoms
-    else:  # boxes moved apart island by island: candidates only within one island
-        lo, hi = np.minimum(p, q), np.maximum(p, q)
-        span = float(np.max(hi) - np.min(lo)) + 1.0
-        pad = 1e-9 * span                      # far above the rounding of the moved boxes
-        off = np.asarray(group, dtype=np.float64) * (4.0 * span)
-        boxes = shapely.box(lo[:, 0] - pad + off, lo[:, 1] - pad, hi[:, 0] + pad + off,
-                            hi[:, 1] + pad)
-    i, j = shapely.STRtree(boxes).query(boxes)
-    keep = i < j
-    i, j = i[keep].astype(np.int64), j[keep].astype(np.int64)
-    meets = segments_meet(p, q, i, j, geoms)
-    return np.stack([i[meets], j[meets]], axis=1)
-
-
-def segments_meet(p, q, i, j, geoms=None):
-    """Do segments ``i`` and ``j`` (each (k,) int) of ``p, q`` (b,2) intersect or touch? (k,) bool.
-
-    Decided by the four orientation signs in float64 when all four are clear of their rounding
-    error bound, by GEOS's robust predicate otherwise; segments with an identical end touch.
-    ``geoms`` (b,) shapely linestrings of the segments, optional (made when needed)."""
-    import shapely
-    a, b, c, d = p[i], q[i], p[j], q[j]
-    shared = np.zeros(len(i), dtype=bool)
-    for x, y in ((a, c), (a, d), (b, c), (b, d)):
-        shared |= np.all(x == y, axis=1)
-    o1, e1 = _orient(a, b, c)
-    o2, e2 = _orient(a, b, d)
-    o3, e3 = _orient(c, d, a)
-    o4, e4 = _orient(c, d, b)
-    clear = (np.abs(o1) > e1) & (np.abs(o2) > e2) & (np.abs(o3) > e3) & (np.abs(o4) > e4)
-    meets = shared | (clear & (np.sign(o1) != np.sign(o2)) & (np.sign(o3) != np.sign(o4)))
-    unsure = ~shared & ~clear
-    if unsure.any():
-        if geoms is None:
-            geoms = shapely.linestrings(np.stack([p, q], axis=1))
-        meets[unsure] = shapely.intersects(geoms[i[unsure]], geoms[j[unsure]])
-    return meets
-
-
 def crossing_pairs(bd, pairs):
     """Which touching pairs of one island's segments are crossings.
 
@@ -261,7 +159,7 @@ def crossing_pairs(bd, pairs):
     a = np.where((share_pp | share_pq)[:, None], bd.q[i], bd.p[i])
     c = np.where((share_pp | share_qp)[:, None], bd.q[j], bd.p[j])
     da, dc = a - s, c - s
-    fold = (_cross(da, dc) == 0) & (np.einsum("ij,ij->i", da, dc) > 0)
+    fold = (cross(da, dc) == 0) & (np.einsum("ij,ij->i", da, dc) > 0)
     return (n_share == 0) | (n_share >= 2) | ((n_share == 1) & fold)
 
 
@@ -285,7 +183,7 @@ def _winding_ok(bd, loop, n_loops):
     """Per loop: does the faces' side of it have winding number 1? (k,) bool, k = n_loops."""
     if n_loops == 0:
         return np.zeros(0, dtype=bool)
-    area2 = np.bincount(loop, weights=_cross(bd.p, bd.q), minlength=n_loops)  # twice signed area
+    area2 = np.bincount(loop, weights=cross(bd.p, bd.q), minlength=n_loops)  # twice signed area
     positive = area2 > 0
     lisl = np.zeros(n_loops, dtype=np.int64)
     lisl[loop] = bd.island

@@ -13,7 +13,7 @@ are known, and its boundary half-edges in order along the one loop. From the cor
    starts: one closed polygon;
 3. the polygon is simple (``overlap.island_overlaps``, Lipman 2012, Theorems 5.1-5.2): no UV point
    twice (no pinch), no two consecutive segments folding back onto each other, no two others
-   meeting (their candidates by a sweep over x, decided by ``overlap.segments_meet``'s robust
+   meeting (their candidates by a sweep over x, decided by ``segments.segments_meet``'s robust
    predicates), and it winds counter-clockwise (the faces' side has winding number 1).
 A failure of any step is left to ``certify_islands`` (and the unwrap's ``overlap_certificate``,
 which cuts an overlapping island), so its reasons are worded in one place.
@@ -22,7 +22,7 @@ import numpy as np
 
 from ..certificate import RTOL, Certificate
 from ..metrics import _distortion, signed_uv_areas
-from ..overlap import segments_meet
+from ..segments import segments_meet
 
 
 def certify_disk(corner_uv, G, disk, C, rtol=RTOL):
@@ -88,7 +88,7 @@ def _simple_ccw_boundary(corner_uv, disk):
 
 def _star_shaped(p, q):
     """A sufficient test, the common case: seen from the mean of its points, every segment turns
-    counter-clockwise (``overlap._orient``'s sign, clear of its rounding bound) and the turns add
+    counter-clockwise (``segments._orient``'s sign, clear of its rounding bound) and the turns add
     up to one full turn. The segments then cover the directions from that point once each, so
     only consecutive ones meet, at their shared end: a simple polygon, wound counter-clockwise."""
     c = p.mean(axis=0)
@@ -127,10 +127,10 @@ def _simple_ccw(p, q):
 
 def _meet(p, q, i, j):
     """Does any segment i meet its segment j, segments with no end in common? The four
-    orientation signs (``overlap._orient``) when all are clear of their rounding bound, else
-    ``overlap.segments_meet``'s robust predicate."""
+    orientation signs (``segments._orient``) when all are clear of their rounding bound, else
+    ``segments.segments_meet``'s robust predicate."""
     # orientations of c and d against segment (a, b), of a and b against (c, d): (4, k) arrays
-    # of their points (p's rows, then q's), the arithmetic of overlap._orient
+    # of their points (p's rows, then q's), the arithmetic of segments._orient
     k, nb = len(i), len(p)
     ends = np.concatenate([p, q])
     first = np.concatenate([i, i, j, j])
