@@ -24,6 +24,7 @@ COMPONENT = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 512
 COMPONENT_TYPE = {np.dtype(v).str: k for k, v in COMPONENT.items()}
 WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
+MESHOPT = {"EXT_meshopt_compression", "KHR_meshopt_compression"}
 
 
 class GltfFile:
@@ -125,6 +126,10 @@ def read_gltf(path):
 def _buffer_bytes(path, i, buf, bin_chunk):
     uri = buf.get("uri")
     if uri is None:
+        if bin_chunk is None and MESHOPT & set(buf.get("extensions") or {}):
+            # A meshopt fallback buffer holds no bytes by design: its views are decoded from the
+            # compressed buffer. Each primitive reading one is refused by name (``gltf._refusal``).
+            return b""
         if bin_chunk is None:
             raise SceneFileError(f"{path}: buffer {i} has no uri and there is no GLB BIN chunk")
         return bytes(bin_chunk)

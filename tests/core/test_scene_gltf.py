@@ -165,6 +165,30 @@ def test_draco_primitive_is_refused_by_name(tmp_path, capsys):
     assert not (tmp_path / "o.gltf").exists()   # no mesh certified: nothing written at -o
 
 
+def test_meshopt_fallback_buffer_without_bytes_is_refused_by_name(tmp_path, capsys):
+    # EXT_meshopt_compression's fallback buffer has no uri and no bytes by design (gltf-transform
+    # writes BoxMeshopt.gltf so): the file is read, and the primitive is refused in the user's
+    # terms, not as "buffer 1 has no uri".
+    b, prim = _one_mesh(tmp_path)
+    b.write(str(tmp_path / "m.gltf"))
+    doc = json.loads((tmp_path / "m.gltf").read_text())
+    view = doc["accessors"][prim["indices"]]["bufferView"]
+    length = doc["bufferViews"][view]["byteLength"]
+    doc["buffers"].append({"byteLength": length,
+                           "extensions": {"EXT_meshopt_compression": {"fallback": True}}})
+    doc["bufferViews"][view].update(buffer=len(doc["buffers"]) - 1, byteOffset=0, extensions={
+        "EXT_meshopt_compression": {"buffer": 0, "byteOffset": 0, "byteLength": 4,
+                                    "mode": "TRIANGLES", "byteStride": 2, "count": 3}})
+    doc["extensionsUsed"] = doc["extensionsRequired"] = ["EXT_meshopt_compression"]
+    (tmp_path / "m.gltf").write_text(json.dumps(doc))
+    before = (tmp_path / "m.gltf").read_bytes()
+    assert main(["unwrap", str(tmp_path / "m.gltf"), "-o", str(tmp_path / "o.gltf")]) == 1
+    err = capsys.readouterr().err
+    assert "RockNode" in err and "'Rock'" in err and "meshopt" in err and "no uri" not in err
+    assert not (tmp_path / "o.gltf").exists()
+    assert (tmp_path / "m.gltf").read_bytes() == before
+
+
 @pytest.mark.parametrize("breakage,words", [
     (lambda d: d["accessors"][1].update(count=10**6),
      ["'Rock'", "node /RockNode", "primitive 0", "indices"]),
