@@ -21,6 +21,8 @@ WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
 class Builder:
     def __init__(self):
         self.blob = bytearray()
+        # buffers after the blob's (index 1, 2, ...): e.g. a meshopt fallback buffer, no bytes
+        self.extra_buffers = []
         self.doc = {"asset": {"version": "2.0", "generator": "bd-uv tests", "extras": {"k": 1}},
                     "buffers": [], "bufferViews": [], "accessors": []}
 
@@ -46,7 +48,7 @@ class Builder:
         doc = json.loads(json.dumps(self.doc))
         blob = bytes(self.blob) + b"\0" * ((-len(self.blob)) % 4)
         if glb:
-            doc["buffers"] = [{"byteLength": len(blob)}]
+            doc["buffers"] = [{"byteLength": len(blob)}] + self.extra_buffers
             js = json.dumps(doc).encode()
             js += b" " * ((-len(js)) % 4)
             body = (struct.pack("<II", len(js), 0x4E4F534A) + js
@@ -61,7 +63,7 @@ class Builder:
             with open(os.path.join(os.path.dirname(path), uri), "wb") as fh:
                 fh.write(blob)
             uri = uri.replace(" ", "%20")
-        doc["buffers"] = [{"uri": uri, "byteLength": len(blob)}]
+        doc["buffers"] = [{"uri": uri, "byteLength": len(blob)}] + self.extra_buffers
         with open(path, "w") as fh:
             json.dump(doc, fh)
 

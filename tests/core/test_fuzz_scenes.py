@@ -39,7 +39,7 @@ EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "40"))
 SEAMS = ("needed", "needed", "none", "uv", "auto")
 BREAKAGES = ("none", "index range", "position range", "index ctype", "position ctype",
              "sparse position", "no indices", "degenerate", "nan position", "view range",
-             "buffer short", "bad mode", "inf position")
+             "buffer short", "bad mode", "inf position", "meshopt", "draco")
 
 
 def _scene(breakage, copies, seed):
@@ -84,6 +84,18 @@ def _scene(breakage, copies, seed):
         b.doc["bufferViews"][acc[pos]["bufferView"]]["byteOffset"] = 10 ** 7
     elif breakage == "bad mode":
         prim["mode"] = int(rng.choice([0, 1, 5, 6, 9]))
+    elif breakage == "meshopt":   # indices in a meshopt fallback buffer: no uri, no bytes
+        view = acc[prim["indices"]]["bufferView"]
+        n = b.doc["bufferViews"][view]["byteLength"]
+        b.extra_buffers = [{"byteLength": n,
+                            "extensions": {"EXT_meshopt_compression": {"fallback": True}}}]
+        b.doc["bufferViews"][view].update(buffer=1, byteOffset=0, extensions={
+            "EXT_meshopt_compression": {"buffer": 0, "byteOffset": 0, "byteLength": 4,
+                                        "mode": "TRIANGLES", "byteStride": 2, "count": n // 2}})
+        b.doc["extensionsUsed"] = b.doc["extensionsRequired"] = ["EXT_meshopt_compression"]
+    elif breakage == "draco":
+        prim["extensions"] = {"KHR_draco_mesh_compression": {
+            "bufferView": acc[pos]["bufferView"], "attributes": {"POSITION": 0}}}
     b.doc["meshes"] = [{"name": "Rock", "primitives": [prim]}]
     b.doc["nodes"] = [{"name": f"RockNode{i}", "mesh": 0, "translation": [2.0 * i, 0, 0]}
                       for i in range(copies)]
@@ -177,6 +189,12 @@ def _check_written(out, report):
 @example(breakage="none", copies=21, glb=True, seed=0, cut=None,
          flips=[(0.849154883563951, 16), (0.849154883563951, 96)], spoil="scene",
          seams="needed")
+# a meshopt fallback buffer (no uri, no bytes by design, as glTF-Transform writes one) was the
+# whole file refused as "buffer 1 has no uri", not its primitive by name
+@example(breakage="meshopt", copies=2, glb=True, seed=0, cut=None, flips=[], spoil="scene",
+         seams="needed")
+@example(breakage="meshopt", copies=1, glb=False, seed=0, cut=None, flips=[], spoil="its .bin",
+         seams="auto")
 @given(breakage=st.sampled_from(BREAKAGES), copies=st.integers(1, 40), glb=st.booleans(),
        seed=st.integers(0, 2 ** 16), cut=st.one_of(st.none(), st.floats(0.0, 0.999)),
        flips=st.lists(st.tuples(st.floats(0, 0.999), st.integers(1, 255)), max_size=3),
@@ -208,6 +226,11 @@ def test_scene_files_never_crash_or_write_an_uncertified_result(breakage, copies
             _check_written(out, json.loads(open(rep).read()))
             assert any(m.get("output") for m in json.loads(open(rep).read())["meshes"]), \
                 "a file at -o holds at least one certified mesh"
+        if breakage in ("meshopt", "draco") and not flips and cut is None \
+                and spoil != "its .bin gone":
+            # the compressed primitive is refused by name, nothing is written
+            assert rc == 1 and not os.path.exists(out), msg
+            assert "RockNode" in msg and {"meshopt": "meshopt", "draco": "Draco"}[breakage] in msg
 
 
 USD_BREAKAGES = ("none", "polygon counts", "index range", "counts sum", "nan point", "empty stage",
