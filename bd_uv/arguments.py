@@ -107,8 +107,10 @@ def add_scene_options(p):
     p.add_argument("--uv-set", type=int, default=0, metavar="N",
                    help="glTF: write the UVs to TEXCOORD_N (default 0; e.g. 1 for a lightmap "
                         "beside the artist's UVs)")
-    p.add_argument("--uv-name", default="st", metavar="NAME",
-                   help="USD: write the UVs to primvars:NAME (default st)")
+    p.add_argument("--uv-name", default=None, metavar="NAME",
+                   help="USD: read and write the UVs as primvars:NAME (default: the primvar "
+                        "the mesh's materials read UVs from, else its one UV primvar, e.g. "
+                        "map1 from Maya, else st)")
 
 
 def scene_option_misuse(args, paths):
@@ -117,7 +119,7 @@ def scene_option_misuse(args, paths):
     low = [p.lower() for p in paths]
     if args.uv_set != 0 and not any(p.endswith((".gltf", ".glb")) for p in low):
         return "--uv-set applies to glTF files (.gltf, .glb) only"
-    if args.uv_name != "st" and not any(p.endswith((".usd", ".usda", ".usdc", ".usdz"))
+    if args.uv_name is not None and not any(p.endswith((".usd", ".usda", ".usdc", ".usdz"))
                                         for p in low):
         return "--uv-name applies to USD files (.usd, .usda, .usdc, .usdz) only"
     if args.uv_set < 0:

@@ -96,7 +96,8 @@ class JobOptions:
     margin : float, the shelf packing margin in the unit square (without ``pack_options``)
     pack_options : bd_uv.PackOptions or None, pack with the atlas packer (the command line's)
     uv_set : int, where a glTF scene's UVs go: ``TEXCOORD_<uv_set>`` (``bd_uv.scenes``)
-    uv_name : str, where a USD scene's UVs go: ``primvars:<uv_name>``
+    uv_name : str or None, where a USD scene's UVs go: ``primvars:<uv_name>``; None: the
+        primvar each mesh's materials read (``bd_uv.scenes.usd_uv_name``), else ``st``
     """
     unwrap: UnwrapOptions = field(default_factory=UnwrapOptions)
     pack: bool = False
@@ -104,7 +105,7 @@ class JobOptions:
     margin: float = MARGIN
     pack_options: PackOptions = None
     uv_set: int = 0
-    uv_name: str = "st"
+    uv_name: str = None
 
     @classmethod
     def of(cls, options):
@@ -131,7 +132,7 @@ class JobOptions:
     def as_dict(self):
         """Every option, flat and JSON-able (the report's "options", the journal's hash)."""
         scene = {"uv_set": self.uv_set, "uv_name": self.uv_name} if (
-            self.uv_set, self.uv_name) != (0, "st") else {}   # as before for other files
+            self.uv_set, self.uv_name) != (0, None) else {}   # as before for other files
         out = {**self.unwrap.as_dict(), "pack": self.pack, "cut": self.cut}
         if self.pack_options is None:
             out["margin"] = self.margin

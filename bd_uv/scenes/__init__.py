@@ -27,7 +27,7 @@ def blender_command(path):
             f"blender -b {path} --python scripts/bd_uv_batch.py -- --output OUT_DIR/{stem}.blend")
 
 
-def read_scene(path, uv_set=0, uv_name="st"):
+def read_scene(path, uv_set=0, uv_name=None):
     """Read a glTF or USD file into a scene (``GltfScene`` or ``UsdScene``).
 
     Raises

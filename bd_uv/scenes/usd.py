@@ -5,8 +5,9 @@ Reading: each mesh prim of the composed stage (references, payloads and variant 
 resolved) in its own space; polygons are fan-triangulated for the solve, and the triangles of
 one polygon are one ``face_group`` so that seams run only along polygon edges, never through a
 quad. Holes (``holeIndices``) are not unwrapped. Time-sampled points: the rest pose (the
-default value, else the first time sample, with a warning). The existing primvar (``st``, or the
-name asked) gives the seams, as an OBJ's ``vt`` do.
+default value, else the first time sample, with a warning). The UVs are read from and written to
+the primvar named by ``--uv-name``, else the one the mesh's materials read (``usd_uv_name``:
+``map1`` for a Maya export), else ``st``; the existing UVs give the seams, as an OBJ's ``vt`` do.
 
 Writing: the input layer is never edited. The output's root layer is a copy of the input's root
 layer with every relative asset path (sublayers, references, payloads, textures) re-anchored so it
@@ -26,6 +27,7 @@ from ..errors import SceneFileError
 from ..meshio import Mesh
 from ..scheduling.atomic import atomic_path
 from .model import SceneMesh
+from .usd_uv_name import uv_primvar
 
 
 def _pxr():
@@ -62,7 +64,7 @@ class UsdScene:
         self.path, self.uv_name, self.meshes, self._parts = path, uv_name, meshes, parts
 
     @classmethod
-    def read(cls, path, uv_name="st"):
+    def read(cls, path, uv_name=None):
         Sdf, Usd, UsdGeom, _, _ = _pxr()
         if not os.path.isfile(path):
             raise SceneFileError(f"{path}: no such file")
@@ -179,16 +181,17 @@ class UsdScene:
         prim = stage.GetPrimAtPath(sm.name)
         api = UsdGeom.PrimvarsAPI(prim)
         warnings = []
-        old = api.GetPrimvar(self.uv_name)
+        name = part["uv_name"]
+        old = api.GetPrimvar(name)
         if old and old.GetTypeName() != Sdf.ValueTypeNames.TexCoord2fArray:
-            warnings.append(f"primvars:{self.uv_name} was {old.GetTypeName()}; it becomes "
+            warnings.append(f"primvars:{name} was {old.GetTypeName()}; it becomes "
                             "texCoord2f[]")
             prim.RemoveProperty(old.GetAttr().GetName())
-        pv = api.CreatePrimvar(self.uv_name, Sdf.ValueTypeNames.TexCoord2fArray,
+        pv = api.CreatePrimvar(name, Sdf.ValueTypeNames.TexCoord2fArray,
                                UsdGeom.Tokens.faceVarying)
         pv.SetInterpolation(UsdGeom.Tokens.faceVarying)
         if pv.GetAttr().GetNumTimeSamples() or pv.GetIndicesAttr().GetNumTimeSamples():
-            warnings.append(f"primvars:{self.uv_name} had time samples; they are blocked so "
+            warnings.append(f"primvars:{name} had time samples; they are blocked so "
                             "the new UVs hold at every time")
             pv.GetAttr().Block()
             pv.GetIndicesAttr().Block()
@@ -250,6 +253,10 @@ def _mesh_arrays(mesh, where, uv_name, Usd):
     """(Mesh, write-back part, info, warnings) of one UsdGeom.Mesh."""
     from pxr import UsdGeom
     warnings = []
+    if not uv_name:   # the primvar the mesh's materials read its UVs from (usd_uv_name)
+        uv_name, note = uv_primvar(mesh.GetPrim())
+        if note:
+            warnings.append(note)
     points_attr = mesh.GetPointsAttr()
     P = points_attr.Get(Usd.TimeCode.Default())
     if P is None and points_attr.GetNumTimeSamples():
@@ -283,10 +290,11 @@ def _mesh_arrays(mesh, where, uv_name, Usd):
         T = T[:, ::-1].copy()                    # the front face winds clockwise
     F = indices[T]
     corner_uv = _existing_uv(mesh, uv_name, T, indices, len(V), where)
-    info = {"prim": str(mesh.GetPath()), "polygons": int(len(counts)),
+    info = {"prim": str(mesh.GetPath()), "uv_name": uv_name, "polygons": int(len(counts)),
             "holes": int(len(holes)),
             "subdivision": str(mesh.GetSubdivisionSchemeAttr().Get())}
-    part = {"T": T, "poly": poly, "n_face_vertices": len(indices), "warnings": warnings}
+    part = {"T": T, "poly": poly, "n_face_vertices": len(indices), "warnings": warnings,
+            "uv_name": uv_name}
     # one prim is one object; each face's material from its "materialBind" GeomSubset
     labels = {"object": np.zeros(len(F), np.int64),
               "material": _subset_materials(mesh, len(counts))[poly]}

@@ -56,10 +56,10 @@ def _check_everything_kept(stage_in, stage_out):
     return n
 
 
-def _check_st(stage, path, bound):
+def _check_st(stage, path, bound, name="st"):
     """Certify the stored primvar from the file, with this test's own fan triangulation."""
     mesh = UsdGeom.Mesh(stage.GetPrimAtPath(path))
-    pv = UsdGeom.PrimvarsAPI(mesh.GetPrim()).GetPrimvar("st")
+    pv = UsdGeom.PrimvarsAPI(mesh.GetPrim()).GetPrimvar(name)
     assert pv.GetTypeName() == Sdf.ValueTypeNames.TexCoord2fArray
     assert pv.GetInterpolation() == UsdGeom.Tokens.faceVarying and pv.IsIndexed()
     assert pv.GetAttr().GetNumTimeSamples() == 0
@@ -383,3 +383,83 @@ def test_uv_name_writes_another_primvar_and_keeps_st(tmp_path):
     assert p_out.GetPrimvar("st").GetInterpolation() == UsdGeom.Tokens.vertex
     lm = p_out.GetPrimvar("lightmap")
     assert lm.GetInterpolation() == UsdGeom.Tokens.faceVarying and lm.IsIndexed()
+
+
+def _grid_stage(path, primvars, reads=None):
+    """One quad grid at /World/Grid holding faceVarying texCoord2f[] ``primvars`` (name: UVs
+    per face-vertex, two islands: the grid's halves apart), bound to a material whose
+    UsdPrimvarReader_float2 reads ``reads`` through an input of the material (as Maya's and
+    Houdini's exports connect it), or no material."""
+    V, counts, idx = quad_grid()
+    stage = Usd.Stage.CreateNew(path)
+    mesh = UsdGeom.Mesh.Define(stage, "/World/Grid")
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(V.astype(np.float32)))
+    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(counts.astype(np.int32)))
+    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(idx.astype(np.int32)))
+    uv = V[idx, :2].astype(np.float32)
+    poly = np.repeat(np.arange(len(counts)), counts)
+    right = np.bincount(poly, V[idx, 0]) / counts > 0.5
+    uv[right[poly], 0] += 3.0                  # the right half's polygons apart: a seam
+    for name in primvars:
+        pv = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar(name, Sdf.ValueTypeNames.TexCoord2fArray,
+                                                      UsdGeom.Tokens.faceVarying)
+        pv.Set(Vt.Vec2fArray.FromNumpy(uv))
+    if reads:
+        mat = UsdShade.Material.Define(stage, "/World/Looks/Wood")
+        frame = mat.CreateInput("frame:stPrimvarName", Sdf.ValueTypeNames.Token)
+        frame.Set(reads)
+        reader = UsdShade.Shader.Define(stage, "/World/Looks/Wood/uv")
+        reader.CreateIdAttr("UsdPrimvarReader_float2")
+        reader.CreateInput("varname", Sdf.ValueTypeNames.Token).ConnectToSource(frame)
+        UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(mat)
+    stage.GetRootLayer().Save()
+    return uv
+
+
+@pytest.mark.parametrize("primvars,reads,written", [
+    (["map1"], None, "map1"),                 # a Maya export: its one UV primvar
+    (["st", "uvA"], "uvA", "uvA"),            # the primvar its material reads
+    (["map1"], "st0", "st0"),                 # what the material reads, though not held yet
+])
+def test_new_uvs_go_where_the_mesh_keeps_and_its_material_reads_them(tmp_path, primvars,
+                                                                      reads, written):
+    src, out, rep = str(tmp_path / "in.usda"), str(tmp_path / "o.usda"), tmp_path / "r.json"
+    old = _grid_stage(src, primvars, reads)
+    before = _tree_digest(tmp_path)
+    assert main(["unwrap", src, "-o", out, "--report", str(rep)]) == 0
+    assert _tree_digest(tmp_path) == {**before, **{k: v for k, v in _tree_digest(tmp_path)
+                                                   .items() if k not in before}}
+    (entry,) = json.loads(rep.read_text())["meshes"]
+    assert entry["uv_name"] == written
+    stage = Usd.Stage.Open(out)
+    _check_st(stage, "/World/Grid", entry["bound_certified"], written)
+    api = UsdGeom.PrimvarsAPI(stage.GetPrimAtPath("/World/Grid"))
+    for name in set(primvars) - {written}:        # the others keep their values, none is added
+        assert np.array_equal(np.asarray(api.GetPrimvar(name).Get()), old)
+    assert sorted(pv.GetPrimvarName() for pv in api.GetPrimvarsWithValues()) == sorted(
+        set(primvars) | {written})
+    # the file's own UVs (the grid's two halves apart) gave the seams: two islands
+    assert len(entry["islands"]) == (2 if written in primvars else 1)
+
+
+def test_seams_uv_reads_a_maya_map1(tmp_path, capsys):
+    src, out = str(tmp_path / "in.usda"), str(tmp_path / "o.usda")
+    _grid_stage(src, ["map1"])
+    assert main(["unwrap", src, "-o", out, "--seams", "uv", "--report",
+                 str(tmp_path / "r.json")]) == 0
+    (entry,) = json.loads((tmp_path / "r.json").read_text())["meshes"]
+    assert entry["uv_name"] == "map1" and len(entry["islands"]) == 2
+    # named explicitly, a primvar the mesh lacks still means no UVs to cut along
+    assert main(["unwrap", src, "-o", str(tmp_path / "p.usda"), "--seams", "uv",
+                 "--uv-name", "st"]) == 1
+    assert "no UVs" in capsys.readouterr().err
+
+
+def test_several_uv_primvars_and_no_material_write_st_and_say_so(tmp_path):
+    src, out, rep = str(tmp_path / "in.usda"), str(tmp_path / "o.usda"), tmp_path / "r.json"
+    _grid_stage(src, ["uvA", "uvB"])
+    assert main(["unwrap", src, "-o", out, "--report", str(rep)]) == 0
+    (entry,) = json.loads(rep.read_text())["meshes"]
+    assert entry["uv_name"] == "st"
+    assert any("uvA, uvB" in w and "--uv-name" in w for w in entry["warnings"])
+    _check_st(Usd.Stage.Open(out), "/World/Grid", entry["bound_certified"])
