@@ -105,7 +105,7 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
     w : (k,) unit complex frames; kappa : float, the cones' aperture; C : float, the target
     watch : ``bound_search``'s watch of a target (``seen(D, it, C) -> (better, stop)``, ``best``)
     alpha : float, the over-relaxation
-    count : callable(), called once an iteration (the search's iteration count)
+    count : callable(n), called once with the number of iterations run (the search's count)
 
     Returns
     -------
@@ -122,7 +122,7 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
     ru, rv = rhs[:nf], rhs[nf:]
     GU = np.empty((4, k))
     flat_gu = GU.reshape(-1)
-    np.copyto(flat_gu, lift_fixed)
+    flat_gu[...] = lift_fixed
     lift.lift(data, x, flat_gu)
     # ADMM with the multipliers lam = GU - T folded in: T is the last least-squares target, the
     # projection's point is GU + lam = 2 GU - T, and the next target z - lam = alpha P + (1 -
@@ -181,11 +181,11 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
             P -= GU                             # the target T + alpha (P - GU)
             P *= alpha_
             T += P
-            np.copyto(rhs, rhs_fixed)
+            rhs[...] = rhs_fixed               # (np.copyto's Python wrapper: ~1 us more)
             lift.rhs(wdata, flat_t, rhs)
             xu[...] = solve(ru)
             xv[...] = solve(rv)
-            np.copyto(flat_gu, lift_fixed)
+            flat_gu[...] = lift_fixed
             lift.lift(data, x, flat_gu)
-            count()
+    count(it)                                   # the steps run: one before each measure
     return kept, watch.best
