@@ -249,8 +249,8 @@ class BoundSearch:
         U[0, s.free], U[1, s.free] = best[:nf], best[nf:]
         return U, D, D <= C
 
-    def _count(self):
-        self.iterations += 1
+    def _count(self, n):
+        self.iterations += n
 
     def search(self, u, frames_of=None, report=None, deadline=None, cancel=None):
         """The least max distortion reached from the flip-free map u (nv,) complex.

@@ -18,6 +18,7 @@ calls:
 """
 import functools
 import itertools
+import math
 
 import numpy as np
 import scipy.sparse as sp
@@ -104,7 +105,7 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
     w : (k,) unit complex frames; kappa : float, the cones' aperture; C : float, the target
     watch : ``bound_search``'s watch of a target (``seen(D, it, C) -> (better, stop)``, ``best``)
     alpha : float, the over-relaxation
-    count : callable(), called once an iteration (the search's iteration count)
+    count : callable(n), called once with the number of iterations run (the search's count)
 
     Returns
     -------
@@ -121,7 +122,7 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
     ru, rv = rhs[:nf], rhs[nf:]
     GU = np.empty((4, k))
     flat_gu = GU.reshape(-1)
-    np.copyto(flat_gu, lift_fixed)
+    flat_gu[...] = lift_fixed
     lift.lift(data, x, flat_gu)
     # ADMM with the multipliers lam = GU - T folded in: T is the last least-squares target, the
     # projection's point is GU + lam = 2 GU - T, and the next target z - lam = alpha P + (1 -
@@ -132,7 +133,11 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
     sq = np.empty_like(GU)
     nb, t, f = np.empty(k), np.empty(k), np.empty(k)
     p0, pb, sb = P[0], P[2:], sq[2:]
-    kc = kappa * c
+    s0, s1, s2, s3 = sq                 # rows as views made once (~0.15 us an index)
+    # the constants as 0-d arrays: a Python float operand costs a ufunc call ~2-3 us of
+    # conversion at these sizes (six such calls an iteration), a 0-d array none; the same bits
+    kappa_, kc, c_, alpha_ = (np.array(v) for v in (kappa, kappa * c, c, alpha))
+    zero, one = np.zeros(()), np.ones(())
     kept = None
     with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
         for it in itertools.count():
@@ -141,14 +146,14 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
             if it:
                 # max |beta|^2 / |alpha|^2 (rotation-invariant), as bound_search's
                 np.multiply(GU, GU, out=sq)
-                np.add(sq[2], sq[3], out=nb)
-                np.add(sq[0], sq[1], out=t)
+                np.add(s2, s3, out=nb)
+                np.add(s0, s1, out=t)
                 np.divide(nb, t, out=nb)
                 r = float(np.maximum.reduce(nb))     # (ndarray.max's wrapper: ~2 us)
                 if not r < 1.0:
                     D = np.inf
                 else:
-                    r = np.sqrt(r)
+                    r = math.sqrt(r)
                     D = (1.0 + r) / (1.0 - r)
                 better, stop = watch.seen(D, it, C)
                 if better:
@@ -162,25 +167,25 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
             # beta scales by min(1, kappa t / ((1 + kappa^2) |beta|)) (fmin: 1 where |beta| = 0),
             # x becomes max(x, t / (1 + kappa^2)) (no larger than x exactly inside the cone)
             np.multiply(pb, pb, out=sb)
-            np.add(sb[0], sb[1], out=nb)
+            np.add(s2, s3, out=nb)
             np.sqrt(nb, out=nb)
-            np.multiply(nb, kappa, out=t)
+            np.multiply(nb, kappa_, out=t)
             t += p0
-            np.maximum(t, 0.0, out=t)
+            np.maximum(t, zero, out=t)
             np.multiply(t, kc, out=f)
             np.divide(f, nb, out=f)
-            np.fmin(f, 1.0, out=f)
+            np.fmin(f, one, out=f)
             pb *= f
-            t *= c
+            t *= c_
             np.maximum(p0, t, out=p0)
             P -= GU                             # the target T + alpha (P - GU)
-            P *= alpha
+            P *= alpha_
             T += P
-            np.copyto(rhs, rhs_fixed)
+            rhs[...] = rhs_fixed               # (np.copyto's Python wrapper: ~1 us more)
             lift.rhs(wdata, flat_t, rhs)
             xu[...] = solve(ru)
             xv[...] = solve(rv)
-            np.copyto(flat_gu, lift_fixed)
+            flat_gu[...] = lift_fixed
             lift.lift(data, x, flat_gu)
-            count()
+    count(it)                                   # the steps run: one before each measure
     return kept, watch.best
