@@ -62,6 +62,12 @@ def add_solver_options(p):
                         f"--seams auto: {AUTO_SEAMS_STRETCH:g} by default; --seams needed (the "
                         "default): only the charts it cuts, "
                         f"{AUTO_SEAMS_STRETCH:g} by default")
+    p.add_argument("--no-atlas-cuts", action="store_true",
+                   help="where seams are added (--seams needed or auto): only the seams the "
+                        "charts' certificate needs; by default a chart the search made that alone "
+                        "caps the atlas's coverage (a torus's band, a long strip) is also cut in "
+                        "two where both pieces pass, and the report's atlas_cuts lists those "
+                        "seams. Marked seams' islands are never cut for the atlas")
     p.add_argument("--boundary", choices=BOUNDARIES, default=DEFAULTS.boundary,
                    help="each island's outer boundary: free (default), on a circle, on a rectangle "
                         "(corners at the four boundary vertices nearest a right angle, or four "
@@ -94,7 +100,8 @@ def unwrap_options_of(args):
         raise_bound=not args.no_raise, bound_limit=args.bound_limit, cone=args.cone,
         time_budget=args.time_budget if args.bound == "auto" else None,
         stretch=args.stretch, boundary=args.boundary,
-        overlap=getattr(args, "overlap", DEFAULTS.overlap))
+        overlap=getattr(args, "overlap", DEFAULTS.overlap),
+        atlas_cuts=not args.no_atlas_cuts)
 
 
 def solver_kwargs(args):

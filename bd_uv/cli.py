@@ -5,6 +5,7 @@ one line per problem on stderr. The JSON report has the shape documented in READ
 """
 import argparse
 import contextlib
+import dataclasses
 import json
 import os
 import sys
@@ -27,6 +28,7 @@ from .progress import TerminalProgress
 from .scenes import BLENDER_SUFFIXES, GLTF_SUFFIXES, SCENE_SUFFIXES, USD_SUFFIXES, read_scene
 from .scheduling.atomic import atomic_path
 from .seams import unwrap_auto
+from .seams.pack_shape import atlas_cuts_of
 from .seams.needed import AUTO_BOUND
 
 
@@ -184,7 +186,9 @@ def _print_needed(res, options, output):
     print(f"seams: {n} added, only on islands that could not be certified as they were (their "
           f"charts at C = {min(float(options.bound), AUTO_BOUND):g}, stretch <= "
           f"{options.seams_stretch:g})" + (f"; they are UV discontinuities of {output} and "
-                                          "\"seams_added\" in the report" if n else ""))
+                                          "\"seams_added\" in the report" if n else "")
+          + (f"; {atlas_line(res.atlas_cuts, options)}" if n and res.atlas_cuts is not None
+             else ""))
 
 
 def auto_seams(mesh, seams, options, progress=None):
@@ -193,12 +197,23 @@ def auto_seams(mesh, seams, options, progress=None):
     optional."""
     res, added, info = unwrap_auto(mesh.V, mesh.F, seams=seams, bound=options.bound,
                                    stretch=options.seams_stretch, method=options.method,
-                                   frames=options.frames, cone=options.cone, progress=progress)
+                                   frames=options.frames, cone=options.cone, progress=progress,
+                                   atlas_cuts=options.atlas_cuts)
+    res = dataclasses.replace(res, seams_added=added, atlas_cuts=atlas_cuts_of(info))
     print(f"seams auto: {info['charts']} charts, {len(added)} edges added, seam length "
           f"{info['seam_length']:.4g} ({100 * info['seam_length'] / info['edge_length']:.2f}% of "
           f"all edge length), max stretch {max(info['max_stretch'], default=1.0):.3f} <= "
-          f"{options.seams_stretch:g}")
+          f"{options.seams_stretch:g}; {atlas_line(res.atlas_cuts, options)}")
     return res
+
+
+def atlas_line(atlas, options):
+    """What the atlas cuts (``UnwrapResult.atlas_cuts``) added, for the report lines."""
+    if not options.atlas_cuts:
+        return "no atlas cuts (--no-atlas-cuts)"
+    return (f"{atlas['cuts']} atlas cut(s), {len(atlas['seams'])} edges of length "
+            f"{atlas['length']:.4g} (charts cut in two for the packing: \"atlas_cuts\" in the "
+            "report; --no-atlas-cuts for none)")
 
 
 def _print_report(name, islands, layout, seconds, args, out):

@@ -69,6 +69,12 @@ class UnwrapOptions:
         ``seams_mode="marked"``
     overlap : "cut" | "fail", an island whose UVs lie over themselves: cut into overlap-free
         pieces, or failed
+    atlas_cuts : bool, where seams are added (``adds_seams``): also bisect a chart the search
+        made where it alone caps the atlas's coverage (a torus's band, a long strip:
+        ``bd_uv.seams.pack_shape``), never an island the given seams alone bound; the result's
+        ``atlas_cuts`` says which seams are for the atlas. False: only the seams the charts'
+        certificate needs (minimal seams); refused with ``seams_mode="marked"``, which adds no
+        seams
 
     Raises
     ------
@@ -86,6 +92,7 @@ class UnwrapOptions:
     stretch: Optional[float] = None
     boundary: str = "free"
     overlap: str = "cut"
+    atlas_cuts: bool = True
 
     def __post_init__(self):
         _one_of("seams_mode", self.seams_mode, SEAMS_MODES)
@@ -107,6 +114,12 @@ class UnwrapOptions:
                               f"None, got {self.time_budget!r}")
         _one_of("boundary", self.boundary, BOUNDARIES)
         _one_of("overlap", self.overlap, OVERLAPS)
+        if not isinstance(self.atlas_cuts, bool):
+            raise OptionError("atlas_cuts", f"atlas_cuts must be True or False, got "
+                              f"{self.atlas_cuts!r}")
+        if not self.atlas_cuts and not self.adds_seams:
+            raise OptionError("atlas_cuts", "atlas_cuts=False applies where seams are added "
+                              "(seams_mode 'needed' or 'auto'); seams_mode='marked' adds none")
         if self.boundary != "free" and self.bound == "auto":
             raise OptionError("boundary", f"boundary={self.boundary!r} needs a numeric bound C "
                               "(bound='auto' minimises C with a free boundary only)")

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..bd_uv.seams import edge_table, unwrap_auto
+from ..bd_uv.seams.pack_shape import atlas_cuts_of
 
 # Rounds of giving split polygons to one chart and certifying the charts again.
 REPAIR_ROUNDS = 3
@@ -42,12 +43,16 @@ class AutoSeams:
         Islands of ``result``.
     notes : tuple of str
         What was repaired before solving (Seams "Add Where Needed": ``needed_seams.solve``).
+    atlas_cuts : dict or None
+        Of ``added``, the seams cut for the atlas (``bd_uv.seams.pack_shape``): ``cuts``,
+        ``length``, ``seams`` (vertex pairs into the batch's V), as ``UnwrapResult.atlas_cuts``.
     """
 
     result: object
     added: np.ndarray
     charts: int
     notes: tuple = ()
+    atlas_cuts: dict = None
 
 
 def split_polygons(face_island, tri_poly):
@@ -134,7 +139,7 @@ def _fail_torn(result, tri_loops):
 
 
 def solve(V, F, *, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0, face_groups=None,
-          method="lscm", frames="auto", progress=None, cancel=None):
+          method="lscm", frames="auto", atlas_cuts=True, progress=None, cancel=None):
     """Unwrap with seams added where needed, every Blender polygon kept in one chart.
 
     Parameters
@@ -147,6 +152,9 @@ def solve(V, F, *, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0, face
     stretch : float, S (every chart's singular values within [1/S, S], section 6.3)
     face_groups : (m,) int, optional, material of each triangle: seams prefer their boundaries
     method, frames, progress, cancel : as for ``bd_uv.unwrap``
+    atlas_cuts : bool, the search may cut a chart it made in two where it alone caps the
+        atlas's coverage (``UnwrapOptions.atlas_cuts``; the first pass, whose charts the second
+        keeps)
 
     Returns
     -------
@@ -170,9 +178,9 @@ def solve(V, F, *, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0, face
     Fc, order, poly = canonical_triangles(V, F, tri_poly, np.asarray(tri_loops, np.int64))
     search = dict(options, polygons=poly,
                   face_groups=None if face_groups is None else np.asarray(face_groups)[order])
-    _, found, _ = unwrap_auto(V, Fc, seams=seams, **search)
+    _, found, info = unwrap_auto(V, Fc, seams=seams, atlas_cuts=atlas_cuts, **search)
     keep = np.concatenate([seams, found]) if len(found) else seams
-    result, added, _ = unwrap_auto(V, F, seams=keep, **options)
+    result, added, _ = unwrap_auto(V, F, seams=keep, atlas_cuts=False, **options)
     added = np.concatenate([found, added]) if len(added) else found
     # The marked seams are exactly where the UVs are cut: the seams added (also those inside a
     # chart, e.g. a handle's cut) and the real edges between charts.
@@ -182,7 +190,8 @@ def solve(V, F, *, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0, face
     cut[inner] |= island[E.faces[inner, 0]] != island[E.faces[inner, 1]]
     added = E.ends[cut & ~_diagonals(E, tri_poly) & ~marked]
     result = _fail_torn(result, np.asarray(tri_loops, np.int64))
-    return AutoSeams(result, np.asarray(added, np.int64).reshape(-1, 2), len(result.islands))
+    return AutoSeams(result, np.asarray(added, np.int64).reshape(-1, 2), len(result.islands),
+                     atlas_cuts=atlas_cuts_of(info))
 
 
 def canonical_triangles(V, F, tri_poly, tri_loops):

@@ -160,8 +160,9 @@ def polygon_ids(batch):
     return dict(tri_poly=batch.tri_polygons, tri_loops=np.concatenate(tri_loops))
 
 
-def auto_arguments(batch, *, method, bound, minimise, stretch, frames):
-    """Positional and keyword arguments of :func:`auto_seams.solve` (Seams "Add Where Needed").
+def auto_arguments(batch, *, method, bound, minimise, stretch, frames, atlas_cuts=True):
+    """Positional and keyword arguments of :func:`auto_seams.solve` (Seams "Add Where Needed");
+    ``atlas_cuts`` as ``UnwrapOptions.atlas_cuts`` (the operator's Atlas Cuts).
 
     Raises
     ------
@@ -180,23 +181,25 @@ def auto_arguments(batch, *, method, bound, minimise, stretch, frames):
                         "unwrap with Sync Selection on or from the 3D Viewport, or mark the "
                         "seams yourself")
     options = _options(seams_mode="auto", method=method, bound=float(bound),
-                       stretch=float(stretch), frames=frames)
+                       stretch=float(stretch), frames=frames, atlas_cuts=bool(atlas_cuts))
     material = np.concatenate([p.arrays.material for p in batch.parts])
     kwargs = dict(**polygon_ids(batch),
                   face_groups=material if len(np.unique(material)) > 1 else None,
                   seams=batch.seams, method=options.method, bound=options.bound,
-                  stretch=options.seams_stretch, frames=options.frames)
+                  stretch=options.seams_stretch, frames=options.frames,
+                  atlas_cuts=options.atlas_cuts)
     return (batch.V, batch.F), kwargs
 
 
-def needed_arguments(batch, *, method, bound, stretch, frames, overlap, limit_stretch):
+def needed_arguments(batch, *, method, bound, stretch, frames, overlap, limit_stretch,
+                     atlas_cuts=True):
     """Positional and keyword arguments of :func:`needed_seams.solve` (Seams "Add Where
     Needed"): those of :func:`auto_arguments`, the Overlaps choice for the marked islands and,
     with Limit Stretch, its S for them too. Blender stores positions in float32: faces it
     cannot tell from a line, side by side, are left out as zero-area (``precision``; they fail
     their island as stored at any stretch, and trying costs minutes on OpenChessSet's bishops)."""
     args, kwargs = auto_arguments(batch, method=method, bound=bound, minimise=False,
-                                  stretch=stretch, frames=frames)
+                                  stretch=stretch, frames=frames, atlas_cuts=atlas_cuts)
     kwargs["overlap"] = overlap
     kwargs["precision"] = stored_precision(batch.V, batch.F, np.float32)
     if limit_stretch:

@@ -34,7 +34,7 @@ def applies(minimise, frames, boundary, pinned):
 
 def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0,
           marked_stretch=None, face_groups=None, method="lscm", frames="auto", overlap="cut",
-          precision=None, progress=None, cancel=None):
+          precision=None, atlas_cuts=True, progress=None, cancel=None):
     """Unwrap with seams added only where an island cannot be certified.
 
     Parameters
@@ -53,6 +53,7 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
         cannot tell from a line are left out as zero-area; ``gather.needed_arguments`` gives it
         when such faces lie side by side)
     method, frames, progress, cancel : as for ``bd_uv.unwrap``
+    atlas_cuts : bool, as for :func:`auto_seams.solve` (the islands that get seams)
 
     Returns
     -------
@@ -69,6 +70,7 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
     seams2 = rep.seams(seams)
     options = dict(method=method, frames=frames, progress=progress, cancel=cancel)
     added = np.zeros((0, 2), dtype=np.int64)
+    atlas = {"cuts": 0, "length": 0.0, "seams": added}
     if not len(F2):
         from ..bd_uv.unwrapping.results import UnwrapResult
         res = UnwrapResult(np.zeros((0, 3, 2)), np.zeros(0, np.int64), [], 0.0, method)
@@ -85,9 +87,11 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
             auto = auto_seams.solve(V2[voc], Fl.reshape(-1, 3), tri_poly=tp[sub],
                                     tri_loops=tl[sub], seams=pairs_in(seams2, voc),
                                     bound=min(float(bound), AUTO_BOUND), stretch=float(stretch),
-                                    face_groups=groups, **options)
+                                    face_groups=groups, atlas_cuts=atlas_cuts, **options)
             res = splice(res, auto.result, sub, voc, len(F2))
             added = voc[auto.added]
+            atlas = dict(auto.atlas_cuts, seams=np.sort(
+                rep.vertex_source[voc[auto.atlas_cuts["seams"]]], axis=1).reshape(-1, 2))
     result = result_on_input(res, rep, F, method)
     added = rep.vertex_source[added] if len(added) else added
     cuts = [p for p in (added, rep.nonmanifold_edges, rep.orientation_edges) if len(p)]
@@ -95,4 +99,4 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
              else np.zeros((0, 2), dtype=np.int64))
     charts = sum(1 for r in result.islands if r.status == "certified")
     return auto_seams.AutoSeams(result, added, charts, tuple(rep.notes(
-        indices=False, count=lambda tris: len(np.unique(tri_poly[tris])))))
+        indices=False, count=lambda tris: len(np.unique(tri_poly[tris])))), atlas_cuts=atlas)

@@ -102,6 +102,13 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                            "scaled to its 3D area (both singular values within [1/S, S]; S must be "
                            "at least the square root of C). Add Where Needed always limits it; "
                            "with Marked seams, turn on Limit Stretch")
+    atlas_cuts: BoolProperty(name="Atlas Cuts", default=DEFAULTS.atlas_cuts,
+                             description="Where seams are added: also cut a chart the search "
+                             "made in two where it alone limits how much of the texture the "
+                             "packed charts cover (a torus's band, a long strip) and both pieces "
+                             "pass; the report counts these cuts. Off: only the seams the "
+                             "certificate needs. Islands of your marked seams are never cut for "
+                             "the atlas")
     limit_stretch: BoolProperty(name="Limit Stretch", default=False,
                                 description="Marked seams: also bound every face's singular "
                                 "values to [1/S, S] (Lipman 2012, section 6.3), keeping texel "
@@ -161,6 +168,8 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
         layout.use_property_split = True
         layout.prop(self, "method")
         layout.prop(self, "seams")
+        if self.seams != 'MARKED':
+            layout.prop(self, "atlas_cuts")
         if self.seams == 'AUTO':
             layout.prop(self, "stretch")
         else:
@@ -259,12 +268,12 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                 args, kwargs = session.needed_arguments(
                     batch, method=self.method, bound=self.bound, stretch=self.stretch,
                     frames=self.frames, overlap='cut' if self.overlap == 'CUT' else 'fail',
-                    limit_stretch=self.limit_stretch)
+                    limit_stretch=self.limit_stretch, atlas_cuts=self.atlas_cuts)
                 return batch, 'NEEDED', args, kwargs
             if self.seams == 'AUTO':
                 args, kwargs = session.auto_arguments(
                     batch, method=self.method, bound=self.bound, minimise=self.minimise,
-                    stretch=self.stretch, frames=self.frames)
+                    stretch=self.stretch, frames=self.frames, atlas_cuts=self.atlas_cuts)
                 return batch, True, args, kwargs
         except session.UserError as error:
             self.report({'WARNING'}, str(error))
@@ -331,6 +340,7 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
                 f"{summary.message}; {marked} seam{'s' if marked != 1 else ''} added, "
                 f"{auto.charts} chart{'s' if auto.charts != 1 else ''}"
                 + (" (see the marked seams in Edit Mode)" if marked else "")
+                + atlas_note(auto.atlas_cuts)
                 + "".join(f"; {note}" for note in auto.notes)))
         elif summary.written:
             cut = session.overlap_cuts(result)
@@ -353,6 +363,16 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
         session.store(context.window_manager, summary, batch.face_count)
         self.report({summary.level}, summary.message)
         return {'FINISHED'} if summary.written else {'CANCELLED'}
+
+
+def atlas_note(atlas):
+    """The report's words on the atlas cuts (``AutoSeams.atlas_cuts``): "" when none."""
+    if not atlas or not atlas["cuts"]:
+        return ""
+    n = atlas["cuts"]
+    return (f"; of those seams, {n} atlas cut{'s' if n != 1 else ''} ({len(atlas['seams'])} "
+            f"edges, length {atlas['length']:.3g}: a chart cut in two to pack tighter; turn off "
+            "Atlas Cuts for none)")
 
 
 classes = (UV_OT_bd_unwrap,)

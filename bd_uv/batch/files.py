@@ -123,6 +123,8 @@ def _script_options(options, seams_mode=None):
         out += ["--stretch", str(o.stretch)]
     out += ["--seams", seams_mode if seams_mode in ("uv", "none") else
             o.seams_mode if o.seams_mode in ("needed", "auto") else "marked"]
+    if not o.atlas_cuts:
+        out.append("--no-atlas-cuts")
     job = JobOptions.of(options)
     if job.pack:   # packed by the script, each object into its own square
         out += (["--pack", *pack_flags(job.pack_options)] if job.pack_options is not None

@@ -227,7 +227,7 @@ def _unwrap_job(job, options, png, precision):
         if o.frames == "input-uv" and job.corner_uv is None:
             raise ValueError(f"{job.name} has no UVs to take frames from (--frames input-uv)")
         if o.seams_mode != "marked" and job.pin_corners is not None and len(job.pin_corners):
-            o = o.replace(seams_mode="marked")   # pinned UVs: the islands as they are marked
+            o = o.replace(seams_mode="marked", atlas_cuts=True)   # pinned UVs: as marked
         res = unwrap(job.V, job.F, job.seams, job.pin_corners, job.pin_uv,
                      initial_uv=job.corner_uv if o.frames == "input-uv" else None,
                      face_groups=job.face_groups, options=o, precision=precision)

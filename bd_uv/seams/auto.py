@@ -49,7 +49,7 @@ FINISH_ROUNDS = 4
 MAP_VERTICES = 60_000
 def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merge=True,
                 method="lscm", frames="auto", cone="soc", progress=None, cancel=None,
-                polygons=None):
+                polygons=None, atlas_cuts=True):
     """Unwrap with seams added where needed: every chart a disk, certified at C, stretch <= S.
 
     Parameters
@@ -71,6 +71,9 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         polygons, as a UV map of the polygon mesh (Blender's) can hold it. Splits, cuts and
         merges work on whole polygons; ``unwrap`` gets them as its ``face_groups``. A marked
         seam along a diagonal is refused.
+    atlas_cuts : bool, after merging, bisect a chart the search made (never an island the given
+        seams alone bound) where it alone caps the atlas's coverage and both pieces pass
+        (``pack_shape.split_for_packing``); False: only the seams the charts' test needs
 
     Raises
     ------
@@ -83,7 +86,8 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     added : (k,2) int64, vertex pairs of the seams added (smaller index first)
     info : dict, ``charts``, ``seam_length``, ``added_length``, ``edge_length`` (all edges),
         ``max_stretch`` (per chart, from the final UVs), ``crossings`` (per chart), ``rounds``,
-        ``seconds``
+        ``seconds``, ``atlas_cuts`` (bisections for the atlas), ``atlas_seams`` (k,2) int64 (the
+        vertex pairs of their seams, among ``added``), ``atlas_length`` (their length)
     """
     t0 = time.perf_counter()
     V, F = check_arrays(V, F, share=True)     # held to the end: the caller's, not copies
@@ -147,13 +151,17 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
                           failed=failed)
         if not changed:
             break
+    atlas = np.zeros(len(E.ends), dtype=bool)   # the seams added for the atlas
+    kept = []
     if merge:
-        before = cut.copy()
         merge_charts(V, F, E, cut, keep, invalid, S, C, known=known, geom=geom,
                      failed=failed)
-        # A union that alone caps the atlas's coverage is bisected where that pays.
-        split_for_packing(V, F, E, cut, before, original, A, cen, S, mean_cap(C), poly, geom,
-                          known, invalid)
+    if atlas_cuts:
+        # A chart that alone caps the atlas's coverage is bisected where that pays.
+        atlas[:] = cut
+        kept = split_for_packing(V, F, E, cut, original, A, cen, S, mean_cap(C), poly, geom,
+                                 known, invalid)
+        atlas = cut & ~atlas
     # The mesh's face geometry (30 MB on a 500k-face mesh) is not held through the final unwrap,
     # which forms its charts' own: the rounds after it map a few pieces, and ``chart_maps``
     # forms theirs (the same per-face arithmetic, the same bits).
@@ -219,7 +227,9 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             "added_length": float(E.length[cut & ~original].sum()),
             "edge_length": float(E.length.sum()),
             "max_stretch": st, "crossings": cr, "rounds": rounds,
-            "seconds": result.seconds}
+            "seconds": result.seconds, "atlas_cuts": len(kept),
+            "atlas_seams": E.ends[atlas & cut].astype(np.int64),
+            "atlas_length": float(E.length[atlas & cut].sum())}
     return result, added, info
 
 

@@ -34,6 +34,7 @@ from ..unwrapping.results import IslandResult, UnwrapResult
 from ..unwrapping.storage import beyond_headroom, with_storage_headroom
 from ..unwrapping.unwrap import unwrap
 from .auto import unwrap_auto
+from .pack_shape import atlas_cuts_of
 from .measure import splice
 
 # The bound of the charts the seam search makes (see the module docstring); their stretch limit
@@ -65,7 +66,8 @@ def unwrap_needed(V, F, seams=None, polygons=None, options=None, marked_stretch=
     options : UnwrapOptions, optional (its ``seams_mode`` is not read): ``bound`` C for the
         islands the marked seams make (never raised: an island with no certified map within C
         gets seams instead), ``min(C, AUTO_BOUND)`` for the charts the search cuts, ``stretch``
-        (``seams_stretch``) S for those charts; ``method``, ``frames``, ``cone`` for all;
+        (``seams_stretch``) S for those charts and ``atlas_cuts`` for the search; ``method``,
+        ``frames``, ``cone`` for all;
         ``overlap`` for the marked islands (with "fail" an island overlapping itself is named,
         not given seams)
     marked_stretch : float, optional, S for the islands the marked seams make too (``unwrap``'s
@@ -80,7 +82,8 @@ def unwrap_needed(V, F, seams=None, polygons=None, options=None, marked_stretch=
     Returns
     -------
     UnwrapResult over the input faces, with ``seams_added`` (k,2) int64 (input vertex pairs of
-    the seams the search added, smaller index first) and ``repair`` (what was repaired);
+    the seams the search added, smaller index first), ``atlas_cuts`` (those added for the
+    atlas) and ``repair`` (what was repaired);
     ``duplicate_of`` names each duplicate face's twin (its corner UVs are the twin's);
     zero-area faces form one failed island (``DegenerateFacesError``) with NaN UVs
     """
@@ -93,8 +96,10 @@ def unwrap_needed(V, F, seams=None, polygons=None, options=None, marked_stretch=
     faces = rep.faces if rep is not None else np.arange(len(F2))
     seams2 = rep.seams(seams) if rep is not None else seams
     poly = None if polygons is None else np.asarray(polygons, np.int64)[faces]
-    marked = opts.replace(seams_mode="marked", raise_bound=False, stretch=marked_stretch)
+    marked = opts.replace(seams_mode="marked", raise_bound=False, stretch=marked_stretch,
+                          atlas_cuts=True)
     added = np.zeros((0, 2), dtype=np.int64)
+    atlas = atlas_cuts_of({"atlas_cuts": 0, "atlas_length": 0.0, "atlas_seams": added})
     if len(F2):
         res = unwrap(V2, F2, seams2, face_groups=poly, progress=progress, cancel=cancel,
                      options=marked, disk=disk or None)
@@ -110,22 +115,26 @@ def unwrap_needed(V, F, seams=None, polygons=None, options=None, marked_stretch=
         if bad:
             sub = np.sort(np.concatenate([r.faces for r in bad]))
             voc, Fl = np.unique(F2[sub], return_inverse=True)
-            part, found, _ = unwrap_auto(
+            part, found, info = unwrap_auto(
                 V2[voc], Fl.reshape(-1, 3), seams=pairs_in(seams2, voc),
                 bound=min(float(opts.bound), AUTO_BOUND), stretch=opts.seams_stretch,
                 method=opts.method, frames=opts.frames, cone=opts.cone, progress=progress,
-                cancel=cancel, polygons=None if poly is None else poly[sub])
+                cancel=cancel, polygons=None if poly is None else poly[sub],
+                atlas_cuts=opts.atlas_cuts)
             res = splice(res, part, sub, voc, len(F2))
             added = voc[found]
+            atlas = atlas_cuts_of(info, voc)
     else:
         res = UnwrapResult(np.zeros((0, 3, 2)), np.zeros(0, np.int64), [], 0.0, opts.method)
     result = (result_on_input(res, rep, np.asarray(F, np.int64), opts.method)
               if rep is not None else res)
     if rep is not None and len(added):
         added = rep.vertex_source[added]
+        atlas["seams"] = np.sort(rep.vertex_source[atlas["seams"]], axis=1)
     added = np.unique(np.sort(added, axis=1), axis=0) if len(added) else added.reshape(0, 2)
     return dataclasses.replace(result, seams_added=added.astype(np.int64),
-                               repair=tuple(rep.notes()) if rep is not None else ())
+                               repair=tuple(rep.notes()) if rep is not None else (),
+                               atlas_cuts=atlas)
 
 
 def clean_disk(V, F, precision=None):

@@ -68,6 +68,9 @@ class UnwrapResult:
     island's ``faces``; its ``face_island`` and corner UVs are its twin's.
     ``seams_added`` (k,2) int64 or None: vertex pairs of the seams the search added.
     ``repair`` tuple of str: what was repaired before solving (``repair.Repair.notes``).
+    ``atlas_cuts`` dict or None: of those seams, the ones added for the atlas
+    (``bd_uv.seams.pack_shape``, ``UnwrapOptions.atlas_cuts``): ``cuts`` (bisections),
+    ``length`` (3D length) and ``seams`` (k,2) int64 vertex pairs.
 
     ``certificates``: one ``certificate.Certificate`` per island (None for an island not
     certified), measured on ``corner_uv`` exactly as returned, when the unwrap kept them (it does
@@ -83,6 +86,7 @@ class UnwrapResult:
     seams_added: np.ndarray = None
     repair: tuple = ()
     certificates: tuple = None
+    atlas_cuts: dict = None
 
     @property
     def certified(self):
@@ -105,12 +109,17 @@ class UnwrapResult:
         return (np.concatenate(uvs) if uvs else np.zeros((0, 2))), F_uv
 
     def seams_report(self):
-        """``seams_added`` (vertex pairs) and ``repair`` (sentences) for the JSON report, when
+        """``seams_added`` (vertex pairs), ``repair`` (sentences) and ``atlas_cuts`` (those
+        seams added for the atlas: ``cuts``, ``length``, ``seams``) for the JSON report, when
         seams were added (``seams_mode="needed"`` or ``"auto"``); {} otherwise."""
         if self.seams_added is None:
             return {}
-        return {"seams_added": np.asarray(self.seams_added).tolist(),
-                "repair": list(self.repair)}
+        out = {"seams_added": np.asarray(self.seams_added).tolist(), "repair": list(self.repair)}
+        if self.atlas_cuts is not None:
+            a = self.atlas_cuts
+            out["atlas_cuts"] = {"cuts": int(a["cuts"]), "length": float(a["length"]),
+                                 "seams": np.asarray(a["seams"]).tolist()}
+        return out
 
     def report(self):
         """JSON-ready report: method, seconds and one entry per island."""

@@ -346,22 +346,29 @@ def test_script_refuses_atlas_options_it_would_ignore(scene_blend, tmp_path):
         assert not out.exists()
 
 
-def test_folder_batch_seams_auto_reaches_a_blend_and_marks_its_seams(tmp_path, empty_scene):
+@pytest.mark.parametrize("flags", [[], ["--no-atlas-cuts"]])
+def test_folder_batch_seams_auto_reaches_a_blend_and_marks_its_seams(tmp_path, empty_scene,
+                                                                       flags):
     """``--seams auto`` on a .blend: the script searches seams (it used to get ``--seams
     marked`` and fail a closed torus as no disk), marks the seams it added on the saved mesh and
-    lists them in the report; the saved map is certified (checked independently)."""
+    lists them in the report; the saved map is certified (checked independently). The torus's
+    band gets atlas cuts, among the seams added, unless ``--no-atlas-cuts`` reaches the
+    script."""
     bpy.ops.mesh.primitive_torus_add(major_segments=24, minor_segments=12)
     bpy.context.active_object.name = "Torus"
     src = tmp_path / "torus.blend"
     bpy.ops.wm.save_as_mainfile(filepath=str(src))
     out = tmp_path / "out"
     proc = subprocess.run([sys.executable, "-m", "bd_uv", "batch", str(src), "-o", str(out),
-                           "--jobs", "1", "--seams", "auto"],
+                           "--jobs", "1", "--seams", "auto", *flags],
                           capture_output=True, text=True, cwd=REPO_ROOT)
     assert proc.returncode == 0, proc.stdout + proc.stderr
     (e,) = json.loads((out / "report.json").read_text())["items"]
     assert e["status"] == "certified" and e["layout_overlaps"] == 0
     added = np.asarray(e["seams_added"])
+    atlas = {tuple(sorted(p)) for p in e["atlas_cuts"]["seams"]}
+    assert (e["atlas_cuts"]["cuts"] == 0) == bool(flags)
+    assert bool(atlas) != bool(flags) and atlas <= {tuple(sorted(p)) for p in added.tolist()}
     assert len(added) > 0 and e["seams_marked"] == len(added)
     bpy.ops.wm.open_mainfile(filepath=str(out / "torus.blend"))
     ob = bpy.data.objects["Torus"]

@@ -330,3 +330,39 @@ def test_marked_seams_refuse_float32_flat_faces_at_once(addon, capsys):
     uv = loop_uv_array(obj.data)
     D, det = triangle_distortion(Vt, tris[keep], uv[loops[keep]])
     assert (det > 0).all() and D.max() <= C * SLACK
+
+
+def _packed_coverage(obj):
+    """The stored UVs' triangle area inside the unit square (float32 as stored)."""
+    V, tris, loops, _ = _loop_triangles(obj)
+    uv = loop_uv_array(obj.data)[loops].astype(np.float64)
+    assert ((uv >= 0) & (uv <= 1)).all()
+    e1, e2 = uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]
+    return float(0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]).sum())
+
+
+@pytest.mark.parametrize("seams", ['NEEDED', 'AUTO'])
+def test_atlas_cuts_cut_the_torus_band_unless_turned_off(addon, capsys, seams):
+    # Blender's default torus: the handle cuts open it into one band that caps the atlas at a
+    # third; Atlas Cuts (the default) cut the band in two, marked and reported as the atlas's,
+    # and the packed UVs cover far more. Off: the minimal seams, one band.
+    found = {}
+    for atlas in (True, False):
+        for ob in list(bpy.data.objects):
+            bpy.data.objects.remove(ob)
+        PRIMITIVES["torus"]()
+        obj = bpy.context.active_object
+        set_mode(obj, 'EDIT')
+        bpy.ops.mesh.select_all(action='SELECT')
+        result, reports = run(capsys, seams=seams, atlas_cuts=atlas)
+        set_mode(obj, 'OBJECT')
+        assert result == {'FINISHED'}, reports
+        _certified_as_stored(obj)
+        found[atlas] = (last().islands, int(_seams(obj.data).sum()), _packed_coverage(obj),
+                        reports[-1][1])
+    (on_islands, on_seams, on_cov, on_msg), (off_islands, off_seams, off_cov, off_msg) = (
+        found[True], found[False])
+    assert (on_islands, off_islands) == (2, 1)
+    assert on_seams > off_seams
+    assert "1 atlas cut" in on_msg and "atlas" not in off_msg
+    assert on_cov >= 1.5 * off_cov, (on_cov, off_cov)

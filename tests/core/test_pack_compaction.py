@@ -160,3 +160,27 @@ def test_a_first_layout_too_wide_for_its_square_is_nested_again_as_wide_as_high(
     dens = 4.0 / (height * 4.6)
     expect = max((np.sqrt(4.0 / dens) - 2 * tol) / (1 + p * h), 1.05 * side0)
     assert asked[1][0] == pytest.approx(expect, rel=1e-12)
+
+
+def test_a_layout_drifted_off_the_low_corner_is_moved_back_and_its_square_cut():
+    """Two squares left in the middle of a square with room on every side (the drift a short
+    compaction left on Blender's torus at seed 2): with no program run, the layout comes back
+    moved as one to the low corner and the side cut to its extent plus the padding, computed
+    here; the two squares keep their offset, the padding and the edges."""
+    from bd_uv.packing.nest import Placement
+    options = PackOptions(resolution=1024, padding_px=4, rotate="any")
+    tol = 1e-4
+    box = 0.5 * np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    pl0 = Placement(np.zeros(2), np.array([[1.0, 1.2], [2.2, 1.3]]), 4.0)
+    pl, side, steps = compact_square([box, box], pl0, 4.0, options, tol, 1e9, max_programs=0)
+    assert steps == 0
+    extent = max(2.2 + 0.5 - (1.0 - 0.5), 1.3 + 0.5 - (1.2 - 0.5))     # 2.2 wide, 1.1 high
+    assert np.isclose(side, (extent + 2 * tol) / (1 - options.padding), rtol=1e-9)
+    rings = _placed([box, box], pl)
+    pts = np.concatenate(rings)
+    edge = 0.5 * options.padding * side + tol
+    assert np.isclose(pts.min(axis=0), edge, rtol=1e-9).all()
+    assert pts.max() <= side - edge * (1 - 1e-9)
+    assert np.allclose(pl.shift[1] - pl.shift[0], [1.2, 0.1], rtol=0, atol=1e-12)
+    gap, nested = _least_gap(rings)
+    assert gap >= (options.padding * side + 2 * tol) * (1 - 1e-9) and not nested

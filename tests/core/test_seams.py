@@ -66,11 +66,14 @@ def loop_pairs(loop):
 
 
 def test_torus_gets_exactly_its_two_handle_cuts():
+    # Minimal seams (atlas_cuts=False): the certificate's cuts only. By default the band may
+    # also be cut for the atlas (test_seams_pack_shape.py).
     V, F, meridian, inner = torus()
     assert genus(F) == 1
-    res, added, info = unwrap_auto(V, F, bound=C, stretch=S)
+    res, added, info = unwrap_auto(V, F, bound=C, stretch=S, atlas_cuts=False)
     check_charts(V, F, res)
     assert len(res.islands) == 1            # the bounds allow one chart: no cut beyond the handle
+    assert info["atlas_cuts"] == 0 and len(info["atlas_seams"]) == 0
     # Two loops through one point: as long as the meridian plus the inner equator, within 25 %
     # (the cut may take a staircase near the root; every added edge is on one of two loops).
     L = np.linalg.norm(V[added[:, 0]] - V[added[:, 1]], axis=1).sum()
@@ -83,7 +86,7 @@ def test_torus_gets_exactly_its_two_handle_cuts():
 def test_torus_keeps_a_marked_meridian_and_adds_only_the_other_loop():
     V, F, meridian, inner = torus()
     marked = loop_pairs(meridian)
-    res, added, info = unwrap_auto(V, F, seams=marked, bound=C, stretch=S)
+    res, added, info = unwrap_auto(V, F, seams=marked, bound=C, stretch=S, atlas_cuts=False)
     check_charts(V, F, res)
     assert seam_kept(res, marked, F)
     assert len(res.islands) == 1
