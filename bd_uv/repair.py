@@ -139,10 +139,11 @@ def zero_area_faces(V, F, precision=None):
     bishops hold hundreds), whose angles, and so whose distortion, are rounding
     noise, and whose UVs no float32 store keeps apart."""
     P = V[F]
-    A = face_areas(V, F)
-    lmax2 = np.max(np.sum((P - np.roll(P, -1, axis=1)) ** 2, axis=2), axis=1)
     finite = np.isfinite(P).all(axis=(1, 2))
+    # non-finite corners (refused by name elsewhere) give NaN here, not numpy warnings
     with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+        A = face_areas(V, F)
+        lmax2 = np.max(np.sum((P - np.roll(P, -1, axis=1)) ** 2, axis=2), axis=1)
         zero = ~(2 * A > DEGENERATE_RATIO * lmax2)
     zero |= thinner_than_precision(P, A, lmax2, precision)
     return zero & finite
