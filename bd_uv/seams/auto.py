@@ -131,7 +131,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     if E.fans is not None:                  # the corner table served the checks above only
         E = dataclasses.replace(E, corners=None)
     known = {}                              # conformal maps of charts that passed, by faces
-    orders = Orders.of(n, m)                # the LSCM systems' elimination orders
+    orders = Orders.of(n, m)                # the LSCM and Fiedler systems' orders
     failed = {}                             # max stretch of disks whose map failed, by chart
     release_memory(m)                       # the set-up's temporaries
     rounds = 0
@@ -187,7 +187,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         for g, r in enumerate(bad):
             frozen[r.faces] = False
             group[r.faces] = g
-        bisect([np.sort(r.faces) for r in bad], E, cut, A, cen, poly)
+        bisect([np.sort(r.faces) for r in bad], E, cut, A, cen, poly, orders)
         for _ in range(MAX_ROUNDS):
             if not _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag, geom=geom,
                            failed=failed, orders=orders):
@@ -349,7 +349,7 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=Non
                     failed[chart_key(c)] = float(cm.max_stretch[j])
                 todo.append((c.faces, cm.sigma[cm.foff[j]:cm.foff[j + 1]]))
     if todo:
-        split = split_deep(todo, E, cut, A, cen, S, poly)
+        split = split_deep(todo, E, cut, A, cen, S, poly, orders)
         for (faces, _), done in zip(todo, split):
             if not done:
                 frozen[faces] = True

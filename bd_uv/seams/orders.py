@@ -1,11 +1,11 @@
 """Elimination orders of the seam search's conformal-map systems, reused from chart to chart.
 
 Every LSCM system of the search (``charts.chart_maps``) is a piece or a union of charts already
-mapped, and qdldl orders each afresh (SuiteSparse AMD on its 2n unknowns): on the 8-13k-face
-meshes that was 60-80 % of the factorisation's time (dino: 214 of 280 ms CPU). Here a mesh
-vertex keeps a key, its place in the last order it was given, and a system's unknowns are
-eliminated in the order of their vertices' keys (u and v of a vertex side by side,
-``solvers.ordered_ldl``):
+mapped, and qdldl orders each afresh (SuiteSparse AMD on its 2n unknowns): most of the
+factorisation's time (dino's 27 systems: 143 ms CPU in ``qdldl.Solver``, 24 of them the numeric
+factor; fandisk's 24: 309 and 126). Here a mesh vertex keeps a key, its place in the last
+order it was given, and a system's unknowns are eliminated in the order of their vertices' keys
+(u and v of a vertex side by side, ``solvers.ordered_ldl``):
 
 - a chart with a vertex never ordered gets a fresh order: AMD of its vertex graph (half the
   unknowns of the system's own), its vertices keyed by it and its faces made one block;
@@ -50,6 +50,32 @@ class Orders:
         self.block = np.full(m, -1, np.int64)
         self.given = self.blocks = 0
         self.fill = 0.0
+        self.face_key = np.full(m, -1, np.int64)
+        self.face_block = np.full(m, -1, np.int64)
+
+    def face_keys(self, pieces, fa):
+        """Keys of the faces ``fa`` (the ``pieces`` concatenated) for their Fiedler systems: a
+        piece whose faces all come from one order keeps it, the others get -1 (their system is
+        ordered afresh, ``fiedler_solver``). Hand the keys back with ``faces_ordered``."""
+        keys = self.face_key[fa]
+        at = 0
+        for f in pieces:
+            b = self.face_block[f]
+            if b.min() < 0 or b.min() != b.max():
+                keys[at:at + len(f)] = -1
+            at += len(f)
+        return keys
+
+    def faces_ordered(self, pieces, fa, before, keys):
+        """After the Fiedler solves: the faces' keys as ordered (``keys``, written by
+        ``fiedler_solver``); a piece whose keys changed (ordered afresh) is one block now."""
+        self.face_key[fa] = keys
+        at = 0
+        for f in pieces:
+            if not np.array_equal(before[at:at + len(f)], keys[at:at + len(f)]):
+                self.face_block[f] = self.blocks
+                self.blocks += 1
+            at += len(f)
 
     @classmethod
     def of(cls, n, m):
@@ -160,3 +186,23 @@ def _factor(A, keys):
     cols = np.repeat(np.arange(n, dtype=np.int64), np.diff(A.indptr))
     f = ordered_ldl.Factor(A.indices.astype(np.int64), cols, A.data, n, perm)
     return f if f.lnz >= 0 else None
+
+
+def fiedler_solver(K, keys):
+    """Solve of a Fiedler system K (upper triangle, csc, one node a face) in the order of its
+    nodes' ``keys``; where a key is -1 the system is ordered afresh (AMD) and ``keys`` (a view
+    the caller reads back) rewritten with it. A piece of a chart keeps the chart's order: the
+    dual graph of a piece is a subgraph of the chart's, so its fill is within the chart's.
+    ``spd_solver`` where the factorisation fails."""
+    k = K.shape[0]
+    if (keys < 0).any():
+        p = ordered_ldl.amd(K.indptr, K.indices, k)
+        if p is not None:
+            keys[p] = np.arange(k)
+    if (keys >= 0).all():
+        cols = np.repeat(np.arange(k, dtype=np.int64), np.diff(K.indptr))
+        f = ordered_ldl.Factor(K.indices.astype(np.int64), cols, K.data, k,
+                               np.argsort(keys, kind="stable"))
+        if f.lnz >= 0 and f.factor():
+            return f.solve
+    return spd_solver(K, upper=True)
