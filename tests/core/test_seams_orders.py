@@ -197,3 +197,26 @@ def test_unwrap_auto_adds_the_same_seams_with_orders_as_without(monkeypatch):
     _, without, info2 = unwrap_auto(V, F, bound=2.0, stretch=2.0)
     assert np.array_equal(with_orders, without)
     assert info["charts"] == info2["charts"]
+
+
+def test_bisect_with_orders_cuts_as_without():
+    """The Fiedler systems: charts ordered afresh, then their pieces in the restricted order;
+    the same cuts as qdldl's order gives (decisions are made on rounded values)."""
+    V, F, E, cut = _sphere_charts()
+    whole = [np.sort(c.faces) for c in charts(F, E, cut) if c.kind == "disk"]
+    A, cen = face_geometry(V, F).area, FaceCentroids(V, F)
+    o = orders_mod.Orders(len(V), len(F))
+    a, b = cut.copy(), cut.copy()
+    sides = bisect(whole, E, a, A, cen, orders=o)
+    bisect(whole, E, b, A, cen)
+    assert np.array_equal(a, b)
+    assert (o.face_key[np.concatenate(whole)] >= 0).all()
+    pieces = [p for two in sides if two is not None for p in two]
+    assert len(pieces) >= 4
+    assert (o.face_keys(pieces, np.concatenate(pieces)) >= 0).all()     # reused, not fresh
+    blocks = o.blocks
+    a2, b2 = a.copy(), a.copy()
+    bisect(pieces, E, a2, A, cen, orders=o)
+    bisect(pieces, E, b2, A, cen)
+    assert np.array_equal(a2, b2) and a2.sum() > a.sum()
+    assert o.blocks == blocks                   # no piece ordered afresh
