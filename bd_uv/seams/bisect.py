@@ -60,8 +60,9 @@ def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None):
     """
     split = np.zeros(len(todo), dtype=bool)
     stack = [(faces, j) for j, (faces, _) in enumerate(todo)]
+    extra = {} if orders is None else {"orders": orders}
     for _ in range(SPLIT_DEPTH):
-        sides = bisect([f for f, _ in stack], E, cut, A, cen, poly, orders)
+        sides = bisect([f for f, _ in stack], E, cut, A, cen, poly, **extra)
         pieces = []                         # (piece, chart) of charts with a map
         for (f, j), two in zip(stack, sides):
             if two is None:
