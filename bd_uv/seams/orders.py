@@ -31,6 +31,11 @@ from ..solvers.lscm import spd_solver
 # Factor entries per unknown a reused order may reach, relative to the fresh orders' most
 # (1.5 let fandisk's merged unions reach 1.5-2x the fill of AMD's order and cost more than it).
 SLACK = 1.2
+# A chart of more vertices than this is factored in qdldl's order (its keys -1): a reused or
+# vertex-graph order fills up to SLACK times more, and the large charts' factors are the
+# search's memory peaks (dino subdivided to 500k faces: 470 MB against 427 with every chart
+# ordered here).
+MAX_VERTICES = 12_500
 # Keys of the vertices put last in a union (above any key given).
 LAST = 1 << 50
 
@@ -40,18 +45,21 @@ class Orders:
 
     Attributes
     ----------
-    key : (n,) int64, block : (m,) int64
+    key : (n,) int64, block : (m,) int32
+    face_key, face_block : (m,) int32, the same for the faces' Fiedler systems
     given : int, keys handed out so far; blocks : int, blocks made so far
     fill : float, the most factor entries per unknown of a fresh order (0 before the first)
     """
 
     def __init__(self, n, m):
         self.key = np.full(n, -1, np.int64)
-        self.block = np.full(m, -1, np.int64)
+        # Per face int32 (ranks within one system, block counts: far below 2^31): 6 MB on a
+        # 500k-face mesh rather than 12.
+        self.block = np.full(m, -1, np.int32)
         self.given = self.blocks = 0
         self.fill = 0.0
-        self.face_key = np.full(m, -1, np.int64)
-        self.face_block = np.full(m, -1, np.int64)
+        self.face_key = np.full(m, -1, np.int32)
+        self.face_block = np.full(m, -1, np.int32)
 
     def face_keys(self, pieces, fa):
         """Keys of the faces ``fa`` (the ``pieces`` concatenated) for their Fiedler systems: a
@@ -85,11 +93,15 @@ class Orders:
 
     def keys(self, charts, voff):
         """Keys of the batch's vertices (chart after chart, ``voff`` their offsets), giving
-        fresh orders and ordering unions as the module says. Returns (nv,) int64 and a (k,)
-        bool array: the charts ordered afresh."""
+        fresh orders and ordering unions as the module says (-1 for a chart above
+        ``MAX_VERTICES``: its run is left to qdldl). Returns (nv,) int64 and a (k,) bool
+        array: the charts ordered afresh."""
         vk = np.empty(int(voff[-1]), np.int64)
         fresh = np.zeros(len(charts), dtype=bool)
         for j, c in enumerate(charts):
+            if len(c.vertices) > MAX_VERTICES:
+                vk[voff[j]:voff[j + 1]] = -1
+                continue
             k = self.key[c.vertices]
             if (k < 0).any():
                 fresh[j] = True
@@ -156,7 +168,7 @@ class Orders:
 def ordered_solver(A, keys, budget):
     """Solve of the LSCM system A (upper triangle, csc, unknowns ``[u; v]`` of the free
     vertices) eliminated in the order of ``keys`` (the free vertices' keys, u and v of a
-    vertex side by side). With ``budget`` > 0, an order whose factor would hold more than
+    vertex side by side; any -1: ``spd_solver``). With ``budget`` > 0, an order whose factor would hold more than
     ``budget`` entries per unknown is refused and the system ordered afresh (AMD of its
     vertex graph, the u block's pattern); ``spd_solver`` where even that fails.
 
@@ -166,6 +178,8 @@ def ordered_solver(A, keys, budget):
      the fresh order's ranks of the free vertices or None)
     """
     n = A.shape[0]
+    if (keys < 0).any():                    # a chart left to qdldl's order
+        return spd_solver(A, upper=True), None, None
     f = _factor(A, keys)
     if f is not None and (budget <= 0 or f.lnz <= budget * n) and f.factor():
         return f.solve, f.lnz / max(n, 1), None
