@@ -13,7 +13,7 @@ from ..solvers.lscm import FaceGeometry, face_geometry, spd_solver  # noqa: F401
 from ..solvers.lscm import _lscm_system   # lscm_pinned's assembly, to free memory before factoring
 from ..solvers.threads import halves, map_blocks
 from .crossings import boundary_crossings
-from .orders import SLACK, ordered_solver
+from .orders import BATCH_VERTICES, SLACK, ordered_solver
 from ..trim import release_memory
 from ..unwrapping.batched import _far_pairs
 
@@ -100,7 +100,8 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
         whose map is flip-free with max stretch and mean distortion within them (the others fail
         anyway); their ``crossings`` are -1
     orders : orders.Orders of the mesh, optional: the systems are eliminated in the order
-        its keys give (given, reused or made here) rather than in qdldl's AMD order
+        its keys give (given, reused or made here) rather than in qdldl's AMD order, in a
+        batch of at most ``orders.BATCH_VERTICES`` vertices
 
     Returns
     -------
@@ -130,6 +131,8 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
     idx = _far_pairs(P, charts, voff)
     val = np.tile(np.array([0.0, 1.0], np.complex128), k)
 
+    if n > BATCH_VERTICES:  # a large batch's factors are memory peaks: AMD's fill (orders.py)
+        orders = None
     vk, fresh = orders.keys(charts, voff) if orders is not None else (None, None)
     budget = SLACK * orders.fill if orders is not None else 0.0
 

@@ -31,11 +31,16 @@ from ..solvers.lscm import spd_solver
 # Factor entries per unknown a reused order may reach, relative to the fresh orders' most
 # (1.5 let fandisk's merged unions reach 1.5-2x the fill of AMD's order and cost more than it).
 SLACK = 1.2
-# A chart of more vertices than this is factored in qdldl's order (its keys -1): a reused or
-# vertex-graph order fills up to SLACK times more, and the large charts' factors are the
-# search's memory peaks (dino subdivided to 500k faces: 470 MB against 427 with every chart
-# ordered here).
-MAX_VERTICES = 12_500
+# Orders are reused in a batch of at most this many vertices (``charts.chart_maps``; a larger
+# batch is factored in qdldl's order), and kept for a mesh of at most MESH_VERTICES vertices
+# (``Orders.of``): a reused or vertex-graph order fills up to SLACK times more than AMD's, and
+# the large batches' factors are the search's memory peaks. Measured: dino subdivided to 500k
+# faces peaked at 470 MB with every batch reusing orders, 432 MB with batches up to 50k
+# vertices, against main's 423; cow subdivided twice (46k vertices) 229 MB with batches up to
+# 12.5k, against 223. Meshes that large are within xatlas's time already (0.4-0.55 of it);
+# the small ones are not.
+BATCH_VERTICES = 12_500
+MESH_VERTICES = 20_000
 # Keys of the vertices put last in a union (above any key given).
 LAST = 1 << 50
 
@@ -88,20 +93,17 @@ class Orders:
     @classmethod
     def of(cls, n, m):
         """Orders for a mesh of n vertices and m faces, or None where the ordered
-        factorisation cannot run (``ordered_ldl.available``)."""
-        return cls(n, m) if ordered_ldl.available() else None
+        factorisation cannot run (``ordered_ldl.available``) or the mesh has more than
+        ``MESH_VERTICES`` vertices."""
+        return cls(n, m) if n <= MESH_VERTICES and ordered_ldl.available() else None
 
     def keys(self, charts, voff):
         """Keys of the batch's vertices (chart after chart, ``voff`` their offsets), giving
-        fresh orders and ordering unions as the module says (-1 for a chart above
-        ``MAX_VERTICES``: its run is left to qdldl). Returns (nv,) int64 and a (k,) bool
-        array: the charts ordered afresh."""
+        fresh orders and ordering unions as the module says. Returns (nv,) int64 and a (k,)
+        bool array: the charts ordered afresh."""
         vk = np.empty(int(voff[-1]), np.int64)
         fresh = np.zeros(len(charts), dtype=bool)
         for j, c in enumerate(charts):
-            if len(c.vertices) > MAX_VERTICES:
-                vk[voff[j]:voff[j + 1]] = -1
-                continue
             k = self.key[c.vertices]
             if (k < 0).any():
                 fresh[j] = True
@@ -168,7 +170,7 @@ class Orders:
 def ordered_solver(A, keys, budget):
     """Solve of the LSCM system A (upper triangle, csc, unknowns ``[u; v]`` of the free
     vertices) eliminated in the order of ``keys`` (the free vertices' keys, u and v of a
-    vertex side by side; any -1: ``spd_solver``). With ``budget`` > 0, an order whose factor would hold more than
+    vertex side by side). With ``budget`` > 0, an order whose factor would hold more than
     ``budget`` entries per unknown is refused and the system ordered afresh (AMD of its
     vertex graph, the u block's pattern); ``spd_solver`` where even that fails.
 
@@ -178,8 +180,6 @@ def ordered_solver(A, keys, budget):
      the fresh order's ranks of the free vertices or None)
     """
     n = A.shape[0]
-    if (keys < 0).any():                    # a chart left to qdldl's order
-        return spd_solver(A, upper=True), None, None
     f = _factor(A, keys)
     if f is not None and (budget <= 0 or f.lnz <= budget * n) and f.factor():
         return f.solve, f.lnz / max(n, 1), None
