@@ -37,8 +37,8 @@ SLACK = 1.2
 # the large batches' factors are the search's memory peaks. Measured: dino subdivided to 500k
 # faces peaked at 470 MB with every batch reusing orders, 432 MB with batches up to 50k
 # vertices, against main's 423; cow subdivided twice (46k vertices) 229 MB with batches up to
-# 12.5k, against 223. Meshes that large are within xatlas's time already (0.4-0.55 of it);
-# the small ones are not.
+# 12.5k, against 223. Memory is where meshes that large miss xatlas (344 MB on dino-sub3); the
+# small ones miss its time.
 BATCH_VERTICES = 12_500
 MESH_VERTICES = 20_000
 # Keys of the vertices put last in a union (above any key given).
