@@ -30,6 +30,7 @@ from .cut_graph import cut_graph
 from .edges import edge_table
 from .measure import measure_charts, splice
 from .merge import chart_key, merge_charts
+from .orders import Orders
 from .pack_shape import split_for_packing
 from .bisect import FaceCentroids, bisect, edge_weight, polygon_edges, split_deep
 from .topology import charts, cut_mesh
@@ -134,6 +135,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     if E.fans is not None:                  # the corner table served the checks above only
         E = dataclasses.replace(E, corners=None)
     known = {}                              # conformal maps of charts that passed, by faces
+    orders = Orders.of(n, m)                # the LSCM and Fiedler systems' orders
     failed = {}                             # max stretch of disks whose map failed, by chart
     release_memory(m)                       # the set-up's temporaries
     rounds = 0
@@ -148,14 +150,14 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         changed = _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag,
                           cap=mean_cap(C) + GIVEN_SLACK * (mean_cap(C) - 1.0)
                           if rounds == 1 else mean_cap(C), known=known, geom=geom,
-                          failed=failed)
+                          failed=failed, orders=orders)
         if not changed:
             break
     atlas = np.zeros(len(E.ends), dtype=bool)   # the seams added for the atlas
     kept = []
     if merge:
         merge_charts(V, F, E, cut, keep, invalid, S, C, known=known, geom=geom,
-                     failed=failed)
+                     failed=failed, orders=orders)
     if atlas_cuts:
         # A chart that alone caps the atlas's coverage is bisected where that pays.
         atlas[:] = cut
@@ -193,15 +195,15 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         for g, r in enumerate(bad):
             frozen[r.faces] = False
             group[r.faces] = g
-        bisect([np.sort(r.faces) for r in bad], E, cut, A, cen, poly)
+        bisect([np.sort(r.faces) for r in bad], E, cut, A, cen, poly, orders)
         for _ in range(MAX_ROUNDS):
             if not _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag, geom=geom,
-                           failed=failed):
+                           failed=failed, orders=orders):
                 break
         if merge:
             # The pieces may now merge with their neighbours (never with each other).
             merge_charts(V, F, E, cut, keep, invalid, S, C, group=group, geom=geom,
-                         failed=failed)
+                         failed=failed, orders=orders)
         # Unwrap anew every chart holding a piece (with the neighbours it took in).
         redo = np.zeros(m, dtype=bool)
         for c in charts(F, E, cut):
@@ -303,7 +305,7 @@ def _valid_everywhere(V, F, E, A):
 
 
 def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None, known=None,
-            geom=None, failed=None):
+            geom=None, failed=None, orders=None):
     """One top-down round over the charts not yet accepted; True when a seam was added.
 
     Handles are cut first; the charts to split (closed spheres, open charts no cut graph
@@ -312,6 +314,7 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=Non
     passes with a mean distortion up to ``cap`` (default ``mean_cap(C)``); its conformal map goes
     into ``known`` (``ChartMaps.remember``). A disk that fails (at ``cap`` >= ``mean_cap(C)``, so
     at merging's test too) goes into ``failed`` (``merge.chart_key`` -> its map's max stretch).
+    ``orders``: the mesh's ``orders.Orders`` for the maps' solves, optional.
     """
     sub = np.flatnonzero(~frozen)
     if len(sub) == 0:
@@ -343,7 +346,7 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=Non
             disks.append(c)
     if disks:
         cap = mean_cap(C) if cap is None else cap
-        cm = chart_maps(V, disks, geom, limits=(S * MARGIN, cap))
+        cm = chart_maps(V, disks, geom, limits=(S * MARGIN, cap), orders=orders)
         ok = (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
               & (cm.crossings == 0) & (cm.mean_distortion <= cap))
         if known is not None:
@@ -356,7 +359,7 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=Non
                     failed[chart_key(c)] = float(cm.max_stretch[j])
                 todo.append((c.faces, cm.sigma[cm.foff[j]:cm.foff[j + 1]]))
     if todo:
-        split = split_deep(todo, E, cut, A, cen, S, poly)
+        split = split_deep(todo, E, cut, A, cen, S, poly, orders)
         for (faces, _), done in zip(todo, split):
             if not done:
                 frozen[faces] = True

@@ -35,7 +35,7 @@ class FaceCentroids:
         return self.V[self.F[faces]].mean(axis=1)
 
 
-def split_deep(todo, E, cut, A, cen, S, poly=None):
+def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None):
     """Split charts, and split their pieces again while a chart's conformal map restricted to a
     piece (``piece_stretch``: no new solve) still breaks S by the factor ``DEEPER``.
 
@@ -55,11 +55,14 @@ def split_deep(todo, E, cut, A, cen, S, poly=None):
     Returns
     -------
     (len(todo),) bool, whether each chart was split
+
+    ``orders``: the mesh's ``orders.Orders`` for the Fiedler systems, optional (``bisect``).
     """
     split = np.zeros(len(todo), dtype=bool)
     stack = [(faces, j) for j, (faces, _) in enumerate(todo)]
+    extra = {} if orders is None else {"orders": orders}
     for _ in range(SPLIT_DEPTH):
-        sides = bisect([f for f, _ in stack], E, cut, A, cen, poly)
+        sides = bisect([f for f, _ in stack], E, cut, A, cen, poly, **extra)
         pieces = []                         # (piece, chart) of charts with a map
         for (f, j), two in zip(stack, sides):
             if two is None:
@@ -109,7 +112,7 @@ def polygon_edges(polygons, E, m):
     return poly, diag
 
 
-def bisect(pieces, E, cut, A, cen, poly=None):
+def bisect(pieces, E, cut, A, cen, poly=None, orders=None):
     """Split charts by ``fiedler_split_many`` (all at once) and mark the new seams.
 
     With ``poly`` (polygon of each face) the split runs on the polygons (each one node of the
@@ -118,6 +121,8 @@ def bisect(pieces, E, cut, A, cen, poly=None):
     Parameters
     ----------
     pieces : list of (k_i,) int64, sorted global face ids of disjoint charts
+    orders : orders.Orders, optional: the Fiedler systems (on faces, not polygons) factor in
+        the order a piece's chart was given, or afresh (``orders.fiedler_solver``)
 
     Returns
     -------
@@ -166,7 +171,11 @@ def bisect(pieces, E, cut, A, cen, poly=None):
     else:
         pairs, w = np.stack([na[across], nb[across]], 1), fe[across]
     del na, nb, across
-    side, split = fiedler_split_many(mass, pcen, offsets, pairs, E.length[w], E.cost[w])
+    keys = None if orders is None or poly is not None else orders.face_keys(pieces, fa)
+    before = None if keys is None else keys.copy()
+    side, split = fiedler_split_many(mass, pcen, offsets, pairs, E.length[w], E.cost[w], keys)
+    if keys is not None:
+        orders.faces_ordered(pieces, fa, before, keys)
     del pairs, w
     fside = side if node is None else side[node]
     new = fe[fside[la] != fside[lb]]

@@ -13,6 +13,7 @@ from ..solvers.lscm import FaceGeometry, face_geometry, spd_solver  # noqa: F401
 from ..solvers.lscm import _lscm_system   # lscm_pinned's assembly, to free memory before factoring
 from ..solvers.threads import halves, map_blocks
 from .crossings import boundary_crossings
+from .orders import BATCH_VERTICES, SLACK, ordered_solver
 from ..trim import release_memory
 from ..unwrapping.batched import _far_pairs
 
@@ -87,7 +88,7 @@ class ChartMaps:
             known[charts[j].faces.tobytes()] = self.u[self.voff[j]:self.voff[j + 1]].copy()
 
 
-def chart_maps(V, charts, geom=None, limits=None):
+def chart_maps(V, charts, geom=None, limits=None, orders=None):
     """LSCM of every chart in one block-diagonal solve, with per-face distortion and stretch.
 
     Parameters
@@ -98,6 +99,9 @@ def chart_maps(V, charts, geom=None, limits=None):
     limits : (stretch, mean) floats, optional: count boundary crossings only for the charts
         whose map is flip-free with max stretch and mean distortion within them (the others fail
         anyway); their ``crossings`` are -1
+    orders : orders.Orders of the mesh, optional: the systems are eliminated in the order
+        its keys give (given, reused or made here) rather than in qdldl's AMD order, in a
+        batch of at most ``orders.BATCH_VERTICES`` vertices
 
     Returns
     -------
@@ -127,20 +131,34 @@ def chart_maps(V, charts, geom=None, limits=None):
     idx = _far_pairs(P, charts, voff)
     val = np.tile(np.array([0.0, 1.0], np.complex128), k)
 
-    def run(r):             # the system of charts r[0]:r[1] alone
+    if n > BATCH_VERTICES:  # a large batch's factors are memory peaks: AMD's fill (orders.py)
+        orders = None
+    vk, fresh = orders.keys(charts, voff) if orders is not None else (None, None)
+    budget = SLACK * orders.fill if orders is not None else 0.0
+
+    def run(r):             # the system of charts r[0]:r[1] alone: (u, ordering info)
         (a, b), (fa, fb) = r, (foff[r[0]], foff[r[1]])
-        return _lscm_pinned(geom, faces[fa:fb], tris[fa:fb] - voff[a], int(voff[b] - voff[a]),
-                            idx[2 * a:2 * b] - voff[a], val[2 * a:2 * b])
+        args = (geom, faces[fa:fb], tris[fa:fb] - voff[a], int(voff[b] - voff[a]),
+                idx[2 * a:2 * b] - voff[a], val[2 * a:2 * b])
+        if vk is None:
+            return _lscm_pinned(*args), None
+        return _lscm_ordered(*args, vk[voff[a]:voff[b]], budget)
     j = halves(nvs, PARALLEL_VERTICES)
     if n > SEQUENTIAL_VERTICES:     # two factors at a time, none of more than RUN_VERTICES
         #                             vertices but a chart's own
         runs = _runs(nvs, RUN_VERTICES)
-        u = np.concatenate([x for i in range(0, len(runs), 2)
-                            for x in map_blocks(run, runs[i:i + 2])])
+        out = [x for i in range(0, len(runs), 2) for x in map_blocks(run, runs[i:i + 2])]
     elif j is None:
-        u = _lscm_pinned(geom, faces, tris, n, idx, val)
+        runs, out = [(0, k)], [run((0, k))]
     else:                   # two runs of charts, one system each, side by side
-        u = np.concatenate(map_blocks(run, [(0, j), (j, k)]))
+        runs = [(0, j), (j, k)]
+        out = map_blocks(run, runs)
+    u = np.concatenate([x for x, _ in out])
+    if orders is not None:
+        gv = np.concatenate([c.vertices for c in charts])
+        orders.solved(charts, runs, [(fill, rank, gv[voff[a]:voff[b]][free])
+                                     for (a, b), (_, (fill, rank, free)) in zip(runs, out)],
+                      fresh)
     u_solved = u
     cb = geom.cb[faces] * root
     ca = cb.conj()
@@ -181,12 +199,25 @@ def _lscm_pinned(geom, faces, tris, n, idx, val):
     """``solvers.lscm.lscm_pinned`` on the terms of ``faces`` (``geom``: FaceGeometry), formed
     here and dropped with the assembly's temporaries before the factorisation, whose memory is
     handed back to the operating system first (``trim.release_memory``: large charts only)."""
+    return _lscm_ordered(geom, faces, tris, n, idx, val)[0]
+
+
+def _lscm_ordered(geom, faces, tris, n, idx, val, keys=None, budget=0.0):
+    """``_lscm_pinned``, with ``keys`` (n,) the unknowns eliminated in their vertices' order
+    (``orders.ordered_solver``, ``budget`` its fill limit). Returns (u, (the fill and ranks
+    ``ordered_solver`` returns, the free vertices) or None without keys)."""
     A, rhs, u, free = _lscm_system(geom.cbw(faces), geom.cb[faces], tris, n, idx, val)
     release_memory(len(tris))
-    x = spd_solver(A, upper=True)(rhs)
+    info = None
+    if keys is None:
+        solve = spd_solver(A, upper=True)
+    else:
+        solve, fill, rank = ordered_solver(A, keys[free], budget)
+        info = (fill, rank, free)
+    x = solve(rhs)
     nf = len(free)
     u[free] = x[:nf] + 1j * x[nf:]
-    return u
+    return u, info
 
 
 def _runs(sizes, limit):

@@ -31,7 +31,7 @@ def chart_key(chart):
 
 
 def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, known=None,
-                 geom=None, failed=None):
+                 geom=None, failed=None, orders=None):
     """Merge neighbouring charts pairwise while the union's conformal map still passes.
 
     Each round tests a matching of neighbouring pairs (dearest shared seam first: length times
@@ -52,6 +52,8 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
     failed : dict, optional, ``chart_key`` -> max stretch of disks whose conformal map
         failed this test before (the search's, which then split them): a union that is one
         fails without a new solve (the same pairs are tried and the same charts come out)
+    orders : orders.Orders of the mesh, optional: the unions' solves reuse their charts'
+        elimination orders (``charts.chart_maps``)
     """
     failed = {} if failed is None else failed
     # The counts of the failed charts: a union of other counts is not hashed (``chart_key``).
@@ -127,7 +129,7 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
         new = np.flatnonzero(np.isnan(stretch))
         if len(new):
             union = [disks[j][0] for j in new]
-            cm = chart_maps(V, union, geom, limits=(S * MARGIN, mean_cap(C)))
+            cm = chart_maps(V, union, geom, limits=(S * MARGIN, mean_cap(C)), orders=orders)
             ok[new] = (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
                        & (cm.crossings == 0) & (cm.mean_distortion <= mean_cap(C)))
             stretch[new] = cm.max_stretch

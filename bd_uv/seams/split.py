@@ -10,6 +10,7 @@ from ..solvers.threads import halves, map_blocks
 from .charts import spd_solver
 from . import cluster_fiedler
 from .compressed import compressed
+from .orders import fiedler_solver
 from ..trim import release_memory
 
 # Neither side of a split may hold less than this share of the chart's area.
@@ -48,7 +49,7 @@ def fiedler_split(face_area, centroid, pairs, edge_len, edge_cost):
     return side if split[0] else None
 
 
-def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost):
+def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost, keys=None):
     """``fiedler_split`` of many charts at once: one block-diagonal factorisation, every step
     vectorised over the charts (the same cut for each chart as alone, up to rounding).
 
@@ -58,6 +59,8 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost)
     offsets : (g+1,) int64, chart j owns nodes ``offsets[j]:offsets[j+1]``
     pairs : (e,2) int64, node pairs (within one chart) sharing an edge that may be cut
     edge_len, edge_cost : (e,) float64
+    keys : (k,) int64, optional, the nodes' elimination keys (``orders.fiedler_solver``: -1
+        where a chart is to be ordered afresh; rewritten in place where it is)
 
     Returns
     -------
@@ -79,7 +82,7 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost)
     mean_len = np.bincount(pg, edge_len, g) / np.maximum(npairs, 1)
     w = edge_len * edge_cost / np.maximum(d, 1e-12 * mean_len[pg])
     del pg, d                               # per pair: dead before the factors
-    x = _fiedler_many(pairs, w, face_area, centroid, offsets, group)
+    x = _fiedler_many(pairs, w, face_area, centroid, offsets, group, keys=keys)
     if x is None:
         return side, split
     release_memory(k)                       # the factors' freed heap, before the sweep's arrays
@@ -156,32 +159,33 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost)
     return side, split
 
 
-def _fiedler_many(pairs, w, mass, centroid, offsets, group, iters=12, coarsen=True):
+def _fiedler_many(pairs, w, mass, centroid, offsets, group, iters=12, coarsen=True, keys=None):
     """``_fiedler_block`` of all charts; two runs of charts factor side by side when each is
     large enough (``solvers.threads``; each chart's vector is its own either way). Charts above
     ``cluster_fiedler.COARSE_NODES`` nodes get theirs from a graph of clusters of their nodes
-    (``cluster_fiedler.coarse_fiedler``)."""
+    (``cluster_fiedler.coarse_fiedler``, where ``keys`` are not used)."""
     if coarsen and (np.diff(offsets) > cluster_fiedler.COARSE_NODES).any():
         def again(*a, coarsen):
             return _fiedler_many(*a, iters=iters, coarsen=coarsen)
         return cluster_fiedler.coarse_fiedler(pairs, w, mass, centroid, offsets, group, again)
     j = halves(np.diff(offsets), PARALLEL_NODES)
     if j is None:
-        return _fiedler_block(pairs, w, mass, centroid, offsets, group, iters)
+        return _fiedler_block(pairs, w, mass, centroid, offsets, group, iters, keys)
     cut = offsets[j]
     first = pairs[:, 0] < cut
 
     def run(r):
         sel, lo, hi, a, b = r
         return _fiedler_block(pairs[sel] - lo, w[sel], mass[lo:hi], centroid[lo:hi],
-                              offsets[a:b + 1] - lo, group[lo:hi] - a, iters)
+                              offsets[a:b + 1] - lo, group[lo:hi] - a, iters,
+                              None if keys is None else keys[lo:hi])
     xs = map_blocks(run, [(first, 0, cut, 0, j), (~first, cut, len(mass), j, len(offsets) - 1)])
     if any(x is None for x in xs):
         return None
     return np.concatenate(xs)
 
 
-def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12):
+def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12, keys=None):
     """Approximate Fiedler vectors of ``L x = lambda M x``, each chart's own, by inverse
     iteration on the block-diagonal Laplacian (one sparse factorisation for all charts).
 
@@ -194,6 +198,7 @@ def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12):
     pairs : (e,2) int64, w : (e,) float64, the graph's edges and weights (Laplacian L)
     mass : (k,) float64 > 0, centroid : (k,3) float64
     offsets : (g+1,) int64, group : (k,) int64, the chart of each node
+    keys : (k,) int64, optional: factor in their order (``orders.fiedler_solver``)
 
     Returns
     -------
@@ -221,7 +226,7 @@ def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12):
                                   np.concatenate([-w, deg + shift[group] * mass]), k),
                       shape=(k, k))
     try:
-        solve = spd_solver(K, upper=True)
+        solve = spd_solver(K, upper=True) if keys is None else fiedler_solver(K, keys)
     except RuntimeError:
         return None
     tot = np.maximum(total, 1e-300)[group]
@@ -326,6 +331,7 @@ def _principal_axes(c, mass, offsets, group):
     ----------
     c : (k,3) float64, node centroids about their chart's weighted mean; mass : (k,) float64
     offsets : (g+1,) int64, group : (k,) int64, the chart of each node
+    keys : (k,) int64, optional: factor in their order (``orders.fiedler_solver``)
 
     Returns
     -------

@@ -1,0 +1,222 @@
+"""Elimination orders of the seam search's conformal-map systems, reused from chart to chart.
+
+Every LSCM system of the search (``charts.chart_maps``) is a piece or a union of charts already
+mapped, and qdldl orders each afresh (SuiteSparse AMD on its 2n unknowns): most of the
+factorisation's time (dino's 27 systems: 143 ms CPU in ``qdldl.Solver``, 24 of them the numeric
+factor; fandisk's 24: 309 and 126). Here a mesh vertex keeps a key, its place in the last
+order it was given, and a system's unknowns are eliminated in the order of their vertices' keys
+(u and v of a vertex side by side, ``solvers.ordered_ldl``):
+
+- a chart with a vertex never ordered gets a fresh order: AMD of its vertex graph (half the
+  unknowns of the system's own), its vertices keyed by it and its faces made one block;
+- a piece of an ordered chart (the search splits it) keeps its chart's order restricted to it:
+  the fill of an order restricted to a subgraph is within the fill of the whole;
+- a union of charts of different blocks (merging tests it) keeps each chart's order and puts
+  the vertices where blocks meet (the seam the union removes) last, as nested dissection does;
+  they are keyed after everything so far and the union's faces made one block.
+
+An order is refused when its factor would hold more than ``SLACK`` times the entries per
+unknown of the fresh orders so far (the elimination tree gives the count before the numeric
+factor); that system is ordered afresh (AMD of its vertex graph) and its vertices keyed by it.
+The order decides only rounding (~1e-15 relative): the maps, and so the charts, are those of
+qdldl's order (the same added seams bit for bit on suzanne, cow, dino, fandisk and camel).
+Where ``ordered_ldl`` cannot run, ``Orders.of`` is None and qdldl orders every system.
+"""
+import numpy as np
+import scipy.sparse as sp
+
+from ..solvers import ordered_ldl
+from ..solvers.lscm import spd_solver
+
+# Factor entries per unknown a reused order may reach, relative to the fresh orders' most
+# (1.5 let fandisk's merged unions reach 1.5-2x the fill of AMD's order and cost more than it).
+SLACK = 1.2
+# Orders are reused in a batch of at most this many vertices (``charts.chart_maps``; a larger
+# batch is factored in qdldl's order), and kept for a mesh of at most MESH_VERTICES vertices
+# (``Orders.of``): a reused or vertex-graph order fills up to SLACK times more than AMD's, and
+# the large batches' factors are the search's memory peaks. Measured: dino subdivided to 500k
+# faces peaked at 470 MB with every batch reusing orders, 432 MB with batches up to 50k
+# vertices, against main's 423; cow subdivided twice (46k vertices) 229 MB with batches up to
+# 12.5k, against 223. Memory is where meshes that large miss xatlas (344 MB on dino-sub3); the
+# small ones miss its time.
+BATCH_VERTICES = 12_500
+MESH_VERTICES = 20_000
+# Keys of the vertices put last in a union (above any key given).
+LAST = 1 << 50
+
+
+class Orders:
+    """Keys of a mesh's vertices and blocks of its faces (``-1``: never ordered).
+
+    Attributes
+    ----------
+    key : (n,) int64, block : (m,) int32
+    face_key, face_block : (m,) int32, the same for the faces' Fiedler systems
+    given : int, keys handed out so far; blocks : int, blocks made so far
+    fill : float, the most factor entries per unknown of a fresh order (0 before the first)
+    """
+
+    def __init__(self, n, m):
+        self.key = np.full(n, -1, np.int64)
+        # Per face int32 (ranks within one system, block counts: far below 2^31): 6 MB on a
+        # 500k-face mesh rather than 12.
+        self.block = np.full(m, -1, np.int32)
+        self.given = self.blocks = 0
+        self.fill = 0.0
+        self.face_key = np.full(m, -1, np.int32)
+        self.face_block = np.full(m, -1, np.int32)
+
+    def face_keys(self, pieces, fa):
+        """Keys of the faces ``fa`` (the ``pieces`` concatenated) for their Fiedler systems: a
+        piece whose faces all come from one order keeps it, the others get -1 (their system is
+        ordered afresh, ``fiedler_solver``). Hand the keys back with ``faces_ordered``."""
+        keys = self.face_key[fa]
+        at = 0
+        for f in pieces:
+            b = self.face_block[f]
+            if b.min() < 0 or b.min() != b.max():
+                keys[at:at + len(f)] = -1
+            at += len(f)
+        return keys
+
+    def faces_ordered(self, pieces, fa, before, keys):
+        """After the Fiedler solves: the faces' keys as ordered (``keys``, written by
+        ``fiedler_solver``); a piece whose keys changed (ordered afresh) is one block now."""
+        self.face_key[fa] = keys
+        at = 0
+        for f in pieces:
+            if not np.array_equal(before[at:at + len(f)], keys[at:at + len(f)]):
+                self.face_block[f] = self.blocks
+                self.blocks += 1
+            at += len(f)
+
+    @classmethod
+    def of(cls, n, m):
+        """Orders for a mesh of n vertices and m faces, or None where the ordered
+        factorisation cannot run (``ordered_ldl.available``) or the mesh has more than
+        ``MESH_VERTICES`` vertices."""
+        return cls(n, m) if n <= MESH_VERTICES and ordered_ldl.available() else None
+
+    def keys(self, charts, voff):
+        """Keys of the batch's vertices (chart after chart, ``voff`` their offsets), giving
+        fresh orders and ordering unions as the module says. Returns (nv,) int64 and a (k,)
+        bool array: the charts ordered afresh."""
+        vk = np.empty(int(voff[-1]), np.int64)
+        fresh = np.zeros(len(charts), dtype=bool)
+        for j, c in enumerate(charts):
+            k = self.key[c.vertices]
+            if (k < 0).any():
+                fresh[j] = True
+                continue
+            fb = self.block[c.faces]
+            if fb.min() != fb.max():            # a union: where blocks meet goes last
+                # A vertex's corners all of one block iff count * sum(b^2) == sum(b)^2 (exact:
+                # integers far below 2^53).
+                b = np.repeat((fb - fb.min()).astype(np.float64), 3)
+                t, nv = c.tris.ravel(), len(k)
+                s1 = np.bincount(t, b, nv)
+                sep = np.flatnonzero(np.bincount(t, minlength=nv) * np.bincount(t, b * b, nv)
+                                     != s1 * s1)
+                k = k.copy()
+                k[sep] += LAST
+                rank = np.empty(len(sep), np.int64)
+                rank[np.argsort(k[sep], kind="stable")] = np.arange(len(sep))
+                self.key[c.vertices[sep]] = self.given + rank
+                self.given += len(sep)
+                self._block(c.faces)
+            vk[voff[j]:voff[j + 1]] = k
+        if fresh.any():
+            self._fresh([charts[j] for j in np.flatnonzero(fresh)])
+            for j in np.flatnonzero(fresh):
+                vk[voff[j]:voff[j + 1]] = self.key[charts[j].vertices]
+        return vk, fresh
+
+    def solved(self, charts, runs, out, fresh):
+        """After a batch's solves: each run of charts ``runs[i]`` gave ``out[i]`` = (fill,
+        ranks, free vertices (global ids)) of ``ordered_solver``. Charts ordered afresh (here or
+        by a refused order) raise ``fill``; a run ordered afresh keys its vertices by it."""
+        for (a, b), (fill, rank, gv) in zip(runs, out):
+            if rank is not None:
+                self.key[gv] = self.given + rank
+                self.given += len(rank)
+                for c in charts[a:b]:
+                    self._block(c.faces)
+            if rank is not None or fresh[a:b].all():
+                self.fill = max(self.fill, fill if fill is not None else 0.0)
+
+    def _block(self, faces):
+        self.block[faces] = self.blocks
+        self.blocks += 1
+
+    def _fresh(self, charts):
+        """AMD of the charts' vertex graphs (one block-diagonal pattern); their vertices keyed
+        in its order (the batch after every key so far), each chart's faces one block."""
+        nvs = np.array([len(c.vertices) for c in charts])
+        off = np.concatenate([[0], np.cumsum(nvs)])
+        t = np.concatenate([c.tris + off[j] for j, c in enumerate(charts)])
+        a, b = t.ravel(), t[:, [1, 2, 0]].ravel()
+        n = int(off[-1])
+        g = sp.csc_matrix((np.ones(2 * len(a)), (np.concatenate([a, b]), np.concatenate([b, a]))),
+                          shape=(n, n))
+        p = ordered_ldl.amd(g.indptr, g.indices, n)
+        rank = np.empty(n, np.int64)
+        rank[p if p is not None else np.arange(n)] = np.arange(n)
+        for j, c in enumerate(charts):
+            self.key[c.vertices] = self.given + rank[off[j]:off[j + 1]]
+            self._block(c.faces)
+        self.given += n
+
+
+def ordered_solver(A, keys, budget):
+    """Solve of the LSCM system A (upper triangle, csc, unknowns ``[u; v]`` of the free
+    vertices) eliminated in the order of ``keys`` (the free vertices' keys, u and v of a
+    vertex side by side). With ``budget`` > 0, an order whose factor would hold more than
+    ``budget`` entries per unknown is refused and the system ordered afresh (AMD of its
+    vertex graph, the u block's pattern); ``spd_solver`` where even that fails.
+
+    Returns
+    -------
+    (callable b -> x, factor entries per unknown of the order used (None: ``spd_solver``),
+     the fresh order's ranks of the free vertices or None)
+    """
+    n = A.shape[0]
+    f = _factor(A, keys)
+    if f is not None and (budget <= 0 or f.lnz <= budget * n) and f.factor():
+        return f.solve, f.lnz / max(n, 1), None
+    nf = n // 2
+    p = ordered_ldl.amd(A.indptr[:nf + 1], A.indices[:A.indptr[nf]], nf)
+    if p is not None:
+        rank = np.empty(nf, np.int64)
+        rank[p] = np.arange(nf)
+        f = _factor(A, rank)
+        if f is not None and f.factor():
+            return f.solve, f.lnz / max(n, 1), rank
+    return spd_solver(A, upper=True), None, None
+
+
+def _factor(A, keys):
+    n = A.shape[0]
+    perm = np.argsort(np.concatenate([2 * keys, 2 * keys + 1]), kind="stable")
+    cols = np.repeat(np.arange(n, dtype=np.int64), np.diff(A.indptr))
+    f = ordered_ldl.Factor(A.indices.astype(np.int64), cols, A.data, n, perm)
+    return f if f.lnz >= 0 else None
+
+
+def fiedler_solver(K, keys):
+    """Solve of a Fiedler system K (upper triangle, csc, one node a face) in the order of its
+    nodes' ``keys``; where a key is -1 the system is ordered afresh (AMD) and ``keys`` (a view
+    the caller reads back) rewritten with it. A piece of a chart keeps the chart's order: the
+    dual graph of a piece is a subgraph of the chart's, so its fill is within the chart's.
+    ``spd_solver`` where the factorisation fails."""
+    k = K.shape[0]
+    if (keys < 0).any():
+        p = ordered_ldl.amd(K.indptr, K.indices, k)
+        if p is not None:
+            keys[p] = np.arange(k)
+    if (keys >= 0).all():
+        cols = np.repeat(np.arange(k, dtype=np.int64), np.diff(K.indptr))
+        f = ordered_ldl.Factor(K.indices.astype(np.int64), cols, K.data, k,
+                               np.argsort(keys, kind="stable"))
+        if f.lnz >= 0 and f.factor():
+            return f.solve
+    return spd_solver(K, upper=True)

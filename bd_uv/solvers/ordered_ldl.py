@@ -1,0 +1,144 @@
+"""LDL^T of a sparse symmetric positive definite matrix in an elimination order the caller
+gives, through the QDLDL and AMD functions qdldl's extension module exports (``ctypes``).
+
+``qdldl.Solver`` runs SuiteSparse AMD on every matrix, and on the seam search's systems that is
+most of the factorisation (a 1,000-row system: ~0.9 ms of AMD for ~0.1 ms of numeric factor),
+while most of its systems are pieces or unions of charts already ordered (``seams.orders``).
+Here the order is given, its fill is known from the elimination tree before the numeric factor
+(so a caller can refuse an order that fills too much and ask for AMD), and AMD runs only when
+asked for, on the graph the caller chooses (the chart's vertices rather than their 2n unknowns).
+
+Where the module does not export the functions (a build that hides them), its index type is not
+64-bit, or qdldl is another release than the ones checked (``TESTED``), ``available()`` is False
+and callers use ``lscm.spd_solver``.
+"""
+import ctypes
+import functools
+
+import numpy as np
+from scipy.sparse import _sparsetools as _st
+
+try:
+    import qdldl
+except ImportError:  # pragma: no cover - exercised where qdldl is absent
+    qdldl = None
+
+# Arrays go to C as their data addresses (``ndarray.ctypes.data``: ``data_as`` cost ~10 us a
+# call, a few hundred microseconds a factor on the small systems); the arrays are held alive by
+# the caller (``Factor``) while C reads them.
+_A = ctypes.c_void_p
+# The qdldl releases whose exported C functions these signatures were checked against (the one
+# requirements.txt pins and the zips bundle): a wrong argument list is not an error ctypes can
+# catch but a crash (inside Blender, the user's session), so any other release takes qdldl's own
+# order (``qdldl.Solver``).
+TESTED = ("0.1.9.post1",)
+
+
+def _version():
+    try:
+        from importlib.metadata import PackageNotFoundError, version
+        return version("qdldl")
+    except (ImportError, PackageNotFoundError, ValueError):   # vendored, no metadata
+        return None
+
+
+@functools.lru_cache(maxsize=1)
+def _lib():
+    """The extension module's functions with their signatures, or None where they are not
+    exported or their integers are not int64 (checked on a 3 x 3 matrix of known fill)."""
+    if qdldl is None or _version() not in TESTED:
+        return None
+    try:
+        lib = ctypes.CDLL(qdldl.__file__)
+        lib.amd_l_order.argtypes = [ctypes.c_int64, _A, _A, _A, _A, _A]
+        lib.amd_l_order.restype = ctypes.c_int64
+        lib.QDLDL_etree.argtypes = [ctypes.c_int64] + [_A] * 5
+        lib.QDLDL_etree.restype = ctypes.c_int64
+        lib.QDLDL_factor.argtypes = [ctypes.c_int64] + [_A] * 13
+        lib.QDLDL_factor.restype = ctypes.c_int64
+        lib.QDLDL_solve.argtypes = [ctypes.c_int64] + [_A] * 5
+        lib.QDLDL_solve.restype = None
+    except (OSError, AttributeError):
+        return None
+    # A dense 3 x 3 upper triangle: L has 3 entries below the diagonal; read as int32, these
+    # arrays give a column without entries (-1) or another count.
+    Ap = np.array([0, 1, 3, 6], np.int64)
+    Ai = np.array([0, 0, 1, 0, 1, 2], np.int64)
+    work, lnz, et = (np.empty(3, np.int64) for _ in range(3))
+    if lib.QDLDL_etree(3, _p(Ap), _p(Ai), _p(work), _p(lnz), _p(et)) != 3:
+        return None
+    return lib
+
+
+def _p(a):
+    return a.ctypes.data
+
+
+def available():
+    """Whether the ordered factorisation can run here."""
+    return _lib() is not None
+
+
+def amd(indptr, indices, n):
+    """SuiteSparse AMD order (n,) int64 of the symmetric pattern given by one or both
+    triangles in compressed columns (int64 arrays); None when AMD refuses it."""
+    lib = _lib()
+    P = np.empty(n, np.int64)
+    Ap = np.ascontiguousarray(indptr, np.int64)
+    Ai = np.ascontiguousarray(indices, np.int64)
+    if lib.amd_l_order(n, _p(Ap), _p(Ai), _p(P), None, None) < 0:
+        return None
+    return P
+
+
+class Factor:
+    """LDL^T of ``P A P^T`` for a symmetric A given by its upper triangle (rows, cols, vals:
+    triplets with no duplicates) and an order ``perm`` (the unknown eliminated k-th is
+    ``perm[k]``). ``lnz``: the factor's entries, known before the numeric factorisation
+    (``factor`` may then be skipped). Call ``factor()`` (False on a zero pivot), then
+    ``solve(b)``. The matrix in elimination order is written here (rows sorted in each column,
+    the diagonal last, as ``QDLDL_etree`` requires)."""
+
+    def __init__(self, rows, cols, vals, n, perm):
+        self.n, self.perm = n, perm
+        pinv = np.empty(n, np.int64)
+        pinv[perm] = np.arange(n)
+        r, c = pinv[rows], pinv[cols]
+        r, c = np.minimum(r, c), np.maximum(r, c)
+        # Rows by row (counting sort), then the transpose to columns (counting sort again),
+        # which leaves each column's rows in increasing order: O(entries), no comparison sort.
+        nnz = len(r)
+        Rp, Rj, Rx = np.empty(n + 1, np.int64), np.empty(nnz, np.int64), np.empty(nnz)
+        _st.coo_tocsr(n, n, nnz, r, c, np.ascontiguousarray(vals, np.float64), Rp, Rj, Rx)
+        self.Ap, self.Ai, self.Ax = np.empty(n + 1, np.int64), np.empty(nnz, np.int64), \
+            np.empty(nnz)
+        _st.csr_tocsc(n, n, Rp, Rj, Rx, self.Ap, self.Ai, self.Ax)
+        self.work, self.Lnz, self.etree = (np.empty(n, np.int64) for _ in range(3))
+        self.lnz = int(_lib().QDLDL_etree(n, _p(self.Ap), _p(self.Ai), _p(self.work),
+                                          _p(self.Lnz), _p(self.etree)))
+
+    def factor(self):
+        n, lib = self.n, _lib()
+        if self.lnz < 0:
+            return False
+        self.Lp = np.empty(n + 1, np.int64)
+        self.Li = np.empty(max(self.lnz, 1), np.int64)
+        self.Lx = np.empty(max(self.lnz, 1), np.float64)
+        D, self.Dinv = np.empty(n), np.empty(n)
+        bwork = np.empty(n, np.ubyte)
+        iwork = np.empty(3 * n, np.int64)
+        fwork = np.empty(n)
+        pos = lib.QDLDL_factor(n, _p(self.Ap), _p(self.Ai), _p(self.Ax), _p(self.Lp),
+                               _p(self.Li), _p(self.Lx), _p(D), _p(self.Dinv), _p(self.Lnz),
+                               _p(self.etree), _p(bwork), _p(iwork), _p(fwork))
+        self.Ai = self.Ax = self.work = None     # the matrix, no longer needed
+        # The factor's pointers, made once: a solve (12 of them a Fiedler system) passes them.
+        self._args = (n, _p(self.Lp), _p(self.Li), _p(self.Lx), _p(self.Dinv))
+        return pos >= 0                          # -1: a zero pivot (as qdldl.Solver refuses)
+
+    def solve(self, b):
+        x = np.ascontiguousarray(b[self.perm], np.float64)
+        _lib().QDLDL_solve(*self._args, x.ctypes.data)
+        out = np.empty_like(x)
+        out[self.perm] = x
+        return out
