@@ -115,8 +115,12 @@ def uv_boundary(F, corner_uv, face_island):
     del same_next, two
     x, y = order[i1], order[i1 + 1]
     del order, i1
-    match = (a[x] == b[y]) & np.all(flat_uv[h[x]] == flat_uv[hn[y]], axis=1) \
-        & np.all(flat_uv[hn[x]] == flat_uv[h[y]], axis=1)
+    # One UV column at a time: the (k,2) gathers of both ends of both half-edges were ~48 MB at
+    # once on a 500k-face layout.
+    match = a[x] == b[y]
+    for col in (0, 1):
+        match &= flat_uv[h[x], col] == flat_uv[hn[y], col]
+        match &= flat_uv[hn[x], col] == flat_uv[h[y], col]
     interior = np.zeros(len(h), dtype=bool)
     interior[x[match]] = True
     interior[y[match]] = True

@@ -121,10 +121,8 @@ def chart_maps(V, charts, geom=None, limits=None):
         faces = np.arange(len(tris))
     else:
         faces = np.concatenate([c.faces for c in charts])
-    A3 = geom.area[faces]
-    area = np.bincount(face_c, A3, minlength=k)
-    root = np.sqrt(area)[face_c][:, None]
     idx = _far_pairs(P, charts, voff)
+    del P                   # the batch's areas and positions are not held through the factors
     val = np.tile(np.array([0.0, 1.0], np.complex128), k)
 
     def run(r):             # the system of charts r[0]:r[1] alone
@@ -142,6 +140,9 @@ def chart_maps(V, charts, geom=None, limits=None):
     else:                   # two runs of charts, one system each, side by side
         u = np.concatenate(map_blocks(run, [(0, j), (j, k)]))
     u_solved = u
+    A3 = geom.area[faces]
+    area = np.bincount(face_c, A3, minlength=k)
+    root = np.sqrt(area)[face_c][:, None]
     cb = geom.cb[faces] * root
     ca = cb.conj()
     # Scale each chart so its UV area equals its (unit-normalised) 3D area: sigma are then the
