@@ -35,6 +35,8 @@ PARALLEL_VERTICES = 1500
 # ~200 MB each). Two runs of 25k vertices at once hold about what one of 50k did; halves of a
 # 100k-vertex batch side by side were the search's peak (a merge round, 477-494 MB).
 SEQUENTIAL_VERTICES = 50_000
+# Faces per chunk of the maps' per-face numbers.
+CHUNK = 65536
 RUN_VERTICES = 25_000
 
 
@@ -140,22 +142,36 @@ def chart_maps(V, charts, geom=None, limits=None):
     else:                   # two runs of charts, one system each, side by side
         u = np.concatenate(map_blocks(run, [(0, j), (j, k)]))
     u_solved = u
-    A3 = geom.area[faces]
-    area = np.bincount(face_c, A3, minlength=k)
-    root = np.sqrt(area)[face_c][:, None]
-    cb = geom.cb[faces] * root
-    ca = cb.conj()
+    # The per-face numbers ``CHUNK`` faces at a time (each face's are its own: the same bits):
+    # the batch's (f,3) complex coefficients, their conjugates and the corners' UVs at once
+    # were ~250 bytes per face, a merge round's peak once its factors were freed.
+    nf = len(tris)
+    w = np.empty(nf)
+    for i in range(0, nf, CHUNK):
+        t = tris[i:i + CHUNK]
+        e1 = u[t[:, 1]] - u[t[:, 0]]
+        e2 = u[t[:, 2]] - u[t[:, 0]]
+        w[i:i + CHUNK] = 0.5 * (e1.conj() * e2).imag
+    t = e1 = e2 = None
     # Scale each chart so its UV area equals its (unit-normalised) 3D area: sigma are then the
     # singular values of the map with the chart at its 3D size.
-    e1 = u[tris[:, 1]] - u[tris[:, 0]]
-    e2 = u[tris[:, 2]] - u[tris[:, 0]]
-    uv_area = np.bincount(face_c, 0.5 * (e1.conj() * e2).imag, minlength=k)
+    uv_area = np.bincount(face_c, w, minlength=k)
+    del w
     with np.errstate(invalid="ignore", divide="ignore"):
         s = np.sqrt(1.0 / np.abs(uv_area))
     s[~np.isfinite(s)] = 1.0
     u = u * s[vert_c]
-    a = np.abs(np.einsum("fk,fk->f", ca, u[tris]))
-    b = np.abs(np.einsum("fk,fk->f", cb, u[tris]))
+    A3 = geom.area[faces]
+    area = np.bincount(face_c, A3, minlength=k)
+    root = np.sqrt(area)
+    a, b = np.empty(nf), np.empty(nf)
+    for i in range(0, nf, CHUNK):
+        f = slice(i, i + CHUNK)
+        cb = geom.cb[faces[f]] * root[face_c[f]][:, None]
+        ut = u[tris[f]]
+        a[f] = np.abs(np.einsum("fk,fk->f", cb.conj(), ut))
+        b[f] = np.abs(np.einsum("fk,fk->f", cb, ut))
+    cb = ut = None
     with np.errstate(invalid="ignore", divide="ignore"):
         ok = a > b
         D = np.where(ok, (a + b) / (a - b), np.inf)
