@@ -142,6 +142,9 @@ def chart_maps(V, charts, geom=None, limits=None):
     else:                   # two runs of charts, one system each, side by side
         u = np.concatenate(map_blocks(run, [(0, j), (j, k)]))
     u_solved = u
+    # The factors' freed heap (much of it in the worker threads' arenas) back to the operating
+    # system before the per-face numbers are formed beside it.
+    release_memory(len(tris))
     # The per-face numbers ``CHUNK`` faces at a time (each face's are its own: the same bits):
     # the batch's (f,3) complex coefficients, their conjugates and the corners' UVs at once
     # were ~250 bytes per face, a merge round's peak once its factors were freed.
