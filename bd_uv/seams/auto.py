@@ -22,10 +22,11 @@ import numpy as np
 
 from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, OverlapError,
                       SolverError, TopologyError)
+from ..geometry import face_areas
 from ..mesh import DEGENERATE_RATIO, Island, check_arrays, islands
 from ..options import UnwrapOptions
 from ..unwrapping.unwrap import pin_arrays, unwrap, unwrap_islands
-from .charts import MARGIN, chart_maps, face_geometry, mean_cap
+from .charts import MARGIN, chart_maps, mean_cap
 from .cut_graph import cut_graph
 from .edges import edge_table
 from .measure import measure_charts, splice
@@ -36,7 +37,7 @@ from .topology import charts, cut_mesh
 from ..trim import release_memory
 
 MAX_ROUNDS = 60
-# Faces per chunk of ``_valid_everywhere``'s per-face tests.
+# Faces per chunk of the set-up's per-face arithmetic (areas, ``_valid_everywhere``'s tests).
 CHUNK = 65536
 # The charts of the given seams (the first round's) pass with a mean up to this share of
 # (mean_cap - 1) more: 1.0875 at C = 2.
@@ -117,8 +118,12 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         g = np.asarray(face_groups)
         inner = E.faces[:, 1] >= 0
         keep[inner] |= g[E.faces[inner, 0]] != g[E.faces[inner, 1]]
-    geom = face_geometry(V, F)
-    A = geom.area                           # the same per-face arithmetic as ``face_areas``
+    # Face areas only (``face_geometry``'s own arithmetic): the mesh's face geometry (beta's
+    # coefficients, 30 MB on a 500k-face mesh) is not held through the search; ``chart_maps``
+    # forms each batch's (the same per-face numbers, the same bits; the faces mapped add up to
+    # ~8x the mesh's, ~4 % more CPU).
+    A = np.concatenate([face_areas(V, F[i:i + CHUNK]) for i in range(0, m, CHUNK)]
+                       or [np.zeros(0)])
     cen = FaceCentroids(V, F)               # formed for the faces split, not held per face
     # Islands the seams cannot fix (non-manifold, degenerate, ...) are left to ``unwrap`` to
     # report; the rest of the search works on charts of the validated mesh.
@@ -145,21 +150,15 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         # must not be cut again for triangulation noise in its mean.
         changed = _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag,
                           cap=mean_cap(C) + GIVEN_SLACK * (mean_cap(C) - 1.0)
-                          if rounds == 1 else mean_cap(C), known=known, geom=geom,
-                          failed=failed)
+                          if rounds == 1 else mean_cap(C), known=known, failed=failed)
         if not changed:
             break
     if merge:
         before = cut.copy()
-        merge_charts(V, F, E, cut, keep, invalid, S, C, known=known, geom=geom,
-                     failed=failed)
+        merge_charts(V, F, E, cut, keep, invalid, S, C, known=known, failed=failed)
         # A union that alone caps the atlas's coverage is bisected where that pays.
-        split_for_packing(V, F, E, cut, before, original, A, cen, S, mean_cap(C), poly, geom,
+        split_for_packing(V, F, E, cut, before, original, A, cen, S, mean_cap(C), poly, None,
                           known, invalid)
-    # The mesh's face geometry (30 MB on a 500k-face mesh) is not held through the final unwrap,
-    # which forms its charts' own: the rounds after it map a few pieces, and ``chart_maps``
-    # forms theirs (the same per-face arithmetic, the same bits).
-    geom = None
     release_memory(m)
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last
@@ -189,13 +188,11 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             group[r.faces] = g
         bisect([np.sort(r.faces) for r in bad], E, cut, A, cen, poly)
         for _ in range(MAX_ROUNDS):
-            if not _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag, geom=geom,
-                           failed=failed):
+            if not _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag, failed=failed):
                 break
         if merge:
             # The pieces may now merge with their neighbours (never with each other).
-            merge_charts(V, F, E, cut, keep, invalid, S, C, group=group, geom=geom,
-                         failed=failed)
+            merge_charts(V, F, E, cut, keep, invalid, S, C, group=group, failed=failed)
         # Unwrap anew every chart holding a piece (with the neighbours it took in).
         redo = np.zeros(m, dtype=bool)
         for c in charts(F, E, cut):
