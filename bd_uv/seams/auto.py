@@ -163,7 +163,20 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last
     # round lets ``unwrap`` cut what still overlaps.
-    result, chs = _unwrap_charts(V, F, E, cut, known, not invalid.any(),
+    chs = charts(F, E, cut) if not invalid.any() else None
+    # The final unwrap and the measures after it read the edges' ends and lengths only: the
+    # fans, faces, face edges and costs (~38 MB on a 500k-face mesh) are dropped, and the table
+    # is built again (the same arrays) only if a finish round or a cut needs it.
+    slim = E.fans is not None and chs is not None
+    if slim:
+        E = dataclasses.replace(E, faces=None, cost=None, face_edges=None, fans=None)
+
+    def whole(E):
+        """The whole edge table again where it was slimmed."""
+        if E.fans is None and slim:
+            E = dataclasses.replace(edge_table(V, F, face_groups), corners=None)
+        return E
+    result, chs = _unwrap_charts(V, F, E, cut, known, chs,
                                  chart_options.replace(overlap="cut" if FINISH_ROUNDS == 0
                                                        else "fail"), unwrap_options)
     known = None                            # the maps of charts merged since: no longer needed
@@ -181,6 +194,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         if not bad:
             break
         measured = None
+        E = whole(E)
         frozen[:] = True
         group = np.full(m, -1, dtype=np.int64)
         for g, r in enumerate(bad):
@@ -210,6 +224,8 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             k = E.keys(r.cut_edges, n)
             cut[k[k >= 0]] = True
             measured = chs = None
+    if measured is None and chs is None:
+        E = whole(E)
     st, cr = measured if measured is not None else measure_charts(V, F, E, cut, result, chs)
     result = dataclasses.replace(result, seconds=time.perf_counter() - t0)
     added = E.ends[cut & ~original].astype(np.int64)
@@ -222,22 +238,23 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     return result, added, info
 
 
-def _unwrap_charts(V, F, E, cut, known, valid, options, run):
+def _unwrap_charts(V, F, E, cut, known, chs, options, run):
     """``unwrap`` of the mesh cut along ``cut`` with ``options`` (UnwrapOptions: C, not raised),
     the conformal maps in ``known`` (charts that passed) certified rather than solved again
     (``known`` is emptied before the unwrap: the maps of charts merged since are garbage);
     ``run``: progress, cancel and face_groups as ``unwrap`` takes them.
 
-    Where the mesh is ``valid`` (``_valid_everywhere``, nothing frozen as invalid) and every
-    chart is a disk, the charts are the islands ``mesh.islands`` would find (numbered alike), so
-    they go to ``unwrap_islands`` as they are; otherwise ``unwrap`` finds and checks them.
+    ``chs``: the charts of ``cut`` (``topology.charts``) where the mesh is valid
+    (``_valid_everywhere``, nothing frozen as invalid), else None. Where they are all disks,
+    they are the islands ``mesh.islands`` would find (numbered alike), so they go to
+    ``unwrap_islands`` as they are; otherwise ``unwrap`` finds and checks them (``E``: its
+    ``ends`` only).
 
     Returns
     -------
     (UnwrapResult, the charts of ``cut`` (``topology.charts``) or None where not found)
     """
-    chs = charts(F, E, cut) if valid else []
-    if not valid or any(c.kind != "disk" for c in chs):
+    if chs is None or any(c.kind != "disk" for c in chs):
         known.clear()
         return unwrap(V, F, seams=E.ends[cut], options=options, **run), (chs or None)
     isl = [Island(j, c.faces, c.vertices, c.tris, c.loops) for j, c in enumerate(chs)]
