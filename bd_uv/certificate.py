@@ -129,6 +129,7 @@ def certify_islands(V, F, corner_uv, face_island, bounds, rtol=RTOL):
     dsum = np.bincount(fl[ok_d], weights=(A * D)[ok_d], minlength=k)
     with np.errstate(invalid="ignore", divide="ignore"):
         meanD = np.where(wsum > 0, dsum / wsum, np.inf)
+    D = flip = A = ok_d = None              # per face, not held through the overlap test
     # The distortion pass's freed chunks, handed back before the boundary's arrays (on a
     # 500k-face mesh the freed heap stayed resident under the overlap test: the seam search's
     # last memory peak).

@@ -100,7 +100,7 @@ def uv_boundary(F, corner_uv, face_island):
     # Pair half-edges of one island on the same undirected edge; interior iff exactly two, opposite
     # directions, and the same UV at each end.
     lo, hi = np.minimum(a, b), np.maximum(a, b)
-    order = np.lexsort((hi, lo, isl))
+    order = np.lexsort((hi, lo, isl)).astype(it, copy=False)
     same_next = np.zeros(len(h), dtype=bool)
     if len(h) > 1:
         same_next[:-1] = _equal_next(isl, order)
@@ -115,20 +115,29 @@ def uv_boundary(F, corner_uv, face_island):
     del same_next, two
     x, y = order[i1], order[i1 + 1]
     del order, i1
-    match = (a[x] == b[y]) & np.all(flat_uv[h[x]] == flat_uv[hn[y]], axis=1) \
-        & np.all(flat_uv[hn[x]] == flat_uv[h[y]], axis=1)
+    # One UV column at a time: the (k,2) gathers of both ends of both half-edges were ~48 MB at
+    # once on a 500k-face layout.
+    match = a[x] == b[y]
+    for col in (0, 1):
+        match &= flat_uv[h[x], col] == flat_uv[hn[y], col]
+        match &= flat_uv[hn[x], col] == flat_uv[h[y], col]
+    x, y = x[match], y[match]
+    del match
     interior = np.zeros(len(h), dtype=bool)
-    interior[x[match]] = True
-    interior[y[match]] = True
+    interior[x] = True
+    interior[y] = True
+    inner = np.stack([h[x], h[y]], axis=1).astype(np.int64)
+    del x, y
     bnd = np.flatnonzero(~interior)
     del interior
+    # The outputs first, then the per-half-edge columns dropped before the boundary's ids.
     p, q, bi = flat_uv[h[bnd]], flat_uv[hn[bnd]], isl[bnd].astype(np.int64)
+    edge = np.stack([a[bnd], b[bnd]], axis=1).astype(np.int64)
+    del h, hn, a, b, isl
     ids = _row_ids(np.concatenate([bi, bi]), _bits(np.concatenate([p[:, 0], q[:, 0]])),
                    _bits(np.concatenate([p[:, 1], q[:, 1]])))
     nb = len(bnd)
-    return Boundary(p, q, bi, faces[bnd // 3],
-                    np.stack([a[bnd], b[bnd]], axis=1).astype(np.int64), ids[:nb], ids[nb:],
-                    np.stack([h[x[match]], h[y[match]]], axis=1).astype(np.int64))
+    return Boundary(p, q, bi, faces[bnd // 3], edge, ids[:nb], ids[nb:], inner)
 
 
 def _equal_next(col, order):

@@ -22,10 +22,11 @@ import numpy as np
 
 from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, OverlapError,
                       SolverError, TopologyError)
+from ..geometry import face_areas
 from ..mesh import DEGENERATE_RATIO, Island, check_arrays, islands
 from ..options import UnwrapOptions
 from ..unwrapping.unwrap import pin_arrays, unwrap, unwrap_islands
-from .charts import MARGIN, chart_maps, face_geometry, mean_cap
+from .charts import MARGIN, chart_maps, mean_cap
 from .cut_graph import cut_graph
 from .edges import edge_table
 from .measure import measure_charts, splice
@@ -37,6 +38,8 @@ from .topology import charts, cut_mesh
 from ..trim import release_memory
 
 MAX_ROUNDS = 60
+# Faces per chunk of the set-up's per-face arithmetic (areas, ``_valid_everywhere``'s tests).
+CHUNK = 65536
 # The charts of the given seams (the first round's) pass with a mean up to this share of
 # (mean_cap - 1) more: 1.0875 at C = 2.
 GIVEN_SLACK = 0.25
@@ -120,8 +123,12 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         g = np.asarray(face_groups)
         inner = E.faces[:, 1] >= 0
         keep[inner] |= g[E.faces[inner, 0]] != g[E.faces[inner, 1]]
-    geom = face_geometry(V, F)
-    A = geom.area                           # the same per-face arithmetic as ``face_areas``
+    # Face areas only (``face_geometry``'s own arithmetic): the mesh's face geometry (beta's
+    # coefficients, 30 MB on a 500k-face mesh) is not held through the search; ``chart_maps``
+    # forms each batch's (the same per-face numbers, the same bits; the faces mapped add up to
+    # ~8x the mesh's, ~4 % more CPU).
+    A = np.concatenate([face_areas(V, F[i:i + CHUNK]) for i in range(0, m, CHUNK)]
+                       or [np.zeros(0)])
     cen = FaceCentroids(V, F)               # formed for the faces split, not held per face
     # Islands the seams cannot fix (non-manifold, degenerate, ...) are left to ``unwrap`` to
     # report; the rest of the search works on charts of the validated mesh.
@@ -149,30 +156,39 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         # must not be cut again for triangulation noise in its mean.
         changed = _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag,
                           cap=mean_cap(C) + GIVEN_SLACK * (mean_cap(C) - 1.0)
-                          if rounds == 1 else mean_cap(C), known=known, geom=geom,
-                          failed=failed, orders=orders)
+                          if rounds == 1 else mean_cap(C), known=known, failed=failed,
+                          orders=orders)
         if not changed:
             break
     atlas = np.zeros(len(E.ends), dtype=bool)   # the seams added for the atlas
     kept = []
     if merge:
-        merge_charts(V, F, E, cut, keep, invalid, S, C, known=known, geom=geom,
-                     failed=failed, orders=orders)
+        merge_charts(V, F, E, cut, keep, invalid, S, C, known=known, failed=failed,
+                     orders=orders)
     if atlas_cuts:
         # A chart that alone caps the atlas's coverage is bisected where that pays.
         atlas[:] = cut
-        kept = split_for_packing(V, F, E, cut, original, A, cen, S, mean_cap(C), poly, geom,
+        kept = split_for_packing(V, F, E, cut, original, A, cen, S, mean_cap(C), poly, None,
                                  known, invalid)
         atlas = cut & ~atlas
-    # The mesh's face geometry (30 MB on a 500k-face mesh) is not held through the final unwrap,
-    # which forms its charts' own: the rounds after it map a few pieces, and ``chart_maps``
-    # forms theirs (the same per-face arithmetic, the same bits).
-    geom = None
     release_memory(m)
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last
     # round lets ``unwrap`` cut what still overlaps.
-    result, chs = _unwrap_charts(V, F, E, cut, known, not invalid.any(),
+    chs = charts(F, E, cut) if not invalid.any() else None
+    # The final unwrap and the measures after it read the edges' ends and lengths only: the
+    # fans, faces, face edges and costs (~38 MB on a 500k-face mesh) are dropped, and the table
+    # is built again (the same arrays) only if a finish round or a cut needs it.
+    slim = E.fans is not None and chs is not None
+    if slim:
+        E = dataclasses.replace(E, faces=None, cost=None, face_edges=None, fans=None)
+
+    def whole(E):
+        """The whole edge table again where it was slimmed."""
+        if E.fans is None and slim:
+            E = dataclasses.replace(edge_table(V, F, face_groups), corners=None)
+        return E
+    result, chs = _unwrap_charts(V, F, E, cut, known, chs,
                                  chart_options.replace(overlap="cut" if FINISH_ROUNDS == 0
                                                        else "fail"), unwrap_options)
     known = None                            # the maps of charts merged since: no longer needed
@@ -190,6 +206,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         if not bad:
             break
         measured = None
+        E = whole(E)
         frozen[:] = True
         group = np.full(m, -1, dtype=np.int64)
         for g, r in enumerate(bad):
@@ -197,13 +214,13 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             group[r.faces] = g
         bisect([np.sort(r.faces) for r in bad], E, cut, A, cen, poly, orders)
         for _ in range(MAX_ROUNDS):
-            if not _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag, geom=geom,
-                           failed=failed, orders=orders):
+            if not _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag, failed=failed,
+                           orders=orders):
                 break
         if merge:
             # The pieces may now merge with their neighbours (never with each other).
-            merge_charts(V, F, E, cut, keep, invalid, S, C, group=group, geom=geom,
-                         failed=failed, orders=orders)
+            merge_charts(V, F, E, cut, keep, invalid, S, C, group=group, failed=failed,
+                         orders=orders)
         # Unwrap anew every chart holding a piece (with the neighbours it took in).
         redo = np.zeros(m, dtype=bool)
         for c in charts(F, E, cut):
@@ -221,6 +238,8 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             k = E.keys(r.cut_edges, n)
             cut[k[k >= 0]] = True
             measured = chs = None
+    if measured is None and chs is None:
+        E = whole(E)
     st, cr = measured if measured is not None else measure_charts(V, F, E, cut, result, chs)
     result = dataclasses.replace(result, seconds=time.perf_counter() - t0)
     added = E.ends[cut & ~original].astype(np.int64)
@@ -235,22 +254,23 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     return result, added, info
 
 
-def _unwrap_charts(V, F, E, cut, known, valid, options, run):
+def _unwrap_charts(V, F, E, cut, known, chs, options, run):
     """``unwrap`` of the mesh cut along ``cut`` with ``options`` (UnwrapOptions: C, not raised),
     the conformal maps in ``known`` (charts that passed) certified rather than solved again
     (``known`` is emptied before the unwrap: the maps of charts merged since are garbage);
     ``run``: progress, cancel and face_groups as ``unwrap`` takes them.
 
-    Where the mesh is ``valid`` (``_valid_everywhere``, nothing frozen as invalid) and every
-    chart is a disk, the charts are the islands ``mesh.islands`` would find (numbered alike), so
-    they go to ``unwrap_islands`` as they are; otherwise ``unwrap`` finds and checks them.
+    ``chs``: the charts of ``cut`` (``topology.charts``) where the mesh is valid
+    (``_valid_everywhere``, nothing frozen as invalid), else None. Where they are all disks,
+    they are the islands ``mesh.islands`` would find (numbered alike), so they go to
+    ``unwrap_islands`` as they are; otherwise ``unwrap`` finds and checks them (``E``: its
+    ``ends`` only).
 
     Returns
     -------
     (UnwrapResult, the charts of ``cut`` (``topology.charts``) or None where not found)
     """
-    chs = charts(F, E, cut) if valid else []
-    if not valid or any(c.kind != "disk" for c in chs):
+    if chs is None or any(c.kind != "disk" for c in chs):
         known.clear()
         return unwrap(V, F, seams=E.ends[cut], options=options, **run), (chs or None)
     isl = [Island(j, c.faces, c.vertices, c.tris, c.loops) for j, c in enumerate(chs)]
@@ -281,25 +301,31 @@ def _valid_everywhere(V, F, E, A):
     -------
     bool
     """
-    P = V[F]
-    if not np.isfinite(P).all():
-        return False
-    lmax2 = np.max(np.sum((P - np.roll(P, -1, axis=1)) ** 2, axis=2), axis=1)
-    with np.errstate(invalid="ignore"):
-        if not np.all(2 * A > DEGENERATE_RATIO * lmax2):
+    # Per-face tests ``CHUNK`` faces at a time: the (m,3,3) corner positions and their
+    # differences were ~110 MB at once on a 500k-face mesh, the set-up's peak.
+    for i in range(0, len(F), CHUNK):
+        P = V[F[i:i + CHUNK]]
+        if not np.isfinite(P).all():
             return False
+        lmax2 = np.max(np.sum((P - np.roll(P, -1, axis=1)) ** 2, axis=2), axis=1)
+        with np.errstate(invalid="ignore"):
+            if not np.all(2 * A[i:i + CHUNK] > DEGENERATE_RATIO * lmax2):
+                return False
+        # Two faces on the same vertices share all three edges: each edge leads to the other.
+        ef = E.faces[E.face_edges[i:i + CHUNK]]         # (k,3,2)
+        me = np.arange(i, i + len(ef))[:, None]
+        other = np.where(ef[:, :, 0] == me, ef[:, :, 1], ef[:, :, 0])
+        if np.any((other[:, 0] >= 0) & (other[:, 0] == other[:, 1])
+                  & (other[:, 1] == other[:, 2])):
+            return False
+    P = lmax2 = ef = me = other = None
     if (np.bincount(E.face_edges.ravel(), minlength=len(E.ends)) > 2).any():
         return False
     c = E.corners[E.faces[:, 1] >= 0]
     nxt = lambda h: h - h % 3 + (h % 3 + 1) % 3
     if np.any((nxt(c[:, 0, 0]) == c[:, 0, 1]) == (nxt(c[:, 1, 0]) == c[:, 1, 1])):
         return False
-    # Two faces on the same vertices share all three edges: each edge leads to the other.
-    ef = E.faces[E.face_edges]                          # (m,3,2)
-    me = np.arange(len(F))[:, None]
-    other = np.where(ef[:, :, 0] == me, ef[:, :, 1], ef[:, :, 0])
-    if np.any((other[:, 0] >= 0) & (other[:, 0] == other[:, 1]) & (other[:, 1] == other[:, 2])):
-        return False
+    del c
     _, voc = cut_mesh(F, E, np.zeros(len(E.ends), dtype=bool))
     return len(voc) == len(np.unique(F))
 
@@ -357,7 +383,11 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=Non
             else:
                 if failed is not None:
                     failed[chart_key(c)] = float(cm.max_stretch[j])
-                todo.append((c.faces, cm.sigma[cm.foff[j]:cm.foff[j + 1]]))
+                todo.append((c.faces, cm.sigma[cm.foff[j]:cm.foff[j + 1]].copy()))
+    # The round's charts and maps are not held through the splits (the Fiedler sweep is the
+    # top-down rounds' peak): ~36 bytes per face of charts and ~48 per face and vertex mapped
+    # (17 MB and more on a 500k-face mesh); only the failed disks' singular values are kept.
+    chs = disks = cm = None
     if todo:
         split = split_deep(todo, E, cut, A, cen, S, poly, orders)
         for (faces, _), done in zip(todo, split):

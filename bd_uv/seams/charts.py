@@ -36,6 +36,8 @@ PARALLEL_VERTICES = 1500
 # ~200 MB each). Two runs of 25k vertices at once hold about what one of 50k did; halves of a
 # 100k-vertex batch side by side were the search's peak (a merge round, 477-494 MB).
 SEQUENTIAL_VERTICES = 50_000
+# Faces per chunk of the maps' per-face numbers.
+CHUNK = 65536
 RUN_VERTICES = 25_000
 
 
@@ -125,10 +127,8 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
         faces = np.arange(len(tris))
     else:
         faces = np.concatenate([c.faces for c in charts])
-    A3 = geom.area[faces]
-    area = np.bincount(face_c, A3, minlength=k)
-    root = np.sqrt(area)[face_c][:, None]
     idx = _far_pairs(P, charts, voff)
+    del P                   # the batch's areas and positions are not held through the factors
     val = np.tile(np.array([0.0, 1.0], np.complex128), k)
 
     if n > BATCH_VERTICES:  # a large batch's factors are memory peaks: AMD's fill (orders.py)
@@ -144,10 +144,10 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
             return _lscm_pinned(*args), None
         return _lscm_ordered(*args, vk[voff[a]:voff[b]], budget)
     j = halves(nvs, PARALLEL_VERTICES)
-    if n > SEQUENTIAL_VERTICES:     # two factors at a time, none of more than RUN_VERTICES
-        #                             vertices but a chart's own
+    if n > SEQUENTIAL_VERTICES:     # two factors of at most RUN_VERTICES vertices at a time,
+        #                             a larger chart's alone
         runs = _runs(nvs, RUN_VERTICES)
-        out = [x for i in range(0, len(runs), 2) for x in map_blocks(run, runs[i:i + 2])]
+        out = [x for g in _pairs(runs, voff) for x in map_blocks(run, g)]
     elif j is None:
         runs, out = [(0, k)], [run((0, k))]
     else:                   # two runs of charts, one system each, side by side
@@ -160,19 +160,39 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
                                      for (a, b), (_, (fill, rank, free)) in zip(runs, out)],
                       fresh)
     u_solved = u
-    cb = geom.cb[faces] * root
-    ca = cb.conj()
+    # The factors' freed heap (much of it in the worker threads' arenas) back to the operating
+    # system before the per-face numbers are formed beside it.
+    release_memory(len(tris))
+    # The per-face numbers ``CHUNK`` faces at a time (each face's are its own: the same bits):
+    # the batch's (f,3) complex coefficients, their conjugates and the corners' UVs at once
+    # were ~250 bytes per face, a merge round's peak once its factors were freed.
+    nf = len(tris)
+    w = np.empty(nf)
+    for i in range(0, nf, CHUNK):
+        t = tris[i:i + CHUNK]
+        e1 = u[t[:, 1]] - u[t[:, 0]]
+        e2 = u[t[:, 2]] - u[t[:, 0]]
+        w[i:i + CHUNK] = 0.5 * (e1.conj() * e2).imag
+    t = e1 = e2 = None
     # Scale each chart so its UV area equals its (unit-normalised) 3D area: sigma are then the
     # singular values of the map with the chart at its 3D size.
-    e1 = u[tris[:, 1]] - u[tris[:, 0]]
-    e2 = u[tris[:, 2]] - u[tris[:, 0]]
-    uv_area = np.bincount(face_c, 0.5 * (e1.conj() * e2).imag, minlength=k)
+    uv_area = np.bincount(face_c, w, minlength=k)
+    del w
     with np.errstate(invalid="ignore", divide="ignore"):
         s = np.sqrt(1.0 / np.abs(uv_area))
     s[~np.isfinite(s)] = 1.0
     u = u * s[vert_c]
-    a = np.abs(np.einsum("fk,fk->f", ca, u[tris]))
-    b = np.abs(np.einsum("fk,fk->f", cb, u[tris]))
+    A3 = geom.area[faces]
+    area = np.bincount(face_c, A3, minlength=k)
+    root = np.sqrt(area)
+    a, b = np.empty(nf), np.empty(nf)
+    for i in range(0, nf, CHUNK):
+        f = slice(i, i + CHUNK)
+        cb = geom.cb[faces[f]] * root[face_c[f]][:, None]
+        ut = u[tris[f]]
+        a[f] = np.abs(np.einsum("fk,fk->f", cb.conj(), ut))
+        b[f] = np.abs(np.einsum("fk,fk->f", cb, ut))
+    cb = ut = None
     with np.errstate(invalid="ignore", divide="ignore"):
         ok = a > b
         D = np.where(ok, (a + b) / (a - b), np.inf)
@@ -231,6 +251,22 @@ def _runs(sizes, limit):
         total += s
     runs.append((a, len(sizes)))
     return runs
+
+
+def _pairs(runs, voff):
+    """``runs`` in groups factored side by side: two consecutive runs while both hold at most
+    ``RUN_VERTICES`` vertices, a run of one larger chart alone (two such factors side by side
+    were the seam search's peak on a 500k-face mesh)."""
+    size = [int(voff[b] - voff[a]) for a, b in runs]
+    groups, i = [], 0
+    while i < len(runs):
+        if i + 1 < len(runs) and max(size[i], size[i + 1]) <= RUN_VERTICES:
+            groups.append(runs[i:i + 2])
+            i += 2
+        else:
+            groups.append(runs[i:i + 1])
+            i += 1
+    return groups
 
 
 def piece_stretch(sigma, area3, label, k):
