@@ -82,8 +82,9 @@ class UsdScene:
         meshes, parts, where = [], [], path
         try:   # a crate file's values are read lazily: a damaged one fails here, not at Open
             for prim in stage.Traverse():
-                if not prim.IsA(UsdGeom.Mesh):
-                    continue
+                if not prim.IsA(UsdGeom.Mesh) or _empty(UsdGeom.Mesh(prim)):
+                    continue   # an empty Mesh (a placeholder a variant or payload fills) is
+                    #            nothing to unwrap, as a glTF mesh of points or lines
                 where = f"{path}: prim {prim.GetPath()}"
                 m, part, info, warnings = _mesh_arrays(UsdGeom.Mesh(prim), where, uv_name, Usd)
                 name = str(prim.GetPath())
@@ -247,6 +248,21 @@ def _reanchor(src, asset, out_dir, package_local=False):
         return asset + inner                     # a search path, resolved by the resolver
     rel = os.path.relpath(full, out_dir).replace(os.sep, "/")
     return (rel if rel.startswith("../") else "./" + rel) + inner
+
+
+def _empty(mesh):
+    """True for a Mesh with no points, no faces and no face-vertex indices authored (or all
+    three authored empty, at every time)."""
+    attrs = (mesh.GetPointsAttr(), mesh.GetFaceVertexCountsAttr(),
+             mesh.GetFaceVertexIndicesAttr())
+    def nothing(a):   # not authored, or authored as an empty array (a damaged value is not)
+        if a.GetNumTimeSamples():
+            return False
+        if not a.HasAuthoredValue():
+            return True
+        value = a.Get()
+        return value is not None and hasattr(value, "__len__") and len(value) == 0
+    return all(nothing(a) for a in attrs)
 
 
 def _mesh_arrays(mesh, where, uv_name, Usd):

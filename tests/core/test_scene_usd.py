@@ -463,3 +463,35 @@ def test_several_uv_primvars_and_no_material_write_st_and_say_so(tmp_path):
     assert entry["uv_name"] == "st"
     assert any("uvA, uvB" in w and "--uv-name" in w for w in entry["warnings"])
     _check_st(Usd.Stage.Open(out), "/World/Grid", entry["bound_certified"])
+
+
+def test_an_empty_mesh_prim_is_skipped_and_the_others_unwrapped(tmp_path, capsys):
+    # a placeholder `def Mesh` with nothing authored (StandardShaderBall's layers hold one a
+    # variant fills) had the whole stage refused as "a mesh without points"
+    src, out, rep = str(tmp_path / "in.usda"), str(tmp_path / "o.usda"), tmp_path / "r.json"
+    _grid_stage(src, ["st"])
+    stage = Usd.Stage.Open(src)
+    UsdGeom.Mesh.Define(stage, "/World/Placeholder")
+    empty = UsdGeom.Mesh.Define(stage, "/World/Emptied")   # authored, but empty
+    empty.CreatePointsAttr([])
+    empty.CreateFaceVertexCountsAttr([])
+    empty.CreateFaceVertexIndicesAttr([])
+    stage.GetRootLayer().Save()
+    assert main(["unwrap", src, "-o", out, "--report", str(rep)]) == 0
+    (entry,) = json.loads(rep.read_text())["meshes"]
+    assert entry["name"] == "/World/Grid" and entry["status"] == "certified"
+    _check_st(Usd.Stage.Open(out), "/World/Grid", entry["bound_certified"])
+    for path in ("/World/Placeholder", "/World/Emptied"):
+        assert not UsdGeom.PrimvarsAPI(Usd.Stage.Open(out).GetPrimAtPath(path)).GetPrimvar("st")
+    # a stage of empty meshes alone has nothing to unwrap, and says so
+    only = Usd.Stage.CreateNew(str(tmp_path / "only.usda"))
+    UsdGeom.Mesh.Define(only, "/Placeholder")
+    only.GetRootLayer().Save()
+    assert main(["unwrap", str(tmp_path / "only.usda"), "-o", str(tmp_path / "p.usda")]) == 2
+    assert "holds no triangle or polygon mesh" in capsys.readouterr().err
+    # faces without points is not empty: still refused by name
+    bad = Usd.Stage.CreateNew(str(tmp_path / "bad.usda"))
+    UsdGeom.Mesh.Define(bad, "/Broken").CreateFaceVertexCountsAttr([3])
+    bad.GetRootLayer().Save()
+    assert main(["unwrap", str(tmp_path / "bad.usda"), "-o", str(tmp_path / "q.usda")]) == 2
+    assert "/Broken" in capsys.readouterr().err
