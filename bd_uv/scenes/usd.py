@@ -57,6 +57,48 @@ def fan_triangles(counts):
     return np.stack([s, s + i, s + i + 1], 1), poly
 
 
+def polygon_triangles(counts, indices):
+    """``fan_triangles``, with the fan of a polygon turned to start at another corner where one
+    of its diagonals would run along an edge of the mesh (a non-planar pentagon whose fan
+    diagonal lies on its neighbour's side, usd-wg's ``5_face.usda``): such a diagonal makes an
+    edge of three triangles, which splits the polygon across islands.
+
+    Returns
+    -------
+    T : (m,3) int64 face-vertex ids, poly : (m,) int64 polygon of each triangle
+    """
+    T, poly = fan_triangles(counts)
+    counts = np.asarray(counts, dtype=np.int64)
+    big = np.flatnonzero(counts >= 4)
+    if not len(big) or not len(indices):
+        return T, poly
+    idx = np.asarray(indices, dtype=np.int64)
+    n = int(idx.max()) + 1
+    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    pos = np.arange(len(idx)) - np.repeat(start, counts)
+    nxt = np.repeat(start, counts) + (pos + 1) % np.repeat(counts, counts)
+    a, b = idx, idx[nxt]
+    sides = np.unique(np.minimum(a, b) * n + np.maximum(a, b))
+    # the fan's diagonals: its first two and last two triangles' shared edges (s, s+i+1)
+    d = T[:, [0, 2]]
+    inner = np.r_[poly[1:] == poly[:-1], False]          # a triangle followed by its polygon's
+    key = np.minimum(idx[d[:, 0]], idx[d[:, 1]]) * n + np.maximum(idx[d[:, 0]], idx[d[:, 1]])
+    bad = np.unique(poly[inner & np.isin(key, sides)])
+    if not len(bad):
+        return T, poly
+    for p in bad:   # rare: each such polygon's fan tried from its other corners
+        c, s0 = int(counts[p]), int(start[p])
+        ring = idx[s0:s0 + c]
+        for k in range(1, c):
+            diag = [(ring[k], ring[(k + j) % c]) for j in range(2, c - 1)]
+            if not np.isin([min(u, v) * n + max(u, v) for u, v in diag], sides).any():
+                rows = np.flatnonzero(poly == p)
+                j = np.arange(1, c - 1)
+                T[rows] = s0 + np.stack([np.full(c - 2, k), (k + j) % c, (k + j + 1) % c], 1)
+                break
+    return T, poly
+
+
 class UsdScene:
     """A USD stage read for unwrapping; ``meshes`` one :class:`SceneMesh` per mesh prim."""
 
@@ -298,7 +340,7 @@ def _mesh_arrays(mesh, where, uv_name, Usd):
         raise SceneFileError(f"{where}: face {bad} has {int(counts[bad])} vertices (< 3)")
     if len(indices) and (indices.min() < 0 or indices.max() >= len(V)):
         raise SceneFileError(f"{where}: a faceVertexIndex is out of range ({len(V)} points)")
-    T, poly = fan_triangles(counts)
+    T, poly = polygon_triangles(counts, indices)
     holes = _numbers(mesh.GetHoleIndicesAttr().Get() or [], np.int64, f"{where}: holeIndices")
     keep = ~np.isin(poly, holes)
     T, poly = T[keep], poly[keep]

@@ -481,8 +481,9 @@ def test_an_empty_mesh_prim_is_skipped_and_the_others_unwrapped(tmp_path, capsys
     (entry,) = json.loads(rep.read_text())["meshes"]
     assert entry["name"] == "/World/Grid" and entry["status"] == "certified"
     _check_st(Usd.Stage.Open(out), "/World/Grid", entry["bound_certified"])
+    written = Usd.Stage.Open(out)
     for path in ("/World/Placeholder", "/World/Emptied"):
-        assert not UsdGeom.PrimvarsAPI(Usd.Stage.Open(out).GetPrimAtPath(path)).GetPrimvar("st")
+        assert not UsdGeom.PrimvarsAPI(written.GetPrimAtPath(path)).GetPrimvar("st")
     # a stage of empty meshes alone has nothing to unwrap, and says so
     only = Usd.Stage.CreateNew(str(tmp_path / "only.usda"))
     UsdGeom.Mesh.Define(only, "/Placeholder")
@@ -495,3 +496,36 @@ def test_an_empty_mesh_prim_is_skipped_and_the_others_unwrapped(tmp_path, capsys
     bad.GetRootLayer().Save()
     assert main(["unwrap", str(tmp_path / "bad.usda"), "-o", str(tmp_path / "q.usda")]) == 2
     assert "/Broken" in capsys.readouterr().err
+
+
+def test_a_fan_diagonal_along_another_polygons_side_is_turned_away(tmp_path):
+    # A cube whose last side is a non-planar pentagon through a ninth point: fanned from its
+    # first corner, its diagonal 2-0 runs along the side 0-2 of the quad (0, 4, 6, 2), an edge of
+    # three triangles, and the pentagon was split across islands (written UVs 33x off the
+    # bound). Fanned from its second corner (3), no diagonal is an edge of the mesh.
+    P = np.array([[-.5, -.5, -.5], [.5, -.5, -.5], [-.5, .5, -.5], [.5, .5, -.5], [-.5, -.5, .5],
+                  [.5, -.5, .5], [-.5, .5, .5], [.5, .5, .5], [.7, .7, .7]])
+    polys = [[0, 4, 6, 2], [0, 1, 5, 4], [4, 5, 7, 6], [3, 7, 5, 1], [6, 7, 3, 2],
+             [2, 3, 1, 0, 8]]
+    src, out, rep = str(tmp_path / "in.usda"), str(tmp_path / "o.usda"), tmp_path / "r.json"
+    stage = Usd.Stage.CreateNew(src)
+    mesh = UsdGeom.Mesh.Define(stage, "/Box")
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(P.astype(np.float32)))
+    mesh.CreateFaceVertexCountsAttr([len(q) for q in polys])
+    mesh.CreateFaceVertexIndicesAttr([v for q in polys for v in q])
+    stage.GetRootLayer().Save()
+    assert main(["unwrap", src, "-o", out, "--report", str(rep)]) == 0
+    (entry,) = json.loads(rep.read_text())["meshes"]
+    assert entry["status"] == "certified"
+    written = Usd.Stage.Open(out)
+    pv = UsdGeom.PrimvarsAPI(written.GetPrimAtPath("/Box")).GetPrimvar("st")
+    uv = np.asarray(pv.Get(), np.float64)[np.asarray(pv.GetIndices())]      # per face-vertex
+    # this test's own triangles in face-vertex ids: the quads fanned from their first corner,
+    # the pentagon (face-vertices 20..24 = points 2, 3, 1, 0, 8) from its second
+    T = [(4 * q, 4 * q + i, 4 * q + i + 1) for q in range(5) for i in (1, 2)]
+    T += [(21, 22, 23), (21, 23, 24), (21, 24, 20)]
+    T = np.array(T)
+    idx = np.array([v for q in polys for v in q])
+    D, flipped = reference_distortion(P, idx[T], uv[T])
+    assert not flipped.any() and D.max() <= entry["bound_certified"] * (1 + 1e-9)
+    assert len(overlapping_triangle_pairs(uv[T])) == 0
