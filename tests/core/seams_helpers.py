@@ -166,3 +166,17 @@ def uv_sphere(segments=16, rings=8, flip=()):
     tris.append(bot)
     poly.append(segments + len(a) + np.arange(segments))
     return V, np.concatenate(tris).astype(np.int64), np.concatenate(poly).astype(np.int64)
+
+
+def sphere_cut():
+    """A 32x16 UV sphere cut by the seams ``seams='auto'`` adds at C = S = 1.5: (V, F, the
+    edge table, the cut edges (e,) bool)."""
+    from bd_uv.seams import unwrap_auto
+    from bd_uv.seams.edges import edge_table
+    V, F, _ = uv_sphere(32, 16)
+    _, added, _ = unwrap_auto(V, F, bound=1.5, stretch=1.5)
+    E = edge_table(V, F)
+    cut = np.zeros(len(E.ends), dtype=bool)
+    k = E.keys(added, len(V))
+    cut[k[k >= 0]] = True
+    return V, F, E, cut

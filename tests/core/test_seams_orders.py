@@ -21,7 +21,7 @@ from bd_uv.seams.edges import edge_table
 from bd_uv.seams.topology import charts
 from bd_uv.solvers import ordered_ldl
 from bd_uv.solvers.lscm import _lscm_system, face_geometry
-from seams_helpers import uv_sphere
+from seams_helpers import sphere_cut, uv_sphere
 
 pytestmark = pytest.mark.skipif(not ordered_ldl.available(),
                                 reason="qdldl's module does not export QDLDL and AMD here")
@@ -135,13 +135,7 @@ def test_orders_fresh_pieces_and_unions():
 
 
 def _sphere_charts():
-    V, F, _ = uv_sphere(32, 16)
-    _, added, _ = unwrap_auto(V, F, bound=1.5, stretch=1.5)
-    E = edge_table(V, F)
-    cut = np.zeros(len(E.ends), dtype=bool)
-    k = E.keys(added, len(V))
-    cut[k[k >= 0]] = True
-    return V, F, E, cut
+    return sphere_cut()
 
 
 @pytest.mark.parametrize("slack", [orders_mod.SLACK, 1e-9])

@@ -22,7 +22,7 @@ from bd_uv.solvers import threads
 from bd_uv.options import UnwrapOptions
 from bd_uv.unwrapping.unwrap import pin_arrays, unwrap, unwrap_islands
 from helpers import reference_distortion
-from seams_helpers import face_singular_values, torus, uv_sphere
+from seams_helpers import face_singular_values, sphere_cut, torus, uv_sphere
 
 
 def test_map_blocks_keeps_order_and_each_result(monkeypatch):
@@ -60,12 +60,7 @@ def test_halves_balances_work_and_refuses_small_or_single(monkeypatch):
 
 def _sphere_charts():
     """The disk charts ``seams='auto'`` makes of a 32x16 UV sphere."""
-    V, F, _ = uv_sphere(32, 16)
-    _, added, _ = unwrap_auto(V, F, bound=1.5, stretch=1.5)
-    E = edge_table(V, F)
-    cut = np.zeros(len(E.ends), dtype=bool)
-    k = E.keys(added, len(V))
-    cut[k[k >= 0]] = True
+    V, F, E, cut = sphere_cut()
     chs = [c for c in charts(F, E, cut) if c.kind == "disk"]
     assert len(chs) >= 2
     return V, F, chs
