@@ -41,10 +41,11 @@ COMPACT_SHARE = 0.5     # of the time: compaction of the best layout found (.com
 COMPACT_MAX_CHARTS = 200
 # up to this many charts each solve runs on one thread (spyrrow's ``num_workers``): on so few,
 # spyrrow overshoots its time (the cube's 3 charts asked 0.05-0.3 s take 0.5-1.0 s wall) and a
-# second worker only adds CPU; measured on eight meshes of 2-6 charts, seeds 0-4: the same
-# coverage within the seeds' spread, the cube 0.86 -> 0.60 s CPU, the torus 0.78 -> 0.48 s
-# (benchmarks/results/bench_pack-2026-11-27-workers.md)
-FEW_CHARTS = 6
+# second worker only adds CPU; measured on seven meshes of 2-3 charts, seeds 0-9: the same
+# coverage within the seeds' spread, the cube 0.85 -> 0.47-0.60 s CPU, the torus 0.6-0.8 ->
+# 0.3-0.5 s; eight's 6 charts lost 1 % on one worker over 20 seeds and doubled the spread
+# (0.584 sd 0.027 against 0.590 sd 0.012; benchmarks/results/bench_pack-2026-11-27-workers.md)
+FEW_CHARTS = 3
 
 
 def _squares(points, owner, placements, tol, padding):
