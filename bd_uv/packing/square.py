@@ -39,6 +39,13 @@ COMPACT_SHARE = 0.5     # of the time: compaction of the best layout found (.com
 # above this many charts a compaction step (one linear program over every chart) is too slow to
 # pay: measured under load ~11, 400 charts 4 steps in 10 s (+0.6 % coverage), 2,000 charts none
 COMPACT_MAX_CHARTS = 200
+# up to this many charts each solve runs on one thread (spyrrow's ``num_workers``): on so few,
+# spyrrow overshoots its time (the cube's 3 charts asked 0.05-0.3 s take 0.5-1.0 s wall) and a
+# second worker only adds CPU; measured on seven meshes of 2-3 charts, seeds 0-9: the same
+# coverage within the seeds' spread, the cube 0.85 -> 0.47-0.60 s CPU, the torus 0.6-0.8 ->
+# 0.3-0.5 s; eight's 6 charts lost 1 % on one worker over 20 seeds and doubled the spread
+# (0.584 sd 0.027 against 0.590 sd 0.012; benchmarks/results/bench_pack-2026-11-27-workers.md)
+FEW_CHARTS = 3
 
 
 def _squares(points, owner, placements, tol, padding):
@@ -58,9 +65,10 @@ def _squares(points, owner, placements, tol, padding):
 def _solve_all(outlines, sides, options, tol, seconds):
     """One solve per square side, all at once (threads): per side, every feasible layout reached
     (reports, then the result), or None where spyrrow gave up (it panics when it cannot place a
-    chart in the strip); the last such refusal (PackError) or None."""
+    chart in the strip); the last such refusal (PackError) or None. Each solve searches on
+    ``os.cpu_count() // len(sides)`` threads, one up to ``FEW_CHARTS`` charts."""
     out, errors, refused = [None] * len(sides), [], []
-    workers = max(1, (os.cpu_count() or 1) // len(sides))
+    workers = 1 if len(outlines) <= FEW_CHARTS else max(1, (os.cpu_count() or 1) // len(sides))
 
     def work(i):
         try:
