@@ -188,17 +188,19 @@ def charts(F, E, cut, faces=None):
         # An oriented manifold: faces meet at a cut vertex only across an uncut edge, so the
         # charts are the components of the faces joined across their inner half-edges (k
         # nodes, not the k + nv of faces and vertices), numbered by their least face alike.
-        # Each inner edge once, from its first face (f0) in the set.
-        inner = np.flatnonzero(~bnd)
-        inner = inner[f0[inner] == faces[inner // 3]]
-        pos = np.empty(len(F), dtype=np.int64)
-        pos[faces] = np.arange(k)
-        n_c, fl = _components(np.concatenate([[0], np.cumsum(np.bincount(inner // 3,
-                                                                        minlength=k))]),
-                              pos[f1[inner]], k)
+        # Each inner edge once, from its first face (f0), as CSR rows of the faces.
+        inner = ~bnd.reshape(k, 3) & (f0.reshape(k, 3) == faces[:, None])
+        indptr = np.zeros(k + 1, dtype=np.int64)
+        np.cumsum(inner.sum(axis=1), out=indptr[1:])
+        other = f1[inner.ravel()]
+        if k != len(F):                     # input face ids -> positions in ``faces``
+            pos = np.empty(len(F), dtype=np.int64)
+            pos[faces] = np.arange(k)
+            other = pos[other]
+        n_c, fl = _components(indptr, other, k)
         vl = np.empty(nv, dtype=fl.dtype)
         vl[tri] = fl[:, None]
-        del inner, pos
+        del inner, indptr, other
     else:
         idx = index_dtype(3 * k + nv + 1)
         # Faces and cut vertices, each face joined to its three corners' vertices.
