@@ -228,7 +228,7 @@ def charts(F, E, cut, faces=None):
         disk &= np.bincount(vl[rep_v[rep_v >= 0]], minlength=n_c) == 1
     # (With fans every chart is an orientable surface, chi = 2 - 2 genus - loops: chi = 1 with
     # a boundary is one loop.)
-    # Group faces and vertices by chart: each chart's arrays are slices of the call's.
+    # Group faces and vertices by chart.
     forder = np.argsort(fl, kind="stable")
     fb = np.searchsorted(fl[forder], np.arange(n_c + 1))
     vorder = np.argsort(vl, kind="stable")
@@ -239,8 +239,11 @@ def charts(F, E, cut, faces=None):
     kinds = np.where(disk, "disk", np.where((nb == 0) & (chi == 2), "sphere", "open")).tolist()
     cf, cv, ct = faces[forder], voc[ids[vorder]], local[tri[forder]]
     fbl, vbl = fb.tolist(), vb.tolist()
-    out = [Chart(cf[fbl[c]:fbl[c + 1]], cv[vbl[c]:vbl[c + 1]], ct[fbl[c]:fbl[c + 1]],
-                 (local[loops[c]],) if c in loops else (), kinds[c]) for c in range(n_c)]
+    # Copies of the slices: a chart kept (merging keeps its charts for rounds) holds its own
+    # arrays, not the whole call's.
+    out = [Chart(cf[fbl[c]:fbl[c + 1]].copy(), cv[vbl[c]:vbl[c + 1]].copy(),
+                 ct[fbl[c]:fbl[c + 1]].copy(), (local[loops[c]],) if c in loops else (), kinds[c])
+           for c in range(n_c)]
     out.sort(key=lambda ch: int(ch.faces[0]))
     return out
 
