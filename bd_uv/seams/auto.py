@@ -162,20 +162,22 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             break
     atlas = np.zeros(len(E.ends), dtype=bool)   # the seams added for the atlas
     kept = []
+    chs = None                              # the charts of ``cut``, where known
     if merge:
-        merge_charts(V, F, E, cut, keep, invalid, S, C, known=known, failed=failed,
-                     orders=orders)
+        chs = merge_charts(V, F, E, cut, keep, invalid, S, C, known=known, failed=failed,
+                           orders=orders)
     if atlas_cuts:
         # A chart that alone caps the atlas's coverage is bisected where that pays.
         atlas[:] = cut
-        kept = split_for_packing(V, F, E, cut, original, A, cen, S, mean_cap(C), poly, None,
-                                 known, invalid)
+        kept, chs = split_for_packing(V, F, E, cut, original, A, cen, S, mean_cap(C), poly, None,
+                                      known, invalid, chs)
         atlas = cut & ~atlas
     release_memory(m)
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last
-    # round lets ``unwrap`` cut what still overlaps.
-    chs = charts(F, E, cut) if not invalid.any() else None
+    # round lets ``unwrap`` cut what still overlaps. Merging and the atlas's splits found the
+    # charts of ``cut`` already (the same ``topology.charts`` finds).
+    chs = None if invalid.any() else charts(F, E, cut) if chs is None else chs
     # The final unwrap and the measures after it read the edges' ends and lengths only: the
     # fans, faces, face edges and costs (~38 MB on a 500k-face mesh) are dropped, and the table
     # is built again (the same arrays) only if a finish round or a cut needs it.

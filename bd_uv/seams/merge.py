@@ -54,6 +54,11 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
         fails without a new solve (the same pairs are tried and the same charts come out)
     orders : orders.Orders of the mesh, optional: the unions' solves reuse their charts'
         elimination orders (``charts.chart_maps``)
+
+    Returns
+    -------
+    list of topology.Chart: the charts of ``cut`` after merging, as ``topology.charts(F, E,
+    cut)`` finds them (the caller need not find them again)
     """
     failed = {} if failed is None else failed
     # The counts of the failed charts: a union of other counts is not hashed (``chart_key``).
@@ -78,7 +83,7 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
             ga, gb = group[E.faces[inner, 0]], group[E.faces[inner, 1]]
             diff &= ((ga >= 0) | (gb >= 0)) & (ga != gb)
         if not diff.any():
-            return
+            return chs
         ei = np.flatnonzero(inner)[diff]
         la, lb = np.minimum(la[diff], lb[diff]), np.maximum(la[diff], lb[diff])
         uk, inv = np.unique(la * len(chs) + lb, return_inverse=True)
@@ -119,7 +124,7 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
                     disks.append((c, trial, int(np.searchsorted(uk, a * len(chs) + b))))
         if not disks:
             if not any(layers):
-                return
+                return chs
             continue
         # Unions the search already mapped and split fail as they did; the rest in one solve.
         stretch = np.array([failed.get(chart_key(c), np.nan)
@@ -159,3 +164,4 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
         # the new cut on their faces) and every chart not merged, as they were.
         chs = sorted([c for j, c in enumerate(chs) if not merged[j]] + unions,
                      key=lambda ch: int(ch.faces[0]))
+    return chs

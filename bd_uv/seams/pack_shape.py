@@ -70,7 +70,7 @@ def _passes(cm, S, cap):
 
 
 def split_for_packing(V, F, E, cut, original, A, cen, S, cap, poly=None, geom=None,
-                      known=None, invalid=None):
+                      known=None, invalid=None, chs=None):
     """Bisect the charts of ``cut`` that cap the atlas's coverage, while it pays; marks the new
     seams in ``cut`` (in place).
 
@@ -83,16 +83,20 @@ def split_for_packing(V, F, E, cut, original, A, cen, S, cap, poly=None, geom=No
     known : dict, optional: maps of charts that passed (``ChartMaps.remember``); the pieces'
         maps go in, the split charts' come out
     invalid : (m,) bool, optional, faces of islands left to ``unwrap`` to report (never split)
+    chs : list of topology.Chart, optional: the charts of ``cut`` (``merge.merge_charts``'s),
+        else found here
 
     Returns
     -------
-    list of (bound before, worse piece's bound after) per kept split
+    kept : list of (bound before, worse piece's bound after) per kept split
+    every : list of topology.Chart, the charts of ``cut`` after the splits (by least face)
     """
-    chs = [c for c in charts(F, E, cut) if c.kind == "disk" and len(c.faces) >= 4
+    every = charts(F, E, cut) if chs is None else chs
+    chs = [c for c in every if c.kind == "disk" and len(c.faces) >= 4
            and not (invalid is not None and invalid[c.faces].any())]
     total = float(A.sum())
     if not chs or total <= 0:
-        return []
+        return [], every
     # Each chart's conformal map: the search's (``known``) or solved here. Only its shape counts.
     maps = [None if known is None else known.get(c.faces.tobytes()) for c in chs]
     miss = [j for j, u in enumerate(maps) if u is None]
@@ -132,12 +136,13 @@ def split_for_packing(V, F, E, cut, original, A, cen, S, cap, poly=None, geom=No
         if min(after) < GAIN * b:
             break
         cut[:] = trial
+        every = sorted([x for x in every if x is not c] + pieces, key=lambda x: int(x.faces[0]))
         kept.append((b, min(after)))
         if known is not None:
             known.pop(c.faces.tobytes(), None)
             pm.remember(pieces, np.ones(2, dtype=bool), known)
         live += [(a, p, True) for a, p in zip(after, pieces)]
-    return kept
+    return kept, every
 
 
 def atlas_cuts_of(info, vertices=None):

@@ -13,6 +13,9 @@ from scipy.sparse.csgraph import connected_components
 from ..geometry import HOOK_VERTICES, components
 from .edges import index_dtype
 
+# Boundary vertices (of all the disks of a call) up to which each loop is walked in Python.
+WALK = 2000
+
 
 @dataclass(frozen=True)
 class Chart:
@@ -159,6 +162,8 @@ def charts(F, E, cut, faces=None):
     faces = np.arange(len(F)) if faces is None else np.sort(np.asarray(faces, dtype=np.int64))
     corners, corner, voc = _cut_corners(F, E, cut, faces)
     T = corner.reshape(-1, 3)               # the distinct faces' corners, in face order
+    # A face listed twice is joined to its copy through their vertices only (below).
+    fans = E.fans is not None and len(T) == len(faces)
     if len(T) != len(faces):
         T = T[np.searchsorted(np.unique(faces), faces)]
     del corners, corner
@@ -172,12 +177,6 @@ def charts(F, E, cut, faces=None):
     tri = (np.cumsum(used, dtype=T.dtype) - 1)[T]
     del T, used
     nv, k = len(ids), len(faces)
-    idx = index_dtype(3 * k + nv + 1)
-    # Faces and cut vertices, each face joined to its three corners' vertices.
-    n_c, comp = _components(np.concatenate([np.arange(0, 3 * k + 1, 3, dtype=idx),
-                                            np.full(nv, 3 * k, dtype=idx)]),
-                            np.add(tri.ravel(), k, dtype=idx), k + nv)
-    fl, vl = comp[:k], comp[k:]
     # Boundary half-edges: on a seam, on the mesh boundary, or next to a face not asked for
     # (the half-edge F[f,j] -> F[f,j+1] runs along edge E.face_edges[f,j]).
     inset = np.zeros(len(F), dtype=bool)
@@ -185,6 +184,30 @@ def charts(F, E, cut, faces=None):
     fe = E.face_edges[faces].ravel()
     f0, f1 = E.faces[fe, 0], E.faces[fe, 1]
     bnd = cut[fe] | (f1 < 0) | ~inset[f0] | ~inset[np.maximum(f1, 0)]
+    if fans:
+        # An oriented manifold: faces meet at a cut vertex only across an uncut edge, so the
+        # charts are the components of the faces joined across their inner half-edges (k
+        # nodes, not the k + nv of faces and vertices), numbered by their least face alike.
+        # Each inner edge once, from its first face (f0), as CSR rows of the faces.
+        inner = ~bnd.reshape(k, 3) & (f0.reshape(k, 3) == faces[:, None])
+        indptr = np.zeros(k + 1, dtype=np.int64)
+        np.cumsum(inner.sum(axis=1), out=indptr[1:])
+        other = f1[inner.ravel()]
+        if k != len(F):                     # input face ids -> positions in ``faces``
+            pos = np.empty(len(F), dtype=np.int64)
+            pos[faces] = np.arange(k)
+            other = pos[other]
+        n_c, fl = _components(indptr, other, k)
+        vl = np.empty(nv, dtype=fl.dtype)
+        vl[tri] = fl[:, None]
+        del inner, indptr, other
+    else:
+        idx = index_dtype(3 * k + nv + 1)
+        # Faces and cut vertices, each face joined to its three corners' vertices.
+        n_c, comp = _components(np.concatenate([np.arange(0, 3 * k + 1, 3, dtype=idx),
+                                                np.full(nv, 3 * k, dtype=idx)]),
+                                np.add(tri.ravel(), k, dtype=idx), k + nv)
+        fl, vl = comp[:k], comp[k:]
     del fe, f0, f1, inset
     hb = np.flatnonzero(bnd)                # boundary half-edges, as corners of ``tri``
     del bnd
@@ -194,12 +217,17 @@ def charts(F, E, cut, faces=None):
     nvc = np.bincount(vl, minlength=n_c)
     ne = (3 * nf + nb) // 2
     chi = nvc - ne + nf
-    bo = np.argsort(ba, kind="stable")
-    _, lab = _components(np.concatenate([[0], np.cumsum(np.bincount(ba, minlength=nv))]),
-                         bb[bo], nv)
-    rep_v = np.full(nv, -1, dtype=np.int64)
-    rep_v[lab[ba]] = ba                     # a boundary vertex of each loop
-    n_loops = np.bincount(vl[rep_v[rep_v >= 0]], minlength=n_c)
+    disk = (nb > 0) & (chi == 1)
+    if not fans:
+        # Without fans a chart need not be a surface: its boundary loops are counted.
+        bo = np.argsort(ba, kind="stable")
+        _, lab = _components(np.concatenate([[0], np.cumsum(np.bincount(ba, minlength=nv))]),
+                             bb[bo], nv)
+        rep_v = np.full(nv, -1, dtype=np.int64)
+        rep_v[lab[ba]] = ba                 # a boundary vertex of each loop
+        disk &= np.bincount(vl[rep_v[rep_v >= 0]], minlength=n_c) == 1
+    # (With fans every chart is an orientable surface, chi = 2 - 2 genus - loops: chi = 1 with
+    # a boundary is one loop.)
     # Group faces and vertices by chart.
     forder = np.argsort(fl, kind="stable")
     fb = np.searchsorted(fl[forder], np.arange(n_c + 1))
@@ -207,18 +235,15 @@ def charts(F, E, cut, faces=None):
     vb = np.searchsorted(vl[vorder], np.arange(n_c + 1))
     local = np.empty(nv, dtype=np.int64)
     local[vorder] = np.arange(nv) - vb[vl[vorder]]
-    disk = (nb > 0) & (chi == 1) & (n_loops == 1)
-    loops = _disk_loops(ba, bb, vl, disk, nv)
-    out = []
-    for c in range(n_c):
-        fi = forder[fb[c]:fb[c + 1]]
-        vi = vorder[vb[c]:vb[c + 1]]
-        if disk[c]:
-            kind = "disk"
-        else:
-            kind = "sphere" if (nb[c] == 0 and chi[c] == 2) else "open"
-        out.append(Chart(faces[fi], voc[ids[vi]], local[tri[fi]],
-                         (local[loops[c]],) if disk[c] else (), kind))
+    loops = _disk_loops(ba, bb, vl, disk, nv, fans)
+    kinds = np.where(disk, "disk", np.where((nb == 0) & (chi == 2), "sphere", "open")).tolist()
+    cf, cv, ct = faces[forder], voc[ids[vorder]], local[tri[forder]]
+    fbl, vbl = fb.tolist(), vb.tolist()
+    # Copies of the slices: a chart kept (merging keeps its charts for rounds) holds its own
+    # arrays, not the whole call's.
+    out = [Chart(cf[fbl[c]:fbl[c + 1]].copy(), cv[vbl[c]:vbl[c + 1]].copy(),
+                 ct[fbl[c]:fbl[c + 1]].copy(), (local[loops[c]],) if c in loops else (), kinds[c])
+           for c in range(n_c)]
     out.sort(key=lambda ch: int(ch.faces[0]))
     return out
 
@@ -242,7 +267,7 @@ def _components(indptr, indices, n):
     return connected_components(g, directed=True, connection="weak")
 
 
-def _disk_loops(ba, bb, vl, disk, nv):
+def _disk_loops(ba, bb, vl, disk, nv, walk=False):
     """The boundary loop of every disk chart at once, by list ranking (pointer doubling).
 
     Each boundary vertex of a disk has one outgoing boundary half-edge (a cut vertex is one
@@ -254,6 +279,8 @@ def _disk_loops(ba, bb, vl, disk, nv):
     ba, bb : (b,) int64, boundary half-edges ``ba -> bb`` (cut vertex ids, all charts)
     vl : (nv,) int64, chart of each cut vertex
     disk : (n_c,) bool
+    walk : bool, every boundary vertex has one half-edge in and one out (the charts of an
+        oriented manifold): up to ``WALK`` boundary vertices, each loop is followed in Python
 
     Returns
     -------
@@ -265,6 +292,20 @@ def _disk_loops(ba, bb, vl, disk, nv):
         return {}
     cs = vl[sa]
     charts_, first = np.unique(cs, return_index=True)
+    if walk and len(sa) <= WALK:
+        # The same loops, from the same first vertex: fewer steps than the doubling's numpy
+        # calls (a dozen per round, ~log2 of the longest loop rounds).
+        nx = dict(zip(sa.tolist(), sb.tolist()))
+        out = {}
+        for c, x in zip(charts_.tolist(), sa[first].tolist()):
+            loop = [x]
+            for _ in range(len(sa)):
+                x = nx[x]
+                if x == loop[0]:
+                    break
+                loop.append(x)
+            out[c] = np.array(loop, dtype=sa.dtype)
+        return out
     nxt = np.arange(nv)
     nxt[sa] = sb
     pred = np.full(nv, -1, dtype=np.int64)
