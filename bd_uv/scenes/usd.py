@@ -92,7 +92,7 @@ def polygon_triangles(counts, indices):
         for k in range(1, c):
             diag = [(ring[k], ring[(k + j) % c]) for j in range(2, c - 1)]
             if not np.isin([min(u, v) * n + max(u, v) for u, v in diag], sides).any():
-                rows = np.flatnonzero(poly == p)
+                rows = slice(*np.searchsorted(poly, [p, p + 1]))   # poly is sorted
                 j = np.arange(1, c - 1)
                 T[rows] = s0 + np.stack([np.full(c - 2, k), (k + j) % c, (k + j + 1) % c], 1)
                 break
@@ -124,11 +124,13 @@ class UsdScene:
         meshes, parts, where = [], [], path
         try:   # a crate file's values are read lazily: a damaged one fails here, not at Open
             for prim in stage.Traverse():
-                if not prim.IsA(UsdGeom.Mesh) or _empty(UsdGeom.Mesh(prim)):
-                    continue   # an empty Mesh (a placeholder a variant or payload fills) is
-                    #            nothing to unwrap, as a glTF mesh of points or lines
+                if not prim.IsA(UsdGeom.Mesh):
+                    continue
                 where = f"{path}: prim {prim.GetPath()}"
-                m, part, info, warnings = _mesh_arrays(UsdGeom.Mesh(prim), where, uv_name, Usd)
+                arrays = _mesh_arrays(UsdGeom.Mesh(prim), where, uv_name, Usd)
+                if arrays is None:   # an empty Mesh (a placeholder a variant or payload
+                    continue         # fills) is nothing to unwrap, as a glTF mesh of points
+                m, part, info, warnings = arrays
                 name = str(prim.GetPath())
                 meshes.append(SceneMesh(name, m, info, None, part["poly"], warnings + errors))
                 parts.append(part)
@@ -292,29 +294,21 @@ def _reanchor(src, asset, out_dir, package_local=False):
     return (rel if rel.startswith("../") else "./" + rel) + inner
 
 
-def _empty(mesh):
-    """True for a Mesh with no points, no faces and no face-vertex indices authored (or all
-    three authored empty, at every time)."""
-    attrs = (mesh.GetPointsAttr(), mesh.GetFaceVertexCountsAttr(),
-             mesh.GetFaceVertexIndicesAttr())
-    def nothing(a):   # not authored, or authored as an empty array (a damaged value is not)
-        if a.GetNumTimeSamples():
-            return False
-        if not a.HasAuthoredValue():
-            return True
-        value = a.Get()
-        return value is not None and hasattr(value, "__len__") and len(value) == 0
-    return all(nothing(a) for a in attrs)
+def _nothing(attr, value):
+    """True for an attribute not authored at all, or authored as an empty array (a damaged
+    value, authored but unreadable, is not nothing)."""
+    if attr.GetNumTimeSamples():
+        return False
+    if value is None:
+        return not attr.HasAuthoredValue()
+    return hasattr(value, "__len__") and len(value) == 0
 
 
 def _mesh_arrays(mesh, where, uv_name, Usd):
-    """(Mesh, write-back part, info, warnings) of one UsdGeom.Mesh."""
+    """(Mesh, write-back part, info, warnings) of one UsdGeom.Mesh; None for an empty one
+    (points, faceVertexCounts and faceVertexIndices all unauthored or empty)."""
     from pxr import UsdGeom
     warnings = []
-    if not uv_name:   # the primvar the mesh's materials read its UVs from (usd_uv_name)
-        uv_name, note = uv_primvar(mesh.GetPrim())
-        if note:
-            warnings.append(note)
     points_attr = mesh.GetPointsAttr()
     P = points_attr.Get(Usd.TimeCode.Default())
     if P is None and points_attr.GetNumTimeSamples():
@@ -323,6 +317,13 @@ def _mesh_arrays(mesh, where, uv_name, Usd):
         warnings.append(f"points are time-sampled with no default: unwrapped at time {t:g}")
     counts = mesh.GetFaceVertexCountsAttr().Get()
     indices = mesh.GetFaceVertexIndicesAttr().Get()
+    if (_nothing(points_attr, P) and _nothing(mesh.GetFaceVertexCountsAttr(), counts)
+            and _nothing(mesh.GetFaceVertexIndicesAttr(), indices)):
+        return None
+    if not uv_name:   # the primvar the mesh's materials read its UVs from (usd_uv_name)
+        uv_name, note = uv_primvar(mesh.GetPrim())
+        if note:
+            warnings.append(note)
     if P is None or counts is None or indices is None:
         raise SceneFileError(f"{where}: a mesh without points, faceVertexCounts or "
                              "faceVertexIndices")
