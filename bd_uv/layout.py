@@ -15,6 +15,10 @@ from .overlap import _bits, _row_ids, layout_overlaps
 from .pack import MARGIN, island_boxes, pack_islands
 from .repair import twin_corners
 
+#: rounds of cutting pieces whose boundary crosses itself once stored (each re-packs: a new
+#: layout rounds other near-touching boundaries differently)
+RECUT_ROUNDS = 4
+
 
 @dataclass(frozen=True)
 class Layout:
@@ -194,7 +198,7 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
         cuts.append(cut_edges)
     source = np.asarray(source, dtype=np.int64)
     unpacked = uv
-    for again in (True, False):   # a second round only for pieces cut as stored (below)
+    for again in (True,) * RECUT_ROUNDS + (False,):   # more rounds only for pieces cut as stored
         uv, packed = _place(V, F, unpacked, new, source, moved, pack, pack_options, margin,
                             face_labels)
         stored = uv.astype(dtype).astype(np.float64)

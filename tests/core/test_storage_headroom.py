@@ -205,3 +205,61 @@ def test_a_float32_job_certifies_its_layout_as_float32():
     f64 = batch.unwrap_job(batch.Job("teapot", V, F), opts)
     uv64 = f64.layout.corner_uv
     assert not np.array_equal(uv64.astype(np.float32).astype(np.float64), uv64)
+
+
+def test_a_piece_that_crosses_itself_only_in_a_later_layout_is_cut_too(monkeypatch):
+    """Each cut as stored places everything again, and the new layout rounds other boundaries
+    differently: usd-wg's tractorShovel (no UVs, ``--uv-name st``) failed every run, a piece
+    crossing itself in the second layout that the first had rounded apart. Here a placement
+    scripted per round puts the second "C"'s ends near (0, 0) in the first layout (float32 keeps
+    them ~100 steps apart) and near (0.9, 0.9) in the later ones (a fraction of a step): its piece
+    is cut in the second round, and every stored piece is certified."""
+    import bd_uv.layout as layout_module
+    from bd_uv.certificate import certify_islands
+    Va, Fa = _c_shape(2e-8)
+    Vb, Fb = _c_shape(2e-8)
+    n = len(Va)
+    V, F = np.concatenate([Va, Vb + [5.0, 0.0, 0.0]]), np.concatenate([Fa, Fb + n])
+    res = bd_uv.unwrap(V, F)
+    assert [r.status for r in res.islands] == ["certified"] * 2
+    k = len(Fa)
+    ends = [(0, 40), (n, n + 40)]          # each "C"'s first and last inner vertex
+    calls = []
+
+    def at(uv, faces, scale, gap_at):
+        """The faces' UVs scaled by ``scale`` and moved so their C's gap (where its ends are in
+        the unwrap's UVs: a cut piece moves with its whole C) sits at ``gap_at``."""
+        i, j = ends[0] if faces[0] < k else ends[1]
+        fv, u0 = F, res.corner_uv
+        gap = 0.5 * (u0[fv == i][0] + u0[fv == j][0]) * scale
+        return uv[faces] * scale - gap + np.asarray(gap_at)
+
+    def scripted(V, F, uv, new, source, moved, *args):
+        calls.append(len(source))
+        out = np.full_like(uv, np.nan)
+        for p in range(len(source)):   # per piece: where its C is placed in this round
+            faces = np.flatnonzero(new == p)
+            scale = 0.4 / np.ptp(uv[res.face_island == source[p]].reshape(-1, 2), axis=0).max()
+            late = source[p] == 1 and len(calls) > 1
+            where = (0.3, 0.3) if source[p] == 0 else ((0.9, 0.9) if late else (1e-3, 1e-3))
+            out[faces] = at(uv, faces, scale, where)
+        return out, None
+
+    # the script does what the test says: the second C crosses at (0.9, 0.9), not near (0, 0)
+    b = res.face_island == 1
+    lab = np.where(b, 0, -1)
+    scale_b = 0.4 / np.ptp(res.corner_uv[b].reshape(-1, 2), axis=0).max()
+    for where, crossing in (((1e-3, 1e-3), False), ((0.9, 0.9), True)):
+        uv = np.full_like(res.corner_uv, np.nan)
+        uv[b] = at(res.corner_uv, np.flatnonzero(b), scale_b, where)
+        stored = uv.astype(np.float32).astype(np.float64)
+        assert (certify_islands(V, F, stored, lab, [5.0])[0].crossings >= 1) == crossing
+    monkeypatch.setattr(layout_module, "_place", scripted)
+    layout = stored_layout(V, F, res, dtype=np.float32)
+    assert len(calls) >= 3 and calls[1] < calls[2]    # the second C was cut in a later round
+    assert all(c.certified for c in layout.certificates)
+    assert (layout.face_island >= 0).all()
+    assert len(layout.cut_edges[0]) >= 1 and len(layout.cut_edges[1]) >= 1
+    out = layout.corner_uv
+    D, flipped = reference_distortion(V, F, out)
+    assert not flipped.any() and D.max() <= 5.0
