@@ -88,12 +88,16 @@ class GltfScene:
             names = paths.get(mi) or [label]
             info = {"mesh": mesh.get("name"), "mesh_index": mi, "nodes": paths.get(mi, []),
                     "primitives": [j for j, _ in prims]}
-            refused = _refusal(gf, label, prims)
+            try:   # a malformed mesh is refused by name, the file's other meshes unwrapped
+                refused = _refusal(gf, label, prims)
+                if not refused:
+                    m, part = _mesh_arrays(gf, label, prims, uv_set, names[0])
+            except SceneFileError as exc:
+                refused = str(exc).removeprefix(f"{gf.path}: ")   # the entry names the file
             if refused:
                 meshes.append(SceneMesh(", ".join(names), None, info, refused, None, warnings))
                 parts.append(None)
                 continue
-            m, part = _mesh_arrays(gf, label, prims, uv_set, names[0])
             meshes.append(SceneMesh(", ".join(names), m, info, None, None, warnings))
             parts.append(part)
         return cls(gf, uv_set, meshes, parts)

@@ -127,11 +127,18 @@ class UsdScene:
                 if not prim.IsA(UsdGeom.Mesh):
                     continue
                 where = f"{path}: prim {prim.GetPath()}"
-                arrays = _mesh_arrays(UsdGeom.Mesh(prim), where, uv_name, Usd)
+                name = str(prim.GetPath())
+                try:
+                    arrays = _mesh_arrays(UsdGeom.Mesh(prim), where, uv_name, Usd)
+                except SceneFileError as exc:   # refused by name, the stage's other meshes
+                    why = str(exc).removeprefix(f"{where}: ")   # the entry names the prim
+                    meshes.append(SceneMesh(name, None, {"prim": name}, why, None,  # unwrapped
+                                            list(errors)))
+                    parts.append(None)
+                    continue
                 if arrays is None:   # an empty Mesh (a placeholder a variant or payload
                     continue         # fills) is nothing to unwrap, as a glTF mesh of points
                 m, part, info, warnings = arrays
-                name = str(prim.GetPath())
                 meshes.append(SceneMesh(name, m, info, None, part["poly"], warnings + errors))
                 parts.append(part)
         except Tf.ErrorException as exc:

@@ -196,16 +196,56 @@ def test_meshopt_fallback_buffer_without_bytes_is_refused_by_name(tmp_path, caps
      ["'Rock'", "node /RockNode", "primitive 0", "accessor 99"]),
 ])
 def test_malformed_file_names_the_mesh(tmp_path, capsys, breakage, words):
+    """A malformed mesh is refused by name (exit 1, as a Draco one); being the only mesh,
+    nothing is written."""
     b, _ = _one_mesh(tmp_path)
     breakage(b.doc)
     b.write(str(tmp_path / "bad.gltf"))
     before = _digest(tmp_path)
-    assert main(["unwrap", str(tmp_path / "bad.gltf"), "-o", str(tmp_path / "o.gltf")]) == 2
+    assert main(["unwrap", str(tmp_path / "bad.gltf"), "-o", str(tmp_path / "o.gltf")]) == 1
     err = capsys.readouterr().err
     assert all(w in err for w in words), err
+    assert "Traceback" not in err
     assert _digest(tmp_path) == before                            # nothing written
-    with pytest.raises(SceneFileError):
-        read_scene(str(tmp_path / "bad.gltf"))
+    scene = read_scene(str(tmp_path / "bad.gltf"))
+    assert [m.mesh for m in scene.meshes] == [None] and "primitive 0" in scene.meshes[0].refused
+
+
+@pytest.mark.parametrize("breakage", ["indices count", "position accessor"])
+def test_a_malformed_mesh_leaves_the_others_unwrapped(tmp_path, capsys, breakage):
+    """A production scene with one broken mesh is not refused whole: the broken one is named
+    and kept as read (its primitive's JSON unchanged in the output), the good one is certified
+    and written (exit 1: not every mesh certified)."""
+    b = Builder()
+    V, F, _ = seamed_grid()
+    prims = [{"attributes": {"POSITION": b.accessor(V.astype(np.float32), 5126, "VEC3",
+                                                    minmax=True)},
+              "indices": b.accessor(F.reshape(-1, 1), 5123, "SCALAR")} for _ in range(2)]
+    b.doc["meshes"] = [{"name": "Rock", "primitives": [prims[0]]},
+                       {"name": "Moss", "primitives": [prims[1]]}]
+    b.doc["nodes"] = [{"name": "RockNode", "mesh": 0}, {"name": "MossNode", "mesh": 1}]
+    b.doc.update(scenes=[{"nodes": [0, 1]}], scene=0)
+    if breakage == "indices count":
+        b.doc["accessors"][prims[1]["indices"]]["count"] = 10 ** 6
+    else:
+        prims[1]["attributes"]["POSITION"] = 99
+    b.write(str(tmp_path / "two.gltf"))
+    doc_in = json.loads((tmp_path / "two.gltf").read_text())
+    out, rep = tmp_path / "o.gltf", tmp_path / "r.json"
+    assert main(["unwrap", str(tmp_path / "two.gltf"), "-o", str(out), "--report",
+                 str(rep)]) == 1
+    err = capsys.readouterr().err
+    assert "MossNode" in err and "'Moss'" in err and "Traceback" not in err
+    assert "RockNode" not in err
+    entries = {e["name"]: e for e in json.loads(rep.read_text())["meshes"]}
+    assert entries["/MossNode"]["status"] == "failed"
+    assert entries["/MossNode"]["error"] == "SceneFileError"
+    assert entries["/RockNode"]["status"] == "certified"
+    doc_out = json.loads(out.read_text())
+    assert doc_out["meshes"][1] == doc_in["meshes"][1]            # the broken mesh as read
+    assert doc_out["meshes"][0] != doc_in["meshes"][0]            # the good one has new UVs
+    reader = Reader(str(out))
+    _check_uvs(reader, doc_out["meshes"][0]["primitives"][0], "TEXCOORD_0", entries["/RockNode"])
 
 
 def test_not_gltf_and_blender_only_formats(tmp_path, capsys):

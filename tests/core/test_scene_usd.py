@@ -4,6 +4,7 @@ input layers are untouched, references resolve from another output folder."""
 import hashlib
 import json
 import os
+import re
 
 import numpy as np
 import pytest
@@ -282,11 +283,12 @@ def test_malformed_stage_names_the_prim(tmp_path, capsys):
     m.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy((counts + 1).astype(np.int32)))
     m.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(idx.astype(np.int32)))
     stage.GetRootLayer().Save()
-    with pytest.raises(SceneFileError, match="/Geo/Broken.*faceVertexCounts sum"):
-        read_scene(str(tmp_path / "bad.usda"))
-    assert main(["unwrap", str(tmp_path / "bad.usda"), "-o", str(tmp_path / "o.usda")]) == 2
+    scene = read_scene(str(tmp_path / "bad.usda"))
+    assert [(m.name, m.mesh) for m in scene.meshes] == [("/Geo/Broken", None)]
+    assert "faceVertexCounts sum" in scene.meshes[0].refused
+    assert main(["unwrap", str(tmp_path / "bad.usda"), "-o", str(tmp_path / "o.usda")]) == 1
     assert "/Geo/Broken" in capsys.readouterr().err
-    assert not (tmp_path / "o.usda").exists()
+    assert not (tmp_path / "o.usda").exists()     # its only mesh refused: nothing written
     (tmp_path / "junk.usda").write_text("this is not usd")
     with pytest.raises(SceneFileError, match="junk.usda"):
         read_scene(str(tmp_path / "junk.usda"))
@@ -310,12 +312,47 @@ def test_a_value_of_an_unknown_type_is_a_scene_error(tmp_path, capsys, attr, lin
     path.write_text('#usda 1.0\n\ndef Mesh "Panel"\n{\n        '
                     + "\n        ".join(body.values()) + "\n}\n")
     raw = path.read_bytes()
-    with pytest.raises(SceneFileError, match=f"/Panel.*{attr}.*not an array of numbers"):
-        read_scene(str(path))
-    assert main(["unwrap", str(path), "-o", str(tmp_path / "o.usda")]) == 2
+    mesh = read_scene(str(path)).meshes[0]
+    assert mesh.name == "/Panel" and mesh.mesh is None
+    assert re.search(f"{attr}.*not an array of numbers", mesh.refused), mesh.refused
+    assert main(["unwrap", str(path), "-o", str(tmp_path / "o.usda")]) == 1
     err = capsys.readouterr().err
     assert "/Panel" in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
     assert not (tmp_path / "o.usda").exists() and path.read_bytes() == raw
+
+
+def test_a_malformed_mesh_leaves_the_stage_s_others_unwrapped(tmp_path, capsys):
+    """A stage with one broken mesh is not refused whole: the broken prim is named and left as
+    read, the good one certified and written (exit 1: not every mesh certified)."""
+    stage = Usd.Stage.CreateNew(str(tmp_path / "two.usda"))
+    V, counts, idx = quad_grid(4, 3, bump=False)
+    for path, c in (("/Geo/Good", counts), ("/Geo/Broken", counts + 1)):
+        m = UsdGeom.Mesh.Define(stage, path)
+        m.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(V.astype(np.float32)))
+        m.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(c.astype(np.int32)))
+        m.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(idx.astype(np.int32)))
+    stage.GetRootLayer().Save()
+    raw = (tmp_path / "two.usda").read_bytes()
+    out, rep = tmp_path / "o.usda", tmp_path / "r.json"
+    assert main(["unwrap", str(tmp_path / "two.usda"), "-o", str(out), "--report",
+                 str(rep)]) == 1
+    err = capsys.readouterr().err
+    assert "/Geo/Broken" in err and "faceVertexCounts sum" in err and "/Geo/Good" not in err
+    assert (tmp_path / "two.usda").read_bytes() == raw
+    entries = {e["name"]: e for e in json.loads(rep.read_text())["meshes"]}
+    assert entries["/Geo/Broken"]["status"] == "failed"
+    assert entries["/Geo/Good"]["status"] == "certified"
+    written = Usd.Stage.Open(str(out))
+    assert not UsdGeom.PrimvarsAPI(written.GetPrimAtPath("/Geo/Broken")).HasPrimvar("st")
+    good = UsdGeom.PrimvarsAPI(written.GetPrimAtPath("/Geo/Good")).GetPrimvar("st")
+    uv = np.asarray(good.ComputeFlattened(), dtype=np.float64).reshape(-1, 2)
+    fan = np.concatenate([[[s, s + k, s + k + 1] for k in range(1, n - 1)]
+                          for s, n in zip(np.cumsum(counts) - counts, counts)])
+    P = V.astype(np.float32).astype(np.float64)[np.asarray(idx)[fan]]
+    Fw = np.arange(3 * len(fan)).reshape(-1, 3)
+    D, flipped = reference_distortion(P.reshape(-1, 3), Fw, uv[fan])
+    assert not flipped.any() and D.max() <= entries["/Geo/Good"]["bound_certified"] * (1 + 1e-9)
+    assert len(overlapping_triangle_pairs(uv[fan])) == 0
 
 
 def test_holes_instances_and_points_only_time_sampled(tmp_path):
@@ -494,8 +531,10 @@ def test_an_empty_mesh_prim_is_skipped_and_the_others_unwrapped(tmp_path, capsys
     bad = Usd.Stage.CreateNew(str(tmp_path / "bad.usda"))
     UsdGeom.Mesh.Define(bad, "/Broken").CreateFaceVertexCountsAttr([3])
     bad.GetRootLayer().Save()
-    assert main(["unwrap", str(tmp_path / "bad.usda"), "-o", str(tmp_path / "q.usda")]) == 2
+    # refused by name (exit 1); its only mesh, so nothing is written
+    assert main(["unwrap", str(tmp_path / "bad.usda"), "-o", str(tmp_path / "q.usda")]) == 1
     assert "/Broken" in capsys.readouterr().err
+    assert not (tmp_path / "q.usda").exists()
 
 
 def test_a_fan_diagonal_along_another_polygons_side_is_turned_away(tmp_path):
