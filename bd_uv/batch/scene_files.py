@@ -6,6 +6,8 @@ certified, and it is certified again from the UVs exactly as the format stores t
 float32 with v downwards; USD: float32). A mesh that fails keeps the UVs it had, and its entry
 says so. The report names each mesh by its node paths (glTF) or prim path (USD).
 """
+import copy
+import hashlib
 import os
 import time
 
@@ -41,13 +43,21 @@ def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=Non
     scene = read_scene(path, uv_set=options.uv_set, uv_name=options.uv_name)
     if not scene.meshes:
         raise BDError(f"{path} holds no triangle or polygon mesh")
-    entries, charts = [], {}
+    entries, charts, seen = [], {}, {}
     for k, sm in enumerate(scene.meshes):
         where = {**base, "object": sm.name, **sm.info}
         if sm.refused:
             entries.append(failed_entry(sm.name, "SceneFileError", sm.refused, **where))
             continue
         t0 = time.perf_counter()
+        key = geometry_key(sm)
+        if key in seen:   # the same arrays as an earlier mesh: the same result, not solved again
+            j = seen[key]
+            entries.append(_reused(entries[j], scene.meshes[j], sm, where, t0))
+            if j in charts:
+                charts[k] = charts[j]
+            continue
+        seen[key] = k
         png_k = None if png is None else f"{os.path.splitext(png)[0]}-{k}.png"
         try:
             job = Job(sm.name, sm.mesh.V, sm.mesh.F, seams=_seams(sm, seams_mode, path),
@@ -97,6 +107,32 @@ def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=Non
         else:
             entry["output"] = os.path.abspath(output)
     return entries
+
+
+def geometry_key(sm):
+    """A digest of everything one scene mesh's unwrap reads: positions, faces, the file's UVs
+    (its seams), polygons and face labels. Meshes with equal keys get the same result (a scene
+    exported with every copy of a part as its own mesh: glTF-Transform's many-cubes.gltf holds
+    501 equal meshes)."""
+    h = hashlib.sha256()
+    m = sm.mesh
+    labels = getattr(m, "labels", None) or {}
+    for part in ([m.V, m.F, m.corner_uv, sm.face_groups]
+                 + [labels[name] for name in sorted(labels)]):
+        a = None if part is None else np.ascontiguousarray(part)
+        h.update(b"-" if a is None else f"{a.dtype}{a.shape}".encode() + a.tobytes())
+    return h.hexdigest()
+
+
+def _reused(first, first_mesh, sm, where, t0):
+    """The report entry of ``sm``, whose arrays equal those of ``first_mesh`` (entry ``first``):
+    its figures, status and message, under its own name, with ``same_as`` naming the mesh whose
+    result it reuses."""
+    entry = copy.deepcopy(first)
+    own = [w for w in entry.get("warnings", []) if w not in first_mesh.warnings]
+    entry.update(where, name=sm.name, same_as=first_mesh.name, warnings=list(sm.warnings) + own,
+                 seconds=round(time.perf_counter() - t0, 4))
+    return entry
 
 
 def with_neighbour_uvs(F, corner_uv, faces):
