@@ -9,6 +9,9 @@ default value, else the first time sample, with a warning). The UVs are read fro
 the primvar named by ``--uv-name``, else the one the mesh's materials read (``usd_uv_name``:
 ``map1`` for a Maya export), else ``st``; the existing UVs give the seams, as an OBJ's ``vt`` do.
 
+Instanced meshes (``instanceable = true``) are read once per prototype and their UVs authored on
+a class every instance inherits (``usd_instances``).
+
 Writing: the input layer is never edited. The output's root layer is a copy of the input's root
 layer with every relative asset path (sublayers, references, payloads, textures) re-anchored so it
 resolves from the output folder, and the new primvar is authored in it as an opinion (an ``over``
@@ -18,6 +21,7 @@ the variants stay selectable), and everything the unwrap does not touch keeps it
 topology, normals, other primvars, bindings, xforms and metadata are not written at all. A
 ``.usdz`` output is packaged with its dependencies (``UsdUtils.CreateNewUsdzPackage``).
 """
+import dataclasses
 import os
 
 import numpy as np
@@ -27,6 +31,8 @@ from ..errors import SceneFileError
 from ..meshio import Mesh
 from ..scheduling.atomic import atomic_path
 from .model import SceneMesh
+from .usd_instances import (add_inherits, prototype_meshes, proxy_uvs, target_prim,
+                            undo_instanced)
 from .usd_uv_name import uv_primvar
 
 
@@ -144,15 +150,9 @@ class UsdScene:
         except Tf.ErrorException as exc:
             raise SceneFileError(f"{where}: USD could not read its values, the file is damaged "
                                  f"({_pxr_message(exc)})") from None
-        for proto in stage.GetPrototypes():
-            meshes_in = [p for p in Usd.PrimRange(proto) if p.IsA(UsdGeom.Mesh)]
-            if meshes_in:
-                meshes.append(SceneMesh(
-                    str(meshes_in[0].GetPath()), None, {"prim": str(meshes_in[0].GetPath())},
-                    f"{len(meshes_in)} mesh(es) inside instanced prims (instanceable = true) are "
-                    "not unwrapped: USD does not allow opinions on instance proxies; make the "
-                    "prims not instanceable, or unwrap the referenced asset itself"))
-                parts.append(None)
+        for sm, part in prototype_meshes(stage, path, uv_name, errors, _mesh_arrays):
+            meshes.append(sm)
+            parts.append(part)
         scene = cls(path, uv_name, meshes, parts)
         scene.layers = {os.path.realpath(p) for p in (
             layer.realPath for layer in stage.GetUsedLayers()) if p}
@@ -230,11 +230,18 @@ class UsdScene:
         if not all(c.certified for c in certs):
             return certs, ["the UVs as stored (float32, one per face-vertex) do not certify; "
                            "the mesh keeps the UVs it had"]
-        prim = stage.GetPrimAtPath(sm.name)
+        instanced = part.get("instanced")
+        if instanced is None:
+            prim = seen = stage.GetPrimAtPath(sm.name)
+        else:   # on the prototype's class, which every instance inherits (usd_instances)
+            prim, seen = target_prim(stage, instanced)
         api = UsdGeom.PrimvarsAPI(prim)
         warnings = []
         name = part["uv_name"]
-        old = api.GetPrimvar(name)
+        old = UsdGeom.PrimvarsAPI(seen).GetPrimvar(name)
+        if old and old.GetTypeName() != Sdf.ValueTypeNames.TexCoord2fArray and instanced:
+            return _refused(certs, f"primvars:{name} is {old.GetTypeName()} in the instanced "
+                                   "asset, not texCoord2f[]")
         if old and old.GetTypeName() != Sdf.ValueTypeNames.TexCoord2fArray:
             warnings.append(f"primvars:{name} was {old.GetTypeName()}; it becomes "
                             "texCoord2f[]")
@@ -249,7 +256,23 @@ class UsdScene:
             pv.GetIndicesAttr().Block()
         pv.Set(Vt.Vec2fArray.FromNumpy(values))
         pv.SetIndices(Vt.IntArray.FromNumpy(index.astype(np.int32)))
+        if instanced is not None:
+            add_inherits(stage, instanced)
+            seen_uv = proxy_uvs(stage, instanced["proxy"], name)
+            if seen_uv is None or not np.array_equal(seen_uv, values[index]):
+                undo_instanced(stage, instanced, prim, pv)   # nothing of it left in the layer
+                return _refused(certs, "the instances do not compose the UVs authored on their "
+                                       "class")
+            warnings.append(f"instanced: the UVs are authored once on {instanced['class']}, "
+                            f"which the {sm.info['instances']} instance(s) inherit")
         return certs, warnings + part["warnings"]
+
+
+def _refused(certs, why):
+    """(certificates, warnings) of a mesh whose certified UVs are not written: each
+    certificate failed with ``why``, so the mesh keeps the UVs it had."""
+    return ([dataclasses.replace(c, certified=False, reason=why) for c in certs],
+            [f"{why}; the mesh keeps the UVs it had"])
 
 
 class _NothingCertified(Exception):

@@ -301,7 +301,7 @@ def _check_stage(out, report):
     from pxr import Usd, UsdGeom
     written = [m for m in report["meshes"] if m.get("output")]
     stage = Usd.Stage.Open(out)
-    for prim in stage.Traverse():
+    for prim in stage.Traverse(Usd.TraverseInstanceProxies()):   # instanced meshes too
         if not prim.IsA(UsdGeom.Mesh):
             continue
         pv = UsdGeom.PrimvarsAPI(prim).GetPrimvar("st")

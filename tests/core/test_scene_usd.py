@@ -357,7 +357,9 @@ def test_a_malformed_mesh_leaves_the_stage_s_others_unwrapped(tmp_path, capsys):
 
 def test_holes_instances_and_points_only_time_sampled(tmp_path):
     """A hole is not unwrapped (its corners get one value); a mesh inside an instanceable prim is
-    reported, not written; points with time samples only are unwrapped at the first sample."""
+    unwrapped once on its prototype, its UVs on a class the instance inherits
+    (``test_instanced_meshes_are_unwrapped_once_per_prototype``); points with time samples only
+    are unwrapped at the first sample."""
     stage = Usd.Stage.CreateNew(str(tmp_path / "a.usda"))
     V, counts, idx = quad_grid(5, 4, bump=False)
     m = UsdGeom.Mesh.Define(stage, "/Holed")
@@ -378,14 +380,16 @@ def test_holes_instances_and_points_only_time_sampled(tmp_path):
     assert proto
     out = tmp_path / "b.usda"
     assert main(["unwrap", str(tmp_path / "a.usda"), "-o", str(out), "--bound", "3",
-                 "--report", str(tmp_path / "r.json")]) == 1          # the instance is not done
+                 "--report", str(tmp_path / "r.json")]) == 0
     entries = {e["name"]: e for e in json.loads((tmp_path / "r.json").read_text())["meshes"]}
     holed = entries["/Holed"]
     assert holed["status"] == "certified" and holed["faces"] == 2 * (len(counts) - 1)
     assert any("time 1" in w for w in holed["warnings"])
-    (inst_entry,) = [e for p, e in entries.items() if p != "/Holed" and p != "/Proto/Leaf"]
-    assert "instanceable" in inst_entry["message"] and inst_entry["status"] == "failed"
+    inst_entry = entries["/Inst/Leaf"]
+    assert inst_entry["status"] == "certified" and inst_entry["instances"] == 1
     stage_out = Usd.Stage.Open(str(out))
+    leaf = stage_out.GetPrimAtPath("/Inst/Leaf")
+    assert leaf.IsInstanceProxy() and UsdGeom.PrimvarsAPI(leaf).GetPrimvar("st").HasValue()
     pv = UsdGeom.PrimvarsAPI(stage_out.GetPrimAtPath("/Holed")).GetPrimvar("st")
     fv = np.asarray(pv.GetIndices()).reshape(-1, 4)
     assert len(set(fv[5].tolist())) == 1                                 # the hole's corners
@@ -568,3 +572,98 @@ def test_a_fan_diagonal_along_another_polygons_side_is_turned_away(tmp_path):
     D, flipped = reference_distortion(P, idx[T], uv[T])
     assert not flipped.any() and D.max() <= entry["bound_certified"] * (1 + 1e-9)
     assert len(overlapping_triangle_pairs(uv[T])) == 0
+
+
+def _fan(counts):
+    """This test's own fan triangulation: (t,3) face-vertex positions."""
+    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    return np.array([(s, s + i, s + i + 1) for s, c in zip(start, counts)
+                     for i in range(1, c - 1)])
+
+
+def test_instanced_meshes_are_unwrapped_once_per_prototype(tmp_path):
+    """Production USD instances its assets (usd-wg's teapotScene: 524 instanceable teapots, 133
+    prototypes, were refused). A prototype's mesh is unwrapped once; its UVs go on a class of the
+    output layer that every instance inherits (USD allows no opinion on an instance proxy), an
+    instance nested in another instanced prim through its place under the outer prototype's
+    class: every proxy composes them, certified here from the written stage; the instances still
+    share their prototypes; the asset file is untouched."""
+    V, counts, idx = quad_grid(6, 5)
+    asset = Usd.Stage.CreateNew(str(tmp_path / "rock.usda"))
+    root = UsdGeom.Xform.Define(asset, "/Rock")
+    asset.SetDefaultPrim(root.GetPrim())
+    m = UsdGeom.Mesh.Define(asset, "/Rock/geo/body")
+    m.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(V.astype(np.float32)))
+    m.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(counts.astype(np.int32)))
+    m.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(idx.astype(np.int32)))
+    asset.GetRootLayer().Save()
+    asset_bytes = (tmp_path / "rock.usda").read_bytes()
+    stage = Usd.Stage.CreateNew(str(tmp_path / "shot.usda"))
+    for i in range(4):
+        p = UsdGeom.Xform.Define(stage, f"/World/Rock{i}").GetPrim()
+        p.GetReferences().AddReference("./rock.usda")
+        p.SetInstanceable(True)
+        UsdGeom.XformCommonAPI(p).SetTranslate((3.0 * i, 0.0, 0.0))
+    stage.DefinePrim("/Group")                       # instanced, and holding an instance
+    inner = stage.DefinePrim("/Group/Inner")
+    inner.GetReferences().AddReference("./rock.usda")
+    inner.SetInstanceable(True)
+    for i in range(2):
+        p = stage.DefinePrim(f"/World/Group{i}")
+        p.GetReferences().AddInternalReference("/Group")
+        p.SetInstanceable(True)
+    stage.GetRootLayer().Save()
+    out, rep = tmp_path / "out" / "shot.usda", tmp_path / "r.json"
+    assert main(["unwrap", str(tmp_path / "shot.usda"), "-o", str(out), "--report",
+                 str(rep)]) == 0
+    (done,) = json.loads(rep.read_text())["meshes"]
+    assert done["status"] == "certified" and done["name"] == "/Group/Inner/geo/body"
+    assert done["instances"] == 6          # /Group/Inner, 4 rocks, the one in Group's prototype
+    assert (tmp_path / "rock.usda").read_bytes() == asset_bytes
+    before = Usd.Stage.Open(str(tmp_path / "shot.usda"))
+    written = Usd.Stage.Open(str(out))
+    assert len(written.GetPrototypes()) == len(before.GetPrototypes())
+    protos = {written.GetPrimAtPath(f"/World/Rock{i}").GetPrototype().GetPath()
+              for i in range(4)}
+    assert len(protos) == 1                                    # still one shared prototype
+    T = _fan(counts)
+    for path in [f"/World/Rock{i}/geo/body" for i in range(4)] + [
+            "/Group/Inner/geo/body", "/World/Group0/Inner/geo/body",
+            "/World/Group1/Inner/geo/body"]:
+        proxy = written.GetPrimAtPath(path)
+        assert proxy.IsInstanceProxy()
+        pv = UsdGeom.PrimvarsAPI(proxy).GetPrimvar("st")
+        assert pv.GetInterpolation() == UsdGeom.Tokens.faceVarying
+        uv = np.asarray(pv.ComputeFlattened(), np.float64)
+        P = V.astype(np.float32).astype(np.float64)[idx]
+        D, flipped = reference_distortion(P, T, uv[T])
+        assert not flipped.any() and D.max() <= done["bound_certified"] * (1 + 1e-9)
+        assert len(overlapping_triangle_pairs(uv[T])) == 0
+
+
+def test_an_instanced_asset_whose_uvs_have_another_type_keeps_them(tmp_path):
+    """Outside an instance a primvar of another type is replaced (with a warning); in an instanced
+    asset it cannot be removed, so the mesh is refused by name and nothing of it is written."""
+    V, counts, idx = quad_grid(4, 3, bump=False)
+    asset = Usd.Stage.CreateNew(str(tmp_path / "tile.usda"))
+    asset.SetDefaultPrim(UsdGeom.Xform.Define(asset, "/Tile").GetPrim())
+    m = UsdGeom.Mesh.Define(asset, "/Tile/body")
+    m.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(V.astype(np.float32)))
+    m.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(counts.astype(np.int32)))
+    m.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(idx.astype(np.int32)))
+    UsdGeom.PrimvarsAPI(m.GetPrim()).CreatePrimvar(
+        "st", Sdf.ValueTypeNames.Float2Array, UsdGeom.Tokens.vertex).Set(
+        Vt.Vec2fArray.FromNumpy(V[:, :2].astype(np.float32)))
+    asset.GetRootLayer().Save()
+    stage = Usd.Stage.CreateNew(str(tmp_path / "floor.usda"))
+    for i in range(3):
+        p = stage.DefinePrim(f"/Floor/Tile{i}")
+        p.GetReferences().AddReference("./tile.usda")
+        p.SetInstanceable(True)
+    stage.GetRootLayer().Save()
+    out, rep = tmp_path / "o.usda", tmp_path / "r.json"
+    assert main(["unwrap", str(tmp_path / "floor.usda"), "-o", str(out), "--report", str(rep),
+                 "--seams", "none"]) == 1
+    (entry,) = json.loads(rep.read_text())["meshes"]
+    assert entry["status"] == "failed" and "float2[]" in entry["message"]
+    assert not out.exists()
