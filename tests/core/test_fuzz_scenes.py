@@ -235,7 +235,7 @@ def test_scene_files_never_crash_or_write_an_uncertified_result(breakage, copies
 
 USD_BREAKAGES = ("none", "polygon counts", "index range", "counts sum", "nan point", "empty stage",
                  "no points", "instanced", "instanceable", "time-sampled points", "holes",
-                 "inf point", "zero-area island")
+                 "inf point", "zero-area island", "nested instanceable")
 
 
 def _stage(path, breakage, seed):
@@ -292,6 +292,15 @@ def _stage(path, breakage, seed):
             p.GetReferences().AddInternalReference("/World/Panel")
             if breakage == "instanceable":
                 p.SetInstanceable(True)
+    if breakage == "nested instanceable":   # instances inside prims instanced in turn
+        for i in range(int(rng.integers(1, 4))):
+            p = stage.DefinePrim(f"/Lib/Group/Copy{i}")
+            p.GetReferences().AddInternalReference("/World/Panel")
+            p.SetInstanceable(True)
+        for i in range(int(rng.integers(1, 6))):
+            p = stage.DefinePrim(f"/World/Group{i}")
+            p.GetReferences().AddInternalReference("/Lib/Group")
+            p.SetInstanceable(bool(rng.integers(0, 4)))
     stage.GetRootLayer().Save()
 
 
