@@ -108,6 +108,20 @@ def _edge_keys(a, b, n):
     return np.minimum(a, b) * n + np.maximum(a, b)
 
 
+#: the largest coordinate magnitude a face may have: the seam search forms fourth powers of
+#: coordinates (area-weighted second moments), which overflow float64 near 1e77 (a disk scaled to
+#: 1e80 ended in LinAlgError out of the Fiedler split's principal axes); beyond it a face is refused
+#: by name as too large to measure, as a non-finite one is
+MEASURABLE = 1e60
+
+
+def measurable(P):
+    """(m,) bool: faces (corners ``P`` (m,3,3)) whose coordinates are finite and at most
+    ``MEASURABLE`` in magnitude."""
+    with np.errstate(invalid="ignore"):
+        return np.all(np.abs(P) <= MEASURABLE, axis=(1, 2))
+
+
 def thinner_than_precision(P, A, lmax2, precision):
     """(m,) bool: faces (corners ``P`` (m,3,3), areas ``A``, longest edges squared ``lmax2``)
     whose height, twice the area over the longest edge, is below one step of ``precision`` (the
@@ -221,7 +235,7 @@ def checked_islands(V, F, seams=None, precision=None):
     degenerate |= thinner_than_precision(P, A, lmax2, precision)
     # The one place non-finite vertex coordinates are caught: NaN or inf, and coordinates so large
     # that the face's squared edges or area overflow (nothing downstream could measure it).
-    nonfinite_face = ~(np.all(np.isfinite(P), axis=(1, 2)) & np.isfinite(lmax2) & np.isfinite(A))
+    nonfinite_face = ~(measurable(P) & np.isfinite(lmax2) & np.isfinite(A))
     many = np.flatnonzero(he_count >= 3)
     # Every edge in at most two faces and no face repeating a vertex (whose two sides of one edge
     # would pair with each other): each half-edge's only possible twin is its pair's other half.
@@ -317,7 +331,8 @@ def _validate(idx, faces, tris, vertices, V, degenerate, nonfinite, duplicate, n
     bad = faces[nonfinite[faces]]
     if len(bad):
         return NonFiniteError(f"{name}: {len(bad)} face(s) have NaN or infinite vertex coordinates, "
-                              f"or coordinates too large to measure (faces {_some(bad)}); fix or "
+                              f"or coordinates too large to measure (beyond 1e60) (faces {_some(bad)}); "
+                              "fix or "
                               "delete those vertices", idx, bad)
     bad = faces[duplicate[faces]]
     if len(bad):

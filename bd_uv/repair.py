@@ -24,7 +24,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from .geometry import face_areas
-from .mesh import DEGENERATE_RATIO, check_arrays, thinner_than_precision
+from .mesh import DEGENERATE_RATIO, check_arrays, measurable, thinner_than_precision
 
 
 @dataclass(frozen=True)
@@ -40,7 +40,8 @@ class Repair:
     twin : (m,) int64, for an input face left out as a duplicate the face it duplicates (a
         solved one); -1 otherwise
     zero_area : (z,) int64, input faces of zero area (not solved)
-    non_finite : (q,) int64, input faces with a NaN or infinite corner (not solved)
+    non_finite : (q,) int64, input faces with a NaN or infinite corner, or one beyond
+        ``mesh.MEASURABLE`` (not solved)
     split_vertices : (b,) int64, input vertices split into one vertex per fan
     nonmanifold_edges : (e1,2) int64, input vertex pairs of edges of three or more faces (cut)
     orientation_edges : (e2,2) int64, input vertex pairs of edges whose two faces are oriented
@@ -113,7 +114,8 @@ class Repair:
             out.append(f"{len(self.zero_area)} zero-area face(s) cannot be certified: their UVs "
                        f"are left as they were (faces {_some(self.zero_area)})")
         if len(self.non_finite) and indices:
-            out.append(f"{len(self.non_finite)} face(s) with NaN or infinite coordinates cannot "
+            out.append(f"{len(self.non_finite)} face(s) with NaN or infinite coordinates, or "
+                       "coordinates beyond 1e60 (too large to measure), cannot "
                        f"be certified: their UVs are left as they were (faces "
                        f"{_some(self.non_finite)})")
         return out
@@ -139,7 +141,7 @@ def zero_area_faces(V, F, precision=None):
     bishops hold hundreds), whose angles, and so whose distortion, are rounding
     noise, and whose UVs no float32 store keeps apart."""
     P = V[F]
-    finite = np.isfinite(P).all(axis=(1, 2))
+    finite = measurable(P)
     # non-finite corners (refused by name elsewhere) give NaN here, not numpy warnings
     with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
         A = face_areas(V, F)
@@ -227,7 +229,7 @@ def repair_mesh(V, F, precision=None):
     V, F = check_arrays(V, F)
     n, m = len(V), len(F)
     zero = zero_area_faces(V, F, precision)
-    bad = ~np.isfinite(V[F]).all(axis=(1, 2))
+    bad = ~measurable(V[F])
     twin = duplicate_twins(F, skip=zero | bad)
     faces = np.flatnonzero(~zero & ~bad & (twin < 0))
     Fk = F[faces]

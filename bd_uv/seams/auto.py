@@ -23,7 +23,7 @@ import numpy as np
 from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, OverlapError,
                       SolverError, TopologyError)
 from ..geometry import face_areas
-from ..mesh import DEGENERATE_RATIO, Island, check_arrays, islands
+from ..mesh import DEGENERATE_RATIO, Island, check_arrays, islands, measurable
 from ..options import UnwrapOptions
 from ..unwrapping.unwrap import pin_arrays, unwrap, unwrap_islands
 from .charts import MARGIN, chart_maps, mean_cap
@@ -307,7 +307,7 @@ def _valid_everywhere(V, F, E, A):
     # differences were ~110 MB at once on a 500k-face mesh, the set-up's peak.
     for i in range(0, len(F), CHUNK):
         P = V[F[i:i + CHUNK]]
-        if not np.isfinite(P).all():
+        if not measurable(P).all():   # NaN, inf, or beyond float64's fourth powers
             return False
         lmax2 = np.max(np.sum((P - np.roll(P, -1, axis=1)) ** 2, axis=2), axis=1)
         with np.errstate(invalid="ignore"):

@@ -189,7 +189,8 @@ def result_on_input(res, rep, F, method):
     for z, error, what, fix in (
             (rep.zero_area, DegenerateFacesError, "zero-area face(s)",
              "dissolve or merge them to unwrap them"),
-            (rep.non_finite, NonFiniteError, "face(s) with NaN or infinite coordinates",
+            (rep.non_finite, NonFiniteError, "face(s) with NaN or infinite coordinates, or "
+             "coordinates beyond 1e60 (too large to measure),",
              "fix their vertices to unwrap them")):
         if not len(z):
             continue

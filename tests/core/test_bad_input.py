@@ -507,6 +507,25 @@ def test_absurd_scales_end_in_a_certificate_or_a_typed_error(scale):
         unwrap_checked(V * scale, F)
 
 
+@pytest.mark.parametrize("seams_mode", ["auto", "needed"])
+@pytest.mark.parametrize("scale", [1e30, 1e80, 1e120])
+def test_coordinates_too_large_to_measure_are_refused_by_name(seams_mode, scale):
+    """The seam search forms fourth powers of coordinates: a disk scaled to 1e80 ended in
+    numpy's LinAlgError ("Eigenvalues did not converge") out of ``unwrap(seams_mode="auto")``
+    and out of the command line, a crash. Coordinates beyond ``mesh.MEASURABLE`` (1e60) are
+    now refused by name as too large to measure, as NaN is; at 1e30 the disk is certified."""
+    from bd_uv.mesh import MEASURABLE
+    from bd_uv.options import UnwrapOptions
+    V, F = grid()
+    res = unwrap_checked(V * scale, F, options=UnwrapOptions(seams_mode=seams_mode))
+    if scale <= MEASURABLE:
+        assert [r.status for r in res.islands] == ["certified"]
+        return
+    assert all(r.status == "failed" for r in res.islands)
+    assert any(isinstance(r.error, bd_uv.NonFiniteError) and "1e60" in r.message
+               for r in res.islands)
+
+
 # ---------------------------------------------------------------------------------------------
 # Seams and options
 # ---------------------------------------------------------------------------------------------
