@@ -34,6 +34,13 @@ from .nest import (FIT, Placement, _area, _strip, least_squares, nest, rotations
 DENSITY_GUESS = 0.63  # strip density expected (measured 0.58-0.70 on 27-46 charts of 5 meshes)
 START_PER_CHART = 0.015  # seconds of a solve's first placement per chart (measured, quiet)
 HEADROOM = 1.10       # a strip's separation is the padding of a square this much larger
+# ... and this much when a solve's search is shorter than its first placement (suzanne: 0.08 s
+# of search after 0.4 s of placing): spyrrow can then barely narrow its first layout, and
+# suzanne's came out 1.10-1.12 times wider than the strip's square, so most seeds paid a second
+# solve (a first placement more: 7 seeds of 8 at load ~9); with 1.2 none did, for the same
+# coverage (0.6004 against 0.5995, seeds 0-9) and 20 % less CPU. For every solve (camel searches
+# 0.7 s) it lost 1.5-2 % (seeds 0-3): the layouts spyrrow narrows keep the tighter separation
+SHORT_HEADROOM = 1.20
 SPREAD = (0.07, 0.025)  # each round's densities: its guess times 1 -+ SPREAD[round]
 COMPACT_SHARE = 0.5     # of the time: compaction of the best layout found (.compact)
 # above this many charts a compaction step (one linear program over every chart) is too slow to
@@ -62,7 +69,7 @@ def _squares(points, owner, placements, tol, padding):
     return side, low
 
 
-def _solve_all(outlines, sides, options, tol, seconds):
+def _solve_all(outlines, sides, options, tol, seconds, headroom=HEADROOM):
     """One solve per square side, all at once (threads): per side, every feasible layout reached
     (reports, then the result), or None where spyrrow gave up (it panics when it cannot place a
     chart in the strip); the last such refusal (PackError) or None. Each solve searches on
@@ -72,7 +79,7 @@ def _solve_all(outlines, sides, options, tol, seconds):
 
     def work(i):
         try:
-            height, sep, _ = _strip(sides[i], options, tol, HEADROOM)
+            height, sep, _ = _strip(sides[i], options, tol, headroom)
             reports = []
             final = nest(outlines, height, sep, options, seconds, reports, workers)
             out[i] = reports + [final]
@@ -95,9 +102,10 @@ def square_layout(outlines, options, tol, seconds):
     """The smallest square found that holds every outline with the padding.
 
     The padding scales with the square (it is in texels). A solve packs a strip of height H for
-    a square of side S with the separation of a square ``HEADROOM`` S, so any of its layouts is a
-    square layout of side the placed outlines' larger extent (plus the edges) whenever that is at
-    most ``HEADROOM`` S. Two rounds, each searching for half the time: (solves + 1) // 2
+    a square of side S with the separation of a square ``HEADROOM`` S (``SHORT_HEADROOM`` S when
+    a round's search is shorter than a first placement), so any of its layouts is a square
+    layout of side the placed outlines' larger extent (plus the edges) whenever that is at most
+    that larger square. Two rounds, each searching for half the time: (solves + 1) // 2
     solves at once at the sides of the guessed density times 1 -+ ``SPREAD[0]``, then solves // 2
     around the density the solve nearest to a square reached (1 -+ ``SPREAD[1]``);
     ``options.solves`` 1: one solve at the guess. With no square found, sides keep growing
@@ -125,10 +133,6 @@ def square_layout(outlines, options, tol, seconds):
     owner = np.repeat(np.arange(k), [len(xy) for xy in outlines])
     boxes = least_squares(outlines, options)[0]
     widest = float(boxes.max())
-    # the strip must hold the widest chart with the separation to both its edges: its height is
-    # S (1 + p HEADROOM) + 2 tol, the chart's extent at most S (1 - p HEADROOM) - 2 tol
-    least = (widest + 2 * tol) / (1 - options.padding * HEADROOM) * FIT[options.rotate]
-    t0 = time.perf_counter()
     share = COMPACT_SHARE if k <= COMPACT_MAX_CHARTS else 0.0
     nesting = (1 - share) * seconds
     # (solves + 1) // 2 solves at once around the guess, then solves // 2 around the density the
@@ -137,6 +141,13 @@ def square_layout(outlines, options, tol, seconds):
     at_once = [(options.solves + 1) // 2, options.solves // 2]
     dens = DENSITY_GUESS * np.sqrt(1 - 1 / k)
     best, solves, start = None, 0, START_PER_CHART * k
+    headroom = HEADROOM
+    if seconds > 0 and (nesting - start * rounds) / rounds < start:
+        headroom = SHORT_HEADROOM
+    # the strip must hold the widest chart with the separation to both its edges: its height is
+    # S (1 + p headroom) + 2 tol, the chart's extent at most S (1 - p headroom) - 2 tol
+    least = (widest + 2 * tol) / (1 - options.padding * headroom) * FIT[options.rotate]
+    t0 = time.perf_counter()
     sides = [least]
     for r in range(rounds + 8):  # per round; then larger squares, placing only
         if r >= rounds and best is not None:
@@ -152,10 +163,11 @@ def square_layout(outlines, options, tol, seconds):
         grow = r >= rounds
         spread = np.linspace(-1, 1, at_once[r]) if not grow and at_once[r] > 1 else 0.0
         dens = np.atleast_1d(dens) * (1 + SPREAD[min(r, 1)] * spread)
-        fresh = (np.sqrt(area / dens) - 2 * tol) / (1 + options.padding * HEADROOM)
+        fresh = (np.sqrt(area / dens) - 2 * tol) / (1 + options.padding * headroom)
         sides = [max(float(s), least, 1.05 * max(sides) if grow else 0.0) for s in fresh]
         t1 = time.perf_counter()
-        runs, refused = _solve_all(outlines, sides, options, tol, search)
+        runs, refused = _solve_all(outlines, sides, options, tol, search,
+                                   **({} if headroom == HEADROOM else {"headroom": headroom}))
         start = max(time.perf_counter() - t1 - search, 0.0)
         solves += len(sides)
         # all refused: larger sides (by 1.1, and 1.05 more for the larger squares after the
@@ -165,11 +177,11 @@ def square_layout(outlines, options, tol, seconds):
             if found is None:
                 continue
             squares, low = _squares(points, owner, found, tol, options.padding)
-            height = _strip(side, options, tol, HEADROOM)[0]
+            height = _strip(side, options, tol, headroom)[0]
             if abs(np.log(found[-1].width / height)) < nearest:   # the next round's density
                 nearest = abs(np.log(found[-1].width / height))
                 dens = area / (height * found[-1].width)
-            fit = np.flatnonzero(squares <= HEADROOM * side)
+            fit = np.flatnonzero(squares <= headroom * side)
             if not len(fit):
                 continue
             j = fit[np.argmin(squares[fit])]
