@@ -124,7 +124,8 @@ def square_layout(outlines, options, tol, seconds):
     if k <= few.FEW_MAX:   # a few charts: greedy drops, then a short compaction (:mod:`.few`)
         found = few.few_layout(outlines, options, tol)
         if found is not None:
-            return (*compact_square(outlines, *found, options, tol, few.COMPACT)[:2], 0)
+            return (*compact_square(outlines, *found, options, tol, np.inf,
+                                    max_programs=few.COMPACT_PROGRAMS)[:2], 0)
     area = sum(_area(xy) for xy in outlines)
     points = np.concatenate(outlines)
     owner = np.repeat(np.arange(k), [len(xy) for xy in outlines])
