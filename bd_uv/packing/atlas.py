@@ -23,6 +23,7 @@ from .outlines import chart_outlines
 from .pinned import chart_boxes, free_square
 from .around import place_around
 from .groups import chart_groups, grouped_layout
+from .few import few_square
 from .square import square_layout
 
 
@@ -110,7 +111,9 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
         side = 1.0
     else:
         f = 1.0
-        pl, side, solves = square_layout(charts.outlines, options, tol, seconds)
+        # 2-4 charts: laid out in milliseconds (.few); else (or when it finds none) nested
+        found = few_square(charts.outlines, options, tol)
+        pl, side, solves = found or square_layout(charts.outlines, options, tol, seconds)
         tile = np.zeros(k, dtype=np.int64)
     R = rotations(pl.angle)
     use = lab >= 0

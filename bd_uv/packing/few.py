@@ -26,6 +26,7 @@ import itertools
 
 import numpy as np
 
+from .compact import compact_square
 from .nest import Placement, rotations
 
 # up to this many charts: measured on eight's 6 charts, 0.573 in 0.56 s CPU (load ~4) against
@@ -256,6 +257,19 @@ def _grown(outlines, angles, grow):
         g = np.asarray(shapely.get_coordinates(poly.exterior))[:-1]
         out.append([(a, g @ rotations([a])[0].T) for a in angles[i]])
     return out
+
+
+def few_square(outlines, options, tol):
+    """The smallest square found for 2 to ``FEW_MAX`` outlines: :func:`few_layout`, then
+    ``COMPACT_PROGRAMS`` compaction steps (:func:`.compact.compact_square`). Returns
+    (Placement with shift to the square's corner, side, 0 solves), or None (another count of
+    charts, or no layout found)."""
+    found = few_layout(outlines, options, tol)
+    if found is None:
+        return None
+    pl, side, _ = compact_square(outlines, *found, options, tol, np.inf,
+                                 max_programs=COMPACT_PROGRAMS)
+    return pl, side, 0
 
 
 def few_layout(outlines, options, tol):

@@ -27,7 +27,6 @@ import time
 import numpy as np
 
 from ..errors import PackError
-from . import few
 from .compact import compact_square
 from .nest import (FIT, Placement, _area, _strip, least_squares, nest, rotations,
                    single_layout)
@@ -121,11 +120,6 @@ def square_layout(outlines, options, tol, seconds):
     k = len(outlines)
     if k == 1:
         return (*single_layout(outlines[0], options, tol), 0)
-    if k <= few.FEW_MAX:   # a few charts: greedy drops, then a short compaction (:mod:`.few`)
-        found = few.few_layout(outlines, options, tol)
-        if found is not None:
-            return (*compact_square(outlines, *found, options, tol, np.inf,
-                                    max_programs=few.COMPACT_PROGRAMS)[:2], 0)
     area = sum(_area(xy) for xy in outlines)
     points = np.concatenate(outlines)
     owner = np.repeat(np.arange(k), [len(xy) for xy in outlines])
