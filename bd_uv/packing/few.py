@@ -32,8 +32,8 @@ from .nest import Placement, rotations
 # up to this many charts: measured on eight's 6 charts, 0.573 in 0.56 s CPU (load ~4) against
 # spyrrow's 0.584-0.590 in about as much; 2-4 charts 4-10x faster than spyrrow
 FEW_MAX = 4
-GRID_COARSE = 32    # profile cells across the guessed square side, for every order and fill
-GRID = 256          # ... for the KEEP best of them
+GRID_COARSE = 24    # profile cells across the guessed square side, for every order and fill
+GRID = 192          # ... for the KEEP best of them (a multiple of GRID_COARSE)
 KEEP = 3
 # linear programs of compaction (:mod:`.compact`) of the layout found, a count (not a time) so
 # the layout is deterministic; measured (seed 0, load ~3.5) for 0.05 s of CPU: UV sphere 0.663 ->
@@ -43,6 +43,7 @@ STRIPS = 16         # strip widths tried, from the widest chart's to STRIP_MAX t
 STRIP_MAX = 1.4
 SETTLE_ROUNDS = 3   # rounds of exact moves left and down (:func:`_settle`)
 SETTLE_BISECT = 8   # halvings of a move that is not free all the way
+SQUARE_GREEDY = 1
 ORDERS = 24         # chart orders tried (every order up to 4 charts: 24)
 GROW_SLACK = 1e-6   # grown charts apart by this fraction of the side more (float rounding)
 
@@ -307,7 +308,7 @@ def few_layout(outlines, options, tol):
             if not fine:
                 narrow = max(int(t.ncol.min()) for t in turns)
                 widths = np.unique(np.linspace(narrow, STRIP_MAX * grid, STRIPS).round())
-                runs = [(order, None) for order in orders] + [
+                runs = [(order, None) for order in orders if SQUARE_GREEDY] + [
                     (order, int(w)) for order in orders for w in widths]
             else:   # the best coarse runs, on the fine grid (the same strip widths)
                 ratio = GRID // GRID_COARSE
