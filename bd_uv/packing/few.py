@@ -35,6 +35,7 @@ FEW_MAX = 4
 GRID_COARSE = 24    # profile cells across the guessed square side, for every order and fill
 GRID = 192          # ... for the KEEP best of them (a multiple of GRID_COARSE)
 KEEP = 3
+SETTLED = 1         # of those, settled by exact moves, the smallest kept
 # linear programs of compaction (:mod:`.compact`) of the layout found, a count (not a time) so
 # the layout is deterministic; measured (seed 0, load ~3.5) for 0.05 s of CPU: UV sphere 0.663 ->
 # 0.697, torus 0.746 -> 0.777, fandisk 0.707 -> 0.717; 0.15 s added under 0.005
@@ -323,12 +324,16 @@ def few_layout(outlines, options, tol):
                      if placed and np.isfinite(side)]
         if not found:
             return None
-        side, _, _, placed, turns = min(found, key=lambda f: f[:2])
-        laid = _placement(outlines, placed, turns, options, tol, sep)
-        if laid is not None:   # a layout, or False: it failed the exact check
-            return laid or None
+        # each fine layout settled (the order they reached changes after the exact moves)
+        found = sorted(found, key=lambda f: f[:2])[:SETTLED]
+        laid = [_placement(outlines, f[3], f[4], options, tol, sep) for f in found]
+        held = [x for x in laid if x]
+        if held:
+            return min(held, key=lambda x: x[1])
+        if all(x is False for x in laid):   # every one failed the exact check
+            return None
         # the square reached needs a larger separation than the charts were grown by
-        guess = (side - 2 * grow + 2 * tol) / (1 - pad) * 1.01
+        guess = (found[0][0] - 2 * grow + 2 * tol) / (1 - pad) * 1.01
     return None
 
 
