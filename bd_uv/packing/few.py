@@ -1,32 +1,34 @@
-"""A few charts into the smallest square, in milliseconds: greedy drops on an L-shaped frontier.
+"""A few charts (2 to ``FEW_MAX``) into the smallest square in tens of milliseconds, without
+spyrrow.
 
 spyrrow (:mod:`.nest`) overshoots tiny search requests: Blender's cube (3 charts) asked for about
-0.1 s of search takes 0.5-0.7 s, whatever its budget (measured in
-benchmarks/results/bench_pack-2026-11-27-fewpack.md). For a handful of charts a small exhaustive
-greedy search does as well in far less time:
+0.1 s of search took 0.5-1.0 s whatever its budget (its first placement alone: 20-40 ms), and a
+cube is packed at every unwrap of one (glTF-Transform's many-cubes.gltf: 501 of them). Here:
 
-- each chart is turned to a few candidate angles (its least-area box and least-square box
-  orientations and their quarter turns; quarter turns only for ``rotate`` 90, none for none) and
-  grown by half the separation (a mitred buffer holds every point that close to the chart);
-- a layout places the charts one after another against the frontier of those already placed:
-  dropped down onto the upper profile of the placed charts (column by column), or pushed left onto
-  their right profile (row by row). Profiles are conservative step functions on a grid of
-  ``GRID`` cells across the square: a chart above the upper profile in every column it covers is
-  apart from every placed chart, whatever their shapes (true shapes, not boxes). Among every
-  candidate angle, direction and grid offset, the one leaving the smallest bounding square wins
-  (then the smallest box area, then the lowest-leftmost);
-- the charts are taken in every order (up to 4 charts) or in a few orders (largest first, tallest
-  first, then shuffles from the seed); the smallest square found is kept.
+- each chart is turned to a few candidate angles (its least-area box and least-square box turns
+  and their quarter turns; quarter turns for ``rotate`` 90, none for none; never a mirror) and
+  grown by half the separation at a guessed side (a mitred buffer holds every point that close);
+- layouts place the charts one by one onto conservative step profiles of those already placed
+  (:mod:`.drops`: true shapes, not boxes): in a strip, each chart where its top ends lowest, for
+  ``STRIPS`` widths and every order (up to 4 charts; else ``ORDERS`` from the seed) at once; and
+  a greedy on an L-shaped frontier (dropped down or pushed left, least square first) per order.
+  All on a coarse grid (``GRID_COARSE`` cells across the guess), the ``KEEP`` best again on the
+  fine grid (``GRID``);
+- the best is moved chart by chart left and down by exact GEOS distances at the separation of the
+  square reached (:func:`_settle`: the grid's slack and the guessed separation's excess go), checked
+  exactly (every pair apart by the separation, every point inside), then compacted by
+  ``COMPACT_PROGRAMS`` linear programs (:mod:`.compact`, a count: the layout is deterministic).
 
-Deterministic for a seed. The layout is checked exactly (GEOS distances between the true outlines
-and every point inside the square) before it is returned; a layout that does not hold is not
-returned (the caller nests with spyrrow instead).
+When the square reached needs more separation than the charts were grown by, again at that
+square; None when nothing holds (the caller nests with spyrrow). Measured against spyrrow in
+benchmarks/results/bench_pack-2026-11-27-fewpack.md.
 """
 import itertools
 
 import numpy as np
 
 from .compact import compact_square
+from .drops import Turns, greedy, strip_fills
 from .nest import Placement, rotations
 
 # up to this many charts: measured on eight's 6 charts, 0.573 in 0.56 s CPU (load ~4) against
@@ -44,7 +46,7 @@ STRIPS = 16         # strip widths tried, from the widest chart's to STRIP_MAX t
 STRIP_MAX = 1.4
 SETTLE_ROUNDS = 3   # rounds of exact moves left and down (:func:`_settle`)
 SETTLE_BISECT = 8   # halvings of a move that is not free all the way
-SQUARE_GREEDY = 1
+SQUARE_GREEDY = 1   # run the L-frontier greedy too (0: strips only; the cube lost 0.8 % without)
 ORDERS = 24         # chart orders tried (every order up to 4 charts: 24)
 GROW_SLACK = 1e-6   # grown charts apart by this fraction of the side more (float rounding)
 
@@ -66,170 +68,6 @@ def _candidate_angles(xy, rotate):
         base = sorted({float(theta[np.argmin(ext[:, 0] * ext[:, 1])]),
                        float(theta[np.argmin(ext.max(axis=1))])})
     return [b + 90.0 * r for b in base for r in range(4)]
-
-
-def _profiles(poly, h):
-    """Conservative step profiles of a polygon (n,2) on cells of width h from its low corner:
-    (low, up) per column (least and greatest y within the column's strip, from the low corner)
-    and (left, right) per row, and the extent (w, h)."""
-    lo = poly.min(axis=0)
-    p = poly - lo
-    q = np.roll(p, -1, axis=0)
-    out = []
-    for ax in (0, 1):  # columns (over x), then rows (over y)
-        a, b = p[:, ax], q[:, ax]
-        ya, yb = p[:, 1 - ax], q[:, 1 - ax]
-        n = max(int(np.ceil(p[:, ax].max() / h - 1e-9)), 1)
-        c0 = np.arange(n)[:, None] * h
-        c1 = c0 + h
-        s0, s1 = np.minimum(a, b), np.maximum(a, b)
-        lo_x, hi_x = np.maximum(c0, s0), np.minimum(c1, s1)
-        hit = lo_x <= hi_x
-        d = b - a
-        flat = np.abs(d) < 1e-300
-        slope = np.where(flat, 0.0, (yb - ya) / np.where(flat, 1.0, d))
-        y0 = np.where(flat, ya, ya + (lo_x - a) * slope)
-        y1 = np.where(flat, yb, ya + (hi_x - a) * slope)
-        least = np.where(hit, np.minimum(y0, y1), np.inf).min(axis=1)
-        most = np.where(hit, np.maximum(y0, y1), -np.inf).max(axis=1)
-        out.append((least, most))
-    ext = p.max(axis=0)
-    return out[0], out[1], ext, lo
-
-
-class _Turns:
-    """One chart at its candidate turns, grown, on a grid of cells of width h: per turn its
-    profiles (padded with +-inf to the longest), their lengths, extent and low corner."""
-
-    def __init__(self, chart, turned, h):
-        self.chart = chart
-        self.angle = np.array([a for a, _ in turned])
-        prof = [_profiles(g, h) for _, g in turned]
-        self.ext = np.array([p[2] for p in prof])
-        self.lo = np.array([p[3] for p in prof])
-        self.ncol = np.array([len(p[0][0]) for p in prof])
-        self.nrow = np.array([len(p[1][0]) for p in prof])
-        self.low, self.up = self._stack([p[0] for p in prof], self.ncol)
-        self.left, self.right = self._stack([p[1] for p in prof], self.nrow)
-
-    @staticmethod
-    def _stack(pairs, n):
-        near = np.full((len(pairs), int(n.max())), np.inf)
-        far = np.full(near.shape, -np.inf)
-        for a, (lo, hi) in enumerate(pairs):  # per turn
-            near[a, :len(lo)], far[a, :len(hi)] = lo, hi
-        return near, far
-
-
-def _drops(frontier, near, length):
-    """Per turn a and grid offset i, the least position of a chart above ``frontier`` (its cells
-    i.. against the chart's near profile): max over j of frontier[i + j] - near[a, j], at least 0;
-    inf where the chart (``length[a]`` cells) passes the frontier's end. (A, n) float64."""
-    from numpy.lib.stride_tricks import sliding_window_view
-    n, L = len(frontier), near.shape[1]
-    win = sliding_window_view(np.concatenate([frontier, np.full(L - 1, -np.inf)]), L)
-    pos = np.maximum((win[None, :, :] - near[:, None, :]).max(axis=2), 0.0)
-    pos[np.arange(n)[None, :] + length[:, None] > n] = np.inf
-    return pos
-
-
-def _greedy(turns, order, n_cells, h):
-    """Charts in ``order`` placed one by one on an L-shaped frontier: dropped down onto the
-    placed charts' upper profile or pushed left onto their right profile, at the turn and offset
-    leaving the smallest square (then the least box area, then the lowest-leftmost). Returns
-    (side, [(chart, turn index, x, y)]) with x, y the grown chart's low corner."""
-    top = np.zeros(n_cells)     # per column: the placed charts' greatest y
-    right = np.zeros(n_cells)   # per row: their greatest x
-    W = H = 0.0
-    placed = []
-    for c in order:  # per chart
-        t = turns[c]
-        # offsets past the square so far only grow it more than the first of them
-        n = min(n_cells, int(np.ceil(max(W, H) / h)) + 1 + max(t.low.shape[1], t.left.shape[1]))
-        best = None
-        for down in (True, False):
-            if down:
-                pos = _drops(top[:n], t.low, t.ncol)
-                along = np.arange(n)[None, :] * h
-                w, ht = np.maximum(W, along + t.ext[:, :1]), np.maximum(H, pos + t.ext[:, 1:])
-            else:
-                pos = _drops(right[:n], t.left, t.nrow)
-                along = np.arange(n)[None, :] * h
-                ht, w = np.maximum(H, along + t.ext[:, 1:]), np.maximum(W, pos + t.ext[:, :1])
-            side = np.maximum(w, ht).ravel()
-            j = int(np.lexsort(((along + pos).ravel(), (w * ht).ravel(), np.round(side / h, 6)))[0])
-            cand = (float(side[j]), float((w * ht).ravel()[j]))
-            if best is None or cand < best[0]:
-                a, i = divmod(j, n)
-                xy = (i * h, float(pos[a, i])) if down else (float(pos[a, i]), i * h)
-                best = (cand, a, *xy, float(w.ravel()[j]), float(ht.ravel()[j]))
-        if not np.isfinite(best[0][0]):
-            return np.inf, []
-        _, a, x, y, W, H = best
-        placed.append((c, a, x, y))
-        _raise(top, t.up[a, :t.ncol[a]], x, y, h)
-        _raise(right, t.right[a, :t.nrow[a]], y, x, h)
-    return max(W, H), placed
-
-
-def _strip_fills(turns, runs, h):
-    """Every run (order, strip width in cells) at once: the charts in its order dropped one by
-    one into its strip, each at the turn and offset where its top ends lowest (then the first
-    turn, then leftmost). Returns per run (side, [(chart, turn index, x, y)]) as
-    :func:`_greedy` (side inf where a chart fits no turn)."""
-    from numpy.lib.stride_tricks import sliding_window_view
-    k, A = len(turns), max(len(t.angle) for t in turns)
-    L = max(t.low.shape[1] for t in turns)
-    low = np.full((k, A, L), np.inf)
-    up = np.full((k, A, L), -np.inf)
-    ncol = np.full((k, A), 1 << 30)
-    ext = np.zeros((k, A, 2))
-    for c, t in enumerate(turns):  # per chart
-        a, m = len(t.angle), t.low.shape[1]
-        low[c, :a, :m], up[c, :a, :m], ncol[c, :a], ext[c, :a] = t.low, t.up, t.ncol, t.ext
-    order = np.array([r[0] for r in runs])
-    width = np.array([r[1] for r in runs])
-    B, n = len(runs), int(width.max())
-    rows = np.arange(B)
-    top = np.zeros((B, n + L - 1))
-    top[:, n:] = -np.inf
-    W, H = np.zeros(B), np.zeros(B)
-    ok = np.ones(B, dtype=bool)
-    place = np.zeros((B, k, 4))
-    cols = np.arange(n)
-    for step in range(k):  # per chart of every run
-        c = order[:, step]
-        win = sliding_window_view(top, L, axis=1)[:, :n]                     # (B, n, L)
-        pos = np.maximum((win[:, None, :, :] - low[c][:, :, None, :]).max(axis=3), 0.0)
-        bad = cols[None, None, :] + ncol[c][:, :, None] > width[:, None, None]
-        key = np.where(bad, np.inf, pos + ext[c][:, :, 1:])
-        j = np.argmin(key.reshape(B, -1), axis=1)
-        a, i = np.divmod(j, n)
-        ok &= np.isfinite(key.reshape(B, -1)[rows, j])
-        y = pos[rows, a, i]
-        e = ext[c, a]
-        place[:, step] = np.stack([c, a, i * h, y], axis=1)
-        W, H = np.maximum(W, i * h + e[:, 0]), np.maximum(H, y + e[:, 1])
-        idx = np.minimum(i[:, None] + np.arange(L)[None, :], n + L - 2)
-        val = np.where(np.isfinite(up[c, a]), y[:, None] + up[c, a], -np.inf)
-        top[rows[:, None], idx] = np.maximum(top[rows[:, None], idx], val)
-        top[:, n:] = -np.inf
-    side = np.where(ok, np.maximum(W, H), np.inf)
-    return [(float(side[b]), [(int(p[0]), int(p[1]), float(p[2]), float(p[3]))
-                              for p in place[b]]) for b in range(B)]
-
-
-def _raise(prof, far, at, base, h):
-    """The frontier ``prof`` raised by a chart's far profile placed at offset ``at`` (a cell
-    boundary or not: each cell of the chart covers at most two of the frontier's)."""
-    i = at / h
-    i0 = int(np.floor(i + 1e-9))
-    val = base + far
-    n = min(len(val), len(prof) - i0)
-    np.maximum(prof[i0:i0 + n], val[:n], out=prof[i0:i0 + n])
-    if abs(i - round(i)) > 1e-9:  # straddling: each chart cell touches the next frontier cell
-        n1 = min(len(val), len(prof) - i0 - 1)
-        np.maximum(prof[i0 + 1:i0 + 1 + n1], val[:n1], out=prof[i0 + 1:i0 + 1 + n1])
 
 
 def _orders(outlines, seed):
@@ -302,10 +140,11 @@ def few_layout(outlines, options, tol):
         sep = pad * guess + 2 * tol
         grow = 0.5 * sep * (1 + GROW_SLACK) + GROW_SLACK * guess
         grown = _grown(outlines, angles, grow)
+        found = []
         for fine in (False, True)[:1 + (KEEP > 0)]:  # coarse, then fine
             grid = GRID if fine else GRID_COARSE
             h = guess / grid
-            turns = [_Turns(i, g, h) for i, g in enumerate(grown)]
+            turns = [Turns(i, g, h) for i, g in enumerate(grown)]
             if not fine:
                 narrow = max(int(t.ncol.min()) for t in turns)
                 widths = np.unique(np.linspace(narrow, STRIP_MAX * grid, STRIPS).round())
@@ -316,8 +155,8 @@ def few_layout(outlines, options, tol):
                 runs = [(o, w if w is None else w * ratio)
                         for _, _, (o, w), _, _ in sorted(found, key=lambda f: f[:2])[:KEEP]]
             strips = [r for r in runs if r[1] is not None]
-            laid = _strip_fills(turns, strips, h) if strips else []
-            laid += [_greedy(turns, o, int(np.ceil(2.5 * grid)), h) for o, w in runs if w is None]
+            laid = strip_fills(turns, strips, h) if strips else []
+            laid += [greedy(turns, o, int(np.ceil(2.5 * grid)), h) for o, w in runs if w is None]
             runs = strips + [r for r in runs if r[1] is None]
             found = [(side, n, run, placed, turns)
                      for n, (run, (side, placed)) in enumerate(zip(runs, laid))
