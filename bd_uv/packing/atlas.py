@@ -111,7 +111,7 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
         side = 1.0
     else:
         f = 1.0
-        # 2-4 charts: laid out in milliseconds (.few); else (or when it finds none) nested
+        # 2-5 charts: laid out without spyrrow (.few); else (or when it finds none) nested
         found = few_square(charts.outlines, options, tol)
         pl, side, solves = found or square_layout(charts.outlines, options, tol, seconds)
         tile = np.zeros(k, dtype=np.int64)

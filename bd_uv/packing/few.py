@@ -2,8 +2,10 @@
 spyrrow.
 
 spyrrow (:mod:`.nest`) overshoots tiny search requests: Blender's cube (3 charts) asked for about
-0.1 s of search took 0.5-1.0 s whatever its budget (its first placement alone: 20-40 ms), and a
-cube is packed at every unwrap of one (glTF-Transform's many-cubes.gltf: 501 of them). Here:
+0.1 s of search took 0.5-1.0 s whatever its budget (its first placement alone: 20-40 ms; sparrow
+checks its clock only between its separator's strikes, each a fixed count of iterations, and
+spyrrow 0.9 exposes no iteration limit), and a cube is packed at every unwrap of one
+(glTF-Transform's many-cubes.gltf: 501 of them). Here:
 
 - each chart is turned to a few candidate angles (its least-area box and least-square box turns
   and their quarter turns; quarter turns for ``rotate`` 90, none for none; never a mirror) and
@@ -31,9 +33,12 @@ from .compact import compact_square
 from .drops import Turns, greedy, strip_fills
 from .nest import Placement, rotations
 
-# up to this many charts: measured on eight's 6 charts, 0.573 in 0.56 s CPU (load ~4) against
-# spyrrow's 0.584-0.590 in about as much; 2-4 charts 4-10x faster than spyrrow
-FEW_MAX = 4
+# up to this many charts. Measured (seeds 0-2, load 9-13, subsets of eight's 6 and face's 7
+# charts): 5 charts, mean coverage 0.609 / 0.595 / 0.658 against spyrrow's 0.594 / 0.548 / 0.623
+# in about its CPU (0.42-0.59 s against 0.28-0.70 s); 6 charts even on average (0.570 / 0.638 /
+# 0.686 / 0.682 against 0.574 / 0.658 / 0.689 / 0.688), so spyrrow keeps 6 and more; 2-4 charts
+# take 2-4x less CPU than spyrrow
+FEW_MAX = 5
 GRID_COARSE = 24    # profile cells across the guessed square side, for every order and fill
 GRID = 192          # ... for the KEEP best of them (a multiple of GRID_COARSE)
 KEEP = 3
