@@ -111,9 +111,16 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
         side = 1.0
     else:
         f = 1.0
-        # 2-5 charts: laid out without spyrrow (.few); else (or when it finds none) nested
+        # 2-5 charts: laid out without spyrrow (.few); else (or when it finds none) nested, and
+        # nested too when a search time or more solves are asked for, the smaller square kept
         found = few_square(charts.outlines, options, tol)
-        pl, side, solves = found or square_layout(charts.outlines, options, tol, seconds)
+        if found is None or options.solve_seconds is not None or options.solves > 1:
+            nested = square_layout(charts.outlines, options, tol, seconds)
+            if found is None or nested[1] < found[1]:
+                found = nested
+            else:
+                found = (found[0], found[1], nested[2])
+        pl, side, solves = found
         tile = np.zeros(k, dtype=np.int64)
     R = rotations(pl.angle)
     use = lab >= 0
