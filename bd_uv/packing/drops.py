@@ -1,43 +1,39 @@
-"""Charts dropped onto conservative step profiles of the charts already placed (:mod:`.few`).
+"""Charts dropped into a strip onto conservative step profiles of the charts already placed
+(:mod:`.few`).
 
-A chart's profiles on a grid of cells of width h: per column the least and greatest y of the chart
-within the column's strip (from the boundary segments clipped to it), per row the least and
-greatest x. The placed charts' upper profile (per column the greatest y of any placed chart,
-raised by every cell a chart's cell overlaps) bounds them all from above: a chart whose low
-profile is above it in every column it covers meets none of them, whatever their shapes. So is
-one pushed left onto their right profile. Both are exact in the direction of the drop and one
-cell coarse across it.
+A chart's profile on a grid of cells of width h: per column the least and greatest y of the chart
+within the column's strip (from its boundary segments clipped to the strip). The placed charts'
+upper profile (per column the greatest y of any placed chart) bounds them all from above: a chart
+whose low profile is above it in every column it covers meets none of them, whatever their
+shapes (true shapes, not boxes; a pocket under an overhang is not reached). Exact along the drop,
+one cell coarse across it. Measured and dropped: a greedy on an L-shaped frontier (each chart
+dropped down or pushed left where it leaves the smallest square), run beside the strips: the same
+or less coverage on 7 meshes and three 5-chart sets, 14-25 % more CPU.
 """
 import numpy as np
 
 
 def _profiles(poly, h):
-    """Conservative step profiles of a polygon (n,2) on cells of width h from its low corner:
-    (low, up) per column (least and greatest y within the column's strip, from the low corner)
-    and (left, right) per row, and the extent (w, h)."""
+    """Conservative column profile of a polygon (n,2) on cells of width h from its low corner:
+    (low, up) per column (least and greatest y within the column's strip, from the low corner),
+    the extent (w, h) and the low corner."""
     lo = poly.min(axis=0)
     p = poly - lo
     q = np.roll(p, -1, axis=0)
-    out = []
-    for ax in (0, 1):  # columns (over x), then rows (over y)
-        a, b = p[:, ax], q[:, ax]
-        ya, yb = p[:, 1 - ax], q[:, 1 - ax]
-        n = max(int(np.ceil(p[:, ax].max() / h - 1e-9)), 1)
-        c0 = np.arange(n)[:, None] * h
-        c1 = c0 + h
-        s0, s1 = np.minimum(a, b), np.maximum(a, b)
-        lo_x, hi_x = np.maximum(c0, s0), np.minimum(c1, s1)
-        hit = lo_x <= hi_x
-        d = b - a
-        flat = np.abs(d) < 1e-300
-        slope = np.where(flat, 0.0, (yb - ya) / np.where(flat, 1.0, d))
-        y0 = np.where(flat, ya, ya + (lo_x - a) * slope)
-        y1 = np.where(flat, yb, ya + (hi_x - a) * slope)
-        least = np.where(hit, np.minimum(y0, y1), np.inf).min(axis=1)
-        most = np.where(hit, np.maximum(y0, y1), -np.inf).max(axis=1)
-        out.append((least, most))
-    ext = p.max(axis=0)
-    return out[0], out[1], ext, lo
+    a, b = p[:, 0], q[:, 0]
+    ya, yb = p[:, 1], q[:, 1]
+    n = max(int(np.ceil(p[:, 0].max() / h - 1e-9)), 1)
+    c0 = np.arange(n)[:, None] * h
+    lo_x, hi_x = np.maximum(c0, np.minimum(a, b)), np.minimum(c0 + h, np.maximum(a, b))
+    hit = lo_x <= hi_x
+    d = b - a
+    flat = np.abs(d) < 1e-300
+    slope = np.where(flat, 0.0, (yb - ya) / np.where(flat, 1.0, d))
+    y0 = np.where(flat, ya, ya + (lo_x - a) * slope)
+    y1 = np.where(flat, yb, ya + (hi_x - a) * slope)
+    least = np.where(hit, np.minimum(y0, y1), np.inf).min(axis=1)
+    most = np.where(hit, np.maximum(y0, y1), -np.inf).max(axis=1)
+    return least, most, p.max(axis=0), lo
 
 
 class Turns:
@@ -50,76 +46,18 @@ class Turns:
         prof = [_profiles(g, h) for _, g in turned]
         self.ext = np.array([p[2] for p in prof])
         self.lo = np.array([p[3] for p in prof])
-        self.ncol = np.array([len(p[0][0]) for p in prof])
-        self.nrow = np.array([len(p[1][0]) for p in prof])
-        self.low, self.up = self._stack([p[0] for p in prof], self.ncol)
-        self.left, self.right = self._stack([p[1] for p in prof], self.nrow)
-
-    @staticmethod
-    def _stack(pairs, n):
-        near = np.full((len(pairs), int(n.max())), np.inf)
-        far = np.full(near.shape, -np.inf)
-        for a, (lo, hi) in enumerate(pairs):  # per turn
-            near[a, :len(lo)], far[a, :len(hi)] = lo, hi
-        return near, far
-
-
-def _drops(frontier, near, length):
-    """Per turn a and grid offset i, the least position of a chart above ``frontier`` (its cells
-    i.. against the chart's near profile): max over j of frontier[i + j] - near[a, j], at least 0;
-    inf where the chart (``length[a]`` cells) passes the frontier's end. (A, n) float64."""
-    from numpy.lib.stride_tricks import sliding_window_view
-    n, L = len(frontier), near.shape[1]
-    win = sliding_window_view(np.concatenate([frontier, np.full(L - 1, -np.inf)]), L)
-    pos = np.maximum((win[None, :, :] - near[:, None, :]).max(axis=2), 0.0)
-    pos[np.arange(n)[None, :] + length[:, None] > n] = np.inf
-    return pos
-
-
-def greedy(turns, order, n_cells, h):
-    """Charts in ``order`` placed one by one on an L-shaped frontier: dropped down onto the
-    placed charts' upper profile or pushed left onto their right profile, at the turn and offset
-    leaving the smallest square (then the least box area, then the lowest-leftmost). Returns
-    (side, [(chart, turn index, x, y)]) with x, y the grown chart's low corner."""
-    top = np.zeros(n_cells)     # per column: the placed charts' greatest y
-    right = np.zeros(n_cells)   # per row: their greatest x
-    W = H = 0.0
-    placed = []
-    for c in order:  # per chart
-        t = turns[c]
-        # offsets past the square so far only grow it more than the first of them
-        n = min(n_cells, int(np.ceil(max(W, H) / h)) + 1 + max(t.low.shape[1], t.left.shape[1]))
-        best = None
-        for down in (True, False):
-            if down:
-                pos = _drops(top[:n], t.low, t.ncol)
-                along = np.arange(n)[None, :] * h
-                w, ht = np.maximum(W, along + t.ext[:, :1]), np.maximum(H, pos + t.ext[:, 1:])
-            else:
-                pos = _drops(right[:n], t.left, t.nrow)
-                along = np.arange(n)[None, :] * h
-                ht, w = np.maximum(H, along + t.ext[:, 1:]), np.maximum(W, pos + t.ext[:, :1])
-            side = np.maximum(w, ht).ravel()
-            j = int(np.lexsort(((along + pos).ravel(), (w * ht).ravel(), np.round(side / h, 6)))[0])
-            cand = (float(side[j]), float((w * ht).ravel()[j]))
-            if best is None or cand < best[0]:
-                a, i = divmod(j, n)
-                xy = (i * h, float(pos[a, i])) if down else (float(pos[a, i]), i * h)
-                best = (cand, a, *xy, float(w.ravel()[j]), float(ht.ravel()[j]))
-        if not np.isfinite(best[0][0]):
-            return np.inf, []
-        _, a, x, y, W, H = best
-        placed.append((c, a, x, y))
-        _raise(top, t.up[a, :t.ncol[a]], x, y, h)
-        _raise(right, t.right[a, :t.nrow[a]], y, x, h)
-    return max(W, H), placed
+        self.ncol = np.array([len(p[0]) for p in prof])
+        self.low = np.full((len(prof), int(self.ncol.max())), np.inf)
+        self.up = np.full(self.low.shape, -np.inf)
+        for a, (least, most, _, _) in enumerate(prof):  # per turn
+            self.low[a, :len(least)], self.up[a, :len(most)] = least, most
 
 
 def strip_fills(turns, runs, h):
     """Every run (order, strip width in cells) at once: the charts in its order dropped one by
     one into its strip, each at the turn and offset where its top ends lowest (then the first
-    turn, then leftmost). Returns per run (side, [(chart, turn index, x, y)]) as
-    :func:`greedy` (side inf where a chart fits no turn)."""
+    turn, then leftmost). Returns per run (side, [(chart, turn index, x, y)])
+    (side inf where a chart fits no turn): x, y the grown chart's low corner."""
     from numpy.lib.stride_tricks import sliding_window_view
     k, A = len(turns), max(len(t.angle) for t in turns)
     L = max(t.low.shape[1] for t in turns)

@@ -10,11 +10,10 @@ spyrrow 0.9 exposes no iteration limit), and a cube is packed at every unwrap of
 - each chart is turned to a few candidate angles (its least-area box and least-square box turns
   and their quarter turns; quarter turns for ``rotate`` 90, none for none; never a mirror) and
   grown by half the separation at a guessed side (a mitred buffer holds every point that close);
-- layouts place the charts one by one onto conservative step profiles of those already placed
-  (:mod:`.drops`: true shapes, not boxes): in a strip, each chart where its top ends lowest, for
-  ``STRIPS`` widths and every order (up to 4 charts; else ``ORDERS`` from the seed) at once; and
-  a greedy on an L-shaped frontier (dropped down or pushed left, least square first) per order.
-  All on a coarse grid (``GRID_COARSE`` cells across the guess), the ``KEEP`` best again on the
+- layouts drop the charts one by one into a strip onto conservative step profiles of those
+  already placed (:mod:`.drops`: true shapes, not boxes), each where its top ends lowest, for
+  ``STRIPS`` widths and every order (up to 4 charts; else ``ORDERS`` from the seed) at once,
+  all on a coarse grid (``GRID_COARSE`` cells across the guess), the ``KEEP`` best again on the
   fine grid (``GRID``);
 - the best is moved chart by chart left and down by exact GEOS distances at the separation of the
   square reached (:func:`_settle`: the grid's slack and the guessed separation's excess go), checked
@@ -30,7 +29,7 @@ import itertools
 import numpy as np
 
 from .compact import compact_square
-from .drops import Turns, greedy, strip_fills
+from .drops import Turns, strip_fills
 from .nest import Placement, rotations
 
 # up to this many charts. Measured (seeds 0-2, load 9-13, subsets of eight's 6 and face's 7
@@ -51,7 +50,6 @@ STRIPS = 16         # strip widths tried, from the widest chart's to STRIP_MAX t
 STRIP_MAX = 1.4
 SETTLE_ROUNDS = 3   # rounds of exact moves left and down (:func:`_settle`)
 SETTLE_BISECT = 8   # halvings of a move that is not free all the way
-SQUARE_GREEDY = 1   # run the L-frontier greedy too (0: strips only; the cube lost 0.8 % without)
 ORDERS = 24         # chart orders tried (every order up to 4 charts: 24)
 GROW_SLACK = 1e-6   # grown charts apart by this fraction of the side more (float rounding)
 
@@ -153,19 +151,14 @@ def few_layout(outlines, options, tol):
             if not fine:
                 narrow = max(int(t.ncol.min()) for t in turns)
                 widths = np.unique(np.linspace(narrow, STRIP_MAX * grid, STRIPS).round())
-                runs = [(order, None) for order in orders if SQUARE_GREEDY] + [
-                    (order, int(w)) for order in orders for w in widths]
+                runs = [(order, int(w)) for order in orders for w in widths]
             else:   # the best coarse runs, on the fine grid (the same strip widths)
-                ratio = GRID // GRID_COARSE
-                runs = [(o, w if w is None else w * ratio)
-                        for _, _, (o, w), _, _ in sorted(found, key=lambda f: f[:2])[:KEEP]]
-            strips = [r for r in runs if r[1] is not None]
-            laid = strip_fills(turns, strips, h) if strips else []
-            laid += [greedy(turns, o, int(np.ceil(2.5 * grid)), h) for o, w in runs if w is None]
-            runs = strips + [r for r in runs if r[1] is None]
+                runs = [(order, w * (GRID // GRID_COARSE))
+                        for _, _, (order, w), _, _ in sorted(found, key=lambda f: f[:2])[:KEEP]]
+            laid = strip_fills(turns, runs, h)
             found = [(side, n, run, placed, turns)
                      for n, (run, (side, placed)) in enumerate(zip(runs, laid))
-                     if placed and np.isfinite(side)]
+                     if np.isfinite(side)]
         if not found:
             return None
         # each fine layout settled (the order they reached changes after the exact moves)
