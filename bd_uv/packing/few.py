@@ -120,7 +120,7 @@ def few_layout(outlines, options, tol):
 
     The separation between two outlines is ``padding`` S + 2 ``tol`` for the square's side S,
     and half of it to the square's edge, as :func:`.square.square_layout` keeps. S is guessed
-    and the charts grown by half the separation at it; every order and fill is run on a coarse
+    and the charts grown by half the separation at it; every order and strip width run on a coarse
     grid (``GRID_COARSE`` cells across the guess), the ``KEEP`` best again on the fine grid
     (``GRID``), the best of those settled by exact moves (:func:`_settle`). When the square
     reached needs more separation than the charts were grown by, again at that square.
