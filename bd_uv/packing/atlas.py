@@ -3,7 +3,9 @@
 1. every chart is scaled to one texel density (:func:`chart_outlines`);
 2. its outer outline is nested by spyrrow with turns (any angle, quarter turns or none), the
    padding as the least separation and half of it to the square's edge (:mod:`.nest`), and the
-   best square layout compacted by small moves and turns (:mod:`.compact`);
+   best square layout compacted by small moves and turns (:mod:`.compact`); 2 to 5 charts in
+   the square are laid out without spyrrow (:mod:`.few`: its search overshoots so small a
+   request by 0.5 s and more), then compacted the same way;
 3. each chart's corners get its turn, translation and the common scale: a similarity with positive
    determinant, so every face keeps its orientation and its conformal distortion.
 
