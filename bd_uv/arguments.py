@@ -161,8 +161,10 @@ def add_pack_options(p):
                    metavar="S|auto",
                    help="seconds the nesting and compaction may take for the smallest square, "
                         "half each, the compaction's in CPU time (default auto: about 6 ms "
-                        "sqrt(charts x faces), at most 80 ms a chart); 0: the first placements "
-                        "found only, for less coverage")
+                        "sqrt(charts x faces), at most 80 ms a chart; 2-5 charts are laid out "
+                        "without nesting); 0: the first placements found only, for less "
+                        "coverage; a number with 2-5 charts nests too and keeps the smaller "
+                        "square")
     p.add_argument("--group", choices=GROUPINGS, default=PACK_DEFAULTS["group"],
                    help="pack the charts of one material (OBJ usemtl, glTF primitive material, "
                         "USD materialBind subset) or one object (OBJ o) together, one region per "

@@ -3,7 +3,9 @@
 1. every chart is scaled to one texel density (:func:`chart_outlines`);
 2. its outer outline is nested by spyrrow with turns (any angle, quarter turns or none), the
    padding as the least separation and half of it to the square's edge (:mod:`.nest`), and the
-   best square layout compacted by small moves and turns (:mod:`.compact`);
+   best square layout compacted by small moves and turns (:mod:`.compact`); 2 to 5 charts in
+   the square are laid out without spyrrow (:mod:`.few`: its search overshoots so small a
+   request by 0.5 s and more), then compacted the same way;
 3. each chart's corners get its turn, translation and the common scale: a similarity with positive
    determinant, so every face keeps its orientation and its conformal distortion.
 
@@ -23,6 +25,7 @@ from .outlines import chart_outlines
 from .pinned import chart_boxes, free_square
 from .around import place_around
 from .groups import chart_groups, grouped_layout
+from .few import few_square
 from .square import square_layout
 
 
@@ -110,7 +113,16 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
         side = 1.0
     else:
         f = 1.0
-        pl, side, solves = square_layout(charts.outlines, options, tol, seconds)
+        # 2-5 charts: laid out without spyrrow (.few); else (or when it finds none) nested, and
+        # nested too when a search time or more solves are asked for, the smaller square kept
+        found = few_square(charts.outlines, options, tol)
+        if found is None or options.solve_seconds is not None or options.solves > 1:
+            nested = square_layout(charts.outlines, options, tol, seconds)
+            if found is None or nested[1] < found[1]:
+                found = nested
+            else:
+                found = (found[0], found[1], nested[2])
+        pl, side, solves = found
         tile = np.zeros(k, dtype=np.int64)
     R = rotations(pl.angle)
     use = lab >= 0

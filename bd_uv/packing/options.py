@@ -47,7 +47,9 @@ class PackOptions:
     solve_seconds : float or None, seconds the nesting may take to find the smallest square
         (its solves' first placements, about 15 ms a chart each, are measured and left out of
         their search); None (default): adaptive (:meth:`search_seconds`); 0 keeps spyrrow's
-        first placements only, for a few points of coverage less
+        first placements only, for a few points of coverage less. 2-5 charts are laid out
+        without spyrrow (:mod:`.few`); a number here (or ``solves`` above 1) nests them too and
+        keeps the smaller square
     solves : int, nesting solves for the smallest square (at least 1; default 1: one solve at
         a guessed density, then compaction, :mod:`.compact`); above 1, two rounds:
         (solves + 1) // 2 at once (threads) at strip heights around the guess, then solves // 2
