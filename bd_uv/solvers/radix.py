@@ -1,0 +1,38 @@
+"""Stable sort orders of bounded non-negative integer keys by numpy's radix sort.
+
+numpy sorts 16-bit integers stably by radix (linear time) but 64-bit ones by timsort or
+quicksort: on the seam search's keys (vertex pairs of a chart, entries of a sparse matrix,
+chart labels; 10k-100k of them, hundreds of sorts a call) a sort was 1-4 ms where two 16-bit
+passes take 0.1-0.4 ms. The orders are ``np.argsort(key, kind="stable")``'s exactly (a stable
+order is unique), so nothing sorted this way changes.
+"""
+import numpy as np
+
+DIGIT = 1 << 16
+
+
+def order(key, bound):
+    """``np.argsort(key, kind="stable")`` of integer keys in ``[0, bound)``: one 16-bit radix
+    pass per 16 bits of ``bound`` (least significant first) up to 2**32, numpy's stable sort
+    beyond."""
+    key = np.asarray(key)
+    if bound <= DIGIT:
+        return np.argsort(key.astype(np.uint16), kind="stable")
+    if bound <= DIGIT * DIGIT:
+        o = np.argsort((key & (DIGIT - 1)).astype(np.uint16), kind="stable")
+        return o[np.argsort((key[o] >> 16).astype(np.uint16), kind="stable")]
+    return np.argsort(key, kind="stable")
+
+
+def unique(key, bound):
+    """``np.unique(key, return_inverse=True, return_counts=True)`` of integer keys in
+    ``[0, bound)`` (1-D), sorted by ``order``."""
+    key = np.asarray(key)
+    o = order(key, bound)
+    s = key[o]
+    first = np.ones(len(s), dtype=bool)
+    first[1:] = s[1:] != s[:-1]
+    starts = np.flatnonzero(first)
+    inv = np.empty(len(s), dtype=np.intp)
+    inv[o] = np.cumsum(first) - 1
+    return s[starts], inv, np.diff(np.append(starts, len(s)))
