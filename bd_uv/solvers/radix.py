@@ -11,17 +11,23 @@ import numpy as np
 DIGIT = 1 << 16
 
 
-def order(key, bound):
+def order(key, bound, passes=2):
     """``np.argsort(key, kind="stable")`` of integer keys in ``[0, bound)``: one 16-bit radix
-    pass per 16 bits of ``bound`` (least significant first) up to 2**32, numpy's stable sort
-    beyond."""
+    pass per 16 bits of ``bound`` (least significant first) while at most ``passes`` (up to 4)
+    do, numpy's stable sort beyond."""
     key = np.asarray(key)
     if bound <= DIGIT:
         return np.argsort(key.astype(np.uint16), kind="stable")
-    if bound <= DIGIT * DIGIT:
-        o = np.argsort((key & (DIGIT - 1)).astype(np.uint16), kind="stable")
-        return o[np.argsort((key[o] >> 16).astype(np.uint16), kind="stable")]
-    return np.argsort(key, kind="stable")
+    need = 1
+    while need < 4 and bound > 1 << (16 * need):
+        need += 1
+    if need > passes or bound > 1 << 63:
+        return np.argsort(key, kind="stable")
+    o = np.argsort((key & (DIGIT - 1)).astype(np.uint16), kind="stable")
+    for d in range(1, need):
+        o = o[np.argsort(((key[o] >> (16 * d)) & (DIGIT - 1)).astype(np.uint16),
+                         kind="stable")]
+    return o
 
 
 def unique(key, bound):
