@@ -162,9 +162,10 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost,
 def _sweep_order(r, group, g):
     """``np.lexsort((np.arange(k), r, group))``: nodes by chart, then by ``r`` (rounded
     ``x / q``: integers of magnitude at most ~1e9), ties by node; by 16-bit radix passes
-    (``solvers.radix``) where every ``r`` is finite, numpy's lexsort otherwise."""
+    (``solvers.radix``) where every ``r`` is finite, numpy's lexsort otherwise (and for more
+    than ``radix.LARGE`` nodes: the sweep over a 500k-face sphere is a memory peak)."""
     k = len(r)
-    if k == 0 or not np.isfinite(r).all() or np.abs(r).max() >= 2.0 ** 31:
+    if k == 0 or k > radix.LARGE or not np.isfinite(r).all() or np.abs(r).max() >= 2.0 ** 31:
         return np.lexsort((np.arange(k), r, group))
     key = group.astype(np.int64) << 32 | (r.astype(np.int64) + (1 << 31))
     return radix.order(key, max(g, 1) << 32, passes=4)

@@ -9,13 +9,20 @@ order is unique), so nothing sorted this way changes.
 import numpy as np
 
 DIGIT = 1 << 16
+# Keys above this many go to numpy's own sort (``np.unique``): the passes hold a few more
+# key-sized arrays at once, and on a 500k-face mesh the Fiedler sweep over every face and the
+# LSCM assembly of the largest charts are memory peaks (+11 MB measured), while their sorts are
+# a small share of those steps' time.
+LARGE = 1 << 18
 
 
 def order(key, bound, passes=2):
     """``np.argsort(key, kind="stable")`` of integer keys in ``[0, bound)``: one 16-bit radix
     pass per 16 bits of ``bound`` (least significant first) while at most ``passes`` (up to 4)
-    do, numpy's stable sort beyond."""
+    do, numpy's stable sort beyond (and for more than ``LARGE`` keys)."""
     key = np.asarray(key)
+    if len(key) > LARGE:
+        return np.argsort(key, kind="stable")
     if bound <= DIGIT:
         return np.argsort(key.astype(np.uint16), kind="stable")
     need = 1
@@ -34,6 +41,9 @@ def unique(key, bound):
     """``np.unique(key, return_inverse=True, return_counts=True)`` of integer keys in
     ``[0, bound)`` (1-D), sorted by ``order``."""
     key = np.asarray(key)
+    if len(key) > LARGE:
+        u, inv, counts = np.unique(key, return_inverse=True, return_counts=True)
+        return u, inv.ravel(), counts
     o = order(key, bound)
     s = key[o]
     first = np.ones(len(s), dtype=bool)

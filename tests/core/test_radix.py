@@ -10,7 +10,7 @@ from bd_uv.solvers import radix
                                    (1 << 32) + 5, 1 << 50])
 def test_order_and_unique_are_numpys(bound):
     rng = np.random.default_rng(bound % 1000)
-    for n in (0, 1, 7, 5000):
+    for n in (0, 1, 7, 5000, radix.LARGE + 1):
         # Many ties (a few distinct values) and keys at both ends of the range.
         key = rng.integers(0, bound, n, dtype=np.int64)
         if n > 10:
