@@ -26,7 +26,7 @@ from ..geometry import face_areas
 from ..mesh import DEGENERATE_RATIO, Island, check_arrays, islands, measurable
 from ..options import UnwrapOptions
 from ..unwrapping.unwrap import pin_arrays, unwrap, unwrap_islands
-from .charts import MARGIN, chart_maps, mean_cap
+from .charts import MARGIN, chart_maps, face_geometry, mean_cap
 from .cut_graph import cut_graph
 from .edges import edge_table
 from .measure import measure_charts, splice
@@ -51,6 +51,12 @@ FINISH_ROUNDS = 4
 # developable region). Where it would, its pieces pass and merging (``merge_charts``, which
 # maps unions of any size) joins them again.
 MAP_VERTICES = 60_000
+# Meshes of at most this many faces hold their face geometry (``charts.FaceGeometry``, ~64
+# bytes a face: 3 MB here) through the search, merging and the atlas's splits rather than
+# forming each batch's: the faces mapped add up to ~8x the mesh's, 4-5 % of the CPU of a
+# 1k-20k-face mesh. Larger meshes form each batch's (on a 500k-face mesh the held geometry
+# was 30 MB at the search's memory peaks). The same per-face arithmetic, the same bits.
+GEOM_FACES = 50_000
 def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merge=True,
                 method="lscm", frames="auto", cone="soc", progress=None, cancel=None,
                 polygons=None, atlas_cuts=True):
@@ -123,12 +129,12 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         g = np.asarray(face_groups)
         inner = E.faces[:, 1] >= 0
         keep[inner] |= g[E.faces[inner, 0]] != g[E.faces[inner, 1]]
-    # Face areas only (``face_geometry``'s own arithmetic): the mesh's face geometry (beta's
-    # coefficients, 30 MB on a 500k-face mesh) is not held through the search; ``chart_maps``
-    # forms each batch's (the same per-face numbers, the same bits; the faces mapped add up to
-    # ~8x the mesh's, ~4 % more CPU).
-    A = np.concatenate([face_areas(V, F[i:i + CHUNK]) for i in range(0, m, CHUNK)]
-                       or [np.zeros(0)])
+    # Above ``GEOM_FACES`` faces only the face areas (``face_geometry``'s own arithmetic): the
+    # mesh's face geometry (beta's coefficients, 30 MB on a 500k-face mesh) is not held through
+    # the search; ``chart_maps`` forms each batch's (the same per-face numbers, the same bits).
+    geom = face_geometry(V, F) if m <= GEOM_FACES else None
+    A = geom.area if geom is not None else np.concatenate(
+        [face_areas(V, F[i:i + CHUNK]) for i in range(0, m, CHUNK)] or [np.zeros(0)])
     cen = FaceCentroids(V, F)               # formed for the faces split, not held per face
     # Islands the seams cannot fix (non-manifold, degenerate, ...) are left to ``unwrap`` to
     # report; the rest of the search works on charts of the validated mesh.
@@ -156,20 +162,20 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         # must not be cut again for triangulation noise in its mean.
         changed = _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag,
                           cap=mean_cap(C) + GIVEN_SLACK * (mean_cap(C) - 1.0)
-                          if rounds == 1 else mean_cap(C), known=known, failed=failed,
-                          orders=orders)
+                          if rounds == 1 else mean_cap(C), known=known, geom=geom,
+                          failed=failed, orders=orders)
         if not changed:
             break
     atlas = np.zeros(len(E.ends), dtype=bool)   # the seams added for the atlas
     kept = []
     chs = None                              # the charts of ``cut``, where known
     if merge:
-        chs = merge_charts(V, F, E, cut, keep, invalid, S, C, known=known, failed=failed,
-                           orders=orders)
+        chs = merge_charts(V, F, E, cut, keep, invalid, S, C, known=known, geom=geom,
+                           failed=failed, orders=orders)
     if atlas_cuts:
         # A chart that alone caps the atlas's coverage is bisected where that pays.
         atlas[:] = cut
-        kept, chs = split_for_packing(V, F, E, cut, original, A, cen, S, mean_cap(C), poly, None,
+        kept, chs = split_for_packing(V, F, E, cut, original, A, cen, S, mean_cap(C), poly, geom,
                                       known, invalid, chs)
         atlas = cut & ~atlas
     release_memory(m)
@@ -216,13 +222,13 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             group[r.faces] = g
         bisect([np.sort(r.faces) for r in bad], E, cut, A, cen, poly, orders)
         for _ in range(MAX_ROUNDS):
-            if not _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag, failed=failed,
-                           orders=orders):
+            if not _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag, geom=geom,
+                           failed=failed, orders=orders):
                 break
         if merge:
             # The pieces may now merge with their neighbours (never with each other).
-            merge_charts(V, F, E, cut, keep, invalid, S, C, group=group, failed=failed,
-                         orders=orders)
+            merge_charts(V, F, E, cut, keep, invalid, S, C, group=group, geom=geom,
+                         failed=failed, orders=orders)
         # Unwrap anew every chart holding a piece (with the neighbours it took in).
         redo = np.zeros(m, dtype=bool)
         for c in charts(F, E, cut):

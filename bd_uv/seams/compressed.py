@@ -3,6 +3,8 @@ conversion and checks: a fixed cost of ~0.3-0.5 ms a matrix, which the seam sear
 graphs (cut graphs, Fiedler Laplacians, min-cut graphs) pay many times over."""
 import numpy as np
 
+from ..solvers import radix
+
 
 def compressed(major, minor, vals, n):
     """Canonical compressed rows (or columns) of the n x n matrix with entries ``vals`` at
@@ -10,7 +12,7 @@ def compressed(major, minor, vals, n):
     ``csr_matrix`` (``csc_matrix`` with rows as ``minor``), without scipy's COO conversion and
     checks (a fixed cost of ~0.3 ms, paid several times per split)."""
     key = major.astype(np.int64) * n + minor
-    order = np.argsort(key, kind="stable")
+    order = radix.order(key, n * n)
     key = key[order]
     first = np.ones(len(key), dtype=bool)
     first[1:] = key[1:] != key[:-1]

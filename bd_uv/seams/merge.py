@@ -8,6 +8,7 @@ import numpy as np
 from .charts import MARGIN, chart_maps, mean_cap
 from .split import _quantize
 from .topology import charts
+from .unions import union_charts
 from ..trim import release_memory
 
 # Rounds of pairwise merging (each merges a matching of neighbouring charts).
@@ -114,7 +115,17 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
                 continue
             used[lay, list(busy[lay])] = True
             trial = cut.copy()
-            trial[ei[np.isin(inv, chosen)]] = False
+            gone = np.isin(inv, chosen)
+            trial[ei[gone]] = False
+            if E.fans is not None:          # the unions from their two charts (``unions``)
+                chosen = np.array(chosen, dtype=np.int64)
+                at = np.argsort(chosen)
+                owner = at[np.searchsorted(chosen[at], inv[gone])]
+                for i, c in union_charts(F, E, chs, label, uk[chosen] // len(chs),
+                                         uk[chosen] % len(chs), ei[gone], owner, trial):
+                    if c.kind == "disk":
+                        disks.append((c, trial, int(chosen[i])))
+                continue
             faces = np.flatnonzero(used[lay][label])
             for c in charts(F, E, trial, faces):
                 lab = label[c.faces]

@@ -25,7 +25,7 @@ Where ``ordered_ldl`` cannot run, ``Orders.of`` is None and qdldl orders every s
 import numpy as np
 import scipy.sparse as sp
 
-from ..solvers import ordered_ldl
+from ..solvers import ordered_ldl, radix
 from ..solvers.lscm import spd_solver
 
 # Factor entries per unknown a reused order may reach, relative to the fresh orders' most
@@ -196,7 +196,10 @@ def ordered_solver(A, keys, budget):
 
 def _factor(A, keys):
     n = A.shape[0]
-    perm = np.argsort(np.concatenate([2 * keys, 2 * keys + 1]), kind="stable")
+    # The keys' dense ranks keep their order (ties included), so the radix order of the ranks
+    # is the keys' stable order (``solvers.radix``): one sort of n / 2 keys, not of n.
+    uk, r = np.unique(keys, return_inverse=True)
+    perm = radix.order(np.concatenate([2 * r, 2 * r + 1]), 2 * len(uk))
     cols = np.repeat(np.arange(n, dtype=np.int64), np.diff(A.indptr))
     f = ordered_ldl.Factor(A.indices.astype(np.int64), cols, A.data, n, perm)
     return f if f.lnz >= 0 else None
@@ -215,8 +218,9 @@ def fiedler_solver(K, keys):
             keys[p] = np.arange(k)
     if (keys >= 0).all():
         cols = np.repeat(np.arange(k, dtype=np.int64), np.diff(K.indptr))
+        uk, r = np.unique(keys, return_inverse=True)     # (as ``_factor``)
         f = ordered_ldl.Factor(K.indices.astype(np.int64), cols, K.data, k,
-                               np.argsort(keys, kind="stable"))
+                               radix.order(r, len(uk)))
         if f.lnz >= 0 and f.factor():
             return f.solve
     return spd_solver(K, upper=True)

@@ -6,6 +6,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order, maximum_flow
 
 from ..geometry import components
+from ..solvers import radix
 from ..solvers.threads import halves, map_blocks
 from .charts import spd_solver
 from . import cluster_fiedler
@@ -91,7 +92,7 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost,
     scale = np.zeros(g)
     np.maximum.at(scale, group, np.abs(x))
     q = np.maximum(scale * 1e-9, 1e-300)[group]
-    order = np.lexsort((np.arange(k), np.round(x / q), group))
+    order = _sweep_order(np.round(x / q), group, g)
     del x, q                                # each dead array dropped as soon as read: the
     pos = np.empty(k, dtype=np.int64)       # first round's sweep over a 500k-node sphere is
     pos[order] = np.arange(k)               # one of the search's memory peaks
@@ -125,14 +126,13 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost,
     fin = np.isfinite(score)
     np.maximum.at(sscale, gp[fin], np.abs(score[fin]))
     sq = np.maximum(sscale * 1e-9, 1e-300)[gp]
-    best = np.lexsort((p, np.where(fin, np.round(score / sq), np.inf), gp))
-    first = best[np.r_[True, gp[best][1:] != gp[best][:-1]]]
+    first = _least_per_group(np.where(fin, np.round(score / sq), np.inf), gp, g)
     tg = np.zeros(g, dtype=np.int64)
     tg[gp[first]] = t[first]
     side = rank < tg[group]
     # The sweep's ~25 per-node arrays are dead now: dropped before the min cut and the filters
     # (a 500k-node sphere's first split was the search's memory peak).
-    del order, rank, p, t, gp, raw_score, score, none, sscale, fin, sq, best, first, tg
+    del order, rank, p, t, gp, raw_score, score, none, sscale, fin, sq, first, tg
     side = _snap_many(side, pairs, c, group, g)
     raw = side.copy()
     # Majority filter: a node with two or three neighbours across moves over (never two
@@ -157,6 +157,32 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost,
     ones = np.bincount(group, side, g)
     split = live & (ones > 0) & (ones < size)
     return side, split
+
+
+def _sweep_order(r, group, g):
+    """``np.lexsort((np.arange(k), r, group))``: nodes by chart, then by ``r`` (rounded
+    ``x / q``: integers of magnitude at most ~1e9), ties by node; by 16-bit radix passes
+    (``solvers.radix``) where every ``r`` is finite, numpy's lexsort otherwise (and for more
+    than ``radix.LARGE`` nodes: the sweep over a 500k-face sphere is a memory peak)."""
+    k = len(r)
+    if k == 0 or k > radix.LARGE or not np.isfinite(r).all() or np.abs(r).max() >= 2.0 ** 31:
+        return np.lexsort((np.arange(k), r, group))
+    key = group.astype(np.int64) << 32 | (r.astype(np.int64) + (1 << 31))
+    return radix.order(key, max(g, 1) << 32, passes=4)
+
+
+def _least_per_group(s, gp, g):
+    """The first node of each chart's least ``s`` (ties by node), as the first of each chart in
+    ``np.lexsort((np.arange(k), s, gp))`` (``gp`` non-decreasing; ``s`` integers or inf), without
+    the sort; the lexsort where an ``s`` is NaN."""
+    k = len(s)
+    if np.isnan(s).any():
+        best = np.lexsort((np.arange(k), s, gp))
+        return best[np.r_[True, gp[best][1:] != gp[best][:-1]]]
+    least = np.full(g, np.inf)
+    np.minimum.at(least, gp, s)
+    idx = np.flatnonzero(s == least[gp])
+    return idx[np.r_[True, gp[idx][1:] != gp[idx][:-1]]]
 
 
 def _fiedler_many(pairs, w, mass, centroid, offsets, group, iters=12, coarsen=True, keys=None):
@@ -348,8 +374,11 @@ def _principal_axes(c, mass, offsets, group):
     big = np.zeros(g)
     np.maximum.at(big, group, np.abs(proj))
     on = np.flatnonzero(np.abs(proj) > 1e-9 * big[group])
-    _, first = np.unique(group[on], return_index=True)
-    first = on[first]
+    gon = group[on]
+    if len(gon) and (np.diff(gon) >= 0).all():    # grouped chart by chart (every caller):
+        first = on[np.r_[True, gon[1:] != gon[:-1]]]   # each chart's first, without a sort
+    else:
+        first = on[np.unique(gon, return_index=True)[1]]
     flip = np.zeros(g, dtype=bool)
     flip[group[first]] = proj[first] < 0
     axes[flip] *= -1

@@ -11,6 +11,7 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from ..geometry import HOOK_VERTICES, components
+from ..solvers import radix
 from .edges import index_dtype
 
 # Boundary vertices (of all the disks of a call) up to which each loop is walked in Python.
@@ -229,9 +230,9 @@ def charts(F, E, cut, faces=None):
     # (With fans every chart is an orientable surface, chi = 2 - 2 genus - loops: chi = 1 with
     # a boundary is one loop.)
     # Group faces and vertices by chart.
-    forder = np.argsort(fl, kind="stable")
+    forder = radix.order(fl, n_c)
     fb = np.searchsorted(fl[forder], np.arange(n_c + 1))
-    vorder = np.argsort(vl, kind="stable")
+    vorder = radix.order(vl, n_c)
     vb = np.searchsorted(vl[vorder], np.arange(n_c + 1))
     local = np.empty(nv, dtype=np.int64)
     local[vorder] = np.arange(nv) - vb[vl[vorder]]

@@ -12,6 +12,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..geometry import face_areas, gradient_operators, local_coordinates
+from . import radix
 
 try:  # LDL^T with AMD ordering; SuperLU without it
     import qdldl
@@ -168,8 +169,7 @@ def _lscm_system(cbw, cb, tris, n, idx, val, sides=None):
     lo, hi = np.minimum(J, K).ravel(), np.maximum(J, K).ravel()
     im = np.where((J < K).ravel(), hjk.imag, -hjk.imag)
     if sides is None:
-        edge, inv, count = np.unique(lo * n + hi, return_inverse=True, return_counts=True)
-        inv = inv.ravel()
+        edge, inv, count = radix.unique(lo * n + hi, n * n)
         re_e, im_e = np.bincount(inv, hjk.real, len(edge)), np.bincount(inv, im, len(edge))
         lo, hi, rim = edge // n, edge % n, count == 1
     else:   # the edges known: each interior edge's two sides (in increasing order), then the
@@ -196,7 +196,7 @@ def _lscm_system(cbw, cb, tris, n, idx, val, sides=None):
     # No two entries share a place (one per free vertex, per edge, per boundary edge and side),
     # so the compressed columns are the entries sorted by (column, row): no triplet conversion
     # (scipy's is ~0.4 ms of fixed cost on a 200-face island).
-    order = np.argsort(cols * (2 * nf) + rows)
+    order = radix.order(cols * (2 * nf) + rows, 4 * nf * nf)
     indptr = np.zeros(2 * nf + 1, dtype=np.int64)
     np.cumsum(np.bincount(cols, minlength=2 * nf), out=indptr[1:])
     A = sp.csc_matrix((vals[order], rows[order], indptr), shape=(2 * nf, 2 * nf))
