@@ -91,16 +91,25 @@ def amd(indptr, indices, n):
     return P
 
 
+# Up to this many vertices a piece's systems are factorised in its vertices' AMD order
+# (``vertex_ranks``); above, the conformal map's factor in that order (u and v side by side)
+# holds 10-17 % more entries than in qdldl's AMD of its 2n unknowns, and its numeric
+# factorisation costs more than the AMD saved (CPU, C = 5: face.obj, 26k vertices, 315 -> 390
+# ms; lion-head, 8.4k, 79 -> 89; hemisphere, 2k, 20 -> 23.5; nefertiti, 299, 3.2 -> 3.0-3.2).
+RANKED_VERTICES = 1000
+
+
 def vertex_ranks(tris, n):
     """Each of n vertices' place (n,) int64 in the AMD order of the graph of the triangles'
-    edges, or None where the ordered factorisation cannot run or AMD refuses the graph. One
+    edges, or None where the ordered factorisation cannot run, AMD refuses the graph or n is
+    above RANKED_VERTICES (the callers then let qdldl order each system). One
     order of a mesh piece's vertices serves every system on its vertices: the conformal map's
     (u and v of a vertex side by side, ``lscm.lscm_pinned``) and the bound search's Laplacian
     (``global_step.GlobalStep``), each restricted to its free vertices (the fill of an order
     restricted to a subgraph is within the whole's). AMD of the n vertices costs about half of
     qdldl's own on the conformal map's 2n unknowns (nefertiti, 299 vertices: ~0.29 against
     ~0.62 ms), and once for both systems instead of once each."""
-    if not available() or n == 0:
+    if not 0 < n <= RANKED_VERTICES or not available():
         return None
     tris = np.asarray(tris, np.int64)
     J, K = tris.ravel(), tris[:, [1, 2, 0]].ravel()

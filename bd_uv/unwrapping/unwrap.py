@@ -170,7 +170,7 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
                 res = _solve_island(island, V, pins, o, initial_uv, report, cancel,
                                     starts.get(island.index),
                                     None if disk is None else (disk.G, disk.area),
-                                    None if disk is None else disk.ranks)
+                                    None if disk is None or o.bound != "auto" else disk.ranks)
         except Cancelled:
             raise CancelledError("unwrap cancelled; nothing was changed") from None
         if res.status == "certified":
