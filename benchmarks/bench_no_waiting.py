@@ -4,9 +4,12 @@
         [--closed NAME ...] [--subdivide NAME:TIMES ...] [--meshes DIR] [--out table.md]
 
 Every (mesh, method) runs in its own fresh process (``isolate.py``: time and peak memory are the
-method's own, warm-up untimed). The methods of one mesh run one after another, and the whole
-set ``--rounds`` times over, interleaved; each time is the least of its rounds (a shared machine's
-load only ever adds time) and each peak memory the largest. Printed:
+method's own). Each method is first called once, untimed, on a small disk of its own (Blender's
+operators on a two-face disk, bd-uv's C = 5 and ``auto`` each on a 50-face grid:
+``methods.warmup``), so one-time process costs fall in no timed call, on either side. The
+methods of one mesh run one after another, and the whole set ``--rounds`` times over,
+interleaved; each time is the least of its rounds (a shared machine's load only ever adds time)
+and each peak memory the largest. Printed:
 
 - disks (the shared disks, and ``--patches``: ``assets.patch``, whole face rings of a shared mesh
   holding at least FACES faces; default a ~200-face patch of face.obj, the small case of item 2):

@@ -117,10 +117,12 @@ class BoundSearch:
         component)
     connected : bool, ``tris`` are one connected piece (one ``mesh.Island``): its components
         are not searched for (``GlobalStep``)
+    ranks : (nv,) int64, optional, the vertices' elimination order (``GlobalStep``)
     """
 
-    def __init__(self, ops, nv, tris, fixed, connected=False):
-        self.solver = s = GlobalStep(ops, nv, fixed, tris=tris, connected=connected)
+    def __init__(self, ops, nv, tris, fixed, connected=False, ranks=None):
+        self.solver = s = GlobalStep(ops, nv, fixed, tris=tris, connected=connected,
+                                     ranks=ranks)
         self.k = len(s.area)
         self.UF = None
         self._rhs_fixed = None      # (UF, its share of the right-hand side; small: its FreeLift)

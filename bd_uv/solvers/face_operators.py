@@ -40,7 +40,8 @@ def laplacian_blocks(gx, gy, area, tris, free, fixed, nv):
     Parameters
     ----------
     gx, gy : (k,3) from ``face_gradients``; area : (k,); tris : (k,3) int64
-    free, fixed : sorted vertex ids (a partition of 0..nv-1)
+    free, fixed : vertex ids (a partition of 0..nv-1), in the order of the blocks' rows and
+        columns (``global_step.GlobalStep``'s free vertices may be in an elimination order)
     """
     vals = area[:, None, None] * (gx[:, :, None] * gx[:, None, :] + gy[:, :, None] * gy[:, None, :])
     r = np.broadcast_to(tris[:, :, None], vals.shape).ravel()

@@ -101,7 +101,8 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
 
     Parameters
     ----------
-    lift : FreeLift; solve : the global step's back-solve (nf,) -> (nf,)
+    lift : FreeLift; solve : the global step's back-solve (nf,) -> (nf,) (its ``vector`` where
+        it has one: an answer that may be the solver's buffer, copied out before the next call)
     w : (k,) unit complex frames; kappa : float, the cones' aperture; C : float, the target
     watch : ``bound_search``'s watch of a target (``seen(D, it, C) -> (better, stop)``, ``best``)
     alpha : float, the over-relaxation

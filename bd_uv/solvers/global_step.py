@@ -13,6 +13,7 @@ import scipy.sparse as sp
 from ..geometry import components
 from .face_operators import face_gradients, laplacian_blocks
 from .factor import factor_spd
+from .ordered_ldl import solver_in_order
 
 __all__ = ["GlobalStep"]
 
@@ -33,6 +34,10 @@ class GlobalStep:
     backend : see :func:`factor.factor_spd`
     connected : bool, the triangles are known to be one connected piece (a ``mesh.Island``):
         its components are not searched for
+    ranks : (nv,) int64, optional, the vertices' elimination order
+        (``ordered_ldl.vertex_ranks``): the free vertices are numbered in it (``free``), so the
+        matrix over them is factorised in its own order (no AMD of its own) and back-solved
+        without permutation; ``backend``'s factorisation where that cannot run
 
     Attributes
     ----------
@@ -42,7 +47,7 @@ class GlobalStep:
     backend : str
     """
 
-    def __init__(self, ops, nv, fixed_idx, tris, backend="auto", connected=False):
+    def __init__(self, ops, nv, fixed_idx, tris, backend="auto", connected=False, ranks=None):
         t0 = time.perf_counter()
         self.nv = nv = int(nv)
         self.area = np.asarray(ops.area, dtype=np.float64)
@@ -63,6 +68,9 @@ class GlobalStep:
         is_free = np.ones(nv, dtype=bool)
         is_free[fixed] = False
         self.free = np.flatnonzero(is_free)     # np.setdiff1d's answer without its sort
+        self.ranks = ranks
+        if ranks is not None:                   # in elimination order
+            self.free = self.free[np.argsort(ranks[self.free], kind="stable")]
         self.free_comp = self.component[self.free]
         # Faces sorted by component, for per-component maxima.
         self._order = np.argsort(self.face_comp, kind="stable")
@@ -135,7 +143,11 @@ class GlobalStep:
         if self._solve is None:
             t0 = time.perf_counter()
             self._assemble()
-            self._solve, self.backend = factor_spd(self._L_ff, self.backend)
+            solve = None if self.ranks is None else solver_in_order(self._L_ff)
+            if solve is not None:
+                self._solve, self.backend = solve, "qdldl-ordered"
+            else:
+                self._solve, self.backend = factor_spd(self._L_ff, self.backend)
             self.factor_seconds = time.perf_counter() - t0
         return self._solve
 

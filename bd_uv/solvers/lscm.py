@@ -12,7 +12,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..geometry import face_areas, gradient_operators, local_coordinates
-from . import radix
+from . import ordered_ldl, radix
 
 try:  # LDL^T with AMD ordering; SuperLU without it
     import qdldl
@@ -116,7 +116,7 @@ def spd_solver(A, upper=False):
     return lu.solve
 
 
-def lscm_pinned(cbw, cb, tris, n, idx, val, sides=None):
+def lscm_pinned(cbw, cb, tris, n, idx, val, sides=None, ranks=None):
     """LSCM (minimise ``sum_f area_f |beta_f|^2``) with vertices ``idx`` fixed to ``val``.
 
     The energy is ``u^H H u`` with ``H = sum_f h_f`` (n x n Hermitian, ``h_f = area_f cb_f^*
@@ -134,17 +134,33 @@ def lscm_pinned(cbw, cb, tris, n, idx, val, sides=None):
     sides : (s1, s2, sb) int64 arrays, optional, the edges when known (``unwrapping.one_disk``):
         face sides (flat ``3 f + k``, the side from corner k to k + 1) of each interior edge,
         s1 < s2, and of each boundary edge; found by sorting the sides otherwise
+    ranks : (n,) int64, optional, the vertices' elimination order (``ordered_ldl.vertex_ranks``):
+        the free vertices' unknowns are eliminated in it, u and v of a vertex side by side
+        (qdldl's AMD of the 2n unknowns otherwise, or where that factorisation fails)
 
     Returns
     -------
     u : (n,) complex128
     """
     A, rhs, u0, free = _lscm_system(cbw, cb, tris, n, idx, val, sides)
-    x = spd_solver(A, upper=True)(rhs)
+    solve = None if ranks is None else _ranked_solver(A, ranks[free])
+    x = (spd_solver(A, upper=True) if solve is None else solve)(rhs)
     u = u0
     nf = len(free)
     u[free] = x[:nf] + 1j * x[nf:]
     return u
+
+
+def _ranked_solver(A, keys):
+    """The solve of the system A (upper triangle, csc, unknowns ``[u; v]`` of the free vertices)
+    eliminated in the order of the free vertices' ``keys``, u and v of a vertex side by side;
+    None where the factorisation fails."""
+    nf = len(keys)
+    p = np.argsort(keys, kind="stable")
+    perm = np.stack([p, p + nf], axis=1).ravel()
+    cols = np.repeat(np.arange(2 * nf, dtype=np.int64), np.diff(A.indptr))
+    f = ordered_ldl.Factor(A.indices.astype(np.int64), cols, A.data, 2 * nf, perm)
+    return f.solve if f.lnz >= 0 and f.factor() else None
 
 
 def _lscm_system(cbw, cb, tris, n, idx, val, sides=None):

@@ -91,6 +91,87 @@ def amd(indptr, indices, n):
     return P
 
 
+# Up to this many vertices a piece's systems are factorised in its vertices' AMD order
+# (``vertex_ranks``); above, the conformal map's factor in that order (u and v side by side)
+# holds 10-17 % more entries than in qdldl's AMD of its 2n unknowns, and its numeric
+# factorisation costs more than the AMD saved (CPU, C = 5: face.obj, 26k vertices, 315 -> 390
+# ms; lion-head, 8.4k, 79 -> 89; hemisphere, 2k, 20 -> 23.5; nefertiti, 299, 3.2 -> 3.0-3.2).
+RANKED_VERTICES = 1000
+
+
+def vertex_ranks(tris, n):
+    """Each of n vertices' place (n,) int64 in the AMD order of the graph of the triangles'
+    edges, or None where the ordered factorisation cannot run, AMD refuses the graph or n is
+    above RANKED_VERTICES (the callers then let qdldl order each system). One
+    order of a mesh piece's vertices serves every system on its vertices: the conformal map's
+    (u and v of a vertex side by side, ``lscm.lscm_pinned``) and the bound search's Laplacian
+    (``global_step.GlobalStep``), each restricted to its free vertices (the fill of an order
+    restricted to a subgraph is within the whole's). AMD of the n vertices costs about half of
+    qdldl's own on the conformal map's 2n unknowns (nefertiti, 299 vertices: ~0.29 against
+    ~0.62 ms), and once for both systems instead of once each."""
+    if not 0 < n <= RANKED_VERTICES or not available():
+        return None
+    tris = np.asarray(tris, np.int64)
+    J, K = tris.ravel(), tris[:, [1, 2, 0]].ravel()
+    r, c = np.concatenate([J, K]), np.concatenate([K, J])
+    nnz = len(r)
+    Ap, Ai, Ax = np.empty(n + 1, np.int64), np.empty(nnz, np.int64), np.empty(nnz)
+    _st.coo_tocsr(n, n, nnz, r, c, np.ones(nnz), Ap, Ai, Ax)   # symmetric: its csr is its csc
+    _st.csr_sort_indices(n, Ap, Ai, Ax)
+    _st.csr_sum_duplicates(n, n, Ap, Ai, Ax)    # an interior edge's two sides
+    p = amd(Ap, Ai[:Ap[-1]], n)
+    if p is None:
+        return None
+    rank = np.empty(n, np.int64)
+    rank[p] = np.arange(n)
+    return rank
+
+
+def solver_in_order(M):
+    """LDL^T of a canonical csc symmetric positive definite matrix M (both triangles or the
+    upper one) eliminated in its own order, no reordering: ``solve(b)`` for b (n,) or (n, r) ->
+    a new array; its ``vector(b)`` for b (n,) alone -> a buffer of the solver's, overwritten by
+    the next call (the search's iterations copy it out at once). No permutation either way, and
+    ``vector`` calls the C solve with its arguments converted once (a call with them as Python
+    integers costs ~2 us more: 4.9 against 7.8 us a solve on 144 unknowns, qdldl's own 4.6).
+    None where it cannot run or a pivot is zero."""
+    if not available():
+        return None
+    n = M.shape[0]
+    cols = np.repeat(np.arange(n, dtype=np.int64), np.diff(M.indptr))
+    rows = M.indices.astype(np.int64)
+    up = rows <= cols
+    f = Factor(rows[up], cols[up], M.data[up], n, np.arange(n, dtype=np.int64))
+    if f.lnz < 0 or not f.factor():
+        return None
+    buf = np.empty(n)
+    args = (ctypes.c_int64(n),) + tuple(ctypes.c_void_p(a) for a in f._args[1:]) + (
+        ctypes.c_void_p(buf.ctypes.data),)
+    qdldl_solve = _bare_solve()
+
+    def vector(b):
+        buf[...] = b
+        qdldl_solve(*args)
+        return buf
+
+    def solve(B):
+        B = np.asarray(B, dtype=np.float64)
+        if B.ndim == 1:
+            return vector(B).copy()
+        return np.stack([vector(B[:, i]).copy() for i in range(B.shape[1])], axis=1)
+    solve.vector, solve.factor = vector, f      # the factor held while its solves live
+    return solve
+
+
+@functools.lru_cache(maxsize=1)
+def _bare_solve():
+    """``QDLDL_solve`` without argument conversion (its arguments passed as ctypes values of
+    the types ``_lib`` checked): a second handle on the same loaded module."""
+    fn = ctypes.CDLL(qdldl.__file__).QDLDL_solve
+    fn.restype = None
+    return fn
+
+
 class Factor:
     """LDL^T of ``P A P^T`` for a symmetric A given by its upper triangle (rows, cols, vals:
     triplets with no duplicates) and an order ``perm`` (the unknown eliminated k-th is

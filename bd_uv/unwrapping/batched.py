@@ -12,6 +12,7 @@ import time
 import numpy as np
 
 from ..solvers.lscm import face_geometry, lscm_pinned
+from ..solvers.ordered_ldl import vertex_ranks
 from .problem import STORE_HEADROOM
 from .results import IslandResult
 
@@ -72,7 +73,9 @@ def conformal_islands(V, islands, C, known=None):
             own = ~have[np.repeat(np.arange(k), 2)]
             idx = np.concatenate([idx[own], kv])
             val = np.concatenate([val[own], kidx])
-        u = lscm_pinned(geom.cbw(), geom.cb, tris, len(verts), idx, val)
+        # before a bound search (C None: "auto"), in the vertices' order its factor reuses
+        u = lscm_pinned(geom.cbw(), geom.cb, tris, len(verts), idx, val,
+                        ranks=vertex_ranks(tris, len(verts)) if C is None else None)
     if C is None:
         return {}, {isl.index: u[voff[j]:voff[j + 1]] / 1.0 for j, isl in enumerate(islands)}
     root = np.sqrt(area)[face_isl]

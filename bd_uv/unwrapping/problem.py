@@ -62,13 +62,16 @@ class IslandProblem:
         input geometry when known (``one_disk.Disk``: ``geometry.gradient_operators`` and
         ``face_areas``' bits): ``finish`` measures the final UVs with them
 
+    ranks : (nv,) int64, optional, the island's vertices' elimination order when known
+        (``one_disk.Disk.ranks``); the bound search finds it otherwise
+
     Attributes
     ----------
-    faces_3d : as the parameter, or None
+    faces_3d, ranks : as the parameters, or None
     """
 
-    def __init__(self, island, V, pins, method, cone, cancel, faces_3d=None):
-        self.island = island
+    def __init__(self, island, V, pins, method, cone, cancel, faces_3d=None, ranks=None):
+        self.island, self.ranks = island, ranks
         self.method, self.cone, self.cancel = method, cone, cancel
         self.faces_3d = faces_3d
         Vi = V[island.vertices]

@@ -12,6 +12,7 @@ import numpy as np
 from ..errors import InfeasibleError
 from ..frames import frames_from_map
 from ..solvers.bound_search import BoundSearch
+from ..solvers.ordered_ldl import vertex_ranks
 from .bounded import bend, formulate, guaranteed_bound, start_for_solve
 from .initial import Start
 from .problem import Cancelled
@@ -124,7 +125,10 @@ def search(prob, u, report, budget, flags, t0):
     u = u.copy()
     if len(prob.pin_idx):
         u[prob.pin_idx] = prob.pin_val
-    bs = BoundSearch(prob.ops, prob.nv, prob.island.tris, fixed, connected=True)
+    # one elimination order of the island's vertices (the conformal map's, where the one-disk
+    # path solved it: no second AMD)
+    ranks = prob.ranks if prob.ranks is not None else vertex_ranks(prob.island.tris, prob.nv)
+    bs = BoundSearch(prob.ops, prob.nv, prob.island.tris, fixed, connected=True, ranks=ranks)
 
     def progress(D, C):
         report(0.1, f"minimising C: C* <= {D:.4g}, aiming at {C:.4g}")

@@ -169,7 +169,8 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
             else:
                 res = _solve_island(island, V, pins, o, initial_uv, report, cancel,
                                     starts.get(island.index),
-                                    None if disk is None else (disk.G, disk.area))
+                                    None if disk is None else (disk.G, disk.area),
+                                    None if disk is None or o.bound != "auto" else disk.ranks)
         except Cancelled:
             raise CancelledError("unwrap cancelled; nothing was changed") from None
         if res.status == "certified":
@@ -250,7 +251,7 @@ def _batched(V, isl, pins, face_island, options, progress, cancel, conformal=Non
 
 
 def _solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=None,
-                  faces_3d=None):
+                  faces_3d=None, ranks=None):
     t0 = time.perf_counter()
     o = options
     method, bound, boundary, stretch = o.method, o.bound, o.boundary, o.stretch
@@ -270,7 +271,7 @@ def _solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=Non
             return with_premises(_failed(island, err, t0, bound, FRAMES_NAME), island)
         return with_premises(finish(prob, u, C, bound, FRAMES_NAME, flags, t0, stretch), island)
     try:
-        prob = IslandProblem(island, V, pins, method, o.cone, cancel, faces_3d)
+        prob = IslandProblem(island, V, pins, method, o.cone, cancel, faces_3d, ranks)
         start = start_map(prob, o.frames, initial_uv, report, lscm=lscm)
     except IslandError as exc:
         exc.renumber(island.index)
