@@ -227,5 +227,7 @@ def test_an_unchecked_qdldl_release_takes_qdldls_own_order(monkeypatch):
         res, added, _ = unwrap_auto(V, F, bound=2.0, stretch=2.0)
         assert all(r.status == "certified" for r in res.islands) and len(added)
     finally:
+        monkeypatch.undo()            # the real version again, so the cache left behind is true
         ordered_ldl._lib.cache_clear()
     assert ordered_ldl.available() == (ordered_ldl._version() in ordered_ldl.TESTED)
+    assert ordered_ldl.available()    # the pinned qdldl: later tests take the ordered path
