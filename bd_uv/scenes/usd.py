@@ -28,81 +28,16 @@ import numpy as np
 
 from ..certificate import certify_islands
 from ..errors import SceneFileError
-from ..meshio import Mesh
 from ..scheduling.atomic import atomic_path
 from .model import SceneMesh
 from .usd_instances import (add_inherits, prototype_meshes, proxy_uvs, target_prim,
                             undo_instanced)
-from .usd_uv_name import uv_primvar
+from .usd_mesh import mesh_arrays
 
 
 def _pxr():
     from pxr import Sdf, Usd, UsdGeom, UsdUtils, Vt
     return Sdf, Usd, UsdGeom, UsdUtils, Vt
-
-
-def fan_triangles(counts):
-    """Fan triangulation of polygons, in face-vertex ids.
-
-    Parameters
-    ----------
-    counts : (p,) int array, vertices of each polygon (>= 3)
-
-    Returns
-    -------
-    T : (m,3) int64 face-vertex ids (into faceVertexIndices), polygon j's triangles
-        (s, s+i, s+i+1) for i = 1 .. counts[j]-2, s its first face-vertex
-    poly : (m,) int64 polygon of each triangle
-    """
-    counts = np.asarray(counts, dtype=np.int64)
-    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    ntri = counts - 2
-    poly = np.repeat(np.arange(len(counts)), ntri)
-    i = np.arange(len(poly)) - np.repeat(np.cumsum(ntri) - ntri, ntri) + 1
-    s = start[poly]
-    return np.stack([s, s + i, s + i + 1], 1), poly
-
-
-def polygon_triangles(counts, indices):
-    """``fan_triangles``, with the fan of a polygon turned to start at another corner where one
-    of its diagonals would run along an edge of the mesh (a non-planar pentagon whose fan
-    diagonal lies on its neighbour's side, usd-wg's ``5_face.usda``): such a diagonal makes an
-    edge of three triangles, which splits the polygon across islands.
-
-    Returns
-    -------
-    T : (m,3) int64 face-vertex ids, poly : (m,) int64 polygon of each triangle
-    """
-    T, poly = fan_triangles(counts)
-    counts = np.asarray(counts, dtype=np.int64)
-    big = np.flatnonzero(counts >= 4)
-    if not len(big) or not len(indices):
-        return T, poly
-    idx = np.asarray(indices, dtype=np.int64)
-    n = int(idx.max()) + 1
-    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    pos = np.arange(len(idx)) - np.repeat(start, counts)
-    nxt = np.repeat(start, counts) + (pos + 1) % np.repeat(counts, counts)
-    a, b = idx, idx[nxt]
-    sides = np.unique(np.minimum(a, b) * n + np.maximum(a, b))
-    # the fan's diagonals: its first two and last two triangles' shared edges (s, s+i+1)
-    d = T[:, [0, 2]]
-    inner = np.r_[poly[1:] == poly[:-1], False]          # a triangle followed by its polygon's
-    key = np.minimum(idx[d[:, 0]], idx[d[:, 1]]) * n + np.maximum(idx[d[:, 0]], idx[d[:, 1]])
-    bad = np.unique(poly[inner & np.isin(key, sides)])
-    if not len(bad):
-        return T, poly
-    for p in bad:   # rare: each such polygon's fan tried from its other corners
-        c, s0 = int(counts[p]), int(start[p])
-        ring = idx[s0:s0 + c]
-        for k in range(1, c):
-            diag = [(ring[k], ring[(k + j) % c]) for j in range(2, c - 1)]
-            if not np.isin([min(u, v) * n + max(u, v) for u, v in diag], sides).any():
-                rows = slice(*np.searchsorted(poly, [p, p + 1]))   # poly is sorted
-                j = np.arange(1, c - 1)
-                T[rows] = s0 + np.stack([np.full(c - 2, k), (k + j) % c, (k + j + 1) % c], 1)
-                break
-    return T, poly
 
 
 class UsdScene:
@@ -135,7 +70,7 @@ class UsdScene:
                 where = f"{path}: prim {prim.GetPath()}"
                 name = str(prim.GetPath())
                 try:
-                    arrays = _mesh_arrays(UsdGeom.Mesh(prim), where, uv_name, Usd)
+                    arrays = mesh_arrays(UsdGeom.Mesh(prim), where, uv_name, Usd)
                 except SceneFileError as exc:   # refused by name, the stage's other meshes
                     why = str(exc).removeprefix(f"{where}: ")   # the entry names the prim
                     meshes.append(SceneMesh(name, None, {"prim": name}, why, None,  # unwrapped
@@ -150,7 +85,7 @@ class UsdScene:
         except Tf.ErrorException as exc:
             raise SceneFileError(f"{where}: USD could not read its values, the file is damaged "
                                  f"({_pxr_message(exc)})") from None
-        for sm, part in prototype_meshes(stage, path, uv_name, errors, _mesh_arrays):
+        for sm, part in prototype_meshes(stage, path, uv_name, errors, mesh_arrays):
             meshes.append(sm)
             parts.append(part)
         scene = cls(path, uv_name, meshes, parts)
@@ -322,127 +257,6 @@ def _reanchor(src, asset, out_dir, package_local=False):
         return asset + inner                     # a search path, resolved by the resolver
     rel = os.path.relpath(full, out_dir).replace(os.sep, "/")
     return (rel if rel.startswith("../") else "./" + rel) + inner
-
-
-def _nothing(attr, value):
-    """True for an attribute not authored at all, or authored as an empty array (a damaged
-    value, authored but unreadable, is not nothing)."""
-    if attr.GetNumTimeSamples():
-        return False
-    if value is None:
-        return not attr.HasAuthoredValue()
-    return hasattr(value, "__len__") and len(value) == 0
-
-
-def _mesh_arrays(mesh, where, uv_name, Usd):
-    """(Mesh, write-back part, info, warnings) of one UsdGeom.Mesh; None for an empty one
-    (points, faceVertexCounts and faceVertexIndices all unauthored or empty)."""
-    from pxr import UsdGeom
-    warnings = []
-    points_attr = mesh.GetPointsAttr()
-    P = points_attr.Get(Usd.TimeCode.Default())
-    if P is None and points_attr.GetNumTimeSamples():
-        t = points_attr.GetTimeSamples()[0]
-        P = points_attr.Get(t)
-        warnings.append(f"points are time-sampled with no default: unwrapped at time {t:g}")
-    counts = mesh.GetFaceVertexCountsAttr().Get()
-    indices = mesh.GetFaceVertexIndicesAttr().Get()
-    if (_nothing(points_attr, P) and _nothing(mesh.GetFaceVertexCountsAttr(), counts)
-            and _nothing(mesh.GetFaceVertexIndicesAttr(), indices)):
-        return None
-    if not uv_name:   # the primvar the mesh's materials read its UVs from (usd_uv_name)
-        uv_name, note = uv_primvar(mesh.GetPrim())
-        if note:
-            warnings.append(note)
-    if P is None or counts is None or indices is None:
-        raise SceneFileError(f"{where}: a mesh without points, faceVertexCounts or "
-                             "faceVertexIndices")
-    if mesh.GetFaceVertexCountsAttr().GetNumTimeSamples() > 1:
-        raise SceneFileError(f"{where}: faceVertexCounts is time-sampled (changing topology); "
-                             "bd-uv unwraps one topology")
-    V = _numbers(P, np.float64, f"{where}: points", width=3)
-    counts = _numbers(counts, np.int64, f"{where}: faceVertexCounts")
-    indices = _numbers(indices, np.int64, f"{where}: faceVertexIndices")
-    if counts.sum() != len(indices):
-        raise SceneFileError(f"{where}: faceVertexCounts sum to {int(counts.sum())} but there "
-                             f"are {len(indices)} faceVertexIndices")
-    if len(counts) and counts.min() < 3:
-        bad = int(np.flatnonzero(counts < 3)[0])
-        raise SceneFileError(f"{where}: face {bad} has {int(counts[bad])} vertices (< 3)")
-    if len(indices) and (indices.min() < 0 or indices.max() >= len(V)):
-        raise SceneFileError(f"{where}: a faceVertexIndex is out of range ({len(V)} points)")
-    T, poly = polygon_triangles(counts, indices)
-    holes = _numbers(mesh.GetHoleIndicesAttr().Get() or [], np.int64, f"{where}: holeIndices")
-    keep = ~np.isin(poly, holes)
-    T, poly = T[keep], poly[keep]
-    if mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded:
-        T = T[:, ::-1].copy()                    # the front face winds clockwise
-    F = indices[T]
-    corner_uv = _existing_uv(mesh, uv_name, T, indices, len(V), where)
-    info = {"prim": str(mesh.GetPath()), "uv_name": uv_name, "polygons": int(len(counts)),
-            "holes": int(len(holes)),
-            "subdivision": str(mesh.GetSubdivisionSchemeAttr().Get())}
-    part = {"T": T, "poly": poly, "n_face_vertices": len(indices), "warnings": warnings,
-            "uv_name": uv_name}
-    # one prim is one object; each face's material from its "materialBind" GeomSubset
-    labels = {"object": np.zeros(len(F), np.int64),
-              "material": _subset_materials(mesh, len(counts))[poly]}
-    return Mesh(V, F, corner_uv, str(mesh.GetPath()), labels), part, info, warnings
-
-
-def _subset_materials(mesh, n_faces):
-    """(n_faces,) int64: each face's material, numbered by the material its "materialBind"
-    GeomSubset binds (two subsets bound to one material are one; a subset without a binding is
-    its own); faces in no such subset share the prim's own (number -1)."""
-    from pxr import UsdGeom, UsdShade
-    out = np.full(n_faces, -1, dtype=np.int64)
-    names = {}
-    for subset in UsdGeom.Subset.GetGeomSubsets(mesh, UsdGeom.Tokens.face, "materialBind"):
-        material, _ = UsdShade.MaterialBindingAPI(subset.GetPrim()).ComputeBoundMaterial()
-        key = str(material.GetPath()) if material else str(subset.GetPath())
-        faces = _numbers(subset.GetIndicesAttr().Get() or [], np.int64,
-                         f"{subset.GetPath()}: indices")
-        faces = faces[(faces >= 0) & (faces < n_faces)]
-        out[faces] = names.setdefault(key, len(names))
-    return out
-
-
-def _numbers(value, dtype, what, width=None):
-    """An attribute's value as a numpy array of ``dtype`` ((n, width) when ``width`` is given), or
-    SceneFileError naming it: a damaged file can hold a value of an unknown type (pxr's
-    ``UnregisteredValue``) or of the wrong shape where numbers belong."""
-    try:
-        arr = np.asarray(value, dtype=dtype)
-    except (TypeError, ValueError):
-        raise SceneFileError(f"{what} is not an array of numbers (a {type(value).__name__}); "
-                             "the file is damaged or not USD this reads") from None
-    if width is not None and (arr.ndim != 2 or arr.shape[1] != width) and arr.size:
-        raise SceneFileError(f"{what} is not {width} numbers per element (shape {arr.shape})")
-    return arr.reshape(-1, width) if width is not None else arr.reshape(-1)
-
-
-def _existing_uv(mesh, uv_name, T, indices, n_points, where=""):
-    """The mesh's UVs per triangle corner (m,3,2), or None."""
-    from pxr import UsdGeom
-    pv = UsdGeom.PrimvarsAPI(mesh.GetPrim()).GetPrimvar(uv_name)
-    if not pv or not pv.HasValue():
-        return None
-    vals = pv.ComputeFlattened()
-    if vals is None:
-        return None
-    try:
-        vals = np.asarray(vals, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise SceneFileError(f"{where}: primvars:{uv_name} is not an array of numbers (a "
-                             f"{type(vals).__name__}); the file is damaged") from None
-    if vals.ndim != 2 or vals.shape[1] != 2:
-        return None
-    interp = pv.GetInterpolation()
-    if interp == UsdGeom.Tokens.faceVarying and len(vals) == len(indices):
-        return vals[T]
-    if interp in (UsdGeom.Tokens.vertex, UsdGeom.Tokens.varying) and len(vals) == n_points:
-        return vals[indices[T]]
-    return None
 
 
 def _pxr_message(exc):

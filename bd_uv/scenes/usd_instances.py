@@ -29,9 +29,9 @@ def prototype_meshes(stage, path, uv_name, errors, mesh_arrays):
     ----------
     stage : Usd.Stage
     path : str, the stage's file (for messages)
-    uv_name : str or None, as for ``usd._mesh_arrays``
+    uv_name : str or None, as for ``usd_mesh.mesh_arrays``
     errors : list of str, composition errors said on every mesh
-    mesh_arrays : ``usd._mesh_arrays``
+    mesh_arrays : ``usd_mesh.mesh_arrays``
 
     Returns
     -------

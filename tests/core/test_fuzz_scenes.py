@@ -350,7 +350,7 @@ def _check_stage(out, report):
 # Tf.ErrorException raised UnicodeDecodeError out of read_scene): usd._pxr_message
 @example(breakage="none", seed=0, cut=None, flips=[(0.5, 128)], suffix=".usda", seams="needed")
 # found by this contract: a flipped byte left points of an unknown type (Sdf.UnregisteredValue),
-# and numpy's TypeError left read_scene (usd._numbers; test_scene_usd's
+# and numpy's TypeError left read_scene (usd_mesh._numbers; test_scene_usd's
 # test_a_value_of_an_unknown_type_is_a_scene_error)
 @example(breakage="inf point", seed=2, cut=None, flips=[(0.4, 99)], suffix=".usda",
          seams="needed")
