@@ -113,6 +113,7 @@ def _edge_keys(a, b, n):
 #: 1e80 ended in LinAlgError out of the Fiedler split's principal axes); beyond it a face is refused
 #: by name as too large to measure, as a non-finite one is
 MEASURABLE = 1e60
+TOO_LARGE = "coordinates beyond 1e60 (too large to measure)"   # how messages say it
 
 
 def measurable(P):
@@ -331,9 +332,8 @@ def _validate(idx, faces, tris, vertices, V, degenerate, nonfinite, duplicate, n
     bad = faces[nonfinite[faces]]
     if len(bad):
         return NonFiniteError(f"{name}: {len(bad)} face(s) have NaN or infinite vertex coordinates, "
-                              f"or coordinates too large to measure (beyond 1e60) (faces {_some(bad)}); "
-                              "fix or "
-                              "delete those vertices", idx, bad)
+                              f"or {TOO_LARGE} (faces {_some(bad)}); fix or delete those "
+                              "vertices", idx, bad)
     bad = faces[duplicate[faces]]
     if len(bad):
         return DuplicateFacesError(f"{name}: {len(bad)} faces repeat the same three vertices "

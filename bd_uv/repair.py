@@ -24,7 +24,8 @@ import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
 from .geometry import face_areas
-from .mesh import DEGENERATE_RATIO, check_arrays, measurable, thinner_than_precision
+from .mesh import (DEGENERATE_RATIO, TOO_LARGE, check_arrays, measurable,
+                   thinner_than_precision)
 
 
 @dataclass(frozen=True)
@@ -115,8 +116,7 @@ class Repair:
                        f"are left as they were (faces {_some(self.zero_area)})")
         if len(self.non_finite) and indices:
             out.append(f"{len(self.non_finite)} face(s) with NaN or infinite coordinates, or "
-                       "coordinates beyond 1e60 (too large to measure), cannot "
-                       f"be certified: their UVs are left as they were (faces "
+                       f"{TOO_LARGE}, cannot be certified: their UVs are left as they were (faces "
                        f"{_some(self.non_finite)})")
         return out
 

@@ -29,10 +29,9 @@ import numpy as np
 from ..certificate import certify_islands
 from ..errors import SceneFileError
 from ..scheduling.atomic import atomic_path
-from .model import SceneMesh
 from .usd_instances import (add_inherits, prototype_meshes, proxy_uvs, target_prim,
                             undo_instanced)
-from .usd_mesh import mesh_arrays
+from .usd_mesh import scene_mesh
 
 
 def _pxr():
@@ -41,7 +40,7 @@ def _pxr():
 
 
 class UsdScene:
-    """A USD stage read for unwrapping; ``meshes`` one :class:`SceneMesh` per mesh prim."""
+    """A USD stage read for unwrapping; ``meshes`` one ``SceneMesh`` per mesh prim."""
 
     def __init__(self, path, uv_name, meshes, parts):
         self.path, self.uv_name, self.meshes, self._parts = path, uv_name, meshes, parts
@@ -68,24 +67,15 @@ class UsdScene:
                 if not prim.IsA(UsdGeom.Mesh):
                     continue
                 where = f"{path}: prim {prim.GetPath()}"
-                name = str(prim.GetPath())
-                try:
-                    arrays = mesh_arrays(UsdGeom.Mesh(prim), where, uv_name, Usd)
-                except SceneFileError as exc:   # refused by name, the stage's other meshes
-                    why = str(exc).removeprefix(f"{where}: ")   # the entry names the prim
-                    meshes.append(SceneMesh(name, None, {"prim": name}, why, None,  # unwrapped
-                                            list(errors)))
-                    parts.append(None)
-                    continue
-                if arrays is None:   # an empty Mesh (a placeholder a variant or payload
-                    continue         # fills) is nothing to unwrap, as a glTF mesh of points
-                m, part, info, warnings = arrays
-                meshes.append(SceneMesh(name, m, info, None, part["poly"], warnings + errors))
-                parts.append(part)
+                read = scene_mesh(UsdGeom.Mesh(prim), where, str(prim.GetPath()), uv_name,
+                                  errors, Usd)
+                if read is not None:   # (an empty Mesh is skipped, as a glTF mesh of points)
+                    meshes.append(read[0])
+                    parts.append(read[1])
         except Tf.ErrorException as exc:
             raise SceneFileError(f"{where}: USD could not read its values, the file is damaged "
                                  f"({_pxr_message(exc)})") from None
-        for sm, part in prototype_meshes(stage, path, uv_name, errors, mesh_arrays):
+        for sm, part in prototype_meshes(stage, path, uv_name, errors):
             meshes.append(sm)
             parts.append(part)
         scene = cls(path, uv_name, meshes, parts)
@@ -174,10 +164,10 @@ class UsdScene:
         warnings = []
         name = part["uv_name"]
         old = UsdGeom.PrimvarsAPI(seen).GetPrimvar(name)
-        if old and old.GetTypeName() != Sdf.ValueTypeNames.TexCoord2fArray and instanced:
-            return _refused(certs, f"primvars:{name} is {old.GetTypeName()} in the instanced "
-                                   "asset, not texCoord2f[]")
         if old and old.GetTypeName() != Sdf.ValueTypeNames.TexCoord2fArray:
+            if instanced is not None:   # the asset's attribute: not removable from here
+                return _refused(certs, f"primvars:{name} is {old.GetTypeName()} in the "
+                                       "instanced asset, not texCoord2f[]")
             warnings.append(f"primvars:{name} was {old.GetTypeName()}; it becomes "
                             "texCoord2f[]")
             prim.RemoveProperty(old.GetAttr().GetName())
@@ -195,7 +185,7 @@ class UsdScene:
             add_inherits(stage, instanced)
             seen_uv = proxy_uvs(stage, instanced["proxy"], name)
             if seen_uv is None or not np.array_equal(seen_uv, values[index]):
-                undo_instanced(stage, instanced, prim, pv)   # nothing of it left in the layer
+                undo_instanced(prim, pv)   # nothing of it left in the layer
                 return _refused(certs, "the instances do not compose the UVs authored on their "
                                        "class")
             warnings.append(f"instanced: the UVs are authored once on {instanced['class']}, "

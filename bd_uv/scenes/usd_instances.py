@@ -14,15 +14,16 @@ An instance inside another prototype (nested instancing) cannot be given the inh
 is: it is given it on its place under the outer prototype's class, which the outer instances
 inherit in turn.
 """
+import dataclasses
+
 import numpy as np
 
-from ..errors import SceneFileError
-from .model import SceneMesh
+from .usd_mesh import scene_mesh
 
 ROOT = "/_bd_uv_instanced"
 
 
-def prototype_meshes(stage, path, uv_name, errors, mesh_arrays):
+def prototype_meshes(stage, path, uv_name, errors):
     """One (SceneMesh, part) per mesh prim of each prototype of ``stage``.
 
     Parameters
@@ -31,7 +32,6 @@ def prototype_meshes(stage, path, uv_name, errors, mesh_arrays):
     path : str, the stage's file (for messages)
     uv_name : str or None, as for ``usd_mesh.mesh_arrays``
     errors : list of str, composition errors said on every mesh
-    mesh_arrays : ``usd_mesh.mesh_arrays``
 
     Returns
     -------
@@ -43,62 +43,62 @@ def prototype_meshes(stage, path, uv_name, errors, mesh_arrays):
     """
     from pxr import Sdf, Usd, UsdGeom
     protos = {str(p.GetPath()): k for k, p in enumerate(stage.GetPrototypes())}
-    out = []
+    found, out = {}, []
     for k, proto in enumerate(stage.GetPrototypes()):
         meshes = [p for p in Usd.PrimRange(proto) if p.IsA(UsdGeom.Mesh)]
         if not meshes:
             continue
         klass = f"{ROOT}/P{k}"
-        inherits, shown_root = _inherits(stage, proto, protos, Sdf)
-        n = len([1 for inst in proto.GetInstances()])
+        inherits, shown_root = _inherits(stage, proto, protos, Sdf, found)
+        n = len(proto.GetInstances())
         base = proto.GetPath()
         for mesh in meshes:
             rel = mesh.GetPath().MakeRelativePath(base)
             shown = str(Sdf.Path(shown_root).AppendPath(rel))
-            where = f"{path}: prim {shown}"
-            try:
-                arrays = mesh_arrays(UsdGeom.Mesh(mesh), where, uv_name, Usd)
-            except SceneFileError as exc:
-                why = str(exc).removeprefix(f"{where}: ")
-                out.append((SceneMesh(shown, None, {"prim": shown}, why, None, list(errors)),
-                            None))
+            read = scene_mesh(UsdGeom.Mesh(mesh), f"{path}: prim {shown}", shown, uv_name,
+                              errors, Usd)
+            if read is None:
                 continue
-            if arrays is None:
-                continue
-            m, part, info, warnings = arrays
-            info = {**info, "prim": shown, "instances": n}
-            part = {**part, "instanced": {
-                "class": str(Sdf.Path(klass).AppendPath(rel)), "root": klass,
-                "inherits": inherits, "proxy": shown}}
-            out.append((SceneMesh(shown, m, info, None, part["poly"], warnings + errors), part))
+            sm, part = read
+            if part is not None:
+                sm = dataclasses.replace(sm, info={**sm.info, "instances": n})
+                part = {**part, "instanced": {
+                    "class": str(Sdf.Path(klass).AppendPath(rel)), "root": klass,
+                    "inherits": inherits, "proxy": shown}}
+            out.append((sm, part))
     return out
 
 
-def _inherits(stage, proto, protos, Sdf):
+def _inherits(stage, proto, protos, Sdf, found):
     """The (prim path, class path) inherits that make every instance of ``proto`` compose its
-    class ``ROOT/P<k>``, and the path under which the report shows its prims.
+    class ``ROOT/P<k>``, and the path under which the report shows its prims; ``found`` keeps
+    each prototype's answer (an outer prototype is asked once per instance nested in it).
 
     An instance outside any prototype is given the inherit itself. One inside another prototype
     (nested instancing) cannot be: the inherit goes on its place under the outer prototype's
     class instead, and the outer prototype's instances are given that class the same way, as
     far out as the nesting goes."""
-    pairs, shown = [], None
-    klass = f"{ROOT}/P{protos[str(proto.GetPath())]}"
+    key = str(proto.GetPath())
+    if key in found:
+        return found[key]
+    pairs, shown = {}, None      # an ordered set of pairs
+    klass = f"{ROOT}/P{protos[key]}"
     for inst in sorted(proto.GetInstances(), key=lambda p: str(p.GetPath())):
         path = inst.GetPath()
         if not inst.IsInPrototype():
-            pairs.append((str(path), klass))
+            pairs[(str(path), klass)] = None
             shown = shown or str(path)
             continue
         outer_root = path.GetPrefixes()[0]             # the outer prototype: /__Prototype_<n>
         outer = stage.GetPrimAtPath(outer_root)
         rel = path.MakeRelativePath(outer_root)
         outer_class = f"{ROOT}/P{protos[str(outer_root)]}"
-        pairs.append((str(Sdf.Path(outer_class).AppendPath(rel)), klass))
-        more, outer_shown = _inherits(stage, outer, protos, Sdf)
-        pairs += [p for p in more if p not in pairs]
+        pairs[(str(Sdf.Path(outer_class).AppendPath(rel)), klass)] = None
+        more, outer_shown = _inherits(stage, outer, protos, Sdf, found)
+        pairs.update(dict.fromkeys(more))
         shown = shown or str(Sdf.Path(outer_shown).AppendPath(rel))
-    return pairs, shown
+    found[key] = list(pairs), shown
+    return found[key]
 
 
 def target_prim(stage, instanced):
@@ -130,10 +130,10 @@ def _class(stage, path):
     return stage.CreateClassPrim(path)
 
 
-def undo_instanced(stage, instanced, prim, pv):
-    """Take back what ``target_prim`` and ``add_inherits`` authored for one mesh: the primvar on
-    the class, and the inherit (which other meshes of the same prototype may still use: then
-    the instances keep it, harmless without opinions of this mesh)."""
+def undo_instanced(prim, pv):
+    """Take back the primvar ``pv`` authored on the class prim ``prim`` for one mesh. The
+    inherits stay: other meshes of the same prototype may use them, and without opinions of
+    this mesh they change nothing."""
     prim.RemoveProperty(pv.GetAttr().GetName())
     prim.RemoveProperty(pv.GetIndicesAttr().GetName())
 

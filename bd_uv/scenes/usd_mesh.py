@@ -8,6 +8,7 @@ import numpy as np
 
 from ..errors import SceneFileError
 from ..meshio import Mesh
+from .model import SceneMesh
 from .usd_uv_name import uv_primvar
 
 
@@ -194,3 +195,19 @@ def _existing_uv(mesh, uv_name, T, indices, n_points, where=""):
     if interp in (UsdGeom.Tokens.vertex, UsdGeom.Tokens.varying) and len(vals) == n_points:
         return vals[indices[T]]
     return None
+
+
+def scene_mesh(mesh, where, name, uv_name, errors, Usd):
+    """One UsdGeom.Mesh as the scene's (SceneMesh, write-back part), named ``name``: refused by
+    name (part None) when its values are malformed, the stage's other meshes read on; None for
+    an empty one (``mesh_arrays``). ``errors``: composition errors said on every mesh."""
+    try:
+        arrays = mesh_arrays(mesh, where, uv_name, Usd)
+    except SceneFileError as exc:
+        why = str(exc).removeprefix(f"{where}: ")   # the entry names the prim
+        return SceneMesh(name, None, {"prim": name}, why, None, list(errors)), None
+    if arrays is None:   # a placeholder a variant or payload fills: nothing to unwrap
+        return None
+    m, part, info, warnings = arrays
+    return (SceneMesh(name, m, {**info, "prim": name}, None, part["poly"], warnings + errors),
+            part)

@@ -26,7 +26,7 @@ import numpy as np
 
 from ..errors import (ClosedIslandError, DegenerateFacesError, InfeasibleError, InvalidMeshError,
                       NonFiniteError, OverlapError, SolverError, TopologyError)
-from ..mesh import check_arrays
+from ..mesh import TOO_LARGE, check_arrays
 from ..options import unwrap_options
 from ..repair import repair_mesh, twin_corners, zero_area_faces
 from ..unwrapping import one_disk
@@ -190,7 +190,7 @@ def result_on_input(res, rep, F, method):
             (rep.zero_area, DegenerateFacesError, "zero-area face(s)",
              "dissolve or merge them to unwrap them"),
             (rep.non_finite, NonFiniteError, "face(s) with NaN or infinite coordinates, or "
-             "coordinates beyond 1e60 (too large to measure),",
+             f"{TOO_LARGE},",
              "fix their vertices to unwrap them")):
         if not len(z):
             continue
