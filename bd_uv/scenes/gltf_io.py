@@ -24,6 +24,7 @@ COMPONENT = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 512
 COMPONENT_TYPE = {np.dtype(v).str: k for k, v in COMPONENT.items()}
 WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT2": 4, "MAT3": 9, "MAT4": 16}
 ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER = 34962, 34963
+ZERO_FILL_FLOOR = 1 << 16  # elements a data-less accessor may always have (see zero_fill_limit)
 MESHOPT = {"EXT_meshopt_compression", "KHR_meshopt_compression"}
 
 
@@ -49,6 +50,11 @@ class GltfFile:
             acc = self.doc["accessors"][index]
             dt = np.dtype(COMPONENT[acc["componentType"]]).newbyteorder("<")
             width, count = WIDTH[acc["type"]], int(acc["count"])
+            if "bufferView" not in acc and count > self.zero_fill_limit():
+                # zeros (with the sparse values put in): numpy's lazily zeroed pages would be
+                # written in full later, so a count the file cannot mean fills the memory
+                raise ValueError(f"it has no bufferView and {count} elements, more than the "
+                                 f"file's {self.zero_fill_limit()} bytes of buffers can describe")
             out = np.zeros((count, width), dtype=dt)
             if "bufferView" in acc:
                 out[:] = self._view(acc["bufferView"], acc.get("byteOffset", 0), count, width, dt)
@@ -67,6 +73,13 @@ class GltfFile:
         except (KeyError, IndexError, TypeError, ValueError) as exc:
             raise SceneFileError(f"{self.path}: {where}: accessor {index} cannot be read "
                                  f"({type(exc).__name__}: {exc})") from exc
+
+    def zero_fill_limit(self):
+        """Elements an accessor without a bufferView may have: every other accessor's element
+        takes at least one byte of the buffers, so a zero-filled one (its few sparse values
+        put in) larger than all of them together, or than ``ZERO_FILL_FLOOR``, describes no
+        mesh (usually a corrupted count)."""
+        return max(sum(len(b) for b in self.buffers), ZERO_FILL_FLOOR)
 
     def _view(self, view_index, offset, count, width, dt):
         view = self.doc["bufferViews"][view_index]

@@ -39,7 +39,7 @@ EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "40"))
 SEAMS = ("needed", "needed", "none", "uv", "auto")
 BREAKAGES = ("none", "index range", "position range", "index ctype", "position ctype",
              "sparse position", "no indices", "degenerate", "nan position", "view range",
-             "buffer short", "bad mode", "inf position", "meshopt", "draco")
+             "buffer short", "bad mode", "inf position", "meshopt", "draco", "zero-filled count")
 
 
 def _scene(breakage, copies, seed):
@@ -93,6 +93,9 @@ def _scene(breakage, copies, seed):
             "EXT_meshopt_compression": {"buffer": 0, "byteOffset": 0, "byteLength": 4,
                                         "mode": "TRIANGLES", "byteStride": 2, "count": n // 2}})
         b.doc["extensionsUsed"] = b.doc["extensionsRequired"] = ["EXT_meshopt_compression"]
+    elif breakage == "zero-filled count":   # no bufferView (zeros), a count a corruption left
+        acc[pos].pop("bufferView")
+        acc[pos]["count"] = int(rng.choice([len(V), 10 ** 5, 10 ** 9, 10 ** 12, 2 ** 62]))
     elif breakage == "draco":
         prim["extensions"] = {"KHR_draco_mesh_compression": {
             "bufferView": acc[pos]["bufferView"], "attributes": {"POSITION": 0}}}
@@ -195,6 +198,12 @@ def _check_written(out, report):
          seams="needed")
 @example(breakage="meshopt", copies=1, glb=False, seed=0, cut=None, flips=[], spoil="its .bin",
          seams="auto")
+# an accessor with no bufferView (zeros) and a count of 10^9 or 10^12 was numpy's MemoryError out
+# of the reader, a traceback (a few GB would have been allocated and filled): seeds 4 and 6
+@example(breakage="zero-filled count", copies=1, glb=False, seed=4, cut=None, flips=[],
+         spoil="scene", seams="needed")
+@example(breakage="zero-filled count", copies=2, glb=True, seed=6, cut=None, flips=[],
+         spoil="scene", seams="needed")
 @given(breakage=st.sampled_from(BREAKAGES), copies=st.integers(1, 40), glb=st.booleans(),
        seed=st.integers(0, 2 ** 16), cut=st.one_of(st.none(), st.floats(0.0, 0.999)),
        flips=st.lists(st.tuples(st.floats(0, 0.999), st.integers(1, 255)), max_size=3),

@@ -194,6 +194,10 @@ def test_meshopt_fallback_buffer_without_bytes_is_refused_by_name(tmp_path, caps
      ["'Rock'", "node /RockNode", "primitive 0", "indices"]),
     (lambda d: d["meshes"][0]["primitives"][0]["attributes"].update(POSITION=99),
      ["'Rock'", "node /RockNode", "primitive 0", "accessor 99"]),
+    # a corrupted count on a zero-filled accessor: named, not allocated (12 TB: a traceback of
+    # numpy's MemoryError before; a count of a few GB would have filled the memory)
+    (lambda d: (d["accessors"][0].pop("bufferView"), d["accessors"][0].update(count=10**12)),
+     ["'Rock'", "node /RockNode", "primitive 0", "accessor 0", "no bufferView"]),
 ])
 def test_malformed_file_names_the_mesh(tmp_path, capsys, breakage, words):
     """A malformed mesh is refused by name (exit 1, as a Draco one); being the only mesh,
