@@ -221,9 +221,14 @@ class LiveSession:
         if T.shape != (len(self.pins), 2) or not np.all(np.isfinite(T)):
             raise OptionError("targets", f"targets must be ({len(self.pins)}, 2) finite: one "
                               "per pin")
-        T = self._stored(T)
         try:
-            U, check, its = self._solve(T)
+            # targets dragged out to the overflow range (1e300; beyond float32 storage's 3.4e38)
+            # give inf and NaN on the way: such a map is not certified and the frame falls back
+            # to the nearest certified one (step 3 of _solve), so numpy's warnings only spoke
+            # of arithmetic the certificate already refuses
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                T = self._stored(T)
+                U, check, its = self._solve(T)
         except CancelledError:
             self._cancel.clear()
             raise
