@@ -123,7 +123,6 @@ def _first_use(names):
 def uv_seams(F, corner_uv):
     """Edges whose two faces disagree on the UV of either end, as (s,2) vertex pairs."""
     F = np.asarray(F, dtype=np.int64)
-    m = len(F)
     n = int(F.max()) + 1
     a = F.ravel()
     b = np.roll(F, -1, axis=1).ravel()

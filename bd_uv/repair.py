@@ -227,7 +227,7 @@ def repair_mesh(V, F, precision=None):
     InvalidMeshError for arrays that are not a mesh (``mesh.check_arrays``)
     """
     V, F = check_arrays(V, F)
-    n, m = len(V), len(F)
+    n = len(V)
     zero = zero_area_faces(V, F, precision)
     bad = ~measurable(V[F])
     twin = duplicate_twins(F, skip=zero | bad)
