@@ -10,7 +10,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components, shortest_path
 
-from .overlap import island_overlaps, uv_boundary
+from .overlap import island_overlaps
+from .uv_boundary import uv_boundary
 
 
 def _overlap_free(F, uv, faces):

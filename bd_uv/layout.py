@@ -11,7 +11,8 @@ import numpy as np
 
 from .certificate import certificate_totals, certify_islands
 from .cut import split_overlapping
-from .overlap import _bits, _row_ids, layout_overlaps
+from .overlap import layout_overlaps
+from .uv_boundary import exact_bits, row_ids
 from .pack import MARGIN, island_boxes, pack_islands
 from .repair import twin_corners
 
@@ -65,7 +66,7 @@ class Layout:
             return np.zeros((0, 2)), F_uv
         uv = self.corner_uv[written].reshape(-1, 2)
         isl = np.repeat(self.face_island[written], 3)
-        ids = _row_ids(isl, F[written].ravel(), _bits(uv[:, 0]), _bits(uv[:, 1]))
+        ids = row_ids(isl, F[written].ravel(), exact_bits(uv[:, 0]), exact_bits(uv[:, 1]))
         table = np.zeros((int(ids.max()) + 1, 2))
         table[ids] = uv
         F_uv[written] = ids.reshape(-1, 3)

@@ -22,7 +22,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..energies import jacobian_operators
-from ..overlap import Boundary, _loops, _winding_ok, crossing_pairs
+from ..overlap import _loops, _winding_ok, crossing_pairs
+from ..uv_boundary import Boundary
 from ..segments import segments_meet
 
 __all__ = ["FrameCheck", "FrameCertificate", "boundary_half_edges"]

@@ -12,7 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..overlap import layout_overlaps, uv_boundary
+from ..overlap import layout_overlaps
+from ..uv_boundary import uv_boundary
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import PackError
-from ..overlap import uv_boundary
+from ..uv_boundary import uv_boundary
 from .square import DENSITY_GUESS
 
 TOL_PX = 0.1   # outline simplification, in texels: the separation grows by twice this

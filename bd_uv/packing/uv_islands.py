@@ -6,7 +6,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 
-from ..overlap import uv_boundary
+from ..uv_boundary import uv_boundary
 
 
 def uv_islands(F, corner_uv):

@@ -8,7 +8,7 @@ are known, and its boundary half-edges in order along the one loop. From the cor
 1. every face's Jacobian (``metrics.face_jacobians``' arithmetic on the faces' gradient
    operators), its conformal distortion and signed UV area; no face flipped or collapsed, the max
    within the bound (``certificate.RTOL``);
-2. the UV boundary (``overlap.uv_boundary``): an interior edge's two half-edges must carry the same
+2. the UV boundary (``uv_boundary.uv_boundary``): an interior edge's two half-edges must carry the same
    UVs at both ends, so the boundary segments are the loop's, and each must end where the next
    starts: one closed polygon;
 3. the polygon is simple (``overlap.island_overlaps``, Lipman 2012, Theorems 5.1-5.2): no UV point

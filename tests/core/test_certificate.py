@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from bd_uv.certificate import certificate_totals, certify_islands
-from bd_uv.overlap import island_overlaps, layout_overlaps, uv_boundary
+from bd_uv.overlap import island_overlaps, layout_overlaps
+from bd_uv.uv_boundary import uv_boundary
 from overlap_shapes import figure8_uv, overlapping_triangle_pairs, spiral_uv
 
 
