@@ -16,7 +16,6 @@ polygons. Every decision on floats is made on rounded values with ties broken by
 same input gives the same charts in every run and process.
 """
 import dataclasses
-import threading
 import time
 
 import numpy as np
@@ -33,7 +32,6 @@ from .edges import edge_table
 from .measure import measure_charts, splice
 from .merge import chart_key, merge_charts
 from .orders import Orders
-from . import parallel
 from .pack_shape import split_for_packing
 from .bisect import FaceCentroids, bisect, edge_weight, polygon_edges, split_deep
 from .topology import charts, cut_mesh
@@ -153,35 +151,21 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     orders = Orders.of(n, m)                # the LSCM and Fiedler systems' orders
     failed = {}                             # max stretch of disks whose map failed, by chart
     release_memory(m)                       # the set-up's temporaries
-    main = threading.get_ident()
-
-    def step(rounds, frozen, orders):
-        """One round of the search on the faces not ``frozen``; True when it changed a seam."""
+    rounds = 0
+    for rounds in range(1, MAX_ROUNDS + 1):
         if cancel is not None and cancel.is_set():
             raise CancelledError("cancelled while placing seams")
-        if progress is not None and threading.get_ident() == main:
+        if progress is not None:
             progress(0.0, f"seams: round {rounds}, {int(frozen.sum())}/{m} faces in charts")
         # The charts the given seams make (round 1) keep a looser mean: a chart found by a
         # search on other triangles of the same polygons (the Blender operator's second pass)
         # must not be cut again for triangulation noise in its mean.
-        return _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag,
-                       cap=mean_cap(C) + GIVEN_SLACK * (mean_cap(C) - 1.0)
-                       if rounds == 1 else mean_cap(C), known=known, geom=geom,
-                       failed=failed, orders=orders)
-    rounds, forked = 0, False
-    while rounds < MAX_ROUNDS:
-        rounds += 1
-        if not step(rounds, frozen, orders):
+        changed = _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag,
+                          cap=mean_cap(C) + GIVEN_SLACK * (mean_cap(C) - 1.0)
+                          if rounds == 1 else mean_cap(C), known=known, geom=geom,
+                          failed=failed, orders=orders)
+        if not changed:
             break
-        # Two groups of charts large enough: their large rounds on two cores.
-        masks = (parallel.groups(F, E, cut, frozen)
-                 if not forked and rounds <= parallel.ROUNDS and m <= parallel.MESH_FACES
-                 and not invalid.any() else None)
-        if masks is not None:
-            forked = True
-            rounds, more = parallel.search(masks, frozen, orders, rounds, MAX_ROUNDS, step)
-            if not more:
-                break
     atlas = np.zeros(len(E.ends), dtype=bool)   # the seams added for the atlas
     kept = []
     chs = None                              # the charts of ``cut``, where known

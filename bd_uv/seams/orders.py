@@ -148,31 +148,6 @@ class Orders:
         self.block[faces] = self.blocks
         self.blocks += 1
 
-    def copy(self):
-        """An independent copy (``parallel.search``: one for each group of charts searched
-        in a thread of its own, so no thread's keys depend on the other's timing)."""
-        o = Orders.__new__(Orders)
-        o.__dict__.update({k: v.copy() if isinstance(v, np.ndarray) else v
-                           for k, v in self.__dict__.items()})
-        return o
-
-    def join(self, a, b):
-        """Take back the keys and blocks copies ``a`` and ``b`` of this one gave (``copy``), the
-        same way whatever the threads' timing: ``b``'s new keys and blocks numbered after
-        ``a``'s, a vertex both gave a key (where their charts meet) keeping ``a``'s."""
-        g0, b0 = self.given, self.blocks
-        kb = np.where(b.key >= g0, b.key + (a.given - g0), b.key)
-        self.key = np.where(a.key != self.key, a.key, np.where(b.key != self.key, kb, self.key))
-        for name in ("block", "face_block"):
-            x, xa, xb = getattr(self, name), getattr(a, name), getattr(b, name)
-            shifted = np.where(xb >= b0, xb + (a.blocks - b0), xb).astype(x.dtype)
-            setattr(self, name, np.where(xa != x, xa, np.where(xb != x, shifted, x)))
-        self.face_key = np.where(a.face_key != self.face_key, a.face_key,
-                                 b.face_key).astype(self.face_key.dtype)
-        self.given = a.given + (b.given - g0)
-        self.blocks = a.blocks + (b.blocks - b0)
-        self.fill = max(a.fill, b.fill)
-
     def _fresh(self, charts):
         """AMD of the charts' vertex graphs (one block-diagonal pattern); their vertices keyed
         in its order (the batch after every key so far), each chart's faces one block."""

@@ -15,15 +15,6 @@ import numpy as np
 
 _pool = None
 _lock = threading.Lock()
-# Set in a thread that already runs beside another on its own share of the work
-# (``seams.parallel``): its blocks are not split again (``halves``).
-_local = threading.local()
-
-
-def beside(value=True):
-    """Mark the calling thread as running beside another one (``halves`` then splits nothing:
-    both cores are busy already)."""
-    _local.beside = value
 
 
 def workers():
@@ -72,7 +63,7 @@ def halves(sizes, least):
     -------
     int j: blocks ``[:j]`` and ``[j:]``, or None
     """
-    if workers() < 2 or len(sizes) < 2 or getattr(_local, "beside", False):
+    if workers() < 2 or len(sizes) < 2:
         return None
     c = np.cumsum(np.asarray(sizes, dtype=np.float64))
     j = int(np.argmin(np.abs(c[:-1] - c[-1] / 2))) + 1
