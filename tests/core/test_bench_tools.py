@@ -123,3 +123,18 @@ def test_done_when_verdicts():
     assert verdict("C=5: median time") == "FAIL"             # median(0.9, 4.0) = 2.45
     assert verdict("C=5: no mesh above 3x") == "FAIL"
     assert "n/a (initial map flips)" in text
+
+
+def test_auto_quality_grids_are_the_test_suites_grids():
+    """``bench_auto_quality``'s height-field grids are the surfaces the earlier passes' quality
+    tables used (``tests/core/helpers.grid``), vertex for vertex and triangle for triangle."""
+    import bench_auto_quality
+    from helpers import grid
+
+    for name, (nx, ny, z) in bench_auto_quality.GRIDS.items():
+        V, F = bench_auto_quality.load(name)
+        V0, F0 = grid(nx, ny, z=z)
+        assert np.array_equal(V, V0) and np.array_equal(F, F0), name
+        assert len(F) == 2 * (nx - 1) * (ny - 1)
+    assert [len(bench_auto_quality.load(n)[1]) for n in ("grid8", "grid9", "grid12")] == \
+        [98, 112, 242]
