@@ -32,7 +32,8 @@ class LayoutCertificate:
     overlaps : (p,2) int64, chart pairs that overlap
     coverage : float, chart area over the area of the tiles used
     tiles : list of int, UDIM numbers used
-    density_spread : float, largest over smallest texel density
+    density_spread : float, largest over smallest texel density (inf: a chart with 3D area has
+        no UV area as stored)
     """
     certified: bool
     reason: str
@@ -53,7 +54,9 @@ class LayoutCertificate:
                     padding_px=self.padding_px,
                     least_gap_px=None if not np.isfinite(gap) else round(float(gap), 4),
                     edge_gap_px=round(float(self.edge_gap_px), 4), coverage=round(self.coverage, 5),
-                    tiles=self.tiles, density_spread=round(self.density_spread, 6),
+                    tiles=self.tiles,
+                    density_spread=None if not np.isfinite(self.density_spread)
+                    else round(self.density_spread, 6),
                     overlapping_pairs=int(len(self.overlaps)))
 
 
@@ -137,6 +140,9 @@ def layout_certificate(V, F, corner_uv, face_island, tile, resolution, padding_p
         reasons.append(f"least gap {gap:.3f} px < padding {padding_px:g} px")
     if edge < 0.5 * padding_px:
         reasons.append(f"a chart is {edge:.3f} px from its tile's edge < {0.5 * padding_px:g} px")
-    spread = float(dens.max() / dens.min()) if len(dens) else 1.0
+    # a chart whose UV area is 0 as stored (a degenerate island of any UV map, or one
+    # collapsed by float32 storage) has texel density 0: the spread is unbounded
+    spread = (1.0 if not len(dens) else np.inf if dens.min() <= 0
+              else float(dens.max() / dens.min()))
     return LayoutCertificate(not reasons, "; ".join(reasons), int(resolution), float(padding_px),
                              gap, float(edge), inside, overlaps, coverage, tiles, spread)

@@ -161,6 +161,28 @@ def test_certificate_sees_an_overlap_and_a_short_gap():
     assert not cert.certified and "least gap" in cert.reason
 
 
+def test_a_chart_with_no_uv_area_has_an_unbounded_density_spread():
+    """A chart whose UVs are collapsed onto a line (any UV map's degenerate island) has texel
+    density 0: the spread is infinite, said as null in the JSON report (not Infinity, which
+    strict JSON readers refuse), and with no divide-by-zero warning."""
+    import json
+    import warnings
+    V, F, uv, lab = chart_set("boxes", 3, seed=1)
+    packed = pack_islands(V, F, uv, lab, PackOptions(solves=1))
+    out = packed.corner_uv.copy()
+    flat = out[lab == 2]
+    flat[..., 1] = flat[..., 1].mean()                      # chart 2: zero UV area
+    out[lab == 2] = flat
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        cert = layout_certificate(V, F, out, lab, packed.tile, 1024, 4)
+    assert cert.density_spread == np.inf
+    summary = json.loads(json.dumps(cert.summary(), allow_nan=False))
+    assert summary["density_spread"] is None
+    fine = layout_certificate(V, F, packed.corner_uv, lab, packed.tile, 1024, 4)
+    assert 1.0 <= fine.density_spread < 1.001 and fine.summary()["density_spread"] >= 1.0
+
+
 def test_uv_islands_follow_shared_uvs_not_shared_vertices():
     # two triangles sharing mesh edge (1, 2): one island when the UVs agree along it, two when not
     F = np.array([[0, 1, 2], [2, 1, 3]])
