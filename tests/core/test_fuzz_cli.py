@@ -15,7 +15,6 @@ deeper.
 """
 import contextlib
 import io
-import json
 import os
 import pathlib
 import re
@@ -28,7 +27,7 @@ from hypothesis import strategies as st
 
 from bd_uv.cli import main
 from overlap_shapes import overlapping_triangle_pairs
-from unwrap_contract import DATA, distortion_and_flips, read_off
+from unwrap_contract import DATA, distortion_and_flips, read_off, strict_json
 
 EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "25"))
 V3, F3 = read_off(DATA / "three_peaks.off")
@@ -232,7 +231,7 @@ def check_written(inp_mesh, out, report, stdout, packed):
     D, flipped = distortion_and_flips(V, F[has], uv)
     assert not flipped.any()
     if report is not None and report.exists():
-        rep = json.loads(report.read_text())
+        rep = strict_json(report.read_text())
         bound = max(e["bound_certified"] for e in rep["islands"] if e["status"] == "certified")
         slack = 2e-6
     else:                                   # the report line prints 4 significant digits

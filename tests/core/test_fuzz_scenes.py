@@ -17,7 +17,6 @@ deeper.
 import contextlib
 import hashlib
 import io
-import json
 import os
 import tempfile
 
@@ -28,6 +27,7 @@ from hypothesis import strategies as st
 from bd_uv.cli import main
 from bd_uv.errors import BDError
 from bd_uv.scenes import read_scene
+from unwrap_contract import strict_json
 from gltf_build import Builder, Reader, seamed_grid
 from usd_build import quad_grid
 from helpers import float32_flat, reference_distortion
@@ -232,8 +232,8 @@ def test_scene_files_never_crash_or_write_an_uncertified_result(breakage, copies
             assert any(w in msg for w in ("RockNode", "Rock", "scene", "buffer", "glTF",
                                           "GLB", "file")), msg
         if os.path.exists(out):
-            _check_written(out, json.loads(open(rep).read()))
-            assert any(m.get("output") for m in json.loads(open(rep).read())["meshes"]), \
+            _check_written(out, strict_json(open(rep).read()))
+            assert any(m.get("output") for m in strict_json(open(rep).read())["meshes"]), \
                 "a file at -o holds at least one certified mesh"
         if breakage in ("meshopt", "draco") and not flips and cut is None \
                 and spoil != "its .bin gone":
@@ -423,4 +423,4 @@ def test_usd_stages_never_crash_or_write_an_uncertified_result(breakage, seed, c
         if rc != 0 and breakage not in ("none", "empty stage") and not flips and cut is None:
             assert "/World/Panel" in msg or "mesh" in msg, msg
         if os.path.exists(out):
-            _check_stage(out, json.loads(open(rep).read()))
+            _check_stage(out, strict_json(open(rep).read()))

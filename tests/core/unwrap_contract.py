@@ -23,6 +23,14 @@ ISLAND_ERRORS = (bd_uv.ClosedIslandError, bd_uv.NonManifoldError, bd_uv.Degenera
                  bd_uv.DuplicateFacesError, bd_uv.InfeasibleError, bd_uv.SolverError)
 
 
+def strict_json(text):
+    """A report's text parsed as strict JSON: NaN and Infinity (Python's json writes them,
+    strict readers refuse them) fail the test, naming the value."""
+    def refuse(constant):
+        raise AssertionError(f"the JSON report holds {constant}, which is not JSON")
+    return json.loads(text, parse_constant=refuse)
+
+
 def read_off(path):
     """Vertices (n,3) float64 and triangles (m,3) int64 of an OFF file (own reader, no trimesh)."""
     words = []
