@@ -117,7 +117,7 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
         # nested too when a search time or more solves are asked for, the smaller square kept
         found = few_square(charts.outlines, options, tol)
         if found is None or options.solve_seconds is not None or options.solves > 1:
-            nested = square_layout(charts.outlines, options, tol, seconds)
+            nested = square_layout(charts.outlines, options, tol, seconds, charts.exact)
             if found is None or nested[1] < found[1]:
                 found = nested
             else:

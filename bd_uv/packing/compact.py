@@ -306,6 +306,20 @@ def _stalled(history, now, side, window):
     return bool(before) and before[-1] < side * (1 + STALL_GAIN)
 
 
+def refitted(outlines, placement, options, tol):
+    """The layout of other outlines of the same charts (the exact ones in the frame of the
+    simplified ones that were placed) moved as one to the low corner, in the square of their
+    extent plus the edges: (Placement, side), or None when they do not keep the padding
+    there."""
+    lo, hi = placed_bounds(outlines, placement)
+    low = lo.min(axis=0)
+    side = (float((hi.max(axis=0) - low).max()) + 2 * tol) / (1 - options.padding) * (1 + 1e-12)
+    shift = placement.shift - low + (0.5 * options.padding * side + tol)
+    if not _fits(outlines, placement.angle, shift, side, options.padding, options.padding, tol):
+        return None
+    return Placement(placement.angle, shift, side), side
+
+
 def _anchored(outlines, angle, shift, S, pad, pm, tol):
     """The layout moved as one to the square's low corner and the side cut to its extent, where
     that checks exactly; else (shift, S) as given.
