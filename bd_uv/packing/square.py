@@ -27,7 +27,7 @@ import time
 import numpy as np
 
 from ..errors import PackError
-from .compact import compact_square, refitted
+from .compact import compact_square, on_exact
 from .nest import (FIT, Placement, _area, _strip, least_squares, nest, rotations,
                    single_layout)
 
@@ -46,13 +46,6 @@ COMPACT_SHARE = 0.5     # of the time: compaction of the best layout found (.com
 # above this many charts a compaction step (one linear program over every chart) is too slow to
 # pay: measured under load ~11, 400 charts 4 steps in 10 s (+0.6 % coverage), 2,000 charts none
 COMPACT_MAX_CHARTS = 200
-# the compaction moves the charts' exact outlines (not the nesting's, simplified within tol:
-# 2 tol more in every gap and tol at the edges), with this fraction of tol kept as the margin
-# float32's rounding of the stored UVs needs; the exact outlines have few more points (cow
-# 1,470 against 1,415, camel 2,476 against 2,155, suzanne the same). From the same compacted
-# layouts, 10 programs more on the exact outlines against the simplified: +0.0005-0.0013
-# coverage on suzanne, cow and eight, seeds 0-3
-EXACT_TOL = 0.05
 # up to this many charts each solve runs on one thread (spyrrow's ``num_workers``): on so few,
 # spyrrow overshoots its time (the cube's 3 charts asked 0.05-0.3 s take 0.5-1.0 s wall) and a
 # second worker only adds CPU; measured on seven meshes of 2-3 charts, seeds 0-9: the same
@@ -128,7 +121,7 @@ def square_layout(outlines, options, tol, seconds, exact=None):
     seconds : float, the time to take (each solve's first placement is not bounded: it is
         left out of the nesting's share, measured as about ``START_PER_CHART`` seconds a chart)
     exact : list of (m_i,2) float arrays, optional: the outlines before their simplification
-        (same frame), compacted instead of the simplified ones with ``EXACT_TOL`` tol
+        (same frame), compacted instead of the simplified ones (:func:`.compact.on_exact`)
 
     Returns
     -------
@@ -206,9 +199,7 @@ def square_layout(outlines, options, tol, seconds, exact=None):
     # (no layout is smaller than the widest chart's least square with the padding; sampled
     # every 0.05 degrees, a hair above it)
     fine = float(least_squares([outlines[int(np.argmax(boxes))]], options, step=0.05)[0][0])
-    start = refitted(exact, best[0], options, EXACT_TOL * tol) if exact is not None else None
-    if start is not None:
-        outlines, tol = exact, EXACT_TOL * tol
-    pl, side, _ = compact_square(outlines, *(start or best), options, tol, share * seconds,
+    outlines, start, tol = on_exact(outlines, exact, *best, options, tol)
+    pl, side, _ = compact_square(outlines, *start, options, tol, share * seconds,
                                  least_side=(fine + 2 * tol) / (1 - options.padding))
     return pl, side, solves
