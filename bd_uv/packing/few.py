@@ -28,7 +28,8 @@ import itertools
 
 import numpy as np
 
-from .compact import compact_square, on_exact
+from .compact import compact_square
+from .refit import on_exact
 from .drops import Turns, strip_fills
 from .nest import Placement, rotations
 

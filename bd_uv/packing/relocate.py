@@ -53,7 +53,6 @@ def relocate(outlines, angle, shift, side, separation, options, n=CELLS):
     angle, shift (copies, the moved charts changed) and the number of charts moved
     """
     import scipy.fft as sf
-    k = len(outlines)
     h = 1.0 / n
     reach = 0.5 * separation / side + h * np.sqrt(0.5)
     angle, shift = angle.astype(np.float64).copy(), shift.astype(np.float64).copy()

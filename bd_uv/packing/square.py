@@ -27,7 +27,8 @@ import time
 import numpy as np
 
 from ..errors import PackError
-from .compact import compact_square, on_exact
+from .compact import compact_square
+from .refit import on_exact
 from .nest import (FIT, Placement, _area, _strip, least_squares, nest, rotations,
                    single_layout)
 
