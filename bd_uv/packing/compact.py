@@ -175,7 +175,10 @@ def compact_square(outlines, placement, side, options, tol, seconds, max_program
                    least_side=0.0):
     """Shrink a square layout by compaction steps for at most ``seconds`` (or until the step
     falls below ``LEAST_STEP`` of the side: no program gains, or no move passes the check; or
-    until the side is within ``NEAR_LEAST`` of ``least_side``).
+    until the side is within ``NEAR_LEAST`` of ``least_side``). In a run bounded by time, at
+    ``RELOCATE_AT`` of it (or at a stall or convergence before, and at later ones) the small
+    charts against the square's edges are moved into the free space deepest inside it
+    (:func:`.relocate.relocate`, checked exactly) and the steps go on from there.
 
     Parameters
     ----------
