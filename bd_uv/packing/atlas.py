@@ -115,9 +115,9 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
         f = 1.0
         # 2-5 charts: laid out without spyrrow (.few); else (or when it finds none) nested, and
         # nested too when a search time or more solves are asked for, the smaller square kept
-        found = few_square(charts.outlines, options, tol)
+        found = few_square(charts.outlines, options, tol, charts.exact)
         if found is None or options.solve_seconds is not None or options.solves > 1:
-            nested = square_layout(charts.outlines, options, tol, seconds)
+            nested = square_layout(charts.outlines, options, tol, seconds, charts.exact)
             if found is None or nested[1] < found[1]:
                 found = nested
             else:

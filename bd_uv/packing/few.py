@@ -31,6 +31,7 @@ import numpy as np
 from .compact import compact_square
 from .drops import Turns, strip_fills
 from .nest import Placement, rotations
+from .refit import on_exact
 
 # up to this many charts. Measured (seeds 0-2, load 9-13, subsets of eight's 6 and face's 7
 # charts): 5 charts, mean coverage 0.609 / 0.595 / 0.658 against spyrrow's 0.594 / 0.548 / 0.623
@@ -102,14 +103,15 @@ def _grown(outlines, angles, grow):
     return out
 
 
-def few_square(outlines, options, tol):
+def few_square(outlines, options, tol, exact=None):
     """The smallest square found for 2 to ``FEW_MAX`` outlines: :func:`few_layout`, then
-    ``COMPACT_PROGRAMS`` compaction steps (:func:`.compact.compact_square`). Returns
-    (Placement with shift to the square's corner, side, 0 solves), or None (another count of
-    charts, or no layout found)."""
+    ``COMPACT_PROGRAMS`` compaction steps (:func:`.compact.compact_square`; of the ``exact``
+    outlines when given, :func:`.refit.on_exact`). Returns (Placement with shift to the
+    square's corner, side, 0 solves), or None (another count of charts, or no layout found)."""
     found = few_layout(outlines, options, tol)
     if found is None:
         return None
+    outlines, found, tol = on_exact(outlines, exact, *found, options, tol)
     pl, side, _ = compact_square(outlines, *found, options, tol, np.inf,
                                  max_programs=COMPACT_PROGRAMS)
     return pl, side, 0

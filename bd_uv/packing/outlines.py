@@ -29,6 +29,8 @@ class Charts:
     area : (k,) float64, each chart's UV area after scaling (= its 3D area)
     outlines : list of (n_i,2) float64, each chart's simplified outer outline, counter-clockwise,
         centred on ``centre``
+    exact : list of (m_i,2) float64, each chart's outer outline before the simplification, in
+        the same frame (the simplified one keeps a subset of its points)
     centre : (k,2) float64, the point of each chart the outline is centred on
     """
     uv: np.ndarray
@@ -36,6 +38,7 @@ class Charts:
     area: np.ndarray
     outlines: list
     centre: np.ndarray
+    exact: list
 
 
 def _areas(P):
@@ -103,7 +106,7 @@ def chart_outlines(V, F, corner_uv, face_island, n_charts, options, tol_px=TOL_P
     order = np.argsort(bd.island, kind="stable")
     cuts = np.searchsorted(bd.island[order], np.arange(n_charts + 1))
     segs = shapely.linestrings(np.stack([bd.p, bd.q], axis=1)[order])
-    outlines, centre = [], np.zeros((n_charts, 2))
+    outlines, exact, centre = [], [], np.zeros((n_charts, 2))
     for i in range(n_charts):  # per chart
         polys = shapely.get_parts(shapely.polygonize(segs[cuts[i]:cuts[i + 1]]))
         # the outer ring encloses the most (a hole's own face can have more area than the chart)
@@ -116,4 +119,6 @@ def chart_outlines(V, F, corner_uv, face_island, n_charts, options, tol_px=TOL_P
         lo, hi = xy.min(axis=0), xy.max(axis=0)
         centre[i] = 0.5 * (lo + hi)
         outlines.append(xy - centre[i])
-    return Charts(out, lab, A3, outlines, centre), tol
+        exact.append(np.asarray(shapely.get_coordinates(shapely.orient_polygons(
+            shapely.Polygon(outer.exterior))))[:-1] - centre[i])
+    return Charts(out, lab, A3, outlines, centre, exact), tol

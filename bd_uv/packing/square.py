@@ -28,6 +28,7 @@ import numpy as np
 
 from ..errors import PackError
 from .compact import compact_square
+from .refit import on_exact
 from .nest import (FIT, Placement, _area, _strip, least_squares, nest, rotations,
                    single_layout)
 
@@ -98,7 +99,7 @@ def _solve_all(outlines, sides, options, tol, seconds, headroom=HEADROOM):
     return out, (refused[-1] if refused else None)
 
 
-def square_layout(outlines, options, tol, seconds):
+def square_layout(outlines, options, tol, seconds, exact=None):
     """The smallest square found that holds every outline with the padding.
 
     The padding scales with the square (it is in texels). A solve packs a strip of height H for
@@ -120,6 +121,8 @@ def square_layout(outlines, options, tol, seconds):
     tol : float, outline simplification tolerance
     seconds : float, the time to take (each solve's first placement is not bounded: it is
         left out of the nesting's share, measured as about ``START_PER_CHART`` seconds a chart)
+    exact : list of (m_i,2) float arrays, optional: the outlines before their simplification
+        (same frame), compacted instead of the simplified ones (:func:`.compact.on_exact`)
 
     Returns
     -------
@@ -197,6 +200,7 @@ def square_layout(outlines, options, tol, seconds):
     # (no layout is smaller than the widest chart's least square with the padding; sampled
     # every 0.05 degrees, a hair above it)
     fine = float(least_squares([outlines[int(np.argmax(boxes))]], options, step=0.05)[0][0])
-    pl, side, _ = compact_square(outlines, best[0], best[1], options, tol, share * seconds,
+    outlines, start, tol = on_exact(outlines, exact, *best, options, tol)
+    pl, side, _ = compact_square(outlines, *start, options, tol, share * seconds,
                                  least_side=(fine + 2 * tol) / (1 - options.padding))
     return pl, side, solves
