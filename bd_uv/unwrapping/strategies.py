@@ -11,11 +11,9 @@ import numpy as np
 
 from ..errors import InfeasibleError
 from ..frames import frames_from_map
-from ..solvers.bound_search import BoundSearch
-from ..solvers.ordered_ldl import vertex_ranks
-from .bounded import bend, formulate, guaranteed_bound, start_for_solve
+from .along import golden
+from .bounded import bend, formulate, guaranteed_bound, search, start_for_solve
 from .initial import Start
-from .problem import Cancelled
 
 # Minimising C stops after a Dinkelbach step that lowers C - 1 by less than this share of it.
 # Measured against C* = where 24 steps end: mushroom 1.12375 -> 1.10996 (11 %, C* 1.10980),
@@ -39,8 +37,8 @@ def minimise(prob, start, limit, budget, flags, report, t0):
     is at hand (issue 21).
 
     A flip-free map bounds C* from above: the start, bent into C = 5 when it flips. From it
-    ``search`` lowers the bound by ADMM onto F_C with frames (``solvers.bound_search``: one
-    factorisation for every C). Conic programs run only where they are the only way or were
+    ``bounded.search`` lowers the bound by ADMM onto F_C with frames (``solvers.bound_search``:
+    one factorisation for every C). Conic programs run only where they are the only way or were
     asked for:
     - no flip-free map at hand: ``first_certified`` searches C upwards by energy solves, then
       Dinkelbach steps lower it (``ratio_step``);
@@ -113,37 +111,6 @@ def minimise(prob, start, limit, budget, flags, report, t0):
     return best + (start.name,)
 
 
-def search(prob, u, report, budget, flags, t0):
-    """Lower the bound of a flip-free map ``u`` by ADMM onto F_C with frames
-    (``solvers.bound_search``), holding the pins (or one boundary vertex, where ``u`` has it).
-    Returns (the best map, its max distortion); flags "time_budget_exhausted" when the budget
-    stopped it."""
-    if len(prob.pin_idx) >= prob.nv:
-        return u, prob.distortion(u)
-    t = time.perf_counter()
-    fixed = prob.pin_idx if len(prob.pin_idx) else prob.island.loops[0][:1]
-    u = u.copy()
-    if len(prob.pin_idx):
-        u[prob.pin_idx] = prob.pin_val
-    # one elimination order of the island's vertices (the conformal map's, where the one-disk
-    # path solved it: no second AMD)
-    ranks = prob.ranks if prob.ranks is not None else vertex_ranks(prob.island.tris, prob.nv)
-    bs = BoundSearch(prob.ops, prob.nv, prob.island.tris, fixed, connected=True, ranks=ranks)
-
-    def progress(D, C):
-        report(0.1, f"minimising C: C* <= {D:.4g}, aiming at {C:.4g}")
-
-    deadline = None if budget is None else t0 + budget
-    u, D, out_of_time = bs.search(u, None, progress, deadline, prob.cancel)
-    if prob.cancel is not None and prob.cancel.is_set():
-        raise Cancelled
-    if out_of_time:
-        flags.append("time_budget_exhausted")
-    prob.iterations += bs.iterations
-    prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
-    return u, D
-
-
 def lower_mean(prob, best, budget, flags, report, t0):
     """One energy solve over F_C at the bound the map ``best`` = (u, D) certifies, from its own
     frames (where it is feasible, eq. 4.21): the min-max steps leave faces below the max wherever
@@ -163,7 +130,7 @@ def lower_mean(prob, best, budget, flags, report, t0):
 
 def best_along(prob, u0, u1, evaluations=LINE_SEARCH):
     """The map of lowest max distortion on the segment from u0 to u1 (u1 included), by golden
-    section on s in [0, 1] of ``u0 + s (u1 - u0)``.
+    section on s in [0, 1] of ``u0 + s (u1 - u0)`` (``along.golden``).
 
     With the frames fixed each face's ratio ``|beta_j| / Re(w_j alpha_j)`` is convex over linear
     along the segment, so their max is quasi-convex; the conformal distortion (eq. 4.9) follows it
@@ -171,21 +138,7 @@ def best_along(prob, u0, u1, evaluations=LINE_SEARCH):
     s = 0.82). Vectorised distortion evaluations only, no solve.
     """
     d = u1 - u0
-    D = lambda s: prob.distortion(u0 + s * d)
-    g = 0.5 * (np.sqrt(5.0) - 1.0)
-    a, b = 0.0, 1.0
-    c, e = b - g * (b - a), a + g * (b - a)
-    fc, fe = D(c), D(e)
-    for _ in range(evaluations - 2):
-        if fc < fe:
-            b, e, fe = e, c, fc
-            c = b - g * (b - a)
-            fc = D(c)
-        else:
-            a, c, fc = c, e, fe
-            e = a + g * (b - a)
-            fe = D(e)
-    s, Ds = (c, fc) if fc < fe else (e, fe)
+    s, Ds = golden(lambda s: prob.distortion(u0 + s * d), evaluations)
     return u0 + s * d if Ds < prob.distortion(u1) else u1
 
 

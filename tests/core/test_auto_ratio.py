@@ -15,7 +15,8 @@ import bd_uv
 from bd_uv.frames import frames_from_map
 from bd_uv.mesh import islands
 from bd_uv.spaces import distortion_epigraph_space
-from bd_uv.unwrapping import strategies
+from bd_uv.geometry import face_areas
+from bd_uv.unwrapping import along, strategies
 from bd_uv.unwrapping.initial import Start
 from bd_uv.unwrapping.problem import IslandProblem
 
@@ -179,6 +180,35 @@ def test_best_along_finds_the_lowest_max_on_the_segment():
     scan = min(_max_distortion(prob, u0 + s * (far - u0)) for s in np.linspace(0, 1, 61))
     assert D <= scan * (1 + 1e-3)
     assert D < _max_distortion(prob, u0)
+
+
+def test_least_mean_within_keeps_the_bound_and_finds_the_lowest_mean_on_the_segment():
+    """``along.least_mean_within`` (``bounded.bend`` between the projected and the searched map):
+    on a segment from a min-max step's map (lower max, higher mean) through the conformal map
+    and beyond it, the map returned is within C (recomputed by SVD) and its area-weighted mean
+    (recomputed) is lower than at the start, and no higher (to 1e-3) than anywhere a scan of
+    the segment finds within C."""
+    V, F = load_off("nefertiti.off")
+    prob, lscm = _problem(V, F)
+    u0, _, _ = prob.ratio_step(lscm, 0.0)
+    far = u0 + 2.0 * (lscm - u0)
+    C = _max_distortion(prob, lscm)       # the start and the middle are within C, the far end not
+
+    def mean_within(u):
+        isl = prob.island
+        uv = np.stack([u.real, u.imag], axis=1)
+        D, flipped = reference_distortion(prob.V, isl.tris, uv[isl.tris])
+        A = face_areas(prob.V, isl.tris)
+        if flipped.any() or D.max() > C * (1 + 1e-9):
+            return np.inf
+        return float(np.sum(A * D) / np.sum(A))
+
+    assert mean_within(far) == np.inf
+    u = along.least_mean_within(prob, u0, far, C, 12)
+    m = mean_within(u)
+    assert m < mean_within(u0)
+    scan = min(mean_within(u0 + s * (far - u0)) for s in np.linspace(0, 1, 61))
+    assert np.isfinite(m) and m <= scan * (1 + 1e-3)
 
 
 def test_lower_mean_keeps_the_bound_and_lowers_the_mean():
