@@ -38,7 +38,12 @@ PARALLEL_VERTICES = 1500
 SEQUENTIAL_VERTICES = 50_000
 # Faces per chunk of the maps' per-face numbers.
 CHUNK = 65536
-RUN_VERTICES = 25_000
+# Runs of 12.5k rather than 25k vertices: with the batches' own arrays gone (each run forms
+# its own), two 25k-vertex factors side by side and their threads' freed heap were a merge
+# round's peak on a 500k-face mesh (~360 MB, ~345 with one thread). A run's charts are
+# eliminated in qdldl's AMD order of their block-diagonal system, each chart's block as
+# alone (the same bits: dino subdivided twice and three times give the same maps).
+RUN_VERTICES = 12_500
 
 
 def mean_cap(C):
