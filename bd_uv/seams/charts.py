@@ -147,9 +147,6 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
         else:
             g, faces = geom, np.concatenate([c.faces for c in cs])
         args = (g, faces, tris, nv, idx[2 * a:2 * b] - voff[a], val[2 * a:2 * b])
-        # A large batch's runs each start on a trimmed heap (the last run's factor freed),
-        # whatever their own size.
-        release_memory(nf)
         if vk is None:
             u, info = _lscm_pinned(*args), None
         else:
