@@ -353,6 +353,10 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=Non
     sub = np.flatnonzero(~frozen)
     if len(sub) == 0:
         return False
+    # Each step of a round (charts, cut graphs, maps, splits) starts on the heap the last one
+    # freed handed back (``trim``): on a 500k-face mesh the Fiedler sweep's and the factors'
+    # freed heap otherwise stayed resident (50-100 MB) under the next step's own peak.
+    release_memory(len(sub))
     chs = charts(F, E, cut, sub)
     changed = False
     todo = []                               # (faces, the map's sigma per face or None)
@@ -378,7 +382,12 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=Non
             todo.append((c.faces, None))    # split unmapped; merging may join it again
         else:
             disks.append(c)
+    # The charts that are not disks hold their vertices and triangles only here (a round's
+    # open and closed charts: up to the whole mesh, ~36 bytes a face): not held through the
+    # maps' factors.
+    chs = None
     if disks:
+        release_memory(len(sub))
         cap = mean_cap(C) if cap is None else cap
         cm = chart_maps(V, disks, geom, limits=(S * MARGIN, cap), orders=orders)
         ok = (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
@@ -397,6 +406,7 @@ def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=Non
     # (17 MB and more on a 500k-face mesh); only the failed disks' singular values are kept.
     chs = disks = cm = None
     if todo:
+        release_memory(len(sub))
         split = split_deep(todo, E, cut, A, cen, S, poly, orders)
         for (faces, _), done in zip(todo, split):
             if not done:

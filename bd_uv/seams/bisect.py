@@ -20,6 +20,8 @@ DEEPER = 4.0
 # suzanne, 10 on fandisk; 10 and 9 with this, the same charts.
 MOST = 0.8
 MOST_DEEPER = 1.0
+# Faces whose centroids are formed at a time.
+CHUNK = 65536
 
 
 class FaceCentroids:
@@ -32,7 +34,15 @@ class FaceCentroids:
         self.V, self.F = V, F
 
     def __getitem__(self, faces):
-        return self.V[self.F[faces]].mean(axis=1)
+        faces = np.asarray(faces)
+        if faces.ndim != 1 or len(faces) <= CHUNK:
+            return self.V[self.F[faces]].mean(axis=1)
+        # ``CHUNK`` rows at a time (each row's own mean: the same bits): the (k,3,3) corner
+        # positions of a 500k-face sphere's first split were 36 MB at once.
+        out = np.empty((len(faces), 3))
+        for i in range(0, len(faces), CHUNK):
+            out[i:i + CHUNK] = self.V[self.F[faces[i:i + CHUNK]]].mean(axis=1)
+        return out
 
 
 def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None):

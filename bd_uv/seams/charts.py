@@ -38,7 +38,12 @@ PARALLEL_VERTICES = 1500
 SEQUENTIAL_VERTICES = 50_000
 # Faces per chunk of the maps' per-face numbers.
 CHUNK = 65536
-RUN_VERTICES = 25_000
+# Runs of 12.5k rather than 25k vertices: with the batches' own arrays gone (each run forms
+# its own), two 25k-vertex factors side by side and their threads' freed heap were a merge
+# round's peak on a 500k-face mesh (~360 MB, ~345 with one thread). A run's charts are
+# eliminated in qdldl's AMD order of their block-diagonal system, each chart's block as
+# alone (the same bits: dino subdivided twice and three times give the same maps).
+RUN_VERTICES = 12_500
 
 
 def mean_cap(C):
@@ -114,21 +119,10 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
     nfs = np.array([len(c.faces) for c in charts])
     voff = np.concatenate([[0], np.cumsum(nvs)])
     foff = np.concatenate([[0], np.cumsum(nfs)])
-    face_c = np.repeat(np.arange(k), nfs)
-    vert_c = np.repeat(np.arange(k), nvs)
+    n, nf = int(voff[-1]), int(foff[-1])
     P = V[np.concatenate([c.vertices for c in charts])]
-    tris = np.concatenate([c.tris for c in charts]) + voff[face_c][:, None]
-    n = len(P)
-    # alpha = sum_k ca_k u_k and beta = sum_k cb_k u_k per face (eq. 4.19 with u complex:
-    # Re a = (u_x + v_y)/2, Im a = (v_x - u_y)/2, Re b = (u_x - v_y)/2, Im b = (v_x + u_y)/2),
-    # each chart scaled to unit area (coefficients grow by sqrt(area), areas shrink by it).
-    if geom is None:
-        geom = face_geometry(P, tris)
-        faces = np.arange(len(tris))
-    else:
-        faces = np.concatenate([c.faces for c in charts])
     idx = _far_pairs(P, charts, voff)
-    del P                   # the batch's areas and positions are not held through the factors
+    del P                   # the batch's positions are not held through the factors
     val = np.tile(np.array([0.0, 1.0], np.complex128), k)
 
     if n > BATCH_VERTICES:  # a large batch's factors are memory peaks: AMD's fill (orders.py)
@@ -136,36 +130,67 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
     vk, fresh = orders.keys(charts, voff) if orders is not None else (None, None)
     budget = SLACK * orders.fill if orders is not None else 0.0
 
-    def run(r):             # the system of charts r[0]:r[1] alone: (u, ordering info)
-        (a, b), (fa, fb) = r, (foff[r[0]], foff[r[1]])
-        args = (geom, faces[fa:fb], tris[fa:fb] - voff[a], int(voff[b] - voff[a]),
-                idx[2 * a:2 * b] - voff[a], val[2 * a:2 * b])
+    def run(r):
+        """The charts r[0]:r[1] alone: their system solved and their per-face numbers. Each
+        run forms its own triangles and (without ``geom``) face geometry, so a batch's are
+        never held whole beside the factors (on a 500k-face mesh ~100 bytes a face of the
+        batch's, 30-35 MB of a round's 300k faces); every face's numbers are its own and every
+        per-chart sum runs over the chart's faces in order, as over the whole batch: the same
+        bits."""
+        a, b = r
+        cs = charts[a:b]
+        tris = np.concatenate([c.tris + int(voff[j] - voff[a]) for j, c in zip(range(a, b), cs)])
+        nv = int(voff[b] - voff[a])
+        if geom is None:
+            g = face_geometry(V[np.concatenate([c.vertices for c in cs])], tris)
+            faces = np.arange(len(tris))
+        else:
+            g, faces = geom, np.concatenate([c.faces for c in cs])
+        args = (g, faces, tris, nv, idx[2 * a:2 * b] - voff[a], val[2 * a:2 * b])
         if vk is None:
-            return _lscm_pinned(*args), None
-        return _lscm_ordered(*args, vk[voff[a]:voff[b]], budget)
+            u, info = _lscm_pinned(*args), None
+        else:
+            u, info = _lscm_ordered(*args, vk[voff[a]:voff[b]], budget)
+        return (info, u) + _per_face(u, g, faces, tris, nfs[a:b], nvs[a:b])
     j = halves(nvs, PARALLEL_VERTICES)
     if n > SEQUENTIAL_VERTICES:     # two factors of at most RUN_VERTICES vertices at a time,
         #                             a larger chart's alone
         runs = _runs(nvs, RUN_VERTICES)
-        out = [x for g in _pairs(runs, voff) for x in map_blocks(run, g)]
+        out = [x for gr in _pairs(runs, voff) for x in map_blocks(run, gr)]
     elif j is None:
         runs, out = [(0, k)], [run((0, k))]
     else:                   # two runs of charts, one system each, side by side
         runs = [(0, j), (j, k)]
         out = map_blocks(run, runs)
-    u = np.concatenate([x for x, _ in out])
     if orders is not None:
         gv = np.concatenate([c.vertices for c in charts])
         orders.solved(charts, runs, [(fill, rank, gv[voff[a]:voff[b]][free])
-                                     for (a, b), (_, (fill, rank, free)) in zip(runs, out)],
+                                     for (a, b), ((fill, rank, free), *_) in zip(runs, out)],
                       fresh)
-    u_solved = u
-    # The factors' freed heap (much of it in the worker threads' arenas) back to the operating
-    # system before the per-face numbers are formed beside it.
-    release_memory(len(tris))
-    # The per-face numbers ``CHUNK`` faces at a time (each face's are its own: the same bits):
-    # the batch's (f,3) complex coefficients, their conjugates and the corners' UVs at once
-    # were ~250 bytes per face, a merge round's peak once its factors were freed.
+    u_solved, uv, D, St, a, b, meanD = (np.concatenate([x[i] for x in out])
+                                        for i in range(1, 8))
+    out = None
+    maxD = np.maximum.reduceat(D, foff[:-1])
+    maxS = np.maximum.reduceat(St, foff[:-1])
+    if limits is None:
+        cross = boundary_crossings(uv, [c.loops[0] + voff[j] for j, c in enumerate(charts)])
+    else:
+        ask = np.flatnonzero(np.isfinite(maxD) & (maxS <= limits[0]) & (meanD <= limits[1]))
+        cross = np.full(k, -1, dtype=np.int64)
+        cross[ask] = boundary_crossings(uv, [charts[j].loops[0] + voff[j] for j in ask])
+    return ChartMaps(uv, voff, foff, D, St, maxD, maxS, cross, np.stack([a + b, a - b], axis=1),
+                     meanD, u_solved)
+
+
+def _per_face(u, geom, faces, tris, nfs, nvs):
+    """A run's per-face numbers from its map ``u`` (its charts' vertices in turn, ``nfs`` and
+    ``nvs`` faces and vertices each; ``faces`` index ``geom``): (uv, distortion, stretch,
+    |alpha|, |beta|, each chart's mean distortion), ``CHUNK`` faces at a time (each face's
+    are its own: the same bits; the (f,3) complex coefficients, their conjugates and the
+    corners' UVs at once were ~250 bytes per face)."""
+    k = len(nfs)
+    face_c = np.repeat(np.arange(k), nfs)
+    vert_c = np.repeat(np.arange(k), nvs)
     nf = len(tris)
     w = np.empty(nf)
     for i in range(0, nf, CHUNK):
@@ -181,7 +206,7 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
     with np.errstate(invalid="ignore", divide="ignore"):
         s = np.sqrt(1.0 / np.abs(uv_area))
     s[~np.isfinite(s)] = 1.0
-    u = u * s[vert_c]
+    us = u * s[vert_c]
     A3 = geom.area[faces]
     area = np.bincount(face_c, A3, minlength=k)
     root = np.sqrt(area)
@@ -189,7 +214,7 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
     for i in range(0, nf, CHUNK):
         f = slice(i, i + CHUNK)
         cb = geom.cb[faces[f]] * root[face_c[f]][:, None]
-        ut = u[tris[f]]
+        ut = us[tris[f]]
         a[f] = np.abs(np.einsum("fk,fk->f", cb.conj(), ut))
         b[f] = np.abs(np.einsum("fk,fk->f", cb, ut))
     cb = ut = None
@@ -199,20 +224,10 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
         St = np.where(ok, np.maximum(a + b, 1.0 / (a - b)), np.inf)
     D[~np.isfinite(D)] = np.inf
     St[~np.isfinite(St)] = np.inf
-    maxD = np.maximum.reduceat(D, foff[:-1])
-    maxS = np.maximum.reduceat(St, foff[:-1])
     with np.errstate(invalid="ignore"):
         meanD = np.bincount(face_c, A3 * D, minlength=k) / area
     meanD[~np.isfinite(meanD)] = np.inf
-    uv = u * np.sqrt(area)[vert_c]
-    if limits is None:
-        cross = boundary_crossings(uv, [c.loops[0] + voff[j] for j, c in enumerate(charts)])
-    else:
-        ask = np.flatnonzero(np.isfinite(maxD) & (maxS <= limits[0]) & (meanD <= limits[1]))
-        cross = np.full(k, -1, dtype=np.int64)
-        cross[ask] = boundary_crossings(uv, [charts[j].loops[0] + voff[j] for j in ask])
-    return ChartMaps(uv, voff, foff, D, St, maxD, maxS, cross, np.stack([a + b, a - b], axis=1),
-                     meanD, u_solved)
+    return us * np.sqrt(area)[vert_c], D, St, a, b, meanD
 
 
 def _lscm_pinned(geom, faces, tris, n, idx, val):

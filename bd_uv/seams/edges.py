@@ -9,6 +9,8 @@ import numpy as np
 
 # Dihedral turn from which a concave edge gets its full discount (half the cost).
 CONCAVE_FULL = np.radians(5.0)
+# Rows (edges, faces) per chunk of the table's per-row arithmetic.
+CHUNK = 65536
 
 @dataclass(frozen=True)
 class EdgeTable:
@@ -76,6 +78,7 @@ def edge_table(V, F, face_groups=None, crease_angle=np.radians(30.0)):
     a = F.ravel()
     b = np.roll(F, -1, axis=1).ravel()
     key = np.minimum(a, b) * n + np.maximum(a, b)
+    del b
     uniq, inv = np.unique(key, return_inverse=True)
     del key
     inv = inv.ravel().astype(idx)
@@ -90,30 +93,46 @@ def edge_table(V, F, face_groups=None, crease_angle=np.radians(30.0)):
     two = count >= 2
     del count
     faces[two, 1] = order[first[two] + 1] // 3
-    P = V[ends]
-    length = np.linalg.norm(P[:, 1] - P[:, 0], axis=1)
-    N = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    N /= np.maximum(np.linalg.norm(N, axis=1, keepdims=True), 1e-300)
+    # The per-edge and per-face arithmetic ``CHUNK`` rows at a time (each row's own numbers:
+    # the same bits): the (e,2,3) end positions and the interior edges' normals, cross products
+    # and opposite vertices at once were ~200 MB on a 500k-face mesh, the search's set-up peak.
+    length = np.empty(e)
+    for i in range(0, e, CHUNK):
+        s = slice(i, i + CHUNK)
+        length[s] = np.linalg.norm(V[ends[s, 1]] - V[ends[s, 0]], axis=1)
+    N = np.empty((m, 3))
+    for i in range(0, m, CHUNK):
+        Fs = F[i:i + CHUNK]
+        Ns = N[i:i + CHUNK]
+        Ns[:] = np.cross(V[Fs[:, 1]] - V[Fs[:, 0]], V[Fs[:, 2]] - V[Fs[:, 0]])
+        Ns /= np.maximum(np.linalg.norm(Ns, axis=1, keepdims=True), 1e-300)
+    Fs = Ns = None
     cost = np.ones(e)
     f0, f1 = faces[two, 0], faces[two, 1]
-    # atan2 rather than arccos: exact near 0, where arccos turns rounding noise into angles.
-    theta = np.arctan2(np.linalg.norm(np.cross(N[f0], N[f1]), axis=1),
-                       np.einsum("ij,ij->i", N[f0], N[f1]))
-    # Concave when the opposite vertex of f1 lies above f0's plane. The discount grows with the
-    # angle (full from CONCAVE_FULL on): on a flat edge (a planar quad's diagonal) the side is
-    # rounding noise, which must not halve the cost of one run and not the next.
-    Ff1 = F[f1]
-    off_edge = (Ff1 != ends[two, :1]) & (Ff1 != ends[two, 1:])
-    opp = Ff1[np.arange(len(f1)), np.argmax(off_edge, axis=1)]
-    concave = np.einsum("ij,ij->i", V[opp] - P[two, 0], N[f0]) > 0
-    half = np.where(concave, 0.5 * np.minimum(theta / CONCAVE_FULL, 1.0), 0.0)
-    c = np.exp(-theta / crease_angle) * (1.0 - half)
+    tw = np.flatnonzero(two)
+    c = np.empty(len(tw))
+    for i in range(0, len(tw), CHUNK):
+        s = slice(i, i + CHUNK)
+        N0, N1 = N[f0[s]], N[f1[s]]
+        # atan2 rather than arccos: exact near 0, where arccos turns rounding noise into angles.
+        theta = np.arctan2(np.linalg.norm(np.cross(N0, N1), axis=1),
+                           np.einsum("ij,ij->i", N0, N1))
+        # Concave when the opposite vertex of f1 lies above f0's plane. The discount grows with
+        # the angle (full from CONCAVE_FULL on): on a flat edge (a planar quad's diagonal) the
+        # side is rounding noise, which must not halve the cost of one run and not the next.
+        Ff1, es = F[f1[s]], ends[tw[s]]
+        off_edge = (Ff1 != es[:, :1]) & (Ff1 != es[:, 1:])
+        opp = Ff1[np.arange(len(Ff1)), np.argmax(off_edge, axis=1)]
+        concave = np.einsum("ij,ij->i", V[opp] - V[es[:, 0]], N0) > 0
+        half = np.where(concave, 0.5 * np.minimum(theta / CONCAVE_FULL, 1.0), 0.0)
+        c[s] = np.exp(-theta / crease_angle) * (1.0 - half)
+    N = N0 = N1 = Ff1 = es = off_edge = opp = concave = half = theta = tw = None
     if face_groups is not None:
         g = np.asarray(face_groups)
         c = np.where(g[f0] != g[f1], min(c.min(initial=1.0), np.exp(-np.pi / crease_angle)), c)
     cost[two] = np.maximum(c, 1e-3)
+    del c, f0, f1
     # Corners of each edge's ends in its faces: its half-edge h runs corner h -> the next one.
-    del N, P, Ff1, off_edge, opp, concave, half, theta, c
     corners = np.full((e, 2, 2), -1, dtype=idx)
     for s_, h in ((0, order[first]), (1, order[first[two] + 1])):
         sel = slice(None) if s_ == 0 else two
@@ -153,12 +172,16 @@ def _fans(F, face_edges, faces, ends, corners):
     """``Fans`` of the mesh, or None where it is not an oriented manifold (an edge with three
     faces, two faces running an edge the same way, a corner reached twice)."""
     m = len(F)
-    c = np.arange(3 * m)
+    # Corner ids in the table's index type and the 0/1 sides in int8 (integers all through:
+    # the same results as int64): ~15 arrays of a corner each, the set-up's peak in int64.
+    idx = index_dtype(3 * m)
+    c = np.arange(3 * m, dtype=idx)
     edge = face_edges.ravel()
     v = F.ravel()
-    side = (faces[edge, 0] != c // 3).astype(np.int64)
-    end = (ends[edge, 0] != v).astype(np.int64)
+    side = (faces[edge, 0] != c // 3).astype(np.int8)
+    end = (ends[edge, 0] != v).astype(np.int8)
     nxt = corners[edge, 1 - side, end]
+    del side
     on = nxt >= 0
     count = np.bincount(edge, minlength=len(ends))
     # Oriented: across every interior edge the two faces run it in opposite directions (one
@@ -166,32 +189,38 @@ def _fans(F, face_edges, faces, ends, corners):
     if (count > 2).any() or (np.bincount(edge, end, len(ends))[count == 2] != 1).any() \
             or (v[nxt[on]] != v[on]).any():
         return None
-    prev = np.full(3 * m, -1, dtype=np.int64)
+    del count, end
+    prev = np.full(3 * m, -1, dtype=idx)
     prev[nxt[on]] = c[on]
     steps = int(np.ceil(np.log2(max(int(np.bincount(v).max(initial=1)), 2)))) + 1
     # Closed fans: the smallest corner of each cycle becomes its start.
     fwd = np.where(on, nxt, c)
-    low, p = c.copy(), fwd.copy()
+    low, p = c.copy(), fwd
     for _ in range(steps):
         low = np.minimum(low, low[p])
         p = p[p]
+    fwd = None
     p = np.where(prev >= 0, prev, c)
     for _ in range(steps):
         p = p[p]
     ring = prev[p] >= 0                     # never reaches a corner without a predecessor
     start = np.where(ring, low, p)
+    del low
     # Rank of each corner in its fan: steps back to the start (list ranking).
     p = np.where((prev >= 0) & (c != start), prev, c)
-    rank = (p != c).astype(np.int64)
+    del prev
+    rank = (p != c).astype(idx)
     for _ in range(steps):
         rank = rank + rank[p]
         p = p[p]
+    del p
     order = np.lexsort((rank, start))
+    del rank
     first = np.r_[True, start[order][1:] != start[order][:-1]]
+    del start
     fan = np.empty(3 * m, dtype=np.int32)
     fan[order] = np.cumsum(first) - 1
     starts = np.append(np.flatnonzero(first), 3 * m)
-    idx = index_dtype(3 * m)
     return Fans(nxt.astype(idx, copy=False), edge.astype(idx, copy=False), order.astype(idx),
                 first, first & ring[order], fan, starts.astype(idx))
 

@@ -11,6 +11,7 @@ import time
 
 import numpy as np
 
+from ..geometry import face_areas
 from ..solvers.lscm import face_geometry, lscm_pinned
 from ..solvers.ordered_ldl import vertex_ranks
 from .problem import STORE_HEADROOM
@@ -59,8 +60,12 @@ def conformal_islands(V, islands, C, known=None):
                     for i in islands}
     # alpha = sum ca u, beta = sum cb u per face (eq. 4.19); each island normalised to unit area
     # (as IslandProblem does): the coefficients grow by sqrt(area), the LSCM terms do not change.
-    geom = face_geometry(P, tris)
-    area = np.bincount(face_isl, geom.area, minlength=k)
+    # With every map known and more than CHUNK faces, the coefficients are formed CHUNK faces
+    # at a time where they are read (twice), not held for all faces (~64 bytes a face: 32 MB
+    # of a 500k-face mesh's final unwrap, the seam search's peak there).
+    held = not have.all() or len(tris) <= CHUNK
+    geom = face_geometry(P, tris) if held else None
+    A3 = geom.area if held else np.empty(len(tris))
     if have.all():
         u = np.concatenate([np.asarray(known[i.index], dtype=np.complex128) for i in islands])
     else:
@@ -78,16 +83,26 @@ def conformal_islands(V, islands, C, known=None):
                         ranks=vertex_ranks(tris, len(verts)) if C is None else None)
     if C is None:
         return {}, {isl.index: u[voff[j]:voff[j + 1]] / 1.0 for j, isl in enumerate(islands)}
-    root = np.sqrt(area)[face_isl]
+    if held:                    # the positions are read again only to form coefficients
+        P = None
     m = len(tris)
+
+    def cb(f):                  # beta's coefficients of the faces f (a slice)
+        return geom.cb[f] if held else face_geometry(P, tris[f]).cb
+    if not held:                # the areas first: the islands' totals scale every face
+        for i in range(0, m, CHUNK):
+            A3[i:i + CHUNK] = face_areas(P, tris[i:i + CHUNK])
+    area = np.bincount(face_isl, A3, minlength=k)
+    root = np.sqrt(area)[face_isl]
     # Per-face numbers CHUNK faces at a time (the same bits; the whole of a 500k-face mesh's
     # corner maps and coefficients at once were the seam search's last memory peak).
     a, b, sa = np.empty(m), np.empty(m), np.empty(m)
     for i in range(0, m, CHUNK):
         f = slice(i, i + CHUNK)
         uc = u[tris[f]]
-        a[f] = np.abs(np.einsum("fk,fk->f", geom.ca(f), uc)) * root[f]
-        b[f] = np.abs(np.einsum("fk,fk->f", geom.cb[f], uc)) * root[f]
+        cf = cb(f)
+        a[f] = np.abs(np.einsum("fk,fk->f", cf.conj(), uc)) * root[f]
+        b[f] = np.abs(np.einsum("fk,fk->f", cf, uc)) * root[f]
         e1 = uc[:, 1] - uc[:, 0]
         e2 = uc[:, 2] - uc[:, 0]
         sa[f] = 0.5 * (e1.conj() * e2).imag
@@ -113,8 +128,9 @@ def conformal_islands(V, islands, C, known=None):
     for i in range(0, m, CHUNK):
         f = slice(i, i + CHUNK)
         cu = us[tris[f]]
-        ac[f] = np.abs(np.einsum("fk,fk->f", geom.ca(f), cu))
-        bc[f] = np.abs(np.einsum("fk,fk->f", geom.cb[f], cu))
+        cf = cb(f)
+        ac[f] = np.abs(np.einsum("fk,fk->f", cf.conj(), cu))
+        bc[f] = np.abs(np.einsum("fk,fk->f", cf, cu))
         e1, e2 = cu[:, 1] - cu[:, 0], cu[:, 2] - cu[:, 0]
         unflipped[f] = 0.5 * (e1.conj() * e2).imag > 0
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -122,7 +138,7 @@ def conformal_islands(V, islands, C, known=None):
     Dc[~(ac > bc) | ~np.isfinite(Dc) | ~unflipped] = np.inf
     flipped = np.add.reduceat((~unflipped).astype(np.int64), foff[:-1])
     maxc = np.maximum.reduceat(Dc, foff[:-1])
-    A3 = geom.area
+    cf = None
     finite = np.isfinite(Dc)
     mean = (np.bincount(face_isl, np.where(finite, A3 * Dc, 0.0), minlength=k)
             / np.maximum(np.bincount(face_isl, np.where(finite, A3, 0.0), minlength=k), 1e-300))
