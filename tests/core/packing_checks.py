@@ -80,3 +80,21 @@ def check_layout(V, F, uv_in, lab, packed, options, tiles=(1001,), pinned=None):
         # the per-chart bound above only: 1.0013 for a chart 4e-4 wide in tile 1010)
         assert cert.density_spread == pytest.approx(d32.max() / d32.min(), rel=1e-9)
     return cert
+
+
+def placed(outlines, angle, shift):
+    """Each outline (n_i,2) turned by its angle in degrees and moved by its shift, computed here."""
+    out = []
+    for xy, a, t in zip(outlines, angle, shift):  # per chart
+        r = np.deg2rad(a)
+        R = np.array([[np.cos(r), -np.sin(r)], [np.sin(r), np.cos(r)]])
+        out.append(xy @ R.T + t)
+    return out
+
+
+def inside(p, ring):
+    """Even-odd test: is point p strictly inside the closed ring (n,2)?"""
+    a, b = ring, np.roll(ring, -1, axis=0)
+    cross = (a[:, 1] > p[1]) != (b[:, 1] > p[1])
+    x = a[:, 0] + (p[1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / np.where(cross, b[:, 1] - a[:, 1], 1)
+    return bool(np.sum(cross & (x > p[0])) % 2)

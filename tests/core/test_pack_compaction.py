@@ -8,26 +8,8 @@ from bd_uv.packing import PackOptions, pack_islands
 from bd_uv.packing.compact import compact_square
 from bd_uv.packing.outlines import chart_outlines
 from bd_uv.packing.square import square_layout
-from packing_checks import check_layout
+from packing_checks import check_layout, inside, placed
 from packing_sets import chart_set, segment_distances
-
-
-def _placed(outlines, pl):
-    """Each outline turned by its angle and moved by its shift (computed here from the angles)."""
-    out = []
-    for xy, a, s in zip(outlines, pl.angle, pl.shift):  # per chart
-        t = np.deg2rad(a)
-        R = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
-        out.append(xy @ R.T + s)
-    return out
-
-
-def _inside(p, ring):
-    """Even-odd test: is point p strictly inside the closed ring (n,2)?"""
-    a, b = ring, np.roll(ring, -1, axis=0)
-    cross = (a[:, 1] > p[1]) != (b[:, 1] > p[1])
-    x = a[:, 0] + (p[1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / np.where(cross, b[:, 1] - a[:, 1], 1)
-    return bool(np.sum(cross & (x > p[0])) % 2)
 
 
 def _least_gap(rings):
@@ -41,7 +23,7 @@ def _least_gap(rings):
             I, J = np.meshgrid(np.arange(len(a0)), np.arange(len(b0)), indexing="ij")
             I, J = I.ravel(), J.ravel()
             gap = min(gap, float(segment_distances(a0[I], a1[I], b0[J], b1[J]).min()))
-            nested |= _inside(rings[i][0], rings[j]) or _inside(rings[j][0], rings[i])
+            nested |= inside(rings[i][0], rings[j]) or inside(rings[j][0], rings[i])
     return gap, nested
 
 
@@ -59,7 +41,7 @@ def test_compaction_shrinks_the_square_and_keeps_the_padding(kind, k, rotate):
     pl, side, steps = compact_square(charts.outlines, pl0, side0, options, tol, 1e9,
                                      max_programs=25)
     assert steps >= 1 and side < side0 * (1 - 1e-3)
-    rings = _placed(charts.outlines, pl)
+    rings = placed(charts.outlines, pl.angle, pl.shift)
     pts = np.concatenate(rings)
     edge = 0.5 * options.padding * side + tol
     assert pts.min() >= edge * (1 - 1e-9) and pts.max() <= side - edge * (1 - 1e-9)
@@ -122,7 +104,7 @@ def test_compaction_stops_at_the_widest_charts_least_square():
     pl, side, steps = runs[least]
     assert least * (1 - 1e-9) <= side <= least * (1 + 1e-3)
     assert steps < runs[0.0][2] and runs[0.0][1] >= least * (1 - 1e-9)
-    rings = _placed([tri, box], pl)
+    rings = placed([tri, box], pl.angle, pl.shift)
     pts = np.concatenate(rings)
     edge = 0.5 * options.padding * side + tol
     assert pts.min() >= edge * (1 - 1e-9) and pts.max() <= side - edge * (1 - 1e-9)
@@ -176,7 +158,7 @@ def test_a_layout_drifted_off_the_low_corner_is_moved_back_and_its_square_cut():
     assert steps == 0
     extent = max(2.2 + 0.5 - (1.0 - 0.5), 1.3 + 0.5 - (1.2 - 0.5))     # 2.2 wide, 1.1 high
     assert np.isclose(side, (extent + 2 * tol) / (1 - options.padding), rtol=1e-9)
-    rings = _placed([box, box], pl)
+    rings = placed([box, box], pl.angle, pl.shift)
     pts = np.concatenate(rings)
     edge = 0.5 * options.padding * side + tol
     assert np.isclose(pts.min(axis=0), edge, rtol=1e-9).all()

@@ -5,6 +5,7 @@ import numpy as np
 
 from bd_uv.packing import PackOptions
 from bd_uv.packing.relocate import relocate
+from packing_checks import inside, placed
 from packing_sets import segment_distances
 
 # a U of 8 x 8 in a square of side 12, its pocket 4 wide and 6 deep open to the top, and a
@@ -14,22 +15,6 @@ U = np.array([[-4.0, -4.0], [4.0, -4.0], [4.0, 4.0], [2.0, 4.0], [2.0, -2.0], [-
 BOX = 0.5 * np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
 SIDE = 12.0
 SEP = 0.2
-
-
-def _placed(outlines, angle, shift):
-    out = []
-    for xy, a, s in zip(outlines, angle, shift):  # per chart
-        t = np.deg2rad(a)
-        R = np.array([[np.cos(t), -np.sin(t)], [np.sin(t), np.cos(t)]])
-        out.append(xy @ R.T + s)
-    return out
-
-
-def _inside(p, ring):
-    a, b = ring, np.roll(ring, -1, axis=0)
-    cross = (a[:, 1] > p[1]) != (b[:, 1] > p[1])
-    x = a[:, 0] + (p[1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / np.where(cross, b[:, 1] - a[:, 1], 1)
-    return bool(np.sum(cross & (x > p[0])) % 2)
 
 
 def _gap(a, b):
@@ -50,15 +35,15 @@ def test_a_small_chart_against_the_edge_goes_into_the_pocket():
     left as it was."""
     angle = np.array([0.0, 0.0])
     shift = np.array([[4.5, 4.5], [11.0, 6.0]])
-    before = _placed([U, BOX], angle, shift)
+    before = placed([U, BOX], angle, shift)
     assert np.isclose(_depth(before[0]), _depth(before[1]))   # both bound the square
     a2, s2, moved = relocate([U, BOX], angle, shift, SIDE, SEP, PackOptions(rotate="any"))
     assert moved == 1
     assert a2[0] == 0.0 and np.array_equal(s2[0], shift[0])
-    u, box = _placed([U, BOX], a2, s2)
+    u, box = placed([U, BOX], a2, s2)
     assert _depth(box) > _depth(before[1]) + 1.0
     assert _gap(u, box) >= SEP
-    assert not _inside(box[0], u) and not _inside(u[0], box)
+    assert not inside(box[0], u) and not inside(u[0], box)
     assert box.min() >= 0.5 * SEP and box.max() <= SIDE - 0.5 * SEP
     # in the pocket: between its walls and below its opening
     assert (box[:, 0] > 2.5).all() and (box[:, 0] < 6.5).all() and (box[:, 1] < 8.5).all()
@@ -78,5 +63,5 @@ def test_no_chart_moves_when_only_a_large_one_bounds_the_square():
     shift = np.array([[4.5, 4.5], [11.0, 6.0]])
     a2, s2, moved = relocate([U, BOX], angle, shift, SIDE, SEP, PackOptions(rotate="none"))
     assert moved == 1 and np.array_equal(a2, angle)
-    u, box = _placed([U, BOX], a2, s2)
+    u, box = placed([U, BOX], a2, s2)
     assert _gap(u, box) >= SEP and _depth(box) > 1.5
