@@ -11,12 +11,10 @@ import numpy as np
 from .geometry import face_areas
 from .metrics import conformal_distortion, flipped_faces
 from .overlap import island_overlaps
-from .trim import release_memory
+from .trim import CHUNK, release_memory
 
 # Same relative tolerance as metrics.certify: the bound is met up to rounding.
 RTOL = 1e-6
-# Faces measured at a time (per-face numbers, so the same whatever the chunk).
-CHUNK = 65536
 # an island narrower than this (UV units) that fails certification is named too small in its reason:
 # measures at that scale fall below what the overlap test and float32 storage resolve
 TINY = 2.0 ** -20

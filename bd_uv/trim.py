@@ -16,6 +16,11 @@ import sys
 
 # Meshes from this many faces have their freed memory handed back between steps.
 TRIM_FACES = 50_000
+# Rows (faces, edges) of per-row arithmetic formed at a time on large meshes: every row's
+# numbers are its own, so the results are the same bits whatever the chunk, and the (k,3,3)
+# temporaries of a 500k-face mesh are not all held at once (certificate, seam search,
+# conformal maps, LSCM geometry).
+CHUNK = 65536
 
 _trim = None                # libc's malloc_trim, False where there is none
 

@@ -35,11 +35,9 @@ from .orders import Orders
 from .pack_shape import split_for_packing
 from .bisect import FaceCentroids, bisect, edge_weight, polygon_edges, split_deep
 from .topology import charts, cut_mesh
-from ..trim import release_memory
+from ..trim import CHUNK, release_memory
 
 MAX_ROUNDS = 60
-# Faces per chunk of the set-up's per-face arithmetic (areas, ``_valid_everywhere``'s tests).
-CHUNK = 65536
 # The charts of the given seams (the first round's) pass with a mean up to this share of
 # (mean_cap - 1) more: 1.0875 at C = 2.
 GIVEN_SLACK = 0.25

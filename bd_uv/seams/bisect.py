@@ -7,6 +7,7 @@ import numpy as np
 
 from .charts import MARGIN, piece_stretch
 from .split import fiedler_split_many
+from ..trim import CHUNK
 
 # Levels a failing chart is split at once while its restricted map still breaks S.
 SPLIT_DEPTH = 4
@@ -20,8 +21,6 @@ DEEPER = 4.0
 # suzanne, 10 on fandisk; 10 and 9 with this, the same charts.
 MOST = 0.8
 MOST_DEEPER = 1.0
-# Faces whose centroids are formed at a time.
-CHUNK = 65536
 
 
 class FaceCentroids:

@@ -14,7 +14,7 @@ from ..solvers.lscm import _lscm_system   # lscm_pinned's assembly, to free memo
 from ..solvers.threads import halves, map_blocks
 from .crossings import boundary_crossings
 from .orders import BATCH_VERTICES, SLACK, ordered_solver
-from ..trim import release_memory
+from ..trim import CHUNK, release_memory
 from ..unwrapping.batched import _far_pairs
 
 # Charts are accepted a little inside S: bending a map into C moves its stretch slightly.
@@ -36,8 +36,6 @@ PARALLEL_VERTICES = 1500
 # ~200 MB each). Two runs of 25k vertices at once hold about what one of 50k did; halves of a
 # 100k-vertex batch side by side were the search's peak (a merge round, 477-494 MB).
 SEQUENTIAL_VERTICES = 50_000
-# Faces per chunk of the maps' per-face numbers.
-CHUNK = 65536
 # Runs of 12.5k rather than 25k vertices: with the batches' own arrays gone (each run forms
 # its own), two 25k-vertex factors side by side and their threads' freed heap were a merge
 # round's peak on a 500k-face mesh (~360 MB, ~345 with one thread). A run's charts are
@@ -119,7 +117,7 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
     nfs = np.array([len(c.faces) for c in charts])
     voff = np.concatenate([[0], np.cumsum(nvs)])
     foff = np.concatenate([[0], np.cumsum(nfs)])
-    n, nf = int(voff[-1]), int(foff[-1])
+    n = int(voff[-1])
     P = V[np.concatenate([c.vertices for c in charts])]
     idx = _far_pairs(P, charts, voff)
     del P                   # the batch's positions are not held through the factors

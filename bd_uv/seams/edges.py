@@ -7,10 +7,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..trim import CHUNK
+
 # Dihedral turn from which a concave edge gets its full discount (half the cost).
 CONCAVE_FULL = np.radians(5.0)
-# Rows (edges, faces) per chunk of the table's per-row arithmetic.
-CHUNK = 65536
 
 @dataclass(frozen=True)
 class EdgeTable:

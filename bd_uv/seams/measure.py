@@ -7,13 +7,10 @@ import numpy as np
 
 from ..geometry import face_areas
 from ..metrics import face_jacobians
+from ..trim import CHUNK
 from ..unwrapping.results import UnwrapResult
 from .crossings import boundary_crossings
 from .topology import charts
-
-# Faces measured at a time (the numbers are per face; a 500k-face result's Jacobian temporaries
-# at once were the search's last memory peak).
-CHUNK = 65536
 
 
 def measure_charts(V, F, E, cut, result, chs=None):
@@ -84,7 +81,6 @@ def splice(result, part, sub, voc, m):
     for r in isl:
         face_island[r.faces] = r.index
     return UnwrapResult(corner_uv, face_island, isl, result.seconds + part.seconds, result.method)
-
 
 
 def _loop(chart, r):

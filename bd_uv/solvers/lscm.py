@@ -13,6 +13,7 @@ import scipy.sparse.linalg as spla
 
 from ..geometry import face_areas, gradient_operators, local_coordinates
 from . import ordered_ldl, radix
+from ..trim import CHUNK
 
 try:  # LDL^T with AMD ordering; SuperLU without it
     import qdldl
@@ -20,9 +21,6 @@ except ImportError:  # pragma: no cover - exercised where qdldl is absent
     qdldl = None
 
 __all__ = ["FaceGeometry", "face_geometry", "face_geometry_of", "lscm_pinned", "spd_solver"]
-
-# Faces whose geometry is computed at a time.
-CHUNK = 65536
 
 
 @dataclass(frozen=True)

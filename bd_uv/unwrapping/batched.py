@@ -16,9 +16,7 @@ from ..solvers.lscm import face_geometry, lscm_pinned
 from ..solvers.ordered_ldl import vertex_ranks
 from .problem import STORE_HEADROOM
 from .results import IslandResult
-
-# Faces whose per-face numbers are computed at a time.
-CHUNK = 65536
+from ..trim import CHUNK
 
 
 def conformal_islands(V, islands, C, known=None):
