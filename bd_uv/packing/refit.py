@@ -51,10 +51,7 @@ def refitted(outlines, placement, options, tol):
     simplified ones that were placed) moved as one to the low corner, in the square of their
     extent plus the edges: (Placement, side), or None when they do not keep the padding
     there."""
-    lo, hi = placed_bounds(outlines, placement)
-    low = lo.min(axis=0)
-    side = (float((hi.max(axis=0) - low).max()) + 2 * tol) / (1 - options.padding) * (1 + 1e-12)
-    shift = placement.shift - low + (0.5 * options.padding * side + tol)
+    shift, side = _cornered(outlines, placement, options.padding, tol)
     if not fits(outlines, placement.angle, shift, side, options.padding, options.padding, tol):
         return None
     return Placement(placement.angle, shift, side), side
@@ -69,12 +66,19 @@ def anchored(outlines, angle, shift, S, pad, pm, tol):
     back (two charts, 0.1 s: Blender's torus at seed 2 ended 9 % and 7 % of the side from the
     low edges, coverage 0.58 where seed 0 reaches 0.78), the square kept that slack. Moving every
     chart alike keeps their gaps, and a smaller side asks a smaller padding."""
-    lo, hi = placed_bounds(outlines, Placement(angle, shift, S))
-    low = lo.min(axis=0)
-    tight = (float((hi.max(axis=0) - low).max()) + 2 * tol) / (1 - pad) * (1 + 1e-12)
+    moved, tight = _cornered(outlines, Placement(angle, shift, S), pad, tol)
     if tight >= S:
         return shift, S
-    moved = shift - low + (0.5 * pad * tight + tol)
     if not fits(outlines, angle, moved, tight, pad, pm, tol):
         return shift, S
     return moved, tight
+
+
+def _cornered(outlines, placement, pad, tol):
+    """The placement's shifts moved as one so that its outlines start at the low corner of the
+    square of their extent plus the edges (padding ``pad`` of the side, and ``tol``), and that
+    side: ((k,2) shift, side)."""
+    lo, hi = placed_bounds(outlines, placement)
+    low = lo.min(axis=0)
+    side = (float((hi.max(axis=0) - low).max()) + 2 * tol) / (1 - pad) * (1 + 1e-12)
+    return placement.shift - low + (0.5 * pad * side + tol), side

@@ -28,9 +28,9 @@ import numpy as np
 
 from ..errors import PackError
 from .compact import compact_square
-from .refit import on_exact
 from .nest import (FIT, Placement, _area, _strip, least_squares, nest, rotations,
                    single_layout)
+from .refit import on_exact
 
 DENSITY_GUESS = 0.63  # strip density expected (measured 0.58-0.70 on 27-46 charts of 5 meshes)
 START_PER_CHART = 0.015  # seconds of a solve's first placement per chart (measured, quiet)
@@ -122,7 +122,7 @@ def square_layout(outlines, options, tol, seconds, exact=None):
     seconds : float, the time to take (each solve's first placement is not bounded: it is
         left out of the nesting's share, measured as about ``START_PER_CHART`` seconds a chart)
     exact : list of (m_i,2) float arrays, optional: the outlines before their simplification
-        (same frame), compacted instead of the simplified ones (:func:`.compact.on_exact`)
+        (same frame), compacted instead of the simplified ones (:func:`.refit.on_exact`)
 
     Returns
     -------
