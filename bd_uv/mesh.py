@@ -125,15 +125,27 @@ def measurable(P):
 
 def thinner_than_precision(P, A, lmax2, precision):
     """(m,) bool: faces (corners ``P`` (m,3,3), areas ``A``, longest edges squared ``lmax2``)
-    whose height, twice the area over the longest edge, is below one step of ``precision`` (the
-    float type the positions were stored in: ``np.float32`` for glTF, USD, Blender) at their
-    largest coordinate: three points that precision cannot tell from a line. None or float64:
-    none."""
+    too thin for ``precision``, the float type the positions were stored in and the UVs are
+    written in (``np.float32`` for glTF, USD, Blender); None or float64: none. Their height,
+    twice the area over the longest edge, is below
+
+    - one step of ``precision`` at their largest coordinate: three points that precision cannot
+      tell from a line; or
+    - one step of ``precision`` in the unit square's upper half (2^-24 for float32) times the
+      square root of the mesh's area (the faces ``A`` given): at the largest scale a map of the
+      mesh into the unit square has on average (its faces keeping their 3D areas, all of the
+      square covered), the face is less than one UV step high, so no float32 UVs keep it from
+      flipping or collapsing wherever it is packed. usd-wg's tractor body has one such face
+      (3.7e-7 high at coordinates up to 2.85, 1.6 position steps, in 195 square units: 0.45 UV
+      step); it failed its island as stored in about one run of four, by where it was packed.
+    """
     if precision is None or np.dtype(precision) == np.float64:
         return np.zeros(len(A), dtype=bool)
     with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
         step = np.spacing(np.abs(P).max(axis=(1, 2)).astype(precision)).astype(np.float64)
-        return ~(2 * A > step * np.sqrt(lmax2))
+        total = float(np.sum(A[np.isfinite(A)]))
+        uv_step = float(np.spacing(np.asarray(0.5, dtype=precision))) * np.sqrt(total)
+        return ~(2 * A > np.maximum(step, uv_step) * np.sqrt(lmax2))
 
 
 def islands(V, F, seams=None, precision=None):

@@ -83,8 +83,8 @@ def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=Non
                              zero_area_faces=int(zero.sum()))
                 entry["warnings"].append(
                     f"{int(zero.sum())} face(s) of zero area at the float32 precision of their "
-                    "positions have no shape to map or certify: their corners take the UVs of "
-                    "the same vertices in neighbouring faces")
+                    "positions or UVs have no shape to map or certify: their corners take the "
+                    "UVs of the same vertices in neighbouring faces")
         elif entry["status"] != "failed":
             entry["warnings"].append("not every face was certified: the mesh keeps the UVs it "
                                      "had")

@@ -263,3 +263,48 @@ def test_a_piece_that_crosses_itself_only_in_a_later_layout_is_cut_too(monkeypat
     out = layout.corner_uv
     D, flipped = reference_distortion(V, F, out)
     assert not flipped.any() and D.max() <= 5.0
+
+
+def _sliver_fan():
+    """A flat fan of 5 faces over a 2000 x 2000 square whose face 0 is a sliver near the origin:
+    1e-6 high at coordinates up to 1 (about 8 float32 steps of its positions), in a mesh of 2e6
+    square units, so a map into the unit square that keeps every face's area makes it
+    1e-6 / sqrt(2e6) ~ 7e-10 high, about 0.01 of float32's UV step (2^-24) in the square's
+    upper half: wherever it is packed, rounding to float32 collapses or flips it (usd-wg's
+    tractor body holds one 0.45 UV step high, which failed its island one run in four)."""
+    V = np.array([[-1.0, 0, 0], [1, 0, 0], [0, 1e-6, 0], [0, 1000, 0], [0, -1000, 0],
+                  [-1000, 0, 0], [1000, 0, 0]], dtype=np.float32).astype(np.float64)
+    F = np.array([[0, 1, 2], [0, 2, 3], [2, 1, 3], [0, 4, 1], [5, 4, 0], [1, 4, 6]])
+    return V, F
+
+
+def test_a_face_thinner_than_a_float32_uv_step_is_left_out_not_its_island():
+    """A face float32 positions tell from a line, but no float32 UVs could keep apart at the
+    mesh's scale in the unit square, is too thin for the precision (``zero_area_faces``), and a
+    float32 job leaves it out (its corners take their neighbours' UVs) instead of leaving its
+    island unwritten. Checked from the geometry and on the UVs handed over."""
+    from bd_uv import batch
+    from bd_uv.batch import JobOptions
+    from bd_uv.repair import zero_area_faces
+    V, F = _sliver_fan()
+    P = V[F]
+    cross = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
+    area = 0.5 * np.linalg.norm(cross, axis=1)
+    longest = np.max(np.linalg.norm(P - np.roll(P, -1, axis=1), axis=2), axis=1)
+    height = 2 * area / longest
+    position_step = np.spacing(np.float32(1.0))          # face 0's largest coordinate is 1
+    uv_height = height[0] / np.sqrt(area.sum())          # every face keeping its area
+    assert height[0] > 4 * position_step and uv_height < 0.05 * 2.0 ** -24
+    thin = zero_area_faces(V, F, np.float32)
+    assert thin.tolist() == [True, False, False, False, False, False]
+    assert not zero_area_faces(V, F).any() and not zero_area_faces(V, F, np.float64).any()
+    opts = JobOptions(bd_uv.UnwrapOptions(seams_mode="needed"), pack=True, cut=True,
+                      pack_options=PACK)   # the command line's and the scenes' seams
+    out = batch.unwrap_job(batch.Job("fan", V, F, uv_dtype=np.float32,
+                                     position_dtype=np.float32), opts)
+    written = out.layout.face_island >= 0
+    assert written[1:].all()
+    uv = out.layout.corner_uv[1:]
+    assert np.array_equal(uv.astype(np.float32).astype(np.float64), uv)
+    D, flipped = reference_distortion(V, F[1:], uv)
+    assert not flipped.any() and D.max() <= out.entry["bound_certified"] * (1 + 1e-9)
