@@ -35,15 +35,19 @@ def reference_distortion(V, F, corner_uv):
 
 
 def float32_flat(V, F):
-    """(m,) bool: faces float32 positions cannot tell from a line, by this test's own sums:
-    twice the area (a cross product's norm) at most one float32 step of the largest coordinate
-    times the longest edge, or at most 1e-12 times the longest edge squared. The scene writers
-    leave such faces out of the certificate (their corners take neighbouring UVs)."""
+    """(m,) bool: faces too thin for float32, by this test's own sums: twice the area (a cross
+    product's norm) at most one float32 step of the largest coordinate times the longest edge
+    (positions cannot tell the face from a line), or at most 2^-24 (float32's step in [0.5, 1))
+    times the square root of the area of all of ``F`` times the longest edge (at the scale that
+    fills the unit square keeping every face's area the face is under one UV step high), or at
+    most 1e-12 times the longest edge squared. ``F`` is the whole mesh. The scene writers leave
+    such faces out of the certificate (their corners take neighbouring UVs)."""
     P = np.asarray(V, np.float64)[np.asarray(F)]
     a2 = np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
     edges = np.linalg.norm(P - np.roll(P, 1, axis=1), axis=2).max(axis=1)
     step = np.spacing(np.abs(P).max(axis=(1, 2)).astype(np.float32)).astype(np.float64)
-    return (a2 <= step * edges) | (a2 <= 1e-12 * edges ** 2)
+    uv_step = 2.0 ** -24 * np.sqrt(0.5 * a2[np.isfinite(a2)].sum())
+    return (a2 <= np.maximum(step, uv_step) * edges) | (a2 <= 1e-12 * edges ** 2)
 
 
 def grid(nx=6, ny=5, z=None):
