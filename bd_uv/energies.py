@@ -42,7 +42,7 @@ def jacobian_operators(Z, tris, nv):
     JacobianOperators
     """
     k = len(tris)
-    G = gradient_operators(Z)  # (k,2,3): d/dx, d/dy of a linear function from corner values
+    G, area = face_operators(Z)
     g0, g1 = G[:, 0, :].ravel(), G[:, 1, :].ravel()
     cols = np.concatenate([tris, tris + nv], axis=1).ravel()    # six entries a face's row
     indptr = np.arange(0, 6 * k + 1, 6)
@@ -58,10 +58,18 @@ def jacobian_operators(Z, tris, nv):
         return M
 
     # Re a = (u_x + v_y)/2, Im a = (v_x - u_y)/2, Re b = (u_x - v_y)/2, Im b = (v_x + u_y)/2.
-    area = 0.5 * np.abs(((Z[:, 1] - Z[:, 0]).conj() * (Z[:, 2] - Z[:, 0])).imag)
     return JacobianOperators(op(0.5 * g0, 0.5 * g1), op(-0.5 * g1, 0.5 * g0),
                              op(0.5 * g0, -0.5 * g1), op(0.5 * g1, 0.5 * g0), area,
                              np.asarray(tris, dtype=np.int64), G[:, 0, :], G[:, 1, :])
+
+
+def face_operators(Z):
+    """(G (k,2,3) each face's gradient operator: d/dx, d/dy of a linear function from its corner
+    values, area (k,)) of the faces with local corner coordinates Z (k,3) complex: the geometry
+    ``jacobian_operators`` builds its operators from (``unwrapping.disk_auto`` uses it bare)."""
+    G = gradient_operators(Z)
+    area = 0.5 * np.abs(((Z[:, 1] - Z[:, 0]).conj() * (Z[:, 2] - Z[:, 0])).imag)
+    return G, area
 
 
 def rotated_alpha(ops, w):

@@ -259,6 +259,18 @@ class BoundSearch:
     def _count(self, n):
         self.iterations += n
 
+    def distortion_of(self, u):
+        """Max conformal distortion (inf when a face flips) of the map u (nv,) complex, as
+        ``search`` measures the map it starts from (its fixed vertices held where u has them;
+        the lift kept when they are already there)."""
+        U = np.stack([u.real, u.imag])
+        UF = U[:, self.solver.fixed].T
+        if self.UF is None or not np.array_equal(self.UF, UF):
+            self.UF = UF
+        self.solver._assemble()
+        self._operators()
+        return self.max_distortion(self._lift(U))
+
     def search(self, u, frames_of=None, report=None, deadline=None, cancel=None):
         """The least max distortion reached from the flip-free map u (nv,) complex.
 
@@ -277,10 +289,7 @@ class BoundSearch:
         out_of_time : bool, the deadline stopped the search
         """
         U = np.stack([u.real, u.imag])
-        self.UF = U[:, self.solver.fixed].T
-        self.solver._assemble()
-        self._operators()
-        D = self.max_distortion(self._lift(U))
+        D = self.distortion_of(u)
         step, small = STEP, 0
         out_of_time = False
         while np.isfinite(D) and D > 1.0:

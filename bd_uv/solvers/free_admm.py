@@ -101,8 +101,9 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
 
     Parameters
     ----------
-    lift : FreeLift; solve : the global step's back-solve (nf,) -> (nf,) (its ``vector`` where
-        it has one: an answer that may be the solver's buffer, copied out before the next call)
+    lift : FreeLift; solve : the global step's back-solve (nf,) -> (nf,) (its ``paired`` where
+        it has one: both halves in place, ``ordered_ldl._paired``; else its ``vector`` where it
+        has one: an answer that may be the solver's buffer, copied out before the next call)
     w : (k,) unit complex frames; kappa : float, the cones' aperture; C : float, the target
     watch : ``bound_search``'s watch of a target (``seen(D, it, C) -> (better, stop)``, ``best``)
     alpha : float, the over-relaxation
@@ -115,11 +116,17 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
     k, nf = lift.k, lift.nf
     data, wdata, lift_fixed = lift.framed(w)
     rhs_fixed = lift.rhs_fixed
+    paired = getattr(solve, "paired", None)
+    paired = paired() if paired is not None else None
     solve = getattr(solve, "vector", solve)
     c = 1.0 / (1.0 + kappa * kappa)
-    x = x0.copy()
+    # with the paired solve (``ordered_ldl``: u and v in one call, in place) the right-hand side
+    # is built in x itself and solved there; else into ``rhs``, each half solved and copied out
+    x = x0.copy() if paired is None else paired.buffer
+    if paired is not None:
+        x[...] = x0
     xu, xv = x[:nf], x[nf:]
-    rhs = np.empty(2 * nf)
+    rhs = np.empty(2 * nf) if paired is None else x
     ru, rv = rhs[:nf], rhs[nf:]
     GU = np.empty((4, k))
     flat_gu = GU.reshape(-1)
@@ -184,8 +191,11 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
             T += P
             rhs[...] = rhs_fixed               # (np.copyto's Python wrapper: ~1 us more)
             lift.rhs(wdata, flat_t, rhs)
-            xu[...] = solve(ru)
-            xv[...] = solve(rv)
+            if paired is not None:
+                paired()
+            else:
+                xu[...] = solve(ru)
+                xv[...] = solve(rv)
             flat_gu[...] = lift_fixed
             lift.lift(data, x, flat_gu)
     count(it)                                   # the steps run: one before each measure

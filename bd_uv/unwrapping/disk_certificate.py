@@ -39,6 +39,17 @@ def certify_disk(corner_uv, G, disk, C, rtol=RTOL):
     (Certificate, D (m,) each face's conformal distortion, the least and the largest singular
     value over the faces), or (None, D, nan, nan) when a step fails (``certify_islands`` decides)
     """
+    D, smin, smax = measure_disk(corner_uv, G)
+    cert = certify_measured_disk(corner_uv, D, disk, C, rtol)
+    if cert is None:
+        return None, D, np.nan, np.nan
+    return cert, D, smin, smax
+
+
+def measure_disk(corner_uv, G):
+    """Step 1's measures of the UVs (m,3,2) as stored, with each face's gradient operator G
+    (m,2,3): (D (m,) each face's conformal distortion, inf where a face flips or collapses; the
+    least and the largest singular value over the faces)."""
     d = corner_uv - corner_uv[:, :1]
     gx = np.einsum("mkc,mc->mk", G, d[:, :, 0])
     gy = np.einsum("mkc,mc->mk", G, d[:, :, 1])
@@ -46,10 +57,7 @@ def certify_disk(corner_uv, G, disk, C, rtol=RTOL):
     beta = 0.5 * ((gx[:, 0] - gy[:, 1]) + 1j * (gy[:, 0] + gx[:, 1]))
     a, b = np.abs(alpha), np.abs(beta)
     D = _distortion(a, b, ~(signed_uv_areas(corner_uv) > 0))
-    cert = certify_measured_disk(corner_uv, D, disk, C, rtol)
-    if cert is None:
-        return None, D, np.nan, np.nan
-    return cert, D, float((a - b).min()), float((a + b).max())
+    return D, float((a - b).min()), float((a + b).max())
 
 
 def certify_measured_disk(corner_uv, D, disk, C, rtol=RTOL):

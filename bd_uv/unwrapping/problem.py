@@ -43,6 +43,12 @@ def solve_bound(C):
 STRETCH_MARGIN_SOLVE = 1.005
 
 
+def normalised(Vi, area3d):
+    """An island's vertices Vi (nv,3) centred and scaled to unit total area (area3d its area):
+    huge or tiny coordinates solve alike."""
+    return (Vi - Vi.mean(axis=0)) / np.sqrt(area3d)
+
+
 class Cancelled(Exception):
     """Raised inside the unwrap when its cancel event is set."""
 
@@ -78,8 +84,7 @@ class IslandProblem:
         self.V = Vi
         self.area3d = float((face_areas(Vi, island.tris) if faces_3d is None
                              else faces_3d[1]).sum())
-        # Normalise: centre and unit total area (huge or tiny coordinates solve alike).
-        self.Vn = (Vi - Vi.mean(axis=0)) / np.sqrt(self.area3d)
+        self.Vn = normalised(Vi, self.area3d)
         self.nv = len(Vi)
         self.Z = local_coordinates(self.Vn, island.tris)
         self.ops = jacobian_operators(self.Z, island.tris, self.nv)

@@ -20,7 +20,7 @@ from ..errors import (BDError, CancelledError, InvalidMeshError, IslandError, Op
 from ..mesh import as_indices, as_reals, check_arrays, checked_islands as split_islands
 from ..options import unwrap_options
 from ..trim import release_memory
-from . import bounded as within, one_disk, strategies
+from . import bounded as within, disk_auto, one_disk, strategies
 from . import stretch as stretch_search
 from .batched import conformal_islands
 from .finish import finish
@@ -103,6 +103,8 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     if disk is not None:
         done, u = one_disk.unwrap_disk(V, F, disk, None if opts.bound == "auto" else
                                        float(opts.bound), t0, progress, cancel)
+        if done is None and opts.bound == "auto" and opts.time_budget is None:
+            done = disk_auto.minimise_disk(V, disk, u, opts.bound_limit, t0, progress, cancel)
         if done is not None:
             return done
         conformal = {0: u}

@@ -103,3 +103,31 @@ def test_a_cancelled_search_stops_at_once():
     bs = BoundSearch(prob.ops, prob.nv, isl.tris, isl.loops[0][:1])
     u, D, _ = bs.search(u0, lambda v: frames_from_map(prob.alpha(v)), cancel=Set())
     assert bs.iterations == 0 and np.array_equal(u, u0)
+
+
+def test_the_paired_solve_gives_the_searchs_iterates_to_the_bit():
+    """A small island's iterations back-solve u and v in one call where the factor has it
+    (``ordered_ldl``'s ``paired``): the same maps, bits and iterations as one solve a half."""
+    from bd_uv.solvers.ordered_ldl import available, vertex_ranks
+    if not available():
+        pytest.skip("qdldl's module does not export QDLDL here")
+    V, F = load_off("nefertiti.off")
+    isl = islands(V, F)[0]
+    prob = IslandProblem(isl, V, NO_PINS, "lscm", "soc", None)
+    u0 = prob.fallback_map()
+    ranks = vertex_ranks(isl.tris, prob.nv)
+    fixed = isl.loops[0][:1]
+    paired = BoundSearch(prob.ops, prob.nv, isl.tris, fixed, connected=True, ranks=ranks)
+    u1, D1, _ = paired.search(u0)
+    assert hasattr(paired.solver.factorize(), "paired")
+    halves = BoundSearch(prob.ops, prob.nv, isl.tris, fixed, connected=True, ranks=ranks)
+    solve = halves.solver.factorize()
+
+    def one_half(b):
+        return solve(b)
+    one_half.vector = solve.vector          # no ``paired``: a solve a half
+    halves.solver._solve = one_half
+    u2, D2, _ = halves.search(u0)
+    assert np.array_equal(u1, u2) and D1 == D2 and paired.iterations == halves.iterations > 0
+    Dr, flipped = _map_distortion(V, isl, u1)
+    assert not flipped.any() and Dr.max() == pytest.approx(D1, rel=1e-9)

@@ -324,3 +324,31 @@ def test_finishs_measure_certifies_as_the_disk_certificates_own(name):
     folded = res.corner_uv.copy()
     folded[..., 0] = -folded[..., 0]        # mirrored: the loop winds clockwise
     assert one_disk.certify(disk, folded, C, r.distortion) is None
+
+
+def test_auto_on_a_disk_leaves_to_the_general_path_what_it_does_not_search():
+    """``disk_auto.minimise_disk`` answers only a flip-free conformal map within the limit on an
+    island of up to ONE_PRODUCT_FACES faces; otherwise None (the general path bends, solves or
+    searches on the whole map). Where it answers, its C is the map's max distortion as
+    ``certify_islands`` measures it from the UVs, and the search lowered it below the conformal
+    map's."""
+    import time
+    import bd_uv.solvers.bound_search as bs
+    from bd_uv.unwrapping import disk_auto
+    V, F = curved_grid()
+    F = np.asarray(F, np.int64)
+    disk = one_disk.find(V, F)
+    _, u = one_disk.unwrap_disk(V, F, disk, None, time.perf_counter())
+    D0 = bd_uv.unwrap(V, F, bound=1000.0).islands[0].max_distortion     # the conformal map's
+    assert disk_auto.minimise_disk(V, disk, u, 1.0 + 0.5 * (D0 - 1.0), 0.0) is None
+    done = disk_auto.minimise_disk(V, disk, u, 1000.0, 0.0)
+    (r,) = done.islands
+    assert r.flags == ("projected",) and r.iterations > 0 and r.max_distortion < D0
+    (c,) = certify_islands(V, F, done.corner_uv, done.face_island, [r.bound_certified])
+    assert c.certified and c.max_distortion == r.max_distortion <= r.bound_certified
+    old = bs.ONE_PRODUCT_FACES
+    try:
+        bs.ONE_PRODUCT_FACES = len(F) - 1
+        assert disk_auto.minimise_disk(V, disk, u, 1000.0, 0.0) is None
+    finally:
+        bs.ONE_PRODUCT_FACES = old

@@ -5,7 +5,7 @@ order solves:
 - the ranks are a permutation of the vertices, the same from any copy of the triangles, and None
   above ``RANKED_VERTICES``;
 - a matrix factorised in its own order solves to scipy's solution, one right-hand side or many,
-  and its in-place ``vector`` solve gives the same numbers;
+  and its in-place ``vector`` solve and its ``paired`` solve of two gives the same numbers;
 - the conformal map in the ranks' order equals qdldl's to rounding;
 - the global step with ranks numbers its free vertices in their order and solves the same
   least-squares step as without.
@@ -72,6 +72,16 @@ def test_a_matrix_factorised_in_its_own_order_solves_to_scipys_solution():
     assert np.array_equal(x, solve(b))
     # the upper triangle alone gives the same factor
     assert np.array_equal(ordered_ldl.solver_in_order(sp.triu(L, format="csc"))(b), solve(b))
+    # the paired solve (both halves of a (2n,) vector in one call, in place) is two solves
+    # bit for bit, and scipy's solution of the block-diagonal system
+    c = rng.standard_normal(L.shape[0])
+    pair = solve.paired()
+    assert pair is solve.paired()               # made once
+    pair.buffer[...] = np.concatenate([b, c])
+    pair()
+    assert np.array_equal(pair.buffer, np.concatenate([solve(b), solve(c)]))
+    both = spla.spsolve(sp.csc_matrix(sp.block_diag([L, L])), np.concatenate([b, c]))
+    assert np.allclose(pair.buffer, both, rtol=0, atol=1e-10 * np.abs(both).max())
 
 
 def test_the_conformal_map_in_the_ranks_order_is_qdldls_to_rounding():

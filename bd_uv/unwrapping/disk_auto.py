@@ -1,0 +1,115 @@
+"""``bound="auto"`` on a mesh that is one clean disk, from its ``one_disk.Disk`` geometry (issue 21
+item 1: auto's own set-up on the smallest disks).
+
+The general path (``unwrap._solve_island``, ``strategies.minimise``, ``finish``) builds an
+``IslandProblem`` for the island (normalised coordinates, their local frames, the four sparse
+Jacobian operators), measures the conformal map's distortion and frames there, searches, measures
+the searched map again, and certifies it. For a small disk whose conformal map is flip-free
+within the limit, every piece of that the search needs is already in the ``Disk``: each face's
+gradient operator and area (the conformal map was solved from them), and the vertices' elimination
+order. Here the bound search (``solvers.bound_search``, the general path's search, the same
+targets and stops) runs on them, and the map is placed as ``finish`` places it and certified by
+``disk_certificate`` at the bound ``finish`` reports. The search's iterations do not depend on
+the geometry's scale or place, so the maps are the general path's up to rounding (the general
+path works on a copy centred and scaled to unit area).
+
+Anything else goes the general way: a conformal map that flips or exceeds the limit (bent into a
+bound first), a time budget (Dinkelbach steps), more than ``bound_search.ONE_PRODUCT_FACES`` faces
+(the search's sparse operators: the set-up is a small part there), a map the disk certificate does
+not clear.
+"""
+import math
+import time
+
+import numpy as np
+
+from ..certificate import RTOL
+from ..energies import JacobianOperators, face_operators
+from ..errors import CancelledError
+from ..geometry import local_coordinates
+from ..metrics import mean_distortion
+from ..solvers import bound_search
+from .bounded import uv_area
+from .disk_certificate import certify_measured_disk, measure_disk
+from .finish import HIGH_DISTORTION, certified_bound
+from .problem import normalised
+from .results import IslandResult, UnwrapResult
+
+__all__ = ["minimise_disk"]
+
+
+def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None):
+    """The smallest certified C of a ``Disk`` from its conformal map u (nv,) complex128
+    (``one_disk.unwrap_disk``'s), as ``strategies.minimise`` finds it without a time budget.
+
+    Returns
+    -------
+    UnwrapResult, or None where the general path must decide (see the module's docstring)
+
+    Raises
+    ------
+    CancelledError when ``cancel`` is set
+    """
+    isl = disk.island
+    k, nv = len(isl.tris), len(isl.vertices)
+    if k > bound_search.ONE_PRODUCT_FACES:    # read at the call (tests set it)
+        return None
+    t = time.perf_counter()
+    # the search's geometry as IslandProblem normalises it (the same bits: the same maps)
+    area3d = float(disk.area.sum())
+    Gn, An = face_operators(local_coordinates(normalised(V.take(isl.vertices, axis=0), area3d),
+                                              isl.tris))
+    ops = JacobianOperators(None, None, None, None, An, isl.tris, Gn[:, 0, :], Gn[:, 1, :])
+    bs = bound_search.BoundSearch(ops, nv, isl.tris, isl.loops[0][:1], connected=True,
+                                  ranks=disk.ranks)
+    D0 = bs.distortion_of(u)
+    if not (np.isfinite(D0) and D0 <= limit):
+        return None
+
+    def report(D, C):
+        _report(progress, cancel, 0.1, f"island 1/1: minimising C: C* <= {D:.4g}, aiming at "
+                f"{C:.4g}")
+    us, D, _ = bs.search(u, None, report, None, cancel)
+    if cancel is not None and cancel.is_set():
+        raise CancelledError("unwrap cancelled; nothing was changed")
+    project = time.perf_counter() - t
+    flags = ("projected",) if D < D0 else ("initial_map",)
+    if D >= D0:
+        us, D = u, D0
+    # placed as finish places a map of no pin: UV area = 3D area, bounding box at (0, 0)
+    area = uv_area(us, isl.tris)
+    s = math.sqrt(area3d / area) if area > 0.0 and math.isfinite(area) else 1.0
+    us = s * us
+    us = us - (us.real.min() + 1j * us.imag.min())
+    uv = np.stack([us.real, us.imag], axis=1)
+    corner_uv = uv.take(isl.tris, axis=0)
+    t = time.perf_counter()
+    Dm, smin, smax = measure_disk(corner_uv, disk.G)
+    mx = float(Dm.max())
+    C = certified_bound(mx)
+    # finish's test (the map within the bound its search reached) and the disk certificate
+    cert = (certify_measured_disk(corner_uv, Dm, disk, C)
+            if mx <= certified_bound(D) * (1.0 + RTOL) and C <= HIGH_DISTORTION else None)
+    if cert is None:
+        return None
+    res = IslandResult(
+        0, isl.faces, isl.vertices, isl.tris, uv=uv, status="certified",
+        message=f"island 0: {k} faces, max distortion {mx:.3f} <= {C:.4g}, 0 flipped",
+        bound_requested="auto", bound_certified=float(C), max_distortion=mx,
+        mean_distortion=mean_distortion(None, None, Dm, disk.area), flipped=0, frames="conformal",
+        seconds=time.perf_counter() - t0, iterations=bs.iterations, distortion=Dm, flags=flags,
+        overlap_free=True, min_singular=smin, max_singular=smax,
+        timings={"setup": 0.0, "solve": 0.0, "certify": time.perf_counter() - t,
+                 "project": project})
+    _report(progress, cancel, 1.0, "island 1/1: minimised")
+    if progress is not None:
+        progress(1.0, "done")
+    return UnwrapResult(corner_uv, np.zeros(k, dtype=np.int64), [res], time.perf_counter() - t0,
+                        "lscm", certificates=(cert,))
+
+
+def _report(progress, cancel, fraction, message):
+    if progress is not None:
+        progress(fraction, message)
+    if cancel is not None and cancel.is_set():
+        raise CancelledError("unwrap cancelled; nothing was changed")
