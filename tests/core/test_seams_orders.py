@@ -20,7 +20,7 @@ from bd_uv.seams.bisect import FaceCentroids, bisect
 from bd_uv.seams.edges import edge_table
 from bd_uv.seams.topology import charts
 from bd_uv.solvers import ordered_ldl
-from bd_uv.solvers.lscm import _lscm_system, face_geometry
+from bd_uv.solvers.lscm import Upper, _lscm_system, face_geometry
 from seams_helpers import sphere_cut, uv_sphere
 
 pytestmark = pytest.mark.skipif(not ordered_ldl.available(),
@@ -79,6 +79,43 @@ def test_factor_solves_in_any_order_with_the_fill_its_etree_counts():
     natural = ordered_ldl.Factor(U.indices.astype(np.int64), cols, U.data, n, np.arange(n))
     ordered = ordered_ldl.Factor(U.indices.astype(np.int64), cols, U.data, n, inter)
     assert ordered.lnz < natural.lnz
+
+
+def test_the_system_as_triplets_is_its_csc_and_factors_to_the_same_bits():
+    """``_lscm_system(triplets=True)``: the same entries as its csc matrix, in no order;
+    ``ordered_solver`` factors them as they come, to the bits of the sorted entries (in any
+    triplet order), and compresses them itself where it refuses the order (AMD afresh)."""
+    V, F = _bumpy_disk()
+    U, rhs, _, free = _system(V, F)
+    g = face_geometry(V, F)
+    T, rhs2, _, free2 = _lscm_system(g.cbw(), g.cb, F, len(V), np.array([0, len(V) - 1]),
+                                     np.array([0.0, 1.0], np.complex128), triplets=True)
+    n = U.shape[0]
+    assert T.n == n and np.array_equal(rhs, rhs2) and np.array_equal(free, free2)
+    assert len(T.rows) == U.nnz and np.all(T.rows <= T.cols)
+    dense = np.zeros((n, n))
+    dense[T.rows, T.cols] = T.vals
+    assert np.array_equal(dense, U.toarray())
+    C = T.csc()
+    assert np.array_equal(C.indptr, U.indptr) and np.array_equal(C.indices, U.indices)
+    assert np.array_equal(C.data, U.data)
+    keys = np.random.default_rng(2).permutation(len(free))
+    sorted_ = Upper(U.indices.astype(np.int64),
+                                    np.repeat(np.arange(n), np.diff(U.indptr)), U.data, n)
+    p = np.random.default_rng(3).permutation(len(T.rows))
+    shuffled = Upper(T.rows[p], T.cols[p], T.vals[p], n)
+    want = spla.spsolve((U + sp.triu(U, 1).T).tocsc(), rhs)
+    xs = []
+    for A in (sorted_, T, shuffled):
+        solve, fill, rank = orders_mod.ordered_solver(A, keys, 0.0)
+        assert fill > 0 and rank is None
+        xs.append(solve(rhs))
+    assert all(np.array_equal(x, xs[0]) for x in xs)
+    np.testing.assert_allclose(xs[0], want, rtol=1e-9, atol=1e-12)
+    # A budget no order meets: refused, ordered afresh by AMD of the u block, still solved.
+    solve, fill, rank = orders_mod.ordered_solver(shuffled, keys, 1e-9)
+    assert rank is not None and np.array_equal(np.sort(rank), np.arange(len(free)))
+    np.testing.assert_allclose(solve(rhs), want, rtol=1e-9, atol=1e-12)
 
 
 def test_a_zero_pivot_is_refused():
