@@ -206,13 +206,24 @@ def _factor(A, keys):
     return f if f.lnz >= 0 else None
 
 
-def fiedler_solver(K, keys):
-    """Solve of a Fiedler system K (upper triangle, csc, one node a face) in the order of its
+def fiedler_solver(rows, cols, vals, keys, upper):
+    """Solve of a Fiedler system (its upper triangle as triplets ``rows``, ``cols``, ``vals``,
+    one node a face; ``upper()`` the canonical csc matrix, duplicates summed) in the order of its
     nodes' ``keys``; where a key is -1 the system is ordered afresh (AMD) and ``keys`` (a view
     the caller reads back) rewritten with it. A piece of a chart keeps the chart's order: the
     dual graph of a piece is a subgraph of the chart's, so its fill is within the chart's.
-    ``spd_solver`` where the factorisation fails."""
-    k = K.shape[0]
+    ``spd_solver`` where the factorisation fails.
+
+    Where every key is given, the triplets go to ``ordered_ldl.Factor`` as they are (it sorts
+    them in its own order: the same compressed matrix, the same bits as from ``upper()``),
+    unless two share a place (two faces with two edges in common), which ``upper()`` sums."""
+    k = len(keys)
+    if (keys >= 0).all():
+        uk, r = np.unique(keys, return_inverse=True)     # (as ``_factor``)
+        f = ordered_ldl.Factor(rows, cols, vals, k, radix.order(r, len(uk)))
+        if not f.repeated():
+            return f.solve if f.lnz >= 0 and f.factor() else spd_solver(upper(), upper=True)
+    K = upper()
     if (keys < 0).any():
         p = ordered_ldl.amd(K.indptr, K.indices, k)
         if p is not None:

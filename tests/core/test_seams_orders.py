@@ -268,3 +268,56 @@ def test_an_unchecked_qdldl_release_takes_qdldls_own_order(monkeypatch):
         ordered_ldl._lib.cache_clear()
     assert ordered_ldl.available() == (ordered_ldl._version() in ordered_ldl.TESTED)
     assert ordered_ldl.available()    # the pinned qdldl: later tests take the ordered path
+
+
+def test_fiedler_triplets_factor_as_the_compressed_system_and_repeats_are_summed():
+    """``fiedler_solver`` with every key given factors the triplets as they come: the bits of
+    the compressed matrix, in any triplet order; triplets sharing a place are summed first
+    (``upper()``), and keys of -1 are ordered afresh and handed back."""
+    rng = np.random.default_rng(5)
+    k = 40
+    a = rng.integers(0, k, 120)
+    b = (a + rng.integers(1, k, 120)) % k                 # no loops
+    pairs = np.stack([np.minimum(a, b), np.maximum(a, b)], 1)
+    pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+    keep = np.r_[True, np.any(pairs[1:] != pairs[:-1], axis=1)]
+    w = rng.uniform(0.5, 2.0, len(pairs))
+    rhs = rng.standard_normal(k)
+
+    def system(pairs, w):
+        deg = np.bincount(pairs.ravel(), np.repeat(w, 2), minlength=k) + 0.1
+        idx = np.arange(k)
+        rows = np.concatenate([pairs[:, 0], idx])
+        cols = np.concatenate([pairs[:, 1], idx])
+        vals = np.concatenate([-w, deg])
+
+        def upper():
+            from bd_uv.seams.compressed import compressed
+            return sp.csc_matrix(compressed(cols, rows, vals, k), shape=(k, k))
+        full = sp.coo_matrix((vals, (rows, cols)), shape=(k, k)).tocsc()
+        return rows, cols, vals, upper, (full + sp.triu(full, 1).T).tocsc()
+
+    keys = rng.permutation(k)
+    # Distinct pairs: as given, shuffled, and through the compressed matrix: the same bits.
+    rows, cols, vals, upper, full = system(pairs[keep], w[keep])
+    want = spla.spsolve(full, rhs)
+    p = rng.permutation(len(rows))
+    x1 = orders_mod.fiedler_solver(rows, cols, vals, keys.copy(), upper)(rhs)
+    x2 = orders_mod.fiedler_solver(rows[p], cols[p], vals[p], keys.copy(), upper)(rhs)
+    U = upper()
+    f = ordered_ldl.Factor(U.indices.astype(np.int64), np.repeat(np.arange(k), np.diff(U.indptr)),
+                           U.data, k, np.argsort(keys))
+    assert not f.repeated() and f.factor()
+    assert np.array_equal(x1, x2) and np.array_equal(x1, f.solve(rhs))
+    np.testing.assert_allclose(x1, want, rtol=1e-9, atol=1e-12)
+    # Repeated pairs (as two faces sharing two edges would give): summed, not factored twice.
+    assert (~keep).any()
+    rows, cols, vals, upper, full = system(pairs, w)
+    assert ordered_ldl.Factor(rows, cols, vals, k, np.argsort(keys)).repeated()
+    x = orders_mod.fiedler_solver(rows, cols, vals, keys.copy(), upper)(rhs)
+    np.testing.assert_allclose(x, spla.spsolve(full, rhs), rtol=1e-9, atol=1e-12)
+    # Keys of -1: ordered afresh (AMD), the keys handed back.
+    fresh = np.full(k, -1)
+    x = orders_mod.fiedler_solver(rows, cols, vals, fresh, upper)(rhs)
+    assert np.array_equal(np.sort(fresh), np.arange(k))
+    np.testing.assert_allclose(x, spla.spsolve(full, rhs), rtol=1e-9, atol=1e-12)
