@@ -255,11 +255,15 @@ def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12, keys=None
     def upper():
         return sp.csc_matrix(compressed(cols, rows, vals, k), shape=(k, k))
     try:
-        solve = (spd_solver(upper(), upper=True) if keys is None
-                 else fiedler_solver(rows, cols, vals, keys, upper))
+        if keys is None:            # (every system of a mesh above ``orders.MESH_VERTICES``)
+            K = upper()
+            rows = cols = vals = None       # not held beside the factor: only K, as before
+            solve = spd_solver(K, upper=True)
+        else:
+            solve = fiedler_solver(rows, cols, vals, keys, upper)
     except RuntimeError:
         return None
-    rows = cols = vals = None
+    rows = cols = vals = K = None
     tot = np.maximum(total, 1e-300)[group]
     for _ in range(iters):
         x = x - np.bincount(group, mass * x, g)[group] / tot
