@@ -239,7 +239,8 @@ def _lscm_ordered(geom, faces, tris, n, idx, val, keys=None, budget=0.0):
     """``_lscm_pinned``, with ``keys`` (n,) the unknowns eliminated in their vertices' order
     (``orders.ordered_solver``, ``budget`` its fill limit). Returns (u, (the fill and ranks
     ``ordered_solver`` returns, the free vertices) or None without keys)."""
-    A, rhs, u, free = _lscm_system(geom.cbw(faces), geom.cb[faces], tris, n, idx, val)
+    A, rhs, u, free = _lscm_system(geom.cbw(faces), geom.cb[faces], tris, n, idx, val,
+                                   triplets=keys is not None)
     release_memory(len(tris))
     info = None
     if keys is None:

@@ -168,50 +168,62 @@ class Orders:
 
 
 def ordered_solver(A, keys, budget):
-    """Solve of the LSCM system A (upper triangle, csc, unknowns ``[u; v]`` of the free
-    vertices) eliminated in the order of ``keys`` (the free vertices' keys, u and v of a
-    vertex side by side). With ``budget`` > 0, an order whose factor would hold more than
-    ``budget`` entries per unknown is refused and the system ordered afresh (AMD of its
-    vertex graph, the u block's pattern); ``spd_solver`` where even that fails.
+    """Solve of the LSCM system A (``lscm.Upper``: its upper triangle as triplets, unknowns
+    ``[u; v]`` of the free vertices) eliminated in the order of ``keys`` (the free vertices'
+    keys, u and v of a vertex side by side). With ``budget`` > 0, an order whose factor would
+    hold more than ``budget`` entries per unknown is refused and the system ordered afresh (AMD
+    of its vertex graph, the u block's pattern); ``spd_solver`` where even that fails. The
+    triplets are compressed (``Upper.csc``) only for those two: ``ordered_ldl.Factor`` sorts
+    them in its own order, and the same matrix in any triplet order is factored to the same bits.
 
     Returns
     -------
     (callable b -> x, factor entries per unknown of the order used (None: ``spd_solver``),
      the fresh order's ranks of the free vertices or None)
     """
-    n = A.shape[0]
+    n = A.n
     f = _factor(A, keys)
     if f is not None and (budget <= 0 or f.lnz <= budget * n) and f.factor():
         return f.solve, f.lnz / max(n, 1), None
     nf = n // 2
-    p = ordered_ldl.amd(A.indptr[:nf + 1], A.indices[:A.indptr[nf]], nf)
+    C = A.csc()
+    p = ordered_ldl.amd(C.indptr[:nf + 1], C.indices[:C.indptr[nf]], nf)
     if p is not None:
         rank = np.empty(nf, np.int64)
         rank[p] = np.arange(nf)
         f = _factor(A, rank)
         if f is not None and f.factor():
             return f.solve, f.lnz / max(n, 1), rank
-    return spd_solver(A, upper=True), None, None
+    return spd_solver(C, upper=True), None, None
 
 
 def _factor(A, keys):
-    n = A.shape[0]
     # The keys' dense ranks keep their order (ties included), so the radix order of the ranks
     # is the keys' stable order (``solvers.radix``): one sort of n / 2 keys, not of n.
     uk, r = np.unique(keys, return_inverse=True)
     perm = radix.order(np.concatenate([2 * r, 2 * r + 1]), 2 * len(uk))
-    cols = np.repeat(np.arange(n, dtype=np.int64), np.diff(A.indptr))
-    f = ordered_ldl.Factor(A.indices.astype(np.int64), cols, A.data, n, perm)
+    f = ordered_ldl.Factor(A.rows, A.cols, A.vals, A.n, perm)
     return f if f.lnz >= 0 else None
 
 
-def fiedler_solver(K, keys):
-    """Solve of a Fiedler system K (upper triangle, csc, one node a face) in the order of its
+def fiedler_solver(rows, cols, vals, keys, upper):
+    """Solve of a Fiedler system (its upper triangle as triplets ``rows``, ``cols``, ``vals``,
+    one node a face; ``upper()`` the canonical csc matrix, duplicates summed) in the order of its
     nodes' ``keys``; where a key is -1 the system is ordered afresh (AMD) and ``keys`` (a view
     the caller reads back) rewritten with it. A piece of a chart keeps the chart's order: the
     dual graph of a piece is a subgraph of the chart's, so its fill is within the chart's.
-    ``spd_solver`` where the factorisation fails."""
-    k = K.shape[0]
+    ``spd_solver`` where the factorisation fails.
+
+    Where every key is given, the triplets go to ``ordered_ldl.Factor`` as they are (it sorts
+    them in its own order: the same compressed matrix, the same bits as from ``upper()``),
+    unless two share a place (two faces with two edges in common), which ``upper()`` sums."""
+    k = len(keys)
+    if (keys >= 0).all():
+        uk, r = np.unique(keys, return_inverse=True)     # (as ``_factor``)
+        f = ordered_ldl.Factor(rows, cols, vals, k, radix.order(r, len(uk)))
+        if not f.repeated():
+            return f.solve if f.lnz >= 0 and f.factor() else spd_solver(upper(), upper=True)
+    K = upper()
     if (keys < 0).any():
         p = ordered_ldl.amd(K.indptr, K.indices, k)
         if p is not None:

@@ -246,15 +246,24 @@ def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12, keys=None
     cnt = np.maximum(np.bincount(group, minlength=g), 1)
     shift = 1e-8 * (np.bincount(group, deg, g) / cnt) / np.maximum(total / cnt, 1e-300)
     idx = np.arange(k)
-    # Upper triangle only (the factorisation reads no more).
-    K = sp.csc_matrix(compressed(np.concatenate([pairs.max(axis=1), idx]),
-                                  np.concatenate([pairs.min(axis=1), idx]),
-                                  np.concatenate([-w, deg + shift[group] * mass]), k),
-                      shape=(k, k))
+    # Upper triangle only (the factorisation reads no more), as triplets: the ordered factor
+    # sorts them in its own order (``orders.fiedler_solver``); compressed where needed.
+    rows = np.concatenate([pairs.min(axis=1), idx])
+    cols = np.concatenate([pairs.max(axis=1), idx])
+    vals = np.concatenate([-w, deg + shift[group] * mass])
+
+    def upper():
+        return sp.csc_matrix(compressed(cols, rows, vals, k), shape=(k, k))
     try:
-        solve = spd_solver(K, upper=True) if keys is None else fiedler_solver(K, keys)
+        if keys is None:            # (every system of a mesh above ``orders.MESH_VERTICES``)
+            K = upper()
+            rows = cols = vals = None       # not held beside the factor: only K, as before
+            solve = spd_solver(K, upper=True)
+        else:
+            solve = fiedler_solver(rows, cols, vals, keys, upper)
     except RuntimeError:
         return None
+    rows = cols = vals = K = None
     tot = np.maximum(total, 1e-300)[group]
     for _ in range(iters):
         x = x - np.bincount(group, mass * x, g)[group] / tot

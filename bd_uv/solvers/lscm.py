@@ -161,11 +161,12 @@ def _ranked_solver(A, keys):
     return f.solve if f.lnz >= 0 and f.factor() else None
 
 
-def _lscm_system(cbw, cb, tris, n, idx, val, sides=None):
-    """``lscm_pinned``'s system: Q's upper triangle on the free unknowns (csc), the right-hand
-    side, the map with the pinned values set (zeros elsewhere), the free vertices. Its own
-    function so that the assembly's temporaries (a few times the matrix) are freed before the
-    factorisation, which is the memory peak of a large chart."""
+def _lscm_system(cbw, cb, tris, n, idx, val, sides=None, triplets=False):
+    """``lscm_pinned``'s system: Q's upper triangle on the free unknowns (csc; with
+    ``triplets`` an ``Upper``, unsorted: a factorisation in an order of its own sorts them
+    anyway), the right-hand side, the map with the pinned values set (zeros elsewhere), the free
+    vertices. Its own function so that the assembly's temporaries (a few times the matrix) are
+    freed before the factorisation, which is the memory peak of a large chart."""
     idx = np.asarray(idx, dtype=np.int64)
     pinned = np.zeros(n, dtype=bool)
     pinned[idx] = True
@@ -204,15 +205,29 @@ def _lscm_system(cbw, cb, tris, n, idx, val, sides=None):
     bl, bh, im_b = pos[lo[rim]], pos[hi[rim]], im_e[rim]
     free = np.flatnonzero(~pinned)
     pd = pos[free]
-    rows = np.concatenate([pd, pl, pd + nf, pl + nf, bl, bh])
-    cols = np.concatenate([pd, ph, pd + nf, ph + nf, bh + nf, bl + nf])
-    vals = np.concatenate([diag[free], re_e, diag[free], re_e, -im_b, im_b])
-    # No two entries share a place (one per free vertex, per edge, per boundary edge and side),
-    # so the compressed columns are the entries sorted by (column, row): no triplet conversion
-    # (scipy's is ~0.4 ms of fixed cost on a 200-face island).
-    order = radix.order(cols * (2 * nf) + rows, 4 * nf * nf)
-    indptr = np.zeros(2 * nf + 1, dtype=np.int64)
-    np.cumsum(np.bincount(cols, minlength=2 * nf), out=indptr[1:])
-    A = sp.csc_matrix((vals[order], rows[order], indptr), shape=(2 * nf, 2 * nf))
+    # No two entries share a place (one per free vertex, per edge, per boundary edge and side).
+    A = Upper(np.concatenate([pd, pl, pd + nf, pl + nf, bl, bh]),
+              np.concatenate([pd, ph, pd + nf, ph + nf, bh + nf, bl + nf]),
+              np.concatenate([diag[free], re_e, diag[free], re_e, -im_b, im_b]), 2 * nf)
     rhs = np.concatenate([rhs_c.real[free], rhs_c.imag[free]])
-    return A, rhs, u0, free
+    return (A if triplets else A.csc()), rhs, u0, free
+
+
+@dataclass(frozen=True)
+class Upper:
+    """The upper triangle (diagonal included) of an n x n symmetric matrix as triplets, no two
+    at one place, in no particular order (``_lscm_system``'s, for a factorisation that sorts
+    them in its own order: ``seams.orders.ordered_solver``)."""
+    rows: np.ndarray
+    cols: np.ndarray
+    vals: np.ndarray
+    n: int
+
+    def csc(self):
+        """The canonical csc matrix: the entries sorted by (column, row), no triplet conversion
+        (scipy's is ~0.4 ms of fixed cost on a 200-face island)."""
+        n, rows, cols = self.n, self.rows, self.cols
+        order = radix.order(cols * n + rows, n * n)
+        indptr = np.zeros(n + 1, dtype=np.int64)
+        np.cumsum(np.bincount(cols, minlength=n), out=indptr[1:])
+        return sp.csc_matrix((self.vals[order], rows[order], indptr), shape=(n, n))

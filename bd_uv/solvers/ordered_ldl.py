@@ -227,6 +227,15 @@ class Factor:
         self.lnz = int(_lib().QDLDL_etree(n, _p(self.Ap), _p(self.Ai), _p(self.work),
                                           _p(self.Lnz), _p(self.etree)))
 
+    def repeated(self):
+        """Whether two of the triplets given share a place (before ``factor``, which needs them
+        summed first): equal rows side by side within a column."""
+        Ai, Ap = self.Ai, self.Ap
+        same = Ai[1:] == Ai[:-1]
+        starts = Ap[1:-1]
+        same[starts[(starts > 0) & (starts < len(Ai))] - 1] = False
+        return bool(same.any())
+
     def factor(self):
         n, lib = self.n, _lib()
         if self.lnz < 0:

@@ -20,7 +20,7 @@ from bd_uv.seams.bisect import FaceCentroids, bisect
 from bd_uv.seams.edges import edge_table
 from bd_uv.seams.topology import charts
 from bd_uv.solvers import ordered_ldl
-from bd_uv.solvers.lscm import _lscm_system, face_geometry
+from bd_uv.solvers.lscm import Upper, _lscm_system, face_geometry
 from seams_helpers import sphere_cut, uv_sphere
 
 pytestmark = pytest.mark.skipif(not ordered_ldl.available(),
@@ -79,6 +79,43 @@ def test_factor_solves_in_any_order_with_the_fill_its_etree_counts():
     natural = ordered_ldl.Factor(U.indices.astype(np.int64), cols, U.data, n, np.arange(n))
     ordered = ordered_ldl.Factor(U.indices.astype(np.int64), cols, U.data, n, inter)
     assert ordered.lnz < natural.lnz
+
+
+def test_the_system_as_triplets_is_its_csc_and_factors_to_the_same_bits():
+    """``_lscm_system(triplets=True)``: the same entries as its csc matrix, in no order;
+    ``ordered_solver`` factors them as they come, to the bits of the sorted entries (in any
+    triplet order), and compresses them itself where it refuses the order (AMD afresh)."""
+    V, F = _bumpy_disk()
+    U, rhs, _, free = _system(V, F)
+    g = face_geometry(V, F)
+    T, rhs2, _, free2 = _lscm_system(g.cbw(), g.cb, F, len(V), np.array([0, len(V) - 1]),
+                                     np.array([0.0, 1.0], np.complex128), triplets=True)
+    n = U.shape[0]
+    assert T.n == n and np.array_equal(rhs, rhs2) and np.array_equal(free, free2)
+    assert len(T.rows) == U.nnz and np.all(T.rows <= T.cols)
+    dense = np.zeros((n, n))
+    dense[T.rows, T.cols] = T.vals
+    assert np.array_equal(dense, U.toarray())
+    C = T.csc()
+    assert np.array_equal(C.indptr, U.indptr) and np.array_equal(C.indices, U.indices)
+    assert np.array_equal(C.data, U.data)
+    keys = np.random.default_rng(2).permutation(len(free))
+    sorted_ = Upper(U.indices.astype(np.int64),
+                                    np.repeat(np.arange(n), np.diff(U.indptr)), U.data, n)
+    p = np.random.default_rng(3).permutation(len(T.rows))
+    shuffled = Upper(T.rows[p], T.cols[p], T.vals[p], n)
+    want = spla.spsolve((U + sp.triu(U, 1).T).tocsc(), rhs)
+    xs = []
+    for A in (sorted_, T, shuffled):
+        solve, fill, rank = orders_mod.ordered_solver(A, keys, 0.0)
+        assert fill > 0 and rank is None
+        xs.append(solve(rhs))
+    assert all(np.array_equal(x, xs[0]) for x in xs)
+    np.testing.assert_allclose(xs[0], want, rtol=1e-9, atol=1e-12)
+    # A budget no order meets: refused, ordered afresh by AMD of the u block, still solved.
+    solve, fill, rank = orders_mod.ordered_solver(shuffled, keys, 1e-9)
+    assert rank is not None and np.array_equal(np.sort(rank), np.arange(len(free)))
+    np.testing.assert_allclose(solve(rhs), want, rtol=1e-9, atol=1e-12)
 
 
 def test_a_zero_pivot_is_refused():
@@ -231,3 +268,56 @@ def test_an_unchecked_qdldl_release_takes_qdldls_own_order(monkeypatch):
         ordered_ldl._lib.cache_clear()
     assert ordered_ldl.available() == (ordered_ldl._version() in ordered_ldl.TESTED)
     assert ordered_ldl.available()    # the pinned qdldl: later tests take the ordered path
+
+
+def test_fiedler_triplets_factor_as_the_compressed_system_and_repeats_are_summed():
+    """``fiedler_solver`` with every key given factors the triplets as they come: the bits of
+    the compressed matrix, in any triplet order; triplets sharing a place are summed first
+    (``upper()``), and keys of -1 are ordered afresh and handed back."""
+    rng = np.random.default_rng(5)
+    k = 40
+    a = rng.integers(0, k, 120)
+    b = (a + rng.integers(1, k, 120)) % k                 # no loops
+    pairs = np.stack([np.minimum(a, b), np.maximum(a, b)], 1)
+    pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+    keep = np.r_[True, np.any(pairs[1:] != pairs[:-1], axis=1)]
+    w = rng.uniform(0.5, 2.0, len(pairs))
+    rhs = rng.standard_normal(k)
+
+    def system(pairs, w):
+        deg = np.bincount(pairs.ravel(), np.repeat(w, 2), minlength=k) + 0.1
+        idx = np.arange(k)
+        rows = np.concatenate([pairs[:, 0], idx])
+        cols = np.concatenate([pairs[:, 1], idx])
+        vals = np.concatenate([-w, deg])
+
+        def upper():
+            from bd_uv.seams.compressed import compressed
+            return sp.csc_matrix(compressed(cols, rows, vals, k), shape=(k, k))
+        full = sp.coo_matrix((vals, (rows, cols)), shape=(k, k)).tocsc()
+        return rows, cols, vals, upper, (full + sp.triu(full, 1).T).tocsc()
+
+    keys = rng.permutation(k)
+    # Distinct pairs: as given, shuffled, and through the compressed matrix: the same bits.
+    rows, cols, vals, upper, full = system(pairs[keep], w[keep])
+    want = spla.spsolve(full, rhs)
+    p = rng.permutation(len(rows))
+    x1 = orders_mod.fiedler_solver(rows, cols, vals, keys.copy(), upper)(rhs)
+    x2 = orders_mod.fiedler_solver(rows[p], cols[p], vals[p], keys.copy(), upper)(rhs)
+    U = upper()
+    f = ordered_ldl.Factor(U.indices.astype(np.int64), np.repeat(np.arange(k), np.diff(U.indptr)),
+                           U.data, k, np.argsort(keys))
+    assert not f.repeated() and f.factor()
+    assert np.array_equal(x1, x2) and np.array_equal(x1, f.solve(rhs))
+    np.testing.assert_allclose(x1, want, rtol=1e-9, atol=1e-12)
+    # Repeated pairs (as two faces sharing two edges would give): summed, not factored twice.
+    assert (~keep).any()
+    rows, cols, vals, upper, full = system(pairs, w)
+    assert ordered_ldl.Factor(rows, cols, vals, k, np.argsort(keys)).repeated()
+    x = orders_mod.fiedler_solver(rows, cols, vals, keys.copy(), upper)(rhs)
+    np.testing.assert_allclose(x, spla.spsolve(full, rhs), rtol=1e-9, atol=1e-12)
+    # Keys of -1: ordered afresh (AMD), the keys handed back.
+    fresh = np.full(k, -1)
+    x = orders_mod.fiedler_solver(rows, cols, vals, fresh, upper)(rhs)
+    assert np.array_equal(np.sort(fresh), np.arange(k))
+    np.testing.assert_allclose(x, spla.spsolve(full, rhs), rtol=1e-9, atol=1e-12)
