@@ -26,13 +26,13 @@ TRIM_FACES = 50_000
 CHUNK = 65536
 
 # While a search of at least ``TRIM_FACES`` faces runs, every block of at least this many bytes
-# (an array of 512k float64) is mapped on its own and returned at its free: glibc's rule would
+# (an array of 262k float64) is mapped on its own and returned at its free: glibc's rule would
 # otherwise raise its mmap threshold to the largest array freed (up to 32 MB), and the freed
 # arrays of each step stay resident in its heap until the next ``release_memory``. Measured on a
-# 500k-face mesh (benchmarks/results/issue21-mem7-2026-11-27.md): 4 MB takes ~20 MB off the
-# search's peak for ~4 s more system time (pages faulted in afresh); 1 MB took 2 MB more off
-# for ~10 s more, 16 MB 4 MB less for ~2 s.
-MAP_BYTES = 4 << 20
+# 500k-face mesh (benchmarks/results/issue21-mem7-2026-11-27.md): the peak 355-374 -> 328-331 MB
+# for ~5.5 s more system time (pages faulted in afresh; +17 % CPU); 4 MB: 328-340 MB for ~3 s;
+# 1 MB: ~10 s.
+MAP_BYTES = 2 << 20
 # glibc's mallopt parameters; its default trim threshold; its dynamic rule's largest mmap
 # threshold (DEFAULT_MMAP_THRESHOLD_MAX on 64-bit), and the trim threshold it sets beside it.
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3

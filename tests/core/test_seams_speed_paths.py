@@ -371,7 +371,7 @@ def test_large_blocks_mapped_returns_freed_arrays_at_once():
                 return int(f.read().split()[1]) * 4096 / 2**20
         def churn():
             base = rss()
-            held = [np.ones(2**19) for _ in range(25)]   # 100 MB in 4 MB arrays (MAP_BYTES)
+            held = [np.ones(2**19) for _ in range(25)]   # 100 MB in 4 MB arrays (>= MAP_BYTES)
             last = np.ones(2**19)                  # keeps the heap's top in use
             del held
             return rss() - base, last
