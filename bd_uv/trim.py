@@ -29,8 +29,8 @@ CHUNK = 65536
 # (an array of 262k float64) is mapped on its own and returned at its free: glibc's rule would
 # otherwise raise its mmap threshold to the largest array freed (up to 32 MB), and the freed
 # arrays of each step stay resident in its heap until the next ``release_memory``. Measured on a
-# 500k-face mesh (benchmarks/results/issue21-mem7-2026-11-27.md): the peak 355-374 -> 328-331 MB
-# for ~5.5 s more system time (pages faulted in afresh; +17 % CPU); 4 MB: 328-340 MB for ~3 s;
+# 500k-face mesh (benchmarks/results/issue21-mem7-2026-11-27.md): the peak 355-374 -> 325-331 MB
+# for ~5 s more system time (pages faulted in afresh; +15-17 % CPU); 4 MB: 328-340 MB for ~3 s;
 # 1 MB: ~10 s.
 MAP_BYTES = 2 << 20
 # glibc's mallopt parameters; its default trim threshold; its dynamic rule's largest mmap
