@@ -10,9 +10,12 @@ resident heap: measured on a 500k-face mesh, 457 MB resident after the edge tabl
 hold 114 MB, 185 MB after ``malloc_trim``, which takes ~3 ms there. On other C libraries (and
 below ``TRIM_FACES``) nothing is done.
 """
+import contextlib
+import functools
 import ctypes
 import ctypes.util
 import sys
+import threading
 
 # Meshes from this many faces have their freed memory handed back between steps.
 TRIM_FACES = 50_000
@@ -22,7 +25,24 @@ TRIM_FACES = 50_000
 # conformal maps, LSCM geometry).
 CHUNK = 65536
 
+# While a search of at least ``TRIM_FACES`` faces runs, every block of at least this many bytes
+# (an array of 262k float64) is mapped on its own and returned at its free: glibc's rule would
+# otherwise raise its mmap threshold to the largest array freed (up to 32 MB), and the freed
+# arrays of each step stay resident in its heap until the next ``release_memory``. Measured on a
+# 500k-face mesh (benchmarks/results/issue21-mem7-2026-11-27.md): the peak 355-374 -> 325-331 MB
+# for ~5 s more system time (pages faulted in afresh; +15-17 % CPU); 4 MB: 328-340 MB for ~3 s;
+# 1 MB: ~10 s.
+MAP_BYTES = 2 << 20
+# glibc's mallopt parameters; its default trim threshold; its dynamic rule's largest mmap
+# threshold (DEFAULT_MMAP_THRESHOLD_MAX on 64-bit), and the trim threshold it sets beside it.
+_M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3
+_TRIM_DEFAULT = 128 * 1024
+_MMAP_MAX = 32 * 1024 * 1024
+
 _trim = None                # libc's malloc_trim, False where there is none
+_mallopt = None             # libc's mallopt, False where there is none
+_lock = threading.Lock()
+_depth = 0                  # searches running inside ``large_blocks_mapped``
 
 
 def release_memory(faces):
@@ -40,3 +60,61 @@ def release_memory(faces):
                 _trim = False
     if _trim:
         _trim(0)
+
+
+def _libc_mallopt():
+    """glibc's ``mallopt`` (``int mallopt(int, int)``), or False where there is none."""
+    global _mallopt
+    if _mallopt is None:
+        _mallopt = False
+        if sys.platform.startswith("linux"):
+            try:
+                _mallopt = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6").mallopt
+                _mallopt.argtypes, _mallopt.restype = [ctypes.c_int, ctypes.c_int], ctypes.c_int
+            except (OSError, AttributeError):     # not glibc
+                _mallopt = False
+    return _mallopt
+
+
+@contextlib.contextmanager
+def large_blocks_mapped(faces):
+    """Within the block, glibc maps every allocation of at least ``MAP_BYTES`` on its own (and
+    unmaps it at its free), when the work covers at least ``TRIM_FACES`` faces; elsewhere, and
+    below that size, nothing changes.
+
+    On the way out the thresholds are left where glibc's own rule leaves them after a large run
+    (mmap threshold 32 MB, trim threshold 64 MB): a fixed threshold turns that rule off for the
+    rest of the process (glibc has no call that turns it back on), and after the arrays of a
+    100k+ face mesh it has reached its ceiling anyway. Nested and concurrent blocks set the
+    thresholds once, and the last one out restores them. Which memory a block is served from
+    never changes a value computed in it.
+    """
+    global _depth
+    mallopt = _libc_mallopt() if faces >= TRIM_FACES else False
+    if not mallopt:
+        yield
+        return
+    with _lock:
+        _depth += 1
+        if _depth == 1:
+            mallopt(_M_MMAP_THRESHOLD, MAP_BYTES)
+            mallopt(_M_TRIM_THRESHOLD, _TRIM_DEFAULT)
+    try:
+        yield
+    finally:
+        with _lock:
+            _depth -= 1
+            if _depth == 0:
+                mallopt(_M_MMAP_THRESHOLD, _MMAP_MAX)
+                mallopt(_M_TRIM_THRESHOLD, 2 * _MMAP_MAX)
+
+
+
+def maps_large_blocks(search):
+    """Decorator: ``search(V, F, ...)`` runs inside ``large_blocks_mapped`` for F's faces (none
+    where F has no length: ``search`` reports what is wrong with it)."""
+    @functools.wraps(search)
+    def run(V, F, *args, **kwargs):
+        with large_blocks_mapped(len(F) if hasattr(F, "__len__") else 0):
+            return search(V, F, *args, **kwargs)
+    return run

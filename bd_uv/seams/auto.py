@@ -35,7 +35,7 @@ from .orders import Orders
 from .pack_shape import split_for_packing
 from .bisect import FaceCentroids, bisect, edge_weight, polygon_edges, split_deep
 from .topology import charts, cut_mesh
-from ..trim import CHUNK, release_memory
+from ..trim import CHUNK, maps_large_blocks, release_memory
 
 MAX_ROUNDS = 60
 # The charts of the given seams (the first round's) pass with a mean up to this share of
@@ -55,6 +55,9 @@ MAP_VERTICES = 60_000
 # 1k-20k-face mesh. Larger meshes form each batch's (on a 500k-face mesh the held geometry
 # was 30 MB at the search's memory peaks). The same per-face arithmetic, the same bits.
 GEOM_FACES = 50_000
+
+
+@maps_large_blocks
 def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merge=True,
                 method="lscm", frames="auto", cone="soc", progress=None, cancel=None,
                 polygons=None, atlas_cuts=True):

@@ -131,17 +131,21 @@ def _loops_from(root, graph):
     loop_len = dist[ends[:, 0]] + dist[ends[:, 1]] + w
     dual = ~in_tree
     big = loop_len[dual].max(initial=0.0) + 1.0
-    mst = minimum_spanning_tree(_csr(big - loop_len[dual] + 1e-12, f0[dual], f1[dual],
-                                     nf)).tocoo()
+    fd0, fd1 = f0[dual], f1[dual]
+    mst = minimum_spanning_tree(_csr(big - loop_len[dual] + 1e-12, fd0, fd1, nf)).tocoo()
     cot = np.zeros(len(uniq), dtype=bool)
     r, c = mst.row.astype(np.int64), mst.col.astype(np.int64)  # int32: pair keys overflow
-    pairs = np.stack([np.minimum(r, c), np.maximum(r, c)], axis=1)
-    dual_idx = np.flatnonzero(dual)
-    dpairs = np.stack([np.minimum(f0[dual], f1[dual]), np.maximum(f0[dual], f1[dual])], axis=1)
-    dk = dpairs[:, 0] * nf + dpairs[:, 1]
+    del mst
+    tree_keys = np.minimum(r, c) * nf + np.maximum(r, c)
+    del r, c
+    # The dual edges' keys formed once, without (e,2) stacks: a 500k-face chart's cut graph
+    # was a memory peak of the seam search.
+    dk = np.minimum(fd0, fd1) * nf + np.maximum(fd0, fd1)
+    del fd0, fd1
     dorder = np.argsort(dk)
-    hit = dorder[np.searchsorted(dk[dorder], pairs[:, 0] * nf + pairs[:, 1])]
-    cot[dual_idx[hit]] = True
+    hit = dorder[np.searchsorted(dk[dorder], tree_keys)]
+    del dk, dorder, tree_keys
+    cot[np.flatnonzero(dual)[hit]] = True
     left = np.flatnonzero(~in_tree & ~cot)
     # Mark the tree paths from the leftover edges' ends and from every cap back to the root.
     marked = np.zeros(N, dtype=bool)

@@ -337,3 +337,54 @@ def test_search_holds_the_callers_arrays_read_only_and_centroids_per_split():
     rows = np.array([5, 0, len(F) - 1, 17])
     whole = V[F].mean(axis=1)
     np.testing.assert_array_equal(FaceCentroids(V, F)[rows], whole[rows])
+
+
+def test_large_blocks_mapped_only_for_large_work_and_restored_once(monkeypatch):
+    """``trim.large_blocks_mapped`` sets glibc's thresholds from TRIM_FACES faces on (never
+    below), once for nested blocks, and leaves them where glibc's own rule ends (32 MB, 64 MB)."""
+    from bd_uv import trim
+    calls = []
+    monkeypatch.setattr(trim, "_mallopt", lambda p, v: calls.append((p, v)))
+    with trim.large_blocks_mapped(trim.TRIM_FACES - 1):
+        pass
+    assert calls == []
+    with trim.large_blocks_mapped(trim.TRIM_FACES):
+        with trim.large_blocks_mapped(10 * trim.TRIM_FACES):
+            assert calls == [(-3, trim.MAP_BYTES), (-1, 128 * 1024)]
+        assert len(calls) == 2
+    assert calls[2:] == [(-3, 32 * 2**20), (-1, 64 * 2**20)]
+
+
+def test_large_blocks_mapped_returns_freed_arrays_at_once():
+    """On glibc, inside ``large_blocks_mapped`` the arrays numpy frees leave the resident set at
+    their free, where outside (after glibc raised its mmap threshold) they stay resident."""
+    import ctypes.util
+    import subprocess
+    import sys
+    if not sys.platform.startswith("linux") or "libc" not in (ctypes.util.find_library("c") or ""):
+        pytest.skip("glibc only")
+    code = """if True:
+        import numpy as np
+        from bd_uv import trim
+        def rss():
+            with open("/proc/self/statm") as f:
+                return int(f.read().split()[1]) * 4096 / 2**20
+        def churn():
+            base = rss()
+            held = [np.ones(2**19) for _ in range(25)]   # 100 MB in 4 MB arrays (>= MAP_BYTES)
+            last = np.ones(2**19)                  # keeps the heap's top in use
+            del held
+            return rss() - base, last
+        big = np.ones(2**21); del big          # a freed 16 MB map raises the mmap threshold
+        outside = churn()[0]
+        trim.release_memory(trim.TRIM_FACES)
+        with trim.large_blocks_mapped(trim.TRIM_FACES):
+            inside = churn()[0]
+        print(outside, inside)
+    """
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.split()
+    outside, inside = map(float, out)
+    if outside < 50:
+        pytest.skip(f"this allocator returned the memory itself ({outside:.0f} MB kept)")
+    assert inside < 10, (outside, inside)
