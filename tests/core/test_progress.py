@@ -102,7 +102,11 @@ def _unwrap_on_a_terminal(tmp_path, *extra):
 def test_the_command_draws_progress_on_a_terminal_and_not_with_quiet(tmp_path):
     r, drawn = _unwrap_on_a_terminal(tmp_path)
     assert r.returncode == 0 and "certified C = 1.3" in r.stdout
-    assert "island 1/1" in drawn and "storing" in drawn and "%|" in drawn
+    # the bar, its end and the storing stage (a stage is drawn at once); the islands' texts are
+    # redrawn at most every 0.1 s (tqdm's mininterval), so a quick run on an idle machine can go
+    # from 0 % to done between two draws (CI did: "0%| ... 100%| done ... storing"); that the
+    # core's island texts reach the bar is checked with no interval above
+    assert "%|" in drawn and "100%" in drawn and "storing" in drawn
     r, drawn = _unwrap_on_a_terminal(tmp_path, "--quiet")
     assert r.returncode == 0 and "certified C = 1.3" in r.stdout
     assert drawn == ""
