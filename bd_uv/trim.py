@@ -26,13 +26,15 @@ TRIM_FACES = 50_000
 CHUNK = 65536
 
 # While a search of at least ``TRIM_FACES`` faces runs, every block of at least this many bytes
-# (an array of 262k float64) is mapped on its own and returned at its free: glibc's rule would
+# (an array of 1M float64) is mapped on its own and returned at its free: glibc's rule would
 # otherwise raise its mmap threshold to the largest array freed (up to 32 MB), and the freed
 # arrays of each step stay resident in its heap until the next ``release_memory``. Measured on a
-# 500k-face mesh (benchmarks/results/issue21-mem7-2026-11-27.md): the peak 355-374 -> 325-331 MB
-# for ~5 s more system time (pages faulted in afresh; +15-17 % CPU); 4 MB: 328-340 MB for ~3 s;
-# 1 MB: ~10 s.
-MAP_BYTES = 2 << 20
+# 500k-face mesh (benchmarks/results/issue21-mem7-2026-11-27.md), the costs being system time
+# (pages faulted in afresh): unmapped 27.5 s, 360 MB; 8 MB 28.0-30.0 s, 330-339 MB; 4 MB
+# 29.8-30.2 s, 333-334 MB; 2 MB 32.1-32.5 s, 331-332 MB; xatlas 25.6-26.0 s, 333-334 MB (one
+# quiet session, isolate.py). 8 MB takes most of the memory for a third of 2 MB's time: the seam
+# search's time is the criterion it misses at that size.
+MAP_BYTES = 8 << 20
 # glibc's mallopt parameters; its default trim threshold; its dynamic rule's largest mmap
 # threshold (DEFAULT_MMAP_THRESHOLD_MAX on 64-bit), and the trim threshold it sets beside it.
 _M_TRIM_THRESHOLD, _M_MMAP_THRESHOLD = -1, -3

@@ -371,8 +371,8 @@ def test_large_blocks_mapped_returns_freed_arrays_at_once():
                 return int(f.read().split()[1]) * 4096 / 2**20
         def churn():
             base = rss()
-            held = [np.ones(2**19) for _ in range(25)]   # 100 MB in 4 MB arrays (>= MAP_BYTES)
-            last = np.ones(2**19)                  # keeps the heap's top in use
+            held = [np.ones(2**20) for _ in range(13)]   # 104 MB in 8 MB arrays (>= MAP_BYTES)
+            last = np.ones(2**20)                  # keeps the heap's top in use
             del held
             return rss() - base, last
         big = np.ones(2**21); del big          # a freed 16 MB map raises the mmap threshold
