@@ -1,10 +1,10 @@
-"""One top-down round of the seam search (``auto.unwrap_auto``): every chart not yet accepted
-either passes or is cut.
+"""One top-down round of the seam search (``auto.unwrap_auto``): each chart not yet accepted is
+cut or accepted.
 
 A chart that is not a disk has its handles cut (``cut_graph``); closed spheres, open charts no
 cut graph changes, disks of more than ``MAP_VERTICES`` vertices and disks whose conformal map
 fails the charts' test (``charts.chart_maps``) are split, all in one batch
-(``bisect.split_deep``); a disk that passes is frozen.
+(``bisect.split_deep``); a disk that passes, and a chart no split divides, is accepted (frozen).
 """
 import numpy as np
 
