@@ -1,12 +1,12 @@
 """``seams="auto"``: cut every island that cannot be certified as it is into certified charts.
 
-Top-down: a chart that is not a disk is opened by its handle cuts (``cut_graph``), a closed
-sphere and a disk whose conformal map breaks a bound are split along their cheapest neck
-(``fiedler_split``), until every chart's conformal map (LSCM) is flip-free with stretch within S,
-an area-weighted mean conformal distortion within ``mean_cap(C)`` and a boundary that does not cross
-itself. Then bottom-up (``merge.merge_charts``): neighbouring charts are merged while the union
-still passes. ``bd_uv.unwrap`` finally certifies every chart at C (bending the few whose
-conformal map exceeds C), and any chart the certified map leaves beyond S, crossing itself or
+Top-down, round after round (``rounds.refine``): a chart that is not a disk is opened by its handle
+cuts (``cut_graph``), a closed sphere and a disk whose conformal map breaks a bound are split along
+their cheapest neck (``fiedler_split``), until every chart's conformal map (LSCM) is flip-free with
+stretch within S, an area-weighted mean conformal distortion within ``mean_cap(C)`` and a boundary
+that does not cross itself. Then bottom-up (``merge.merge_charts``): neighbouring charts are merged
+while the union still passes. ``bd_uv.unwrap`` finally certifies every chart at C (bending the few
+whose conformal map exceeds C), and any chart the certified map leaves beyond S, crossing itself or
 overlapping (``measure.measure_charts``) is split again (its pieces may merge with their
 neighbours).
 
@@ -23,18 +23,19 @@ import numpy as np
 from ..errors import (CancelledError, ClosedIslandError, InfeasibleError, OverlapError,
                       SolverError, TopologyError)
 from ..geometry import face_areas
-from ..mesh import DEGENERATE_RATIO, Island, check_arrays, islands, measurable
+from ..mesh import Island, check_arrays, islands
 from ..options import UnwrapOptions
 from ..unwrapping.unwrap import pin_arrays, unwrap, unwrap_islands
-from .charts import MARGIN, chart_maps, face_geometry, mean_cap
-from .cut_graph import cut_graph
+from .charts import face_geometry, mean_cap
 from .edges import edge_table
 from .measure import measure_charts, splice
-from .merge import chart_key, merge_charts
+from .merge import merge_charts
 from .orders import Orders
 from .pack_shape import split_for_packing
-from .bisect import FaceCentroids, bisect, edge_weight, polygon_edges, split_deep
+from .bisect import FaceCentroids, bisect, polygon_edges
+from .rounds import refine
 from .topology import charts, cut_mesh
+from .valid import valid_everywhere
 from ..trim import CHUNK, maps_large_blocks, release_memory
 
 MAX_ROUNDS = 60
@@ -43,12 +44,6 @@ MAX_ROUNDS = 60
 GIVEN_SLACK = 0.25
 # Passes that split charts the certified map leaves beyond S.
 FINISH_ROUNDS = 4
-# A chart of more vertices than this is split without its conformal map: the map's LDL^T factor
-# was the search's memory peak on a 500k-face mesh (~310 MB for its first round's 183k-vertex
-# chart, against ~95 MB at this size), and a chart that large passes rarely (a wide, nearly
-# developable region). Where it would, its pieces pass and merging (``merge_charts``, which
-# maps unions of any size) joins them again.
-MAP_VERTICES = 60_000
 # Meshes of at most this many faces hold their face geometry (``charts.FaceGeometry``, ~64
 # bytes a face: 3 MB here) through the search, merging and the atlas's splits rather than
 # forming each batch's: the faces mapped add up to ~8x the mesh's, 4-5 % of the CPU of a
@@ -140,7 +135,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     # Islands the seams cannot fix (non-manifold, degenerate, ...) are left to ``unwrap`` to
     # report; the rest of the search works on charts of the validated mesh.
     frozen = np.zeros(m, dtype=bool)
-    if not _valid_everywhere(V, F, E, A):
+    if not valid_everywhere(V, F, E, A):
         for i in islands(V, F, E.ends[cut]):
             if i.error is not None and not isinstance(i.error, (ClosedIslandError,
                                                                 TopologyError)):
@@ -161,10 +156,10 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         # The charts the given seams make (round 1) keep a looser mean: a chart found by a
         # search on other triangles of the same polygons (the Blender operator's second pass)
         # must not be cut again for triangulation noise in its mean.
-        changed = _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag,
-                          cap=mean_cap(C) + GIVEN_SLACK * (mean_cap(C) - 1.0)
-                          if rounds == 1 else mean_cap(C), known=known, geom=geom,
-                          failed=failed, orders=orders)
+        changed = refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag,
+                         cap=mean_cap(C) + GIVEN_SLACK * (mean_cap(C) - 1.0)
+                         if rounds == 1 else mean_cap(C), known=known, geom=geom,
+                         failed=failed, orders=orders)
         if not changed:
             break
     atlas = np.zeros(len(E.ends), dtype=bool)   # the seams added for the atlas
@@ -223,8 +218,8 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             group[r.faces] = g
         bisect([np.sort(r.faces) for r in bad], E, cut, A, cen, poly, orders)
         for _ in range(MAX_ROUNDS):
-            if not _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag, geom=geom,
-                           failed=failed, orders=orders):
+            if not refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag, geom=geom,
+                          failed=failed, orders=orders):
                 break
         if merge:
             # The pieces may now merge with their neighbours (never with each other).
@@ -270,8 +265,8 @@ def _unwrap_charts(V, F, E, cut, known, chs, options, run):
     ``run``: progress, cancel and face_groups as ``unwrap`` takes them.
 
     ``chs``: the charts of ``cut`` (``topology.charts``) where the mesh is valid
-    (``_valid_everywhere``, nothing frozen as invalid), else None. Where they are all disks,
-    they are the islands ``mesh.islands`` would find (numbered alike), so they go to
+    (``valid.valid_everywhere``, nothing frozen as invalid), else None. Where they are all
+    disks, they are the islands ``mesh.islands`` would find (numbered alike), so they go to
     ``unwrap_islands`` as they are; otherwise ``unwrap`` finds and checks them (``E``: its
     ``ends`` only).
 
@@ -291,126 +286,3 @@ def _unwrap_charts(V, F, E, cut, known, chs, options, run):
     known.clear()                           # the maps are in ``conformal`` now
     return unwrap_islands(V, F, isl, pin_arrays(None, None, len(F)), options, conformal=conformal,
                           **run), chs
-
-
-def _valid_everywhere(V, F, E, A):
-    """Whether no island can fail ``mesh.islands``' validation (whatever the seams), checked
-    on the whole mesh at once, so the search can skip ``islands`` (a few per cent of its time).
-
-    Conservative: every coordinate finite, no face of zero area by ``mesh.islands``' test, no
-    edge of three or more faces, every interior edge's two faces oriented alike, no two faces on
-    the same three vertices, every vertex a single fan of corners. Where any fails (even a
-    vertex fan ``mesh.islands`` would accept, joining two islands), ``islands`` decides.
-
-    Parameters
-    ----------
-    V : (n,3) float64, F : (m,3) int64, E : edges.EdgeTable, A : (m,) float64 face areas
-
-    Returns
-    -------
-    bool
-    """
-    # Per-face tests ``CHUNK`` faces at a time: the (m,3,3) corner positions and their
-    # differences were ~110 MB at once on a 500k-face mesh, the set-up's peak.
-    for i in range(0, len(F), CHUNK):
-        P = V[F[i:i + CHUNK]]
-        if not measurable(P).all():   # NaN, inf, or beyond float64's fourth powers
-            return False
-        lmax2 = np.max(np.sum((P - np.roll(P, -1, axis=1)) ** 2, axis=2), axis=1)
-        with np.errstate(invalid="ignore"):
-            if not np.all(2 * A[i:i + CHUNK] > DEGENERATE_RATIO * lmax2):
-                return False
-        # Two faces on the same vertices share all three edges: each edge leads to the other.
-        ef = E.faces[E.face_edges[i:i + CHUNK]]         # (k,3,2)
-        me = np.arange(i, i + len(ef))[:, None]
-        other = np.where(ef[:, :, 0] == me, ef[:, :, 1], ef[:, :, 0])
-        if np.any((other[:, 0] >= 0) & (other[:, 0] == other[:, 1])
-                  & (other[:, 1] == other[:, 2])):
-            return False
-    P = lmax2 = ef = me = other = None
-    if (np.bincount(E.face_edges.ravel(), minlength=len(E.ends)) > 2).any():
-        return False
-    c = E.corners[E.faces[:, 1] >= 0]
-    nxt = lambda h: h - h % 3 + (h % 3 + 1) % 3
-    if np.any((nxt(c[:, 0, 0]) == c[:, 0, 1]) == (nxt(c[:, 1, 0]) == c[:, 1, 1])):
-        return False
-    del c
-    _, voc = cut_mesh(F, E, np.zeros(len(E.ends), dtype=bool))
-    return len(voc) == len(np.unique(F))
-
-
-def _refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None, known=None,
-            geom=None, failed=None, orders=None):
-    """One top-down round over the charts not yet accepted; True when a seam was added.
-
-    Handles are cut first; the charts to split (closed spheres, open charts no cut graph
-    changes, disks of more than ``MAP_VERTICES`` vertices, disks whose map fails) are all split
-    in one batch (``bisect.split_deep``). A disk
-    passes with a mean distortion up to ``cap`` (default ``mean_cap(C)``); its conformal map goes
-    into ``known`` (``ChartMaps.remember``). A disk that fails (at ``cap`` >= ``mean_cap(C)``, so
-    at merging's test too) goes into ``failed`` (``merge.chart_key`` -> its map's max stretch).
-    ``orders``: the mesh's ``orders.Orders`` for the maps' solves, optional.
-    """
-    sub = np.flatnonzero(~frozen)
-    if len(sub) == 0:
-        return False
-    # Each step of a round (charts, cut graphs, maps, splits) starts on the heap the last one
-    # freed handed back (``trim``): on a 500k-face mesh the Fiedler sweep's and the factors'
-    # freed heap otherwise stayed resident (50-100 MB) under the next step's own peak.
-    release_memory(len(sub))
-    chs = charts(F, E, cut, sub)
-    changed = False
-    todo = []                               # (faces, the map's sigma per face or None)
-    for c in chs:
-        if c.kind == "open":                # handles, or several boundary loops
-            w = lambda pairs, _v=c.vertices: edge_weight(E, _v[pairs], n, diag)
-            g = cut_graph(c.tris, len(c.vertices), w)
-            k = E.keys(c.vertices[g], n) if len(g) else np.zeros(0, np.int64)
-            k = k[k >= 0]
-            if diag is not None:            # never inside a polygon (the split below instead)
-                k = k[~diag[k]]
-            if len(k) and not cut[k].all():
-                cut[k] = True
-                changed = True
-                continue
-        if c.kind in ("open", "sphere"):    # a sphere: split along its neck
-            todo.append((c.faces, None))
-    disks = []
-    for c in chs:
-        if c.kind != "disk":
-            continue
-        if len(c.vertices) > MAP_VERTICES and len(c.faces) >= 2:
-            todo.append((c.faces, None))    # split unmapped; merging may join it again
-        else:
-            disks.append(c)
-    # The charts that are not disks hold their vertices and triangles only here (a round's
-    # open and closed charts: up to the whole mesh, ~36 bytes a face): not held through the
-    # maps' factors.
-    chs = None
-    if disks:
-        release_memory(len(sub))
-        cap = mean_cap(C) if cap is None else cap
-        cm = chart_maps(V, disks, geom, limits=(S * MARGIN, cap), orders=orders)
-        ok = (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
-              & (cm.crossings == 0) & (cm.mean_distortion <= cap))
-        if known is not None:
-            cm.remember(disks, ok, known)
-        for j, c in enumerate(disks):
-            if ok[j] or len(c.faces) < 2:
-                frozen[c.faces] = True
-            else:
-                if failed is not None:
-                    failed[chart_key(c)] = float(cm.max_stretch[j])
-                todo.append((c.faces, cm.sigma[cm.foff[j]:cm.foff[j + 1]].copy()))
-    # The round's charts and maps are not held through the splits (the Fiedler sweep is the
-    # top-down rounds' peak): ~36 bytes per face of charts and ~48 per face and vertex mapped
-    # (17 MB and more on a 500k-face mesh); only the failed disks' singular values are kept.
-    chs = disks = cm = None
-    if todo:
-        release_memory(len(sub))
-        split = split_deep(todo, E, cut, A, cen, S, poly, orders)
-        for (faces, _), done in zip(todo, split):
-            if not done:
-                frozen[faces] = True
-        changed |= bool(split.any())
-    return changed

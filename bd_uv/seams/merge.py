@@ -6,7 +6,6 @@ import hashlib
 import numpy as np
 
 from .charts import MARGIN, chart_maps, mean_cap
-from .split import _quantize
 from .topology import charts
 from .unions import union_charts
 from ..trim import release_memory
@@ -176,3 +175,15 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
         chs = sorted([c for j, c in enumerate(chs) if not merged[j]] + unions,
                      key=lambda ch: int(ch.faces[0]))
     return chs
+
+
+def _quantize(x, digits=9):
+    """``x`` rounded to ``10**-digits`` of its largest finite magnitude (ties then broken by
+    index, the same in every run)."""
+    x = np.asarray(x, dtype=np.float64)
+    fin = np.isfinite(x)
+    scale = np.abs(x[fin]).max(initial=0.0)
+    if scale == 0:
+        return x
+    q = scale * 10.0 ** -digits
+    return np.where(fin, np.round(x / q) * q, x)

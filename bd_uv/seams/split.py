@@ -1,26 +1,23 @@
-"""Splitting a chart in two along its cheapest neck (spectral bisection with a Cheeger sweep)."""
-import functools
+"""Splitting a chart in two along its cheapest neck (spectral bisection with a Cheeger sweep).
 
+The charts' Fiedler vectors come from ``fiedler.fiedler_vectors``; here each chart's faces are
+swept in their order for the least cut per area, the cut snapped to the cheapest one near it (an
+s-t min cut) and straightened by a majority filter.
+"""
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import breadth_first_order, maximum_flow
 
 from ..geometry import components
 from ..solvers import radix
-from ..solvers.threads import halves, map_blocks
-from .charts import spd_solver
-from . import cluster_fiedler
 from .compressed import compressed
-from .orders import fiedler_solver
+from .fiedler import fiedler_vectors
 from ..trim import release_memory
 
 # Neither side of a split may hold less than this share of the chart's area.
 MIN_SIDE = 0.05
 # Dual rings on each side of a sweep cut within which the min cut may move it.
 BAND_RINGS = 4
-# Charts of one batch are split into two systems factored side by side when each holds at
-# least this many nodes.
-PARALLEL_NODES = 1500
 
 
 def fiedler_split(face_area, centroid, pairs, edge_len, edge_cost):
@@ -83,7 +80,7 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost,
     mean_len = np.bincount(pg, edge_len, g) / np.maximum(npairs, 1)
     w = edge_len * edge_cost / np.maximum(d, 1e-12 * mean_len[pg])
     del pg, d                               # per pair: dead before the factors
-    x = _fiedler_many(pairs, w, face_area, centroid, offsets, group, keys=keys)
+    x = fiedler_vectors(pairs, w, face_area, centroid, offsets, group, keys=keys)
     if x is None:
         return side, split
     release_memory(k)                       # the factors' freed heap, before the sweep's arrays
@@ -185,102 +182,6 @@ def _least_per_group(s, gp, g):
     return idx[np.r_[True, gp[idx][1:] != gp[idx][:-1]]]
 
 
-def _fiedler_many(pairs, w, mass, centroid, offsets, group, iters=12, coarsen=True, keys=None):
-    """``_fiedler_block`` of all charts; two runs of charts factor side by side when each is
-    large enough (``solvers.threads``; each chart's vector is its own either way). Charts above
-    ``cluster_fiedler.COARSE_NODES`` nodes get theirs from a graph of clusters of their nodes
-    (``cluster_fiedler.coarse_fiedler``, where ``keys`` are not used)."""
-    if coarsen and (np.diff(offsets) > cluster_fiedler.COARSE_NODES).any():
-        def again(*a, coarsen):
-            return _fiedler_many(*a, iters=iters, coarsen=coarsen)
-        return cluster_fiedler.coarse_fiedler(pairs, w, mass, centroid, offsets, group, again)
-    j = halves(np.diff(offsets), PARALLEL_NODES)
-    if j is None:
-        return _fiedler_block(pairs, w, mass, centroid, offsets, group, iters, keys)
-    cut = offsets[j]
-    first = pairs[:, 0] < cut
-
-    def run(r):
-        sel, lo, hi, a, b = r
-        return _fiedler_block(pairs[sel] - lo, w[sel], mass[lo:hi], centroid[lo:hi],
-                              offsets[a:b + 1] - lo, group[lo:hi] - a, iters,
-                              None if keys is None else keys[lo:hi])
-    xs = map_blocks(run, [(first, 0, cut, 0, j), (~first, cut, len(mass), j, len(offsets) - 1)])
-    if any(x is None for x in xs):
-        return None
-    return np.concatenate(xs)
-
-
-def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12, keys=None):
-    """Approximate Fiedler vectors of ``L x = lambda M x``, each chart's own, by inverse
-    iteration on the block-diagonal Laplacian (one sparse factorisation for all charts).
-
-    Each chart starts from its faces' coordinate along its principal axis (already a smooth
-    ordering along its longest extent) plus a small fixed perturbation, and is deflated of
-    its constant vector (M-orthogonally) each step; a dozen steps are enough for a sweep cut.
-
-    Parameters
-    ----------
-    pairs : (e,2) int64, w : (e,) float64, the graph's edges and weights (Laplacian L)
-    mass : (k,) float64 > 0, centroid : (k,3) float64
-    offsets : (g+1,) int64, group : (k,) int64, the chart of each node
-    keys : (k,) int64, optional: factor in their order (``orders.fiedler_solver``)
-
-    Returns
-    -------
-    x : (k,) float64, or None when the system cannot be factored
-    """
-    g, k = len(offsets) - 1, len(mass)
-    total = np.bincount(group, mass, g)
-    mean = np.stack([np.bincount(group, mass * centroid[:, i], g) for i in range(3)], 1)
-    c = centroid - (mean / np.maximum(total, 1e-300)[:, None])[group]
-    axes = _principal_axes(c, mass, offsets, group)
-    x = np.einsum("ij,ij->i", c, axes[group])
-    scale = np.zeros(g)
-    np.maximum.at(scale, group, np.abs(x))
-    noise = np.concatenate([_noise(int(n)) if n <= 5000 else
-                            np.random.default_rng(int(n)).standard_normal(int(n))
-                            for n in np.diff(offsets)])
-    x = x + 1e-3 * np.maximum(scale, 1e-300)[group] * noise
-    deg = np.bincount(pairs.ravel(), np.repeat(w, 2), minlength=k)
-    cnt = np.maximum(np.bincount(group, minlength=g), 1)
-    shift = 1e-8 * (np.bincount(group, deg, g) / cnt) / np.maximum(total / cnt, 1e-300)
-    idx = np.arange(k)
-    # Upper triangle only (the factorisation reads no more), as triplets: the ordered factor
-    # sorts them in its own order (``orders.fiedler_solver``); compressed where needed.
-    rows = np.concatenate([pairs.min(axis=1), idx])
-    cols = np.concatenate([pairs.max(axis=1), idx])
-    vals = np.concatenate([-w, deg + shift[group] * mass])
-
-    def upper():
-        return sp.csc_matrix(compressed(cols, rows, vals, k), shape=(k, k))
-    try:
-        if keys is None:            # (every system of a mesh above ``orders.MESH_VERTICES``)
-            K = upper()
-            rows = cols = vals = None       # not held beside the factor: only K, as before
-            solve = spd_solver(K, upper=True)
-        else:
-            solve = fiedler_solver(rows, cols, vals, keys, upper)
-    except RuntimeError:
-        return None
-    rows = cols = vals = K = None
-    tot = np.maximum(total, 1e-300)[group]
-    for _ in range(iters):
-        x = x - np.bincount(group, mass * x, g)[group] / tot
-        x = solve(mass * x)
-        x = x / np.maximum(np.sqrt(np.bincount(group, mass * x ** 2, g)), 1e-300)[group]
-    return x - np.bincount(group, mass * x, g)[group] / tot
-
-
-@functools.lru_cache(maxsize=512)
-def _noise(n):
-    """The fixed perturbation of an n-node chart's start vector (seeded by n, read-only; kept
-    for the small charts, which come back in every round: at most 512 x 5000 values)."""
-    x = np.random.default_rng(n).standard_normal(n)
-    x.flags.writeable = False
-    return x
-
-
 def _snap_many(side, pairs, cost, group, g, rings=BAND_RINGS):
     """Move each chart's two-way cut to the cheapest one within a band of faces around it.
 
@@ -356,88 +257,3 @@ def _snap_many(side, pairs, cost, group, g, rings=BAND_RINGS):
     out = side.copy()
     out[live] = new[:nb]
     return out
-
-
-def _principal_axes(c, mass, offsets, group):
-    """``_principal_axis`` of every chart at once (one batched eigen-decomposition); charts
-    whose two largest moments tie go through ``_principal_axis`` one by one.
-
-    Parameters
-    ----------
-    c : (k,3) float64, node centroids about their chart's weighted mean; mass : (k,) float64
-    offsets : (g+1,) int64, group : (k,) int64, the chart of each node
-    keys : (k,) int64, optional: factor in their order (``orders.fiedler_solver``)
-
-    Returns
-    -------
-    (g,3) float64 unit axes ((1,0,0) for an empty chart)
-    """
-    g = len(offsets) - 1
-    cov = np.empty((g, 3, 3))
-    for a in range(3):
-        for b in range(a, 3):
-            cov[:, a, b] = cov[:, b, a] = np.bincount(group, mass * c[:, a] * c[:, b], g)
-    w, vec = np.linalg.eigh(cov)
-    axes = vec[:, :, 2].copy()
-    proj = np.einsum("ij,ij->i", c, axes[group])
-    big = np.zeros(g)
-    np.maximum.at(big, group, np.abs(proj))
-    on = np.flatnonzero(np.abs(proj) > 1e-9 * big[group])
-    gon = group[on]
-    if len(gon) and (np.diff(gon) >= 0).all():    # grouped chart by chart (every caller):
-        first = on[np.r_[True, gon[1:] != gon[:-1]]]   # each chart's first, without a sort
-    else:
-        first = on[np.unique(gon, return_index=True)[1]]
-    flip = np.zeros(g, dtype=bool)
-    flip[group[first]] = proj[first] < 0
-    axes[flip] *= -1
-    size = np.diff(offsets)
-    axes[size == 0] = (1.0, 0.0, 0.0)
-    for j in np.flatnonzero((w[:, 1] >= w[:, 2] * (1.0 - 1e-6)) & (size > 0)):
-        axes[j] = _principal_axis(c[offsets[j]:offsets[j + 1]], mass[offsets[j]:offsets[j + 1]])
-    return axes
-
-
-def _principal_axis(c, mass):
-    """The chart's longest principal axis, chosen the same way in every run.
-
-    Where the two (or three) largest principal moments agree to 1e-6 (a chart symmetric about
-    an axis) the axis is any direction of their plane and an SVD returns one picked by rounding
-    noise: then take the first face's direction projected onto that plane.
-
-    Parameters
-    ----------
-    c : (k,3) float64, face centroids about their weighted mean; mass : (k,) float64
-
-    Returns
-    -------
-    (3,) float64, unit axis, oriented so the first face lies on its non-negative side
-    """
-    cov = (c * mass[:, None]).T @ c
-    w, vec = np.linalg.eigh(cov)
-    w, vec = w[::-1], vec[:, ::-1]
-    top = w >= w[0] * (1.0 - 1e-6)
-    axis = vec[:, 0]
-    if top.sum() > 1:
-        span = vec[:, top]
-        for f in range(len(c)):           # the first face off the plane's normal
-            a = span @ (span.T @ c[f])
-            if np.linalg.norm(a) > 1e-6 * np.sqrt(max(w[0], 1e-300) / mass.sum()):
-                axis = a / np.linalg.norm(a)
-                break
-    first = np.flatnonzero(np.abs(c @ axis) > 1e-9 * np.abs(c @ axis).max(initial=0.0))
-    if len(first) and c[first[0]] @ axis < 0:
-        axis = -axis
-    return axis
-
-
-def _quantize(x, digits=9):
-    """``x`` rounded to ``10**-digits`` of its largest finite magnitude (ties then broken by
-    index, the same in every run)."""
-    x = np.asarray(x, dtype=np.float64)
-    fin = np.isfinite(x)
-    scale = np.abs(x[fin]).max(initial=0.0)
-    if scale == 0:
-        return x
-    q = scale * 10.0 ** -digits
-    return np.where(fin, np.round(x / q) * q, x)

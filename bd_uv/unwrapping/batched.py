@@ -14,7 +14,7 @@ import numpy as np
 from ..geometry import face_areas
 from ..solvers.lscm import face_geometry, lscm_pinned
 from ..solvers.ordered_ldl import vertex_ranks
-from .problem import STORE_HEADROOM
+from .margins import STORE_HEADROOM
 from .results import IslandResult
 from ..trim import CHUNK
 

@@ -21,8 +21,8 @@ from ..solvers.ordered_ldl import vertex_ranks
 from ..spaces import stretch_conformal_bound
 from .along import least_mean_within
 from .initial import start_map
-from .problem import (SOLVE_MARGIN, STORE_HEADROOM, STRETCH_MARGIN_SOLVE, Cancelled,
-                      solve_bound)
+from .conic_solves import Cancelled
+from .margins import SOLVE_MARGIN, STORE_HEADROOM, STRETCH_MARGIN_SOLVE, solve_bound
 
 RAISE_FACTOR = 1.5      # C grows by this factor when infeasible
 MAX_RESETS = 3          # frame resets after the first feasible solve (BD-Dirichlet, BD-ARAP)

@@ -9,7 +9,7 @@ import numpy as np
 from ..errors import SolverError
 from ..metrics import certify_measured, mean_distortion
 from .bounded import uv_area
-from .problem import STORE_HEADROOM
+from .margins import STORE_HEADROOM
 from .results import IslandResult
 
 HIGH_DISTORTION = 50.0  # certified bounds above this get a "high_distortion" flag and a hint

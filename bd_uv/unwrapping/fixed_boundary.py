@@ -18,7 +18,9 @@ from ..boundary import SHAPES, boundary_targets, fixed_boundary_map
 from ..errors import CancelledError, InfeasibleError
 from ..metrics import conformal_distortion
 from ..spaces import stretch_conformal_bound
-from .problem import STORE_HEADROOM, Cancelled, IslandProblem
+from .conic_solves import Cancelled
+from .margins import STORE_HEADROOM
+from .problem import IslandProblem
 from .bounded import RAISE_FACTOR, guaranteed_bound
 
 BOUNDARIES = ("free",) + SHAPES

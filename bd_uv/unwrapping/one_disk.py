@@ -27,7 +27,7 @@ from ..mesh import DEGENERATE_RATIO, Island
 from ..solvers.lscm import face_geometry_of, lscm_pinned
 from ..solvers.ordered_ldl import vertex_ranks
 from .disk_certificate import certify_disk, certify_measured_disk
-from .problem import STORE_HEADROOM
+from .margins import STORE_HEADROOM
 from .results import IslandResult, UnwrapResult
 
 # Up to this many boundary edges the loop is walked in Python (a few tenths of a microsecond a

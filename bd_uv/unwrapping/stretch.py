@@ -19,7 +19,7 @@ from ..frames import frames_from_map
 from ..solvers.projection import ProjectionSolver
 from ..spaces import stretch_conformal_bound
 from .initial import start_map
-from .problem import STORE_HEADROOM, STRETCH_MARGIN_SOLVE, solve_bound
+from .margins import STORE_HEADROOM, STRETCH_MARGIN_SOLVE, solve_bound
 from .bounded import ALWAYS_SOLVED, DESCENT, IMPROVEMENT, MAX_RESETS, POLISH_AREA, fits
 from .strategies import AUTO_MAX_SOLVES
 

@@ -27,7 +27,8 @@ from .finish import finish
 from .fixed_boundary import FRAMES_NAME, fixed_boundary_island, with_premises
 from .initial import start_map
 from .overlap_certificate import overlap_certificate
-from .problem import Cancelled, IslandProblem
+from .conic_solves import Cancelled
+from .problem import IslandProblem
 from .results import IslandResult, UnwrapResult
 
 def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,

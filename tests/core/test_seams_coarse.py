@@ -69,10 +69,10 @@ def test_search_leaves_invalid_islands_to_unwrap(name):
     gets its island error (and no chart of it is certified)."""
     from bd_uv.geometry import face_areas
     from bd_uv.mesh import islands
-    from bd_uv.seams.auto import _valid_everywhere
+    from bd_uv.seams.valid import valid_everywhere
     from bd_uv.seams.edges import edge_table
     V, F = _bad_meshes()[name]
-    assert not _valid_everywhere(V, F, edge_table(V, F), face_areas(V, F))
+    assert not valid_everywhere(V, F, edge_table(V, F), face_areas(V, F))
     with np.errstate(all="ignore"):
         errors = {type(i.error) for i in islands(V, F) if i.error is not None}
         res, added, info = unwrap_auto(V, F, bound=C, stretch=S)
@@ -82,8 +82,8 @@ def test_search_leaves_invalid_islands_to_unwrap(name):
 
 def test_validity_screen_passes_the_clean_meshes():
     from bd_uv.geometry import face_areas
-    from bd_uv.seams.auto import _valid_everywhere
+    from bd_uv.seams.valid import valid_everywhere
     from bd_uv.seams.edges import edge_table
     for name, make in MESHES.items():
         V, F = make()
-        assert _valid_everywhere(V, F, edge_table(V, F), face_areas(V, F)), name
+        assert valid_everywhere(V, F, edge_table(V, F), face_areas(V, F)), name

@@ -3,7 +3,7 @@
 - ``cluster_fiedler.clusters``: connected clusters of one chart each, small charts untouched;
 - a chart split through its cluster graph is cut where the node graph cuts it (a long tube:
   across its middle, one circumference of seam);
-- a chart above ``auto.MAP_VERTICES`` is split unmapped, and a region that passes whole is merged
+- a chart above ``rounds.MAP_VERTICES`` is split unmapped, and a region that passes whole is merged
   back into one certified chart;
 - ``charts.chart_maps`` in bounded runs solves each chart as it would alone.
 """
@@ -111,17 +111,17 @@ def _wavy_sheet(n=40):
 def test_a_chart_above_map_vertices_is_split_unmapped_and_merged_back(monkeypatch):
     """The search maps no chart above ``MAP_VERTICES`` vertices top-down (its factor was the
     memory peak); a sheet that passes whole is still one chart, its pieces merged again."""
-    from bd_uv.seams import auto
+    from bd_uv.seams import auto, rounds
     from tests.core.seams_helpers import face_singular_values
     V, F = _wavy_sheet()
-    monkeypatch.setattr(auto, "MAP_VERTICES", 200)
+    monkeypatch.setattr(rounds, "MAP_VERTICES", 200)
     mapped = []
-    real = auto.chart_maps
+    real = rounds.chart_maps
 
     def spy(V_, charts, *a, **k):
         mapped.extend(len(c.vertices) for c in charts)
         return real(V_, charts, *a, **k)
-    monkeypatch.setattr(auto, "chart_maps", spy)
+    monkeypatch.setattr(rounds, "chart_maps", spy)
     result, added, info = auto.unwrap_auto(V, F, bound=2, stretch=2)
     assert mapped and max(mapped) <= 200           # the top-down rounds mapped pieces only
     assert info["charts"] == 1 and len(added) == 0

@@ -1,0 +1,100 @@
+"""One top-down round of the seam search (``auto.unwrap_auto``): each chart not yet accepted is
+cut or accepted.
+
+A chart that is not a disk has its handles cut (``cut_graph``); closed spheres, open charts no
+cut graph changes, disks of more than ``MAP_VERTICES`` vertices and disks whose conformal map
+fails the charts' test (``charts.chart_maps``) are split, all in one batch
+(``bisect.split_deep``); a disk that passes, and a chart no split divides, is accepted (frozen).
+"""
+import numpy as np
+
+from .charts import MARGIN, chart_maps, mean_cap
+from .cut_graph import cut_graph
+from .merge import chart_key
+from .bisect import edge_weight, split_deep
+from .topology import charts
+from ..trim import release_memory
+
+# A chart of more vertices than this is split without its conformal map: the map's LDL^T factor
+# was the search's memory peak on a 500k-face mesh (~310 MB for its first round's 183k-vertex
+# chart, against ~95 MB at this size), and a chart that large passes rarely (a wide, nearly
+# developable region). Where it would, its pieces pass and merging (``merge_charts``, which
+# maps unions of any size) joins them again.
+MAP_VERTICES = 60_000
+
+
+def refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None, known=None,
+            geom=None, failed=None, orders=None):
+    """One top-down round over the charts not yet accepted; True when a seam was added.
+
+    Handles are cut first; the charts to split (closed spheres, open charts no cut graph
+    changes, disks of more than ``MAP_VERTICES`` vertices, disks whose map fails) are all split
+    in one batch (``bisect.split_deep``). A disk
+    passes with a mean distortion up to ``cap`` (default ``mean_cap(C)``); its conformal map goes
+    into ``known`` (``ChartMaps.remember``). A disk that fails (at ``cap`` >= ``mean_cap(C)``, so
+    at merging's test too) goes into ``failed`` (``merge.chart_key`` -> its map's max stretch).
+    ``orders``: the mesh's ``orders.Orders`` for the maps' solves, optional.
+    """
+    sub = np.flatnonzero(~frozen)
+    if len(sub) == 0:
+        return False
+    # Each step of a round (charts, cut graphs, maps, splits) starts on the heap the last one
+    # freed handed back (``trim``): on a 500k-face mesh the Fiedler sweep's and the factors'
+    # freed heap otherwise stayed resident (50-100 MB) under the next step's own peak.
+    release_memory(len(sub))
+    chs = charts(F, E, cut, sub)
+    changed = False
+    todo = []                               # (faces, the map's sigma per face or None)
+    for c in chs:
+        if c.kind == "open":                # handles, or several boundary loops
+            w = lambda pairs, _v=c.vertices: edge_weight(E, _v[pairs], n, diag)
+            g = cut_graph(c.tris, len(c.vertices), w)
+            k = E.keys(c.vertices[g], n) if len(g) else np.zeros(0, np.int64)
+            k = k[k >= 0]
+            if diag is not None:            # never inside a polygon (the split below instead)
+                k = k[~diag[k]]
+            if len(k) and not cut[k].all():
+                cut[k] = True
+                changed = True
+                continue
+        if c.kind in ("open", "sphere"):    # a sphere: split along its neck
+            todo.append((c.faces, None))
+    disks = []
+    for c in chs:
+        if c.kind != "disk":
+            continue
+        if len(c.vertices) > MAP_VERTICES and len(c.faces) >= 2:
+            todo.append((c.faces, None))    # split unmapped; merging may join it again
+        else:
+            disks.append(c)
+    # The charts that are not disks hold their vertices and triangles only here (a round's
+    # open and closed charts: up to the whole mesh, ~36 bytes a face): not held through the
+    # maps' factors.
+    chs = None
+    if disks:
+        release_memory(len(sub))
+        cap = mean_cap(C) if cap is None else cap
+        cm = chart_maps(V, disks, geom, limits=(S * MARGIN, cap), orders=orders)
+        ok = (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
+              & (cm.crossings == 0) & (cm.mean_distortion <= cap))
+        if known is not None:
+            cm.remember(disks, ok, known)
+        for j, c in enumerate(disks):
+            if ok[j] or len(c.faces) < 2:
+                frozen[c.faces] = True
+            else:
+                if failed is not None:
+                    failed[chart_key(c)] = float(cm.max_stretch[j])
+                todo.append((c.faces, cm.sigma[cm.foff[j]:cm.foff[j + 1]].copy()))
+    # The round's charts and maps are not held through the splits (the Fiedler sweep is the
+    # top-down rounds' peak): ~36 bytes per face of charts and ~48 per face and vertex mapped
+    # (17 MB and more on a 500k-face mesh); only the failed disks' singular values are kept.
+    chs = disks = cm = None
+    if todo:
+        release_memory(len(sub))
+        split = split_deep(todo, E, cut, A, cen, S, poly, orders)
+        for (faces, _), done in zip(todo, split):
+            if not done:
+                frozen[faces] = True
+        changed |= bool(split.any())
+    return changed
