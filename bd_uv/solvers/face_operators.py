@@ -139,7 +139,6 @@ def free_lift_arrays(gx, gy, area, tris, free, nv):
     their data weighted by half each face's area (the right-hand side operator's, its columns
     these rows), and ``fixed = (rows, columns into [u; v], data)`` of the entries on the fixed
     vertices (the fixed vertices' share of the lift)."""
-    k = len(tris)
     data, cols = _lift_entries(gx, gy, tris, nv)
     tr, keep, indptr, w = _free_entries(data, cols, area, free, nv)
     d = data[keep]

@@ -8,6 +8,8 @@
   and ``cut_graph``'s percentile and compressed rows are numpy's and scipy's.
 """
 import importlib
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -99,20 +101,26 @@ def test_release_memory_trims_only_large_work(monkeypatch):
     assert calls == [0]
 
 
-def test_release_memory_hands_freed_heap_back():
-    """On glibc, heap memory numpy freed (after glibc raised its mmap threshold) stays resident
-    until ``release_memory``; after it, the resident set is back near where it started."""
-    import ctypes.util
-    import subprocess
-    import sys
-    if not sys.platform.startswith("linux") or "libc" not in (ctypes.util.find_library("c") or ""):
-        pytest.skip("glibc only")
-    code = """if True:
+# the child processes' start: numpy, bd_uv's trim and the resident set size in MB
+RSS_PRELUDE = """if True:
         import numpy as np
         from bd_uv import trim
         def rss():
             with open("/proc/self/statm") as f:
-                return int(f.read().split()[1]) * 4096 / 2**20
+                return int(f.read().split()[1]) * 4096 / 2**20"""
+
+
+def _glibc_or_skip():
+    import ctypes.util
+    if not sys.platform.startswith("linux") or "libc" not in (ctypes.util.find_library("c") or ""):
+        pytest.skip("glibc only")
+
+
+def test_release_memory_hands_freed_heap_back():
+    """On glibc, heap memory numpy freed (after glibc raised its mmap threshold) stays resident
+    until ``release_memory``; after it, the resident set is back near where it started."""
+    _glibc_or_skip()
+    code = RSS_PRELUDE + """
         big = np.ones(16 * 2**17); del big     # a freed 16 MB map raises the mmap threshold
         base = rss()
         held = [np.ones(2**17) for _ in range(100)]   # 100 MB in 1 MB arrays, from the heap
@@ -358,17 +366,8 @@ def test_large_blocks_mapped_only_for_large_work_and_restored_once(monkeypatch):
 def test_large_blocks_mapped_returns_freed_arrays_at_once():
     """On glibc, inside ``large_blocks_mapped`` the arrays numpy frees leave the resident set at
     their free, where outside (after glibc raised its mmap threshold) they stay resident."""
-    import ctypes.util
-    import subprocess
-    import sys
-    if not sys.platform.startswith("linux") or "libc" not in (ctypes.util.find_library("c") or ""):
-        pytest.skip("glibc only")
-    code = """if True:
-        import numpy as np
-        from bd_uv import trim
-        def rss():
-            with open("/proc/self/statm") as f:
-                return int(f.read().split()[1]) * 4096 / 2**20
+    _glibc_or_skip()
+    code = RSS_PRELUDE + """
         def churn():
             base = rss()
             held = [np.ones(2**20) for _ in range(13)]   # 104 MB in 8 MB arrays (>= MAP_BYTES)
