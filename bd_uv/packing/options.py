@@ -7,22 +7,25 @@ from ..errors import PackError
 
 ROTATIONS = ("none", "90", "any")
 GROUPINGS = ("none", "object", "material")
-# The adaptive time: about an eighth of what Blender 5's exact-shape packer takes on the same
-# charts. Its time went about as 0.045 s sqrt(charts x faces) (quiet: suzanne 27 charts 968 faces
-# 7.3 s, cow 46/5804 28.9 s, dino 36/7828 22.1 s, camel 29/19536 26.0 s; within about 30 % on
-# seven meshes of 3-46 charts, 0.6k-52k faces); a chart count or a face count alone did not
-# follow it (dino has more faces than cow and takes less time, suzanne's charts take 0.27 s
-# each, camel's 0.9 s)
-AUTO_SECONDS_PER_ROOT = 0.006   # seconds per sqrt(charts x faces)
-# and at most this much a chart: Blender took at least 0.2 s a chart on those meshes, and the
-# root alone overshot on meshes of many faces in few charts (camel: 4.5 s of search, 5.2 s in
-# all, against Blender's 19.2 s in the same run, 0.27x; 2026-11-27, load 3.5)
-AUTO_SECONDS_PER_CHART = 0.08
+# The adaptive time: about a sixth of what Blender 5's exact-shape packer takes on the same
+# charts on an idle machine. Its time went about as 0.0145-0.024 s sqrt(charts x faces) there
+# (2026-11-27, load ~1, bench_pack: suzanne 27 charts 968 faces 2.97 s, cow 45/5804 10.4 s, dino
+# 36/7828 12.9 s, camel 29/19536 10.9 s, ChineseDragon 116/19994 31.8 s): 2-2.5x faster than the
+# same packer on a loaded machine (0.045 s; suzanne 7.3 s, cow 28.9 s), since it uses every core,
+# while this budget is CPU seconds. At 0.006 a root, 0.08 a chart and at least 0.6 s the idle
+# machine's runs took 0.24-0.28x Blender's time on suzanne, cow, camel and ChineseDragon; at
+# these 0.12-0.16x, with the same coverage on suzanne, cow and camel (3 seeds) and a few points
+# less on dino and ChineseDragon. A chart count or a face count alone does not follow Blender's
+# time (dino has more faces than cow and takes less time).
+AUTO_SECONDS_PER_ROOT = 0.004   # seconds per sqrt(charts x faces)
+# and at most this much a chart: the root alone overshot on meshes of many faces in few charts
+# (camel: 29 charts of 19.5k faces, Blender 0.38 s a chart)
+AUTO_SECONDS_PER_CHART = 0.06
 AUTO_SECONDS_MAX = 20.0
 # and at least this much (two charts or more): on eight's 6 charts (634 faces) the root gave
 # 0.37 s and coverage 0.558 (8 seeds, load ~8); 0.6 s gave 0.586. Blender's exact-shape packer
-# took at least 4 s on every mesh measured (eight 6.4 s, fandisk's 3 charts 7.4 s)
-AUTO_SECONDS_MIN = 0.6
+# took at least 2.8 s on every mesh measured (eight 2.8 s idle, 6.4 s loaded)
+AUTO_SECONDS_MIN = 0.5
 # but no more than this a chart below six charts: Blender's exact shape takes 0.8-1.6 s a chart
 # on so few (quiet, 2026-11-27: fandisk's 4 charts 3.2 s, Blender's UV sphere's 3 charts 4.7 s),
 # and 0.6 s for fandisk's 4 was 0.217x its time; 0.4 s reached the same coverage (0.663-0.664,

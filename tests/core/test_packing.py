@@ -41,13 +41,13 @@ def test_constructive_placement_only_is_certified_too():
 
 
 def test_nesting_time_is_adaptive_or_as_given():
-    """None (the default): 6 ms sqrt(charts x faces), at most 80 ms a chart and 20 s, nothing
+    """None (the default): 4 ms sqrt(charts x faces), at most 60 ms a chart and 20 s, nothing
     for one chart; a number of seconds, fractional too, is taken as given; anything else
     refused."""
     auto = PackOptions()
     assert auto.search_seconds(1, 10_000) == 0.0
-    assert auto.search_seconds(46, 5804) == pytest.approx(0.006 * (46 * 5804) ** 0.5)
-    assert auto.search_seconds(29, 19536) == pytest.approx(0.08 * 29)    # camel's charts
+    assert auto.search_seconds(46, 5804) == pytest.approx(0.004 * (46 * 5804) ** 0.5)
+    assert auto.search_seconds(29, 19536) == pytest.approx(0.06 * 29)    # camel's charts
     assert auto.search_seconds(5000, 10 ** 6) == 20.0
     assert PackOptions(solve_seconds=0.25).search_seconds(46, 5804) == 0.25
     for bad in ("1", -0.5, 1e9):
@@ -56,12 +56,12 @@ def test_nesting_time_is_adaptive_or_as_given():
 
 
 def test_adaptive_time_has_a_floor_for_a_few_charts():
-    """Two charts or more get at least 0.6 s, or 0.1 s a chart below six: eight's 6 charts of
-    634 faces would get 6 ms sqrt(6 x 634) = 0.37 s and get 0.6 s, fandisk's 4 would get 80 ms a
+    """Two charts or more get at least 0.5 s, or 0.1 s a chart below six: eight's 6 charts of
+    634 faces would get 4 ms sqrt(6 x 634) = 0.25 s and get 0.5 s, fandisk's 4 would get 60 ms a
     chart and get 0.4 s; one chart still none, and a number of seconds given is still taken as
     given."""
     auto = PackOptions()
-    assert 0.006 * (6 * 634) ** 0.5 < 0.6 and auto.search_seconds(6, 634) == 0.6
+    assert 0.004 * (6 * 634) ** 0.5 < 0.5 and auto.search_seconds(6, 634) == 0.5
     assert auto.search_seconds(4, 12946) == pytest.approx(0.4)
     assert auto.search_seconds(3, 12946) == pytest.approx(0.3)
     assert auto.search_seconds(2) == pytest.approx(0.2)
