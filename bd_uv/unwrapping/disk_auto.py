@@ -18,7 +18,6 @@ bound first), a time budget (Dinkelbach steps), more than ``bound_search.ONE_PRO
 (the search's sparse operators: the set-up is a small part there), a map the disk certificate does
 not clear.
 """
-import math
 import time
 
 import numpy as np
@@ -29,9 +28,9 @@ from ..errors import CancelledError
 from ..geometry import local_coordinates
 from ..metrics import mean_distortion
 from ..solvers import bound_search
-from .bounded import uv_area
 from .disk_certificate import certify_measured_disk, measure_disk
-from .finish import HIGH_DISTORTION, certified_bound
+from .finish import HIGH_DISTORTION, certified_bound, placed
+from .one_disk import report_step
 from .problem import normalised
 from .results import IslandResult, UnwrapResult
 
@@ -67,7 +66,7 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None):
         return None
 
     def report(D, C):
-        _report(progress, cancel, 0.1, f"island 1/1: minimising C: C* <= {D:.4g}, aiming at "
+        report_step(progress, cancel, 0.1, f"island 1/1: minimising C: C* <= {D:.4g}, aiming at "
                 f"{C:.4g}")
     us, D, _ = bs.search(u, None, report, None, cancel)
     if cancel is not None and cancel.is_set():
@@ -76,11 +75,7 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None):
     flags = ("projected",) if D < D0 else ("initial_map",)
     if D >= D0:
         us, D = u, D0
-    # placed as finish places a map of no pin: UV area = 3D area, bounding box at (0, 0)
-    area = uv_area(us, isl.tris)
-    s = math.sqrt(area3d / area) if area > 0.0 and math.isfinite(area) else 1.0
-    us = s * us
-    us = us - (us.real.min() + 1j * us.imag.min())
+    us = placed(us, isl.tris, area3d)    # as finish places a map of no pin
     uv = np.stack([us.real, us.imag], axis=1)
     corner_uv = uv.take(isl.tris, axis=0)
     t = time.perf_counter()
@@ -101,15 +96,9 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None):
         overlap_free=True, min_singular=smin, max_singular=smax,
         timings={"setup": 0.0, "solve": 0.0, "certify": time.perf_counter() - t,
                  "project": project})
-    _report(progress, cancel, 1.0, "island 1/1: minimised")
+    report_step(progress, cancel, 1.0, "island 1/1: minimised")
     if progress is not None:
         progress(1.0, "done")
     return UnwrapResult(corner_uv, np.zeros(k, dtype=np.int64), [res], time.perf_counter() - t0,
                         "lscm", certificates=(cert,))
 
-
-def _report(progress, cancel, fraction, message):
-    if progress is not None:
-        progress(fraction, message)
-    if cancel is not None and cancel.is_set():
-        raise CancelledError("unwrap cancelled; nothing was changed")

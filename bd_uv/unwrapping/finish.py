@@ -28,22 +28,33 @@ def certified_bound(max_distortion):
     return 1.0 + math.ceil(excess * 10 ** digits) / 10 ** digits
 
 
+def area_scale(u, tris, area3d):
+    """The factor making the map u (nv,) complex's UV area the island's 3D area ``area3d``; 1
+    for a map collapsed to a point or a line (e.g. pinned ~1e159 away, where float64 cannot hold
+    the island's shape): it has no area to scale by, is left unscaled, and its certificate
+    fails."""
+    area = uv_area(u, tris)
+    return math.sqrt(area3d / area) if area > 0.0 and math.isfinite(area) else 1.0
+
+
+def placed(u, tris, area3d):
+    """A map of no pin placed as the unwrap places it: UV area = 3D area (``area_scale``),
+    bounding box at (0, 0)."""
+    u = area_scale(u, tris, area3d) * u
+    return u - (u.real.min() + 1j * u.imag.min())
+
+
 def finish(prob, u, C, bound, frames_name, flags, t0, stretch=None):
     """Scale and place the island, certify it from its final UVs in the input geometry."""
     isl = prob.island
     npins = len(prob.pin_idx)
-    if npins < 2:
-        # A map collapsed to a point or a line (e.g. pinned ~1e159 away, where float64 cannot
-        # hold the island's shape) has no area to scale by: left unscaled, its certificate fails.
-        area = uv_area(u, isl.tris)
-        s = math.sqrt(prob.area3d / area) if area > 0.0 and math.isfinite(area) else 1.0
-        if npins == 1:
-            p = prob.pin_val[0]
-            u = p + s * (u - p)
-            u[prob.pin_idx[0]] = p
-        else:
-            u = s * u
-            u = u - (u.real.min() + 1j * u.imag.min())
+    if npins == 1:
+        s = area_scale(u, isl.tris, prob.area3d)
+        p = prob.pin_val[0]
+        u = p + s * (u - p)
+        u[prob.pin_idx[0]] = p
+    elif npins == 0:
+        u = placed(u, isl.tris, prob.area3d)
     uv = np.stack([u.real, u.imag], axis=1)
     if npins:
         uv[prob.pin_idx] = np.stack([prob.pin_val.real, prob.pin_val.imag], axis=1)

@@ -199,7 +199,7 @@ def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
     CancelledError when ``cancel`` is set after a progress report (as ``unwrap_islands``)
     """
     isl = disk.island
-    _report(progress, cancel, 0.01, "conformal maps of 1 islands")
+    report_step(progress, cancel, 0.01, "conformal maps of 1 islands")
     Z, G = disk.Z, disk.G
     geom = face_geometry_of(Z, G, disk.area)
     nv = len(isl.vertices)
@@ -231,7 +231,7 @@ def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
         seconds=time.perf_counter() - t0, distortion=D, flags=("initial_map",),
         overlap_free=True, min_singular=smin, max_singular=smax,
         timings={"setup": 0.0, "solve": 0.0, "certify": 0.0})
-    _report(progress, cancel, 1.0, "island 1/1: the conformal map fits the bound")
+    report_step(progress, cancel, 1.0, "island 1/1: the conformal map fits the bound")
     if progress is not None:
         progress(1.0, "done")
     return UnwrapResult(corner_uv, one, [res], time.perf_counter() - t0, "lscm",
@@ -251,7 +251,8 @@ def certify(disk, corner_uv, C, D=None):
     return certify_disk(corner_uv, disk.G, disk, C)[0]
 
 
-def _report(progress, cancel, fraction, message):
+def report_step(progress, cancel, fraction, message):
+    """One progress report, then the cancel check (here and in ``disk_auto``)."""
     if progress is not None:
         progress(fraction, message)
     if cancel is not None and cancel.is_set():
