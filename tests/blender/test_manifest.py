@@ -68,9 +68,10 @@ def test_build_exclusions_keep_development_files_out():
     matcher = build.blender_ext().PathPatternMatch(MANIFEST["build"]["paths_exclude_pattern"])
     for path in ["tests/", "benchmarks/", "docs/", ".ci/", ".git/", ".gitignore", "build.py",
                  "requirements.txt", "requirements-dev.txt", ".wheel-cache/", "dist/", "out/",
-                 "wheels/", "bd_uv/__pycache__/", "bd_uv/mesh.pyc", "BENCHMARKS.md"]:
+                 "wheels/", "bd_uv/__pycache__/", "bd_uv/mesh/arrays.pyc", "bd_uv/mesh/__pycache__/",
+                 "BENCHMARKS.md"]:
         assert matcher.test_path(path), path
-    for path in ["__init__.py", "bd_uv/", "bd_uv/mesh.py", "operators/", "ui/", "scripts/",
+    for path in ["__init__.py", "bd_uv/", "bd_uv/mesh/islands.py", "operators/", "ui/", "scripts/",
                  "README.md", "blender_manifest.toml"]:
         assert not matcher.test_path(path), path
 

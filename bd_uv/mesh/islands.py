@@ -1,4 +1,4 @@
-"""Mesh preparation: validate, cut along seams, split into islands.
+"""Cut the mesh along seams and split it into validated islands.
 
 An island is a set of faces connected across manifold, non-seam edges. Each island gets its own cut
 vertices: corners of one input vertex share an island vertex only when they are connected around
@@ -8,13 +8,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import (ClosedIslandError, DegenerateFacesError, DuplicateFacesError,
-                     InvalidMeshError, NonFiniteError, NonManifoldError, OrientationError,
-                     TopologyError)
-from .geometry import components, face_areas, ordered_loops
-
-# A face is degenerate when twice its area is below this fraction of its longest edge squared.
-DEGENERATE_RATIO = 1e-12
+from ..errors import ClosedIslandError, InvalidMeshError, TopologyError
+from ..geometry import components, face_areas, ordered_loops
+from .arrays import (DEGENERATE_RATIO, as_indices, check_arrays, measurable,
+                     thinner_than_precision)
+from .faults import _repeated_rows, _validate
 
 
 @dataclass(frozen=True)
@@ -38,114 +36,8 @@ class Island:
     error: Exception = None
 
 
-def check_arrays(V, F, *, share=False):
-    """Validate shapes and indices; return float64 V and int64 F.
-
-    With ``share``, arrays already of those types come back as read-only views of the caller's
-    (no copy: the seam search holds V and F through its whole run, 17 MB on a 500k-face mesh);
-    anything writing into them raises rather than changing the caller's mesh.
-
-    Raises
-    ------
-    InvalidMeshError
-    """
-    V = np.asarray(V)
-    F = np.asarray(F)
-    if V.ndim != 2 or V.shape[1] != 3:
-        raise InvalidMeshError(f"vertices must be an (n,3) array, got shape {V.shape}")
-    if F.size == 0:
-        raise InvalidMeshError("the mesh has no faces: nothing to unwrap")
-    if F.ndim != 2 or F.shape[1] != 3:
-        raise InvalidMeshError(f"faces must be an (m,3) array of triangles, got shape {F.shape}; "
-                               "triangulate n-gons first")
-    F = _shared(F) if share and F.dtype == np.int64 else as_indices(F, "face indices")
-    bad = np.flatnonzero(np.any((F < 0) | (F >= len(V)), axis=1))
-    if len(bad):
-        raise InvalidMeshError(f"{len(bad)} face(s) use vertex indices outside 0..{len(V) - 1} "
-                               f"(faces {_some(bad)}); fix the face list")
-    return (_shared(V) if share and V.dtype == np.float64 else as_reals(V, "vertex coordinates"),
-            F)
-
-
-def _shared(x):
-    """A read-only view of ``x``."""
-    x = x.view()
-    x.flags.writeable = False
-    return x
-
-
-def as_reals(x, what):
-    """``x`` as float64, or InvalidMeshError naming ``what`` when it is not real numbers (text,
-    complex numbers: nothing is parsed or dropped silently). NaN and inf pass."""
-    x = np.asarray(x)
-    if x.dtype.kind not in "biufO":
-        raise InvalidMeshError(f"{what} must be real numbers, got {x.dtype}")
-    try:
-        return x.astype(np.float64)
-    except (TypeError, ValueError) as exc:
-        raise InvalidMeshError(f"{what} must be real numbers ({exc})") from None
-
-
-def as_indices(x, what):
-    """``x`` as int64 indices, or InvalidMeshError naming ``what`` when a value is not an integer
-    (fractions, NaN, text: never truncated or cast silently)."""
-    x = np.asarray(x)
-    if x.dtype.kind in "iu":
-        return x.astype(np.int64)
-    f = as_reals(x, what)
-    if not np.all(np.isfinite(f)) or np.any(f != np.round(f)):
-        raise InvalidMeshError(f"{what} must be integers")
-    return f.astype(np.int64)
-
-
-def _some(idx, k=8):
-    idx = np.asarray(idx)
-    s = ", ".join(str(int(i)) for i in idx[:k])
-    return s + (f", ... ({len(idx)} in all)" if len(idx) > k else "")
-
-
 def _edge_keys(a, b, n):
     return np.minimum(a, b) * n + np.maximum(a, b)
-
-
-#: the largest coordinate magnitude a face may have: the seam search forms fourth powers of
-#: coordinates (area-weighted second moments), which overflow float64 near 1e77 (a disk scaled to
-#: 1e80 ended in LinAlgError out of the Fiedler split's principal axes); beyond it a face is refused
-#: by name as too large to measure, as a non-finite one is
-MEASURABLE = 1e60
-TOO_LARGE = "coordinates beyond 1e60 (too large to measure)"   # how messages say it
-
-
-def measurable(P):
-    """(m,) bool: faces (corners ``P`` (m,3,3)) whose coordinates are finite and at most
-    ``MEASURABLE`` in magnitude."""
-    with np.errstate(invalid="ignore"):
-        return np.all(np.abs(P) <= MEASURABLE, axis=(1, 2))
-
-
-def thinner_than_precision(P, A, lmax2, precision):
-    """(m,) bool: faces (corners ``P`` (m,3,3), areas ``A``, longest edges squared ``lmax2``)
-    too thin for ``precision``, the float type the positions were stored in and the UVs are
-    written in (``np.float32`` for glTF, USD, Blender); None or float64: none. Their height,
-    twice the area over the longest edge, is below
-
-    - one step of ``precision`` at their largest coordinate: three points that precision cannot
-      tell from a line; or
-    - one step of ``precision`` in the unit square's upper half (2^-24 for float32) times the
-      square root of the mesh's area (the faces ``A`` given): at the largest scale a map of the
-      mesh into the unit square has on average (its faces keeping their 3D areas, all of the
-      square covered), the face is less than one UV step high, so no float32 UVs keep it from
-      flipping or collapsing wherever it is packed. usd-wg's tractor body has one such face
-      (3.7e-7 high at coordinates up to 2.85, 1.6 position steps, in 195 square units: 0.45 UV
-      step); it failed its island as stored in about one run of four, by where it was packed.
-    """
-    if precision is None or np.dtype(precision) == np.float64:
-        return np.zeros(len(A), dtype=bool)
-    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
-        step = np.spacing(np.abs(P).max(axis=(1, 2)).astype(precision)).astype(np.float64)
-        total = float(np.sum(A[np.isfinite(A)]))
-        uv_step = float(np.spacing(np.asarray(0.5, dtype=precision))) * np.sqrt(total)
-        return ~(2 * A > np.maximum(step, uv_step) * np.sqrt(lmax2))
 
 
 def islands(V, F, seams=None, precision=None):
@@ -323,55 +215,6 @@ def checked_islands(V, F, seams=None, precision=None):
             loops, err = loops_of[idx], topo_err(idx, faces)
         out.append(Island(idx, faces, vertices, tris, loops if err is None else (), err))
     return out
-
-
-def _repeated_rows(T):
-    """(m,) bool: rows of the (m,3) int array ``T`` that occur more than once."""
-    order = np.lexsort((T[:, 2], T[:, 1], T[:, 0]))
-    S = T[order]
-    same = np.all(S[1:] == S[:-1], axis=1)
-    rep = np.zeros(len(T), dtype=bool)
-    rep[1:] |= same
-    rep[:-1] |= same
-    out = np.empty(len(T), dtype=bool)
-    out[order] = rep
-    return out
-
-
-def _validate(idx, faces, tris, vertices, V, degenerate, nonfinite, duplicate, nonmanifold,
-              inconsistent, bowtie, label):
-    name = f"island {idx}"
-    bad = faces[nonfinite[faces]]
-    if len(bad):
-        return NonFiniteError(f"{name}: {len(bad)} face(s) have NaN or infinite vertex coordinates, "
-                              f"or {TOO_LARGE} (faces {_some(bad)}); fix or delete those "
-                              "vertices", idx, bad)
-    bad = faces[duplicate[faces]]
-    if len(bad):
-        return DuplicateFacesError(f"{name}: {len(bad)} faces repeat the same three vertices "
-                                   f"(faces {_some(bad)}); merge or delete the duplicates",
-                                   idx, bad)
-    bad = faces[nonmanifold[faces]]
-    if len(bad):
-        return NonManifoldError(f"{name}: non-manifold edges (shared by 3 or more faces) at faces "
-                                f"{_some(bad)}; split those edges or mark them as seams", idx, bad)
-    bv = bowtie[bowtie[:, 1] == label, 0] if len(bowtie) else np.zeros(0, np.int64)
-    if len(bv):
-        bad = faces[np.isin(vertices[tris], bv).any(axis=1)]
-        return NonManifoldError(f"{name}: non-manifold vertex (faces meet only at a point) at "
-                                f"vertices {_some(bv)}; split the vertex (Mesh > Split) or "
-                                "separate the parts", idx, bad)
-    bad = faces[inconsistent[faces]]
-    if len(bad):
-        return OrientationError(f"{name}: {len(bad)} faces are oriented against their neighbours "
-                                f"(faces {_some(bad)}); recalculate normals (Mesh > Normals > "
-                                "Recalculate Outside)", idx, bad)
-    bad = faces[degenerate[faces]]
-    if len(bad):
-        return DegenerateFacesError(f"{name}: {len(bad)} zero-area face(s) (faces {_some(bad)}); "
-                                    "dissolve degenerate geometry (Mesh > Clean Up > Degenerate "
-                                    "Dissolve)", idx, bad)
-    return None
 
 
 def _all_boundary_loops(cv, hisl, n_isl, ncut, fbounds, valid, local, interior=None):
