@@ -28,17 +28,18 @@ be saved (float32, packed or not) with its own bound, and an island that fails i
 saving: no island that failed is ever saved. The report's figures and the PNG are those of the
 saved map; faces are also counted as Blender's polygons. Arrays come from the add-on's
 ``operators/mesh_data.py`` and are solved by ``bd_uv.batch.unwrap_job``, the code
-``python -m bd_uv batch`` runs. Islands that are not certified keep their old UVs. Exit code 0
+``python -m bd_uv batch`` runs; the objects are chosen and written by
+``operators/batch_objects.py``, checked as saved by ``batch_saved.py``, packed by
+``batch_pack.py``; this file parses the options, opens and saves the file, and reports. Islands that are not certified keep their old UVs. Exit code 0
 only if every object was certified.
 
-This file lives in ``<extension root>/scripts/``; it imports ``bd_uv`` and ``mesh_data`` from the
-extension root by path, so it works from the repository and from an installed extension alike.
+This file lives in ``<extension root>/scripts/``; it imports ``bd_uv`` and the add-on's modules from
+the extension root by path, so it works from the repository and from an installed extension alike.
 """
 import argparse
 import importlib.util
 import json
 import os
-import re
 import sys
 import time
 
@@ -75,16 +76,20 @@ def _extension_package():
 
 def _import_addon():
     """The modules used here, from this extension: bd_uv's batch and arguments, and the add-on's
-    mesh_data (bpy <-> numpy), session (packing) and stored (the post-write check)."""
+    mesh_data (bpy <-> numpy), session (packing), stored (the post-write check) and formats."""
     pkg = _extension_package().__name__
     return tuple(importlib.import_module(f"{pkg}.{name}") for name in
                  ("bd_uv", "bd_uv.batch", "bd_uv.arguments", "operators.mesh_data",
                   "operators.session", "operators.stored", "operators.formats"))
 
 
-def _import_packing():
-    """The add-on's ``operators/batch_pack.py``: this script's packing (both packers)."""
-    return importlib.import_module(f"{_extension_package().__name__}.operators.batch_pack")
+def _import_batch():
+    """The add-on's modules of this script: ``operators/batch_pack.py`` (its packing, both
+    packers), ``batch_objects.py`` (the objects unwrapped and written), ``batch_saved.py`` (the
+    post-write check and the pictures)."""
+    pkg = _extension_package().__name__
+    return tuple(importlib.import_module(f"{pkg}.operators.{name}") for name in
+                 ("batch_pack", "batch_objects", "batch_saved"))
 
 
 def split_argv(argv):
@@ -145,266 +150,10 @@ def build_parser(arguments, packing):
     return p
 
 
-def mesh_objects(names):
-    """(objects to unwrap, report entries for names that are not usable mesh objects)."""
-    missing = []
-    if names:
-        objects = []
-        for name in names:
-            ob = bpy.data.objects.get(name)
-            if ob is None or ob.type != 'MESH':
-                what = "no object" if ob is None else f"a {ob.type.lower()} object, not a mesh,"
-                missing.append((name, f"there is {what} named {name!r} in the file"))
-            else:
-                objects.append(ob)
-    else:
-        objects = sorted((ob for ob in bpy.data.objects
-                          if ob.type == 'MESH' and len(ob.data.polygons)),
-                         key=lambda ob: ob.name)
-    seen, unique = {}, []
-    for ob in objects:  # linked duplicates share one mesh: unwrap it once
-        if ob.data.name in seen:
-            print(f"skipped {ob.name}: shares its mesh with {seen[ob.data.name]}")
-        elif ob.data.library is not None:
-            missing.append((ob.name, f"{ob.name}'s mesh is linked from {ob.data.library.filepath}"
-                                     " and cannot be written here"))
-        else:
-            seen[ob.data.name] = ob.name
-            unique.append(ob)
-    return unique, missing
-
-
-def nothing_to_unwrap():
-    """Why a file has no mesh object to unwrap: linked libraries that are missing, collection
-    instances (their meshes are in another file, or need making real)."""
-    text = "the file holds no mesh object with faces"
-    empty = [ob.name for ob in bpy.data.objects if ob.type == 'MESH' and not len(ob.data.polygons)]
-    if empty:
-        text += (f"; mesh object(s) {', '.join(empty[:3])}{' ...' if len(empty) > 3 else ''} "
-                 "have edges or points only")
-    lost = [lib.filepath for lib in bpy.data.libraries
-            if not os.path.exists(bpy.path.abspath(lib.filepath))]
-    if lost:
-        text += (f"; {len(lost)} linked librar{'y is' if len(lost) == 1 else 'ies are'} "
-                 f"missing ({', '.join(lost[:3])}), so their meshes could not be read")
-    inst = [ob.name for ob in bpy.data.objects
-            if ob.instance_type == 'COLLECTION' and ob.instance_collection is not None]
-    if inst:
-        text += (f"; collection instances ({', '.join(inst[:3])}) are not unwrapped: unwrap the "
-                 "file they link, or make them real (Object > Apply > Make Instances Real)")
-    return text
-
-
-def _leave_edit_mode(objects):
-    view_layer = bpy.context.view_layer
-    for ob in objects:
-        if ob.mode != 'OBJECT' and ob.name in view_layer.objects:
-            view_layer.objects.active = ob
-            bpy.ops.object.mode_set(mode='OBJECT')
-
-
-def _file_name(text):
-    return re.sub(r'[\\/:*?"<>|\s]+', "_", text).strip("._") or "object"
-
-
-def in_polygons(entry, result, name, arrays, session):
-    """Each island entry gains ``polygons`` (its faces as Blender counts them), and a failed
-    island's message names polygons, not the triangles the core was given."""
-    def polygons(tris):
-        return {name: np.unique(arrays.tri_poly[np.asarray(tris, dtype=np.int64)])}
-    for isl in entry["islands"]:
-        r = result.islands[isl["island"]]
-        isl["polygons"] = int(len(np.unique(arrays.tri_poly[r.faces])))
-        if r.status != "certified":
-            isl["message"] = (f"island {r.index} ({isl['polygons']} faces): "
-                              f"{session.failure_text(r, polygons)}")
-    bad = [i for i in entry["islands"] if i["status"] != "certified"]
-    if bad:
-        more = f" (and {len(bad) - 1} more failed island(s))" if len(bad) > 1 else ""
-        entry["message"] = bad[0]["message"] + more
-
-
-def unwrap_objects(objects, args, batch, options, mesh_data, session, source):
-    """Unwrap each object and write its certified islands into its UV map.
-
-    Returns
-    -------
-    items : list of report entries, one per object
-    written : list of Written, one per object with something written
-    """
-    items, written = [], []
-    for ob in objects:
-        try:
-            scale = (1.0, 1.0, 1.0) if args.no_object_scale else tuple(abs(c) for c in ob.scale)
-            arrays = mesh_data.mesh_arrays(ob, uv_name=args.uv_map, scale=scale)
-            seams = arrays.seams
-            if args.seams == "none":
-                seams = None
-            elif args.seams == "uv":
-                if arrays.corner_uv is None:
-                    raise ValueError(f"{ob.name} has no UV map, so --seams uv has nothing to "
-                                     "cut along")
-                meshio = importlib.import_module(f"{_extension_package().__name__}.bd_uv.meshio")
-                seams = meshio.uv_seams(arrays.F, arrays.corner_uv)
-            job = batch.Job(ob.name, arrays.V, arrays.F, seams=seams,
-                            pin_corners=arrays.pin_corners, pin_uv=arrays.pin_uv,
-                            corner_uv=arrays.corner_uv, face_groups=arrays.tri_poly,
-                            uv_dtype=np.float32, position_dtype=np.float32)
-            result = batch.unwrap_job(job, options)
-            entry = {"input": source, "object": ob.name, "output": None, "uv_map": None,
-                     "polygons": int(len(np.unique(arrays.tri_poly))), **result.entry}
-            if result.result is not None:
-                in_polygons(entry, result.result, ob.name, arrays, session)
-            ok = np.isfinite(result.corner_uv).all(axis=(1, 2))
-            if ok.any():
-                name = args.uv_map or arrays.uv_name
-                initial = None
-                if arrays.corner_uv is None:  # a new map: keep what it holds before writing
-                    layer = ob.data.uv_layers.new(name=name or "UVMap")
-                    name, initial = layer.name, mesh_data.loop_uvs(ob.data, layer.name)
-                entry["uv_map"] = mesh_data.write_corner_uvs(
-                    ob.data, name, arrays.tri_loops, result.corner_uv, ok)
-                written.append(Written(entry, ob, arrays, ok, result.result, initial))
-        except Exception as exc:  # one object never stops the others
-            entry = batch.failed_entry(ob.name, type(exc).__name__, f"{ob.name}: {exc}",
-                                       input=source, object=ob.name, output=None, uv_map=None)
-        items.append(entry)
-    return items, written
-
-
-class Written:
-    """One object's written islands: its report entry, the object, its MeshArrays, the (m,) bool
-    triangles written (and kept), the UnwrapResult, and for a map created here what it held
-    before writing ((L,2) float32; None when the map existed)."""
-
-    def __init__(self, entry, ob, arrays, ok, result, initial_uv=None):
-        self.entry, self.ob, self.arrays, self.ok = entry, ob, arrays, ok
-        self.result, self.initial_uv = result, initial_uv
-
-
-def _put_back(w, undo, mesh_data, stored):
-    """Give the triangles ``undo`` (m,) bool their UVs from before the unwrap; a map created
-    here is restored to what it held, or removed when nothing written is left on it. UVs that
-    would lie over the islands kept go back moved right by whole tiles (``stored.tiles_off``).
-
-    Returns
-    -------
-    int, the whole tiles they were moved by (0: exactly as they were)
-    """
-    mesh, name = w.ob.data, w.entry["uv_map"]
-    kept = w.ok & ~undo
-    if w.initial_uv is not None and not kept.any():
-        mesh.uv_layers.remove(mesh.uv_layers[name])
-        mesh.update()
-        w.entry["uv_map"] = None
-        return 0
-    now = mesh_data.loop_uvs(mesh, name)
-    loops = w.arrays.tri_loops[undo].ravel()
-    old = (w.initial_uv[loops] if w.initial_uv is not None
-           else np.asarray(w.arrays.corner_uv, np.float64)[undo].reshape(-1, 2))
-    tiles = stored.tiles_off(now[w.arrays.tri_loops[kept].ravel()], old)
-    if w.initial_uv is None:
-        shift = np.array([tiles, 0.0])
-        mesh_data.write_corner_uvs(mesh, name, w.arrays.tri_loops,
-                                   w.arrays.corner_uv + shift if tiles else w.arrays.corner_uv,
-                                   undo)
-        return tiles
-    now[loops] = old + np.array([tiles, 0.0], dtype=now.dtype)
-    mesh.uv_layers[name].uv.foreach_set("vector", now.ravel())
-    mesh.update()
-    return tiles
-
-
-def check_saved(written, mesh_data, stored, packed):
-    """The post-write check: re-certify each written island from the UV map as it will be saved
-    (float32, packed or not) with that island's own bound, and put back every island that fails,
-    so no island that failed is ever saved. The entry's figures become those of the stored,
-    kept islands (area-weighted mean), its island entries gain the stored figures, and overlaps
-    between the kept islands of the layout are counted.
-    """
-    for w in written:
-        entry, arrays = w.entry, w.arrays
-        uv = mesh_data.loop_uvs(w.ob.data, entry["uv_map"])[arrays.tri_loops].astype(np.float64)
-        labels = np.where(w.ok, w.result.face_island, -1)
-        checks = stored.check_stored(arrays.V, arrays.F, uv, labels, w.result.islands,
-                                     solved_uv=w.result.corner_uv)
-        by_index = {c.island: c for c in checks}
-        undo = np.isin(labels, [c.island for c in checks if not c.certified])
-        for isl in entry["islands"]:
-            c = by_index.get(isl["island"])
-            if c is None:
-                continue
-            isl.update(bound_certified=c.bound, max_distortion=c.max_distortion,
-                       mean_distortion=c.mean_distortion, flipped=c.flipped,
-                       overlap_free=bool(c.overlap_free))
-            if not c.certified:
-                cause = ("as solved already" if c.failed_as_solved else
-                         "after packing" if packed else "after float32 storage")
-                isl.update(status="failed", error="CertificationError",
-                           message=f"island {c.island}: put back as it was, its saved UVs fail "
-                                   f"the certificate ({c.reason}; {cause})")
-        if undo.any():
-            tiles = _put_back(w, undo, mesh_data, stored)
-            if tiles:
-                for isl in entry["islands"]:
-                    c = by_index.get(isl["island"])
-                    if c is not None and not c.certified:
-                        isl["message"] += (f"; moved {tiles} UV tile(s) right, off the saved "
-                                           "islands it lay over")
-                        isl["moved_tiles"] = tiles
-            w.ok = w.ok & ~undo
-        kept = [c for c in checks if c.certified]
-        P = arrays.V[arrays.F]
-        area = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
-        on = labels >= 0
-        island_area = np.bincount(labels[on], weights=area[on], minlength=len(w.result.islands))
-        weights = np.array([island_area[c.island] for c in kept])
-        bad = [i for i in entry["islands"] if i["status"] != "certified"]
-        entry["status"] = "certified" if not bad else ("partial" if kept else "failed")
-        if kept:
-            entry.update(bound_certified=max(c.bound for c in kept),
-                         max_distortion=max(c.max_distortion for c in kept),
-                         mean_distortion=float(np.dot(weights, [c.mean_distortion for c in kept])
-                                               / weights.sum()),
-                         flipped=int(sum(c.flipped for c in kept)))
-        else:
-            entry.update(bound_certified=None, max_distortion=None, mean_distortion=None,
-                         flipped=None)
-        if bad:
-            entry["error"] = bad[0]["error"] or "IslandError"
-            more = f" (and {len(bad) - 1} more failed island(s))" if len(bad) > 1 else ""
-            entry["message"] = bad[0]["message"] + more
-        kept_labels = np.where(w.ok, labels, -1)
-        pairs = (stored.layout_overlaps(uv, kept_labels, arrays.F)
-                 if len(np.unique(kept_labels[kept_labels >= 0])) > 1 else [])
-        entry["island_overlaps"] = None if pairs is None else [
-            [int(a), int(b)] for a, b in np.asarray(pairs).reshape(-1, 2)]
-        # the layout as saved (packed or not), not the core's unpacked one
-        entry["layout_overlaps"] = (None if pairs is None
-                                    else len(entry["island_overlaps"]))
-
-
-def draw_saved(written, core, batch, mesh_data, options, args):
-    """Draw each object's UV layout as saved (only the islands kept), when ``--png``."""
-    for w in written:
-        entry, ob, arrays, ok = w.entry, w.ob, w.arrays, w.ok
-        if not args.png or entry["uv_map"] is None:
-            continue
-        uv = mesh_data.loop_uvs(ob.data, entry["uv_map"])[arrays.tri_loops].astype(np.float64)
-        uv[~ok] = np.nan
-        D = np.full(len(arrays.F), np.nan)
-        D[ok] = core.conformal_distortion(arrays.V, arrays.F[ok], uv[ok])
-        png = os.path.join(args.png, args.png_prefix + _file_name(ob.name) + ".png")
-        try:
-            batch.entry_png(png, entry, uv, D, options)
-        except Exception as exc:  # a picture that cannot be drawn must not lose the UVs
-            entry.update(png=None, png_error=f"{type(exc).__name__}: {exc}")
-
-
 def main(argv):
     blends, rest = split_argv(argv)
-    core, batch, arguments, mesh_data, session, stored, formats = _import_addon()
-    packing = _import_packing()
+    _, batch, arguments, mesh_data, _, _, formats = _import_addon()
+    packing, chosen, saved = _import_batch()
     args = build_parser(arguments, packing).parse_args(rest)
     imported = [f for f in blends if not f.lower().endswith(".blend")] + (
         [args.input] if args.input else [])
@@ -454,26 +203,26 @@ def main(argv):
             os.makedirs(d, exist_ok=True)
 
     t0 = time.perf_counter()
-    objects, missing = mesh_objects(args.objects)
-    _leave_edit_mode(objects)
+    objects, missing = chosen.mesh_objects(args.objects)
+    chosen.leave_edit_mode(objects)
     items = [batch.failed_entry(name, "ObjectError", message, input=source, object=name,
                                 output=None, uv_map=None) for name, message in missing]
     if not objects and not items:   # say why there is nothing, in the file's terms
         items.append(batch.failed_entry(os.path.basename(source or "scene"), "ObjectError",
-                                        nothing_to_unwrap(), input=source, object=None,
+                                        chosen.nothing_to_unwrap(), input=source, object=None,
                                         output=None, uv_map=None))
     for e in items:
         print(batch.item_line(e), flush=True)
-    done, written = unwrap_objects(objects, args, batch, options, mesh_data, session, source)
+    done, written = chosen.unwrap_objects(objects, args, options, source)
     if written and args.pack:
         packing.pack(written, args, atlas)
-    check_saved(written, mesh_data, stored, args.pack)
+    saved.check_saved(written, args.pack)
     written = [w for w in written if w.ok.any()]
     for w in written:   # the seams added, where the artist sees them: marked on the mesh saved
         if w.entry.get("seams_added"):
             w.entry["seams_marked"] = int(mesh_data.mark_seams(
                 w.ob.data, w.arrays.vertices[np.asarray(w.entry["seams_added"])]).sum())
-    draw_saved(written, core, batch, mesh_data, options, args)
+    saved.draw_saved(written, options, args)
     items += done
     for e in done:
         print(batch.item_line(e), flush=True)
