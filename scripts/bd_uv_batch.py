@@ -27,7 +27,7 @@ Pack Islands (``--pack-shape``). Then each island is certified again from the UV
 be saved (float32, packed or not) with its own bound, and an island that fails is put back before
 saving: no island that failed is ever saved. The report's figures and the PNG are those of the
 saved map; faces are also counted as Blender's polygons. Arrays come from the add-on's
-``operators/mesh_data.py`` and are solved by ``bd_uv.batch.unwrap_job``, the code
+``operators/mesh_data/`` and are solved by ``bd_uv.batch.unwrap_job``, the code
 ``python -m bd_uv batch`` runs; the objects are chosen and written by
 ``operators/batch_objects.py``, checked as saved by ``batch_saved.py``, packed by
 ``batch_pack.py``; this file parses the options, opens and saves the file, and reports. Islands that are not certified keep their old UVs. Exit code 0

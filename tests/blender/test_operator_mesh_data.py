@@ -1,4 +1,4 @@
-"""operators/mesh_data.py: the bpy <-> numpy transfer, checked against Blender's own collections."""
+"""operators/mesh_data/: the bpy <-> numpy transfer, checked against Blender's own collections."""
 import numpy as np
 import pytest
 
