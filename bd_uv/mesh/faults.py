@@ -22,35 +22,43 @@ def _repeated_rows(T):
 
 def _validate(idx, faces, tris, vertices, V, degenerate, nonfinite, duplicate, nonmanifold,
               inconsistent, bowtie, label):
+    """The first fault of island ``idx`` (its ``faces``), in the order a user should fix them: an
+    IslandError naming the faces (a bow-tie: the vertices), or None."""
     name = f"island {idx}"
-    bad = faces[nonfinite[faces]]
-    if len(bad):
-        return NonFiniteError(f"{name}: {len(bad)} face(s) have NaN or infinite vertex coordinates, "
-                              f"or {TOO_LARGE} (faces {_some(bad)}); fix or delete those "
-                              "vertices", idx, bad)
-    bad = faces[duplicate[faces]]
-    if len(bad):
-        return DuplicateFacesError(f"{name}: {len(bad)} faces repeat the same three vertices "
-                                   f"(faces {_some(bad)}); merge or delete the duplicates",
-                                   idx, bad)
-    bad = faces[nonmanifold[faces]]
-    if len(bad):
-        return NonManifoldError(f"{name}: non-manifold edges (shared by 3 or more faces) at faces "
-                                f"{_some(bad)}; split those edges or mark them as seams", idx, bad)
+    # (the faulty faces' mask, the error, its advice from the count and the faces listed)
+    first = [
+        (nonfinite, NonFiniteError,
+         lambda n, s: f"{n} face(s) have NaN or infinite vertex coordinates, or {TOO_LARGE} "
+                      f"(faces {s}); fix or delete those vertices"),
+        (duplicate, DuplicateFacesError,
+         lambda n, s: f"{n} faces repeat the same three vertices (faces {s}); merge or delete "
+                      "the duplicates"),
+        (nonmanifold, NonManifoldError,
+         lambda n, s: f"non-manifold edges (shared by 3 or more faces) at faces {s}; split "
+                      "those edges or mark them as seams")]
+    then = [
+        (inconsistent, OrientationError,
+         lambda n, s: f"{n} faces are oriented against their neighbours (faces {s}); "
+                      "recalculate normals (Mesh > Normals > Recalculate Outside)"),
+        (degenerate, DegenerateFacesError,
+         lambda n, s: f"{n} zero-area face(s) (faces {s}); dissolve degenerate geometry "
+                      "(Mesh > Clean Up > Degenerate Dissolve)")]
+    fault = _first_fault(name, idx, faces, first)
+    if fault is not None:
+        return fault
     bv = bowtie[bowtie[:, 1] == label, 0] if len(bowtie) else np.zeros(0, np.int64)
     if len(bv):
         bad = faces[np.isin(vertices[tris], bv).any(axis=1)]
         return NonManifoldError(f"{name}: non-manifold vertex (faces meet only at a point) at "
                                 f"vertices {_some(bv)}; split the vertex (Mesh > Split) or "
                                 "separate the parts", idx, bad)
-    bad = faces[inconsistent[faces]]
-    if len(bad):
-        return OrientationError(f"{name}: {len(bad)} faces are oriented against their neighbours "
-                                f"(faces {_some(bad)}); recalculate normals (Mesh > Normals > "
-                                "Recalculate Outside)", idx, bad)
-    bad = faces[degenerate[faces]]
-    if len(bad):
-        return DegenerateFacesError(f"{name}: {len(bad)} zero-area face(s) (faces {_some(bad)}); "
-                                    "dissolve degenerate geometry (Mesh > Clean Up > Degenerate "
-                                    "Dissolve)", idx, bad)
+    return _first_fault(name, idx, faces, then)
+
+
+def _first_fault(name, idx, faces, checks):
+    """The error of the first check (mask, error class, advice) some of ``faces`` fail, or None."""
+    for mask, error, advice in checks:  # per kind of fault, in order
+        bad = faces[mask[faces]]
+        if len(bad):
+            return error(f"{name}: {advice(len(bad), _some(bad))}", idx, bad)
     return None
