@@ -37,9 +37,15 @@ from .results import IslandResult, UnwrapResult
 __all__ = ["minimise_disk"]
 
 
-def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None):
+def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="auto"):
     """The smallest certified C of a ``Disk`` from its conformal map u (nv,) complex128
     (``one_disk.unwrap_disk``'s), as ``strategies.minimise`` finds it without a time budget.
+
+    ``requested``: the bound asked for, "auto", or a number C (= ``limit``) whose conformal map
+    lay over itself: the smallest C is sought, as for "auto", so that the disk stays one island
+    (a map of lower distortion moves the boundary: on three_peaks' 554-face centre the conformal
+    map at C = 5 folded over and was cut into 3 islands, one of a single face, where the search's
+    map at C = 1.125 is one, in less time than the cut took); flagged "unfolded".
 
     Returns
     -------
@@ -72,7 +78,8 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None):
     if cancel is not None and cancel.is_set():
         raise CancelledError("unwrap cancelled; nothing was changed")
     project = time.perf_counter() - t
-    flags = ("projected",) if D < D0 else ("initial_map",)
+    flags = (("projected",) if D < D0 else ("initial_map",)) + (
+        ("unfolded",) if requested != "auto" else ())
     if D >= D0:
         us, D = u, D0
     us = placed(us, isl.tris, area3d)    # as finish places a map of no pin
@@ -90,7 +97,7 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None):
     res = IslandResult(
         0, isl.faces, isl.vertices, isl.tris, uv=uv, status="certified",
         message=f"island 0: {k} faces, max distortion {mx:.3f} <= {C:.4g}, 0 flipped",
-        bound_requested="auto", bound_certified=float(C), max_distortion=mx,
+        bound_requested=requested, bound_certified=float(C), max_distortion=mx,
         mean_distortion=mean_distortion(None, None, Dm, disk.area), flipped=0, frames="conformal",
         seconds=time.perf_counter() - t0, iterations=bs.iterations, distortion=Dm, flags=flags,
         overlap_free=True, min_singular=smin, max_singular=smax,

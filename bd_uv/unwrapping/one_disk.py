@@ -190,9 +190,11 @@ def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
 
     Returns
     -------
-    (UnwrapResult, None) when the conformal map fits C (with STORE_HEADROOM) and the certificate
-    clears it; else (None, u), u (nv,) complex128 the conformal map as
-    ``batched.conformal_islands`` solves it, for the general path to start from.
+    (UnwrapResult, None, False) when the conformal map fits C (with STORE_HEADROOM) and the
+    certificate clears it; else (None, u, overlaps), u (nv,) complex128 the conformal map as
+    ``batched.conformal_islands`` solves it, for the general path to start from, and overlaps
+    True when the map is flip-free and within C but its UV boundary is not one simple polygon
+    (the map lies over itself: the general path would cut the disk)
 
     Raises
     ------
@@ -207,7 +209,7 @@ def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
     u = lscm_pinned(geom.cbw(), geom.cb, isl.tris, nv, idx, np.array([0.0, 1.0], complex),
                     (disk.twins[0], disk.twins[1], disk.loop), disk.ranks if C is None else None)
     if C is None:
-        return None, u
+        return None, u, False
     # UV area = 3D area, bounding box at (0, 0), as the batched path places an island.
     uc = u.take(isl.tris)
     e1, e2 = uc[:, 1] - uc[:, 0], uc[:, 2] - uc[:, 0]
@@ -221,7 +223,8 @@ def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
     corner_uv = uv.take(isl.tris, axis=0)
     cert, D, smin, smax = certify_disk(corner_uv, G, disk, C)
     if cert is None or not cert.max_distortion * (1.0 + STORE_HEADROOM) <= C:
-        return None, u
+        fits = bool(np.isfinite(corner_uv).all() and D.max() * (1.0 + STORE_HEADROOM) <= C)
+        return None, u, cert is None and fits
     mx = cert.max_distortion
     res = IslandResult(
         0, isl.faces, isl.vertices, isl.tris, uv=uv, status="certified",
@@ -235,7 +238,7 @@ def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
     if progress is not None:
         progress(1.0, "done")
     return UnwrapResult(corner_uv, one, [res], time.perf_counter() - t0, "lscm",
-                        certificates=(cert,)), None
+                        certificates=(cert,)), None, False
 
 
 def certify(disk, corner_uv, C, D=None):

@@ -102,10 +102,14 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     else:
         disk = None
     if disk is not None:
-        done, u = one_disk.unwrap_disk(V, F, disk, None if opts.bound == "auto" else
-                                       float(opts.bound), t0, progress, cancel)
-        if done is None and opts.bound == "auto" and opts.time_budget is None:
-            done = disk_auto.minimise_disk(V, disk, u, opts.bound_limit, t0, progress, cancel)
+        done, u, overlaps = one_disk.unwrap_disk(V, F, disk, None if opts.bound == "auto" else
+                                                 float(opts.bound), t0, progress, cancel)
+        # auto, and a conformal map within C lying over itself: the smallest C keeps the disk
+        # one island where its map does not (else the general path cuts it)
+        if done is None and (opts.bound == "auto" or overlaps) and opts.time_budget is None:
+            done = disk_auto.minimise_disk(
+                V, disk, u, opts.bound_limit if opts.bound == "auto" else float(opts.bound), t0,
+                progress, cancel, opts.bound)
         if done is not None:
             return done
         conformal = {0: u}

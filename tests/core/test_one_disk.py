@@ -179,6 +179,62 @@ def test_an_overlapping_conformal_map_is_cut_by_the_general_path():
                                                  [5.0, 5.0])] == [True, True]
 
 
+def _central_rings(V, F, faces):
+    """Whole rings of faces around the face nearest the vertices' mean, grown over shared edges
+    until at least ``faces`` faces: a disk cut from a closed or larger mesh."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import shortest_path
+    e = np.sort(np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
+    key = e[:, 0] * len(V) + e[:, 1]
+    order = np.argsort(key, kind="stable")
+    same = np.flatnonzero(key[order][1:] == key[order][:-1])
+    a, b = order[same] // 3, order[same + 1] // 3
+    A = sp.coo_array((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])),
+                     shape=(len(F), len(F))).tocsr()
+    seed = int(np.argmin(np.linalg.norm(V[F].mean(axis=1) - V.mean(axis=0), axis=1)))
+    ring = shortest_path(A, unweighted=True, indices=seed)
+    keep = np.flatnonzero(ring <= np.sort(ring)[faces - 1])
+    used, inv = np.unique(F[keep], return_inverse=True)
+    return V[used], inv.reshape(-1, 3)
+
+
+def test_a_conformal_map_lying_over_itself_stays_one_island_at_a_lower_bound():
+    """three_peaks' 554-face centre: its conformal map is flip-free and within C = 5 but folds
+    over itself, which the general path cut into 3 islands (one of a single face). The one pass
+    seeks the smallest C instead, as auto does: one island, certified at a bound below the one
+    asked, flagged "unfolded"; checked here from the UVs with numpy's SVD and shapely."""
+    import shapely
+    V, F = _central_rings(*load_off("three_peaks.off"), 500)
+    assert len(F) == 554
+    disk = one_disk.find(V, F)
+    assert disk is not None
+    done, u, overlaps = one_disk.unwrap_disk(V, F, disk, 5.0, 0.0)
+    assert done is None and overlaps            # the conformal map within 5 lies over itself
+    res = bd_uv.unwrap(V, F, bound=5.0)
+    assert len(res.islands) == 1
+    r = res.islands[0]
+    assert r.status == "certified" and "unfolded" in r.flags and r.bound_requested == 5.0
+    assert r.bound_certified < 2.0
+    uv = res.corner_uv
+    # distortion and flips from each face's Jacobian in its own 3D frame (numpy's SVD)
+    P = V[F]
+    e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
+    x = e1 / np.linalg.norm(e1, axis=1)[:, None]
+    n = np.cross(e1, e2)
+    y = np.cross(n / np.linalg.norm(n, axis=1)[:, None], x)
+    X = np.stack([np.stack([(e1 * x).sum(1), (e1 * y).sum(1)], 1),
+                  np.stack([(e2 * x).sum(1), (e2 * y).sum(1)], 1)], 2)   # columns: edges in 2D
+    U = np.stack([uv[:, 1] - uv[:, 0], uv[:, 2] - uv[:, 0]], 2)
+    J = U @ np.linalg.inv(X)
+    s = np.linalg.svd(J, compute_uv=False)
+    assert (np.linalg.det(J) > 0).all()
+    assert (s[:, 0] / s[:, 1]).max() <= r.bound_certified
+    # no overlap: the triangles' union covers the sum of their areas
+    tris = shapely.polygons(uv)
+    assert shapely.area(shapely.union_all(tris)) == pytest.approx(shapely.area(tris).sum(),
+                                                                   rel=1e-9)
+
+
 def _fan(p):
     """A triangle fan over the polygon p (k,2): its faces and corner UVs, whose UV boundary is
     the polygon (faces may flip: the boundary is what island_overlaps reads)."""
@@ -338,7 +394,7 @@ def test_auto_on_a_disk_leaves_to_the_general_path_what_it_does_not_search():
     V, F = curved_grid()
     F = np.asarray(F, np.int64)
     disk = one_disk.find(V, F)
-    _, u = one_disk.unwrap_disk(V, F, disk, None, time.perf_counter())
+    _, u, _ = one_disk.unwrap_disk(V, F, disk, None, time.perf_counter())
     D0 = bd_uv.unwrap(V, F, bound=1000.0).islands[0].max_distortion     # the conformal map's
     assert disk_auto.minimise_disk(V, disk, u, 1.0 + 0.5 * (D0 - 1.0), 0.0) is None
     done = disk_auto.minimise_disk(V, disk, u, 1000.0, 0.0)
