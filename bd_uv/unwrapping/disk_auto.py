@@ -34,7 +34,12 @@ from .one_disk import report_step
 from .problem import normalised
 from .results import IslandResult, UnwrapResult
 
-__all__ = ["minimise_disk"]
+__all__ = ["minimise_disk", "searches"]
+
+
+def searches(disk):
+    """Does ``minimise_disk`` search this ``Disk`` (else it leaves it to the general path)?"""
+    return len(disk.island.tris) <= bound_search.ONE_PRODUCT_FACES  # read at the call (tests set it)
 
 
 def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="auto"):
@@ -57,7 +62,7 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
     """
     isl = disk.island
     k, nv = len(isl.tris), len(isl.vertices)
-    if k > bound_search.ONE_PRODUCT_FACES:    # read at the call (tests set it)
+    if not searches(disk):
         return None
     t = time.perf_counter()
     # the search's geometry as IslandProblem normalises it (the same bits: the same maps)

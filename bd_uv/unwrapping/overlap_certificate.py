@@ -10,7 +10,7 @@ from ..errors import OverlapError, SolverError
 
 
 def overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True,
-                         face_groups=None):
+                         face_groups=None, unfold=None):
     """Certify every certified island one-to-one from its final UVs (Lipman 2012, Theorems 5.1,
     5.2: simple, disjoint, rightly wound UV boundaries), and cut an island that overlaps itself
     into overlap-free pieces (``cut.split_overlapping``: no UV moves, so each piece keeps its
@@ -22,6 +22,9 @@ def overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True,
     ----------
     pinned : set of island indices with pins (their pieces stay where the pins put them)
     cut : bool, cut an overlapping island (else it fails with OverlapError)
+    unfold : callable(index) -> IslandResult or None, optional: another certified map of an
+        unpinned island that overlaps itself (``unwrap_islands``: the smallest C within the one
+        asked), taken instead when it is certified one-to-one from its UVs here
 
     Returns
     -------
@@ -45,6 +48,10 @@ def overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True,
     for r, c in zip(results, certs):
         if r.status != "certified" or c.overlap_free:
             out.append(dataclasses.replace(r, overlap_free=r.status == "certified"))
+            continue
+        other = _unfolded(V, F, r, corner_uv, unfold) if r.index not in pinned else None
+        if other is not None:
+            out.append(other)
             continue
         if not cut:
             err = OverlapError(f"island {r.index}: its UVs lie over themselves ({c.reason}); "
@@ -97,3 +104,23 @@ def overlap_certificate(V, F, results, face_island, corner_uv, pinned, cut=True,
                                                         uv=None, bound_certified=None)
                 corner_uv[r.faces] = np.nan
     return results, face_island, corner_uv, None
+
+
+def _unfolded(V, F, r, corner_uv, unfold):
+    """``unfold``'s map of the overlapping island r, certified one-to-one from its UVs at its
+    bound and written into ``corner_uv`` (placed at (0, 0) as every unpinned island); None when
+    there is none or it fails."""
+    other = unfold(r.index) if unfold is not None else None
+    if other is None or other.status != "certified":
+        return None
+    uv = other.uv - other.uv.min(axis=0)
+    trial = uv[other.tris]
+    lab = np.full(len(F), -1, dtype=np.int64)
+    lab[r.faces] = 0
+    whole = np.full_like(corner_uv, np.nan)
+    whole[r.faces] = trial
+    c = certify_islands(V, F, whole, lab, [other.bound_certified])[0]
+    if not (c.certified and c.overlap_free):
+        return None
+    corner_uv[r.faces] = trial
+    return dataclasses.replace(other, uv=uv, overlap_free=True)

@@ -93,7 +93,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             raise OptionError("frames", "frames='input-uv' needs initial_uv (m,3,2)")
         initial_uv = np.asarray(initial_uv, dtype=np.float64).reshape(m, 3, 2)
     pins = pin_arrays(pin_corners, pin_uv, m)
-    conformal = None
+    conformal, unfold = None, True
     if (seams is None or not len(seams)) and not len(pins[0]) and _batched_options(opts) \
             and opts.boundary == "free" and opts.stretch is None \
             and (precision is None or np.dtype(precision) == np.float64):
@@ -106,6 +106,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
                                                  float(opts.bound), t0, progress, cancel)
         # auto, and a conformal map within C lying over itself: the smallest C keeps the disk
         # one island where its map does not (else the general path cuts it)
+        unfold = not (overlaps and opts.time_budget is None and disk_auto.searches(disk))
         if done is None and (opts.bound == "auto" or overlaps) and opts.time_budget is None:
             done = disk_auto.minimise_disk(
                 V, disk, u, opts.bound_limit if opts.bound == "auto" else float(opts.bound), t0,
@@ -116,7 +117,40 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     return unwrap_islands(V, F, [disk.island] if disk is not None else
                           split_islands(V, F, seams, precision), pins, opts, initial_uv=initial_uv,
                           face_groups=face_groups, progress=progress, cancel=cancel,
-                          conformal=conformal, t0=t0, disk=disk)
+                          conformal=conformal, t0=t0, disk=disk, unfold=unfold)
+
+
+def _unfold(isl, V, pins, options, cancel):
+    """For ``overlap_certificate``: the map of the smallest certified C within the numeric bound
+    asked (``strategies.minimise``, as ``bound="auto"`` with ``bound_limit`` that C) of an island
+    whose map within it lies over itself: a map of lower distortion often unfolds it, and it
+    stays one island (flag "unfolded"). None where that does not apply: a fixed boundary, a
+    stretch bound, a time budget (conic steps), a method or frames other than the default's."""
+    o = options
+    if (o.bound == "auto" or o.boundary != "free" or o.stretch is not None
+            or o.time_budget is not None or not _batched_options(o)):
+        return None
+    C = float(o.bound)
+    auto = dataclasses.replace(o, bound="auto", bound_limit=C)
+    by_index = {island.index: island for island in isl}
+
+    def unfold(index):
+        try:
+            res = _solve_island(by_index[index], V, pins, auto, None, _quiet(cancel), cancel)
+        except Cancelled:
+            raise CancelledError("unwrap cancelled; nothing was changed") from None
+        if res.status != "certified" or not res.bound_certified <= C:
+            return None
+        return dataclasses.replace(res, bound_requested=o.bound, flags=res.flags + ("unfolded",))
+    return unfold
+
+
+def _quiet(cancel):
+    """A progress report that only checks ``cancel``."""
+    def report(frac, msg):
+        if cancel is not None and cancel.is_set():
+            raise Cancelled
+    return report
 
 
 def _batched_options(options):
@@ -125,7 +159,7 @@ def _batched_options(options):
 
 
 def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, progress=None,
-                   cancel=None, conformal=None, t0=None, disk=None):
+                   cancel=None, conformal=None, t0=None, disk=None, unfold=True):
     """``unwrap`` on islands already found (``mesh.islands``, or charts of a validated mesh).
 
     Parameters
@@ -142,6 +176,9 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
     disk : one_disk.Disk, optional, when ``isl`` is that disk's island: a certified map is
         certified by ``disk_certificate`` first (the general overlap certificate where it does
         not clear it)
+    unfold : bool, an unpinned island certified at a numeric C whose UVs lie over themselves
+        gets the smallest C within it (``_unfold``) before it is cut; False where that search
+        was already made (``disk_auto``)
 
     Returns
     -------
@@ -195,7 +232,8 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
         pinned = set(face_island[pins[0] // 3].tolist())
         release_memory(m)                   # the solves' freed heap, before the certificate
         results, face_island, corner_uv, certs = overlap_certificate(
-            V, F, results, face_island, corner_uv, pinned, o.overlap == "cut", face_groups)
+            V, F, results, face_island, corner_uv, pinned, o.overlap == "cut", face_groups,
+            _unfold(isl, V, pins, o, cancel) if unfold else None)
     if progress is not None:
         progress(1.0, "done")
     return UnwrapResult(corner_uv, face_island, results, time.perf_counter() - t0, o.method,

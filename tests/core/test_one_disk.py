@@ -235,6 +235,27 @@ def test_a_conformal_map_lying_over_itself_stays_one_island_at_a_lower_bound():
                                                                    rel=1e-9)
 
 
+def test_islands_lying_over_themselves_are_unfolded_on_the_general_path_too():
+    """Two copies of that centre, one mesh (not one disk: the general path, per island): each
+    island gets the smallest C within the 5 asked before any cut, as the one pass does; with
+    a pin on the second its map stays pinned and that island is cut as before."""
+    V, F = _central_rings(*load_off("three_peaks.off"), 500)
+    V2, F2 = np.r_[V, V + [10.0, 0.0, 0.0]], np.r_[F, F + len(V)]
+    res = bd_uv.unwrap(V2, F2, bound=5.0)
+    assert [(len(r.faces), r.status, "unfolded" in r.flags) for r in res.islands] == [
+        (554, "certified", True), (554, "certified", True)]
+    certs = certify_islands(V2, F2, res.corner_uv, res.face_island,
+                            [r.bound_certified for r in res.islands])
+    assert all(c.certified and c.overlap_free and c.max_distortion < 2.0 for c in certs)
+    pinned = bd_uv.unwrap(V2, F2, bound=5.0, pin_corners=[3 * len(F), 3 * len(F) + 1],
+                          pin_uv=[[0.0, 0.0], [1.0, 0.0]])
+    assert "unfolded" in pinned.islands[0].flags
+    pieces = pinned.islands[1:]                 # the pinned copy, cut as before
+    assert len(pieces) >= 2 and all(r.cut_from == 1 for r in pieces)
+    assert all("cut" in r.flags and "unfolded" not in r.flags for r in pieces)
+    assert all(r.status == "certified" for r in pinned.islands)
+
+
 def _fan(p):
     """A triangle fan over the polygon p (k,2): its faces and corner UVs, whose UV boundary is
     the polygon (faces may flip: the boundary is what island_overlaps reads)."""
