@@ -136,6 +136,7 @@ def test_no_chart_is_cut_that_could_stay_whole():
             pairs.add((a, b))
     assert pairs
     keep = {tuple(sorted(p)) for p in added.tolist()}
+    checked = 0
     for a, b in sorted(pairs):
         # Seams of the union: every added seam except those between charts a and b.
         between = []
@@ -150,7 +151,9 @@ def test_no_chart_is_cut_that_could_stay_whole():
         if not isl or isl[0].status != "certified":
             continue
         r = isl[0]
-        if chart_topology(r.tris) != (1, 1):
+        # merging tries the union's conformal map bent into C; a map of a lower C that unwrap
+        # seeks where that one lies over itself ("unfolded") is not one it tries
+        if chart_topology(r.tris) != (1, 1) or "unfolded" in r.flags:
             continue
         s1, s2, _ = face_singular_values(V, F[sub][r.faces], r.uv[r.tris])
         uv = r.uv[r.tris]
@@ -161,6 +164,8 @@ def test_no_chart_is_cut_that_could_stay_whole():
         over = np.max(np.maximum(k * s1, 1 / (k * s2))) > S or \
             boundary_self_crossings(r.uv, r.tris, touching=True) > 0
         assert over, f"charts {a} and {b} could have stayed one chart"
+        checked += 1
+    assert checked                  # not only unions that fail, are cut or unfolded
 
 
 def test_sphere_gets_at_least_one_cut():
