@@ -47,8 +47,10 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
     stretch : float, S of the charts the seams added make
     marked_stretch : float, optional, Limit Stretch of the islands the marked seams make
     face_groups : (m,) int, optional, material of each triangle (seams prefer its boundaries)
-    overlap : "cut" | "fail", an island of the marked seams whose map lies over itself: cut
-        (and, failing that, given seams) or left as it was and named (Overlaps "Keep as One")
+    overlap : "cut" | "fail", an island of the marked seams whose map lies over itself (and
+        that no lower C unfolds): given seams by the search, as ``seams.needed`` does (the
+        marked pass fails it rather than cutting it along whatever edges separate the overlap),
+        or left as it was and named (Overlaps "Keep as One")
     precision : float type, optional, as for ``bd_uv.unwrap`` (``np.float32``: the faces it
         cannot tell from a line are left out as zero-area; ``gather.needed_arguments`` gives it
         when such faces lie side by side)
@@ -77,7 +79,7 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
     else:
         extra = {} if marked_stretch is None else {"stretch": float(marked_stretch)}
         res = auto_seams.whole_polygons(unwrap, V2, F2, tri_poly=tp, tri_loops=tl, seams=seams2,
-                                        bound=float(bound), raise_bound=False, overlap=overlap,
+                                        bound=float(bound), raise_bound=False, overlap="fail",
                                         face_groups=tp, **extra, **options)
         bad = [r for r in res.islands if r.status != "certified" and needs_seams(r, overlap)]
         if bad:

@@ -1,7 +1,8 @@
 """uv.bd_unwrap on an island whose UVs would lie over themselves (issue 10): with Overlaps "Cut
-Into Pieces" the island comes back as overlap-free pieces and the cut edges are marked as seams
-(one undo step takes both back); with "Keep as One Island" nothing is written and the report
-names the island. Distortion and overlap are checked here independently of bd_uv."""
+Into Pieces" and Marked seams the island comes back as overlap-free pieces and the cut edges are
+marked as seams (one undo step takes both back); with Add Where Needed (the default) its charts
+come from the seam search instead, their seams marked; with "Keep as One Island" nothing is
+written and the report names the island. Distortion and overlap are checked here independently of bd_uv."""
 import numpy as np
 from conftest import bpy, loop_uv_array, set_mode, triangle_distortion
 
@@ -65,7 +66,7 @@ def test_cut_into_pieces_marks_the_cut_as_seams_and_undo_takes_both_back(addon, 
     before_uv = loop_uv_array(obj.data).copy()
     assert not seams(obj.data).any()
     set_mode(obj, 'EDIT')
-    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', True, bound=5.0, overlap='CUT',
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', True, bound=5.0, overlap='CUT', seams='MARKED',
                                 pack=True) == {'FINISHED'}
     out = capsys.readouterr().out
     set_mode(obj, 'OBJECT')
@@ -81,6 +82,37 @@ def test_cut_into_pieces_marks_the_cut_as_seams_and_undo_takes_both_back(addon, 
     edge_keys = {tuple(sorted(e.vertices)) for e, m in zip(mesh.edges, marked) if m}
     assert all(k in {tuple(sorted(e.vertices)) for e in mesh.edges} for k in edge_keys)
     # one undo step takes back the UVs and the seams
+    set_mode(obj, 'EDIT')
+    bpy.ops.ed.undo()
+    set_mode(obj, 'OBJECT')
+    obj = bpy.data.objects["Ribbon"]
+    assert not seams(obj.data).any()
+    assert np.array_equal(loop_uv_array(obj.data), before_uv)
+
+
+def test_add_where_needed_gives_an_overlapping_island_the_searchs_charts(addon, capsys):
+    """The default seams (Add Where Needed): the ribbon's island, whose map lies over itself,
+    is not cut along whatever edges separate the overlap but given charts by the seam search
+    (certified at C = 2), their seams marked; one undo step takes back UVs and seams."""
+    obj = add_helicoid_ribbon()
+    set_mode(obj, 'EDIT')
+    bpy.ops.mesh.select_all(action='SELECT')
+    bpy.ops.ed.undo_push(message="before")
+    set_mode(obj, 'OBJECT')
+    before_uv = loop_uv_array(obj.data).copy()
+    set_mode(obj, 'EDIT')
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', True, bound=5.0, overlap='CUT',
+                                pack=True) == {'FINISHED'}
+    out = capsys.readouterr().out
+    set_mode(obj, 'OBJECT')
+    mesh = obj.data
+    marked = seams(mesh)
+    assert marked.any() and "seams added" in out and "were cut" not in out, out
+    V, tris, loops = tri_arrays(mesh)
+    uv = loop_uv_array(mesh).astype(np.float64)[loops]
+    D, det = triangle_distortion(V, tris, uv)
+    assert (det > 0).all() and D.max() <= 2.0 * (1 + 1e-4)
+    assert overlapping_triangles(uv) == 0
     set_mode(obj, 'EDIT')
     bpy.ops.ed.undo()
     set_mode(obj, 'OBJECT')
