@@ -1,8 +1,8 @@
 """One top-down round of the seam search (``auto.unwrap_auto``): each chart not yet accepted is
 cut or accepted.
 
-A chart that is not a disk has its handles cut (``cut_graph``); closed spheres, open charts no
-cut graph changes, disks of more than ``MAP_VERTICES`` vertices and disks whose conformal map
+A chart that is not a disk has its handles cut (``cut_graph``), and the disks that opens are
+mapped in the same round; closed spheres, open charts no cut graph changes, disks of more than ``MAP_VERTICES`` vertices and disks whose conformal map
 fails the charts' test (``charts.chart_maps``) are split, all in one batch
 (``bisect.split_deep``); a disk that passes, and a chart no split divides, is accepted (frozen).
 """
