@@ -70,6 +70,12 @@ def cut_graph(tris, nv, weight):
     w = quantised_weights(w, real)
     # What every root shares: the edge graph, and each edge's two faces.
     G = _csr(w, ends[:, 0], ends[:, 1], N)
+    if n_caps and _genus0(N, len(uniq), len(all_tris)):
+        # Genus 0 (the capped surface's Euler characteristic is 2: an annulus, a disk with
+        # holes) leaves no edge outside the tree and the cotree (2g = 0 of them): the cut is
+        # the tree paths from the caps alone; the dual spanning tree need not be formed.
+        pred = dijkstra(G, directed=False, indices=nv, return_predecessors=True)[1]
+        return _tree_paths(np.zeros(0, np.int64), pred, uniq, ends, w, N, nv, n_caps)[0]
     order = np.argsort(inv, kind="stable")
     first = np.searchsorted(inv[order], np.arange(len(uniq)))
     f0, f1 = order[first] // 3, order[first + 1] // 3
@@ -90,6 +96,12 @@ def cut_graph(tris, nv, weight):
             best = trial
         far = np.minimum(far, dijkstra(G, directed=False, indices=r))
     return best[0]
+
+
+def _genus0(nv, ne, nf):
+    """Whether a closed connected surface of ``nv`` vertices, ``ne`` edges and ``nf`` faces is
+    a sphere (Euler characteristic 2)."""
+    return nv - ne + nf == 2
 
 
 def quantised_weights(w, real):
@@ -147,6 +159,12 @@ def _loops_from(root, graph):
     del dk, dorder, tree_keys
     cot[np.flatnonzero(dual)[hit]] = True
     left = np.flatnonzero(~in_tree & ~cot)
+    return _tree_paths(left, pred, uniq, ends, w, N, nv, n_caps)
+
+
+def _tree_paths(left, pred, uniq, ends, w, N, nv, n_caps):
+    """The cut of ``_loops_from``: the leftover edges ``left`` and the tree paths (``pred``)
+    from their ends and from every cap back to the root; (cut, its total weight)."""
     # Mark the tree paths from the leftover edges' ends and from every cap back to the root.
     marked = np.zeros(N, dtype=bool)
     front = np.unique(np.concatenate([ends[left].ravel(), nv + np.arange(n_caps)]))

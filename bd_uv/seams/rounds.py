@@ -1,8 +1,8 @@
 """One top-down round of the seam search (``auto.unwrap_auto``): each chart not yet accepted is
 cut or accepted.
 
-A chart that is not a disk has its handles cut (``cut_graph``); closed spheres, open charts no
-cut graph changes, disks of more than ``MAP_VERTICES`` vertices and disks whose conformal map
+A chart that is not a disk has its handles cut (``cut_graph``), and the disks that opens are
+mapped in the same round; closed spheres, open charts no cut graph changes, disks of more than ``MAP_VERTICES`` vertices and disks whose conformal map
 fails the charts' test (``charts.chart_maps``) are split, all in one batch
 (``bisect.split_deep``); a disk that passes, and a chart no split divides, is accepted (frozen).
 """
@@ -45,6 +45,7 @@ def refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None
     chs = charts(F, E, cut, sub)
     changed = False
     todo = []                               # (faces, the map's sigma per face or None)
+    opened = []                             # the faces of charts whose handles were cut
     for c in chs:
         if c.kind == "open":                # handles, or several boundary loops
             w = lambda pairs, _v=c.vertices: edge_weight(E, _v[pairs], n, diag)
@@ -56,9 +57,18 @@ def refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None
             if len(k) and not cut[k].all():
                 cut[k] = True
                 changed = True
+                opened.append(c.faces)
                 continue
         if c.kind in ("open", "sphere"):    # a sphere: split along its neck
             todo.append((c.faces, None))
+    strict = set()                          # the first faces of the charts opened here
+    if opened:
+        # A chart its cut graph opened is mapped in this round (the round after would find it
+        # as it is now, and map it then, at ``mean_cap(C)``): its disks join this round's
+        # maps; a chart still not a disk waits for the next round, as before.
+        new = charts(F, E, cut, np.concatenate(opened))
+        strict = {int(c.faces[0]) for c in new}
+        chs = sorted([c for c in chs if c.kind == "disk"] + new, key=lambda c: int(c.faces[0]))
     disks = []
     for c in chs:
         if c.kind != "disk":
@@ -75,8 +85,11 @@ def refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None
         release_memory(len(sub))
         cap = mean_cap(C) if cap is None else cap
         cm = chart_maps(V, disks, geom, limits=(S * MARGIN, cap), orders=orders)
+        # (a chart opened in this round passes at ``mean_cap(C)``, as in the next round: a
+        # looser ``cap`` is for the charts of the given seams only)
+        caps = np.array([mean_cap(C) if int(c.faces[0]) in strict else cap for c in disks])
         ok = (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
-              & (cm.crossings == 0) & (cm.mean_distortion <= cap))
+              & (cm.crossings == 0) & (cm.mean_distortion <= caps))
         if known is not None:
             cm.remember(disks, ok, known)
         for j, c in enumerate(disks):
