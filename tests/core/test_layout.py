@@ -21,7 +21,10 @@ def helicoid_obj(tmp_path):
 def test_cli_cuts_packs_and_writes_only_what_it_certified(tmp_path, capsys):
     src, V, F = helicoid_obj(tmp_path)
     out, rep = tmp_path / "o.obj", tmp_path / "r.json"
-    assert cli.main(["unwrap", str(src), "-o", str(out), "--report", str(rep)]) == 0
+    # the mesh's own islands (no seams added: with the default, --seams needed, the search
+    # gives the ribbon charts instead, below)
+    assert cli.main(["unwrap", str(src), "-o", str(out), "--report", str(rep),
+                     "--seams", "none"]) == 0
     stdout = capsys.readouterr().out
     assert "1 overlapping (1 cut along" in stdout and "0 overlapping island pair(s)" in stdout
     # unwrap() cut the ribbon: its pieces are islands of their own, naming the cut
@@ -44,6 +47,23 @@ def test_cli_cuts_packs_and_writes_only_what_it_certified(tmp_path, capsys):
     # the cut edges are where the stored UVs are discontinuous
     seams = {tuple(sorted(e)) for e in mesh.uv_seams().tolist()}
     assert {tuple(sorted(e)) for e in isl["cut_edges"]} <= seams
+
+
+def test_cli_needed_gives_an_overlapping_island_the_searchs_charts(tmp_path, capsys):
+    """The default seams (needed): the ribbon, whose map lies over itself at C = 5, goes to the
+    seam search rather than being cut along whatever edges separate the overlap: charts at
+    C = 2 with seams added, none flagged cut, overlap-free as stored."""
+    src, V, F = helicoid_obj(tmp_path)
+    out, rep = tmp_path / "o.obj", tmp_path / "r.json"
+    assert cli.main(["unwrap", str(src), "-o", str(out), "--report", str(rep)]) == 0
+    report = json.loads(rep.read_text())
+    assert len(report["seams_added"]) > 0 and len(report["islands"]) >= 2
+    assert all(p["status"] == "certified" and "cut" not in p["flags"]
+               for p in report["islands"])
+    uv = load_mesh(out).corner_uv
+    assert len(overlapping_triangle_pairs(uv)) == 0
+    D, flipped = distortion_and_flips(V, F, uv)
+    assert not flipped.any() and D.max() <= 2.0 * (1 + 1e-6)
 
 
 def test_cli_no_pack_and_overlap_fail(tmp_path, capsys):
