@@ -57,7 +57,10 @@ def overlapping_triangles(uv):
     return hits
 
 
-def test_cut_into_pieces_marks_the_cut_as_seams_and_undo_takes_both_back(addon, capsys):
+def _unwrap_ribbon(capsys, bound, **options):
+    """The ribbon unwrapped (Overlaps Cut Into Pieces, packed) after an undo step: its mesh, the
+    operator's printed report, the UVs before, and each triangle's distortion and determinant
+    and its UVs as stored (checked: flip-free, within ``bound``, no two triangles crossing)."""
     obj = add_helicoid_ribbon()
     set_mode(obj, 'EDIT')
     bpy.ops.mesh.select_all(action='SELECT')
@@ -66,59 +69,46 @@ def test_cut_into_pieces_marks_the_cut_as_seams_and_undo_takes_both_back(addon, 
     before_uv = loop_uv_array(obj.data).copy()
     assert not seams(obj.data).any()
     set_mode(obj, 'EDIT')
-    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', True, bound=5.0, overlap='CUT', seams='MARKED',
-                                pack=True) == {'FINISHED'}
+    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', True, bound=5.0, overlap='CUT', pack=True,
+                                **options) == {'FINISHED'}
     out = capsys.readouterr().out
     set_mode(obj, 'OBJECT')
-    mesh = obj.data
-    marked = seams(mesh)
-    assert marked.any() and "marked where overlapping islands were cut" in out, out
-    V, tris, loops = tri_arrays(mesh)
-    uv = loop_uv_array(mesh).astype(np.float64)[loops]
+    V, tris, loops = tri_arrays(obj.data)
+    uv = loop_uv_array(obj.data).astype(np.float64)[loops]
     D, det = triangle_distortion(V, tris, uv)
-    assert (det > 0).all() and D.max() <= 5.0 * (1 + 1e-4)
+    assert (det > 0).all() and D.max() <= bound * (1 + 1e-4)
     assert overlapping_triangles(uv) == 0
-    # every marked edge is a real cut: the UVs on its two sides differ
-    edge_keys = {tuple(sorted(e.vertices)) for e, m in zip(mesh.edges, marked) if m}
-    assert all(k in {tuple(sorted(e.vertices)) for e in mesh.edges} for k in edge_keys)
-    # one undo step takes back the UVs and the seams
+    return obj, out, before_uv
+
+
+def _undo_takes_both_back(obj, before_uv):
+    """One undo step takes back the UVs and the seams."""
     set_mode(obj, 'EDIT')
     bpy.ops.ed.undo()
     set_mode(obj, 'OBJECT')
     obj = bpy.data.objects["Ribbon"]
     assert not seams(obj.data).any()
     assert np.array_equal(loop_uv_array(obj.data), before_uv)
+
+
+def test_cut_into_pieces_marks_the_cut_as_seams_and_undo_takes_both_back(addon, capsys):
+    obj, out, before_uv = _unwrap_ribbon(capsys, 5.0, seams='MARKED')
+    mesh = obj.data
+    marked = seams(mesh)
+    assert marked.any() and "marked where overlapping islands were cut" in out, out
+    # every marked edge is a real cut: the UVs on its two sides differ
+    edge_keys = {tuple(sorted(e.vertices)) for e, m in zip(mesh.edges, marked) if m}
+    assert all(k in {tuple(sorted(e.vertices)) for e in mesh.edges} for k in edge_keys)
+    _undo_takes_both_back(obj, before_uv)
 
 
 def test_add_where_needed_gives_an_overlapping_island_the_searchs_charts(addon, capsys):
     """The default seams (Add Where Needed): the ribbon's island, whose map lies over itself,
     is not cut along whatever edges separate the overlap but given charts by the seam search
     (certified at C = 2), their seams marked; one undo step takes back UVs and seams."""
-    obj = add_helicoid_ribbon()
-    set_mode(obj, 'EDIT')
-    bpy.ops.mesh.select_all(action='SELECT')
-    bpy.ops.ed.undo_push(message="before")
-    set_mode(obj, 'OBJECT')
-    before_uv = loop_uv_array(obj.data).copy()
-    set_mode(obj, 'EDIT')
-    assert bpy.ops.uv.bd_unwrap('EXEC_DEFAULT', True, bound=5.0, overlap='CUT',
-                                pack=True) == {'FINISHED'}
-    out = capsys.readouterr().out
-    set_mode(obj, 'OBJECT')
-    mesh = obj.data
-    marked = seams(mesh)
-    assert marked.any() and "seams added" in out and "were cut" not in out, out
-    V, tris, loops = tri_arrays(mesh)
-    uv = loop_uv_array(mesh).astype(np.float64)[loops]
-    D, det = triangle_distortion(V, tris, uv)
-    assert (det > 0).all() and D.max() <= 2.0 * (1 + 1e-4)
-    assert overlapping_triangles(uv) == 0
-    set_mode(obj, 'EDIT')
-    bpy.ops.ed.undo()
-    set_mode(obj, 'OBJECT')
-    obj = bpy.data.objects["Ribbon"]
-    assert not seams(obj.data).any()
-    assert np.array_equal(loop_uv_array(obj.data), before_uv)
+    obj, out, before_uv = _unwrap_ribbon(capsys, 2.0)
+    assert seams(obj.data).any() and "seams added" in out and "were cut" not in out, out
+    _undo_takes_both_back(obj, before_uv)
 
 
 def test_keep_as_one_island_writes_nothing_and_names_it(addon, capsys):
