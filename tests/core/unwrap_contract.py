@@ -152,7 +152,9 @@ def assert_contract(res, V, F, pin_corners=None, pin_uv=None):
     - a failed island has a typed IslandError naming it, NaN corner UVs and no UV, no bound;
     - a certified island's UVs are finite, match ``corner_uv``, keep every pin exactly, and,
       recomputed independently, have no flipped face and max distortion <= ``bound_certified``;
-      its triangles are a consistently oriented disk with holes (so nothing invalid got through).
+      its triangles are a consistently oriented disk with holes (so nothing invalid got through);
+      one "unfolded" (a lower C sought where its map within C lay over itself) is within the
+      numeric bound asked.
     """
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
@@ -191,6 +193,9 @@ def assert_contract(res, V, F, pin_corners=None, pin_uv=None):
         assert_overlap_free(cuv, f"certified island {i}")
         if hasattr(isl, "overlap_free"):   # IslandResult gains it once the pipeline certifies it
             assert isl.overlap_free is True, f"island {i}: certified but not overlap-free"
+        if "unfolded" in (isl.flags or ()):   # a lower C, sought where the map within C overlapped
+            assert isl.bound_requested != "auto" and "cut" not in isl.flags
+            assert C <= float(isl.bound_requested) * (1 + RTOL), (C, isl.bound_requested)
         assert np.all(np.isfinite(V[F[isl.faces]])), f"island {i}: non-finite vertex certified"
     dup = getattr(res, "duplicate_of", None)
     if dup is not None:
