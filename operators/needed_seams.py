@@ -19,7 +19,7 @@ import numpy as np
 
 from ..bd_uv.repair import repair_mesh
 from ..bd_uv.seams.measure import splice
-from ..bd_uv.seams.needed import AUTO_BOUND, needs_seams, pairs_in, result_on_input
+from ..bd_uv.seams.needed import AUTO_BOUND, island_submesh, needs_seams, result_on_input
 from . import auto_seams
 
 __all__ = ["applies", "solve"]
@@ -83,11 +83,10 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
                                         face_groups=tp, **extra, **options)
         bad = [r for r in res.islands if r.status != "certified" and needs_seams(r, overlap)]
         if bad:
-            sub = np.sort(np.concatenate([r.faces for r in bad]))
-            voc, Fl = np.unique(F2[sub], return_inverse=True)
+            sub, voc, Fl = island_submesh(F2, bad)
             groups = None if face_groups is None else np.asarray(face_groups)[keep][sub]
-            auto = auto_seams.solve(V2[voc], Fl.reshape(-1, 3), tri_poly=tp[sub],
-                                    tri_loops=tl[sub], seams=pairs_in(seams2, voc),
+            auto = auto_seams.solve(V2[voc], Fl, tri_poly=tp[sub],
+                                    tri_loops=tl[sub],
                                     bound=min(float(bound), AUTO_BOUND), stretch=float(stretch),
                                     face_groups=groups, atlas_cuts=atlas_cuts, **options)
             res = splice(res, auto.result, sub, voc, len(F2))

@@ -117,10 +117,9 @@ def unwrap_needed(V, F, seams=None, polygons=None, options=None, marked_stretch=
             res, done = with_storage_headroom(V2, F2, res, flagged)
             bad += [res.islands[i] for i in flagged if i not in done]
         if bad:
-            sub = np.sort(np.concatenate([r.faces for r in bad]))
-            voc, Fl = np.unique(F2[sub], return_inverse=True)
+            sub, voc, Fl = island_submesh(F2, bad)
             part, found, info = unwrap_auto(
-                V2[voc], Fl.reshape(-1, 3), seams=pairs_in(seams2, voc),
+                V2[voc], Fl,
                 bound=min(float(opts.bound), AUTO_BOUND), stretch=opts.seams_stretch,
                 method=opts.method, frames=opts.frames, cone=opts.cone, progress=progress,
                 cancel=cancel, polygons=None if poly is None else poly[sub],
@@ -158,16 +157,33 @@ def clean_disk(V, F, precision=None):
     return disk
 
 
-def pairs_in(pairs, voc):
-    """(s,2) vertex pairs renumbered into the sorted vertex subset ``voc`` (k,) (pairs outside
-    it dropped); None when there are none."""
-    if pairs is None or not len(pairs):
-        return None
-    pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
-    pos = np.searchsorted(voc, pairs)
-    pos = np.minimum(pos, len(voc) - 1)
-    inside = (voc[pos] == pairs).all(axis=1)
-    return pos[inside]
+def island_submesh(F, islands):
+    """The faces of ``islands`` (IslandResults on F) as one mesh for the seam search, on the
+    islands' own cut vertices (``mesh.islands``: corners of a vertex share one only when joined
+    around it without crossing a seam): the marked seams inside them are open already, and no
+    vertex joins two islands, or two sides of one, that meet only there (where a certified island
+    lay between them): a bow-tie of the joined faces would fail the search's whole mesh (usd-wg's
+    chess pawn, once its overlapping islands came here too). A vertex with one cut vertex keeps
+    its place in the order of the mesh's vertex ids (one island without seams: the faces as they
+    are).
+
+    Returns
+    -------
+    sub : (k,) int64, the faces, sorted; voc : (q,) int64, the vertex of F of each sub-mesh
+    vertex; Fl : (k,3) int64, the faces in sub-mesh vertices
+    """
+    faces = np.concatenate([r.faces for r in islands])
+    j = np.repeat(np.arange(len(islands)), [len(r.vertices) for r in islands])
+    verts = np.concatenate([r.vertices for r in islands]).astype(np.int64)
+    local = np.concatenate([np.arange(len(r.vertices)) for r in islands])
+    rank = np.empty(len(verts), dtype=np.int64)
+    rank[np.lexsort((local, verts, j))] = np.arange(len(verts))
+    first = np.cumsum([0] + [len(r.vertices) for r in islands[:-1]])
+    tris = np.concatenate([r.tris + o for r, o in zip(islands, first)]).astype(np.int64)
+    order = np.argsort(faces, kind="stable")
+    voc = np.empty(len(verts), dtype=np.int64)
+    voc[rank] = verts
+    return faces[order], voc, rank[tris[order]]
 
 
 def result_on_input(res, rep, F, method):

@@ -50,7 +50,8 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
     lay over itself: the smallest C is sought, as for "auto", so that the disk stays one island
     (a map of lower distortion moves the boundary: on three_peaks' 554-face centre the conformal
     map at C = 5 folded over and was cut into 3 islands, one of a single face, where the search's
-    map at C = 1.125 is one, in less time than the cut took); flagged "unfolded".
+    map at C = 1.125 is one, in less time than the cut took); flagged "unfolded", certified at
+    the C asked (its max distortion says how far below it the map is).
 
     Returns
     -------
@@ -94,9 +95,11 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
     Dm, smin, smax = measure_disk(corner_uv, disk.G)
     mx = float(Dm.max())
     C = certified_bound(mx)
-    # finish's test (the map within the bound its search reached) and the disk certificate
-    cert = (certify_measured_disk(corner_uv, Dm, disk, C)
-            if mx <= certified_bound(D) * (1.0 + RTOL) and C <= HIGH_DISTORTION else None)
+    # finish's test (the map within the bound its search reached) and the disk certificate, at
+    # the C asked when it was a number (the map found is within it, with room for float32)
+    ok = mx <= certified_bound(D) * (1.0 + RTOL) and C <= HIGH_DISTORTION
+    C = C if requested == "auto" else max(C, float(requested))
+    cert = certify_measured_disk(corner_uv, Dm, disk, C) if ok else None
     if cert is None:
         return None
     res = IslandResult(
