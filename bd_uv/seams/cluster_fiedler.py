@@ -23,6 +23,9 @@ COARSE_NODES = 50_000
 CLUSTER = 16
 # Averaging steps smoothing the prolonged vector (piecewise constant on the clusters).
 SMOOTH = 6
+# (chart, cell) keys below this bound are formed as mixed-radix integers, larger ones as
+# dense ranks (``clusters``).
+KEY_LIMIT = 1 << 62
 
 
 def clusters(mass, centroid, pairs, group, g):
@@ -48,16 +51,28 @@ def clusters(mass, centroid, pairs, group, g):
     with np.errstate(invalid="ignore", divide="ignore"):
         q = np.floor(centroid / np.maximum(h, 1e-300)[group][:, None])
     q = np.where(coarse[:, None] & np.isfinite(q), q, 0).astype(np.int64)
-    low = np.full((g, 3), np.iinfo(np.int64).max)
-    np.minimum.at(low, group, q)
+    # Each chart's lowest cell (group is nondecreasing: each chart's nodes are one run, so a
+    # ``reduceat`` over the runs gives ``np.minimum.at``'s values, ~10x faster).
+    start = np.searchsorted(group, np.arange(g))
+    low = np.zeros((g, 3), np.int64)
+    held = size > 0
+    if held.any():
+        low[held] = np.minimum.reduceat(q, start[held], axis=0)
     q -= low[group]                         # cells counted from each chart's corner
-    # One key per (chart, cell), built an axis at a time (each step's key < k: no overflow);
-    # a node of a small chart its own key.
-    key = group
-    for d in range(3):
-        _, key = np.unique(key * (int(q[:, d].max()) + 1) + q[:, d], return_inverse=True)
-        key = key.ravel()
-    key = np.where(coarse, key, k + np.arange(k))
+    # One key per (chart, cell), a node of a small chart its own (negative) key. Only which
+    # nodes share a key matters (the clusters are the components of the pairs within a key,
+    # numbered by scipy by their smallest node): the mixed-radix key of (chart, cell) where it
+    # is below ``KEY_LIMIT`` (no sort), else dense ranks built an axis at a time (``np.unique``).
+    span = [int(q[:, d].max(initial=0)) + 1 for d in range(3)]
+    if g * span[0] * span[1] * span[2] < KEY_LIMIT:
+        key = group.astype(np.int64) * span[0] + q[:, 0]
+        key = (key * span[1] + q[:, 1]) * span[2] + q[:, 2]
+    else:
+        key = group
+        for d in range(3):
+            _, key = np.unique(key * span[d] + q[:, d], return_inverse=True)
+            key = key.ravel()
+    key = np.where(coarse, key, -1 - np.arange(k))
     same = key[pairs[:, 0]] == key[pairs[:, 1]]
     gr = sp.csr_matrix((np.ones(int(same.sum())), (pairs[same, 0], pairs[same, 1])), shape=(k, k))
     _, label = connected_components(gr, directed=False)

@@ -1,6 +1,8 @@
 """The seam search's paths for large charts (100k+ face meshes) keep what it decides.
 
 - ``cluster_fiedler.clusters``: connected clusters of one chart each, small charts untouched;
+  the nodes of one grid cell of one chart connected by their pairs, whichever way the cells'
+  keys are formed;
 - a chart split through its cluster graph is cut where the node graph cuts it (a long tube:
   across its middle, one circumference of seam);
 - a chart above ``rounds.MAP_VERTICES`` is split unmapped, and a region that passes whole is merged
@@ -8,6 +10,7 @@
 - ``charts.chart_maps`` in bounded runs solves each chart as it would alone.
 """
 import numpy as np
+import pytest
 from scipy.sparse import coo_array
 from scipy.sparse.csgraph import connected_components
 
@@ -71,6 +74,46 @@ def test_clusters_are_connected_pieces_of_one_chart_and_small_charts_stay_whole(
                           np.arange(n_comp))
     # Numbered by their smallest node, so grouped chart by chart.
     assert np.all(np.diff(np.array([np.flatnonzero(label == c)[0] for c in range(n_comp)])) > 0)
+
+
+@pytest.mark.parametrize("limit", [None, 1])
+def test_clusters_are_the_connected_nodes_of_one_cell_of_one_chart(monkeypatch, limit):
+    """Recomputed here node by node: each coarsened chart's grid (side sqrt(CLUSTER * mean node
+    area), counted from its lowest cell), a dictionary of (chart, cell) tuples, the components
+    of the pairs inside one tuple, numbered by their smallest node. Two tubes far apart on
+    negative coordinates (cells below zero), a small chart between them; with ``limit`` 1 the
+    cells are keyed by dense ranks (``np.unique``) instead of mixed-radix integers."""
+    V, F = _tube(nu=20, nv=60)
+    area, cen, pairs, _ = _dual(V, F)
+    k, small = len(F), 40
+    sub = pairs[(pairs < small).all(axis=1)]
+    shift = np.array([-37.3, -5.1, -81.7])
+    mass = np.concatenate([area, area[:small], 2.0 * area])
+    centroid = np.concatenate([cen + shift, cen[:small], 1.5 * cen - shift])
+    allp = np.concatenate([pairs, sub + k, pairs + k + small])
+    group = np.repeat([0, 1, 2], [k, small, k])
+    monkeypatch.setattr(cluster_fiedler, "COARSE_NODES", 1000)
+    if limit is not None:
+        monkeypatch.setattr(cluster_fiedler, "KEY_LIMIT", limit)
+    label, coarse = cluster_fiedler.clusters(mass, centroid, allp, group, 3)
+    n = len(mass)
+    cell = {}
+    for j in range(3):
+        nodes = np.flatnonzero(group == j)
+        if len(nodes) <= 1000:
+            continue
+        h = np.sqrt(cluster_fiedler.CLUSTER * mass[nodes].sum() / len(nodes))
+        q = np.floor(centroid[nodes] / h).astype(np.int64)
+        q -= q.min(axis=0)
+        for i, c in zip(nodes.tolist(), map(tuple, q.tolist())):
+            cell[i] = (j,) + c
+    key = [cell.get(i, ("alone", i)) for i in range(n)]
+    inside = np.array([key[a] == key[b] for a, b in allp.tolist()])
+    g = coo_array((np.ones(int(inside.sum())), (allp[inside, 0], allp[inside, 1])), shape=(n, n))
+    _, comp = connected_components(g, directed=False)
+    assert np.array_equal(coarse, group != 1)
+    assert np.array_equal(label, comp)
+    assert label.dtype == np.int32
 
 
 def test_a_long_tube_is_cut_across_its_middle_through_its_cluster_graph(monkeypatch):
