@@ -139,7 +139,7 @@ class Layout:
 
 
 def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float64,
-                  pack_options=None, face_labels=None, face_groups=None):
+                  pack_options=None, face_labels=None, face_groups=None, v_down=False):
     """Turn an :class:`UnwrapResult` into the UVs to store, and certify them as stored.
 
     1. islands the unwrap certified are checked for self-overlap; with ``cut`` an overlapping one
@@ -165,6 +165,8 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
         ``pack_options.group``
     face_groups : (m,) int array, optional, the polygon of each face: a cut never splits one
         (a scene stores one UV per face-vertex, Blender one per loop)
+    v_down : bool, the format stores 1 - v (glTF): the UVs are certified as it holds them
+        (:func:`as_stored`)
 
     Returns
     -------
@@ -202,7 +204,7 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
     for again in (True,) * RECUT_ROUNDS + (False,):   # more rounds only for pieces cut as stored
         uv, packed = _place(V, F, unpacked, new, source, moved, pack, pack_options, margin,
                             face_labels)
-        stored = uv.astype(dtype).astype(np.float64)
+        stored = as_stored(uv, dtype, v_down)
         certs = certify_islands(V, F, stored, new, bounds[source] if len(source) else [])
         # Rounding can make a boundary that touched itself in float64 cross (a piece of the
         # ASWF's OpenChessSet pawn, of Khronos' BrainStem): cut such pieces again, on their
@@ -238,6 +240,24 @@ def stored_layout(V, F, res, pack=True, cut=True, margin=MARGIN, dtype=np.float6
         face_island[d] = face_island[tw]
     return Layout(stored, face_island, source, certs, unwrapped, cuts, overlaps, bool(pack),
                   report)
+
+
+# float32's step in [0.5, 1): v stored on this grid has 1 - v exact in float32 too
+V_GRID = 2.0 ** -24
+
+
+def as_stored(uv, dtype, v_down=False):
+    """The UVs (..., 2) float64 as ``dtype`` stores them, back in float64. With ``v_down`` (the
+    format stores 1 - v: glTF, whose v runs downwards) in float32, v is first put on the grid of
+    ``V_GRID`` (float32's own step in [0.5, 1)), so that 1 - v is exact in float32 as well: the
+    UVs certified are those the file holds. (Before, glTF's 1 - v rounded otherwise and could
+    flip a thin face certified as float32: the scenes fuzz contract's sliver, seed 22109, was
+    refused whole where the sliver should have been left out.)"""
+    if not v_down or np.dtype(dtype) != np.float32:
+        return np.asarray(uv).astype(dtype).astype(np.float64)
+    out = np.array(uv, dtype=np.float64, copy=True)
+    out[..., 1] = np.round(out[..., 1] / V_GRID) * V_GRID
+    return out.astype(np.float32).astype(np.float64)
 
 
 def _place(V, F, uv, new, source, moved, pack, pack_options, margin, face_labels):

@@ -47,6 +47,8 @@ class Job:
         for packing by group
     uv_dtype : the type the UVs are stored in: float64 (OBJ), float32 (glTF, USD, Blender);
         the layout is certified, and islands failing are re-solved, as stored in it
+    v_down : the format stores 1 - v (glTF, whose v runs downwards): the layout is certified as
+        it holds the UVs (``layout.as_stored``)
     position_dtype : the type ``V`` was stored in: float64 (OBJ, OFF, PLY as read), float32
         (glTF, USD, Blender): faces it cannot tell from a line are left out as zero-area when
         they keep islands from certifying (``unwrap_job``; ``bd_uv.unwrap``'s ``precision``)
@@ -62,6 +64,7 @@ class Job:
     face_labels: dict = None
     uv_dtype: type = np.float64
     position_dtype: type = np.float64
+    v_down: bool = False
 
 
 @dataclass(frozen=True)
@@ -236,7 +239,8 @@ def _unwrap_job(job, options, png, precision):
         layout, res, _ = stored_layout_with_headroom(
             job.V, job.F, res, stretch=o.stretch, pack=options.pack, cut=options.cut,
             margin=options.margin, pack_options=options.pack_options,
-            face_labels=job.face_labels, dtype=job.uv_dtype, face_groups=job.face_groups)
+            face_labels=job.face_labels, dtype=job.uv_dtype, face_groups=job.face_groups,
+            v_down=job.v_down)
     except Exception as exc:  # a bad mesh, or a bug: either way it stays this job's failure
         entry.update(error=type(exc).__name__, message=str(exc),
                      seconds=round(time.perf_counter() - t0, 4))

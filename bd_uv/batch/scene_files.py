@@ -63,7 +63,8 @@ def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=Non
             job = Job(sm.name, sm.mesh.V, sm.mesh.F, seams=_seams(sm, seams_mode, path),
                       corner_uv=sm.mesh.corner_uv, face_groups=sm.face_groups,
                       face_labels=sm.mesh.labels, uv_dtype=np.float32,   # as written
-                      position_dtype=np.float32)                         # as read
+                      position_dtype=np.float32,                         # as read
+                      v_down=getattr(scene, "V_DOWN", False))
             result = unwrap_job(job, options, png=png_k)
         except BDError as exc:
             entries.append(failed_entry(sm.name, type(exc).__name__, str(exc),

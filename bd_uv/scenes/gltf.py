@@ -66,6 +66,9 @@ class GltfScene:
     """A glTF file read for unwrapping; ``meshes`` one :class:`SceneMesh` per glTF mesh with
     triangles."""
 
+    # its v runs downwards: the UVs stored are 1 - v (``layout.as_stored`` certifies them so)
+    V_DOWN = True
+
     def __init__(self, gf, uv_set, meshes, parts):
         self.gf, self.uv_set, self.meshes, self._parts = gf, uv_set, meshes, parts
 

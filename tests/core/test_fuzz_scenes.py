@@ -221,6 +221,11 @@ def _check_written(out, report):
          spoil="scene", seams="needed")
 @example(breakage="sliver", copies=3, glb=False, seed=0, cut=None, flips=[], spoil="scene",
          seams="needed")
+# (300 deep, seed 7373): the sliver's island certified as float32 UVs, but glTF stores 1 - v,
+# which rounded otherwise and collapsed a face: the mesh was refused whole instead of the sliver
+# being left out; a glTF job now certifies the UVs as the file holds them (layout.as_stored)
+@example(breakage="sliver", copies=1, glb=False, seed=22109, cut=None, flips=[], spoil="scene",
+         seams="needed")
 @given(breakage=st.sampled_from(BREAKAGES), copies=st.integers(1, 40), glb=st.booleans(),
        seed=st.integers(0, 2 ** 16), cut=st.one_of(st.none(), st.floats(0.0, 0.999)),
        flips=st.lists(st.tuples(st.floats(0, 0.999), st.integers(1, 255)), max_size=3),

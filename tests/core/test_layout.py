@@ -147,3 +147,26 @@ def test_an_unwrap_that_cut_an_island_keeps_no_certificates():
     res = bd_uv.unwrap(V, F)
     assert any("cut" in r.flags for r in res.islands)
     assert res.certificates is None
+
+
+def test_uvs_stored_with_v_down_keep_1_minus_v_exact_in_float32():
+    """``layout.as_stored``: for a format storing 1 - v (glTF) in float32, v is put on float32's
+    grid in [0.5, 1), so the file's 1 - v is exact and the UVs certified are the file's; u, and
+    every coordinate without ``v_down``, are float32's own rounding."""
+    from bd_uv.layout import as_stored
+    rng = np.random.default_rng(3)
+    uv = rng.random((1000, 3, 2)) * [1.0, 1.0]
+    uv[:10, :, 1] = rng.random((10, 3)) * 1e-6            # near v = 0: float32 is finer there
+    uv[10:20, :, 1] += 1.0                                 # a UDIM row above
+    s = as_stored(uv, np.float32, v_down=True)
+    assert np.array_equal(s[..., 0], uv[..., 0].astype(np.float32))
+    v32 = s[..., 1].astype(np.float32)
+    assert np.array_equal(v32.astype(np.float64), s[..., 1])              # float32 values
+    flipped = (1.0 - v32.astype(np.float64)).astype(np.float32)           # what glTF holds
+    assert np.array_equal(1.0 - flipped.astype(np.float64), s[..., 1])   # read back exactly
+    assert np.abs(s[:10] - uv[:10]).max() <= 2.0 ** -25        # half a grid step near 0
+    assert np.abs(s - uv).max() <= 2.0 ** -23                  # float32 steps in [1, 2)
+    plain = uv.astype(np.float32).astype(np.float64)
+    assert np.array_equal(as_stored(uv, np.float32), plain)
+    assert not np.array_equal(1.0 - (1.0 - plain[..., 1]).astype(np.float32), plain[..., 1])
+    assert np.array_equal(as_stored(uv, np.float64, v_down=True), uv)
