@@ -64,7 +64,7 @@ def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=Non
                       corner_uv=sm.mesh.corner_uv, face_groups=sm.face_groups,
                       face_labels=sm.mesh.labels, uv_dtype=np.float32,   # as written
                       position_dtype=np.float32,                         # as read
-                      v_down=getattr(scene, "V_DOWN", False))
+                      v_down=scene.V_DOWN)
             result = unwrap_job(job, options, png=png_k)
         except BDError as exc:
             entries.append(failed_entry(sm.name, type(exc).__name__, str(exc),

@@ -42,6 +42,9 @@ def _pxr():
 class UsdScene:
     """A USD stage read for unwrapping; ``meshes`` one ``SceneMesh`` per mesh prim."""
 
+    # its v runs upwards: the UVs stored are u, v as certified (``layout.as_stored``)
+    V_DOWN = False
+
     def __init__(self, path, uv_name, meshes, parts):
         self.path, self.uv_name, self.meshes, self._parts = path, uv_name, meshes, parts
 
