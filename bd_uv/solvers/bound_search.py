@@ -271,7 +271,7 @@ class BoundSearch:
         self._operators()
         return self.max_distortion(self._lift(U))
 
-    def search(self, u, frames_of=None, report=None, deadline=None, cancel=None):
+    def search(self, u, frames_of=None, report=None, deadline=None, cancel=None, enough=None):
         """The least max distortion reached from the flip-free map u (nv,) complex.
 
         Parameters
@@ -281,6 +281,9 @@ class BoundSearch:
             product, not the island problem's two)
         report : callable(message), optional, called before each target
         deadline : float (``time.perf_counter()``) or None: no new target after it
+        enough : callable(u) -> bool, optional: asked of each new best map (nv,) complex; True
+            ends the search there (a bound asked for whose conformal map lay over itself: the
+            first map that does not is enough, the least C is not sought)
 
         Returns
         -------
@@ -307,6 +310,8 @@ class BoundSearch:
             gain = (D - Db) / (D - 1.0) if Ub is not None else 0.0
             if Ub is not None:
                 U, D = Ub, Db
+                if enough is not None and enough(U[0] + 1j * U[1]):
+                    break
             if reached:
                 step = min(MAX_STEP, 1.5 * step)
                 small = 0

@@ -204,8 +204,8 @@ def bend(prob, start, C, report, flags=None, polish=True):
 
 def search(prob, u, report, budget, flags, t0):
     """Lower the bound of a flip-free map ``u`` by ADMM onto F_C with frames
-    (``solvers.bound_search``), holding the pins (or one boundary vertex, where ``u`` has it).
-    Returns (the best map, its max distortion); flags "time_budget_exhausted" when the budget
+    (``solvers.bound_search``), holding the pins (or one boundary vertex, where ``u`` has it),
+    ending at the first best map ``prob.enough`` accepts where it is set. Returns (the best map, its max distortion); flags "time_budget_exhausted" when the budget
     stopped it."""
     if len(prob.pin_idx) >= prob.nv:
         return u, prob.distortion(u)
@@ -223,7 +223,7 @@ def search(prob, u, report, budget, flags, t0):
         report(0.1, f"minimising C: C* <= {D:.4g}, aiming at {C:.4g}")
 
     deadline = None if budget is None else t0 + budget
-    u, D, out_of_time = bs.search(u, None, progress, deadline, prob.cancel)
+    u, D, out_of_time = bs.search(u, None, progress, deadline, prob.cancel, prob.enough)
     if prob.cancel is not None and prob.cancel.is_set():
         raise Cancelled
     if out_of_time:

@@ -28,7 +28,7 @@ from ..errors import CancelledError
 from ..geometry import local_coordinates
 from ..metrics import mean_distortion
 from ..solvers import bound_search
-from .disk_certificate import certify_measured_disk, measure_disk
+from .disk_certificate import certify_measured_disk, measure_disk, simple_ccw_loop
 from .finish import HIGH_DISTORTION, certified_bound, placed
 from .one_disk import report_step
 from .problem import normalised
@@ -47,11 +47,11 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
     (``one_disk.unwrap_disk``'s), as ``strategies.minimise`` finds it without a time budget.
 
     ``requested``: the bound asked for, "auto", or a number C (= ``limit``) whose conformal map
-    lay over itself: the smallest C is sought, as for "auto", so that the disk stays one island
-    (a map of lower distortion moves the boundary: on three_peaks' 554-face centre the conformal
-    map at C = 5 folded over and was cut into 3 islands, one of a single face, where the search's
-    map at C = 1.125 is one, in less time than the cut took); flagged "unfolded", certified at
-    the C asked (its max distortion says how far below it the map is).
+    lay over itself: the search for the smallest C runs, as for "auto", until its best map no
+    longer does, so that the disk stays one island (a map of lower distortion moves the boundary:
+    on three_peaks' 554-face centre the conformal map at C = 5 folded over and was cut into 3
+    islands, one of a single face, where the search's maps are one); flagged "unfolded",
+    certified at the C asked (its max distortion says how far below it the map is).
 
     Returns
     -------
@@ -80,7 +80,15 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
     def report(D, C):
         report_step(progress, cancel, 0.1, f"island 1/1: minimising C: C* <= {D:.4g}, aiming at "
                 f"{C:.4g}")
-    us, D, _ = bs.search(u, None, report, None, cancel)
+    enough = None
+    if requested != "auto":
+        # a number whose conformal map lay over itself: the first map of the search that does
+        # not is enough (the user asked for C, not the least C; nearer the conformal map)
+        loop = isl.loops[0]
+
+        def enough(v):
+            return simple_ccw_loop(np.stack([v.real.take(loop), v.imag.take(loop)], axis=1))
+    us, D, _ = bs.search(u, None, report, None, cancel, enough)
     if cancel is not None and cancel.is_set():
         raise CancelledError("unwrap cancelled; nothing was changed")
     project = time.perf_counter() - t

@@ -94,6 +94,13 @@ def _simple_ccw_boundary(corner_uv, disk):
     return _star_shaped(p, q) or _simple_ccw(p, q)
 
 
+def simple_ccw_loop(p):
+    """Is the polygon through the points p (n,2) float64, in order, simple and wound
+    counter-clockwise (steps 3's test of a boundary loop's UVs)?"""
+    q = np.concatenate([p[1:], p[:1]])
+    return _star_shaped(p, q) or _simple_ccw(p, q)
+
+
 def _star_shaped(p, q):
     """A sufficient test, the common case: seen from the mean of its points, every segment turns
     counter-clockwise (``segments._orient``'s sign, clear of its rounding bound) and the turns add

@@ -18,6 +18,7 @@ from ..energies import energy, jacobian_operators
 from ..errors import InfeasibleError
 from ..frames import _far_pair, frames_from_map, lscm_map
 from ..geometry import face_areas, local_coordinates
+from ..overlap import island_overlaps
 from .conic_solves import ConicSolves
 from .margins import STORE_HEADROOM
 
@@ -55,6 +56,9 @@ class IslandProblem(ConicSolves):
         self.island, self.ranks = island, ranks
         self.method, self.cone, self.cancel = method, cone, cancel
         self.faces_3d = faces_3d
+        # callable(u) -> bool or None: the bound search ends at the first best map it accepts
+        # (``unwrap._unfold``: a map that does not lie over itself)
+        self.enough = None
         Vi = V[island.vertices]
         self.V = Vi
         self.area3d = float((face_areas(Vi, island.tris) if faces_3d is None
@@ -256,3 +260,11 @@ class IslandProblem(ConicSolves):
         if self.method == "lscm":
             self.weights = 1.0 / np.maximum(a, 1e-6 * typical)
         self._scale_objective(u_start, frames_from_map(self.alpha(u_start)))
+
+    def one_to_one(self, u):
+        """Does the flip-free map u (nv,) complex lay the island out without overlapping itself
+        (``overlap.island_overlaps``: no boundary crossing, every loop wound as it should)?"""
+        tris = self.island.tris
+        corner_uv = np.stack([u.real, u.imag], axis=1).take(tris, axis=0)
+        return bool(island_overlaps(tris, corner_uv, np.zeros(len(tris), np.int64), 1)
+                    .overlap_free[0])

@@ -121,10 +121,10 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
 
 
 def _unfold(isl, V, pins, options, cancel):
-    """For ``overlap_certificate``: the map of the smallest certified C within the numeric bound
-    asked (``strategies.minimise``, as ``bound="auto"`` with ``bound_limit`` that C) of an island
-    whose map within it lies over itself: a map of lower distortion often unfolds it, and it
-    stays one island (flag "unfolded"), certified at that C. None where that does not apply: a fixed boundary, a
+    """For ``overlap_certificate``: for an island whose map within the numeric bound asked lies
+    over itself, the search for the smallest C within it (``strategies.minimise``, as
+    ``bound="auto"`` with ``bound_limit`` that C) up to its first map that does not (a map of
+    lower distortion often unfolds it): it stays one island (flag "unfolded"), certified at that C. None where that does not apply: a fixed boundary, a
     stretch bound, a time budget (conic steps), a method or frames other than the default's."""
     o = options
     if (o.bound == "auto" or o.boundary != "free" or o.stretch is not None
@@ -136,7 +136,8 @@ def _unfold(isl, V, pins, options, cancel):
 
     def unfold(index):
         try:
-            res = _solve_island(by_index[index], V, pins, auto, None, _quiet(cancel), cancel)
+            res = _solve_island(by_index[index], V, pins, auto, None, _quiet(cancel), cancel,
+                                unfolding=True)
         except Cancelled:
             raise CancelledError("unwrap cancelled; nothing was changed") from None
         if res.status != "certified" or not res.bound_certified <= C:
@@ -301,7 +302,7 @@ def _batched(V, isl, pins, face_island, options, progress, cancel, conformal=Non
 
 
 def _solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=None,
-                  faces_3d=None, ranks=None):
+                  faces_3d=None, ranks=None, unfolding=False):
     t0 = time.perf_counter()
     o = options
     method, bound, boundary, stretch = o.method, o.bound, o.boundary, o.stretch
@@ -322,6 +323,8 @@ def _solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=Non
         return with_premises(finish(prob, u, C, bound, FRAMES_NAME, flags, t0, stretch), island)
     try:
         prob = IslandProblem(island, V, pins, method, o.cone, cancel, faces_3d, ranks)
+        if unfolding:       # ``_unfold``: the first map that does not lie over itself will do
+            prob.enough = prob.one_to_one
         start = start_map(prob, o.frames, initial_uv, report, lscm=lscm)
     except IslandError as exc:
         exc.renumber(island.index)
