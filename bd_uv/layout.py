@@ -107,10 +107,14 @@ class Layout:
                 e.update(max_distortion=t["max_distortion"], mean_distortion=t["mean_distortion"])
             else:
                 bad = [c for c in mine if not c.certified]
+                # the pieces that pass are written (``stored_layout``): say which part is not
+                what = ("not written" if len(bad) == len(mine) else
+                        f"{len(mine) - len(bad)} of its {len(mine)} pieces written, "
+                        f"{len(bad)} not")
                 e.update(status="failed", error="NotCertifiedAsStored", bound_certified=None,
                          bijective=None if e["bijective"] is None else False,
                          max_distortion=max(c.max_distortion for c in mine),
-                         message=f"island {r.index}: not written, the UVs as stored fail "
+                         message=f"island {r.index}: {what}, the UVs as stored fail "
                                  f"certification: {bad[0].reason}")
                 if not np.isfinite(e["max_distortion"]):
                     e["max_distortion"] = None

@@ -282,6 +282,30 @@ def test_stored_layout_cuts_packs_and_recertifies():
     assert len(uv) == 0 and (F_uv == -1).all()
 
 
+def test_an_island_whose_pieces_partly_fail_as_stored_says_which_part_is_written():
+    """A cut island whose pieces do not all certify as stored (the recut path: rounding made a
+    piece cross itself): the pieces that pass are written, and the island's entry says how many,
+    not "not written" (the entry had said so while their faces kept their UVs)."""
+    import dataclasses
+    V, F, res, C = overlapping_result()
+    lay = stored_layout(V, F, res, pack=True, cut=True, dtype=np.float32)
+    assert len(lay.certificates) >= 2 and all(c.certified for c in lay.certificates)
+    failing = dataclasses.replace(lay.certificates[0], certified=False,
+                                  reason="1 flipped or collapsed face(s)")
+    lay = dataclasses.replace(lay, certificates=[failing] + lay.certificates[1:])
+    (e,) = lay.island_entries(res)
+    k = len(lay.certificates)
+    assert e["status"] == "failed" and e["pieces"] == k
+    assert f"{k - 1} of its {k} pieces written, 1 not" in e["message"]
+    assert "flipped" in e["message"]
+    # every piece failing: nothing of the island is written, and it says so
+    lay = dataclasses.replace(lay, certificates=[dataclasses.replace(c, certified=False,
+                                                                     reason="x")
+                                                 for c in lay.certificates])
+    (e,) = lay.island_entries(res)
+    assert "island 0: not written" in e["message"]
+
+
 def test_a_cut_never_splits_a_polygon():
     """With face_groups (the polygon each triangle comes from, as Blender hands them over), the
     pieces of an overlapping island hold whole polygons: a Blender polygon has one UV per corner,
