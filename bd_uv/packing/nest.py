@@ -9,6 +9,7 @@ from dataclasses import dataclass
 from datetime import timedelta
 
 import numpy as np
+from scipy.spatial import ConvexHull, QhullError
 
 from ..errors import PackError
 
@@ -191,10 +192,25 @@ def least_squares(outlines, options, step=1.0):
     R = rotations(turns)
     side, angle = np.zeros(len(outlines)), np.zeros(len(outlines))
     for i, xy in enumerate(outlines):  # per chart
+        # an outline's extent in any direction is its convex hull's, found at the hull's
+        # vertices: the same sides and angles from them (rocker-arm's largest chart at 0.05
+        # degrees: 49 -> 5 ms)
+        xy = xy.take(_hull_vertices(xy), axis=0)
         q = np.einsum("aij,nj->ani", R, xy)
         s = np.ptp(q, axis=1).max(axis=1)
         side[i], angle[i] = s.min(), turns[np.argmin(s)]
     return side, angle
+
+
+def _hull_vertices(xy):
+    """Indices of the convex hull's vertices of the points xy (n,2) (all of them where there
+    are few or the hull is degenerate)."""
+    if len(xy) <= 16:
+        return np.arange(len(xy))
+    try:
+        return ConvexHull(xy).vertices
+    except QhullError:
+        return np.arange(len(xy))
 
 
 def single_layout(xy, options, tol):
