@@ -3,24 +3,23 @@
 ``execute()`` solves synchronously (scripts, the redo panel, tests); ``invoke()`` solves in a
 background :class:`~.worker.UnwrapJob`, polls it from a modal timer, shows progress in the status
 bar, and Esc cancels leaving mesh and UVs exactly as they were (both from
-:class:`~.background.BackgroundSolve`). Both end in ``_finish`` (write back, pack, colour, report)
-so they cannot drift apart.
+:class:`~.background.BackgroundSolve`). Both end in ``_finish`` (write back, pack, colour,
+report; ``unwrap_finish.py``) so they cannot drift apart. The menus' choices are in
+``unwrap_items.py``.
 """
-import dataclasses
 import functools
 
 import bpy
 from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty
 
 from .. import bd_uv
-from ..bd_uv.errors import BDError
 from ..bd_uv.options import ENTRY_SEAMS_MODE
-from ..bd_uv.packing import PackOptions
-from ..bd_uv.unwrapping.storage import with_predicted_headroom
 from . import auto_seams, needed_seams, session
 from .background import BackgroundSolve
 from .editmode import edit_mesh_objects, object_mode
-from .pack import GROUP_ITEMS, pack_atlas, pack_message
+from .pack import GROUP_ITEMS
+from .unwrap_finish import UnwrapFinish
+from .unwrap_items import _BOUNDARY, _FRAMES, _METHODS, _OVERLAP, _SEAMS
 
 # The background job's solve function (tests substitute a gated one to control timing).
 SOLVE = bd_uv.unwrap
@@ -35,52 +34,7 @@ DEFAULTS = bd_uv.UnwrapOptions()
 _SEAMS_ITEM = {"needed": 'NEEDED', "marked": 'MARKED', "auto": 'AUTO'}
 
 
-
-_METHODS = (
-    ('lscm', "BD-LSCM", "Conformal energy (Lipman 2012, section 5): closest to Blender's "
-     "Conformal, with a certified distortion bound"),
-    ('arap', "BD-ARAP", "As-rigid-as-possible energy: keeps areas and lengths too, within the "
-     "same certified bound"),
-    ('dirichlet', "BD-Dirichlet", "Dirichlet (harmonic) energy within the bound: smooth, meant "
-     "for a fixed boundary (Circle, Rectangle, Pinned Polygon)"),
-    ('biharmonic', "BD-Biharmonic", "Biharmonic energy (Lipman 2012, eq. 6.1): smoother than "
-     "Dirichlet, meant for a fixed boundary"),
-    ('stretch-l1', "BD-L1 Stretch", "Sum of each face's singular values by area (section 6.1): "
-     "evens out texel density within the bound"),
-)
-_SEAMS = (
-    ('NEEDED', "Add Where Needed", "Keep the marked seams; add seams (marked on the mesh) only "
-     "to islands that cannot be certified within C as they are (closed meshes, handles), their "
-     "charts within C 2 and Limit Stretch; non-manifold vertices and edges and flipped parts "
-     "are split. With Minimise, From Current UVs, a fixed Boundary or pinned UVs: as Marked"),
-    ('MARKED', "Marked", "Cut along the marked seams only: every island must be a disk"),
-    ('AUTO', "Search All Islands", "Keep the marked seams and search seams on every island, "
-     "also those already certifiable, until every chart is within C and Limit Stretch; the "
-     "added seams are marked on the mesh"),
-)
-_OVERLAP = (
-    ('CUT', "Cut Into Pieces", "An island whose UVs would lie over themselves is cut into "
-     "overlap-free pieces (no UV moves within a piece); the cut edges are marked as seams"),
-    ('KEEP', "Keep as One Island", "An island whose UVs would lie over themselves is not written: "
-     "it keeps its UVs and the report names it (mark seams, or let bd-uv cut it)"),
-)
-_BOUNDARY = (
-    ('free', "Free", "The boundary goes where the map puts it"),
-    ('circle', "Circle", "The outer boundary onto a circle (holes stay free): a bijection, "
-     "Lipman 2012, Theorems 5.1-5.2"),
-    ('rectangle', "Rectangle", "The outer boundary onto a rectangle, corners at the four boundary "
-     "vertices that best fit one, or at four pinned UVs (straighten a strip for a trim sheet)"),
-    ('pinned', "Pinned Polygon", "The outer boundary onto the polygon its pinned UVs make"),
-)
-_FRAMES = (
-    ('auto', "Auto", "Start from the conformal map (or a flip-free one) chosen by bd-uv"),
-    ('input-uv', "From Current UVs", "Start from the UVs the faces have now: an island within C "
-     "keeps its layout (scaled to its 3D area), one beyond C is bent only as far as C demands "
-     "(frames from its UVs, Lipman 2012 eq. 4.21)"),
-)
-
-
-class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
+class UV_OT_bd_unwrap(UnwrapFinish, BackgroundSolve, bpy.types.Operator):
     """Unwrap the selected faces with a certified bound on conformal distortion and no flipped
     faces (Bounded Distortion Mapping Spaces, Lipman 2012)"""
 
@@ -208,26 +162,6 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
             row.prop(self, name)
         layout.prop(self, "show_distortion")
 
-    def _pack(self, context, written):
-        """Pack the written islands: the atlas packer (islands holding a pinned UV stay where
-        they are and the rest pack around their true shapes; when it cannot, e.g. a pinned island
-        lies outside the square, or its layout is not certified: Blender's, said in the note), or
-        Blender's. Returns the note for the report line."""
-        if self.pack_shape != 'ATLAS':
-            session.pack(context, written, self.margin, self.pack_shape)
-            return ""
-        options = PackOptions(resolution=self.pack_resolution, padding_px=self.pack_padding,
-                              group=self.pack_group)
-        try:
-            with object_mode(context):
-                obs = [bpy.data.objects.get(w.object_name) for w in written]
-                todo = [(ob, w.pack_polygons) for ob, w in zip(obs, written) if ob is not None]
-                done = pack_atlas([o for o, _ in todo], [m for _, m in todo], options)
-        except BDError as exc:
-            session.pack(context, written, self.margin, 'AABB')
-            return f"packed by Blender's packer: {exc}"
-        return pack_message(*done, head="packed: ") if done is not None else ""
-
     # -- shared --------------------------------------------------------------------------------
     def _prepare(self, context):
         """``BackgroundSolve``'s (state, solve, args, kwargs): the batch, and ``auto_seams.solve``
@@ -305,74 +239,6 @@ class UV_OT_bd_unwrap(BackgroundSolve, bpy.types.Operator):
             return (f"Limit Stretch {self.stretch:g} cannot hold with C = {self.bound:g}: "
                     f"raise it to at least sqrt(C) = {self.bound ** 0.5:.4g} or lower C")
         return ""
-
-    def _finish(self, context, batch, solved, seconds):
-        """Write, pack, re-certify what is stored (putting back what fails), mark the added
-        seams, colour, report.
-
-        ``solved`` is an ``UnwrapResult``, or with Seams "Add Where Needed" an
-        ``auto_seams.AutoSeams`` whose added seams are marked on every object something was
-        written and kept on (in the operator's one undo step). The report line and the panel
-        show the figures of the post-write check. FINISHED when anything was written and kept,
-        as Blender's own Unwrap does when some islands fail; CANCELLED when nothing at all was
-        written (with a WARNING saying why; no seam is marked then)."""
-        auto = solved if isinstance(solved, auto_seams.AutoSeams) else None
-        result = auto.result if auto is not None else solved
-        stretch = self.stretch if self.seams == 'AUTO' or self.limit_stretch else None
-        headroom = {}
-        if stretch is None:   # islands whose faces float32 UVs would not resolve: re-solved now
-            result, headroom = with_predicted_headroom(batch.V, batch.F, result)
-        with object_mode(context):
-            written = session.write_back(batch, result)
-        verified, packed_note = None, ""
-        if any(w.faces.any() for w in written):
-            if self.pack:
-                packed_note = self._pack(context, written)
-            with object_mode(context):
-                verified = session.verify_written(batch, result, written, stretch)
-        summary = session.summarise(batch, result, written, seconds, verified, packed=self.pack,
-                                    stretch=stretch)
-        if auto is not None and summary.written and (len(auto.added) or auto.notes
-                                                     or self.seams == 'AUTO'):
-            with object_mode(context):
-                marked = session.mark_seams(batch, written, auto.added)
-            summary = dataclasses.replace(summary, message=(
-                f"{summary.message}; {marked} seam{'s' if marked != 1 else ''} added, "
-                f"{auto.charts} chart{'s' if auto.charts != 1 else ''}"
-                + (" (see the marked seams in Edit Mode)" if marked else "")
-                + atlas_note(auto.atlas_cuts)
-                + "".join(f"; {note}" for note in auto.notes)))
-        elif summary.written:
-            cut = session.overlap_cuts(result)
-            if len(cut):  # an island that overlapped itself was cut: show the artist where
-                with object_mode(context):
-                    marked = session.mark_seams(batch, written, cut)
-                summary = dataclasses.replace(summary, message=(
-                    f"{summary.message}; {marked} seam{'s' if marked != 1 else ''} marked where "
-                    "overlapping islands were cut"))
-        if summary.written and headroom:
-            summary = dataclasses.replace(summary, message=f"{summary.message}; " + ", ".join(
-                f"island {i} re-solved with stretch <= {S:g}" for i, S in headroom.items())
-                + " (its conformal map shrank faces below what float32 UVs resolve)")
-        if summary.written and packed_note:  # the layout's figures beside the map's, before notes
-            head, sep, notes = summary.message.partition("; ")
-            summary = dataclasses.replace(summary, message=f"{head}; {packed_note}{sep}{notes}")
-        if summary.written and self.show_distortion:
-            bound = summary.bound_certified if summary.bound_certified > 1 else self.bound
-            session.show_distortion(context, written, bound)
-        session.store(context.window_manager, summary, batch.face_count)
-        self.report({summary.level}, summary.message)
-        return {'FINISHED'} if summary.written else {'CANCELLED'}
-
-
-def atlas_note(atlas):
-    """The report's words on the atlas cuts (``AutoSeams.atlas_cuts``): "" when none."""
-    if not atlas or not atlas["cuts"]:
-        return ""
-    n = atlas["cuts"]
-    return (f"; of those seams, {n} atlas cut{'s' if n != 1 else ''} ({len(atlas['seams'])} "
-            f"edges, length {atlas['length']:.3g}: a chart cut in two to pack tighter; turn off "
-            "Atlas Cuts for none)")
 
 
 classes = (UV_OT_bd_unwrap,)

@@ -20,66 +20,21 @@ pins' new targets:
 """
 import threading
 import time
-from dataclasses import dataclass
 
 import numpy as np
 from scipy.sparse.csgraph import connected_components
 import scipy.sparse as sp
 
-from ..errors import (BDError, CancelledError, DegenerateFacesError, InvalidMeshError,
-                      OptionError, OverlapError)
-from ..solvers.factor import factor_spd
+from ..errors import (CancelledError, DegenerateFacesError, InvalidMeshError, OptionError,
+                      OverlapError)
 from .certificate import FrameCertificate
+from .frame import LiveFrame, SessionClosedError
 from .rest import conformal_rest
-from .steps import (LIVE_METHODS, EnergySteps, apply_similarity, pin_similarity,
-                    project_frame)
+from .steps import LIVE_METHODS, _PinSet, apply_similarity, pin_similarity, project_frame
 
 __all__ = ["LiveFrame", "LiveSession", "SessionClosedError"]
 
 BISECTIONS = 6          # steps of the search for the certified map nearest an uncertified one
-
-
-class SessionClosedError(BDError):
-    """The live session was closed; start a new one."""
-
-
-@dataclass(frozen=True)
-class LiveFrame:
-    """One certified frame of a live session.
-
-    Attributes
-    ----------
-    uv : (n,2) float64, the island's positions; pins on their targets when ``pin_error`` is 0
-    certified : bool, True: 0 flips, max distortion <= C against the rest shape, no overlap,
-        all from ``uv`` itself
-    max_distortion : float
-    flipped : int (0)
-    overlaps : int (0): crossing boundary segment pairs and loops on the wrong side
-    pin_error : float, largest distance from a pin to its target
-    seconds : float, wall time of the update
-    iterations : int, local/global and projection steps taken
-    distortion : (k,) float64, per face against the rest shape (for colouring)
-    """
-    uv: np.ndarray
-    certified: bool
-    max_distortion: float
-    flipped: int
-    overlaps: int
-    pin_error: float
-    seconds: float
-    iterations: int
-    distortion: np.ndarray
-
-
-class _PinSet:
-    """What one pin set needs: the energy's and the projection's steps, one factorisation."""
-
-    def __init__(self, G, area, pins, backend):
-        self.pins = pins                                  # sorted, distinct
-        self.steps = EnergySteps(G, area, pins, None)
-        t0 = time.perf_counter()
-        self.steps.solve, self.backend = factor_spd(self.steps.L_ff, backend)
-        self.factor_seconds = time.perf_counter() - t0
 
 
 class LiveSession:

@@ -14,10 +14,13 @@ enough for a frame: on a 10k-face disk the general solver's per-call set-up alon
   least-squares conformal map with the pins);
 - "dirichlet": the identity (the rest shape's Jacobian): the harmonic map with the pins, one step.
 """
+import time
+
 import numpy as np
 import scipy.sparse as sp
 
 from ..errors import CancelledError
+from ..solvers.factor import factor_spd
 from ..solvers.local_projection import nearest_jacobian_parts, project_singular_values
 
 __all__ = ["EnergySteps", "pin_similarity", "apply_similarity", "project_frame", "LIVE_METHODS"]
@@ -181,3 +184,14 @@ def project_frame(steps, U, C, max_iter, margin=0.9, floor=1e-3, cancel=None):
         prev_err = err
         U[steps.free] = Xc
     return U, False, max_iter
+
+
+class _PinSet:
+    """What one pin set needs: the energy's and the projection's steps, one factorisation."""
+
+    def __init__(self, G, area, pins, backend):
+        self.pins = pins                                  # sorted, distinct
+        self.steps = EnergySteps(G, area, pins, None)
+        t0 = time.perf_counter()
+        self.steps.solve, self.backend = factor_spd(self.steps.L_ff, backend)
+        self.factor_seconds = time.perf_counter() - t0

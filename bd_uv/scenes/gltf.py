@@ -22,15 +22,13 @@ import numpy as np
 
 from ..certificate import certify_islands
 from ..errors import SceneFileError
-from ..meshio import Mesh
 from ..scheduling.atomic import atomic_path
 from .model import SceneMesh
-from .weld import welded
-from .gltf_io import (ARRAY_BUFFER, COMPONENT_TYPE, ELEMENT_ARRAY_BUFFER, BufferWriter,
-                      read_gltf, rebase_uris, write_glb, write_gltf_json)
+from .gltf_io import BufferWriter, read_gltf, rebase_uris, write_glb, write_gltf_json
+from .gltf_mesh import _mesh_arrays, _refusal
+from .gltf_patch import _patch_primitive
 
 TRIANGLES = 4
-DRACO = "KHR_draco_mesh_compression"
 
 
 def node_paths(doc):
@@ -51,15 +49,6 @@ def node_paths(doc):
             j = parent.get(j)
         out.setdefault(n["mesh"], []).append("/" + "/".join(reversed(names)))
     return out
-
-
-def _as_float(values, acc):
-    """Accessor values as float64, normalised integers mapped to [0,1] or [-1,1]."""
-    v = values.astype(np.float64)
-    if acc.get("normalized") and values.dtype.kind in "iu":
-        info = np.iinfo(values.dtype)
-        v = v / info.max if values.dtype.kind == "u" else np.maximum(v / info.max, -1.0)
-    return v
 
 
 class GltfScene:
@@ -188,136 +177,3 @@ def input_files(doc, path):
             if uri and not uri.startswith("data:") and "://" not in uri:
                 out.add(os.path.realpath(os.path.join(folder, unquote(uri))))
     return out
-
-
-def _refusal(gf, label, prims):
-    for j, p in prims:
-        if DRACO in p.get("extensions", {}):
-            return (f"{label} primitive {j} is Draco-compressed ({DRACO}); bd-uv does not "
-                    "decode Draco: decompress the file first (e.g. gltf-transform copy IN OUT)")
-        for name, acc in list(p.get("attributes", {}).items()) + [("indices", p.get("indices"))]:
-            if acc is None:
-                continue
-            try:
-                view = gf.doc["accessors"][acc].get("bufferView")
-                ext = gf.doc["bufferViews"][view].get("extensions", {}) if view is not None else {}
-            except (IndexError, KeyError, TypeError):
-                raise SceneFileError(f"{gf.path}: {label} primitive {j} {name}: accessor {acc} "
-                                     "does not exist")
-            if "EXT_meshopt_compression" in ext or "KHR_meshopt_compression" in ext:
-                return (f"{label} primitive {j} is meshopt-compressed (EXT_meshopt_compression); "
-                        "bd-uv does not decode it: decompress the file first "
-                        "(e.g. gltf-transform copy IN OUT)")
-    return None
-
-
-def _mesh_arrays(gf, label, prims, uv_set, name):
-    """One welded triangle mesh of a glTF mesh's triangle primitives, and how to write back."""
-    Vs, Fs, UVs, part, offset, lo = [], [], [], [], 0, 0
-    for j, p in prims:
-        where = f"{label} primitive {j}"
-        attrs = p.get("attributes", {})
-        if "POSITION" not in attrs:
-            raise SceneFileError(f"{gf.path}: {where} has no POSITION")
-        acc = gf.doc["accessors"][attrs["POSITION"]]
-        V = _as_float(gf.accessor(attrs["POSITION"], where + " POSITION"), acc)
-        if V.shape[1] != 3:
-            raise SceneFileError(f"{gf.path}: {where}: POSITION is not VEC3")
-        n = len(V)
-        if "indices" in p:
-            idx = gf.accessor(p["indices"], where + " indices")[:, 0].astype(np.int64)
-        else:
-            idx = np.arange(n, dtype=np.int64)
-        if len(idx) % 3:
-            raise SceneFileError(f"{gf.path}: {where}: {len(idx)} indices is not a whole "
-                                 "number of triangles")
-        if len(idx) and (idx.max() >= n or idx.min() < 0):   # signed types can go below 0
-            bad = int(idx.min()) if idx.min() < 0 else int(idx.max())
-            raise SceneFileError(f"{gf.path}: {where}: index {bad} is out of range "
-                                 f"({n} vertices)")
-        F = idx.reshape(-1, 3)
-        key = f"TEXCOORD_{uv_set}" if f"TEXCOORD_{uv_set}" in attrs else "TEXCOORD_0"
-        if UVs is not None and key in attrs:
-            uv = _as_float(gf.accessor(attrs[key], f"{where} {key}"),
-                           gf.doc["accessors"][attrs[key]])
-            UVs.append(np.stack([uv[:, 0], 1.0 - uv[:, 1]], -1)[F])
-        else:
-            UVs = None
-        Vs.append(V)
-        Fs.append(F + offset)
-        part.append((j, lo, lo + len(F), F))
-        offset += n
-        lo += len(F)
-    V = np.concatenate(Vs)
-    F = np.concatenate(Fs)
-    if len(F) == 0:
-        raise SceneFileError(f"{gf.path}: {label} has no triangles")
-    W, G = welded(V, F)
-    corner_uv = np.concatenate(UVs) if UVs else None
-    # each face's material: its primitive's (-1: none); one glTF mesh is one object
-    material = np.concatenate([np.full(len(Fj), prims[i][1].get("material", -1), np.int64)
-                               for i, (_, _, _, Fj) in enumerate(part)])
-    labels = {"material": material, "object": np.zeros(len(G), np.int64)}
-    return Mesh(W, G, corner_uv, name, labels), part
-
-
-def _patch_primitive(gf, mesh, j, corner_vertex, uv32, uv_set, writer, name):
-    """Split primitive ``j``'s vertices by their new UVs and point it at the new accessors."""
-    doc = gf.doc
-    prim = mesh["primitives"][j]
-    where = f"{name} primitive {j}"
-    keys = np.stack([corner_vertex.reshape(-1).astype(np.int64),
-                     uv32.reshape(-1, 2).view(np.uint32)[:, 0].astype(np.int64),
-                     uv32.reshape(-1, 2).view(np.uint32)[:, 1].astype(np.int64)], 1)
-    uniq, first, inv = np.unique(keys, axis=0, return_index=True, return_inverse=True)
-    src = uniq[:, 0]                       # the input vertex each output vertex copies
-    new_uv = uv32.reshape(-1, 2)[first]
-    target = f"TEXCOORD_{uv_set}"
-    warnings = []
-    normal_set = _normal_map_set(doc, prim)
-    drop_tangent = "TANGENT" in prim.get("attributes", {}) and (
-        normal_set == uv_set or (normal_set is None and uv_set == 0))
-    if drop_tangent:
-        warnings.append(f"{where}: TANGENT dropped (it followed {target}, which was rewritten); "
-                        "viewers derive MikkTSpace tangents from the new UVs")
-
-    def copy(acc_index, label, bounds=False):
-        acc = doc["accessors"][acc_index]
-        vals = gf.accessor(acc_index, f"{where} {label}")[src]
-        return writer.accessor(vals, acc["componentType"], acc["type"], ARRAY_BUFFER,
-                               acc.get("normalized", False),
-                               bounds=bounds or "min" in acc or "max" in acc)
-
-    attrs = {}
-    for key, acc in prim["attributes"].items():
-        if key == target or (key == "TANGENT" and drop_tangent):
-            continue
-        attrs[key] = copy(acc, key, bounds=key == "POSITION")
-    attrs[target] = writer.accessor(new_uv, COMPONENT_TYPE[np.dtype("<f4").str], "VEC2",
-                                    ARRAY_BUFFER)
-    if "targets" in prim:
-        targets = []
-        for t, tgt in enumerate(prim["targets"]):
-            new_t = {}
-            for key, acc in tgt.items():
-                if key == target or (key == "TANGENT" and drop_tangent):
-                    warnings.append(f"{where}: morph target {t} {key} deltas dropped "
-                                    f"({target} was rewritten)")
-                    continue
-                new_t[key] = copy(acc, f"target {t} {key}", bounds=key == "POSITION")
-            targets.append(new_t)
-        prim["targets"] = targets
-    prim["attributes"] = attrs
-    nv = len(src)
-    ctype = 5123 if nv <= 65535 else 5125     # the type's largest value is reserved (restart)
-    prim["indices"] = writer.accessor(inv.reshape(-1, 1), ctype, "SCALAR", ELEMENT_ARRAY_BUFFER)
-    return warnings
-
-
-def _normal_map_set(doc, prim):
-    """The TEXCOORD set the primitive's normal map reads, or None without a normal map."""
-    try:
-        nt = doc["materials"][prim["material"]].get("normalTexture")
-    except (KeyError, IndexError, TypeError):
-        return None
-    return None if nt is None else nt.get("texCoord", 0)

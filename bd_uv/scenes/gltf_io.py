@@ -141,7 +141,7 @@ def _buffer_bytes(path, i, buf, bin_chunk):
     if uri is None:
         if bin_chunk is None and MESHOPT & set(buf.get("extensions") or {}):
             # A meshopt fallback buffer holds no bytes by design: its views are decoded from the
-            # compressed buffer. Each primitive reading one is refused by name (``gltf._refusal``).
+            # compressed buffer. Each primitive reading one is refused by name (``gltf_mesh._refusal``).
             return b""
         if bin_chunk is None:
             raise SceneFileError(f"{path}: buffer {i} has no uri and there is no GLB BIN chunk")

@@ -34,7 +34,8 @@ from .orders import Orders
 from .pack_shape import split_for_packing
 from .bisect import FaceCentroids, bisect, polygon_edges
 from .rounds import refine
-from .topology import charts, cut_mesh
+from .cut_vertices import cut_mesh
+from .topology import charts
 from .valid import valid_everywhere
 from ..trim import CHUNK, maps_large_blocks, release_memory
 

@@ -3,7 +3,7 @@ on the whole mesh at once, so the seam search (``auto.unwrap_auto``) can skip ``
 import numpy as np
 
 from ..mesh import DEGENERATE_RATIO, measurable
-from .topology import cut_mesh
+from .cut_vertices import cut_mesh
 from ..trim import CHUNK
 
 

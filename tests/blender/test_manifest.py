@@ -67,7 +67,8 @@ def test_manifest_identity_fields():
 def test_build_exclusions_keep_development_files_out():
     matcher = build.blender_ext().PathPatternMatch(MANIFEST["build"]["paths_exclude_pattern"])
     for path in ["tests/", "benchmarks/", "docs/", ".ci/", ".git/", ".gitignore", "build.py",
-                 "requirements.txt", "requirements-dev.txt", ".wheel-cache/", "dist/", "out/",
+                 "build_extension/", "build_extension/wheels.py", "requirements.txt",
+                 "requirements-dev.txt", ".wheel-cache/", "dist/", "out/",
                  "wheels/", "bd_uv/__pycache__/", "bd_uv/mesh/arrays.pyc", "bd_uv/mesh/__pycache__/",
                  "BENCHMARKS.md"]:
         assert matcher.test_path(path), path

@@ -197,7 +197,7 @@ def _check_written(out, report):
 @example(breakage="none", copies=1, glb=False, seed=0, cut=None, flips=[(0.25, 1)],
          spoil="data URI", seams="needed")
 # and (seed 8): indices of a signed component type (5120) whose .bin byte was flipped held -107,
-# and only indices >= the vertex count were refused: IndexError in weld (gltf._mesh_arrays)
+# and only indices >= the vertex count were refused: IndexError in weld (gltf_mesh._mesh_arrays)
 @example(breakage="index ctype", copies=1, glb=False, seed=1, cut=None, flips=[(0.75, 128)],
          spoil="its .bin", seams="needed")
 # and (2,000 deep, seed 99991, after 1,606 examples): two flipped bytes of a 21-copy .glb made a
