@@ -89,7 +89,10 @@ def relaxed(Z, G, area, tris, nv, u_conf, u, sides=None, ranks=None, pins=None, 
         pinned[tris[held]] = True
         if pinned.all():
             return None
-        y = lscm.solve(u, pinned)
+        try:
+            y = lscm.solve(u, pinned)
+        except RuntimeError:    # singular: free vertices held by one vertex only (a pinch)
+            return None
         Dy = face_distortion(geom.cb, tris, y)
         if not (~(Dy <= top)).any():    # every face within the max (none flips)
             return y if float(area @ Dy) / total < mean else None
