@@ -26,7 +26,7 @@ from ..geometry import gradient_operators
 from ..solvers.lscm import face_geometry_of
 from ..solvers.lscm_held import HeldLSCM
 
-__all__ = ["relaxed", "face_distortion"]
+__all__ = ["face_distortion", "relax_island", "relaxed"]
 
 MEAN_RISE = 0.02    # the search's mean over the conformal map's, above which the map is relaxed
 # After a round, a face within this share of the max's excess over 1 below the max is held too,
