@@ -11,7 +11,9 @@ order. Here the bound search (``solvers.bound_search``, the general path's searc
 targets and stops) runs on them, and the map is placed as ``finish`` places it and certified by
 ``disk_certificate`` at the bound ``finish`` reports. The search's iterations do not depend on
 the geometry's scale or place, so the maps are the general path's up to rounding (the general
-path works on a copy centred and scaled to unit area).
+path works on a copy centred and scaled to unit area). Where the search raised the mean distortion
+well over the conformal map's, its faces below the max are given back to the conformal map
+(``mean_relax``, as the general path does): kept when that map certifies at a C no higher.
 
 Anything else goes the general way: a conformal map that flips or exceeds the limit (bent into a
 bound first), a time budget (Dinkelbach steps), more than ``bound_search.ONE_PRODUCT_FACES`` faces
@@ -29,6 +31,7 @@ from ..geometry import local_coordinates
 from ..metrics import mean_distortion
 from ..solvers import bound_search
 from .disk_certificate import certify_measured_disk, measure_disk, simple_ccw_loop
+from . import mean_relax
 from .finish import HIGH_DISTORTION, certified_bound, placed
 from .one_disk import report_step
 from .problem import normalised
@@ -96,32 +99,62 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
         ("unfolded",) if requested != "auto" else ())
     if D >= D0:
         us, D = u, D0
-    us = placed(us, isl.tris, area3d)    # as finish places a map of no pin
-    uv = np.stack([us.real, us.imag], axis=1)
-    corner_uv = uv.take(isl.tris, axis=0)
     t = time.perf_counter()
-    Dm, smin, smax = measure_disk(corner_uv, disk.G)
-    mx = float(Dm.max())
-    C = certified_bound(mx)
     # finish's test (the map within the bound its search reached) and the disk certificate, at
     # the C asked when it was a number (the map found is within it, with room for float32)
-    ok = mx <= certified_bound(D) * (1.0 + RTOL) and C <= HIGH_DISTORTION
-    C = C if requested == "auto" else max(C, float(requested))
-    cert = certify_measured_disk(corner_uv, Dm, disk, C) if ok else None
-    if cert is None:
+    done = _certified(us, disk, area3d, requested, certified_bound(D) * (1.0 + RTOL))
+    if done is None:
         return None
+    relax = 0.0
+    if requested == "auto" and D < D0:
+        # the search's min-max map, its faces below the max given back to the conformal map
+        # where the search raised the mean (``mean_relax``): kept when it certifies at a C no
+        # higher and its mean is lower
+        t1 = time.perf_counter()
+        y = mean_relax.relaxed(disk.Z, disk.G, disk.area, isl.tris, nv, u, us,
+                               (disk.twins[0], disk.twins[1], disk.loop), disk.ranks,
+                               mean=done[3])
+        relax = time.perf_counter() - t1
+        better = None if y is None else _certified(y, disk, area3d, requested, np.inf, done[2])
+        if better is not None and better[3] < done[3]:
+            done, flags = better, flags + ("mean_relaxed",)
+    uv, Dm, C, mean, smin, smax, cert = done
+    mx = float(Dm.max())
     res = IslandResult(
         0, isl.faces, isl.vertices, isl.tris, uv=uv, status="certified",
         message=f"island 0: {k} faces, max distortion {mx:.3f} <= {C:.4g}, 0 flipped",
         bound_requested=requested, bound_certified=float(C), max_distortion=mx,
-        mean_distortion=mean_distortion(None, None, Dm, disk.area), flipped=0, frames="conformal",
+        mean_distortion=mean, flipped=0, frames="conformal",
         seconds=time.perf_counter() - t0, iterations=bs.iterations, distortion=Dm, flags=flags,
         overlap_free=True, min_singular=smin, max_singular=smax,
-        timings={"setup": 0.0, "solve": 0.0, "certify": time.perf_counter() - t,
-                 "project": project})
+        timings={"setup": 0.0, "solve": 0.0, "certify": time.perf_counter() - t - relax,
+                 "project": project + relax})
     report_step(progress, cancel, 1.0, "island 1/1: minimised")
     if progress is not None:
         progress(1.0, "done")
-    return UnwrapResult(corner_uv, np.zeros(k, dtype=np.int64), [res], time.perf_counter() - t0,
-                        "lscm", certificates=(cert,))
+    return UnwrapResult(uv.take(isl.tris, axis=0), np.zeros(k, dtype=np.int64), [res],
+                        time.perf_counter() - t0, "lscm", certificates=(cert,))
+
+
+def _certified(u, disk, area3d, requested, bound, most=HIGH_DISTORTION):
+    """The map u (nv,) complex placed as ``finish`` places a map of no pin, measured and
+    certified by the disk certificate, when its max distortion is within ``bound`` and the C
+    ``bound="auto"`` reports for it (``certified_bound``) within ``most`` (and HIGH_DISTORTION).
+
+    Returns (uv (nv,2), each face's distortion, the certified C, the area-weighted mean
+    distortion, min and max singular values, the certificate), or None."""
+    isl = disk.island
+    us = placed(u, isl.tris, area3d)
+    uv = np.stack([us.real, us.imag], axis=1)
+    corner_uv = uv.take(isl.tris, axis=0)
+    Dm, smin, smax = measure_disk(corner_uv, disk.G)
+    mx = float(Dm.max())
+    C = certified_bound(mx)
+    if not (mx <= bound and C <= min(most, HIGH_DISTORTION)):
+        return None
+    C = C if requested == "auto" else max(C, float(requested))
+    cert = certify_measured_disk(corner_uv, Dm, disk, C)
+    if cert is None:
+        return None
+    return uv, Dm, C, mean_distortion(None, None, Dm, disk.area), smin, smax, cert
 

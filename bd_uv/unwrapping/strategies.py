@@ -11,6 +11,7 @@ import numpy as np
 
 from ..errors import InfeasibleError
 from ..frames import frames_from_map
+from . import mean_relax
 from .along import golden
 from .bounded import bend, formulate, guaranteed_bound, search, start_for_solve
 from .initial import Start
@@ -38,8 +39,10 @@ def minimise(prob, start, limit, budget, flags, report, t0):
 
     A flip-free map bounds C* from above: the start, bent into C = 5 when it flips. From it
     ``bounded.search`` lowers the bound by ADMM onto F_C with frames (``solvers.bound_search``:
-    one factorisation for every C). Conic programs run only where they are the only way or were
-    asked for:
+    one factorisation for every C); without a time budget, where that raised the mean distortion
+    well over the start's, its faces below the max are given back to the conformal map
+    (``mean_relax.relax_island``: the same max, a lower mean). Conic programs run only where they
+    are the only way or were asked for:
     - no flip-free map at hand: ``first_certified`` searches C upwards by energy solves, then
       Dinkelbach steps lower it (``ratio_step``);
     - with a time budget (``time_budget``, the command line's ``--time-budget``): Dinkelbach steps
@@ -64,6 +67,13 @@ def minimise(prob, start, limit, budget, flags, report, t0):
             ok, D = prob.check(u, D)    # the map's max distortion, measured anew
             if ok:
                 best = projected = (u, D)
+                # its faces below the max given back to the conformal map where the search
+                # raised the mean (``mean_relax``; not for a number asked whose map unfolds)
+                relaxed = (mean_relax.relax_island(prob, start.u, u, D)
+                           if not steps and prob.enough is None else None)
+                if relaxed is not None:
+                    best = projected = relaxed
+                    flags.append("mean_relaxed")
     if best is None or steps:  # the conic programs' anchors, weights and scale, at the map
         formulate(prob, start if projected is None else  # the steps start from
                   Start(projected[0], frames_from_map(prob.alpha(projected[0])), start.name,
