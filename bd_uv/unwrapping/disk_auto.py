@@ -83,15 +83,14 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
     def report(D, C):
         report_step(progress, cancel, 0.1, f"island 1/1: minimising C: C* <= {D:.4g}, aiming at "
                 f"{C:.4g}")
-    enough = None
-    if requested != "auto":
-        # a number whose conformal map lay over itself: the first map of the search that does
-        # not is enough (the user asked for C, not the least C; nearer the conformal map)
-        loop = isl.loops[0]
+    loop = isl.loops[0]
 
-        def enough(v):
-            return simple_ccw_loop(np.stack([v.real.take(loop), v.imag.take(loop)], axis=1))
-    us, D, _ = bs.search(u, None, report, None, cancel, enough)
+    def one_to_one(v):
+        return simple_ccw_loop(np.stack([v.real.take(loop), v.imag.take(loop)], axis=1))
+    # a number whose conformal map lay over itself: the first map of the search that does not
+    # is enough (the user asked for C, not the least C; nearer the conformal map)
+    us, D, _ = bs.search(u, None, report, None, cancel,
+                         None if requested == "auto" else one_to_one)
     if cancel is not None and cancel.is_set():
         raise CancelledError("unwrap cancelled; nothing was changed")
     project = time.perf_counter() - t
