@@ -270,6 +270,20 @@ def test_an_unchecked_qdldl_release_takes_qdldls_own_order(monkeypatch):
     assert ordered_ldl.available()    # the pinned qdldl: later tests take the ordered path
 
 
+def test_qdldls_release_is_read_beside_the_module_as_importlib_metadata_reads_it():
+    """``_version`` looks for a tested release's dist-info folder beside the module before it
+    imports ``importlib.metadata`` (that import cost a process's first search ~12 ms): the same
+    release as the metadata gives, and the metadata's answer where the folder is not there."""
+    from importlib.metadata import version
+    assert ordered_ldl._version() == version("qdldl")
+    real = ordered_ldl.TESTED
+    try:
+        ordered_ldl.TESTED = ("0.0.0",)          # no such folder: the metadata decides
+        assert ordered_ldl._version() == version("qdldl")
+    finally:
+        ordered_ldl.TESTED = real
+
+
 def test_fiedler_triplets_factor_as_the_compressed_system_and_repeats_are_summed():
     """``fiedler_solver`` with every key given factors the triplets as they come: the bits of
     the compressed matrix, in any triplet order; triplets sharing a place are summed first
