@@ -1,7 +1,7 @@
 """``bound="auto"`` on a mesh that is one clean disk, from its ``one_disk.Disk`` geometry (issue 21
 item 1: auto's own set-up on the smallest disks).
 
-The general path (``unwrap._solve_island``, ``strategies.minimise``, ``finish``) builds an
+The general path (``island_solve.solve_island``, ``strategies.minimise``, ``finish``) builds an
 ``IslandProblem`` for the island (normalised coordinates, their local frames, the four sparse
 Jacobian operators), measures the conformal map's distortion and frames there, searches, measures
 the searched map again, and certifies it. For a small disk whose conformal map is flip-free
@@ -42,7 +42,8 @@ __all__ = ["minimise_disk", "searches"]
 
 def searches(disk):
     """Does ``minimise_disk`` search this ``Disk`` (else it leaves it to the general path)?"""
-    return len(disk.island.tris) <= bound_search.ONE_PRODUCT_FACES  # read at the call (tests set it)
+    # ONE_PRODUCT_FACES is read at the call (tests set it)
+    return len(disk.island.tris) <= bound_search.ONE_PRODUCT_FACES
 
 
 def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="auto"):

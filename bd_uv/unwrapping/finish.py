@@ -1,6 +1,6 @@
 """An island's map made final: scaled and placed, then certified from its final UVs in the input
 geometry (no flipped face, max conformal distortion <= C; the stretch limits of section 6.3 when
-asked for), whatever strategy found it (``unwrap._solve_island``, ``fixed_boundary``)."""
+asked for), whatever strategy found it (``island_solve.solve_island``, ``fixed_boundary``)."""
 import math
 import time
 

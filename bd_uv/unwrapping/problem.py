@@ -57,7 +57,7 @@ class IslandProblem(ConicSolves):
         self.method, self.cone, self.cancel = method, cone, cancel
         self.faces_3d = faces_3d
         # callable(u) -> bool or None: the bound search ends at the first best map it accepts
-        # (``unwrap._unfold``: a map that does not lie over itself)
+        # (``island_solve.unfolder``: a map that does not lie over itself)
         self.enough = None
         Vi = V[island.vertices]
         self.V = Vi

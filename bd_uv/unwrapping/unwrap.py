@@ -9,27 +9,24 @@ Per island (Lipman 2012, sections 4 and 6; issue 9's "never worse than its start
 With ``boundary`` other than "free", steps 1-2 are replaced by a solve with the island's outer
 boundary fixed on a circle, a rectangle or its pinned polygon (``fixed_boundary``, section 5),
 certified the same way and checked for Theorems 5.1/5.2's premises (``bijective``).
+One island's solve is ``island_solve.solve_island``; here the mesh is checked and split, the
+batched conformal maps and the one-disk pass run, and the islands are gathered and certified.
 """
 import dataclasses
 import time
 
 import numpy as np
 
-from ..errors import (BDError, CancelledError, InvalidMeshError, IslandError, OptionError,
-                      SolverError)
+from ..errors import CancelledError, InvalidMeshError, OptionError
 from ..mesh import as_indices, as_reals, check_arrays, checked_islands as split_islands
 from ..options import unwrap_options
 from ..trim import release_memory
-from . import bounded as within, disk_auto, one_disk, strategies
-from . import stretch as stretch_search
+from . import disk_auto, one_disk
 from .batched import conformal_islands
-from .finish import finish
-from .fixed_boundary import FRAMES_NAME, fixed_boundary_island, with_premises
-from .initial import start_map
+from .island_solve import batched_options, solve_island, unfolder
 from .overlap_certificate import overlap_certificate
 from .conic_solves import Cancelled
-from .problem import IslandProblem
-from .results import IslandResult, UnwrapResult
+from .results import UnwrapResult
 
 def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
            face_groups=None, progress=None, cancel=None, options=None, precision=None,
@@ -94,7 +91,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
         initial_uv = np.asarray(initial_uv, dtype=np.float64).reshape(m, 3, 2)
     pins = pin_arrays(pin_corners, pin_uv, m)
     conformal, unfold = None, True
-    if (seams is None or not len(seams)) and not len(pins[0]) and _batched_options(opts) \
+    if (seams is None or not len(seams)) and not len(pins[0]) and batched_options(opts) \
             and opts.boundary == "free" and opts.stretch is None \
             and (precision is None or np.dtype(precision) == np.float64):
         if disk is None:   # one clean disk: found, solved, certified in one pass
@@ -120,50 +117,6 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
                           conformal=conformal, t0=t0, disk=disk, unfold=unfold)
 
 
-def _unfold(isl, V, pins, options, cancel):
-    """For ``overlap_certificate``: for an island whose map within the numeric bound asked lies
-    over itself, the search for the smallest C within it (``strategies.minimise``, as
-    ``bound="auto"`` with ``bound_limit`` that C) up to its first map that does not (a map of
-    lower distortion often unfolds it): it stays one island (flag "unfolded"), certified at that C. None where that does not apply: a fixed boundary, a
-    stretch bound, a time budget (conic steps), a method or frames other than the default's."""
-    o = options
-    if (o.bound == "auto" or o.boundary != "free" or o.stretch is not None
-            or o.time_budget is not None or not _batched_options(o)):
-        return None
-    C = float(o.bound)
-    auto = dataclasses.replace(o, bound="auto", bound_limit=C)
-    by_index = {island.index: island for island in isl}
-
-    def unfold(index):
-        try:
-            res = _solve_island(by_index[index], V, pins, auto, None, _quiet(cancel), cancel,
-                                unfolding=True)
-        except Cancelled:
-            raise CancelledError("unwrap cancelled; nothing was changed") from None
-        if res.status != "certified" or not res.bound_certified <= C:
-            return None
-        # certified at the C asked, as the island's other maps would be (its max distortion
-        # says how far below; the search's own bound, 0.02 % above that max, leaves little room
-        # for float32: a 1.0002 failed usd-wg's sedan as stored)
-        return dataclasses.replace(res, bound_requested=o.bound, bound_certified=C,
-                                   flags=res.flags + ("unfolded",),
-                                   message=f"{res.message} (unfolded: certified at C = {C:.4g})")
-    return unfold
-
-
-def _quiet(cancel):
-    """A progress report that only checks ``cancel``."""
-    def report(frac, msg):
-        if cancel is not None and cancel.is_set():
-            raise Cancelled
-    return report
-
-
-def _batched_options(options):
-    """Do these options solve unpinned islands by the batched conformal map first?"""
-    return options.method == "lscm" and options.frames in ("auto", "conformal")
-
-
 def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, progress=None,
                    cancel=None, conformal=None, t0=None, disk=None, unfold=True):
     """``unwrap`` on islands already found (``mesh.islands``, or charts of a validated mesh).
@@ -183,7 +136,7 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
         certified by ``disk_certificate`` first (the general overlap certificate where it does
         not clear it)
     unfold : bool, an unpinned island certified at a numeric C whose UVs lie over themselves
-        gets the smallest C within it (``_unfold``) before it is cut; False where that search
+        gets the smallest C within it (``unfolder``) before it is cut; False where that search
         was already made (``disk_auto``)
 
     Returns
@@ -217,7 +170,7 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
                 res = batch[island.index]
                 report(1.0, "the conformal map fits the bound")
             else:
-                res = _solve_island(island, V, pins, o, initial_uv, report, cancel,
+                res = solve_island(island, V, pins, o, initial_uv, report, cancel,
                                     starts.get(island.index),
                                     None if disk is None else (disk.G, disk.area),
                                     None if disk is None or o.bound != "auto" else disk.ranks)
@@ -239,7 +192,7 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
         release_memory(m)                   # the solves' freed heap, before the certificate
         results, face_island, corner_uv, certs = overlap_certificate(
             V, F, results, face_island, corner_uv, pinned, o.overlap == "cut", face_groups,
-            _unfold(isl, V, pins, o, cancel) if unfold else None)
+            unfolder(isl, V, pins, o, cancel) if unfold else None)
     if progress is not None:
         progress(1.0, "done")
     return UnwrapResult(corner_uv, face_island, results, time.perf_counter() - t0, o.method,
@@ -272,13 +225,6 @@ def pin_arrays(pin_corners, pin_uv, m):
     return c, uv
 
 
-def _failed(island, error, t0, bound, frames_name="", flags=(), timings=None):
-    return IslandResult(island.index, island.faces, island.vertices, island.tris, status="failed",
-                        error=error, message=str(error), bound_requested=bound,
-                        frames=frames_name, seconds=time.perf_counter() - t0, flags=tuple(flags),
-                        timings=timings or {})
-
-
 def _batched(V, isl, pins, face_island, options, progress, cancel, conformal=None):
     """Solve every island that can go through ``batched.conformal_islands`` at once: valid,
     unpinned, BD-LSCM from the conformal start; at a fixed bound those that fit are certified
@@ -286,7 +232,7 @@ def _batched(V, isl, pins, face_island, options, progress, cancel, conformal=Non
     factorisation for all, 3-4x faster than per-island ``frames.lscm_map`` on nefertiti). Returns
     (results by island index, conformal starts of the islands not certified here)."""
     bound = options.bound
-    if not _batched_options(options):
+    if not batched_options(options):
         return {}, {}
     pinned = np.zeros(len(isl), dtype=bool)
     if len(pins[0]):
@@ -300,54 +246,3 @@ def _batched(V, isl, pins, face_island, options, progress, cancel, conformal=Non
         raise CancelledError("unwrap cancelled; nothing was changed")
     return conformal_islands(V, todo, None if bound == "auto" else float(bound), conformal)
 
-
-def _solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=None,
-                  faces_3d=None, ranks=None, unfolding=False):
-    t0 = time.perf_counter()
-    o = options
-    method, bound, boundary, stretch = o.method, o.bound, o.boundary, o.stretch
-    if island.error is not None:
-        res = _failed(island, island.error, t0, bound)
-        return res if boundary == "free" else with_premises(res, island)
-    if boundary != "free":
-        try:
-            prob, u, C, flags = fixed_boundary_island(island, V, pins, boundary, method, bound,
-                                                      o.raise_bound, o.bound_limit, o.cone, cancel,
-                                                      report, stretch)
-        except IslandError as exc:
-            exc.renumber(island.index)
-            return with_premises(_failed(island, exc, t0, bound, FRAMES_NAME), island)
-        except BDError as exc:
-            err = SolverError(f"island {island.index}: {exc}", island.index)
-            return with_premises(_failed(island, err, t0, bound, FRAMES_NAME), island)
-        return with_premises(finish(prob, u, C, bound, FRAMES_NAME, flags, t0, stretch), island)
-    try:
-        prob = IslandProblem(island, V, pins, method, o.cone, cancel, faces_3d, ranks)
-        if unfolding:       # ``_unfold``: the first map that does not lie over itself will do
-            prob.enough = prob.one_to_one
-        start = start_map(prob, o.frames, initial_uv, report, lscm=lscm)
-    except IslandError as exc:
-        exc.renumber(island.index)
-        return _failed(island, exc, t0, bound)
-    except BDError as exc:
-        return _failed(island, SolverError(f"island {island.index}: {exc}", island.index), t0,
-                       bound)
-    flags = []
-    try:
-        if bound == "auto" and stretch is not None:
-            u, C, name = stretch_search.minimise_stretch(prob, start, stretch, o.time_budget,
-                                                         flags, report, t0)
-        elif bound == "auto":
-            u, C, name = strategies.minimise(prob, start, o.bound_limit, o.time_budget, flags,
-                                             report, t0)
-        elif stretch is not None:
-            u, C, name = stretch_search.bounded_stretch(prob, start, float(bound), stretch,
-                                                        report, flags)
-        else:
-            u, C, name = within.bounded(prob, start, float(bound), o.raise_bound,
-                                            o.bound_limit, flags, report)
-        if method == "arap" and u is not None:
-            u = within.arap(prob, u, C, report, stretch)
-    except IslandError as exc:
-        return _failed(island, exc, t0, bound, start.name, flags, prob.timings)
-    return finish(prob, u, C, bound, name, flags, t0, stretch)

@@ -903,7 +903,8 @@ def test_time_budget_running_out_returns_the_best_found_so_far(monkeypatch):
     monkeypatch.setattr(bd_uv.solvers.bound_search.BoundSearch, "run", ticking_run)
     monkeypatch.setattr(bd_uv.solvers.conic, "solve_conic", ticking)
     now = lambda: clock[0]
-    for module in (PIPELINE, bd_uv.unwrapping.strategies, bd_uv.solvers.bound_search):
+    for module in (PIPELINE, bd_uv.unwrapping.island_solve, bd_uv.unwrapping.strategies,
+                   bd_uv.solvers.bound_search):
         monkeypatch.setattr(module, "time",
                             types.SimpleNamespace(perf_counter=now, monotonic=now, time=now))
     full = unwrap_checked(V, F, bound="auto", time_budget=float("inf"))
