@@ -205,8 +205,8 @@ def bend(prob, start, C, report, flags=None, polish=True):
 def search(prob, u, report, budget, flags, t0):
     """Lower the bound of a flip-free map ``u`` by ADMM onto F_C with frames
     (``solvers.bound_search``), holding the pins (or one boundary vertex, where ``u`` has it),
-    ending at the first best map ``prob.enough`` accepts where it is set. Returns (the best map, its max distortion); flags "time_budget_exhausted" when the budget
-    stopped it."""
+    ending at the first best map ``prob.enough`` accepts where it is set. Returns (the best map,
+    its max distortion); flags "time_budget_exhausted" when the budget stopped it."""
     if len(prob.pin_idx) >= prob.nv:
         return u, prob.distortion(u)
     t = time.perf_counter()
