@@ -153,11 +153,16 @@ def _ranked_solver(A, keys):
     """The solve of the system A (upper triangle, csc, unknowns ``[u; v]`` of the free vertices)
     eliminated in the order of the free vertices' ``keys``, u and v of a vertex side by side;
     None where the factorisation fails."""
+    cols = np.repeat(np.arange(2 * len(keys), dtype=np.int64), np.diff(A.indptr))
+    return ranked_triplet_solver(A.indices.astype(np.int64), cols, A.data, keys)
+
+
+def ranked_triplet_solver(rows, cols, vals, keys):
+    """``_ranked_solver`` of the system given as upper-triangle triplets (``lscm_held``)."""
     nf = len(keys)
     p = np.argsort(keys, kind="stable")
     perm = np.stack([p, p + nf], axis=1).ravel()
-    cols = np.repeat(np.arange(2 * nf, dtype=np.int64), np.diff(A.indptr))
-    f = ordered_ldl.Factor(A.indices.astype(np.int64), cols, A.data, 2 * nf, perm)
+    f = ordered_ldl.Factor(rows, cols, vals, 2 * nf, perm)
     return f.solve if f.lnz >= 0 and f.factor() else None
 
 

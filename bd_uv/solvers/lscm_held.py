@@ -11,7 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from . import ordered_ldl
-from .lscm import _lscm_system, spd_solver
+from .lscm import _lscm_system, ranked_triplet_solver, spd_solver
 
 __all__ = ["HeldLSCM"]
 
@@ -63,9 +63,6 @@ def _solver(rows, cols, vals, n, keys):
     """The solve of the system of upper-triangle triplets (unknowns ``[u; v]`` of the free
     vertices), eliminated in the order of the free vertices' ``keys`` (u and v of a vertex side
     by side, as ``lscm._ranked_solver``), or by ``lscm.spd_solver`` where that cannot run."""
-    if keys is not None and ordered_ldl.available():
-        p = np.argsort(keys, kind="stable")
-        f = ordered_ldl.Factor(rows, cols, vals, n, np.stack([p, p + n // 2], axis=1).ravel())
-        if f.lnz >= 0 and f.factor():
-            return f.solve
-    return spd_solver(sp.csc_matrix((vals, (rows, cols)), shape=(n, n)), upper=True)
+    solve = (ranked_triplet_solver(rows, cols, vals, keys)
+             if keys is not None and ordered_ldl.available() else None)
+    return solve or spd_solver(sp.csc_matrix((vals, (rows, cols)), shape=(n, n)), upper=True)

@@ -23,6 +23,7 @@ of it (three_peaks' centre: 6.0 %; every other disk of issue 21's table and its 
 import numpy as np
 
 from ..geometry import gradient_operators
+from ..metrics import _distortion
 from ..solvers.lscm import face_geometry_of
 from ..solvers.lscm_held import HeldLSCM
 
@@ -42,10 +43,7 @@ def face_distortion(cb, tris, u):
     uc = u.take(tris)
     b = np.abs(np.einsum("fc,fc->f", cb, uc))
     a = np.abs(np.einsum("fc,fc->f", cb.conj(), uc))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        D = (a + b) / (a - b)
-    D[~(b < a)] = np.inf
-    return D
+    return _distortion(a, b, False)
 
 
 def relaxed(Z, G, area, tris, nv, u_conf, u, sides=None, ranks=None, pins=None, mean=None):
