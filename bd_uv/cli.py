@@ -17,7 +17,7 @@ from .arguments import (add_layout_options, add_scene_options, add_solver_option
                         bound_arg, layout_kwargs, scene_option_misuse, solver_kwargs,
                         unwrap_options_of)
 from .batch import add_batch_parser
-from .batch.jobs import JobOptions
+from .batch.job import JobOptions
 from .batch.report import item_line
 from .batch.scene_files import unwrap_scene_file
 from .errors import BDError, OptionError

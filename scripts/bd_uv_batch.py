@@ -239,7 +239,7 @@ def main(argv):
     echoed = options.as_dict()
     if args.pack:   # packed here, not by the core: the options say how
         echoed.update(pack=True, pack_shape=args.pack_shape, **(
-            {k: getattr(atlas, k) for k in batch.jobs.PACK_FIELDS} if atlas is not None
+            {k: getattr(atlas, k) for k in batch.job.PACK_FIELDS} if atlas is not None
             else {"margin": packing.MARGIN if args.margin is None else args.margin}))
     report = batch.batch_report(items, echoed, wall, jobs=1,
                                 files=[source] if source else [])

@@ -13,12 +13,15 @@ out largest first so one big mesh does not end up last.
 
 Where the files run (a local process pool, or Dask distributed), the per-file limits, the report
 on disk while the batch runs, ``--resume`` and the atomic writes of the outputs live in
-``bd_uv.scheduling``; this package is what one mesh's job is (``jobs``), one file's work and the
-files of a batch (``files``), the report (``report``) and the command line (``command``).
+``bd_uv.scheduling``; this package is what one mesh's job is (``job``), how it runs (``jobs``),
+its picture (``picture``), one file's work and the files of a batch (``files``), the report
+(``report``) and the command line (``command``).
 """
 from .command import add_batch_parser, run_batch
 from .files import BLEND_SUFFIX, MESH_SUFFIXES, SCRIPT, FileTask, input_files, plan, run_tasks
-from .jobs import Job, JobOptions, JobResult, caption, entry_png, failed_entry, unwrap_job
+from .job import Job, JobOptions, JobResult
+from .jobs import failed_entry, unwrap_job
+from .picture import caption, entry_png
 from .report import batch_report, item_line
 
 __all__ = ["BLEND_SUFFIX", "MESH_SUFFIXES", "SCRIPT", "FileTask", "Job", "JobOptions", "JobResult",

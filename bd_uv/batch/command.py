@@ -14,7 +14,7 @@ from ..arguments import (add_layout_options, add_scene_options, add_solver_optio
 from ..scheduling import FileLimits, Ledger, Progress, options_sha256, read_previous, reusable
 from ..scheduling.atomic import remove_stale
 from .files import _size, input_files, plan, run_tasks
-from .jobs import JobOptions
+from .job import JobOptions
 from .report import batch_report, item_line
 
 

@@ -22,7 +22,8 @@ from ..scenes import BLENDER_SUFFIXES, SCENE_SUFFIXES, blender_command
 from ..scheduling import run_pool
 from ..scheduling.atomic import atomic_path
 from ..scheduling.cluster import run_dask
-from .jobs import Job, JobOptions, failed_entry, unwrap_job
+from .job import Job, JobOptions
+from .jobs import failed_entry, unwrap_job
 from .scene_files import unwrap_scene_file
 
 MESH_SUFFIXES = (".obj", ".off", ".ply")

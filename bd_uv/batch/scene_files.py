@@ -17,7 +17,8 @@ from ..certificate import certificate_totals
 from ..errors import BDError
 from ..scenes import Charts, read_scene
 from ..scheduling.entries import failed_entry
-from .jobs import Job, JobOptions, unwrap_job, zero_area_left_out
+from .job import Job, JobOptions
+from .jobs import unwrap_job, zero_area_left_out
 
 
 def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=None):
