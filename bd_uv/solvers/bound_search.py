@@ -70,8 +70,14 @@ class _Watch:
     to stop. Out of reach: no progress for STALL iterations, or FLIPPING flipping iterates in a
     row from the start (three_peaks: a target that flips stays flipped)."""
 
-    def __init__(self, best):
+    def __init__(self, best, enough=None):
         self.best, self.since, self.mark = best, 0, best
+        self.enough, self.ended = enough, False
+
+    def accepts(self, kept):
+        """Does ``enough`` accept the new best iterate ``kept`` (then the search ends there)?"""
+        self.ended = self.enough is not None and bool(self.enough(kept))
+        return self.ended
 
     def seen(self, D, it, C):
         """(better, stop) after iteration ``it`` (>= 1) reached the max distortion D."""
@@ -100,6 +106,8 @@ class _Watch:
                 better, stop = self.seen(measure(), it, C)
                 if better:
                     self.kept = keep()
+                    if self.accepts(self.kept):
+                        break
                 if stop:
                     break
             step()
@@ -127,6 +135,7 @@ class BoundSearch:
         self.UF = None
         self._rhs_fixed = None      # (UF, its share of the right-hand side; small: its FreeLift)
         self.iterations = 0
+        self.ended = False          # did ``enough`` stop the last run
         self._B = self._free = None
 
     def _operators(self):
@@ -193,16 +202,19 @@ class BoundSearch:
                                                  -(s._L_fF @ self.UF).T.ravel()))
         return self._rhs_fixed[1]
 
-    def run(self, U, w, C, D_best, cancel=None):
-        """ADMM towards F_C with frames w (unit complex, (k,)), from U (2, nv): rows u and v.
+    def run(self, U, w, C, D_best, cancel=None, enough=None):
+        """ADMM towards F_C with frames w (unit complex, (k,)), from U (2, nv): rows u and v;
+        ``enough`` as ``search``'s, asked of each iterate that is the least yet (``ended`` tells
+        whether it stopped the run).
 
         Returns (U of the least max distortion below D_best or None, that max, whether it is
         within C)."""
+        self.ended = False
         s = self.solver
         Cm = 1.0 + MARGIN * (C - 1.0)
         kappa = (Cm - 1.0) / (Cm + 1.0)
         if self.k <= ONE_PRODUCT_FACES:
-            return self._run_free(U, w, kappa, C, D_best, cancel)
+            return self._run_free(U, w, kappa, C, D_best, cancel, enough)
         solve = s.factorize()
         BtA = self._operators()[1]
         nf = len(s.free)
@@ -217,10 +229,11 @@ class BoundSearch:
         rhs = np.empty(2 * nf)
         with np.errstate(invalid="ignore", divide="ignore"):
             best, D_best = self._iterate(U, GU, lam, rhs, w2, kappa, C, D_best, solve, BtA,
-                                         rhs_fixed, cancel)
+                                         rhs_fixed, cancel, enough)
         return best, D_best, best is not None and D_best <= C
 
-    def _iterate(self, U, GU, lam, rhs, w2, kappa, C, D_best, solve, BtA, rhs_fixed, cancel):
+    def _iterate(self, U, GU, lam, rhs, w2, kappa, C, D_best, solve, BtA, rhs_fixed, cancel,
+                 enough=None):
         """``run``'s iterations, on its buffers (U, GU, lam, rhs updated in place)."""
         free, nf = self.solver.free, len(self.solver.free)
 
@@ -238,23 +251,32 @@ class BoundSearch:
             np.subtract(GU, Z, out=lam)         # lam + G x - z
             self.iterations += 1
 
-        watch = _Watch(D_best)
+        watch = _Watch(D_best, None if enough is None else lambda V: enough(V[0] + 1j * V[1]))
         watch.iterate(step, lambda: self._max_distortion(GU), U.copy, C, cancel)
+        self.ended = watch.ended
         return watch.kept, watch.best
 
-    def _run_free(self, U, w, kappa, C, D_best, cancel):
+    def _run_free(self, U, w, kappa, C, D_best, cancel, enough=None):
         """``run`` on a small island (up to ONE_PRODUCT_FACES faces): ``free_admm.run_free``, the
         iterations on the free unknowns in every face's frame."""
         s, nf = self.solver, len(self.solver.free)
         self._operators()
         x0 = np.concatenate([U[0, s.free], U[1, s.free]])
-        best, D = run_free(self._free_lift(), s.factorize(), x0, w, kappa, C, _Watch(D_best),
-                           ALPHA, cancel, self._count)
+
+        def whole(x):           # the map (2, nv) of free unknowns x, the fixed vertices of U
+            V = U.copy()
+            V[0, s.free], V[1, s.free] = x[:nf], x[nf:]
+            return V
+        def accepted(x):
+            V = whole(x)
+            return enough(V[0] + 1j * V[1])
+        watch = _Watch(D_best, None if enough is None else accepted)
+        best, D = run_free(self._free_lift(), s.factorize(), x0, w, kappa, C, watch, ALPHA,
+                           cancel, self._count)
+        self.ended = watch.ended
         if best is None:
             return None, D, False
-        U = U.copy()
-        U[0, s.free], U[1, s.free] = best[:nf], best[nf:]
-        return U, D, D <= C
+        return whole(best), D, D <= C
 
     def _count(self, n):
         self.iterations += n
@@ -281,9 +303,11 @@ class BoundSearch:
             product, not the island problem's two)
         report : callable(message), optional, called before each target
         deadline : float (``time.perf_counter()``) or None: no new target after it
-        enough : callable(u) -> bool, optional: asked of each new best map (nv,) complex; True
-            ends the search there (a bound asked for whose conformal map lay over itself: the
-            first map that does not is enough, the least C is not sought)
+        enough : callable(u) -> bool, optional: asked of each iterate (nv,) complex that is the
+            least yet, as soon as it is reached (not only at the end of its target); True ends
+            the search there (a bound asked for whose conformal map lay over itself: the first
+            map that does not is enough, the least C is not sought). Called often: it should
+            refuse cheaply
 
         Returns
         -------
@@ -304,13 +328,13 @@ class BoundSearch:
                 report(D, C)
             w = (frames_from_map(self._alpha2(U)) if frames_of is None
                  else frames_of(U[0] + 1j * U[1]))
-            Ub, Db, reached = self.run(U, w, C, D, cancel=cancel)
+            Ub, Db, reached = self.run(U, w, C, D, cancel=cancel, enough=enough)
             if cancel is not None and cancel.is_set():
                 break
             gain = (D - Db) / (D - 1.0) if Ub is not None else 0.0
             if Ub is not None:
                 U, D = Ub, Db
-                if enough is not None and enough(U[0] + 1j * U[1]):
+                if self.ended:
                     break
             if reached:
                 step = min(MAX_STEP, 1.5 * step)

@@ -30,7 +30,7 @@ from ..errors import CancelledError
 from ..geometry import local_coordinates
 from ..metrics import mean_distortion
 from ..solvers import bound_search
-from .disk_certificate import certify_measured_disk, measure_disk, simple_ccw_loop
+from .disk_certificate import certify_measured_disk, measure_disk, simple_ccw_loop, turns_once
 from . import mean_relax
 from .finish import HIGH_DISTORTION, certified_bound, placed
 from .one_disk import report_step
@@ -86,8 +86,9 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
                 f"{C:.4g}")
     loop = isl.loops[0]
 
-    def one_to_one(v):
-        return simple_ccw_loop(np.stack([v.real.take(loop), v.imag.take(loop)], axis=1))
+    def one_to_one(v):      # asked of every iterate that is the least yet: refuses cheaply
+        z = v.take(loop)
+        return turns_once(z) and simple_ccw_loop(np.stack([z.real, z.imag], axis=1))
     # a number whose conformal map lay over itself: the first map of the search that does not
     # is enough (the user asked for C, not the least C; nearer the conformal map)
     us, D, _ = bs.search(u, None, report, None, cancel,

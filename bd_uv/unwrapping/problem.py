@@ -20,6 +20,7 @@ from ..frames import _far_pair, frames_from_map, lscm_map
 from ..geometry import face_areas, local_coordinates
 from ..overlap import island_overlaps
 from .conic_solves import ConicSolves
+from .disk_certificate import turning
 from .margins import STORE_HEADROOM
 
 
@@ -264,6 +265,14 @@ class IslandProblem(ConicSolves):
     def one_to_one(self, u):
         """Does the flip-free map u (nv,) complex lay the island out without overlapping itself
         (``overlap.island_overlaps``: no boundary crossing, every loop wound as it should)?"""
+        # refused cheaply where a loop's turning number says so (asked of every iterate of the
+        # unfold that is the least yet): simple loops turn once each, counter-clockwise for the
+        # outer one, clockwise for the holes
+        loops = self.island.loops
+        turns = [turning(u.take(loop)) for loop in loops]
+        if None not in turns and (any(abs(t) != 1 for t in turns)
+                                  or sum(turns) != 2 - len(loops)):
+            return False
         tris = self.island.tris
         corner_uv = np.stack([u.real, u.imag], axis=1).take(tris, axis=0)
         return bool(island_overlaps(tris, corner_uv, np.zeros(len(tris), np.int64), 1)
