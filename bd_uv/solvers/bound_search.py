@@ -27,6 +27,7 @@ iterations against 176 for C 1.03506 against 1.03502; mushroom 72 against 92).
 The iterations: up to ONE_PRODUCT_FACES faces on the free unknowns in every face's frame
 (``free_admm``), above on the whole map by the gradient operator (``framed_cone``).
 """
+import functools
 import time
 
 import numpy as np
@@ -70,13 +71,20 @@ class _Watch:
     to stop. Out of reach: no progress for STALL iterations, or FLIPPING flipping iterates in a
     row from the start (three_peaks: a target that flips stays flipped)."""
 
-    def __init__(self, best, enough=None):
+    def __init__(self, best, ask=None):
         self.best, self.since, self.mark = best, 0, best
-        self.enough, self.ended = enough, False
+        self.ask, self.ended, self.refused, self.pending = ask, False, False, False
 
     def accepts(self, kept):
-        """Does ``enough`` accept the new best iterate ``kept`` (then the search ends there)?"""
-        self.ended = self.enough is not None and bool(self.enough(kept))
+        """Is the new best iterate ``kept`` enough (the search ends there)? ``ask(kept)`` (the
+        search's ``ready``, then its ``enough``): True, False (then not asked again in this
+        target: the search asks the target's best at its end, ``pending``), or None (``ready``
+        refused it)."""
+        if self.ask is None or self.refused:
+            self.pending = True
+            return False
+        answer = self.ask(kept)
+        self.pending, self.refused, self.ended = False, answer is False, answer is True
         return self.ended
 
     def seen(self, D, it, C):
@@ -113,6 +121,11 @@ class _Watch:
             step()
 
 
+def _ask(enough, ready, u):
+    """``enough(u)`` where ``ready(u)`` (None: either is missing), else None."""
+    return enough(u) if ready is None or ready(u) else None
+
+
 class BoundSearch:
     """Lower a flip-free map's max conformal distortion by ADMM onto F_C with frames.
 
@@ -135,7 +148,7 @@ class BoundSearch:
         self.UF = None
         self._rhs_fixed = None      # (UF, its share of the right-hand side; small: its FreeLift)
         self.iterations = 0
-        self.ended = False          # did ``enough`` stop the last run
+        self.ended = self.pending = False   # the last run: ``enough`` stopped it; its best unasked
         self._B = self._free = None
 
     def _operators(self):
@@ -202,19 +215,20 @@ class BoundSearch:
                                                  -(s._L_fF @ self.UF).T.ravel()))
         return self._rhs_fixed[1]
 
-    def run(self, U, w, C, D_best, cancel=None, enough=None):
+    def run(self, U, w, C, D_best, cancel=None, enough=None, ready=None):
         """ADMM towards F_C with frames w (unit complex, (k,)), from U (2, nv): rows u and v;
-        ``enough`` as ``search``'s, asked of each iterate that is the least yet (``ended`` tells
-        whether it stopped the run).
+        ``enough`` and ``ready`` as ``search``'s (``ended``: whether ``enough`` stopped the run;
+        ``pending``: whether its best was not asked).
 
         Returns (U of the least max distortion below D_best or None, that max, whether it is
         within C)."""
-        self.ended = False
+        self.ended = self.pending = False
+        ask = None if enough is None or ready is None else functools.partial(_ask, enough, ready)
         s = self.solver
         Cm = 1.0 + MARGIN * (C - 1.0)
         kappa = (Cm - 1.0) / (Cm + 1.0)
         if self.k <= ONE_PRODUCT_FACES:
-            return self._run_free(U, w, kappa, C, D_best, cancel, enough)
+            return self._run_free(U, w, kappa, C, D_best, cancel, ask)
         solve = s.factorize()
         BtA = self._operators()[1]
         nf = len(s.free)
@@ -229,11 +243,11 @@ class BoundSearch:
         rhs = np.empty(2 * nf)
         with np.errstate(invalid="ignore", divide="ignore"):
             best, D_best = self._iterate(U, GU, lam, rhs, w2, kappa, C, D_best, solve, BtA,
-                                         rhs_fixed, cancel, enough)
+                                         rhs_fixed, cancel, ask)
         return best, D_best, best is not None and D_best <= C
 
     def _iterate(self, U, GU, lam, rhs, w2, kappa, C, D_best, solve, BtA, rhs_fixed, cancel,
-                 enough=None):
+                 ask=None):
         """``run``'s iterations, on its buffers (U, GU, lam, rhs updated in place)."""
         free, nf = self.solver.free, len(self.solver.free)
 
@@ -251,12 +265,12 @@ class BoundSearch:
             np.subtract(GU, Z, out=lam)         # lam + G x - z
             self.iterations += 1
 
-        watch = _Watch(D_best, None if enough is None else lambda V: enough(V[0] + 1j * V[1]))
+        watch = _Watch(D_best, None if ask is None else lambda V: ask(V[0] + 1j * V[1]))
         watch.iterate(step, lambda: self._max_distortion(GU), U.copy, C, cancel)
-        self.ended = watch.ended
+        self.ended, self.pending = watch.ended, watch.pending
         return watch.kept, watch.best
 
-    def _run_free(self, U, w, kappa, C, D_best, cancel, enough=None):
+    def _run_free(self, U, w, kappa, C, D_best, cancel, ask=None):
         """``run`` on a small island (up to ONE_PRODUCT_FACES faces): ``free_admm.run_free``, the
         iterations on the free unknowns in every face's frame."""
         s, nf = self.solver, len(self.solver.free)
@@ -267,13 +281,13 @@ class BoundSearch:
             V = U.copy()
             V[0, s.free], V[1, s.free] = x[:nf], x[nf:]
             return V
-        def accepted(x):
+        def asked(x):
             V = whole(x)
-            return enough(V[0] + 1j * V[1])
-        watch = _Watch(D_best, None if enough is None else accepted)
+            return ask(V[0] + 1j * V[1])
+        watch = _Watch(D_best, None if ask is None else asked)
         best, D = run_free(self._free_lift(), s.factorize(), x0, w, kappa, C, watch, ALPHA,
                            cancel, self._count)
-        self.ended = watch.ended
+        self.ended, self.pending = watch.ended, watch.pending
         if best is None:
             return None, D, False
         return whole(best), D, D <= C
@@ -293,7 +307,8 @@ class BoundSearch:
         self._operators()
         return self.max_distortion(self._lift(U))
 
-    def search(self, u, frames_of=None, report=None, deadline=None, cancel=None, enough=None):
+    def search(self, u, frames_of=None, report=None, deadline=None, cancel=None, enough=None,
+               ready=None):
         """The least max distortion reached from the flip-free map u (nv,) complex.
 
         Parameters
@@ -303,11 +318,14 @@ class BoundSearch:
             product, not the island problem's two)
         report : callable(message), optional, called before each target
         deadline : float (``time.perf_counter()``) or None: no new target after it
-        enough : callable(u) -> bool, optional: asked of each iterate (nv,) complex that is the
-            least yet, as soon as it is reached (not only at the end of its target); True ends
-            the search there (a bound asked for whose conformal map lay over itself: the first
-            map that does not is enough, the least C is not sought). Called often: it should
-            refuse cheaply
+        enough : callable(u) -> bool, optional: asked of each target's best map (nv,) complex
+            at its end; True ends the search there (a bound asked for whose conformal map lay
+            over itself: the first map that does not is enough, the least C is not sought)
+        ready : callable(u) -> bool, optional, a cheap test that ``enough`` needs (a boundary
+            loop's turning number): where given, ``enough`` is also asked within each target of
+            every iterate that is the least yet and that ``ready`` passes, as soon as it is
+            reached, until it refuses one (then the target's best at its end, as without it);
+            one that ``ready`` refuses is not asked
 
         Returns
         -------
@@ -328,13 +346,14 @@ class BoundSearch:
                 report(D, C)
             w = (frames_from_map(self._alpha2(U)) if frames_of is None
                  else frames_of(U[0] + 1j * U[1]))
-            Ub, Db, reached = self.run(U, w, C, D, cancel=cancel, enough=enough)
+            Ub, Db, reached = self.run(U, w, C, D, cancel, enough, ready)
             if cancel is not None and cancel.is_set():
                 break
             gain = (D - Db) / (D - 1.0) if Ub is not None else 0.0
             if Ub is not None:
                 U, D = Ub, Db
-                if self.ended:
+                if self.ended or (enough is not None and (ready is None or self.pending)
+                                  and _ask(enough, ready, U[0] + 1j * U[1])):
                     break
             if reached:
                 step = min(MAX_STEP, 1.5 * step)
