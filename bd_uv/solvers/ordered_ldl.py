@@ -109,6 +109,24 @@ def amd(indptr, indices, n):
 RANKED_VERTICES = 1000
 
 
+def edge_ranks(a, b, n):
+    """``vertex_ranks`` of the graph of n vertices whose edges are (a[i], b[i]) (int64 arrays),
+    each edge once (a mesh piece whose edges are known: ``unwrapping.one_disk``): no sort and
+    no duplicate to sum (the same order as ``vertex_ranks`` of its triangles)."""
+    if not 0 < n <= RANKED_VERTICES or not available():
+        return None
+    r, c = np.concatenate([a, b]), np.concatenate([b, a])
+    nnz = len(r)
+    Ap, Ai, Ax = np.empty(n + 1, np.int64), np.empty(nnz, np.int64), np.empty(nnz)
+    _st.coo_tocsr(n, n, nnz, r, c, np.ones(nnz), Ap, Ai, Ax)   # symmetric: its csr is its csc
+    p = amd(Ap, Ai, n)
+    if p is None:
+        return None
+    rank = np.empty(n, np.int64)
+    rank[p] = np.arange(n)
+    return rank
+
+
 def vertex_ranks(tris, n):
     """Each of n vertices' place (n,) int64 in the AMD order of the graph of the triangles'
     edges, or None where the ordered factorisation cannot run, AMD refuses the graph or n is

@@ -25,7 +25,7 @@ from ..errors import CancelledError
 from ..geometry import components, gradient_operators, local_frame
 from ..mesh import DEGENERATE_RATIO, Island
 from ..solvers.lscm import face_geometry_of, lscm_pinned
-from ..solvers.ordered_ldl import vertex_ranks
+from ..solvers.ordered_ldl import edge_ranks
 from .disk_certificate import certify_disk, certify_measured_disk
 from .margins import STORE_HEADROOM
 from .results import IslandResult, UnwrapResult
@@ -75,11 +75,15 @@ class Disk:
     @functools.cached_property
     def ranks(self):
         """The vertices' elimination order (``ordered_ldl.vertex_ranks`` of the island's
-        triangles, as the general path finds it), shared by the conformal map and the bound
-        search of ``bound="auto"`` (at a fixed C the conformal map alone is factorised: qdldl's
-        own AMD costs no more there, lion-head:300 2.6-2.7 against 2.8-2.9 ms CPU at C = 5);
-        None where the ordered factorisation cannot run."""
-        return vertex_ranks(self.island.tris, len(self.island.vertices))
+        triangles, as the general path finds it; here from the edges known: ``edge_ranks``, the
+        same order without sorting the triangles' sides), shared by the conformal map and the
+        bound search of ``bound="auto"`` (at a fixed C the conformal map alone is factorised,
+        in qdldl's own AMD as the batched path does: the same bits; the unfold's search makes
+        it then); None where the ordered factorisation cannot run."""
+        flat = self.island.tris.ravel()
+        edges = np.concatenate([self.twins[0], self.loop])
+        return edge_ranks(flat.take(edges), flat.take(edges - edges % 3 + _NEXT.take(edges % 3)),
+                          len(self.island.vertices))
 
 
 _NEXT = np.array([1, 2, 0])
