@@ -130,10 +130,12 @@ def turning(z):
     e -= z
     t = np.concatenate([e[1:], e[:1]])
     t *= e.conj()
-    if ((t.real < 0) & ~(np.abs(t.imag) > 1e-14 * np.abs(t))).any():
+    a = np.arctan2(t.imag, t.real)
+    s = float(a.sum())
+    # a sign read wrong needs |Im t| within rounding of |t| (~1e-16): |a| within ~1e-15 of pi
+    if not np.abs(a, out=a).max() < np.pi - 1e-12:      # (NaN too)
         return None
-    s = float(np.angle(t).sum())
-    return round(s / (2.0 * np.pi)) if np.isfinite(s) else None
+    return round(s / (2.0 * np.pi))
 
 
 def _star_shaped(p, q):
