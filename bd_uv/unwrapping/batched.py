@@ -76,9 +76,14 @@ def conformal_islands(V, islands, C, known=None):
             own = ~have[np.repeat(np.arange(k), 2)]
             idx = np.concatenate([idx[own], kv])
             val = np.concatenate([val[own], kidx])
-        # before a bound search (C None: "auto"), in the vertices' order its factor reuses
+        # in the vertices' order (up to RANKED_VERTICES; qdldl's own above), which a bound
+        # search's factor reuses ("auto", or a C whose map lies over itself). At a fixed C too:
+        # CPU between Blender's unwraps (bench_cpu_small, C = 5 / ABF, 3 rounds), qdldl's AMD
+        # -> this order: three_peaks:554 (unfolded) 0.94-1.01 -> 0.84-0.91; face:200,
+        # three_peaks:250, lion-head:300, hemisphere:400, mushroom:500, face:800, nefertiti
+        # within 0.02 (0.76-0.77 -> 0.77-0.79 ... 0.33-0.34 -> 0.33)
         u = lscm_pinned(geom.cbw(), geom.cb, tris, len(verts), idx, val,
-                        ranks=vertex_ranks(tris, len(verts)) if C is None else None)
+                        ranks=vertex_ranks(tris, len(verts)))
     if C is None:
         return {}, {isl.index: u[voff[j]:voff[j + 1]] / 1.0 for j, isl in enumerate(islands)}
     if held:                    # the positions are read again only to form coefficients

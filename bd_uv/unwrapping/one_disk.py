@@ -77,9 +77,9 @@ class Disk:
         """The vertices' elimination order (``ordered_ldl.vertex_ranks`` of the island's
         triangles, as the general path finds it; here from the edges known: ``edge_ranks``, the
         same order without sorting the triangles' sides), shared by the conformal map and the
-        bound search of ``bound="auto"`` (at a fixed C the conformal map alone is factorised,
-        in qdldl's own AMD as the batched path does: the same bits; the unfold's search makes
-        it then); None where the ordered factorisation cannot run."""
+        bound search (of ``bound="auto"``, or of a C whose conformal map lies over itself), at a
+        fixed C as the batched path (the same bits); None where the ordered factorisation
+        cannot run."""
         flat = self.island.tris.ravel()
         edges = np.concatenate([self.twins[0], self.loop])
         return edge_ranks(flat.take(edges), flat.take(edges - edges % 3 + _NEXT.take(edges % 3)),
@@ -211,7 +211,7 @@ def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
     nv = len(isl.vertices)
     idx = _far_pair(V.take(isl.vertices, axis=0), isl.loops[0])
     u = lscm_pinned(geom.cbw(), geom.cb, isl.tris, nv, idx, np.array([0.0, 1.0], complex),
-                    (disk.twins[0], disk.twins[1], disk.loop), disk.ranks if C is None else None)
+                    (disk.twins[0], disk.twins[1], disk.loop), disk.ranks)
     if C is None:
         return None, u, False
     # UV area = 3D area, bounding box at (0, 0), as the batched path places an island.
