@@ -25,7 +25,8 @@ targets in a row fell short while gaining less than SMALL of D - 1 (at STALL 20,
 iterations against 176 for C 1.03506 against 1.03502; mushroom 72 against 92).
 
 The iterations: up to ONE_PRODUCT_FACES faces on the free unknowns in every face's frame
-(``free_admm``), above on the whole map by the gradient operator (``framed_cone``).
+(``free_admm``), above on the whole map by the gradient operator (``framed_cone``); each target's
+stop (STALL, PROGRESS, FLIPPING, MAX_ITER) and ``enough`` are watched by ``target_watch``.
 """
 import functools
 import time
@@ -38,6 +39,7 @@ from .face_operators import free_lift_arrays
 from .framed_cone import framed_cone_projection, gradient_products, project_framed
 from .free_admm import FreeLift, run_free
 from .global_step import GlobalStep
+from .target_watch import Watch, ask as _ask
 
 __all__ = ["BoundSearch", "framed_cone_projection"]
 
@@ -51,14 +53,6 @@ MAX_STEP = 0.5
 TOLERANCE = 0.03
 SMALL = 0.01        # ... or two targets in a row fell short gaining less than this share of D - 1
 MARGIN = 0.98       # the cones are aimed at 1 + MARGIN (C - 1)
-MAX_ITER = 150      # iterations per target
-# A target is out of reach after STALL iterations that did not lower the max by PROGRESS of its
-# excess over 1 (20 -> 12: nefertiti 125 -> 80 iterations, C 1.2640 -> 1.2653; hemisphere 156 ->
-# 127, 1.03528 -> 1.03529; mushroom 72 -> 48; three_peaks 181 -> 127, 2.049 -> 2.075; at 8
-# hemisphere stopped at 1.0389, above the lowest peer's 1.037)
-STALL = 12          # a target is out of reach after this many iterations ...
-PROGRESS = 0.01     # ... that did not lower the max by this share of its excess over 1,
-FLIPPING = 6        # or after this many flipping iterates in a row from its start
 ALPHA = 1.5         # ADMM over-relaxation (hemisphere: 196 iterations against 240 at 1.0)
 # A search that ends at its first map ``enough`` accepts (the unfold of a map lying over itself)
 # aims deeper and steps further: the least C is not sought. Iterations to the first one-to-one
@@ -72,66 +66,6 @@ UNFOLD_MARGIN, UNFOLD_ALPHA = 0.9, 1.7
 # operator (fewer calls: small islands pay per call); above, two products each with the (2k, nv)
 # gradient operator (half the multiply-adds: lion-head, 16.7k faces, 1.9 -> 0.95 ms an iteration).
 ONE_PRODUCT_FACES = 1000
-
-
-class _Watch:
-    """One target's iterations watched: the least max distortion so far (``best``), and when
-    to stop. Out of reach: no progress for STALL iterations, or FLIPPING flipping iterates in a
-    row from the start (three_peaks: a target that flips stays flipped)."""
-
-    def __init__(self, best, ask=None):
-        self.best, self.since, self.mark = best, 0, best
-        self.ask, self.ended, self.refused, self.pending = ask, False, False, False
-
-    def accepts(self, kept):
-        """Is the new best iterate ``kept`` enough (the search ends there)? ``ask(kept)`` (the
-        search's ``ready``, then its ``enough``): True, False (then not asked again in this
-        target: the search asks the target's best at its end, ``pending``), or None (``ready``
-        refused it)."""
-        if self.ask is None or self.refused:
-            self.pending = True
-            return False
-        answer = self.ask(kept)
-        self.pending, self.refused, self.ended = False, answer is False, answer is True
-        return self.ended
-
-    def seen(self, D, it, C):
-        """(better, stop) after iteration ``it`` (>= 1) reached the max distortion D."""
-        better = D < self.best
-        if better:
-            self.best = D
-            if D <= C:
-                return True, True
-        if D < self.mark - PROGRESS * (self.mark - 1.0):
-            self.since, self.mark = 0, D
-        else:
-            self.since += 1
-            if self.since >= (FLIPPING if D == np.inf and self.since == it else STALL):
-                return better, True
-        return better, it == MAX_ITER
-
-    def iterate(self, step, measure, keep, C, cancel):
-        """``step()`` up to MAX_ITER times; before each but the first, ``measure()`` the max
-        distortion, ``kept = keep()`` (a copy of the iterate) when it is the least yet, and stop
-        when ``seen`` says so or ``cancel`` is set."""
-        self.kept = None
-        for it in range(MAX_ITER + 1):
-            if cancel is not None and cancel.is_set():
-                break
-            if it:
-                better, stop = self.seen(measure(), it, C)
-                if better:
-                    self.kept = keep()
-                    if self.accepts(self.kept):
-                        break
-                if stop:
-                    break
-            step()
-
-
-def _ask(enough, ready, u):
-    """``enough(u)`` where ``ready(u)`` (None: either is missing), else None."""
-    return enough(u) if ready is None or ready(u) else None
 
 
 class BoundSearch:
@@ -274,7 +208,7 @@ class BoundSearch:
             np.subtract(GU, Z, out=lam)         # lam + G x - z
             self.iterations += 1
 
-        watch = _Watch(D_best, None if ask is None else lambda V: ask(V[0] + 1j * V[1]))
+        watch = Watch(D_best, None if ask is None else lambda V: ask(V[0] + 1j * V[1]))
         watch.iterate(step, lambda: self._max_distortion(GU), U.copy, C, cancel)
         self.ended, self.pending = watch.ended, watch.pending
         return watch.kept, watch.best
@@ -294,7 +228,7 @@ class BoundSearch:
         def asked(x):
             V = whole(x)
             return ask(V[0] + 1j * V[1])
-        watch = _Watch(D_best, None if ask is None else asked)
+        watch = Watch(D_best, None if ask is None else asked)
         best, D = run_free(self._free_lift(), s.factorize(), x0, w, kappa, C, watch, alpha,
                            cancel, self._count)
         self.ended, self.pending = watch.ended, watch.pending
