@@ -51,8 +51,10 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
     (``one_disk.unwrap_disk``'s), as ``strategies.minimise`` finds it without a time budget.
 
     ``requested``: the bound asked for, "auto", or a number C (= ``limit``) whose conformal map
-    lay over itself: the search for the smallest C runs, as for "auto", until its best map no
-    longer does, so that the disk stays one island (a map of lower distortion moves the boundary:
+    lay over itself: the search for the smallest C runs (aiming deeper:
+    ``bound_search.UNFOLD_MARGIN``) until an iterate that is the least yet no longer does (asked
+    as soon as its boundary turns once, ``disk_certificate.turns_once``, and certified then), so
+    that the disk stays one island (a map of lower distortion moves the boundary:
     on three_peaks' 554-face centre the conformal map at C = 5 folded over and was cut into 3
     islands, one of a single face, where the search's maps are one); flagged "unfolded",
     certified at the C asked (its max distortion says how far below it the map is).
