@@ -102,9 +102,10 @@ def simple_ccw_loop(p):
 
 
 def _simple_or_not(p, q):
-    """Step 3 on the segments p[i] -> q[i] = p[i + 1]: a polygon that surely does not turn once
-    is refused at once (``turns_once``), else the star-shaped test, else the full one."""
-    return (turns_once(p[:, 0] + 1j * p[:, 1]) and (_star_shaped(p, q) or _simple_ccw(p, q)))
+    """Step 3 on the segments p[i] -> q[i] = p[i + 1]: the star-shaped test (the common case),
+    else a polygon that surely does not turn once is refused (``turns_once``), else the full
+    test."""
+    return _star_shaped(p, q) or (turns_once(p[:, 0] + 1j * p[:, 1]) and _simple_ccw(p, q))
 
 
 def turns_once(z):

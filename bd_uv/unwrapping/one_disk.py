@@ -25,7 +25,7 @@ from ..errors import CancelledError
 from ..geometry import components, gradient_operators, local_frame
 from ..mesh import DEGENERATE_RATIO, Island
 from ..solvers.lscm import face_geometry_of, lscm_pinned
-from ..solvers.ordered_ldl import edge_ranks
+from ..solvers.ordered_ldl import FIXED_RANKED, edge_ranks
 from .disk_certificate import certify_disk, certify_measured_disk
 from .margins import STORE_HEADROOM
 from .results import IslandResult, UnwrapResult
@@ -205,7 +205,8 @@ def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
     CancelledError when ``cancel`` is set after a progress report (as ``unwrap_islands``)
     """
     report_step(progress, cancel, 0.01, "conformal maps of 1 islands")
-    u = conformal(V, disk, disk.Z, disk.G, disk.ranks)
+    u = conformal(V, disk, disk.Z, disk.G, disk.ranks if C is None or len(disk.island.vertices)
+                  >= FIXED_RANKED else None)
     if C is None:
         return None, u, False
     done, cert, D, corner_uv = fitted(F, disk, u, C, t0, ("initial_map",), "")
