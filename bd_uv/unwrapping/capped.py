@@ -80,8 +80,9 @@ def unfold(V, F, disk, u, C, t0, progress=None, cancel=None):
     theta = np.bincount(tris.ravel(), corner_angles(u.take(tris)).ravel(), nv)
     before = None           # the UV angles and the scales before the last solve
     for _ in range(ATTEMPTS):
+        # capped where some vertex is wrapped round (else the map lies over itself elsewhere)
         wraps = onb & (theta >= CAP * 2.0 * np.pi)
-        if not wraps.any():
+        if not (onb & (theta >= 2.0 * np.pi)).any():
             return None
         report_step(progress, cancel, 0.1, f"island 1/1: the conformal map wraps round "
                     f"{int(wraps.sum())} boundary vertices: their angles capped")
@@ -111,6 +112,7 @@ def unfold(V, F, disk, u, C, t0, progress=None, cancel=None):
         theta = np.bincount(tris.ravel(), corner_angles(u.take(tris)).ravel(), nv)
         if (onb & (theta >= 2.0 * np.pi)).any():    # still round a vertex: not one-to-one
             continue
+        # (else, if it does not certify, capping more does not help: the loop ends above)
         done = fitted(F, disk, u, C, t0, ("angles_capped", "unfolded"),
                       f" (unfolded: the angles capped at {int((scale < 1.0).sum())} "
                       f"boundary vertices)")[0]
