@@ -7,13 +7,14 @@ of its faces there add up to 2 pi or more. That is a saddle at the boundary (a 3
 (three_peaks' 554-face centre: 0.89 x 2 pi in 3D, 1.09 x 2 pi in UV). On 42 overlapping disks
 cut from the shared meshes, 1 or 2 such vertices each (all but one).
 
-Here the faces' corner angles at the boundary vertices whose UV angles reach CAP x 2 pi are
-scaled down by CAP x 2 pi over that sum (the rest of each face's angles given to its other
-corners pro rata), each such face rebuilt from its angles at its own area, and the conformal map
-of these shapes solved (the same system of other coefficients, the same pins and elimination
-order: ``one_disk.conformal``); its UVs are certified against the true faces by the disk
-certificate (no flip, max distortion within C, one simple boundary: ``one_disk.fitted``;
-asked only of a map whose boundary vertices all have UV angles below 2 pi). Up to ATTEMPTS
+Where one boundary vertex's UV angles reach 2 pi, the faces' corner angles at the boundary
+vertices whose UV angles reach CAP x 2 pi are scaled down by CAP x 2 pi over that sum (the rest
+of each face's angles given to its other corners pro rata), each such face rebuilt from its
+angles at its own area, and the conformal map of these shapes solved (the same system of other
+coefficients, the same pins and elimination order: ``one_disk.conformal``); its UVs are
+certified against the true faces by the disk certificate (no flip, max distortion within C, one
+simple boundary: ``one_disk.fitted``; asked only of a map whose boundary vertices all have UV
+angles below 2 pi). Up to ATTEMPTS
 solves, each scaling further the vertices that still reach CAP x 2 pi (by the inverse of the
 share of the last scaling their UV angles followed: RESPONSE).
 
