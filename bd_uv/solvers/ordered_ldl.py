@@ -84,6 +84,12 @@ def _p(a):
     return a.ctypes.data
 
 
+# Loaded with the module, not at the first factorisation in its own order: ~0.15-0.3 ms (the
+# handle, the 3 x 3 check) that a process's first unwrap in that order paid (nefertiti at C = 5,
+# the first call after a warm-up on a 36-vertex grid: 2.3 -> 1.95 ms, main 1.8-2.0).
+_lib()
+
+
 def available():
     """Whether the ordered factorisation can run here."""
     return _lib() is not None
