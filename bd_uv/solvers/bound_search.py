@@ -25,8 +25,10 @@ targets in a row fell short while gaining less than SMALL of D - 1 (at STALL 20,
 iterations against 176 for C 1.03506 against 1.03502; mushroom 72 against 92).
 
 The iterations: up to ONE_PRODUCT_FACES faces on the free unknowns in every face's frame
-(``free_admm``), above on the whole map by the gradient operator (``framed_cone``).
+(``free_admm``), above on the whole map by the gradient operator (``framed_cone``); each target's
+stop (STALL, PROGRESS, FLIPPING, MAX_ITER) and ``enough`` are watched by ``target_watch``.
 """
+import functools
 import time
 
 import numpy as np
@@ -37,6 +39,7 @@ from .face_operators import free_lift_arrays
 from .framed_cone import framed_cone_projection, gradient_products, project_framed
 from .free_admm import FreeLift, run_free
 from .global_step import GlobalStep
+from .target_watch import Watch, ask as _ask
 
 __all__ = ["BoundSearch", "framed_cone_projection"]
 
@@ -50,59 +53,19 @@ MAX_STEP = 0.5
 TOLERANCE = 0.03
 SMALL = 0.01        # ... or two targets in a row fell short gaining less than this share of D - 1
 MARGIN = 0.98       # the cones are aimed at 1 + MARGIN (C - 1)
-MAX_ITER = 150      # iterations per target
-# A target is out of reach after STALL iterations that did not lower the max by PROGRESS of its
-# excess over 1 (20 -> 12: nefertiti 125 -> 80 iterations, C 1.2640 -> 1.2653; hemisphere 156 ->
-# 127, 1.03528 -> 1.03529; mushroom 72 -> 48; three_peaks 181 -> 127, 2.049 -> 2.075; at 8
-# hemisphere stopped at 1.0389, above the lowest peer's 1.037)
-STALL = 12          # a target is out of reach after this many iterations ...
-PROGRESS = 0.01     # ... that did not lower the max by this share of its excess over 1,
-FLIPPING = 6        # or after this many flipping iterates in a row from its start
 ALPHA = 1.5         # ADMM over-relaxation (hemisphere: 196 iterations against 240 at 1.0)
+# A search that ends at its first map ``enough`` accepts (the unfold of a map lying over itself)
+# aims deeper and steps further: the least C is not sought. Iterations to the first one-to-one
+# map, 7 overlapping disks (three_peaks:554, ChineseDragon:913, armadillo:533, camel:328,
+# lion-head:330, :156, three_peaks:536) at C = 5: 85 at (0.98, 1.5), 78 at (0.9, 1.5), 73 at
+# (0.9, 1.7), 72 at (0.9, 1.9) (three_peaks:554 21, 16, 15, 14); means within 0.4 % (0.8 % at
+# (0.9, 1.5) for lion-head:156), below the least C's. On 5 other such disks (the same meshes,
+# other seeds) 55 -> 48 iterations, means within 0.4 %
+UNFOLD_MARGIN, UNFOLD_ALPHA = 0.9, 1.7
 # Up to this many faces the lift and the right-hand side are one product each with the (4k, 2nv)
 # operator (fewer calls: small islands pay per call); above, two products each with the (2k, nv)
 # gradient operator (half the multiply-adds: lion-head, 16.7k faces, 1.9 -> 0.95 ms an iteration).
 ONE_PRODUCT_FACES = 1000
-
-
-class _Watch:
-    """One target's iterations watched: the least max distortion so far (``best``), and when
-    to stop. Out of reach: no progress for STALL iterations, or FLIPPING flipping iterates in a
-    row from the start (three_peaks: a target that flips stays flipped)."""
-
-    def __init__(self, best):
-        self.best, self.since, self.mark = best, 0, best
-
-    def seen(self, D, it, C):
-        """(better, stop) after iteration ``it`` (>= 1) reached the max distortion D."""
-        better = D < self.best
-        if better:
-            self.best = D
-            if D <= C:
-                return True, True
-        if D < self.mark - PROGRESS * (self.mark - 1.0):
-            self.since, self.mark = 0, D
-        else:
-            self.since += 1
-            if self.since >= (FLIPPING if D == np.inf and self.since == it else STALL):
-                return better, True
-        return better, it == MAX_ITER
-
-    def iterate(self, step, measure, keep, C, cancel):
-        """``step()`` up to MAX_ITER times; before each but the first, ``measure()`` the max
-        distortion, ``kept = keep()`` (a copy of the iterate) when it is the least yet, and stop
-        when ``seen`` says so or ``cancel`` is set."""
-        self.kept = None
-        for it in range(MAX_ITER + 1):
-            if cancel is not None and cancel.is_set():
-                break
-            if it:
-                better, stop = self.seen(measure(), it, C)
-                if better:
-                    self.kept = keep()
-                if stop:
-                    break
-            step()
 
 
 class BoundSearch:
@@ -127,6 +90,7 @@ class BoundSearch:
         self.UF = None
         self._rhs_fixed = None      # (UF, its share of the right-hand side; small: its FreeLift)
         self.iterations = 0
+        self.ended = self.pending = False   # the last run: ``enough`` stopped it; its best unasked
         self._B = self._free = None
 
     def _operators(self):
@@ -193,16 +157,21 @@ class BoundSearch:
                                                  -(s._L_fF @ self.UF).T.ravel()))
         return self._rhs_fixed[1]
 
-    def run(self, U, w, C, D_best, cancel=None):
-        """ADMM towards F_C with frames w (unit complex, (k,)), from U (2, nv): rows u and v.
+    def run(self, U, w, C, D_best, cancel=None, enough=None, ready=None):
+        """ADMM towards F_C with frames w (unit complex, (k,)), from U (2, nv): rows u and v;
+        ``enough`` and ``ready`` as ``search``'s (``ended``: whether ``enough`` stopped the run;
+        ``pending``: whether its best was not asked).
 
         Returns (U of the least max distortion below D_best or None, that max, whether it is
         within C)."""
+        self.ended = self.pending = False
+        ask = None if enough is None or ready is None else functools.partial(_ask, enough, ready)
         s = self.solver
-        Cm = 1.0 + MARGIN * (C - 1.0)
+        margin, alpha = (MARGIN, ALPHA) if enough is None else (UNFOLD_MARGIN, UNFOLD_ALPHA)
+        Cm = 1.0 + margin * (C - 1.0)
         kappa = (Cm - 1.0) / (Cm + 1.0)
         if self.k <= ONE_PRODUCT_FACES:
-            return self._run_free(U, w, kappa, C, D_best, cancel)
+            return self._run_free(U, w, kappa, C, D_best, cancel, ask, alpha)
         solve = s.factorize()
         BtA = self._operators()[1]
         nf = len(s.free)
@@ -217,18 +186,19 @@ class BoundSearch:
         rhs = np.empty(2 * nf)
         with np.errstate(invalid="ignore", divide="ignore"):
             best, D_best = self._iterate(U, GU, lam, rhs, w2, kappa, C, D_best, solve, BtA,
-                                         rhs_fixed, cancel)
+                                         rhs_fixed, cancel, ask, alpha)
         return best, D_best, best is not None and D_best <= C
 
-    def _iterate(self, U, GU, lam, rhs, w2, kappa, C, D_best, solve, BtA, rhs_fixed, cancel):
+    def _iterate(self, U, GU, lam, rhs, w2, kappa, C, D_best, solve, BtA, rhs_fixed, cancel,
+                 ask=None, alpha=ALPHA):
         """``run``'s iterations, on its buffers (U, GU, lam, rhs updated in place)."""
         free, nf = self.solver.free, len(self.solver.free)
 
         def step():
             Z = project_framed(GU + lam, w2, kappa)
-            if ALPHA != 1.0:  # over-relaxation
-                Z *= ALPHA
-                Z += (1.0 - ALPHA) * GU
+            if alpha != 1.0:  # over-relaxation
+                Z *= alpha
+                Z += (1.0 - alpha) * GU
             Z -= lam                            # z - lam: the least-squares target
             BtA(Z.ravel(), rhs)
             np.subtract(rhs, rhs_fixed, out=rhs)
@@ -238,23 +208,33 @@ class BoundSearch:
             np.subtract(GU, Z, out=lam)         # lam + G x - z
             self.iterations += 1
 
-        watch = _Watch(D_best)
+        watch = Watch(D_best, None if ask is None else lambda V: ask(V[0] + 1j * V[1]))
         watch.iterate(step, lambda: self._max_distortion(GU), U.copy, C, cancel)
+        self.ended, self.pending = watch.ended, watch.pending
         return watch.kept, watch.best
 
-    def _run_free(self, U, w, kappa, C, D_best, cancel):
+    def _run_free(self, U, w, kappa, C, D_best, cancel, ask=None, alpha=ALPHA):
         """``run`` on a small island (up to ONE_PRODUCT_FACES faces): ``free_admm.run_free``, the
         iterations on the free unknowns in every face's frame."""
         s, nf = self.solver, len(self.solver.free)
         self._operators()
         x0 = np.concatenate([U[0, s.free], U[1, s.free]])
-        best, D = run_free(self._free_lift(), s.factorize(), x0, w, kappa, C, _Watch(D_best),
-                           ALPHA, cancel, self._count)
+
+        def whole(x):           # the map (2, nv) of free unknowns x, the fixed vertices of U
+            V = U.copy()
+            V[0, s.free], V[1, s.free] = x[:nf], x[nf:]
+            return V
+
+        def asked(x):
+            V = whole(x)
+            return ask(V[0] + 1j * V[1])
+        watch = Watch(D_best, None if ask is None else asked)
+        best, D = run_free(self._free_lift(), s.factorize(), x0, w, kappa, C, watch, alpha,
+                           cancel, self._count)
+        self.ended, self.pending = watch.ended, watch.pending
         if best is None:
             return None, D, False
-        U = U.copy()
-        U[0, s.free], U[1, s.free] = best[:nf], best[nf:]
-        return U, D, D <= C
+        return whole(best), D, D <= C
 
     def _count(self, n):
         self.iterations += n
@@ -271,7 +251,8 @@ class BoundSearch:
         self._operators()
         return self.max_distortion(self._lift(U))
 
-    def search(self, u, frames_of=None, report=None, deadline=None, cancel=None, enough=None):
+    def search(self, u, frames_of=None, report=None, deadline=None, cancel=None, enough=None,
+               ready=None):
         """The least max distortion reached from the flip-free map u (nv,) complex.
 
         Parameters
@@ -281,9 +262,14 @@ class BoundSearch:
             product, not the island problem's two)
         report : callable(message), optional, called before each target
         deadline : float (``time.perf_counter()``) or None: no new target after it
-        enough : callable(u) -> bool, optional: asked of each new best map (nv,) complex; True
-            ends the search there (a bound asked for whose conformal map lay over itself: the
-            first map that does not is enough, the least C is not sought)
+        enough : callable(u) -> bool, optional: asked of each target's best map (nv,) complex
+            at its end; True ends the search there (a bound asked for whose conformal map lay
+            over itself: the first map that does not is enough, the least C is not sought)
+        ready : callable(u) -> bool, optional, a cheap test that ``enough`` needs (a boundary
+            loop's turning number): where given, ``enough`` is also asked within each target of
+            every iterate that is the least yet and that ``ready`` passes, as soon as it is
+            reached, until it refuses one (then the target's best at its end, as without it);
+            one that ``ready`` refuses is not asked
 
         Returns
         -------
@@ -304,13 +290,14 @@ class BoundSearch:
                 report(D, C)
             w = (frames_from_map(self._alpha2(U)) if frames_of is None
                  else frames_of(U[0] + 1j * U[1]))
-            Ub, Db, reached = self.run(U, w, C, D, cancel=cancel)
+            Ub, Db, reached = self.run(U, w, C, D, cancel, enough, ready)
             if cancel is not None and cancel.is_set():
                 break
             gain = (D - Db) / (D - 1.0) if Ub is not None else 0.0
             if Ub is not None:
                 U, D = Ub, Db
-                if enough is not None and enough(U[0] + 1j * U[1]):
+                if self.ended or (enough is not None and (ready is None or self.pending)
+                                  and _ask(enough, ready, U[0] + 1j * U[1])):
                     break
             if reached:
                 step = min(MAX_STEP, 1.5 * step)

@@ -166,6 +166,8 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
                 better, stop = watch.seen(D, it, C)
                 if better:
                     kept = x.copy()
+                    if watch.ask is not None and watch.accepts(kept):
+                        break
                 if stop:
                     break
             np.subtract(GU, T, out=P)

@@ -84,6 +84,12 @@ def _p(a):
     return a.ctypes.data
 
 
+# Loaded with the module, not at the first factorisation in its own order: ~0.15-0.3 ms (the
+# handle, the 3 x 3 check) that a process's first unwrap in that order paid (nefertiti at C = 5,
+# the first call after a warm-up on a 36-vertex grid: 2.3 -> 1.95 ms, main 1.8-2.0).
+_lib()
+
+
 def available():
     """Whether the ordered factorisation can run here."""
     return _lib() is not None
@@ -107,6 +113,33 @@ def amd(indptr, indices, n):
 # factorisation costs more than the AMD saved (CPU, C = 5: face.obj, 26k vertices, 315 -> 390
 # ms; lion-head, 8.4k, 79 -> 89; hemisphere, 2k, 20 -> 23.5; nefertiti, 299, 3.2 -> 3.0-3.2).
 RANKED_VERTICES = 1000
+# A conformal map alone (at a fixed C, no search after it) is factorised in that order from this
+# many vertices (``batched.conformal_islands``, ``one_disk.unwrap_disk``: the same rule, the same
+# bits); below, in qdldl's own. One process, find + conformal map, least of 400 x 2 (qdldl's ->
+# the ranks): face:100 (77 vertices) 452 -> 472 us, face:200 (138) 652 -> 636, lion-head:300
+# (189) 779 -> 744, mushroom:500 (305) 1126 -> 1044, face:800 (456) 1447 -> 1328; between
+# Blender's unwraps (bench_cpu_small, C = 5 / ABF) face:200 0.76-0.77 -> 0.79-0.80,
+# three_peaks:250 (158) 0.65-0.67 -> 0.68-0.69, lion-head:300 0.58-0.59 -> 0.59,
+# mushroom:500 0.38-0.39 -> 0.37-0.38
+FIXED_RANKED = 200
+
+
+def edge_ranks(a, b, n):
+    """``vertex_ranks`` of the graph of n vertices whose edges are (a[i], b[i]) (int64 arrays),
+    each edge once (a mesh piece whose edges are known: ``unwrapping.one_disk``): no sort and
+    no duplicate to sum (the same order as ``vertex_ranks`` of its triangles)."""
+    if not 0 < n <= RANKED_VERTICES or not available():
+        return None
+    r, c = np.concatenate([a, b]), np.concatenate([b, a])
+    nnz = len(r)
+    Ap, Ai, Ax = np.empty(n + 1, np.int64), np.empty(nnz, np.int64), np.empty(nnz)
+    _st.coo_tocsr(n, n, nnz, r, c, np.ones(nnz), Ap, Ai, Ax)   # symmetric: its csr is its csc
+    p = amd(Ap, Ai, n)
+    if p is None:
+        return None
+    rank = np.empty(n, np.int64)
+    rank[p] = np.arange(n)
+    return rank
 
 
 def vertex_ranks(tris, n):

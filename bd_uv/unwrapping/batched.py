@@ -13,7 +13,7 @@ import numpy as np
 
 from ..geometry import face_areas
 from ..solvers.lscm import face_geometry, lscm_pinned
-from ..solvers.ordered_ldl import vertex_ranks
+from ..solvers.ordered_ldl import FIXED_RANKED, vertex_ranks
 from .margins import STORE_HEADROOM
 from .results import IslandResult
 from ..trim import CHUNK
@@ -76,9 +76,12 @@ def conformal_islands(V, islands, C, known=None):
             own = ~have[np.repeat(np.arange(k), 2)]
             idx = np.concatenate([idx[own], kv])
             val = np.concatenate([val[own], kidx])
-        # before a bound search (C None: "auto"), in the vertices' order its factor reuses
+        # in the vertices' order (up to RANKED_VERTICES; qdldl's own above), which a bound
+        # search's factor reuses ("auto", or a C whose map lies over itself); at a fixed C from
+        # FIXED_RANKED vertices (three_peaks:554, unfolded: C = 5 / ABF 0.94-1.01 -> 0.84-0.91)
         u = lscm_pinned(geom.cbw(), geom.cb, tris, len(verts), idx, val,
-                        ranks=vertex_ranks(tris, len(verts)) if C is None else None)
+                        ranks=vertex_ranks(tris, len(verts))
+                        if C is None or len(verts) >= FIXED_RANKED else None)
     if C is None:
         return {}, {isl.index: u[voff[j]:voff[j + 1]] / 1.0 for j, isl in enumerate(islands)}
     if held:                    # the positions are read again only to form coefficients

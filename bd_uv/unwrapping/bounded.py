@@ -223,7 +223,8 @@ def search(prob, u, report, budget, flags, t0):
         report(0.1, f"minimising C: C* <= {D:.4g}, aiming at {C:.4g}")
 
     deadline = None if budget is None else t0 + budget
-    u, D, out_of_time = bs.search(u, None, progress, deadline, prob.cancel, prob.enough)
+    u, D, out_of_time = bs.search(u, None, progress, deadline, prob.cancel, prob.enough,
+                                  prob.ready)
     if prob.cancel is not None and prob.cancel.is_set():
         raise Cancelled
     if out_of_time:

@@ -30,7 +30,7 @@ from ..errors import CancelledError
 from ..geometry import local_coordinates
 from ..metrics import mean_distortion
 from ..solvers import bound_search
-from .disk_certificate import certify_measured_disk, measure_disk, simple_ccw_loop
+from .disk_certificate import certify_measured_disk, measure_disk, turns_once
 from . import mean_relax
 from .finish import HIGH_DISTORTION, certified_bound, placed
 from .one_disk import report_step
@@ -51,8 +51,10 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
     (``one_disk.unwrap_disk``'s), as ``strategies.minimise`` finds it without a time budget.
 
     ``requested``: the bound asked for, "auto", or a number C (= ``limit``) whose conformal map
-    lay over itself: the search for the smallest C runs, as for "auto", until its best map no
-    longer does, so that the disk stays one island (a map of lower distortion moves the boundary:
+    lay over itself: the search for the smallest C runs (aiming deeper:
+    ``bound_search.UNFOLD_MARGIN``) until an iterate that is the least yet no longer does (asked
+    as soon as its boundary turns once, ``disk_certificate.turns_once``, and certified then), so
+    that the disk stays one island (a map of lower distortion moves the boundary:
     on three_peaks' 554-face centre the conformal map at C = 5 folded over and was cut into 3
     islands, one of a single face, where the search's maps are one); flagged "unfolded",
     certified at the C asked (its max distortion says how far below it the map is).
@@ -70,10 +72,16 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
     if not searches(disk):
         return None
     t = time.perf_counter()
-    # the search's geometry as IslandProblem normalises it (the same bits: the same maps)
     area3d = float(disk.area.sum())
-    Gn, An = face_operators(local_coordinates(normalised(V.take(isl.vertices, axis=0), area3d),
-                                              isl.tris))
+    unfold = requested != "auto"
+    if unfold:
+        # the disk's own geometry: the iterations do not depend on its scale or place (the same
+        # maps up to rounding), and the unfold is not compared with the general path's bits
+        Gn, An = disk.G, disk.area
+    else:
+        # the search's geometry as IslandProblem normalises it (the same bits: the same maps)
+        Gn, An = face_operators(local_coordinates(normalised(V.take(isl.vertices, axis=0),
+                                                             area3d), isl.tris))
     ops = JacobianOperators(None, None, None, None, An, isl.tris, Gn[:, 0, :], Gn[:, 1, :])
     bs = bound_search.BoundSearch(ops, nv, isl.tris, isl.loops[0][:1], connected=True,
                                   ranks=disk.ranks)
@@ -85,28 +93,37 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
         report_step(progress, cancel, 0.1, f"island 1/1: minimising C: C* <= {D:.4g}, aiming at "
                 f"{C:.4g}")
     loop = isl.loops[0]
+    found = []
 
     def one_to_one(v):
-        return simple_ccw_loop(np.stack([v.real.take(loop), v.imag.take(loop)], axis=1))
+        """The map placed and certified by the disk certificate (kept in ``found``)?"""
+        done = _certified(v, disk, area3d, requested, limit)
+        if done is not None:
+            found.append(done)
+        return done is not None
+
+    def turns_once_(v):     # asked of every iterate that is the least yet: refuses cheaply
+        return turns_once(v.take(loop))
     # a number whose conformal map lay over itself: the first map of the search that does not
     # is enough (the user asked for C, not the least C; nearer the conformal map)
-    us, D, _ = bs.search(u, None, report, None, cancel,
-                         None if requested == "auto" else one_to_one)
+    us, D, _ = bs.search(u, None, report, None, cancel, *((one_to_one, turns_once_) if unfold
+                                                           else (None, None)))
     if cancel is not None and cancel.is_set():
         raise CancelledError("unwrap cancelled; nothing was changed")
     project = time.perf_counter() - t
     flags = (("projected",) if D < D0 else ("initial_map",)) + (
-        ("unfolded",) if requested != "auto" else ())
-    if D >= D0:
+        ("unfolded",) if unfold else ())
+    if D >= D0 and not found:
         us, D = u, D0
     t = time.perf_counter()
     # finish's test (the map within the bound its search reached) and the disk certificate, at
     # the C asked when it was a number (the map found is within it, with room for float32)
-    done = _certified(us, disk, area3d, requested, certified_bound(D) * (1.0 + RTOL))
+    done = (found[-1] if found else
+            _certified(us, disk, area3d, requested, certified_bound(D) * (1.0 + RTOL)))
     if done is None:
         return None
     relax = 0.0
-    if requested == "auto" and D < D0:
+    if not unfold and D < D0:
         # the search's min-max map, its faces below the max given back to the conformal map
         # where the search raised the mean (``mean_relax``): kept when it certifies at a C no
         # higher and its mean is lower

@@ -91,14 +91,52 @@ def _simple_ccw_boundary(corner_uv, disk):
         return False
     p = uv.take(isl.loops[0], axis=0)                     # segment i: p[i] -> p[i + 1]
     q = np.concatenate([p[1:], p[:1]])
-    return _star_shaped(p, q) or _simple_ccw(p, q)
+    return _simple_or_not(p, q)
 
 
 def simple_ccw_loop(p):
     """Is the polygon through the points p (n,2) float64, in order, simple and wound
     counter-clockwise (steps 3's test of a boundary loop's UVs)?"""
     q = np.concatenate([p[1:], p[:1]])
-    return _star_shaped(p, q) or _simple_ccw(p, q)
+    return _simple_or_not(p, q)
+
+
+def _simple_or_not(p, q):
+    """Step 3 on the segments p[i] -> q[i] = p[i + 1]: the star-shaped test (the common case),
+    else a polygon that surely does not turn once is refused (``turns_once``), else the full
+    test."""
+    return _star_shaped(p, q) or (turns_once(p[:, 0] + 1j * p[:, 1]) and _simple_ccw(p, q))
+
+
+def turns_once(z):
+    """A necessary test, cheap (a few microseconds; the unfold asks it of every iterate that is
+    the least yet): may the polygon through the points z (n,) complex, in order, be simple and
+    wound counter-clockwise? False: it surely is not (its turning number, ``turning``, is not
+    1)."""
+    t = turning(z)
+    return t is None or t == 1
+
+
+def turning(z):
+    """The turning number of the closed polygon through the points z (n,) complex, in order, or
+    None where it cannot be told for sure.
+
+    Its exterior angles (each in (-pi, pi], the argument of ``conj(e_i) e_(i+1)`` for
+    consecutive segments e) add up to 2 pi times it: 1 for a simple polygon wound
+    counter-clockwise, -1 clockwise (a hole's loop), 0, 2 or more for a boundary that curls
+    over itself. The sum's rounding is far below pi: only an angle near +-pi (a segment folding
+    back onto the last) may be read with the wrong sign, so where one is not clear of its
+    rounding the answer is None."""
+    e = np.concatenate([z[1:], z[:1]])
+    e -= z
+    t = np.concatenate([e[1:], e[:1]])
+    t *= e.conj()
+    a = np.arctan2(t.imag, t.real)
+    s = float(a.sum())
+    # a sign read wrong needs |Im t| within rounding of |t| (~1e-16): |a| within ~1e-15 of pi
+    if not np.abs(a, out=a).max() < np.pi - 1e-12:      # (NaN too)
+        return None
+    return round(s / (2.0 * np.pi))
 
 
 def _star_shaped(p, q):

@@ -43,7 +43,7 @@ def solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=None
     try:
         prob = IslandProblem(island, V, pins, method, o.cone, cancel, faces_3d, ranks)
         if unfolding:       # ``unfolder``: the first map that does not lie over itself will do
-            prob.enough = prob.one_to_one
+            prob.enough, prob.ready = prob.one_to_one, prob.may_be_one_to_one
         start = start_map(prob, o.frames, initial_uv, report, lscm=lscm)
     except IslandError as exc:
         exc.renumber(island.index)

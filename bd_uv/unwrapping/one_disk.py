@@ -25,7 +25,7 @@ from ..errors import CancelledError
 from ..geometry import components, gradient_operators, local_frame
 from ..mesh import DEGENERATE_RATIO, Island
 from ..solvers.lscm import face_geometry_of, lscm_pinned
-from ..solvers.ordered_ldl import vertex_ranks
+from ..solvers.ordered_ldl import FIXED_RANKED, edge_ranks
 from .disk_certificate import certify_disk, certify_measured_disk
 from .margins import STORE_HEADROOM
 from .results import IslandResult, UnwrapResult
@@ -75,11 +75,15 @@ class Disk:
     @functools.cached_property
     def ranks(self):
         """The vertices' elimination order (``ordered_ldl.vertex_ranks`` of the island's
-        triangles, as the general path finds it), shared by the conformal map and the bound
-        search of ``bound="auto"`` (at a fixed C the conformal map alone is factorised: qdldl's
-        own AMD costs no more there, lion-head:300 2.6-2.7 against 2.8-2.9 ms CPU at C = 5);
-        None where the ordered factorisation cannot run."""
-        return vertex_ranks(self.island.tris, len(self.island.vertices))
+        triangles, as the general path finds it; here from the edges known: ``edge_ranks``, the
+        same order without sorting the triangles' sides), shared by the conformal map and the
+        bound search (of ``bound="auto"``, or of a C whose conformal map lies over itself), at a
+        fixed C as the batched path (the same bits); None where the ordered factorisation
+        cannot run."""
+        flat = self.island.tris.ravel()
+        edges = np.concatenate([self.twins[0], self.loop])
+        return edge_ranks(flat.take(edges), flat.take(edges - edges % 3 + _NEXT.take(edges % 3)),
+                          len(self.island.vertices))
 
 
 _NEXT = np.array([1, 2, 0])
@@ -200,17 +204,44 @@ def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
     ------
     CancelledError when ``cancel`` is set after a progress report (as ``unwrap_islands``)
     """
-    isl = disk.island
     report_step(progress, cancel, 0.01, "conformal maps of 1 islands")
-    Z, G = disk.Z, disk.G
-    geom = face_geometry_of(Z, G, disk.area)
-    nv = len(isl.vertices)
-    idx = _far_pair(V.take(isl.vertices, axis=0), isl.loops[0])
-    u = lscm_pinned(geom.cbw(), geom.cb, isl.tris, nv, idx, np.array([0.0, 1.0], complex),
-                    (disk.twins[0], disk.twins[1], disk.loop), disk.ranks if C is None else None)
+    u = conformal(V, disk, disk.Z, disk.G, disk.ranks if C is None or len(disk.island.vertices)
+                  >= FIXED_RANKED else None)
     if C is None:
         return None, u, False
-    # UV area = 3D area, bounding box at (0, 0), as the batched path places an island.
+    done, cert, D, corner_uv = fitted(F, disk, u, C, t0, ("initial_map",), "")
+    if done is None:
+        fits = bool(np.isfinite(corner_uv).all() and D.max() * (1.0 + STORE_HEADROOM) <= C)
+        return None, u, cert is None and fits
+    report_step(progress, cancel, 1.0, "island 1/1: the conformal map fits the bound")
+    if progress is not None:
+        progress(1.0, "done")
+    return done, None, False
+
+
+def conformal(V, disk, Z, G, ranks):
+    """The conformal map (nv,) complex128 of a ``Disk`` whose faces have the local corners Z
+    (m,3) complex and gradient operators G (m,2,3) (its own: ``batched.conformal_islands``'
+    map; or other shapes: ``capped``), pinned as the batched path pins an island (``_far_pair``
+    at 0 and 1), factorised in the vertices' order ``ranks``."""
+    isl = disk.island
+    geom = face_geometry_of(Z, G, disk.area)
+    idx = _far_pair(V.take(isl.vertices, axis=0), isl.loops[0])
+    return lscm_pinned(geom.cbw(), geom.cb, isl.tris, len(isl.vertices), idx,
+                       np.array([0.0, 1.0], complex), (disk.twins[0], disk.twins[1], disk.loop),
+                       ranks)
+
+
+def fitted(F, disk, u, C, t0, flags, note):
+    """The map u (nv,) complex of a ``Disk`` placed as the batched path places an island (UV
+    area = 3D area, bounding box at (0, 0)) and certified at C from its UVs as stored, with
+    room for float32 (STORE_HEADROOM).
+
+    Returns (UnwrapResult or None where it does not fit, the Certificate or None, each face's
+    distortion, the corner UVs (m,3,2)); the result flagged ``flags``, ``note`` ending its
+    message."""
+    isl = disk.island
+    nv = len(isl.vertices)
     uc = u.take(isl.tris)
     e1, e2 = uc[:, 1] - uc[:, 0], uc[:, 2] - uc[:, 0]
     one = np.zeros(len(F), dtype=np.int64)
@@ -221,24 +252,20 @@ def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
     us -= us.real.min() + 1j * us.imag.min()
     uv = us.view(np.float64).reshape(nv, 2)
     corner_uv = uv.take(isl.tris, axis=0)
-    cert, D, smin, smax = certify_disk(corner_uv, G, disk, C)
+    cert, D, smin, smax = certify_disk(corner_uv, disk.G, disk, C)
     if cert is None or not cert.max_distortion * (1.0 + STORE_HEADROOM) <= C:
-        fits = bool(np.isfinite(corner_uv).all() and D.max() * (1.0 + STORE_HEADROOM) <= C)
-        return None, u, cert is None and fits
+        return None, cert, D, corner_uv
     mx = cert.max_distortion
     res = IslandResult(
         0, isl.faces, isl.vertices, isl.tris, uv=uv, status="certified",
-        message=f"island 0: {len(F)} faces, max distortion {mx:.3f} <= {C:.4g}, 0 flipped",
+        message=f"island 0: {len(F)} faces, max distortion {mx:.3f} <= {C:.4g}, 0 flipped{note}",
         bound_requested=C, bound_certified=float(C), max_distortion=mx,
         mean_distortion=cert.mean_distortion, flipped=0, frames="conformal",
-        seconds=time.perf_counter() - t0, distortion=D, flags=("initial_map",),
+        seconds=time.perf_counter() - t0, distortion=D, flags=flags,
         overlap_free=True, min_singular=smin, max_singular=smax,
         timings={"setup": 0.0, "solve": 0.0, "certify": 0.0})
-    report_step(progress, cancel, 1.0, "island 1/1: the conformal map fits the bound")
-    if progress is not None:
-        progress(1.0, "done")
-    return UnwrapResult(corner_uv, one, [res], time.perf_counter() - t0, "lscm",
-                        certificates=(cert,)), None, False
+    return (UnwrapResult(corner_uv, one, [res], time.perf_counter() - t0, "lscm",
+                         certificates=(cert,)), cert, D, corner_uv)
 
 
 def certify(disk, corner_uv, C, D=None):

@@ -20,6 +20,7 @@ from ..frames import _far_pair, frames_from_map, lscm_map
 from ..geometry import face_areas, local_coordinates
 from ..overlap import island_overlaps
 from .conic_solves import ConicSolves
+from .disk_certificate import turning
 from .margins import STORE_HEADROOM
 
 
@@ -57,8 +58,9 @@ class IslandProblem(ConicSolves):
         self.method, self.cone, self.cancel = method, cone, cancel
         self.faces_3d = faces_3d
         # callable(u) -> bool or None: the bound search ends at the first best map it accepts
-        # (``island_solve.unfolder``: a map that does not lie over itself)
-        self.enough = None
+        # (``island_solve.unfolder``: a map that does not lie over itself), and the cheap test
+        # it needs, asked first of every iterate that is the least yet (``BoundSearch.search``)
+        self.enough = self.ready = None
         Vi = V[island.vertices]
         self.V = Vi
         self.area3d = float((face_areas(Vi, island.tris) if faces_3d is None
@@ -260,6 +262,15 @@ class IslandProblem(ConicSolves):
         if self.method == "lscm":
             self.weights = 1.0 / np.maximum(a, 1e-6 * typical)
         self._scale_objective(u_start, frames_from_map(self.alpha(u_start)))
+
+    def may_be_one_to_one(self, u):
+        """A cheap test that ``one_to_one`` needs (the unfold asks it of every iterate that is
+        the least yet): may every boundary loop of the map u be simple? Simple loops turn once
+        each (``turning``), counter-clockwise for the outer one, clockwise for the holes."""
+        loops = self.island.loops
+        turns = [turning(u.take(loop)) for loop in loops]
+        return None in turns or (all(abs(t) == 1 for t in turns)
+                                 and sum(turns) == 2 - len(loops))
 
     def one_to_one(self, u):
         """Does the flip-free map u (nv,) complex lay the island out without overlapping itself

@@ -21,7 +21,7 @@ from ..errors import CancelledError, InvalidMeshError, OptionError
 from ..mesh import as_indices, as_reals, check_arrays, checked_islands as split_islands
 from ..options import unwrap_options
 from ..trim import release_memory
-from . import disk_auto, one_disk
+from . import capped, disk_auto, one_disk
 from .batched import conformal_islands
 from .island_solve import batched_options, solve_island, unfolder
 from .overlap_certificate import overlap_certificate
@@ -104,6 +104,10 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
         # auto, and a conformal map within C lying over itself: the smallest C keeps the disk
         # one island where its map does not (else the general path cuts it)
         unfold = not (overlaps and opts.time_budget is None and disk_auto.searches(disk))
+        if done is None and overlaps and opts.time_budget is None:
+            # the conformal map wrapping round a few boundary vertices: solved again with their
+            # angles capped (one island, near the conformal map), else the search below
+            done = capped.unfold(V, F, disk, u, float(opts.bound), t0, progress, cancel)
         if done is None and (opts.bound == "auto" or overlaps) and opts.time_budget is None:
             done = disk_auto.minimise_disk(
                 V, disk, u, opts.bound_limit if opts.bound == "auto" else float(opts.bound), t0,

@@ -293,17 +293,22 @@ def test_the_polygon_tests_agree_with_island_overlaps():
     folded) and exact touching ones (orientations exactly 0: decided by GEOS)."""
     rng = np.random.default_rng(20261127)
     seen = {True: 0, False: 0}
-    star = 0
+    star = refused = 0
     for p in [*_polygons(rng), *TOUCHING]:
         q = np.concatenate([p[1:], p[:1]])
         F, uv = _fan(p)
         truth = bool(island_overlaps(F, uv, np.zeros(len(F), np.int64)).overlap_free[0])
         assert disk_certificate._simple_ccw(p, q) == truth
+        assert disk_certificate.simple_ccw_loop(p) == truth
+        # the cheap turning test refuses no simple counter-clockwise polygon
+        turns = disk_certificate.turns_once(p[:, 0] + 1j * p[:, 1])
+        assert turns or not truth
+        refused += not turns
         if disk_certificate._star_shaped(p, q):
             star += 1
             assert truth
         seen[truth] += 1
-    assert seen[True] > 50 and seen[False] > 50 and star > 20
+    assert seen[True] > 50 and seen[False] > 50 and star > 20 and refused > 20
 
 
 def test_the_free_unknowns_iterations_reach_the_whole_maps_bound(monkeypatch):

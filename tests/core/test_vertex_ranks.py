@@ -54,6 +54,22 @@ def test_the_ranks_are_a_permutation_of_the_vertices_and_depend_on_the_triangles
     assert ordered_ldl.vertex_ranks(np.array([[0, 1, 2]]), big) is None
 
 
+@pytest.mark.parametrize("name", ["nefertiti", "grid"])
+def test_a_disks_ranks_from_its_edges_are_the_triangles_ranks(name):
+    """``one_disk.Disk.ranks`` orders the graph of the edges it found (each once, unsorted:
+    ``edge_ranks``): the same order as ``vertex_ranks`` of the island's triangles."""
+    from bd_uv.unwrapping import one_disk
+    V, F = (load_off("nefertiti.off") if name == "nefertiti" else
+            grid(9, 8, z=lambda x, y: 0.3 * np.sin(4 * x) * np.cos(3 * y)))
+    disk = one_disk.find(np.asarray(V, float), np.asarray(F, np.int64))
+    n = len(disk.island.vertices)
+    # every edge once: the interior ones and the loop's
+    assert len(disk.twins[0]) + len(disk.loop) == len(np.unique(np.sort(
+        np.concatenate([disk.island.tris[:, [0, 1]], disk.island.tris[:, [1, 2]],
+                        disk.island.tris[:, [2, 0]]]), axis=1), axis=0))
+    assert np.array_equal(disk.ranks, ordered_ldl.vertex_ranks(disk.island.tris, n))
+
+
 def test_a_matrix_factorised_in_its_own_order_solves_to_scipys_solution():
     V, F = grid(9, 8, z=lambda x, y: 0.3 * np.sin(4 * x) * np.cos(3 * y))
     isl = _island(V, F)
