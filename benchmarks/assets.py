@@ -105,8 +105,8 @@ def patch(path: str, faces: int, out_dir: str = DEFAULT_DIR) -> str:
     The centre is the face whose centroid is nearest the mean of the vertices; rings grow over
     shared edges (``scipy.sparse.csgraph.breadth_first_order``), and only whole rings are kept.
     Rings are added until the kept faces form a disk (:func:`is_disk`: growing rings can meet at
-    a vertex only, and a bowtie is no disk). Unreferenced vertices are dropped, the face order is
-    the file's.
+    a vertex only, and a bowtie is no disk; ValueError if none does). Unreferenced vertices are
+    dropped, the face order is the file's.
     """
     out = os.path.join(out_dir, f"{_stem(path)}-patch{faces}.obj")
     if os.path.exists(out):
@@ -132,6 +132,8 @@ def patch(path: str, faces: int, out_dir: str = DEFAULT_DIR) -> str:
         if is_disk(F[keep]):
             break
         keep = np.flatnonzero(ring <= nxt)
+    if not is_disk(F[keep]):
+        raise ValueError(f"{path}: no whole ring around its central face closes into a disk")
     sub = F[keep]
     used, inv = np.unique(sub, return_inverse=True)
     return write_obj(out, V[used], inv.reshape(-1, 3))

@@ -202,3 +202,18 @@ def test_no_waiting_disk_table_reports_a_refused_disk_and_fails_it():
     assert verdict["auto / ABF <= 2.0 on every disk"]           # 0.015 / 0.01 on the one map
     assert not verdict["auto's certified C < every peer's max distortion"]
     assert not verdict["auto's mean <= 1.05 x ABF's"]
+
+
+def test_patch_of_a_surface_with_no_disk_ring_is_refused(tmp_path):
+    """A torus's rings around a face close into an annulus (the ball wraps around the tube) and
+    then the whole torus: from some size no whole ring is a disk, and patch says so instead of
+    writing the closed surface."""
+    import trimesh
+    t = trimesh.creation.torus(major_radius=1.0, minor_radius=0.6, major_sections=12,
+                               minor_sections=8)
+    src = assets.write_obj(str(tmp_path / "torus.obj"), t.vertices, t.faces)
+    assert len(t.faces) == 192
+    with pytest.raises(ValueError, match="no whole ring"):
+        assets.patch(src, 190, out_dir=str(tmp_path))
+    V, F = load_mesh_by_index(assets.patch(src, 20, out_dir=str(tmp_path)))
+    assert assets.is_disk(F) and len(F) >= 20
