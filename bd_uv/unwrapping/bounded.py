@@ -93,7 +93,7 @@ def bounded(prob, start, C, raise_bound, limit, flags, report):
         # a flip-free start over C: the bound search rather than projection iterations
         found, searched = over_bound(prob, start, C, raise_bound, limit, report)
         if found is not None:
-            flags.append("bound_raised")
+            flags += ["projected", "bound_raised"]
             return found + (start.name,)
     else:
         searched = None
@@ -136,7 +136,7 @@ def bounded(prob, start, C, raise_bound, limit, flags, report):
         if fallback is not None:
             # the searched map (a sphere with a hole at C = 2.4: certified at 2.52, where the
             # raise's conic solves reached 3.72)
-            flags.append(fallback[1])
+            flags += [f for f in fallback[1] if f not in flags]
             return fallback[0] + (start.name,)
         failure = prob.solver_failure()
         if failure is not None and (not raise_bound or C * RAISE_FACTOR > limit):

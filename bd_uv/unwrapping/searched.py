@@ -57,7 +57,8 @@ def over_bound(prob, start, C, raise_bound, limit, report):
     """A flip-free start (``start.D`` finite) over the bound C asked: the bound search from it,
     stopping at its first map within C (``solve_bound``). Where it stays FAR above C (C is out
     of reach), raising is allowed and its bound is within ``limit``: the searched map at the
-    bound it certifies (``margins.certified_bound``). Else None: ``bounded`` goes on (bend,
+    bound it certifies (``margins.certified_bound``; flags "projected": no conic solve made it,
+    and "bound_raised"). Else None: ``bounded`` goes on (bend,
     conic solve at C) and falls back on the searched map (``searched_fallback``) where those
     fail, instead of raising C by conic solves.
 
@@ -79,12 +80,12 @@ def searched_fallback(prob, start, searched, C, raise_bound, limit):
     """Where the solve at C failed for a flip-free start: its searched map (``over_bound``'s)
     within C, as the map of least mean on the segment from the start to it within C
     (``along.least_mean_within``), flag "projected"; else, where raising is allowed, that map
-    at the bound it certifies when within ``limit``, flag "bound_raised"; else None. Returns
-    ((u, C), flag) or None."""
+    at the bound it certifies when within ``limit``, flags "projected" and "bound_raised"; else
+    None. Returns ((u, C), flags) or None."""
     us, D = searched
     target = solve_bound(C)
     if D <= target:
-        return (least_mean_within(prob, start.u, us, target, MEAN_SEARCH), C), "projected"
+        return (least_mean_within(prob, start.u, us, target, MEAN_SEARCH), C), ("projected",)
     if raise_bound and certified_bound(D) <= limit:
-        return (us, certified_bound(D)), "bound_raised"
+        return (us, certified_bound(D)), ("projected", "bound_raised")
     return None
