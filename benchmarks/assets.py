@@ -75,12 +75,38 @@ def _face_adjacency(F):
     return np.c_[f[:-1][same], f[1:][same]]
 
 
+def is_disk(F: np.ndarray) -> bool:
+    """Whether the faces ``F`` (of a manifold mesh) form one topological disk: one connected
+    piece, every vertex on the boundary on exactly two boundary edges (no two rings meeting at a
+    vertex only: a bowtie), and Euler characteristic V - E + F = 1."""
+    from scipy.sparse import coo_array
+    from scipy.sparse.csgraph import connected_components
+
+    F = np.asarray(F, dtype=np.int64)
+    if not len(F):
+        return False
+    e = np.sort(F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    edges, count = np.unique(e, axis=0, return_counts=True)
+    if (count > 2).any():
+        return False
+    used = np.unique(F)
+    n = int(used.max()) + 1
+    on_boundary = np.bincount(edges[count == 1].ravel(), minlength=n)[used]
+    if not np.isin(on_boundary, (0, 2)).all():
+        return False
+    pieces = connected_components(coo_array((np.ones(len(edges)), (edges[:, 0], edges[:, 1])),
+                                            shape=(n, n)), directed=False)[1][used]
+    return len(np.unique(pieces)) == 1 and len(used) - len(edges) + len(F) == 1
+
+
 def patch(path: str, faces: int, out_dir: str = DEFAULT_DIR) -> str:
     """Whole breadth-first face rings around the most central face, until >= ``faces`` faces.
 
     The centre is the face whose centroid is nearest the mean of the vertices; rings grow over
     shared edges (``scipy.sparse.csgraph.breadth_first_order``), and only whole rings are kept.
-    Unreferenced vertices are dropped, the face order is the file's.
+    Rings are added until the kept faces form a disk (:func:`is_disk`: growing rings can meet at
+    a vertex only, and a bowtie is no disk; ValueError if none does). Unreferenced vertices are
+    dropped, the face order is the file's.
     """
     out = os.path.join(out_dir, f"{_stem(path)}-patch{faces}.obj")
     if os.path.exists(out):
@@ -102,6 +128,12 @@ def patch(path: str, faces: int, out_dir: str = DEFAULT_DIR) -> str:
     levels = np.sort(ring[np.isfinite(ring)])
     r = levels[min(faces, len(levels)) - 1]
     keep = np.flatnonzero(ring <= r)
+    for nxt in np.unique(levels[levels > r]):
+        if is_disk(F[keep]):
+            break
+        keep = np.flatnonzero(ring <= nxt)
+    if not is_disk(F[keep]):
+        raise ValueError(f"{path}: no whole ring around its central face closes into a disk")
     sub = F[keep]
     used, inv = np.unique(sub, return_inverse=True)
     return write_obj(out, V[used], inv.reshape(-1, 3))

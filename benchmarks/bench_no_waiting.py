@@ -87,6 +87,13 @@ def disk_table(paths, res):
             lines.append(f"| {os.path.basename(p)} | error: "
                          f"{abf.get('error') or b5.get('error') or au.get('error')} |")
             continue
+        if au.get("mean_d") is None or abf.get("mean_d") is None:
+            # a call that returned without a map (bd-uv refusing the input: its note says why)
+            lines.append(f"| {os.path.basename(p)} | {abf['faces']} | no map: "
+                         f"{au.get('note') if au.get('mean_d') is None else 'ABF'} |")
+            ok_c.append(False)
+            ok_mean.append(False)
+            continue
         x5, xa = b5["seconds"] / abf["seconds"], au["seconds"] / abf["seconds"]
         r5.append(x5)
         ra.append(xa)

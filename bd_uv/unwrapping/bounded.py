@@ -4,7 +4,9 @@
   bound demands (``bend``: projection iterations, then the bound search where they moved much of
   the island), or one solve over F_C from the start's frames, anchored at the start
   (``IslandProblem.anchor_to``); when F_C is empty, C is raised towards the bound the flip-free
-  start is known to meet.
+  start is known to meet. A flip-free start over C is first lowered by the bound search
+  (``searched.over_bound``): C out of its reach is raised to its map at once, and its map stands
+  in for the raise's solves.
 - ``arap``: BD-ARAP iterations with frames from the previous map.
 Each returns a map in the normalised geometry and the C it is meant to be certified at; the caller
 certifies it from its final UVs. Minimising C (``bound="auto"``) is ``strategies.minimise``'s.
@@ -15,14 +17,12 @@ import numpy as np
 
 from ..errors import InfeasibleError
 from ..frames import frames_from_map
-from ..solvers.bound_search import BoundSearch
 from ..solvers.flip_free import flip_free_map
-from ..solvers.ordered_ldl import vertex_ranks
 from ..spaces import stretch_conformal_bound
 from .along import least_mean_within
 from .initial import start_map
-from .conic_solves import Cancelled
 from .margins import SOLVE_MARGIN, STORE_HEADROOM, STRETCH_MARGIN_SOLVE, solve_bound
+from .searched import over_bound, search, searched_fallback
 
 RAISE_FACTOR = 1.5      # C grows by this factor when infeasible
 MAX_RESETS = 3          # frame resets after the first feasible solve (BD-Dirichlet, BD-ARAP)
@@ -88,6 +88,15 @@ def bounded(prob, start, C, raise_bound, limit, flags, report):
     if not solved and fits(start, C):
         flags.append("initial_map")  # the start already fits: nothing to bend
         return start.u, C, start.name
+    if (not solved and prob.method == "lscm" and start.u is not None and np.isfinite(start.D)
+            and solve_bound(C) > 1.0):
+        # a flip-free start over C: the bound search rather than projection iterations
+        found, searched = over_bound(prob, start, C, raise_bound, limit, report)
+        if found is not None:
+            flags += ["projected", "bound_raised"]
+            return found + (start.name,)
+    else:
+        searched = None
     if not solved and start.u is not None and solve_bound(C) > 1.0:   # the projection needs C > 1
         bent = bend(prob, start, C, report, flags)
         if bent is not None:
@@ -122,6 +131,13 @@ def bounded(prob, start, C, raise_bound, limit, flags, report):
         if np.isfinite(D0) and prob.check(start.u, C)[0]:
             flags.append("initial_map")  # the solver failed where the start already fits
             return start.u, C, start.name
+        fallback = (searched_fallback(prob, start, searched, C, raise_bound, limit)
+                    if searched is not None else None)
+        if fallback is not None:
+            # the searched map (a sphere with a hole at C = 2.4: certified at 2.52, where the
+            # raise's conic solves reached 3.72)
+            flags += [f for f in fallback[1] if f not in flags]
+            return fallback[0] + (start.name,)
         failure = prob.solver_failure()
         if failure is not None and (not raise_bound or C * RAISE_FACTOR > limit):
             raise failure
@@ -200,38 +216,6 @@ def bend(prob, start, C, report, flags=None, polish=True):
             flags.remove("projected")
         return us
     return um
-
-
-def search(prob, u, report, budget, flags, t0):
-    """Lower the bound of a flip-free map ``u`` by ADMM onto F_C with frames
-    (``solvers.bound_search``), holding the pins (or one boundary vertex, where ``u`` has it),
-    ending at the first best map ``prob.enough`` accepts where it is set. Returns (the best map,
-    its max distortion); flags "time_budget_exhausted" when the budget stopped it."""
-    if len(prob.pin_idx) >= prob.nv:
-        return u, prob.distortion(u)
-    t = time.perf_counter()
-    fixed = prob.pin_idx if len(prob.pin_idx) else prob.island.loops[0][:1]
-    u = u.copy()
-    if len(prob.pin_idx):
-        u[prob.pin_idx] = prob.pin_val
-    # one elimination order of the island's vertices (the conformal map's, where the one-disk
-    # path solved it: no second AMD)
-    ranks = prob.ranks if prob.ranks is not None else vertex_ranks(prob.island.tris, prob.nv)
-    bs = BoundSearch(prob.ops, prob.nv, prob.island.tris, fixed, connected=True, ranks=ranks)
-
-    def progress(D, C):
-        report(0.1, f"minimising C: C* <= {D:.4g}, aiming at {C:.4g}")
-
-    deadline = None if budget is None else t0 + budget
-    u, D, out_of_time = bs.search(u, None, progress, deadline, prob.cancel, prob.enough,
-                                  prob.ready)
-    if prob.cancel is not None and prob.cancel.is_set():
-        raise Cancelled
-    if out_of_time:
-        flags.append("time_budget_exhausted")
-    prob.iterations += bs.iterations
-    prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
-    return u, D
 
 
 def start_for_solve(prob, start, report):

@@ -9,23 +9,10 @@ import numpy as np
 from ..errors import SolverError
 from ..metrics import certify_measured, mean_distortion
 from .bounded import uv_area
-from .margins import STORE_HEADROOM
+from .margins import certified_bound
 from .results import IslandResult
 
 HIGH_DISTORTION = 50.0  # certified bounds above this get a "high_distortion" flag and a hint
-
-
-def certified_bound(max_distortion):
-    """The bound ``bound="auto"`` reports for a map: its max distortion with STORE_HEADROOM,
-    with C - 1 rounded up to 4 significant digits (1.03633 for 1.036117, 3.858 for 3.8563), so the
-    UVs still pass as stored (float32, packed) and a C close to 1 keeps the precision it was
-    minimised to (the search's tolerance is relative to C - 1 too)."""
-    c = max_distortion * (1.0 + STORE_HEADROOM)
-    excess = c - 1.0
-    if not excess > 0.0:
-        return c
-    digits = 3 - int(math.floor(math.log10(excess)))
-    return 1.0 + math.ceil(excess * 10 ** digits) / 10 ** digits
 
 
 def area_scale(u, tris, area3d):

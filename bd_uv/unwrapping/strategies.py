@@ -13,7 +13,8 @@ from ..errors import InfeasibleError
 from ..frames import frames_from_map
 from . import mean_relax
 from .along import golden
-from .bounded import bend, formulate, guaranteed_bound, search, start_for_solve
+from .bounded import bend, formulate, guaranteed_bound, start_for_solve
+from .searched import search
 from .initial import Start
 
 # Minimising C stops after a Dinkelbach step that lowers C - 1 by less than this share of it.
@@ -38,7 +39,7 @@ def minimise(prob, start, limit, budget, flags, report, t0):
     is at hand (issue 21).
 
     A flip-free map bounds C* from above: the start, bent into C = 5 when it flips. From it
-    ``bounded.search`` lowers the bound by ADMM onto F_C with frames (``solvers.bound_search``:
+    ``searched.search`` lowers the bound by ADMM onto F_C with frames (``solvers.bound_search``:
     one factorisation for every C); without a time budget, where that raised the mean distortion
     well over the start's, its faces below the max are given back to the conformal map
     (``mean_relax.relax_island``: the same max, a lower mean). Conic programs run only where they

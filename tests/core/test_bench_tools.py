@@ -63,6 +63,48 @@ def test_patch_and_subdivide_keep_a_disk(tmp_path):
     assert np.array_equal(F2, F3) and np.allclose(V2, V3)
 
 
+def _boundary_walk(F):
+    """Boundary edges (used by one face) walked from one of them, each vertex's next boundary
+    vertex: (edges walked before returning to the start, boundary edges, a vertex with other
+    than one successor)."""
+    e = np.sort(F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    edges, count = np.unique(e, axis=0, return_counts=True)
+    directed = F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    b = {tuple(x) for x in edges[count == 1]}
+    nxt = {}
+    branching = False
+    for a, c in directed:
+        if (min(a, c), max(a, c)) in b:
+            branching |= a in nxt
+            nxt[a] = c
+    start = next(iter(nxt))
+    v, steps = nxt[start], 1
+    while v != start and steps <= len(b):
+        v, steps = nxt[v], steps + 1
+    return steps, len(b), branching
+
+
+def test_patch_grows_past_rings_that_meet_at_a_vertex(tmp_path):
+    """cow.off's whole rings up to 616 faces meet at a vertex (a bowtie, which bd-uv rightly
+    refuses as a disk); the patch grows to the first ring that closes into a disk."""
+    src = os.path.join(DATA, "cow.off")
+    V0, F0 = load_mesh_by_index(src)
+    # the old patch (whole rings to >= 600 faces) is no disk: its boundary branches at a vertex
+    bowtie = np.array([[0, 1, 2], [0, 3, 4]])
+    assert not assets.is_disk(bowtie) and assets.is_disk(bowtie[:1])
+    p = assets.patch(src, 600, out_dir=str(tmp_path))
+    V, F = load_mesh_by_index(p)
+    assert len(F) > 616 and assets.is_disk(F)
+    steps, nb, branching = _boundary_walk(F)
+    assert not branching and steps == nb            # one boundary loop through every edge
+    e = np.unique(np.sort(F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
+    assert len(np.unique(F)) - len(e) + len(F) == 1
+    isl = bd_uv.islands(V, F)
+    assert len(isl) == 1 and len(isl[0].loops) == 1
+    r = bd_uv.unwrap(V, F, bound=5.0)
+    assert r.certified
+
+
 def test_isolated_run_reports_the_same_distortion_and_a_peak():
     path = os.path.join(DATA, "nefertiti.off")
     r = run_isolated(path, "bd-init-lscm", 60)
@@ -138,3 +180,40 @@ def test_auto_quality_grids_are_the_test_suites_grids():
         assert len(F) == 2 * (nx - 1) * (ny - 1)
     assert [len(bench_auto_quality.load(n)[1]) for n in ("grid8", "grid9", "grid12")] == \
         [98, 112, 242]
+
+
+def test_no_waiting_disk_table_reports_a_refused_disk_and_fails_it():
+    """A bd-uv call that returns no map (its mean distortion None) gets a row saying why and
+    fails auto's quality criteria, instead of stopping the table."""
+    import bench_no_waiting as bnw
+    row = dict(seconds=0.01, faces=500, max_d=1.2, mean_d=1.05, certified_c=None, note="")
+    res = {}
+    for p, auto in (("ok.obj", dict(row, seconds=0.015, max_d=1.1, mean_d=1.04, certified_c=1.1)),
+                    ("bowtie.obj", dict(row, max_d=None, mean_d=None,
+                                        note="failed: non-manifold vertex"))):
+        for k in bnw.PEERS:
+            res[(p, k)] = dict(row)
+        res[(p, "bd-lscm-5")] = dict(row, seconds=0.005, certified_c=5.0)
+        res[(p, "bd-lscm-auto")] = auto
+    lines, crit = bnw.disk_table(["ok.obj", "bowtie.obj"], res)
+    verdict = dict(crit)
+    assert any("bowtie.obj" in ln and "non-manifold vertex" in ln for ln in lines)
+    assert any(ln.startswith("| ok.obj | 500 |") and "| 1.50 |" in ln for ln in lines)
+    assert verdict["auto / ABF <= 2.0 on every disk"]           # 0.015 / 0.01 on the one map
+    assert not verdict["auto's certified C < every peer's max distortion"]
+    assert not verdict["auto's mean <= 1.05 x ABF's"]
+
+
+def test_patch_of_a_surface_with_no_disk_ring_is_refused(tmp_path):
+    """A torus's rings around a face close into an annulus (the ball wraps around the tube) and
+    then the whole torus: from some size no whole ring is a disk, and patch says so instead of
+    writing the closed surface."""
+    import trimesh
+    t = trimesh.creation.torus(major_radius=1.0, minor_radius=0.6, major_sections=12,
+                               minor_sections=8)
+    src = assets.write_obj(str(tmp_path / "torus.obj"), t.vertices, t.faces)
+    assert len(t.faces) == 192
+    with pytest.raises(ValueError, match="no whole ring"):
+        assets.patch(src, 190, out_dir=str(tmp_path))
+    V, F = load_mesh_by_index(assets.patch(src, 20, out_dir=str(tmp_path)))
+    assert assets.is_disk(F) and len(F) >= 20

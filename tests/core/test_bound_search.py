@@ -131,3 +131,23 @@ def test_the_paired_solve_gives_the_searchs_iterates_to_the_bit():
     assert np.array_equal(u1, u2) and D1 == D2 and paired.iterations == halves.iterations > 0
     Dr, flipped = _map_distortion(V, isl, u1)
     assert not flipped.any() and Dr.max() == pytest.approx(D1, rel=1e-9)
+
+
+@pytest.mark.parametrize("n", [20, 36])
+def test_auto_on_a_flat_disk_does_not_search_round_off(n):
+    """A flat disk's conformal map is an isometry up to round-off: ``auto`` certifies it without
+    search iterations (20 x 20: the one-disk path; 36 x 36, 2450 faces: the general path), at
+    the bound that keeps the storage headroom above it, and the UVs recomputed are an isometry."""
+    import bd_uv
+    rng = np.random.default_rng(5)
+    V, F = grid(n, n)
+    V[:, :2] += rng.uniform(-0.2, 0.2, (len(V), 2)) / n       # irregular triangles, still flat
+    Q = np.linalg.qr(rng.standard_normal((3, 3)))[0]
+    V = V @ Q.T + [3.0, -1.0, 2.0]                              # a plane in general position
+    r = bd_uv.unwrap(V, F, bound="auto")
+    isl = r.islands[0]
+    assert r.certified and len(r.islands) == 1
+    assert isl.iterations == 0 and "initial_map" in isl.flags
+    assert 1.0 < isl.bound_certified <= 1.0 + 2.001e-4
+    D, flipped = reference_distortion(V, F, r.corner_uv)
+    assert not flipped.any() and D.max() <= 1.0 + 1e-9

@@ -166,3 +166,30 @@ def test_a_layout_drifted_off_the_low_corner_is_moved_back_and_its_square_cut():
     assert np.allclose(pl.shift[1] - pl.shift[0], [1.2, 0.1], rtol=0, atol=1e-12)
     gap, nested = _least_gap(rings)
     assert gap >= (options.padding * side + 2 * tol) * (1 - 1e-9) and not nested
+
+
+def test_tiny_charts_packed_close_do_not_turn_when_their_programs_are_infeasible():
+    """One large chart and 199 tiny ones (a few texels each, like a model's bolts): a tiny
+    chart's turn needs more room than the gaps spyrrow leaves among them, so programs that let
+    every chart turn are infeasible and the compaction stalled (20 programs: the side 0.6 %
+    smaller). From the first infeasible program the tiny charts of tight pairs only move (HOLD):
+    the side 2 % smaller, every outline inside, every gap the padding, none inside another."""
+    k = 200
+    V, F, uv, lab = chart_set("huge_tiny", k, seed=4)
+    options = PackOptions(resolution=1024, padding_px=4, rotate="any", solves=1)
+    charts, tol = chart_outlines(V, F, uv, lab, k, options)
+    pl0, side0, _ = square_layout(charts.outlines, options, tol, 0.0)
+    pl, side, steps = compact_square(charts.outlines, pl0, side0, options, tol, 1e9,
+                                     max_programs=20)
+    assert steps >= 5 and side < side0 * (1 - 0.015)
+    rings = placed(charts.outlines, pl.angle, pl.shift)
+    pts = np.concatenate(rings)
+    edge = 0.5 * options.padding * side + tol
+    assert pts.min() >= edge * (1 - 1e-9) and pts.max() <= side - edge * (1 - 1e-9)
+    gap, nested = _least_gap(rings)
+    assert gap >= (options.padding * side + 2 * tol) * (1 - 1e-9) and not nested
+    for xy, ring in zip(charts.outlines, rings):  # per chart: turned and moved, not mirrored
+        e0, e1 = xy[1] - xy[0], ring[1] - ring[0]
+        f0, f1 = xy[2] - xy[0], ring[2] - ring[0]
+        assert np.isclose(e0[0] * f0[1] - e0[1] * f0[0], e1[0] * f1[1] - e1[1] * f1[0],
+                          rtol=1e-9, atol=1e-15)
