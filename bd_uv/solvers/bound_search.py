@@ -60,8 +60,8 @@ MARGIN = 0.98       # the cones are aimed at 1 + MARGIN (C - 1)
 # iterations each sought to lower that noise: 0.126 s against 0.014 s at C = 5.
 FLAT = 1e-7
 ALPHA = 1.5         # ADMM over-relaxation (hemisphere: 196 iterations against 240 at 1.0)
-# A search that ends at its first map ``enough`` accepts (the unfold of a map lying over itself)
-# aims deeper and steps further: the least C is not sought. Iterations to the first one-to-one
+# A search asked to aim deep (``deep``: the unfold of a map lying over itself, which ends at its
+# first map ``enough`` accepts) aims deeper and steps further: the least C is not sought. Iterations to the first one-to-one
 # map, 7 overlapping disks (three_peaks:554, ChineseDragon:913, armadillo:533, camel:328,
 # lion-head:330, :156, three_peaks:536) at C = 5: 85 at (0.98, 1.5), 78 at (0.9, 1.5), 73 at
 # (0.9, 1.7), 72 at (0.9, 1.9) (three_peaks:554 21, 16, 15, 14); means within 0.4 % (0.8 % at
@@ -163,9 +163,9 @@ class BoundSearch:
                                                  -(s._L_fF @ self.UF).T.ravel()))
         return self._rhs_fixed[1]
 
-    def run(self, U, w, C, D_best, cancel=None, enough=None, ready=None):
+    def run(self, U, w, C, D_best, cancel=None, enough=None, ready=None, deep=False):
         """ADMM towards F_C with frames w (unit complex, (k,)), from U (2, nv): rows u and v;
-        ``enough`` and ``ready`` as ``search``'s (``ended``: whether ``enough`` stopped the run;
+        ``enough``, ``ready`` and ``deep`` as ``search``'s (``ended``: whether ``enough`` stopped the run;
         ``pending``: whether its best was not asked).
 
         Returns (U of the least max distortion below D_best or None, that max, whether it is
@@ -173,7 +173,7 @@ class BoundSearch:
         self.ended = self.pending = False
         ask = None if enough is None or ready is None else functools.partial(_ask, enough, ready)
         s = self.solver
-        margin, alpha = (MARGIN, ALPHA) if enough is None else (UNFOLD_MARGIN, UNFOLD_ALPHA)
+        margin, alpha = (UNFOLD_MARGIN, UNFOLD_ALPHA) if deep else (MARGIN, ALPHA)
         Cm = 1.0 + margin * (C - 1.0)
         kappa = (Cm - 1.0) / (Cm + 1.0)
         if self.k <= ONE_PRODUCT_FACES:
@@ -258,7 +258,7 @@ class BoundSearch:
         return self.max_distortion(self._lift(U))
 
     def search(self, u, frames_of=None, report=None, deadline=None, cancel=None, enough=None,
-               ready=None):
+               ready=None, deep=False):
         """The least max distortion reached from the flip-free map u (nv,) complex.
 
         Parameters
@@ -276,6 +276,8 @@ class BoundSearch:
             every iterate that is the least yet and that ``ready`` passes, as soon as it is
             reached, until it refuses one (then the target's best at its end, as without it);
             one that ``ready`` refuses is not asked
+        deep : bool, aim the cones deeper and over-relax more (UNFOLD_MARGIN, UNFOLD_ALPHA): for
+            a search that ends at its first one-to-one map (the unfold), not the least C
 
         Returns
         -------
@@ -296,7 +298,7 @@ class BoundSearch:
                 report(D, C)
             w = (frames_from_map(self._alpha2(U)) if frames_of is None
                  else frames_of(U[0] + 1j * U[1]))
-            Ub, Db, reached = self.run(U, w, C, D, cancel, enough, ready)
+            Ub, Db, reached = self.run(U, w, C, D, cancel, enough, ready, deep)
             if cancel is not None and cancel.is_set():
                 break
             gain = (D - Db) / (D - 1.0) if Ub is not None else 0.0

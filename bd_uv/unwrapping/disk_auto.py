@@ -107,7 +107,7 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
     # a number whose conformal map lay over itself: the first map of the search that does not
     # is enough (the user asked for C, not the least C; nearer the conformal map)
     us, D, _ = bs.search(u, None, report, None, cancel, *((one_to_one, turns_once_) if unfold
-                                                           else (None, None)))
+                                                           else (None, None)), deep=unfold)
     if cancel is not None and cancel.is_set():
         raise CancelledError("unwrap cancelled; nothing was changed")
     project = time.perf_counter() - t

@@ -42,9 +42,11 @@ def search(prob, u, report, budget, flags, t0, enough=None):
         report(0.1, f"minimising C: C* <= {D:.4g}, aiming at {C:.4g}")
 
     deadline = None if budget is None else t0 + budget
-    # the problem's own test (one-to-one) comes with its cheap gate; one given here has none
+    # the problem's own test (the unfold's one-to-one) comes with its cheap gate and aims deep;
+    # one given here (``over_bound``'s: within C, else the least C) has neither
     enough, ready = (enough, None) if enough is not None else (prob.enough, prob.ready)
-    u, D, out_of_time = bs.search(u, None, progress, deadline, prob.cancel, enough, ready)
+    u, D, out_of_time = bs.search(u, None, progress, deadline, prob.cancel, enough, ready,
+                                  deep=ready is not None)
     if prob.cancel is not None and prob.cancel.is_set():
         raise Cancelled
     if out_of_time:
