@@ -29,9 +29,10 @@ RUN_NODES = 60_000
 
 def fiedler_vectors(pairs, w, mass, centroid, offsets, group, iters=12, coarsen=True, keys=None):
     """``_fiedler_block`` of all charts; two runs of charts factor side by side when each is
-    large enough (``solvers.threads``; each chart's vector is its own either way). Charts above
-    ``cluster_fiedler.COARSE_NODES`` nodes get theirs from a graph of clusters of their nodes
-    (``cluster_fiedler.coarse_fiedler``, where ``keys`` are not used)."""
+    large enough (``solvers.threads``; each chart's vector is its own either way), a batch of
+    more than ``SEQUENTIAL_NODES`` nodes in runs of at most ``RUN_NODES``, two at a time.
+    Charts above ``cluster_fiedler.COARSE_NODES`` nodes get theirs from a graph of clusters of
+    their nodes (``cluster_fiedler.coarse_fiedler``, where ``keys`` are not used)."""
     if coarsen and (np.diff(offsets) > cluster_fiedler.COARSE_NODES).any():
         def again(*a, coarsen):
             return fiedler_vectors(*a, iters=iters, coarsen=coarsen)
