@@ -44,7 +44,7 @@ class FaceCentroids:
         return out
 
 
-def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None):
+def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None, big=None):
     """Split charts, and split their pieces again while a chart's conformal map restricted to a
     piece (``piece_stretch``: no new solve) still breaks S by the factor ``DEEPER``.
 
@@ -55,11 +55,17 @@ def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None):
     map are left to their own map too. Every level splits all its pieces in one batch
     (``bisect``).
 
+    A chart without a map (None: too large to map, a sphere, an open chart) has its pieces of
+    more than ``big`` faces split again, to the same depth: the next round would split them
+    unmapped anyway, one level a round (a 500k-face sphere took 8 rounds to come down to
+    pieces it maps, each round finding the charts of the whole remaining mesh again).
+
     Parameters
     ----------
     todo : list of (faces (k,) int64 sorted global face ids, sigma (k,2) float64 or None): the
         charts, with their map's singular values per face (``ChartMaps.sigma``); None: split
-        once
+        once, and its pieces again while they hold more than ``big`` faces
+    big : int, optional (None: pieces of charts without a map are not split again)
 
     Returns
     -------
@@ -73,14 +79,20 @@ def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None):
     for _ in range(SPLIT_DEPTH):
         sides = bisect([f for f, _ in stack], E, cut, A, cen, poly, **extra)
         pieces = []                         # (piece, chart) of charts with a map
+        large = []                          # ... of charts without, of more than ``big`` faces
         for (f, j), two in zip(stack, sides):
             if two is None:
                 continue
             split[j] = True
             if todo[j][1] is not None:
                 pieces += [(piece, j) for piece in two]
+            elif big is not None:
+                large += [(piece, j) for piece in two if len(piece) > big]
         if not pieces:
-            break
+            stack = large
+            if not stack:
+                break
+            continue
         # Every piece's restricted stretch at once.
         sig = np.concatenate([todo[j][1][np.searchsorted(todo[j][0], piece)]
                               for piece, j in pieces])
@@ -90,7 +102,7 @@ def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None):
         share = np.array([len(piece) / len(todo[j][0]) for piece, j in pieces])
         deeper = np.where(share >= MOST, MOST_DEEPER, DEEPER)
         stack = [(piece, j) for (piece, j), s_, d_ in zip(pieces, st, deeper)
-                 if np.isfinite(s_) and s_ > d_ * S * MARGIN and len(piece) > 1]
+                 if np.isfinite(s_) and s_ > d_ * S * MARGIN and len(piece) > 1] + large
         if not stack:
             break
     return split

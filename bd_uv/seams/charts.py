@@ -11,7 +11,7 @@ import numpy as np
 
 from ..solvers.lscm import FaceGeometry, face_geometry, spd_solver  # noqa: F401
 from ..solvers.lscm import _lscm_system   # lscm_pinned's assembly, to free memory before factoring
-from ..solvers.threads import halves, map_blocks
+from ..solvers.threads import halves, map_blocks, map_queue
 from .crossings import boundary_crossings
 from .orders import BATCH_VERTICES, SLACK, ordered_solver
 from ..trim import CHUNK, release_memory
@@ -152,9 +152,10 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
         return (info, u) + _per_face(u, g, faces, tris, nfs[a:b], nvs[a:b])
     j = halves(nvs, PARALLEL_VERTICES)
     if n > SEQUENTIAL_VERTICES:     # two factors of at most RUN_VERTICES vertices at a time,
-        #                             a larger chart's alone
+        #                             a larger chart's alone (two such factors side by side
+        #                             were the seam search's peak on a 500k-face mesh)
         runs = _runs(nvs, RUN_VERTICES)
-        out = [x for gr in _pairs(runs, voff) for x in map_blocks(run, gr)]
+        out = map_queue(run, runs, [voff[b] - voff[a] > RUN_VERTICES for a, b in runs])
     elif j is None:
         runs, out = [(0, k)], [run((0, k))]
     else:                   # two runs of charts, one system each, side by side
@@ -265,22 +266,6 @@ def _runs(sizes, limit):
         total += s
     runs.append((a, len(sizes)))
     return runs
-
-
-def _pairs(runs, voff):
-    """``runs`` in groups factored side by side: two consecutive runs while both hold at most
-    ``RUN_VERTICES`` vertices, a run of one larger chart alone (two such factors side by side
-    were the seam search's peak on a 500k-face mesh)."""
-    size = [int(voff[b] - voff[a]) for a, b in runs]
-    groups, i = [], 0
-    while i < len(runs):
-        if i + 1 < len(runs) and max(size[i], size[i + 1]) <= RUN_VERTICES:
-            groups.append(runs[i:i + 2])
-            i += 2
-        else:
-            groups.append(runs[i:i + 1])
-            i += 1
-    return groups
 
 
 def piece_stretch(sigma, area3, label, k):

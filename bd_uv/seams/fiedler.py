@@ -11,7 +11,7 @@ import functools
 import numpy as np
 import scipy.sparse as sp
 
-from ..solvers.threads import halves, map_blocks
+from ..solvers.threads import halves, map_blocks, map_queue
 from .charts import spd_solver
 from . import cluster_fiedler
 from .compressed import compressed
@@ -20,32 +20,60 @@ from .orders import fiedler_solver
 # Charts of one batch are split into two systems factored side by side when each holds at
 # least this many nodes.
 PARALLEL_NODES = 1500
+# ... but a batch of more nodes than this is factored in runs of charts of at most RUN_NODES
+# nodes together, two runs side by side: two halves of a 286k-node batch side by side were
+# the seam search's memory peak on a 500k-face mesh (~396 MB).
+SEQUENTIAL_NODES = 120_000
+RUN_NODES = 60_000
 
 
 def fiedler_vectors(pairs, w, mass, centroid, offsets, group, iters=12, coarsen=True, keys=None):
     """``_fiedler_block`` of all charts; two runs of charts factor side by side when each is
-    large enough (``solvers.threads``; each chart's vector is its own either way). Charts above
-    ``cluster_fiedler.COARSE_NODES`` nodes get theirs from a graph of clusters of their nodes
-    (``cluster_fiedler.coarse_fiedler``, where ``keys`` are not used)."""
+    large enough (``solvers.threads``; each chart's vector is its own either way), a batch of
+    more than ``SEQUENTIAL_NODES`` nodes in runs of at most ``RUN_NODES``, two at a time.
+    Charts above ``cluster_fiedler.COARSE_NODES`` nodes get theirs from a graph of clusters of
+    their nodes (``cluster_fiedler.coarse_fiedler``, where ``keys`` are not used)."""
     if coarsen and (np.diff(offsets) > cluster_fiedler.COARSE_NODES).any():
         def again(*a, coarsen):
             return fiedler_vectors(*a, iters=iters, coarsen=coarsen)
         return cluster_fiedler.coarse_fiedler(pairs, w, mass, centroid, offsets, group, again)
-    j = halves(np.diff(offsets), PARALLEL_NODES)
-    if j is None:
-        return _fiedler_block(pairs, w, mass, centroid, offsets, group, iters, keys)
-    cut = offsets[j]
-    first = pairs[:, 0] < cut
+    g = len(offsets) - 1
+    if len(mass) > SEQUENTIAL_NODES:
+        cuts = _runs(np.diff(offsets), RUN_NODES)
+    else:
+        j = halves(np.diff(offsets), PARALLEL_NODES)
+        if j is None:
+            return _fiedler_block(pairs, w, mass, centroid, offsets, group, iters, keys)
+        cuts = [0, j, g]
+    # The run of each pair (both its nodes are in one chart, so in one run).
+    which = np.searchsorted(offsets[cuts[1:-1]], pairs[:, 0], side="right")
 
-    def run(r):
-        sel, lo, hi, a, b = r
+    def run(i):
+        a, b = cuts[i], cuts[i + 1]
+        lo, hi = int(offsets[a]), int(offsets[b])
+        sel = which == i
         return _fiedler_block(pairs[sel] - lo, w[sel], mass[lo:hi], centroid[lo:hi],
                               offsets[a:b + 1] - lo, group[lo:hi] - a, iters,
                               None if keys is None else keys[lo:hi])
-    xs = map_blocks(run, [(first, 0, cut, 0, j), (~first, cut, len(mass), j, len(offsets) - 1)])
+    if len(cuts) == 3:
+        xs = map_blocks(run, [0, 1])
+    else:                                   # two runs at a time
+        xs = map_queue(run, range(len(cuts) - 1), [False] * (len(cuts) - 1))
     if any(x is None for x in xs):
         return None
     return np.concatenate(xs)
+
+
+def _runs(sizes, limit):
+    """The first chart of each run of consecutive charts of ``sizes`` nodes holding at most
+    ``limit`` together (a larger chart alone), and ``len(sizes)``."""
+    cuts, total = [0], 0
+    for j, s in enumerate(sizes.tolist()):
+        if j > cuts[-1] and total + s > limit:
+            cuts.append(j)
+            total = 0
+        total += s
+    return cuts + [len(sizes)]
 
 
 def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12, keys=None):

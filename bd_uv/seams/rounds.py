@@ -4,7 +4,9 @@ cut or accepted.
 A chart that is not a disk has its handles cut (``cut_graph``), and the disks that opens are
 mapped in the same round (in a round of fewer than ``trim.TRIM_FACES`` faces); closed spheres, open charts no cut graph changes, disks of more than ``MAP_VERTICES`` vertices and disks whose conformal map
 fails the charts' test (``charts.chart_maps``) are split, all in one batch
-(``bisect.split_deep``); a disk that passes, and a chart no split divides, is accepted (frozen).
+(``bisect.split_deep``; the pieces of a chart without a map again while they hold more than
+``2 MAP_VERTICES`` faces); a disk that passes, and a chart no split divides, is accepted
+(frozen).
 """
 import numpy as np
 
@@ -15,11 +17,15 @@ from .bisect import edge_weight, split_deep
 from .topology import charts
 from ..trim import TRIM_FACES, release_memory
 
-# A chart of more vertices than this is split without its conformal map: the map's LDL^T factor
-# was the search's memory peak on a 500k-face mesh (~310 MB for its first round's 183k-vertex
-# chart, against ~95 MB at this size), and a chart that large passes rarely (a wide, nearly
-# developable region). Where it would, its pieces pass and merging (``merge_charts``, which
-# maps unions of any size) joins them again.
+# A chart of more vertices than this is split without its conformal map, and its pieces again
+# while they hold more than twice as many faces (``bisect.split_deep``'s ``big``, in the same
+# round: 15 rounds became 11 on a 500k-face mesh): the map's LDL^T factor was the search's
+# memory peak on a 500k-face mesh (~310 MB for its first round's 183k-vertex chart, against
+# ~95 MB at this size), and a chart that large passes rarely (a wide, nearly developable
+# region). Where it would, its pieces pass and merging (``merge_charts``, which maps unions of
+# any size) joins them again. Not 25k: on that mesh the rounds' maps above 25k vertices all
+# failed, but dino subdivided twice, cow twice and fandisk twice (125k, 93k, 207k faces) lost
+# 3-6 % of seam length without them (their maps guide the first splits, ``split_deep``).
 MAP_VERTICES = 60_000
 
 
@@ -107,7 +113,7 @@ def refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None
     chs = disks = cm = None
     if todo:
         release_memory(len(sub))
-        split = split_deep(todo, E, cut, A, cen, S, poly, orders)
+        split = split_deep(todo, E, cut, A, cen, S, poly, orders, big=2 * MAP_VERTICES)
         for (faces, _), done in zip(todo, split):
             if not done:
                 frozen[faces] = True

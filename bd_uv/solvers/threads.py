@@ -55,6 +55,60 @@ def map_blocks(fn, items):
     return [first] + [f.result() for f in futures]
 
 
+def map_queue(fn, items, alone):
+    """``[fn(x) for x in items]``, at most two at a time, an item with ``alone`` true with no
+    other beside it, in the order of ``items``: the caller's thread and one of the pool's take
+    the next item as soon as they are free (a queue rather than pairs, which wait for both of a
+    pair before the next two start; the same limit on what is held at once, the memory of two
+    factors). Results in the order of ``items``, each what ``fn`` returns for it alone; an
+    exception is raised here after every started call has finished (no further item starts).
+    """
+    items = list(items)
+    if len(items) < 2 or workers() < 2:
+        return [fn(x) for x in items]
+    global _pool
+    with _lock:
+        if _pool is None:
+            _pool = cf.ThreadPoolExecutor(max_workers=workers(), thread_name_prefix="bd_uv")
+    out = [None] * len(items)
+    state = {"next": 0, "busy": 0, "alone": False, "error": None}
+    cond = threading.Condition()
+
+    def lane():
+        while True:
+            with cond:
+                while True:
+                    i = state["next"]
+                    if state["error"] is not None or i >= len(items):
+                        return
+                    if (state["busy"] == 0 if alone[i] else
+                            state["busy"] < 2 and not state["alone"]):
+                        break
+                    cond.wait()
+                state["next"] = i + 1
+                state["busy"] += 1
+                state["alone"] = bool(alone[i])
+            try:
+                out[i] = fn(items[i])
+            except BaseException as exc:    # raised by the caller once both lanes stop
+                with cond:
+                    state["error"] = state["error"] or exc
+            finally:
+                with cond:
+                    state["busy"] -= 1
+                    if alone[i]:
+                        state["alone"] = False
+                    cond.notify_all()
+    other = _pool.submit(lane)
+    try:
+        lane()                              # the caller's thread is the other lane
+    finally:
+        cf.wait([other])
+    if state["error"] is not None:
+        raise state["error"]
+    return out
+
+
 def halves(sizes, least):
     """Where to cut a sequence of blocks of ``sizes`` into two runs of about equal total work
     (``None`` when the smaller run would be under ``least``, or there is one worker).

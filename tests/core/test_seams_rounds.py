@@ -1,7 +1,8 @@
 """Work the seam search saves without changing its charts.
 
 - ``bisect.split_deep`` splits a piece again in the same round while its chart's map restricted
-  to it breaks S by 4x, or breaks S at all when the piece holds ``MOST`` of its chart's faces;
+  to it breaks S by 4x, or breaks S at all when the piece holds ``MOST`` of its chart's faces,
+  and a piece of a chart without a map while it holds more than ``big`` faces;
 - ``merge.merge_charts`` does not solve a union the search already mapped and split: the same
   charts come out with and without that shortcut.
 """
@@ -15,7 +16,7 @@ from bd_uv.seams.charts import MARGIN
 from seams_helpers import uv_sphere
 
 
-def _levels(monkeypatch, stretch, n=200, S=2.0):
+def _levels(monkeypatch, stretch, n=200, S=2.0, big=None):
     """The pieces ``split_deep`` hands to each level's ``bisect`` for one chart of n faces whose
     map has the same singular values (stretch, 1/stretch) on every face (so every piece's
     restricted stretch is ``stretch``), each piece split 10 % / 90 % by a stand-in ``bisect``."""
@@ -27,8 +28,8 @@ def _levels(monkeypatch, stretch, n=200, S=2.0):
                 for p in pieces]
     monkeypatch.setattr(bisect_mod, "bisect", tenth)
     faces = np.arange(n, dtype=np.int64)
-    sigma = np.tile([stretch, 1.0 / stretch], (n, 1))
-    done = bisect_mod.split_deep([(faces, sigma)], None, None, np.ones(n), None, S)
+    sigma = None if stretch is None else np.tile([stretch, 1.0 / stretch], (n, 1))
+    done = bisect_mod.split_deep([(faces, sigma)], None, None, np.ones(n), None, S, big=big)
     return calls, done
 
 
@@ -50,6 +51,21 @@ def test_split_deep_far_beyond_s_splits_every_piece_and_within_s_none(monkeypatc
     assert calls == [[200], [20, 180], [2, 18, 18, 162], [17, 17, 16, 146]]
     assert len(calls) == bisect_mod.SPLIT_DEPTH
     calls, _ = _levels(monkeypatch, 1.5)     # within S: one split, its pieces mapped next
+    assert calls == [[200]]
+
+
+def test_split_deep_splits_pieces_of_an_unmapped_chart_while_above_big(monkeypatch):
+    # No map: once without ``big``; with it, every piece of more than ``big`` faces again, to
+    # SPLIT_DEPTH levels: 200 -> 20 + 180 -> 18 + 162 -> 16 + 146 -> 14 + 132 (not again).
+    calls, done = _levels(monkeypatch, None)
+    assert calls == [[200]] and done.tolist() == [True]
+    calls, done = _levels(monkeypatch, None, big=50)
+    assert calls == [[200], [180], [162], [146]] and done.tolist() == [True]
+    assert len(calls) == bisect_mod.SPLIT_DEPTH
+    calls, _ = _levels(monkeypatch, None, big=170)      # 180 > 170 >= 162: two levels
+    assert calls == [[200], [180]]
+    # A chart with a map is not split deeper for its size: within S, one level as before.
+    calls, _ = _levels(monkeypatch, 1.5, big=50)
     assert calls == [[200]]
 
 

@@ -1,6 +1,7 @@
 """The paths that make ``seams="auto"`` faster must not change what it certifies.
 
-- ``solvers.threads``: blocks factored side by side give each block's own result, in order;
+- ``solvers.threads``: blocks factored side by side give each block's own result, in order
+  (``map_queue``: two at a time at most, a large one alone);
 - ``chart_maps`` of two runs of charts (threads) equals the one-system solve;
 - ``unwrap_islands`` with the search's known conformal maps certifies what ``unwrap`` certifies,
   and a wrong "known" map is not trusted: the UVs written are certified from scratch here;
@@ -48,6 +49,60 @@ def test_map_blocks_raises_after_every_block_finished(monkeypatch):
     with pytest.raises(ValueError, match="block 0"):
         threads.map_blocks(work, [0, 1, 2])
     assert sorted(finished) == [1, 2]
+
+
+def test_map_queue_keeps_order_two_at_most_and_alone_items_alone(monkeypatch):
+    """Every item's own result in order; never more than two at once, an ``alone`` item with
+    nothing beside it; an item starts when one of the two running ends, not when both have:
+    item 0 waits for item 3 to start (pairs would start 2 and 3 only after 0 ended). Recorded
+    from the calls."""
+    import threading
+    monkeypatch.setenv("BD_UV_THREADS", "2")
+    lock = threading.Lock()
+    third = threading.Event()
+    running, events, waited = set(), [], []
+
+    def work(x):
+        with lock:
+            running.add(x)
+            events.append((x, frozenset(running)))
+        if x == 3:
+            third.set()
+        if x == 0:
+            waited.append(third.wait(timeout=30))
+        with lock:
+            running.discard(x)
+        return 10 * x
+    alone = [False, False, False, False, True, False, False]
+    assert threads.map_queue(work, range(7), alone) == [10 * x for x in range(7)]
+    assert waited == [True]
+    assert [x for x, _ in events] == list(range(7))                 # started in order
+    seen = dict(events)
+    assert max(len(s) for s in seen.values()) <= 2
+    assert seen[4] == {4} and all(4 not in s for x, s in seen.items() if x != 4)
+    assert 0 in seen[2] and 0 in seen[3]                            # beside the long item 0
+    monkeypatch.setenv("BD_UV_THREADS", "1")
+    assert threads.map_queue(lambda x: -x, [3, 4], [False, True]) == [-3, -4]
+
+
+def test_map_queue_raises_after_every_started_item_finished(monkeypatch):
+    import threading
+    monkeypatch.setenv("BD_UV_THREADS", "2")
+    failed = threading.Event()
+    finished = []
+
+    def work(x):
+        if x == 1:
+            failed.set()
+            raise ValueError("item 1")
+        failed.wait(timeout=30)             # item 0 ends after item 1 has raised
+        finished.append(x)
+        return x
+    with pytest.raises(ValueError, match="item 1"):
+        threads.map_queue(work, range(6), [False] * 6)
+    # item 0 ran to its end before the error came out (at most an item or two more started
+    # in the moment between item 1's raise and its lane recording it)
+    assert finished[:1] == [0] and 1 not in finished and len(finished) < 5
 
 
 def test_halves_balances_work_and_refuses_small_or_single(monkeypatch):
@@ -396,3 +451,46 @@ def test_large_blocks_mapped_returns_freed_arrays_at_once():
     if outside < 50:
         pytest.skip(f"this allocator returned the memory itself ({outside:.0f} MB kept)")
     assert inside < 10, (outside, inside)
+
+
+def test_fiedler_vectors_in_bounded_runs_are_each_charts_own(monkeypatch):
+    """A batch above ``SEQUENTIAL_NODES`` nodes is factored in runs of charts of at most
+    ``RUN_NODES`` nodes (a larger chart alone), two at a time: each chart's vector is the
+    one it gets alone (recomputed here chart by chart)."""
+    from bd_uv.seams import fiedler
+    sizes = [(6, 9), (4, 5), (8, 8), (3, 12), (7, 6), (5, 5)]
+    pairs, cen, off = [], [], [0]
+    for a, b in sizes:
+        i = np.arange(a * b).reshape(a, b) + off[-1]
+        pairs += [np.stack([i[:, :-1].ravel(), i[:, 1:].ravel()], 1),
+                  np.stack([i[:-1].ravel(), i[1:].ravel()], 1)]
+        y, x = np.mgrid[0:a, 0:b]
+        cen.append(np.stack([x.ravel(), 1.3 * y.ravel(), 0.1 * (x * y).ravel()], 1))
+        off.append(off[-1] + a * b)
+    pairs, cen, off = np.concatenate(pairs), np.concatenate(cen).astype(float), np.array(off)
+    k = off[-1]
+    w = 1.0 + 0.01 * (np.arange(len(pairs)) % 7)
+    mass = 1.0 + 0.1 * (np.arange(k) % 3)
+    group = np.repeat(np.arange(len(sizes)), np.diff(off))
+    alone = []
+    for j in range(len(sizes)):
+        sel = group[pairs[:, 0]] == j
+        lo, hi = off[j], off[j + 1]
+        alone.append(fiedler._fiedler_block(pairs[sel] - lo, w[sel], mass[lo:hi], cen[lo:hi],
+                                            np.array([0, hi - lo]), np.zeros(hi - lo, int)))
+    blocks = []
+    real = fiedler._fiedler_block
+
+    def spy(pairs_, w_, mass_, *a, **kw):
+        blocks.append(len(mass_))
+        return real(pairs_, w_, mass_, *a, **kw)
+    monkeypatch.setattr(fiedler, "_fiedler_block", spy)
+    monkeypatch.setattr(fiedler, "SEQUENTIAL_NODES", 10)
+    monkeypatch.setattr(fiedler, "RUN_NODES", 80)
+    for n in ("1", "2"):
+        monkeypatch.setenv("BD_UV_THREADS", n)
+        blocks.clear()
+        x = fiedler.fiedler_vectors(pairs, w, mass, cen, off, group)
+        # runs: 54+20 | 64 | 36+42 | 25 nodes, none above 80
+        assert sorted(blocks) == [25, 64, 74, 78]
+        np.testing.assert_allclose(x, np.concatenate(alone), rtol=0, atol=1e-9)
