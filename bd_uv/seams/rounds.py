@@ -2,8 +2,10 @@
 cut or accepted.
 
 A chart that is not a disk has its handles cut (``cut_graph``), and the disks that opens are
-mapped in the same round (in a round of fewer than ``trim.TRIM_FACES`` faces); closed spheres, open charts no cut graph changes, disks of more than ``MAP_VERTICES`` vertices and disks whose conformal map
-fails the charts' test (``charts.chart_maps``) are split, all in one batch
+mapped in the same round (in a round of fewer than ``trim.TRIM_FACES`` faces); closed spheres,
+open charts no cut graph changes, disks of more than ``MAP_VERTICES`` vertices (or of more than
+``MAP_SHARE_VERTICES`` holding less than ``MAP_SHARE`` of the mesh's) and disks whose conformal
+map fails the charts' test (``charts.chart_maps``) are split, all in one batch
 (``bisect.split_deep``; the pieces of a chart without a map again while they hold more than
 ``2 MAP_VERTICES`` faces); a disk that passes, and a chart no split divides, is accepted
 (frozen).
@@ -27,6 +29,12 @@ from ..trim import TRIM_FACES, release_memory
 # failed, but dino subdivided twice, cow twice and fandisk twice (125k, 93k, 207k faces) lost
 # 3-6 % of seam length without them (their maps guide the first splits, ``split_deep``).
 MAP_VERTICES = 60_000
+# ... and a chart of more than MAP_SHARE_VERTICES is mapped only where it holds at least
+# MAP_SHARE of the mesh's vertices: on the 500k-face mesh the rounds' maps of 25k-48k-vertex
+# charts (10-19 % of it: long tubes) all failed, 14 % of its CPU, while on the meshes above the
+# 25k-60k charts whose maps guide the first splits hold 24 % of theirs or more
+MAP_SHARE_VERTICES = 25_000
+MAP_SHARE = 0.2
 
 
 def refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None, known=None,
@@ -34,7 +42,8 @@ def refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None
     """One top-down round over the charts not yet accepted; True when a seam was added.
 
     Handles are cut first; the charts to split (closed spheres, open charts no cut graph
-    changes, disks of more than ``MAP_VERTICES`` vertices, disks whose map fails) are all split
+    changes, disks of more than ``MAP_VERTICES`` vertices or of more than ``MAP_SHARE_VERTICES``
+    holding less than ``MAP_SHARE`` of the mesh's, disks whose map fails) are all split
     in one batch (``bisect.split_deep``). A disk
     passes with a mean distortion up to ``cap`` (default ``mean_cap(C)``); its conformal map goes
     into ``known`` (``ChartMaps.remember``). A disk that fails (at ``cap`` >= ``mean_cap(C)``, so
@@ -78,10 +87,12 @@ def refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None
         strict = {int(c.faces[0]) for c in new}
         chs = sorted([c for c in chs if c.kind == "disk"] + new, key=lambda c: int(c.faces[0]))
     disks = []
+    share = MAP_SHARE * len(V)
     for c in chs:
         if c.kind != "disk":
             continue
-        if len(c.vertices) > MAP_VERTICES and len(c.faces) >= 2:
+        nv = len(c.vertices)
+        if (nv > MAP_VERTICES or MAP_SHARE_VERTICES < nv < share) and len(c.faces) >= 2:
             todo.append((c.faces, None))    # split unmapped; merging may join it again
         else:
             disks.append(c)

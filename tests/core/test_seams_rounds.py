@@ -3,6 +3,9 @@
 - ``bisect.split_deep`` splits a piece again in the same round while its chart's map restricted
   to it breaks S by 4x, or breaks S at all when the piece holds ``MOST`` of its chart's faces,
   and a piece of a chart without a map while it holds more than ``big`` faces;
+- ``rounds.refine`` maps a disk of more than ``MAP_SHARE_VERTICES`` vertices only where it holds
+  ``MAP_SHARE`` of the mesh's (a scaled check: this one changes which seams come out on meshes
+  of over ~125k vertices only);
 - ``merge.merge_charts`` does not solve a union the search already mapped and split: the same
   charts come out with and without that shortcut.
 """
@@ -101,3 +104,37 @@ def test_merging_skips_unions_the_search_failed_with_the_same_charts(monkeypatch
     assert with_skip[0] == [k for k in without[0] if k not in without[1]]
     np.testing.assert_array_equal(with_skip[2], without[2])
     assert with_skip[3] == without[3]
+
+
+def test_rounds_map_a_mid_size_disk_only_where_it_holds_a_share_of_the_mesh(monkeypatch):
+    """``rounds.refine`` splits unmapped a disk of more than ``MAP_SHARE_VERTICES`` vertices that
+    holds less than ``MAP_SHARE`` of the mesh's (scaled to a 2,000-vertex sphere, whose first
+    round maps its two halves of ~1,150 and ~900 vertices), maps the others up to
+    ``MAP_VERTICES``, and every chart still certifies."""
+    from bd_uv.seams import rounds as rounds_mod
+    V, F, _ = uv_sphere(64, 32)
+    nv = len(V)
+    runs = {}
+    for low in (None, 300):
+        mapped = []
+        chart_maps = rounds_mod.chart_maps
+
+        def recorded(V_, chs, *a, **k):
+            mapped.extend(len(c.vertices) for c in chs)
+            return chart_maps(V_, chs, *a, **k)
+        monkeypatch.setattr(rounds_mod, "chart_maps", recorded)
+        if low is not None:
+            monkeypatch.setattr(rounds_mod, "MAP_SHARE_VERTICES", low)
+            monkeypatch.setattr(rounds_mod, "MAP_SHARE", 0.7)
+        result, added, info = auto_mod.unwrap_auto(V, F, bound=2.0, stretch=2.0)
+        monkeypatch.undo()
+        assert all(r.status == "certified" for r in result.islands)
+        # every face in exactly one certified island, each within the bound
+        faces = np.concatenate([r.faces for r in result.islands])
+        assert np.array_equal(np.sort(faces), np.arange(len(F)))
+        assert max(r.max_distortion for r in result.islands) <= 2.0
+        runs[low] = mapped
+    share = 0.7 * nv
+    assert any(300 < n < share for n in runs[None])       # the default maps such disks ...
+    assert not any(300 < n < share for n in runs[300])    # ... the scaled rule never does,
+    assert any(n <= 300 for n in runs[300])               # but maps their pieces
