@@ -169,3 +169,27 @@ def test_a_face_rebuilt_from_its_angles_is_the_face():
     assert np.allclose(A.sum(axis=1), np.pi) and (A > 0).all()
     Z = capped.from_angles(A, disk.area)
     assert np.allclose(Z, disk.Z, rtol=0, atol=1e-12 * np.abs(disk.Z).max())
+
+
+def test_a_flat_map_is_not_searched_for_a_lower_max_but_is_for_an_enough():
+    """``bound_search.FLAT``: the conformal map of a flat disk is an isometry up to round-off, so
+    the least-C search makes no iteration; a search with an ``enough`` (the unfold of a flat
+    island lying over itself: the USD sedan's body panel) still runs."""
+    n = 8
+    x, y = np.meshgrid(np.linspace(0, 1, n + 1), np.linspace(0, 1, n + 1), indexing="ij")
+    V = np.stack([x.ravel(), y.ravel(), np.zeros(x.size)], axis=1)
+    idx = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
+    a, b, c, d = idx[:-1, :-1], idx[1:, :-1], idx[1:, 1:], idx[:-1, 1:]
+    F = np.concatenate([np.stack([a, b, c], -1).reshape(-1, 3),
+                        np.stack([a, c, d], -1).reshape(-1, 3)])
+    vertices = one_disk.find(V, F).island.vertices
+    iso = V[vertices, 0] + 1j * V[vertices, 1]       # the conformal map: the plane itself
+    bs, _, loop = _search(V, F)
+    u = iso.copy()
+    D0 = bs.distortion_of(u)
+    assert D0 - 1.0 <= bound_search.FLAT
+    us, D, _ = bs.search(u)
+    assert bs.iterations == 0 and D == D0 and np.array_equal(us, u)
+    bs, _, loop = _search(V, F)
+    us, D, _ = bs.search(iso.copy(), None, None, None, None, lambda v: False)
+    assert bs.iterations > 0 and D <= D0     # it ran (an iterate the least yet would be asked)
