@@ -33,6 +33,15 @@ def _cpus():
     return os.cpu_count() or 1
 
 
+def _the_pool():
+    """The shared thread pool, made at its first use."""
+    global _pool
+    with _lock:
+        if _pool is None:
+            _pool = cf.ThreadPoolExecutor(max_workers=workers(), thread_name_prefix="bd_uv")
+    return _pool
+
+
 def map_blocks(fn, items):
     """``[fn(x) for x in items]``, the items run side by side when there are several workers.
 
@@ -43,11 +52,8 @@ def map_blocks(fn, items):
     items = list(items)
     if len(items) < 2 or workers() < 2:
         return [fn(x) for x in items]
-    global _pool
-    with _lock:
-        if _pool is None:
-            _pool = cf.ThreadPoolExecutor(max_workers=workers(), thread_name_prefix="bd_uv")
-    futures = [_pool.submit(fn, x) for x in items[1:]]
+    pool = _the_pool()
+    futures = [pool.submit(fn, x) for x in items[1:]]
     try:
         first = fn(items[0])                # the caller's thread takes the first block
     finally:
@@ -66,10 +72,7 @@ def map_queue(fn, items, alone):
     items = list(items)
     if len(items) < 2 or workers() < 2:
         return [fn(x) for x in items]
-    global _pool
-    with _lock:
-        if _pool is None:
-            _pool = cf.ThreadPoolExecutor(max_workers=workers(), thread_name_prefix="bd_uv")
+    pool = _the_pool()
     out = [None] * len(items)
     state = {"next": 0, "busy": 0, "alone": False, "error": None}
     cond = threading.Condition()
@@ -99,7 +102,7 @@ def map_queue(fn, items, alone):
                     if alone[i]:
                         state["alone"] = False
                     cond.notify_all()
-    other = _pool.submit(lane)
+    other = pool.submit(lane)
     try:
         lane()                              # the caller's thread is the other lane
     finally:
