@@ -69,3 +69,21 @@ def load_off(name):
     V = np.array(tok[4:4 + 3 * nv], float).reshape(nv, 3)
     rest = np.array(tok[4 + 3 * nv:4 + 3 * nv + 4 * nf], int).reshape(nf, 4)
     return V, rest[:, 1:]
+
+
+def rings(V, F, seed, faces):
+    """Whole rings of faces around the face ``seed``, grown over shared edges until at least
+    ``faces`` faces: a disk cut from a larger mesh."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import shortest_path
+    e = np.sort(np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
+    key = e[:, 0] * len(V) + e[:, 1]
+    order = np.argsort(key, kind="stable")
+    same = np.flatnonzero(key[order][1:] == key[order][:-1])
+    a, b = order[same] // 3, order[same + 1] // 3
+    A = sp.coo_array((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])),
+                     shape=(len(F), len(F))).tocsr()
+    ring = shortest_path(A, unweighted=True, indices=seed)
+    keep = np.flatnonzero(ring <= np.sort(ring)[faces - 1])
+    used, inv = np.unique(F[keep], return_inverse=True)
+    return V[used], inv.reshape(-1, 3)

@@ -11,7 +11,7 @@ from bd_uv.options import unwrap_options
 from bd_uv.overlap import island_overlaps
 from bd_uv.unwrapping import disk_certificate, one_disk
 from bd_uv.unwrapping.unwrap import pin_arrays, unwrap_islands
-from helpers import grid, load_off
+from helpers import grid, load_off, rings
 from unwrap_contract import distortion_and_flips
 
 
@@ -183,20 +183,8 @@ def test_an_overlapping_conformal_map_is_cut_by_the_general_path():
 def _central_rings(V, F, faces):
     """Whole rings of faces around the face nearest the vertices' mean, grown over shared edges
     until at least ``faces`` faces: a disk cut from a closed or larger mesh."""
-    import scipy.sparse as sp
-    from scipy.sparse.csgraph import shortest_path
-    e = np.sort(np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
-    key = e[:, 0] * len(V) + e[:, 1]
-    order = np.argsort(key, kind="stable")
-    same = np.flatnonzero(key[order][1:] == key[order][:-1])
-    a, b = order[same] // 3, order[same + 1] // 3
-    A = sp.coo_array((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])),
-                     shape=(len(F), len(F))).tocsr()
     seed = int(np.argmin(np.linalg.norm(V[F].mean(axis=1) - V.mean(axis=0), axis=1)))
-    ring = shortest_path(A, unweighted=True, indices=seed)
-    keep = np.flatnonzero(ring <= np.sort(ring)[faces - 1])
-    used, inv = np.unique(F[keep], return_inverse=True)
-    return V[used], inv.reshape(-1, 3)
+    return rings(V, F, seed, faces)
 
 
 def test_a_conformal_map_lying_over_itself_stays_one_island_at_a_lower_bound():

@@ -11,31 +11,13 @@ polygon wound counter-clockwise covering exactly the triangles' union (shapely).
 """
 import numpy as np
 import pytest
-import scipy.sparse as sp
-from scipy.sparse.csgraph import shortest_path
 
 import bd_uv
 from bd_uv.solvers import bound_search
 from bd_uv.energies import JacobianOperators
 from bd_uv.unwrapping import disk_certificate, one_disk
-from helpers import load_off
+from helpers import load_off, rings
 from unwrap_contract import distortion_and_flips
-
-
-def rings(V, F, seed, faces):
-    """Whole rings of faces around the face ``seed``, grown over shared edges until at least
-    ``faces`` faces: a disk cut from a larger mesh."""
-    e = np.sort(np.stack([F, np.roll(F, -1, axis=1)], axis=2).reshape(-1, 2), axis=1)
-    key = e[:, 0] * len(V) + e[:, 1]
-    order = np.argsort(key, kind="stable")
-    same = np.flatnonzero(key[order][1:] == key[order][:-1])
-    a, b = order[same] // 3, order[same + 1] // 3
-    A = sp.coo_array((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])),
-                     shape=(len(F), len(F))).tocsr()
-    ring = shortest_path(A, unweighted=True, indices=seed)
-    keep = np.flatnonzero(ring <= np.sort(ring)[faces - 1])
-    used, inv = np.unique(F[keep], return_inverse=True)
-    return V[used], inv.reshape(-1, 3)
 
 
 # (mesh, seed face, faces at least, the way it unfolds): disks whose conformal map at C = 5 lies
