@@ -15,7 +15,8 @@ Each step's layout is checked exactly (GEOS distances between the moved outlines
 inside) before it is kept: else half and a quarter of the move are tried (the linear model holds
 on the segment to the move), then a shorter step. Turns are linearised; their second-order error
 (r phi^2) and the tilt of a turning segment's line (the points' slide times phi) are kept as
-slack in the rows. The charts keep their shape: a turn and a translation each, never a mirror. One step's linear program is :mod:`.compact_step`.
+slack in the rows. The charts keep their shape: a turn and a translation each, never a mirror.
+One step's linear program is :mod:`.compact_step`.
 
 Measured (load ~10-13, from the two-round nesting's layouts): cow 0.629 -> 0.709, camel
 0.632 -> 0.693, suzanne 0.559 -> 0.611 in 40 programs (2.0, 1.9, 0.6 s of CPU); see
@@ -170,7 +171,8 @@ def _programs(outlines, owner, nxt, radius, turn, pm, tol, options, angle, shift
             if again or checked:
                 break
             # pairs closer than the separation after the move, out of reach before it: rows
-            # for them too (the points move up to 2 (sqrt 2 + 1) steps apart, beyond compact_step.REACH)
+            # for them too (the points move up to 2 (sqrt 2 + 1) steps apart, beyond
+            # compact_step.REACH)
             near = close(_placed(outlines, full[0], full[1]), owner, nxt,
                           pm * S_new + 2 * tol + step)
             extra = near if extra is None else tuple(np.concatenate(z) for z in zip(extra, near))

@@ -63,12 +63,12 @@ MARGIN = 0.98       # the cones are aimed at 1 + MARGIN (C - 1)
 FLAT = 1e-7
 ALPHA = 1.5         # ADMM over-relaxation (hemisphere: 196 iterations against 240 at 1.0)
 # A search asked to aim deep (``deep``: the unfold of a map lying over itself, which ends at its
-# first map ``enough`` accepts) aims deeper and steps further: the least C is not sought. Iterations to the first one-to-one
-# map, 7 overlapping disks (three_peaks:554, ChineseDragon:913, armadillo:533, camel:328,
-# lion-head:330, :156, three_peaks:536) at C = 5: 85 at (0.98, 1.5), 78 at (0.9, 1.5), 73 at
-# (0.9, 1.7), 72 at (0.9, 1.9) (three_peaks:554 21, 16, 15, 14); means within 0.4 % (0.8 % at
-# (0.9, 1.5) for lion-head:156), below the least C's. On 5 other such disks (the same meshes,
-# other seeds) 55 -> 48 iterations, means within 0.4 %
+# first map ``enough`` accepts) aims deeper and steps further: the least C is not sought.
+# Iterations to the first one-to-one map, 7 overlapping disks (three_peaks:554,
+# ChineseDragon:913, armadillo:533, camel:328, lion-head:330, :156, three_peaks:536) at C = 5:
+# 85 at (0.98, 1.5), 78 at (0.9, 1.5), 73 at (0.9, 1.7), 72 at (0.9, 1.9) (three_peaks:554 21,
+# 16, 15, 14); means within 0.4 % (0.8 % at (0.9, 1.5) for lion-head:156), below the least C's.
+# On 5 other such disks (the same meshes, other seeds) 55 -> 48 iterations, means within 0.4 %
 UNFOLD_MARGIN, UNFOLD_ALPHA = 0.9, 1.7
 # Up to this many faces the lift and the right-hand side are one product each with the (4k, 2nv)
 # operator (fewer calls: small islands pay per call); above, two products each with the (2k, nv)
@@ -167,8 +167,8 @@ class BoundSearch:
 
     def run(self, U, w, C, D_best, cancel=None, enough=None, ready=None, deep=False):
         """ADMM towards F_C with frames w (unit complex, (k,)), from U (2, nv): rows u and v;
-        ``enough``, ``ready`` and ``deep`` as ``search``'s (``ended``: whether ``enough`` stopped the run;
-        ``pending``: whether its best was not asked).
+        ``enough``, ``ready`` and ``deep`` as ``search``'s (``ended``: whether ``enough``
+        stopped the run; ``pending``: whether its best was not asked).
 
         Returns (U of the least max distortion below D_best or None, that max, whether it is
         within C)."""
