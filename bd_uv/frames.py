@@ -10,6 +10,7 @@ import scipy.sparse.linalg as spla
 
 from .energies import jacobian_operators
 from .errors import BDError
+from .geometry import corner_angles
 
 try:  # LDL^T with AMD ordering for the symmetric (LSCM) systems; SuperLU without it
     import qdldl
@@ -137,7 +138,7 @@ def harmonic_map(Z, tris, nv, loops):
         ZZ = np.concatenate([Z, extra_Z])
         TT = np.concatenate([tris, extra_T])
         n_all = nv + len(holes)
-    ang = _corner_angles(ZZ)
+    ang = np.abs(corner_angles(ZZ))
     t = np.tan(ang / 2)
     lens = np.abs(np.roll(ZZ, -1, axis=1) - ZZ)  # edge c -> c+1
     i = TT.ravel()
@@ -155,13 +156,6 @@ def harmonic_map(Z, tris, nv, loops):
     s = np.concatenate([[0.0], np.cumsum(seg)[:-1]]) / seg.sum()
     ub = np.exp(2j * np.pi * s)
     return _solve_fixed(L, n_all, outer, ub, symmetric=False)[:nv]
-
-
-def _corner_angles(Z):
-    """Interior angle at each corner, (k,3)."""
-    a = np.roll(Z, -1, axis=1) - Z
-    b = np.roll(Z, 1, axis=1) - Z
-    return np.abs(np.angle(b / a))
 
 
 def _solve_fixed(Q, n, idx, val, symmetric=True):

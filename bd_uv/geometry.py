@@ -52,6 +52,15 @@ def local_coordinates(V, F):
     return local_frame(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
 
 
+def corner_angles(Z):
+    """(m,3) each corner's angle of the triangles with corners Z (m,3) complex, signed
+    (negative in a flipped face); its absolute value is the interior angle."""
+    d = np.roll(Z, -1, axis=1) - Z
+    e = np.roll(Z, -2, axis=1) - Z
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.angle(e / d)
+
+
 def local_frame(e01, e02):
     """``local_coordinates`` of faces given by their two edges from the first corner, e01 and
     e02 (m,3) float64."""

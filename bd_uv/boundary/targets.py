@@ -5,8 +5,7 @@ is flat or flipped there; ``boundary_pins`` turns them into ``bd_uv.unwrap`` pin
 import numpy as np
 
 from ..bijectivity import _cross, oriented_loop
-from ..frames import _corner_angles
-from ..geometry import face_areas, local_coordinates
+from ..geometry import corner_angles, face_areas, local_coordinates
 
 SHAPES = ("circle", "rectangle", "pinned")
 
@@ -17,7 +16,7 @@ def _loop_lengths(V, loop):
 
 def _corner_sum(V, tris, nv):
     """Sum of the face angles at each vertex (boundary vertices: the boundary's interior angle)."""
-    ang = _corner_angles(local_coordinates(V, tris))
+    ang = np.abs(corner_angles(local_coordinates(V, tris)))
     return np.bincount(tris.ravel(), weights=ang.ravel(), minlength=nv)
 
 

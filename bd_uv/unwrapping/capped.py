@@ -29,7 +29,7 @@ Where it does not certify, ``disk_auto.minimise_disk``'s search follows.
 """
 import numpy as np
 
-from ..geometry import gradient_operators
+from ..geometry import corner_angles, gradient_operators
 from .one_disk import conformal, fitted, report_step
 
 __all__ = ["unfold"]
@@ -37,15 +37,6 @@ __all__ = ["unfold"]
 CAP = 0.97          # a boundary vertex whose UV angles reach CAP x 2 pi is capped there
 RESPONSE = 0.25     # a scaling the UV angles followed by less is taken as this share
 ATTEMPTS = 3        # solves at most
-
-
-def corner_angles(Z):
-    """(m,3) each corner's angle of the triangles with corners Z (m,3) complex, signed
-    (negative in a flipped face)."""
-    d = np.roll(Z, -1, axis=1) - Z
-    e = np.roll(Z, -2, axis=1) - Z
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.angle(e / d)
 
 
 def from_angles(A, area):
