@@ -130,16 +130,7 @@ def edge_ranks(a, b, n):
     no duplicate to sum (the same order as ``vertex_ranks`` of its triangles)."""
     if not 0 < n <= RANKED_VERTICES or not available():
         return None
-    r, c = np.concatenate([a, b]), np.concatenate([b, a])
-    nnz = len(r)
-    Ap, Ai, Ax = np.empty(n + 1, np.int64), np.empty(nnz, np.int64), np.empty(nnz)
-    _st.coo_tocsr(n, n, nnz, r, c, np.ones(nnz), Ap, Ai, Ax)   # symmetric: its csr is its csc
-    p = amd(Ap, Ai, n)
-    if p is None:
-        return None
-    rank = np.empty(n, np.int64)
-    rank[p] = np.arange(n)
-    return rank
+    return _graph_ranks(a, b, n, twice=False)
 
 
 def vertex_ranks(tris, n):
@@ -155,13 +146,20 @@ def vertex_ranks(tris, n):
     if not 0 < n <= RANKED_VERTICES or not available():
         return None
     tris = np.asarray(tris, np.int64)
-    J, K = tris.ravel(), tris[:, [1, 2, 0]].ravel()
-    r, c = np.concatenate([J, K]), np.concatenate([K, J])
+    return _graph_ranks(tris.ravel(), tris[:, [1, 2, 0]].ravel(), n, twice=True)
+
+
+def _graph_ranks(a, b, n, twice):
+    """Each of n vertices' place (n,) int64 in the AMD order of the graph whose edges are
+    (a[i], b[i]), or None where AMD refuses it; ``twice``: an edge may come twice (an interior
+    edge's two sides, summed into one entry), else each comes once (no sort, no sum)."""
+    r, c = np.concatenate([a, b]), np.concatenate([b, a])
     nnz = len(r)
     Ap, Ai, Ax = np.empty(n + 1, np.int64), np.empty(nnz, np.int64), np.empty(nnz)
     _st.coo_tocsr(n, n, nnz, r, c, np.ones(nnz), Ap, Ai, Ax)   # symmetric: its csr is its csc
-    _st.csr_sort_indices(n, Ap, Ai, Ax)
-    _st.csr_sum_duplicates(n, n, Ap, Ai, Ax)    # an interior edge's two sides
+    if twice:
+        _st.csr_sort_indices(n, Ap, Ai, Ax)
+        _st.csr_sum_duplicates(n, n, Ap, Ai, Ax)
     p = amd(Ap, Ai[:Ap[-1]], n)
     if p is None:
         return None
