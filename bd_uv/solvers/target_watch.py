@@ -20,19 +20,20 @@ FLIPPING = 6        # or after this many flipping iterates in a row from its sta
 # (issue 21 item 1: within 2x Blender ABF's time on small disks, where auto's set-up alone is
 # 1.3x ABF's at 223 faces and an iteration costs as much as ~4 faces of ABF), from a start within
 # EFFORT_START: at most EFFORT_PER_FACE iterations a face in all, at least EFFORT_MIN
-# (face-patch200: 98 -> 33 iterations, C 1.0340 -> 1.0402, the peers' least max 1.0555;
-# three_peaks-patch500 179 -> 83, 1.1255 -> 1.1337, 1.283; spot-patch300 127 -> 46, 1.0494 ->
-# 1.0584, 1.085). A start further over (a conformal map lying over itself: cow.off's 187-face
-# disk, 3.47) is moved far by the search, which the budget would cut short (C 1.3037 -> 1.4085):
-# not bounded. Its first target, from the conformal map, waits FIRST_STALL iterations
-# (knight-patch800: its max stays within 0.1 % of 1.0606 for 28 iterations, then falls to 1.0512
-# by the 60th; at STALL 12 the search ended at 1.05969 after 40 iterations, over Blender LSCM's
-# 1.05958; at 16, 1.0499 after 116; no other disk of issue 21's table changes but
+# (face-patch200: 98 -> 28 iterations, C 1.0340 -> 1.0416, the peers' least max 1.0555, CPU
+# 3.2x -> 1.7x ABF's; three_peaks-patch500 179 -> 72, 1.1255 -> 1.1442, 1.283; spot-patch300
+# 127 -> 40, 1.0494 -> 1.0601, 1.085; at 0.15 face-patch200 took 1.87-1.96x ABF's CPU). A start
+# further over (a conformal map lying over itself: cow.off's 187-face disk, 3.47) is moved far
+# by the search, which the budget would cut short (C 1.3037 -> 1.4085): not bounded.
+# The first target, from the conformal map, waits FIRST_STALL iterations (knight-patch800: its
+# max stays within 0.1 % of 1.0606 for 28 iterations, then falls to 1.0512 by the 60th; at
+# STALL 12 the search ended at 1.05969 after 40 iterations, over Blender LSCM's 1.05958; at 16,
+# 1.0499 after 104 in this budget; no other disk of issue 21's table changes but
 # hemisphere-patch400, 77 -> 81 iterations at the same C). Larger islands: their set-up
-# dominates, their search is unbounded.
+# dominates, their search is not bounded.
 EFFORT_FACES = 1000
 EFFORT_START = 2.0
-EFFORT_PER_FACE = 0.15
+EFFORT_PER_FACE = 0.13
 EFFORT_MIN = 15
 FIRST_STALL = 16
 
