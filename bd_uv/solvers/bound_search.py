@@ -23,6 +23,8 @@ multipliers from zero; every iterate whose max distortion is below D becomes the
 stops bettering the best for STALL iterations halves it, until the step is below TOLERANCE or two
 targets in a row fell short while gaining less than SMALL of D - 1 (at STALL 20, hemisphere: 156
 iterations against 176 for C 1.03506 against 1.03502; mushroom 72 against 92).
+``bound="auto"`` on a small unpinned island with no time budget (``limit_effort``): within an
+iteration budget growing with its faces, its first target waiting longer (``target_watch.effort``).
 
 The iterations: up to ONE_PRODUCT_FACES faces on the free unknowns in every face's frame
 (``free_admm``), above on the whole map by the gradient operator (``framed_cone``); each target's
