@@ -23,6 +23,8 @@ multipliers from zero; every iterate whose max distortion is below D becomes the
 stops bettering the best for STALL iterations halves it, until the step is below TOLERANCE or two
 targets in a row fell short while gaining less than SMALL of D - 1 (at STALL 20, hemisphere: 156
 iterations against 176 for C 1.03506 against 1.03502; mushroom 72 against 92).
+``bound="auto"`` on a small unpinned island with no time budget (``limit_effort``): within an
+iteration budget growing with its faces, its first target waiting longer (``target_watch.effort``).
 
 The iterations: up to ONE_PRODUCT_FACES faces on the free unknowns in every face's frame
 (``free_admm``), above on the whole map by the gradient operator (``framed_cone``); each target's
@@ -39,6 +41,7 @@ from .face_operators import free_lift_arrays
 from .framed_cone import framed_cone_projection, gradient_products, project_framed
 from .free_admm import FreeLift, run_free
 from .global_step import GlobalStep
+from . import target_watch
 from .target_watch import Watch, ask as _ask
 
 __all__ = ["BoundSearch", "framed_cone_projection"]
@@ -100,6 +103,9 @@ class BoundSearch:
         self.iterations = 0
         self.ended = self.pending = False   # the last run: ``enough`` stopped it; its best unasked
         self._B = self._free = None
+        # ``limit_effort``'s: bounded as auto's least C, its iteration budget, the first
+        # target's STALL
+        self.least, self.budget, self.first_stall = False, None, target_watch.STALL
 
     def _operators(self):
         """The lift of a map straight to every face's doubled alpha and beta (eq. 4.19), one
@@ -216,7 +222,7 @@ class BoundSearch:
             np.subtract(GU, Z, out=lam)         # lam + G x - z
             self.iterations += 1
 
-        watch = Watch(D_best, None if ask is None else lambda V: ask(V[0] + 1j * V[1]))
+        watch = self._watch(D_best, None if ask is None else lambda V: ask(V[0] + 1j * V[1]))
         watch.iterate(step, lambda: self._max_distortion(GU), U.copy, C, cancel)
         self.ended, self.pending = watch.ended, watch.pending
         return watch.kept, watch.best
@@ -236,13 +242,30 @@ class BoundSearch:
         def asked(x):
             V = whole(x)
             return ask(V[0] + 1j * V[1])
-        watch = Watch(D_best, None if ask is None else asked)
+        watch = self._watch(D_best, None if ask is None else asked)
         best, D = run_free(self._free_lift(), s.factorize(), x0, w, kappa, C, watch, alpha,
                            cancel, self._count)
         self.ended, self.pending = watch.ended, watch.pending
         if best is None:
             return None, D, False
         return whole(best), D, D <= C
+
+    def limit_effort(self):
+        """Bound the search as ``bound="auto"`` bounds it on an unpinned island with no time
+        budget, up to ``target_watch.EFFORT_FACES`` faces: its first target waits FIRST_STALL
+        iterations, and from a start within EFFORT_START its iterations are within a budget
+        growing with the faces (``target_watch.effort``)."""
+        if self.k <= target_watch.EFFORT_FACES:
+            self.least, self.first_stall = True, target_watch.FIRST_STALL
+
+    def _watch(self, D_best, ask):
+        """A target's ``Watch``: its iterations within the search's budget where it has one, the
+        first target's STALL ``first_stall``."""
+        limit = target_watch.MAX_ITER
+        if self.budget is not None:
+            limit = min(limit, self.budget - self.iterations)
+        return Watch(D_best, ask, limit,
+                     self.first_stall if self.iterations == 0 else target_watch.STALL)
 
     def _count(self, n):
         self.iterations += n
@@ -289,10 +312,14 @@ class BoundSearch:
         """
         U = np.stack([u.real, u.imag])
         D = self.distortion_of(u)
+        if self.least:
+            self.budget = target_watch.effort(self.k, D)
         step, small = STEP, 0
         out_of_time = False
         flat = FLAT if enough is None else 0.0
         while np.isfinite(D) and D - 1.0 > flat:
+            if self.budget is not None and self.iterations >= self.budget:
+                break
             if deadline is not None and time.perf_counter() > deadline and self.iterations:
                 out_of_time = True
                 break

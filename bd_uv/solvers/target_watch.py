@@ -6,7 +6,7 @@ Split from ``bound_search`` (the search over C and its ADMM), with the constants
 """
 import numpy as np
 
-__all__ = ["Watch", "ask"]
+__all__ = ["Watch", "ask", "effort"]
 
 MAX_ITER = 150      # iterations per target
 # A target is out of reach after STALL iterations that did not lower the max by PROGRESS of its
@@ -16,6 +16,26 @@ MAX_ITER = 150      # iterations per target
 STALL = 12          # a target is out of reach after this many iterations ...
 PROGRESS = 0.01     # ... that did not lower the max by this share of its excess over 1,
 FLIPPING = 6        # or after this many flipping iterates in a row from its start
+# ``bound="auto"``'s search on an unpinned island of up to EFFORT_FACES faces with no time budget
+# (issue 21 item 1: within 2x Blender ABF's time on small disks, where auto's set-up alone is
+# 1.3x ABF's at 223 faces and an iteration costs as much as ~4 faces of ABF), from a start within
+# EFFORT_START: at most EFFORT_PER_FACE iterations a face in all, at least EFFORT_MIN
+# (face-patch200: 98 -> 28 iterations, C 1.0340 -> 1.0416, the peers' least max 1.0555, CPU
+# 3.2x -> 1.7x ABF's; three_peaks-patch500 179 -> 72, 1.1255 -> 1.1442, 1.283; spot-patch300
+# 127 -> 40, 1.0494 -> 1.0601, 1.085; at 0.15 face-patch200 took 1.87-1.96x ABF's CPU). A start
+# further over (a conformal map lying over itself: cow.off's 187-face disk, 3.47) is moved far
+# by the search, which the budget would cut short (C 1.3037 -> 1.4085): not bounded.
+# The first target, from the conformal map, waits FIRST_STALL iterations (knight-patch800: its
+# max stays within 0.1 % of 1.0606 for 28 iterations, then falls to 1.0512 by the 60th; at
+# STALL 12 the search ended at 1.05969 after 40 iterations, over Blender LSCM's 1.05958; at 16,
+# 1.0499 after 104 in this budget; no other disk of issue 21's table changes but
+# hemisphere-patch400, 77 -> 81 iterations at the same C). Larger islands: their set-up
+# dominates, their search is not bounded.
+EFFORT_FACES = 1000
+EFFORT_START = 2.0
+EFFORT_PER_FACE = 0.13
+EFFORT_MIN = 15
+FIRST_STALL = 16
 
 
 class Watch:
@@ -23,8 +43,9 @@ class Watch:
     to stop. Out of reach: no progress for STALL iterations, or FLIPPING flipping iterates in a
     row from the start (three_peaks: a target that flips stays flipped)."""
 
-    def __init__(self, best, ask=None):
+    def __init__(self, best, ask=None, limit=MAX_ITER, stall=STALL):
         self.best, self.since, self.mark = best, 0, best
+        self.limit, self.stall = limit, stall
         self.ask, self.ended, self.refused, self.pending = ask, False, False, False
 
     def accepts(self, kept):
@@ -50,16 +71,16 @@ class Watch:
             self.since, self.mark = 0, D
         else:
             self.since += 1
-            if self.since >= (FLIPPING if D == np.inf and self.since == it else STALL):
+            if self.since >= (FLIPPING if D == np.inf and self.since == it else self.stall):
                 return better, True
-        return better, it == MAX_ITER
+        return better, it >= self.limit
 
     def iterate(self, step, measure, keep, C, cancel):
-        """``step()`` up to MAX_ITER times; before each but the first, ``measure()`` the max
+        """``step()`` up to ``limit`` times; before each but the first, ``measure()`` the max
         distortion, ``kept = keep()`` (a copy of the iterate) when it is the least yet, and stop
         when ``seen`` says so or ``cancel`` is set."""
         self.kept = None
-        for it in range(MAX_ITER + 1):
+        for it in range(self.limit + 1):
             if cancel is not None and cancel.is_set():
                 break
             if it:
@@ -71,6 +92,14 @@ class Watch:
                 if stop:
                     break
             step()
+
+
+def effort(k, D):
+    """The iteration budget (None: none) of ``bound="auto"``'s search on an unpinned island of
+    k faces from a start of max distortion D (see EFFORT_FACES)."""
+    if k > EFFORT_FACES or not D <= EFFORT_START:
+        return None
+    return max(EFFORT_MIN, int(EFFORT_PER_FACE * k))
 
 
 def ask(enough, ready, u):

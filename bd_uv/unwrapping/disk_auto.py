@@ -88,6 +88,8 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
     D0 = bs.distortion_of(u)
     if not (np.isfinite(D0) and D0 <= limit):
         return None
+    if not unfold:      # the least C: the general path's bounds (``strategies.minimise``)
+        bs.limit_effort()
 
     def report(D, C):
         report_step(progress, cancel, 0.1, f"island 1/1: minimising C: C* <= {D:.4g}, aiming at "

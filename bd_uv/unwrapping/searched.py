@@ -20,10 +20,12 @@ FAR = 1.25
 MEAN_SEARCH = 12   # distortion evaluations between the start and the searched map (``along``)
 
 
-def search(prob, u, report, budget, flags, t0, enough=None):
+def search(prob, u, report, budget, flags, t0, enough=None, least=False):
     """Lower the bound of a flip-free map ``u`` by ADMM onto F_C with frames
     (``solvers.bound_search``), holding the pins (or one boundary vertex, where ``u`` has it),
     ending at the first best map ``enough`` (else ``prob.enough``) accepts where it is set.
+    ``least``: the search for ``bound="auto"``'s least C on an unpinned island with no time budget,
+    bounded as ``BoundSearch.limit_effort`` bounds it.
     Returns (the best map, its max distortion); flags "time_budget_exhausted" when the budget
     stopped it."""
     if len(prob.pin_idx) >= prob.nv:
@@ -37,6 +39,8 @@ def search(prob, u, report, budget, flags, t0, enough=None):
     # path solved it: no second AMD)
     ranks = prob.ranks if prob.ranks is not None else vertex_ranks(prob.island.tris, prob.nv)
     bs = BoundSearch(prob.ops, prob.nv, prob.island.tris, fixed, connected=True, ranks=ranks)
+    if least:
+        bs.limit_effort()
 
     def progress(D, C):
         report(0.1, f"minimising C: C* <= {D:.4g}, aiming at {C:.4g}")

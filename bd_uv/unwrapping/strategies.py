@@ -63,7 +63,9 @@ def minimise(prob, start, limit, budget, flags, report, t0):
     best, projected, steps = None, None, budget is not None
     if np.isfinite(start.D) and start.D <= limit:
         best = (start.u, start.D)   # the start is certified at its own distortion
-        u, D = search(prob, start.u, report, budget, flags, t0)
+        # the least C of an unpinned island with no time budget: ``one_disk``'s, bounded alike
+        u, D = search(prob, start.u, report, budget, flags, t0,
+                      least=not steps and not len(prob.pin_idx) and prob.enough is None)
         if D < best[1]:
             ok, D = prob.check(u, D)    # the map's max distortion, measured anew
             if ok:

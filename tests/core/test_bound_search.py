@@ -151,3 +151,26 @@ def test_auto_on_a_flat_disk_does_not_search_round_off(n):
     assert 1.0 < isl.bound_certified <= 1.0 + 2.001e-4
     D, flipped = reference_distortion(V, F, r.corner_uv)
     assert not flipped.any() and D.max() <= 1.0 + 1e-9
+
+
+def test_auto_on_a_small_disk_keeps_to_its_effort_budget(monkeypatch):
+    """``bound="auto"`` on an unpinned disk of up to EFFORT_FACES faces, with no time budget,
+    iterates at most EFFORT_PER_FACE a face (``target_watch.effort``); the same call gives the
+    same UVs bit for bit (an iteration count, no clock), certified from the UVs recomputed here;
+    unbounded (EFFORT_FACES 0) the search runs longer, to a C no higher."""
+    import bd_uv
+    from bd_uv.solvers import target_watch
+    V, F = grid(11, 11, z=lambda x, y: 0.3 * np.sin(4 * x) * np.cos(3 * y))
+    budget = max(target_watch.EFFORT_MIN, int(target_watch.EFFORT_PER_FACE * len(F)))
+    runs = [bd_uv.unwrap(V, F, bound="auto") for _ in range(2)]
+    assert np.array_equal(runs[0].corner_uv, runs[1].corner_uv)
+    monkeypatch.setattr(target_watch, "EFFORT_FACES", 0)
+    runs.append(bd_uv.unwrap(V, F, bound="auto"))
+    (bounded,), (free,) = runs[0].islands, runs[2].islands
+    assert 0 < bounded.iterations <= budget < free.iterations
+    assert free.bound_certified <= bounded.bound_certified
+    for r in (runs[0], runs[2]):
+        (isl,) = r.islands
+        D, flipped = reference_distortion(V, F, r.corner_uv.reshape(-1, 3, 2))
+        assert r.certified and not flipped.any()
+        assert D.max() <= isl.bound_certified * (1 + 1e-9)
