@@ -1,0 +1,140 @@
+"""Connected parts of a mesh that are copies of one another (a bolt placed 36 times): the seam
+search (``auto.unwrap_auto``) runs on one of each, and its seams are copied onto the others.
+
+A copy has the same faces as its original, vertex for vertex (each part's vertices numbered by
+first appearance in its faces), the same given seams, materials and polygons, and positions that
+a rotation, a uniform scale and a translation carry onto the original's within ``TOL`` of the
+part's size. A mirror image is not a copy (its seam costs see its creases turned inside out).
+The conformal maps, the charts' test and the certificate depend only on the triangles' shapes,
+so the original's charts pass on the copy as they passed on the original, to rounding; the
+final unwrap certifies every copy's charts all the same, on the copy's own positions, and the
+finish rounds split any that fail there, as they do for every chart.
+"""
+import dataclasses
+import hashlib
+
+import numpy as np
+
+from ..geometry import components
+
+# Parts of fewer faces are searched where they are: their search costs no round of its own.
+MIN_FACES = 16
+# A copy's positions lie within this share of the part's RMS radius of the original's moved
+# by the best similarity (Kabsch with a scale): the shader ball's 36 bolts, stored in an OBJ
+# with 6 decimals, are copies within 6.4e-6. The copies' charts are certified on their own
+# positions anyway: the tolerance decides only where the original's seams are reused.
+TOL = 1e-4
+# Originals a part is compared with among the parts of its faces and seams (beyond, it is an
+# original itself).
+MAX_ORIGINALS = 4
+
+
+@dataclasses.dataclass
+class Copies:
+    """``mask`` (m,) bool: the faces of the copies (the search leaves them alone); ``pairs``:
+    (original part, the original's vertices, the copy's vertices), vertex for vertex."""
+    mask: np.ndarray
+    pairs: list
+
+    def spread(self, E, marked, part, n):
+        """Mark on every copy the edges ``marked`` ((e,) bool, in place) on its original.
+        ``part``: (n,) the part of each vertex."""
+        on = np.flatnonzero(marked)
+        src = part[E.ends[on, 0]]
+        where = np.full(n, -1, dtype=np.int64)
+        for p, orig, copy in self.pairs:
+            ends = E.ends[on[src == p]].astype(np.int64)
+            if not len(ends):
+                continue
+            where[orig] = np.arange(len(orig))
+            k = E.keys(copy[where[ends]], n)
+            marked[k[k >= 0]] = True
+
+
+def find_copies(V, F, E, cut, face_groups=None, polygons=None):
+    """The parts of (V, F) that copy another part, or None when there are none.
+
+    ``cut``: (e,) bool, the given seams (a copy has the same ones); ``face_groups``,
+    ``polygons``: (m,) int arrays or None (a copy has the same materials and polygons).
+
+    Returns
+    -------
+    (Copies, part (n,) int64: each vertex's part) or None
+    """
+    n, m = len(V), len(F)
+    if m < 2 * MIN_FACES:
+        return None
+    count, part = components(n, E.ends[:, 0], E.ends[:, 1])
+    if count < 2:
+        return None
+    F = np.asarray(F, dtype=np.int64)
+    fpart = part[F[:, 0]]
+    nf = np.bincount(fpart, minlength=count)
+    used = np.zeros(n, dtype=bool)
+    used[F.ravel()] = True
+    nv = np.bincount(part[used], minlength=count)
+    size = nf * (n + 1) + nv
+    _, inv, times = np.unique(size, return_inverse=True, return_counts=True)
+    cand = np.flatnonzero((nf >= MIN_FACES) & (times[inv.ravel()] > 1))
+    if not len(cand):
+        return None
+    order = np.argsort(fpart, kind="stable")
+    start = np.concatenate([[0], np.cumsum(nf)])
+    seam = np.flatnonzero(cut)
+    spart = fpart[E.faces[seam, 0]]
+    groups = {}
+    for p in cand.tolist():
+        fc = order[start[p]:start[p + 1]]
+        corners = F[fc].ravel()
+        uniq, first, inv = np.unique(corners, return_index=True, return_inverse=True)
+        by_first = np.argsort(first, kind="stable")
+        rank = np.empty(len(uniq), dtype=np.int64)
+        rank[by_first] = np.arange(len(uniq))
+        verts = uniq[by_first]
+        h = hashlib.blake2b(rank[inv.ravel()].tobytes(), digest_size=16)
+        if face_groups is not None:
+            h.update(np.asarray(face_groups)[fc].astype(np.int64).tobytes())
+        if polygons is not None:
+            _, pf, pinv = np.unique(np.asarray(polygons)[fc], return_index=True,
+                                    return_inverse=True)
+            pr = np.empty(len(pf), dtype=np.int64)
+            pr[np.argsort(pf, kind="stable")] = np.arange(len(pf))
+            h.update(b"p" + pr[pinv.ravel()].tobytes())
+        mine = E.ends[seam[spart == p]].astype(np.int64)
+        if len(mine):
+            loc = rank[np.searchsorted(uniq, mine)]
+            loc = np.sort(loc, axis=1)
+            loc = loc[np.lexsort((loc[:, 1], loc[:, 0]))]
+            h.update(b"s" + loc.tobytes())
+        groups.setdefault((int(size[p]), h.digest()), []).append((p, verts))
+    mask = np.zeros(m, dtype=bool)
+    pairs = []
+    for members in groups.values():
+        originals = []
+        for p, verts in members:
+            Y = V[verts]
+            orig = next((o for o in originals[:MAX_ORIGINALS] if _congruent(V[o[1]], Y)), None)
+            if orig is None:
+                originals.append((p, verts))
+            else:
+                pairs.append((orig[0], orig[1], verts))
+                mask[order[start[p]:start[p + 1]]] = True
+    if not pairs:
+        return None
+    return Copies(mask, pairs), part
+
+
+def _congruent(X, Y):
+    """Whether a rotation (no reflection), a uniform scale and a translation carry X onto Y
+    within ``TOL`` of Y's RMS radius (row for row)."""
+    xc = X - X.mean(axis=0)
+    yc = Y - Y.mean(axis=0)
+    sx, sy = float((xc * xc).sum()), float((yc * yc).sum())
+    if not (sx > 0 and sy > 0):
+        return False
+    U, s, Wt = np.linalg.svd(xc.T @ yc)
+    R = U @ Wt
+    if np.linalg.det(R) <= 0:
+        return False
+    scale = float(s.sum()) / sx
+    return float(np.abs(scale * (xc @ R) - yc).max()) <= TOL * np.sqrt(sy / len(Y))

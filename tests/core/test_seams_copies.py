@@ -1,0 +1,124 @@
+"""Parts of a mesh that copy another part (``seams.copies``): the search runs on the original,
+the copies get its seams, and every chart is still certified on its own positions.
+
+The parts are built here with a known rotation, scale, translation and vertex numbering, so the
+correspondence the search should find is known independently.
+"""
+import numpy as np
+
+from bd_uv.seams import unwrap_auto
+from bd_uv.seams.copies import TOL, find_copies
+from bd_uv.seams.edges import edge_table
+from seams_helpers import torus, uv_sphere
+from test_seams import check_charts
+
+
+def _rotation(seed):
+    q, r = np.linalg.qr(np.random.default_rng(seed).normal(size=(3, 3)))
+    q = q * np.sign(np.diag(r))
+    return q if np.linalg.det(q) > 0 else -q
+
+
+def _parts():
+    """A torus, and beside it: the torus rotated, scaled 2.5 and moved (a copy); moved with its
+    vertices numbered in another order (a copy); mirrored (not a copy); moved with noise of
+    100 TOL of its size (not a copy); a UV sphere (another part). Returns V, F, and per part
+    (faces, vertex of the part for each torus vertex)."""
+    Vt, Ft = torus(R=4.0, r=1.0, nu=24, nv=8)[:2]
+    nt = len(Vt)
+    R = _rotation(3)
+    perm = np.random.default_rng(1).permutation(nt)
+    where = np.empty(nt, dtype=np.int64)
+    where[perm] = np.arange(nt)             # vertex i of the torus is vertex where[i] here
+    noise = np.random.default_rng(2).normal(size=Vt.shape) * 100 * TOL * np.sqrt(
+        np.mean(np.sum((Vt - Vt.mean(0)) ** 2, axis=1)))
+    mirror = Vt * [-1.0, 1.0, 1.0]
+    pieces = [(Vt, Ft, np.arange(nt)),
+              (2.5 * Vt @ R.T + [20.0, 0, 0], Ft, np.arange(nt)),
+              ((Vt + [0, 20.0, 0])[perm], where[Ft], where),
+              (mirror + [0, 0, 20.0], Ft, np.arange(nt)),
+              (Vt + noise + [0, -20.0, 0], Ft, np.arange(nt))]
+    Vs, Fs = uv_sphere()[:2]
+    pieces.append((Vs + [-20.0, 0, 0], Fs, None))
+    V, F, parts, nv, nf = [], [], [], 0, 0
+    for P, Q, corr in pieces:
+        V.append(P)
+        F.append(Q + nv)
+        parts.append((np.arange(nf, nf + len(Q)), None if corr is None else corr + nv))
+        nv += len(P)
+        nf += len(Q)
+    return np.concatenate(V), np.concatenate(F).astype(np.int64), parts
+
+
+def test_copies_found_by_similarity_and_numbering():
+    V, F, parts = _parts()
+    E = edge_table(V, F)
+    found = find_copies(V, F, E, np.zeros(len(E.ends), dtype=bool))
+    assert found is not None
+    copies, part = found
+    want = np.zeros(len(F), dtype=bool)
+    want[parts[1][0]] = want[parts[2][0]] = True
+    assert np.array_equal(copies.mask, want)
+    # Vertex for vertex: the original's torus vertex i onto the copy's torus vertex i.
+    assert sorted(int(copy.min()) for _, _, copy in copies.pairs) == [
+        int(parts[1][1].min()), int(parts[2][1].min())]
+    for p, orig, copy in copies.pairs:
+        assert p == part[parts[0][1][0]]
+        assert np.array_equal(np.sort(orig), parts[0][1])
+        k = 1 if copy.min() == parts[1][1].min() else 2
+        assert np.array_equal(copy, parts[k][1][orig - parts[0][1][0]])
+
+
+def test_given_seams_and_materials_must_match():
+    V, F, parts = _parts()
+    E = edge_table(V, F)
+    cut = np.zeros(len(E.ends), dtype=bool)
+    # A seam on the first copy only: it is no copy any more (the second one still is).
+    e = E.keys([[parts[1][1][0], parts[1][1][1]]], len(V))[0]
+    assert e >= 0
+    cut[e] = True
+    copies, _ = find_copies(V, F, E, cut)
+    assert not copies.mask[parts[1][0]].any() and copies.mask[parts[2][0]].all()
+    groups = np.zeros(len(F), dtype=np.int64)
+    groups[parts[2][0][:5]] = 1
+    copies, _ = find_copies(V, F, E, np.zeros(len(E.ends), dtype=bool), face_groups=groups)
+    assert copies.mask[parts[1][0]].all() and not copies.mask[parts[2][0]].any()
+
+
+def _cut_pairs(res, F, faces):
+    """The mesh edges of ``faces`` whose two faces are in different charts or do not share both
+    chart vertices, as sorted vertex pairs (recomputed from the islands)."""
+    corner = np.full((len(F), 3), -1, dtype=np.int64)
+    off = 0
+    for r in res.islands:
+        corner[r.faces] = r.tris + off
+        off += len(r.vertices)
+    half = {}
+    for f in faces.tolist():
+        for k in range(3):
+            a, b = int(F[f, k]), int(F[f, (k + 1) % 3])
+            half[(a, b)] = (corner[f, k], corner[f, (k + 1) % 3])
+    out = set()
+    for (a, b), (ca, cb) in half.items():
+        other = half.get((b, a))
+        if other is not None and (other[0] != cb or other[1] != ca):
+            out.add((min(a, b), max(a, b)))
+    return out
+
+
+def test_copies_get_the_originals_seams_and_are_certified():
+    V, F, parts = _parts()
+    res, added, info = unwrap_auto(V, F, bound=2.0, stretch=2.0)
+    check_charts(V, F, res)
+    seams = [_cut_pairs(res, F, faces) for faces, _ in parts]
+    assert seams[0]                         # a torus needs seams
+    for k in (1, 2):
+        corr = parts[k][1]
+        image = {tuple(sorted((int(corr[a - parts[0][1][0]]), int(corr[b - parts[0][1][0]]))))
+                 for a, b in seams[0]}
+        assert image == seams[k]
+        charts = {int(i) for i in res.face_island[parts[k][0]]}
+        assert len(charts) == len({int(i) for i in res.face_island[parts[0][0]]})
+    # ``added`` holds the copies' seams too.
+    got = {tuple(p) for p in added.tolist()}
+    assert set().union(*seams[:3]) <= got
