@@ -191,6 +191,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             sub = np.flatnonzero(copies.mask)
             chs = sorted([c for c in chs if not copies.mask[c.faces[0]]] + charts(F, E, cut, sub),
                          key=lambda c: int(c.faces[0]))
+            copies.spread_maps(chs, known)
         copies = part = found = None
     release_memory(m)
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``

@@ -32,7 +32,8 @@ MAX_ORIGINALS = 4
 @dataclasses.dataclass
 class Copies:
     """``mask`` (m,) bool: the faces of the copies (the search leaves them alone); ``pairs``:
-    (original part, the original's vertices, the copy's vertices), vertex for vertex."""
+    (original part, the original's vertices, the copy's vertices, the original's faces, the
+    copy's faces), vertex for vertex and face for face (the faces ascending)."""
     mask: np.ndarray
     pairs: list
 
@@ -42,13 +43,31 @@ class Copies:
         on = np.flatnonzero(marked)
         src = part[E.ends[on, 0]]
         where = np.full(n, -1, dtype=np.int64)
-        for p, orig, copy in self.pairs:
+        for p, orig, copy, _, _ in self.pairs:
             ends = E.ends[on[src == p]].astype(np.int64)
             if not len(ends):
                 continue
             where[orig] = np.arange(len(orig))
             k = E.keys(copy[where[ends]], n)
             marked[k[k >= 0]] = True
+
+    def spread_maps(self, chs, known):
+        """Give each copy's charts (``chs``, topology.Chart of the cut after ``spread``) the
+        conformal map of its original's chart in ``known`` (sorted faces' bytes -> map), corner
+        for corner: the triangles' shapes are the same, so the map is the one the final unwrap
+        would solve, to rounding (and it certifies the copy from its own positions)."""
+        first = {int(c.faces[0]): c for c in chs}
+        starts = np.array(sorted(first), dtype=np.int64)
+        for _, _, _, of, cf in self.pairs:
+            for f in of[np.isin(of, starts)].tolist():
+                oc = first[f]
+                u = known.get(oc.faces.tobytes())
+                cc = first.get(int(cf[np.searchsorted(of, f)]))
+                if u is None or cc is None or len(cc.faces) != len(oc.faces):
+                    continue
+                w = np.empty(len(cc.vertices), dtype=u.dtype)
+                w[cc.tris.ravel()] = u[oc.tris.ravel()]
+                known[cc.faces.tobytes()] = w
 
 
 def find_copies(V, F, E, cut, face_groups=None, polygons=None):
@@ -115,9 +134,9 @@ def find_copies(V, F, E, cut, face_groups=None, polygons=None):
             Y = V[verts]
             orig = next((o for o in originals[:MAX_ORIGINALS] if _congruent(V[o[1]], Y)), None)
             if orig is None:
-                originals.append((p, verts))
+                originals.append((p, verts, order[start[p]:start[p + 1]]))
             else:
-                pairs.append((orig[0], orig[1], verts))
+                pairs.append((orig[0], orig[1], verts, orig[2], order[start[p]:start[p + 1]]))
                 mask[order[start[p]:start[p + 1]]] = True
     if not pairs:
         return None

@@ -60,9 +60,9 @@ def test_copies_found_by_similarity_and_numbering():
     want[parts[1][0]] = want[parts[2][0]] = True
     assert np.array_equal(copies.mask, want)
     # Vertex for vertex: the original's torus vertex i onto the copy's torus vertex i.
-    assert sorted(int(copy.min()) for _, _, copy in copies.pairs) == [
+    assert sorted(int(pr[2].min()) for pr in copies.pairs) == [
         int(parts[1][1].min()), int(parts[2][1].min())]
-    for p, orig, copy in copies.pairs:
+    for p, orig, copy, _, _ in copies.pairs:
         assert p == part[parts[0][1][0]]
         assert np.array_equal(np.sort(orig), parts[0][1])
         k = 1 if copy.min() == parts[1][1].min() else 2
