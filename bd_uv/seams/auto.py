@@ -148,8 +148,8 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     found = find_copies(V, F, E, cut, face_groups, poly)
     hold = invalid
     if found is not None:
-        frozen |= found[0].mask
-        hold = invalid | found[0].mask
+        frozen |= found.mask
+        hold = invalid | found.mask
     if E.fans is not None:                  # the corner table served the checks above only
         E = dataclasses.replace(E, corners=None)
     known = {}                              # conformal maps of charts that passed, by faces
@@ -184,15 +184,8 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
                                       known, hold, chs)
         atlas = cut & ~atlas
     if found is not None:
-        copies, part = found
-        copies.spread(E, cut, part, n)
-        copies.spread(E, atlas, part, n)
-        if chs is not None:             # the copies' charts, found on their new seams
-            sub = np.flatnonzero(copies.mask)
-            chs = sorted([c for c in chs if not copies.mask[c.faces[0]]] + charts(F, E, cut, sub),
-                         key=lambda c: int(c.faces[0]))
-            copies.spread_maps(chs, known)
-        copies = part = found = None
+        chs = found.settle(F, E, cut, [atlas], original, known, chs)
+        found = None
     release_memory(m)
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last

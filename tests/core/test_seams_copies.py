@@ -5,9 +5,11 @@ The parts are built here with a known rotation, scale, translation and vertex nu
 correspondence the search should find is known independently.
 """
 import numpy as np
+import pytest
 
+from bd_uv.seams import copies as copies_mod
 from bd_uv.seams import unwrap_auto
-from bd_uv.seams.copies import TOL, find_copies
+from bd_uv.seams.copies import SEARCHED, TOL, find_copies
 from bd_uv.seams.edges import edge_table
 from seams_helpers import torus, uv_sphere
 from test_seams import check_charts
@@ -55,18 +57,21 @@ def test_copies_found_by_similarity_and_numbering():
     E = edge_table(V, F)
     found = find_copies(V, F, E, np.zeros(len(E.ends), dtype=bool))
     assert found is not None
-    copies, part = found
+    assert len(found.classes) == 1
+    members = found.classes[0]
+    assert [int(found.part[verts[0]]) for _, verts, _ in members] == [
+        int(found.part[parts[k][1][0]]) for k in range(3)]
+    # Vertex for vertex: the torus's vertex i onto each copy's vertex i; face for face.
+    orig = members[0][1]
+    assert np.array_equal(np.sort(orig), parts[0][1])
+    for k, (_, verts, faces) in enumerate(members):
+        assert np.array_equal(verts, parts[k][1][orig - parts[0][1][0]])
+        assert np.array_equal(faces, parts[k][0])
+    # The first SEARCHED members are searched, the others left to the copy.
     want = np.zeros(len(F), dtype=bool)
-    want[parts[1][0]] = want[parts[2][0]] = True
-    assert np.array_equal(copies.mask, want)
-    # Vertex for vertex: the original's torus vertex i onto the copy's torus vertex i.
-    assert sorted(int(pr[2].min()) for pr in copies.pairs) == [
-        int(parts[1][1].min()), int(parts[2][1].min())]
-    for p, orig, copy, _, _ in copies.pairs:
-        assert p == part[parts[0][1][0]]
-        assert np.array_equal(np.sort(orig), parts[0][1])
-        k = 1 if copy.min() == parts[1][1].min() else 2
-        assert np.array_equal(copy, parts[k][1][orig - parts[0][1][0]])
+    for k in range(SEARCHED, 3):
+        want[parts[k][0]] = True
+    assert np.array_equal(found.mask, want)
 
 
 def test_given_seams_and_materials_must_match():
@@ -77,12 +82,14 @@ def test_given_seams_and_materials_must_match():
     e = E.keys([[parts[1][1][0], parts[1][1][1]]], len(V))[0]
     assert e >= 0
     cut[e] = True
-    copies, _ = find_copies(V, F, E, cut)
-    assert not copies.mask[parts[1][0]].any() and copies.mask[parts[2][0]].all()
+
+    def members(found):
+        return [[int(f[0]) for _, _, f in c] for c in found.classes]
+    assert members(find_copies(V, F, E, cut)) == [[int(parts[0][0][0]), int(parts[2][0][0])]]
     groups = np.zeros(len(F), dtype=np.int64)
     groups[parts[2][0][:5]] = 1
-    copies, _ = find_copies(V, F, E, np.zeros(len(E.ends), dtype=bool), face_groups=groups)
-    assert copies.mask[parts[1][0]].all() and not copies.mask[parts[2][0]].any()
+    found = find_copies(V, F, E, np.zeros(len(E.ends), dtype=bool), face_groups=groups)
+    assert members(found) == [[int(parts[0][0][0]), int(parts[1][0][0])]]
 
 
 def _cut_pairs(res, F, faces):
@@ -106,7 +113,11 @@ def _cut_pairs(res, F, faces):
     return out
 
 
-def test_copies_get_the_originals_seams_and_are_certified():
+@pytest.mark.parametrize("searched", [1, SEARCHED])
+def test_copies_get_the_originals_seams_and_are_certified(monkeypatch, searched):
+    """With 1 searched the copies are left out of the search; with ``SEARCHED`` (more than the
+    two copies) all three are searched and the best one's seams replace the others'."""
+    monkeypatch.setattr(copies_mod, "SEARCHED", searched)
     V, F, parts = _parts()
     res, added, info = unwrap_auto(V, F, bound=2.0, stretch=2.0)
     check_charts(V, F, res)
