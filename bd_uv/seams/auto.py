@@ -145,7 +145,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     invalid = frozen.copy()
     # Parts that copy another part (``copies``: a bolt repeated) are left out of the search and
     # of merging and the atlas's splits, then get their original's seams.
-    found = find_copies(V, F, E, cut, face_groups, poly)
+    found = find_copies(V, F, E, cut, face_groups, poly, invalid)
     hold = invalid
     if found is not None:
         frozen |= found.mask

@@ -1,5 +1,6 @@
 """Connected parts of a mesh that are copies of one another (a bolt placed 36 times): the seam
-search (``auto.unwrap_auto``) runs on one of each, and its seams are copied onto the others.
+search (``auto.unwrap_auto``) runs on the first ``SEARCHED`` of them, and the seams of the one
+with the fewest charts are copied onto the others, their maps with them.
 
 A copy has the same faces as its original, vertex for vertex (each part's vertices numbered by
 first appearance in its faces), the same given seams, materials and polygons, and positions that
@@ -113,11 +114,13 @@ class Copies:
         return chs
 
 
-def find_copies(V, F, E, cut, face_groups=None, polygons=None):
+def find_copies(V, F, E, cut, face_groups=None, polygons=None, invalid=None):
     """The parts of (V, F) that copy another part, or None when there are none.
 
     ``cut``: (e,) bool, the given seams (a copy has the same ones); ``face_groups``,
-    ``polygons``: (m,) int arrays or None (a copy has the same materials and polygons).
+    ``polygons``: (m,) int arrays or None (a copy has the same materials and polygons);
+    ``invalid``: (m,) bool or None, faces of islands left to ``unwrap`` to report: their parts
+    are searched where they are (whether a face is degenerate may differ between copies).
 
     Returns
     -------
@@ -137,7 +140,10 @@ def find_copies(V, F, E, cut, face_groups=None, polygons=None):
     nv = np.bincount(part[used], minlength=count)
     size = nf * (n + 1) + nv
     _, inv, times = np.unique(size, return_inverse=True, return_counts=True)
-    cand = np.flatnonzero((nf >= MIN_FACES) & (times[inv.ravel()] > 1))
+    ok = (nf >= MIN_FACES) & (times[inv.ravel()] > 1)
+    if invalid is not None and invalid.any():
+        ok[fpart[invalid]] = False
+    cand = np.flatnonzero(ok)
     if not len(cand):
         return None
     order = np.argsort(fpart, kind="stable")
