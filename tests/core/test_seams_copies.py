@@ -133,3 +133,26 @@ def test_copies_get_the_originals_seams_and_are_certified(monkeypatch, searched)
     # ``added`` holds the copies' seams too.
     got = {tuple(p) for p in added.tolist()}
     assert set().union(*seams[:3]) <= got
+
+
+def test_copies_with_polygons_stay_whole_polygons():
+    """Three UV spheres of quads, two of them rotated and scaled copies, with their polygons:
+    copies are found polygon for polygon (another numbering of the polygons is the same
+    polygons), every chart is whole polygons and certified, and the copies are cut alike."""
+    from test_seams_polygons import _check_whole_polygons
+    Vs, Fs, ps = uv_sphere(24, 12)
+    R = _rotation(5)
+    V = np.concatenate([Vs, 0.5 * Vs @ R.T + [5.0, 0, 0], Vs @ R + [0, 5.0, 0]])
+    F = np.concatenate([Fs, Fs + len(Vs), Fs + 2 * len(Vs)]).astype(np.int64)
+    poly = np.concatenate([ps, ps + 1000, 5000 - ps])
+    E = edge_table(V, F)
+    found = find_copies(V, F, E, np.zeros(len(E.ends), dtype=bool), polygons=poly)
+    assert len(found.classes) == 1 and len(found.classes[0]) == 3
+    res, added, info = unwrap_auto(V, F, bound=2.0, stretch=2.0, polygons=poly)
+    check_charts(V, F, res)
+    _check_whole_polygons(F, poly, res, added)
+    m = len(Fs)
+    seams = [_cut_pairs(res, F, np.arange(k * m, (k + 1) * m)) for k in range(3)]
+    assert seams[0]
+    for k in (1, 2):
+        assert {(a + k * len(Vs), b + k * len(Vs)) for a, b in seams[0]} == seams[k]
