@@ -173,6 +173,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             break
     atlas = np.zeros(len(E.ends), dtype=bool)   # the seams added for the atlas
     kept = []
+    before = None                           # the charts before the atlas's splits
     chs = None                              # the charts of ``cut``, where known
     if merge:
         chs = merge_charts(V, F, E, cut, keep, hold, S, C, known=known, geom=geom,
@@ -180,12 +181,15 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     if atlas_cuts:
         # A chart that alone caps the atlas's coverage is bisected where that pays.
         atlas[:] = cut
+        before = chs
         kept, chs = split_for_packing(V, F, E, cut, original, A, cen, S, mean_cap(C), poly, geom,
                                       known, hold, chs)
         atlas = cut & ~atlas
     if found is not None:
-        chs = found.settle(F, E, cut, [atlas], original, known, chs)
+        chs, copied = found.settle(F, E, cut, [atlas], original, known, chs, before)
+        kept = list(kept) + [None] * copied  # the atlas's splits the copies took
         found = None
+    before = None
     release_memory(m)
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last

@@ -47,7 +47,7 @@ class Copies:
     classes: list
     part: np.ndarray
 
-    def settle(self, F, E, cut, marks, given, known, chs):
+    def settle(self, F, E, cut, marks, given, known, chs, before=None):
         """After the search: in each class the searched member with the fewest charts (then
         the shortest seams, then the first) gives its seams to every other member, in place in
         ``cut`` and in every mask of ``marks`` ((e,) bool, e.g. the atlas's seams); the given
@@ -55,13 +55,24 @@ class Copies:
         ``known``: the conformal maps by sorted faces' bytes; every member's charts get their
         source chart's.
 
-        Returns the charts of the new ``cut`` (None where ``chs`` is None)."""
+        ``before``: the charts before the atlas's splits (``pack_shape``), optional: each of
+        those splits adds one chart, so the members' counts give the splits copied.
+
+        Returns
+        -------
+        (the charts of the new ``cut`` (None where ``chs`` is None), the atlas's splits added
+        (copied onto members less those of searched members that lost; 0 without ``before``))
+        """
         n = len(self.part)
         epart = self.part[E.ends[:, 0]]
         count = int(self.part.max()) + 1
         seam = np.bincount(epart[cut], E.length[cut], minlength=count)
-        charts_of = np.bincount(self.part[F[[int(c.faces[0]) for c in chs], 0]],
-                                minlength=count) if chs is not None else np.zeros(count)
+        def per_part(cs):
+            return np.bincount(self.part[F[[int(c.faces[0]) for c in cs], 0]], minlength=count)
+        charts_of = per_part(chs) if chs is not None else np.zeros(count, dtype=np.int64)
+        splits = charts_of - per_part(before) if chs is not None and before is not None else \
+            np.zeros(count, dtype=np.int64)
+        added = 0
         redo = np.zeros(len(F), dtype=bool)
         pairs = []
         for members in self.classes:
@@ -79,6 +90,7 @@ class Copies:
                         mk[mine] = False
                 redo[dst[2]] = True
                 pairs.append((src, dst))
+                added += int(splits[src[0]]) - (int(splits[dst[0]]) if j < SEARCHED else 0)
         where = np.full(n, -1, dtype=np.int64)
         for mk in [cut] + list(marks):
             on = np.flatnonzero(mk)
@@ -91,7 +103,7 @@ class Copies:
                 k = E.keys(copy[where[ends]], n)
                 mk[k[k >= 0]] = True
         if chs is None:
-            return None
+            return None, added
         for c in chs:                       # the maps of charts whose seams went
             if redo[c.faces[0]]:
                 known.pop(c.faces.tobytes(), None)
@@ -111,7 +123,7 @@ class Copies:
                 w = np.empty(len(cc.vertices), dtype=u.dtype)
                 w[cc.tris.ravel()] = u[oc.tris.ravel()]
                 known[cc.faces.tobytes()] = w
-        return chs
+        return chs, added
 
 
 def find_copies(V, F, E, cut, face_groups=None, polygons=None, invalid=None):

@@ -156,3 +156,19 @@ def test_copies_with_polygons_stay_whole_polygons():
     assert seams[0]
     for k in (1, 2):
         assert {(a + k * len(Vs), b + k * len(Vs)) for a, b in seams[0]} == seams[k]
+
+
+@pytest.mark.parametrize("searched", [1, SEARCHED])
+def test_copies_take_the_atlas_cuts(monkeypatch, searched):
+    """Two copies of a thin torus: each one's band alone caps the atlas, so the atlas's split
+    of the searched one is copied, and counted, on the other (as when both are searched)."""
+    monkeypatch.setattr(copies_mod, "SEARCHED", searched)
+    Vt, Ft = torus(R=8.0, r=0.5, nu=64, nv=8)[:2]
+    V = np.concatenate([Vt, Vt + [40.0, 0, 0]])
+    F = np.concatenate([Ft, Ft + len(Vt)]).astype(np.int64)
+    res, added, info = unwrap_auto(V, F, bound=2.0, stretch=2.0)
+    check_charts(V, F, res)
+    atlas = {tuple(p) for p in info["atlas_seams"].tolist()}
+    one = {(a, b) for a, b in atlas if b < len(Vt)}
+    assert one and info["atlas_cuts"] == 2
+    assert {(a + len(Vt), b + len(Vt)) for a, b in one} == atlas - one
