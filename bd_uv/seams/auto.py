@@ -27,6 +27,7 @@ from ..mesh import Island, check_arrays, islands
 from ..options import UnwrapOptions
 from ..unwrapping.unwrap import pin_arrays, unwrap, unwrap_islands
 from .charts import face_geometry, mean_cap
+from .copies import find_copies
 from .edges import edge_table
 from .measure import measure_charts, splice
 from .merge import merge_charts
@@ -142,6 +143,13 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
                                                                 TopologyError)):
                 frozen[i.faces] = True
     invalid = frozen.copy()
+    # Parts that copy another part (``copies``: a bolt repeated) are left out of the search and
+    # of merging and the atlas's splits, then get their original's seams.
+    found = find_copies(V, F, E, cut, face_groups, poly, invalid)
+    hold = invalid
+    if found is not None:
+        frozen |= found.mask
+        hold = invalid | found.mask
     if E.fans is not None:                  # the corner table served the checks above only
         E = dataclasses.replace(E, corners=None)
     known = {}                              # conformal maps of charts that passed, by faces
@@ -165,16 +173,23 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
             break
     atlas = np.zeros(len(E.ends), dtype=bool)   # the seams added for the atlas
     kept = []
+    before = None                           # the charts before the atlas's splits
     chs = None                              # the charts of ``cut``, where known
     if merge:
-        chs = merge_charts(V, F, E, cut, keep, invalid, S, C, known=known, geom=geom,
+        chs = merge_charts(V, F, E, cut, keep, hold, S, C, known=known, geom=geom,
                            failed=failed, orders=orders)
     if atlas_cuts:
         # A chart that alone caps the atlas's coverage is bisected where that pays.
         atlas[:] = cut
+        before = chs
         kept, chs = split_for_packing(V, F, E, cut, original, A, cen, S, mean_cap(C), poly, geom,
-                                      known, invalid, chs)
+                                      known, hold, chs)
         atlas = cut & ~atlas
+    if found is not None:
+        chs, copied = found.settle(F, E, cut, [atlas], original, known, chs, before)
+        kept = list(kept) + [None] * copied  # the atlas's splits the copies took
+        found = None
+    before = None
     release_memory(m)
     # A chart whose certified map overlaps itself fails (rather than being cut by ``unwrap``
     # along whatever edges separate the overlap) and is split like the others; only the last
