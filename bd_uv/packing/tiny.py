@@ -1,65 +1,50 @@
-"""Many tiny charts, or a few large ones and the rest: the large packed alone, the rest dropped
-into the free space left.
+"""Many tiny charts: the others packed alone, the tiny ones dropped into the free space left.
 
 A mesh can come unwrapped into a few large charts and many tiny ones (the shader ball: 8 charts
 hold 98.6 % of the area, 154 bolt charts a few texels across the other 1.4 %). Nesting and
 compacting them all makes the time follow the chart count (the budget is 4 ms sqrt(charts x
 faces), every compaction program has rows for every tiny chart's outline) while the tiny charts
 barely change the square. So when most charts are tiny (each under ``TINY_SHARE`` of the charts'
-area, at least ``TINY_COUNT_SHARE`` of the charts, together under ``TINY_AREA_SHARE``), or when
-the ``FEW_MAX`` largest charts hold ``FEW_AREA_SHARE`` of the area and at least as many others
-are left (rocker-arm):
+area, at least ``TINY_COUNT_SHARE`` of the charts, together under ``TINY_AREA_SHARE``):
 
-1. the other (large) charts are packed as any set of charts is (:func:`.few.few_square` for 2-5,
+1. the other charts are packed as any set of charts is (:func:`.few.few_square` for 2-5,
    else :func:`.square.square_layout`), with the time of their own count and faces;
-2. the rest, largest first, are dropped into the free space of that square on a raster
+2. the tiny charts, largest first, are dropped into the free space of that square on a raster
    made conservative as in :mod:`.around` (a chart occupies every cell whose centre lies within
    ``separation / 2 + h sqrt(2) / 2`` of its outline, so two charts whose cells do not meet are
    at least the separation apart, and a chart whose cells stay in the grid is half of it from
    the square's edge): the lowest, then leftmost free offset of its bounding mask at each of its
    allowed turns (a summed-area table of the occupied cells), else of its own cells (an FFT
    correlation);
-3. the whole layout is checked exactly (:func:`.refit.fits`); when a chart finds no room
+3. the whole layout is checked exactly (:func:`.refit.fits`); when a tiny chart finds no room
    or the check fails, None: the caller packs every chart together.
 """
 import numpy as np
 
 from .around import GROW, _candidates
-from .few import FEW_MAX, few_square
+from .few import few_square
 from .nest import Placement, rotations
 from .refit import ROUNDING, fits
 from .square import square_layout
 
 TINY_SHARE = 1e-3       # a chart under this share of the charts' area is tiny
-TINY_COUNT_SHARE = 0.5  # ... and the tiny ones are dropped when at least this share of the charts
+# ... and the tiny ones are dropped when at least this share of the charts (the shader ball: 95 %;
+# ChineseDragon's 8 largest charts and its 38 under 0.1 % of its area, 61 % tiny: 0.556 against
+# 0.581 with every chart together, seeds 0-2, the large ones' shorter time lost more than it saved)
+TINY_COUNT_SHARE = 0.8
 TINY_AREA_SHARE = 0.05  # ... holding less than this share of the area together
-# ... else, when the FEW_MAX largest charts hold this share of the area and at least FEW_MAX
-# others are left, those others are dropped around the largest (rocker-arm: 10 charts, the 5
-# largest 94.4 %: coverage 0.616 -> 0.673 mean, seeds 0-9, 0.36-0.63 -> 0.31-0.41 s CPU). Eight
-# (6 charts, the 5 largest 98.6 %, one left) lost with its one chart dropped: 0.591 -> 0.575
-# (seeds 0-9): few.py's layout of its 5 largest is looser than the nesting of all 6
-FEW_AREA_SHARE = 0.9
 CELLS = 512             # raster cells along the square's side (2 texels at 1024 px)
 
 
 def tiny_charts(area):
-    """Indices of the charts to drop (int64), or None (the charts are packed together):
-
-    - the tiny ones, when most charts are tiny (``TINY_SHARE``, ``TINY_COUNT_SHARE``,
-      ``TINY_AREA_SHARE``) and at least two others are left to pack;
-    - else all but the ``FEW_MAX`` largest, when those hold at least ``FEW_AREA_SHARE`` of the
-      area and at least ``FEW_MAX`` others are left (the largest are then laid out by
-      :func:`.few.few_square`, without spyrrow)."""
+    """Indices of the tiny charts to drop (int64), or None when the charts are not mostly
+    tiny ones (or fewer than two would be left to pack)."""
     area = np.asarray(area, dtype=np.float64)
     tiny = area < TINY_SHARE * area.sum()
-    if (tiny.sum() >= TINY_COUNT_SHARE * len(area) and (~tiny).sum() >= 2
-            and area[tiny].sum() < TINY_AREA_SHARE * area.sum()):
-        return np.flatnonzero(tiny)
-    order = np.argsort(-area, kind="stable")
-    if (len(area) >= 2 * FEW_MAX
-            and area[order[:FEW_MAX]].sum() >= FEW_AREA_SHARE * area.sum()):
-        return np.sort(order[FEW_MAX:])
-    return None
+    if (tiny.sum() < TINY_COUNT_SHARE * len(area) or (~tiny).sum() < 2
+            or area[tiny].sum() >= TINY_AREA_SHARE * area.sum()):
+        return None
+    return np.flatnonzero(tiny)
 
 
 def tiny_square(charts, options, tol, faces):
