@@ -27,6 +27,7 @@ from .around import place_around
 from .groups import chart_groups, grouped_layout
 from .few import few_square
 from .square import square_layout
+from .tiny import tiny_square
 
 
 @dataclass(frozen=True)
@@ -113,15 +114,21 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
         side = 1.0
     else:
         f = 1.0
-        # 2-5 charts: laid out without spyrrow (.few); else (or when it finds none) nested, and
-        # nested too when a search time or more solves are asked for, the smaller square kept
-        found = few_square(charts.outlines, options, tol, charts.exact)
-        if found is None or options.solve_seconds is not None or options.solves > 1:
-            nested = square_layout(charts.outlines, options, tol, seconds, charts.exact)
-            if found is None or nested[1] < found[1]:
-                found = nested
-            else:
-                found = (found[0], found[1], nested[2])
+        # mostly tiny charts: the others packed alone, the tiny ones dropped into the space
+        # left (.tiny); else (or when a tiny chart finds no room) 2-5 charts laid out without
+        # spyrrow (.few), more (or when it finds none) nested, and nested too when a search
+        # time or more solves are asked for, the smaller square kept
+        found = None
+        if options.solve_seconds is None and options.solves == 1:
+            found = tiny_square(charts, options, tol, np.bincount(lab[lab >= 0], minlength=k))
+        if found is None:
+            found = few_square(charts.outlines, options, tol, charts.exact)
+            if found is None or options.solve_seconds is not None or options.solves > 1:
+                nested = square_layout(charts.outlines, options, tol, seconds, charts.exact)
+                if found is None or nested[1] < found[1]:
+                    found = nested
+                else:
+                    found = (found[0], found[1], nested[2])
         pl, side, solves = found
         tile = np.zeros(k, dtype=np.int64)
     R = rotations(pl.angle)

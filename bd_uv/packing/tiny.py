@@ -1,0 +1,190 @@
+"""Many tiny charts: the others packed alone, the tiny ones dropped into the free space left.
+
+A mesh can come unwrapped into a few large charts and many tiny ones (the shader ball: 8 charts
+hold 98.6 % of the area, 154 bolt charts a few texels across the other 1.4 %). Nesting and
+compacting them all makes the time follow the chart count (the budget is 4 ms sqrt(charts x
+faces), every compaction program has rows for every tiny chart's outline) while the tiny charts
+barely change the square. So when most charts are tiny (each under ``TINY_SHARE`` of the charts'
+area, at least ``TINY_COUNT_SHARE`` of the charts, together under ``TINY_AREA_SHARE``):
+
+1. the other charts are packed as any set of charts is (:func:`.few.few_square` for 2-5,
+   else :func:`.square.square_layout`), with the time of their own count and faces;
+2. the tiny charts, largest first, are dropped into the free space of that square on a raster
+   made conservative as in :mod:`.around` (a chart occupies every cell whose centre lies within
+   ``separation / 2 + h sqrt(2) / 2`` of its outline, so two charts whose cells do not meet are
+   at least the separation apart, and a chart whose cells stay in the grid is half of it from
+   the square's edge): the lowest, then leftmost free offset of its bounding mask at each of its
+   allowed turns (a summed-area table of the occupied cells), else of its own cells (an FFT
+   correlation);
+3. the whole layout is checked exactly (:func:`.refit.fits`); when a tiny chart finds no room
+   or the check fails, None: the caller packs every chart together.
+"""
+import numpy as np
+
+from .around import GROW, _candidates
+from .few import few_square
+from .nest import Placement, rotations
+from .refit import ROUNDING, fits
+from .square import square_layout
+
+TINY_SHARE = 1e-3       # a chart under this share of the charts' area is tiny
+# ... and the tiny ones are dropped when at least this share of the charts (the shader ball: 95 %;
+# ChineseDragon's 8 largest charts and its 38 under 0.1 % of its area, 61 % tiny: 0.556 against
+# 0.581 with every chart together, seeds 0-2, the large ones' shorter time lost more than it saved)
+TINY_COUNT_SHARE = 0.8
+TINY_AREA_SHARE = 0.05  # ... holding less than this share of the area together
+CELLS = 512             # raster cells along the square's side (2 texels at 1024 px)
+
+
+def tiny_charts(area):
+    """Indices of the tiny charts to drop (int64), or None when the charts are not mostly
+    tiny ones (or fewer than two would be left to pack)."""
+    area = np.asarray(area, dtype=np.float64)
+    tiny = area < TINY_SHARE * area.sum()
+    if (tiny.sum() < TINY_COUNT_SHARE * len(area) or (~tiny).sum() < 2
+            or area[tiny].sum() >= TINY_AREA_SHARE * area.sum()):
+        return None
+    return np.flatnonzero(tiny)
+
+
+def tiny_square(charts, options, tol, faces):
+    """The square of the charts that are not tiny, with the tiny ones dropped into its free
+    space: (Placement, side, solves), or None (not mostly tiny charts, or no room found).
+
+    Parameters
+    ----------
+    charts : outlines.Charts
+    options : PackOptions
+    tol : float, outline simplification tolerance
+    faces : (k,) int, faces of each chart (the time follows the charts packed)
+    """
+    tiny = tiny_charts(charts.area)
+    if tiny is None:
+        return None
+    k = len(charts.outlines)
+    big = np.setdiff1d(np.arange(k), tiny)
+    outlines = [charts.outlines[i] for i in big]
+    exact = [charts.exact[i] for i in big]
+    found = few_square(outlines, options, tol, exact)
+    if found is None:
+        seconds = options.search_seconds(len(big), int(np.sum(np.asarray(faces)[big])))
+        found = square_layout(outlines, options, tol, seconds, exact)
+    pl, side, solves = found
+    angle, shift = np.zeros(k), np.zeros((k, 2))
+    angle[big], shift[big] = pl.angle, pl.shift
+    margin = ROUNDING * side
+    pm = options.padding + 1e-5
+    sep = pm * side + 2 * margin
+    order = tiny[np.argsort(-charts.area[tiny], kind="stable")]
+    got = _drop(charts.exact, big, order, angle, shift, side, sep, options)
+    if got is None:
+        return None
+    angle, shift = got
+    if not fits(charts.exact, angle, shift, side, options.padding, options.padding, margin):
+        return None
+    return Placement(angle, shift, side), side, solves
+
+
+def _occupied(placed, reach, n):
+    """(n,n) bool: the cells of the unit square's grid whose centres lie within ``reach`` of
+    any of the polygons ``placed`` (list of (m,2) arrays in the unit square)."""
+    import shapely
+    h = 1.0 / n
+    occ = np.zeros((n, n), dtype=bool)
+    for q in placed:  # per chart
+        lo = np.maximum(np.floor((q.min(axis=0) - reach) / h).astype(int), 0)
+        hi = np.minimum(np.ceil((q.max(axis=0) + reach) / h).astype(int) + 1, n)
+        grown = shapely.buffer(shapely.Polygon(q), reach * GROW + 1e-12)
+        shapely.prepare(grown)
+        x, y = np.meshgrid((np.arange(lo[0], hi[0]) + 0.5) * h,
+                           (np.arange(lo[1], hi[1]) + 0.5) * h)
+        occ[lo[1]:hi[1], lo[0]:hi[0]] |= shapely.contains_xy(grown, x, y)
+    return occ
+
+
+def _masks(turned, reach, h):
+    """Per polygon of ``turned`` (list of (m,2) arrays, unit square's units): the cells whose
+    centres lie within ``reach`` of it, as :func:`.around._chart_cells` finds them (one shapely
+    call for all): a list of (mask (rows, cols) bool, offset of the polygon from its corner)."""
+    import shapely
+    m = reach + h
+    lo = [q.min(axis=0) for q in turned]
+    shape = [np.ceil((q.max(axis=0) - low + 2 * m) / h).astype(int) for q, low in zip(turned, lo)]
+    rings = shapely.linearrings(np.concatenate([q - low + m for q, low in zip(turned, lo)]),
+                                indices=np.repeat(np.arange(len(turned)), [len(q) for q in turned]))
+    grown = shapely.buffer(shapely.polygons(rings), reach * GROW + 1e-12)
+    sizes = [int(s[0] * s[1]) for s in shape]
+    xs = [np.tile((np.arange(s[0]) + 0.5) * h, s[1]) for s in shape]
+    ys = [np.repeat((np.arange(s[1]) + 0.5) * h, s[0]) for s in shape]
+    inside = shapely.contains_xy(np.repeat(grown, sizes), np.concatenate(xs), np.concatenate(ys))
+    cuts = np.cumsum([0] + sizes)
+    return [(inside[cuts[j]:cuts[j + 1]].reshape(s[1], s[0]), m - low)
+            for j, (s, low) in enumerate(zip(shape, lo))]
+
+
+def _free_boxes(occ, rows, cols):
+    """(n - rows + 1, n - cols + 1) bool: offsets where a rows x cols box meets no occupied
+    cell of ``occ`` (a summed-area table)."""
+    sat = np.zeros((occ.shape[0] + 1, occ.shape[1] + 1), np.int32)
+    sat[1:, 1:] = occ.cumsum(axis=0, dtype=np.int32).cumsum(axis=1, dtype=np.int32)
+    return (sat[rows:, cols:] - sat[:-rows, cols:] - sat[rows:, :-cols] + sat[:-rows, :-cols]) == 0
+
+
+def _drop(outlines, big, order, angle, shift, side, sep, options, n=CELLS):
+    """The charts ``order`` placed one by one into the free cells left by the placed charts
+    ``big``: (angle, shift) with theirs set, or None when one finds no room.
+
+    Each chart goes to the lowest, then leftmost offset where its bounding mask meets no
+    occupied cell, over its allowed turns (per mask size, the free offsets are kept up to date
+    around each chart placed), else where its own cells meet none (an FFT correlation)."""
+    import scipy.fft as sf
+    h = 1.0 / n
+    reach = 0.5 * sep / side + h * np.sqrt(0.5)
+    R = rotations(angle)
+    occ = _occupied([(outlines[i] @ R[i].T + shift[i]) / side for i in big], reach, n)
+    turns = _candidates([outlines[i] for i in order], options)
+    turned = [(i, a, outlines[i] @ Rt.T / side)
+              for i, allowed in zip(order, turns) for a, Rt in zip(allowed, rotations(allowed))]
+    masks = _masks([q for _, _, q in turned], reach, h)
+    cells = {}
+    for (i, a, _), (m, off) in zip(turned, masks):  # per chart and turn
+        if m.shape[0] <= n and m.shape[1] <= n:
+            cells.setdefault(i, []).append((a, m, off))
+    boxes = {}   # (rows, cols) -> the free offsets of such a box
+    for i in order:  # per tiny chart, largest first
+        best = None
+        for a, m, off in cells.get(i, []):  # per allowed turn: the bounding mask free
+            if m.shape not in boxes:
+                boxes[m.shape] = _free_boxes(occ, *m.shape)
+            box = boxes[m.shape]
+            flat = int(np.argmax(box))
+            if box.flat[flat]:
+                at = divmod(flat, box.shape[1])
+                if best is None or at < best[0]:
+                    best = (at, a, m, off)
+        if best is None:   # no free box: the chart's own cells (FFT correlation)
+            F_occ = sf.rfft2(occ.astype(np.float32), workers=1)
+            for a, m, off in cells.get(i, []):  # per allowed turn
+                rows, cols = m.shape
+                pad = np.zeros((n, n), np.float32)
+                pad[:rows, :cols] = m
+                hit = sf.irfft2(F_occ * np.conj(sf.rfft2(pad, workers=1)), s=(n, n), workers=1)
+                free = hit[:n - rows + 1, :n - cols + 1] < 0.5
+                for flat in np.flatnonzero(free):  # lowest, then leftmost first
+                    at = divmod(int(flat), n - cols + 1)
+                    if best is not None and at >= best[0]:
+                        break
+                    if not occ[at[0]:at[0] + rows, at[1]:at[1] + cols][m].any():
+                        best = (at, a, m, off)
+                        break
+        if best is None:
+            return None
+        (rr, cc), a, m, off = best
+        occ[rr:rr + m.shape[0], cc:cc + m.shape[1]] |= m
+        for (rows, cols), box in boxes.items():  # per box size: the offsets around the chart
+            r0, c0 = max(rr - rows + 1, 0), max(cc - cols + 1, 0)
+            r1 = min(rr + m.shape[0], box.shape[0])
+            c1 = min(cc + m.shape[1], box.shape[1])
+            box[r0:r1, c0:c1] = _free_boxes(occ[r0:r1 + rows - 1, c0:c1 + cols - 1], rows, cols)
+        angle[i], shift[i] = a, (np.array([cc, rr]) * h + off) * side
+    return angle, shift
