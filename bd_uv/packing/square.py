@@ -28,6 +28,7 @@ import numpy as np
 
 from ..errors import PackError
 from .compact import compact_square
+from .large_first import LARGE_FIRST_CHARTS, large_first
 from .nest import (FIT, Placement, _area, _strip, least_squares, nest, rotations,
                    single_layout)
 from .refit import on_exact
@@ -99,7 +100,7 @@ def _solve_all(outlines, sides, options, tol, seconds, headroom=HEADROOM):
     return out, (refused[-1] if refused else None)
 
 
-def square_layout(outlines, options, tol, seconds, exact=None):
+def square_layout(outlines, options, tol, seconds, exact=None, split=True):
     """The smallest square found that holds every outline with the padding.
 
     The padding scales with the square (it is in texels). A solve packs a strip of height H for
@@ -112,7 +113,9 @@ def square_layout(outlines, options, tol, seconds, exact=None):
     ``options.solves`` 1: one solve at the guess. With no square found, sides keep growing
     (first placements only) until one is. Then, up to ``COMPACT_MAX_CHARTS`` charts, the best
     layout is compacted (:func:`.compact.compact_square`) for ``COMPACT_SHARE`` of the time, in
-    CPU seconds of this process (the nesting gets the rest, by the clock).
+    CPU seconds of this process (the nesting gets the rest, by the clock). From
+    ``LARGE_FIRST_CHARTS`` charts (one solve asked, a time to take), the largest charts are laid
+    out this way alone first and the others rastered around them (:mod:`.large_first`).
 
     Parameters
     ----------
@@ -123,6 +126,7 @@ def square_layout(outlines, options, tol, seconds, exact=None):
         left out of the nesting's share, measured as about ``START_PER_CHART`` seconds a chart)
     exact : list of (m_i,2) float arrays, optional: the outlines before their simplification
         (same frame), compacted instead of the simplified ones (:func:`.refit.on_exact`)
+    split : bool, the large charts first where there are many (False: all nested at once)
 
     Returns
     -------
@@ -131,6 +135,12 @@ def square_layout(outlines, options, tol, seconds, exact=None):
     k = len(outlines)
     if k == 1:
         return (*single_layout(outlines[0], options, tol), 0)
+    if (split and LARGE_FIRST_CHARTS <= k <= COMPACT_MAX_CHARTS and seconds > 0
+            and options.solves == 1):
+        found = large_first(outlines, exact, options, tol, seconds,
+                            lambda o, opt, s, ex: square_layout(o, opt, tol, s, ex, split=False))
+        if found is not None:
+            return found
     area = sum(_area(xy) for xy in outlines)
     points = np.concatenate(outlines)
     owner = np.repeat(np.arange(k), [len(xy) for xy in outlines])

@@ -1,0 +1,104 @@
+"""Many charts: the largest nested and compacted alone, the small ones rastered into the room
+left, then every chart compacted together.
+
+On many charts (cow: 45, the largest 6 holding 80 % of the area), spyrrow's short search spends
+its moves on every chart alike and a first placement costs about 15 ms a chart, while the
+square's side is set by how the few large charts interlock. Measured on cow, with all 45 charts
+at the product's budget, spyrrow's first placement was already narrower than the strip was high
+(0.95 of it): its search narrowed the strip further and never shrank the square (the same
+coverage with no search, 0.697 against 0.698, seeds 0-7). Nested alone, the large charts get
+the whole search; the small ones then fill the pockets and bands the large ones leave, and the
+compaction (:mod:`.compact`) closes what the raster left.
+
+1. the largest charts holding ``LARGE_SHARE`` of the area (at least ``LARGE_LEAST``) get a
+   square layout of their own (``nested``: :func:`.square.square_layout` with its compaction)
+   for ``LARGE_TIME`` of the time, with the padding of a square ``LARGE_HEADROOM`` larger (so
+   the square may grow that much around them with every gap still the padding);
+2. the others, largest first, go into the free cells of that square at the lowest offset
+   (:func:`.around._place`, conservative: cells of charts that do not meet are the padding
+   apart); while they do not all fit, the square grows by ``GROW`` (beyond the headroom the
+   large charts' shifts grow with it, which keeps them inside and, checked exactly, apart);
+3. every chart is compacted from there for the rest of the time.
+"""
+from dataclasses import replace
+
+import numpy as np
+
+from .around import _candidates, _place
+from .compact import compact_square
+from .nest import Placement, _area, least_squares, rotations
+from .refit import fits, on_exact
+from .relocate import _grid_cells
+
+LARGE_FIRST_CHARTS = 40   # from this many charts (see docs: camel 29 and homer 24 lost 1-3 %)
+LARGE_SHARE = 0.8         # the largest charts holding this share of the area are nested alone
+LARGE_LEAST = 6           # ... at least this many
+LARGE_TIME = 0.5          # of the time: their nesting and compaction
+REST_TIME = 0.35          # ... and the compaction of every chart after the raster
+LARGE_HEADROOM = 1.4      # their padding is that of a square this much larger
+CELLS = 256               # raster cells along the square's side for the small charts
+GROW = 1.02               # the square's growth while the small charts do not fit
+GROW_TRIES = 30
+
+
+def large_first(outlines, exact, options, tol, seconds, nested):
+    """A square layout of many charts, the large ones nested first (module docstring).
+
+    Parameters
+    ----------
+    outlines : list of (n_i,2) float arrays, centred simplified outlines
+    exact : list of (m_i,2) float arrays or None, the outlines before simplification
+    options : PackOptions
+    tol : float, outline simplification tolerance
+    seconds : float, the time to take
+    nested : callable(outlines, options, seconds, exact) -> (Placement, side, solves): the
+        square layout (nesting and compaction) of a subset of the charts
+
+    Returns
+    -------
+    (Placement, side, solves), or None when the small charts found no room
+    """
+    k = len(outlines)
+    area = np.array([_area(o) for o in outlines])
+    order = np.argsort(-area, kind="stable")
+    cum = np.cumsum(area[order]) / area.sum()
+    n_large = max(int(np.searchsorted(cum, LARGE_SHARE)) + 1, LARGE_LEAST)
+    large, small = order[:n_large], order[n_large:]
+    if not len(small):
+        return None
+    roomy = replace(options, padding_px=options.padding_px * LARGE_HEADROOM)
+    pl, S, solves = nested([outlines[i] for i in large], roomy, LARGE_TIME * seconds,
+                           None if exact is None else [exact[i] for i in large])
+    angle, shift = np.zeros(k), np.zeros((k, 2))
+    angle[large] = pl.angle
+    R = rotations(pl.angle)
+    own = [outlines[i] for i in large]
+    part = [outlines[i] for i in small]
+    turns = _candidates(part, options)
+    h = 1.0 / CELLS
+    side, got = S, None
+    for _ in range(GROW_TRIES):  # per side tried
+        shift[large] = pl.shift * max(side / (S * LARGE_HEADROOM), 1.0)
+        if fits(own, pl.angle, shift[large], side, options.padding, options.padding, tol):
+            reach = 0.5 * options.padding + tol / side + h * np.sqrt(0.5)
+            occ = np.zeros((CELLS, CELLS), bool)
+            for j, i in enumerate(large):  # per large chart: its cells
+                r, c, mask = _grid_cells((outlines[i] @ R[j].T + shift[i]) / side, reach,
+                                         CELLS)
+                occ[r:r + mask.shape[0], c:c + mask.shape[1]] |= mask
+            got = _place(occ, part, turns, np.arange(len(small)), 1.0 / side, options, tol)
+            if got is not None:
+                break
+        side *= GROW
+    if got is None:
+        return None
+    angle[small], shift[small] = got[0], got[1] * side
+    # the rest of the time (CPU seconds of this process, as the compaction counts it)
+    left = REST_TIME * seconds
+    widest = int(np.argmax(least_squares(outlines, options)[0]))
+    fine = float(least_squares([outlines[widest]], options, step=0.05)[0][0])
+    outl, start, tol2 = on_exact(outlines, exact, Placement(angle, shift, side), side, options,
+                                 tol)
+    pl, side, _ = compact_square(outl, *start, options, tol2, left,
+                                 least_side=(fine + 2 * tol) / (1 - options.padding))
+    return pl, side, solves

@@ -1,0 +1,84 @@
+"""bd_uv.packing.large_first: many charts, the largest laid out alone first, the small ones
+rastered into the room left, all compacted; checked by code that shares nothing with it
+(brute-force segment distances, an even-odd point-in-polygon test, the placed outlines
+recomputed from the angles and shifts; through pack_islands, the whole layout check)."""
+import numpy as np
+
+import bd_uv.packing.large_first as lf
+import bd_uv.packing.square as sq
+from bd_uv.packing import PackOptions, pack_islands
+from bd_uv.packing.nest import Placement
+from packing_checks import check_layout, inside, placed
+from packing_sets import chart_set, segment_distances
+
+
+def _least_gap(rings):
+    """Least distance between two rings (n_i,2), brute force over their edges."""
+    best = np.inf
+    for a in range(len(rings)):  # per pair of rings
+        for b in range(a + 1, len(rings)):
+            p, q = rings[a], rings[b]
+            I, J = np.meshgrid(np.arange(len(p)), np.arange(len(q)), indexing="ij")
+            I, J = I.ravel(), J.ravel()
+            d = segment_distances(p[I], np.roll(p, -1, axis=0)[I], q[J],
+                                  np.roll(q, -1, axis=0)[J]).min()
+            assert not inside(p[0], q) and not inside(q[0], p)
+            best = min(best, float(d))
+    return best
+
+
+def test_many_charts_go_large_first_and_stay_certified(monkeypatch):
+    """44 charts, one huge and 43 tiny: the square search takes the large-first way (it returns
+    a layout), and the packed layout passes the independent layout check."""
+    taken = []
+
+    def spy(*args, **kwargs):
+        got = lf.large_first(*args, **kwargs)
+        taken.append(got is not None)
+        return got
+
+    monkeypatch.setattr(sq, "large_first", spy)
+    V, F, uv, lab = chart_set("huge_tiny", 44, seed=5)
+    options = PackOptions(resolution=1024, padding_px=4, solve_seconds=1.0)
+    packed = pack_islands(V, F, uv, lab, options)
+    assert taken == [True]
+    cert = check_layout(V, F, uv, lab, packed, options)
+    assert 0.05 < cert.coverage < 1.0
+
+
+def test_the_square_grows_until_the_small_charts_fit(monkeypatch):
+    """Six 1 x 1.5 boxes laid out (by a stand-in for the nesting) in a square of side 3.4 that
+    they fill but for bands 0.1 and 0.2 wide, and thirty 0.2 x 0.2 squares (the boxes hold 88 %
+    of the area: the six large charts): the square grows until the small ones fit, and the
+    layout handed to the compaction and the one it returns keep every chart inside with half
+    the padding and every two charts the padding apart (brute force)."""
+    unit = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
+    outlines = [unit * [1.0, 1.5] for _ in range(6)] + [0.2 * unit for _ in range(30)]
+    options = PackOptions(resolution=64, padding_px=1.0)
+    tol = 1e-6
+    S = 3.4
+    centres = np.array([[0.6 + 1.1 * (i % 3), 0.85 + 1.6 * (i // 3)] for i in range(6)])
+
+    def nested(outl, opt, seconds, exact):
+        assert len(outl) == 6 and opt.padding_px == options.padding_px * lf.LARGE_HEADROOM
+        return Placement(np.zeros(6), centres.copy(), S), S, 1
+
+    starts = []
+    compact = lf.compact_square
+
+    def spy(outl, placement, side, *args, **kwargs):
+        starts.append((placement, side))
+        return compact(outl, placement, side, *args, **kwargs)
+
+    monkeypatch.setattr(lf, "compact_square", spy)
+    pl, side, solves = lf.large_first(outlines, None, options, tol, 0.5, nested)
+    assert solves == 1 and len(starts) == 1
+    start, start_side = starts[0]
+    assert start_side > S * lf.GROW ** 2      # grown: the band above the squares was too small
+    for layout, s in ((start, start_side), (pl, side)):  # the raster's layout, the compacted one
+        rings = placed(outlines, layout.angle, layout.shift)
+        assert side <= start_side
+        edge = 0.5 * options.padding * s
+        assert min(r.min() for r in rings) >= edge * (1 - 1e-9)
+        assert max(r.max() for r in rings) <= s - edge * (1 - 1e-9)
+        assert _least_gap(rings) >= options.padding * s * (1 - 1e-9)
