@@ -112,7 +112,32 @@ def scenarios(draw):
         # the product's ways of adding seams (the command line's default is "needed"); their
         # calls take no pins, so pins come with them in a draw of random pins only (a refusal)
         seams_mode=draw(st.sampled_from(["marked"] * 6 + ["needed", "needed", "auto"])),
+        # parts that copy one another (seams.copies): the mesh repeated, each copy turned,
+        # scaled and moved, the last one mirrored in one draw of two (not a copy: searched)
+        copies=draw(st.sampled_from([0] * 6 + [2, 7])),     # 7: beyond the 6 searched
+        mirror=draw(st.booleans()),
     )
+
+
+def with_copies(V, F, copies, mirror, rng):
+    """The mesh and ``copies`` copies of it, each turned (a random rotation), scaled (0.3-3x)
+    and moved apart; with ``mirror`` the last copy is a mirror image (faces reversed, so it is
+    consistently oriented, but no rotation carries the original onto it)."""
+    size = float(np.ptp(V, axis=0).max())
+    Vs, Fs = [V], [F]
+    for c in range(copies):  # per copy (test data)
+        Q, R = np.linalg.qr(rng.normal(size=(3, 3)))
+        Q = Q * np.sign(np.diag(R))
+        if np.linalg.det(Q) < 0:
+            Q[:, 0] = -Q[:, 0]
+        Vc = V @ Q.T * rng.uniform(0.3, 3.0) + (c + 1) * 4 * size
+        Fc = F + len(V) * (c + 1)
+        if mirror and c == copies - 1:
+            Vc[:, 0] = -Vc[:, 0]
+            Fc = Fc[:, ::-1]
+        Vs.append(Vc)
+        Fs.append(Fc)
+    return np.concatenate(Vs), np.concatenate(Fs)
 
 
 def build(sc):
@@ -136,6 +161,8 @@ def build(sc):
             gone[blob(nb, start, max(1, int(sc["delete"] * len(F) / 3)))] = True
         gone[rng.integers(len(F))] = False                     # never empty
         F = F[~gone]
+    if sc.get("copies", 0):
+        V, F = with_copies(V, F, sc["copies"], sc.get("mirror", False), rng)
     defect = sc["defect"]
     f = int(rng.integers(len(F)))
     if defect == "nan vertex":
@@ -335,6 +362,17 @@ AUTO_RENUMBERED_TOPOLOGY_ERROR = dict(
     method="lscm", frames="auto", cone="soc", solver_faults=0.0, seams_mode="auto")
 
 
+# Parts that copy one another (seams.copies, a bolt repeated): a 120-face patch and eight
+# copies turned, scaled and moved (two left out of the 6 searched), the last mirrored; with a fin,
+# one copy differs from the rest.
+COPIES_AUTO = dict(
+    mesh="three_peaks patch", patch_size=120, seed=5, noise=0.0, delete=0.0,
+    delete_kind="scattered faces", seams=0, pins=0, pin_kind="from a certified map",
+    defect=None, nonfinite=np.nan, nonfinite_at="any vertex", nonfinite_count=1, pin_fault=None,
+    bound=2.0, stretch=None, method="lscm", frames="auto", cone="soc", solver_faults=0.0,
+    seams_mode="auto", copies=8, mirror=True)
+
+
 @settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(sc=scenarios())
 @example(sc=AUTO_RENUMBERED_TOPOLOGY_ERROR)
@@ -348,6 +386,9 @@ AUTO_RENUMBERED_TOPOLOGY_ERROR = dict(
 @example(sc=NAN_VERTEX_BESIDE_CROSSING_ISLANDS)
 @example(sc=ONE_FACE_PINNED_FAR_AWAY)
 @example(sc=FAILED_PIECE_KEPT_ITS_BOUND)
+@example(sc=COPIES_AUTO)
+@example(sc=dict(COPIES_AUTO, mesh="nefertiti", bound=1.2, stretch=1.5, copies=7, mirror=False))
+@example(sc=dict(COPIES_AUTO, seams_mode="needed", defect="fin (3-face edge)", mirror=False))
 def test_unwrap_contract_on_perturbed_real_meshes(sc):
     rng, V, F, seams, bad = build(sc)
     pin_corners, pin_uv = pins_for(sc, rng, V, F, seams, bad)
@@ -355,6 +396,8 @@ def test_unwrap_contract_on_perturbed_real_meshes(sc):
     if mode != "marked" and sc["pin_kind"] != "random":
         pin_corners, pin_uv = None, None
     event(f"seams_mode {mode}")
+    event(f"copies: {sc.get('copies', 0)}" + (", one mirrored" if sc.get("copies", 0)
+                                              and sc.get("mirror") else ""))
     args = (V, F, seams, pin_corners, pin_uv)
     before = snapshot(*args)
     solver = flaky_solver(sc["solver_faults"], rng) if sc["solver_faults"] else REAL_SOLVER

@@ -1,7 +1,8 @@
 """Fuzzing the atlas packer's contract (issue 22): ``pack_islands`` on random island sets.
 
 Sets of 1 to 200 islands (boxes, slivers 40 to 400 times longer than wide, islands with a hole,
-huge and tiny islands together, a zero-area island in UV or in 3D), paddings of 0 to 64 texels at
+huge and tiny islands together, a few islands among many tiny ones packed with the product's
+default search, a zero-area island in UV or in 3D), paddings of 0 to 64 texels at
 resolutions 64 to 16384, turns none | 90 | any; fitted to the square, at a fixed texel density
 (with or without UDIM spill), or around pinned islands (some put outside the square). For every
 example: nothing escapes but a typed ``bd_uv.BDError`` whose message is one line in the user's
@@ -36,11 +37,13 @@ EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "10"))
 KINDS = ("box", "sliver", "hole")
 
 
-def island_set(k, seed, kinds, huge_tiny, zero):
+def island_set(k, seed, kinds, huge_tiny, zero, tiny_after=0):
     """k islands of the given kinds; each a template stretched, its 3D copy scaled (densities
     differ before packing), its UVs turned and moved anywhere (never mirrored).
 
     huge_tiny : island 0 huge (20 x 14), the others 50 times smaller
+    tiny_after : when > 0, the islands from this one on at most 0.02 long (packing.tiny's case:
+        a few charts and many tiny ones, as a model's bolts)
     zero : None | "uv" | "3d": the last island's UVs (or 3D corners) collapsed onto a segment
 
     Returns V (n,3), F (m,3), corner_uv (m,3,2), face_island (m,)
@@ -55,6 +58,8 @@ def island_set(k, seed, kinds, huge_tiny, zero):
             size[0] *= rng.uniform(40, 400)
         if huge_tiny:
             size = np.array([20.0, 14.0]) if i == 0 else size * 0.02
+        elif tiny_after and i >= tiny_after:     # at most 0.02 long (slivers too)
+            size = size / size.max() * rng.uniform(0.004, 0.02)
         local = P * size
         V = np.c_[local * rng.uniform(0.5, 2.0), np.zeros(len(P))]
         th = rng.uniform(0, 2 * np.pi)
@@ -111,14 +116,21 @@ def problems(draw):
     n_pins = draw(st.integers(1, 9))
     outside = draw(st.sampled_from([False] * 4 + [True]))
     fits = draw(st.sampled_from([False, True, True, True]))
-    return dict(fits=fits, k=k, kinds=kinds, huge_tiny=huge_tiny, zero=zero, seed=seed, res=res, pad=pad,
+    # a few charts and many tiny ones (packing.tiny): the product's default search, as its
+    # gate asks (the tiny ones dropped into the room the others leave)
+    tiny_after = draw(st.sampled_from([0] * 8 + [2, 3, 6]))
+    if tiny_after:
+        k = draw(st.integers(5 * tiny_after, 200))
+        huge_tiny, mode, solve_seconds, solves = False, "fit", None, 1
+    return dict(tiny_after=tiny_after, fits=fits, k=k, kinds=kinds, huge_tiny=huge_tiny, zero=zero, seed=seed, res=res, pad=pad,
                 rotate=rotate, mode=mode, solve_seconds=solve_seconds, fill=fill, n_pins=n_pins,
                 outside=outside, solves=solves)
 
 
 def _pack(p):
     """The inputs and options of a drawn problem, and what the contract expects of them."""
-    V, F, uv, lab = island_set(p["k"], p["seed"], p["kinds"], p["huge_tiny"], p["zero"])
+    V, F, uv, lab = island_set(p["k"], p["seed"], p["kinds"], p["huge_tiny"], p["zero"],
+                               p.get("tiny_after", 0))
     k, res, pad = p["k"], p["res"], p["pad"]
     kw = dict(resolution=res, padding_px=pad, rotate=p["rotate"], solves=p.get("solves", 1),
               solve_seconds=p["solve_seconds"], seed=p["seed"] % 1000)
@@ -248,9 +260,17 @@ FAR_TILE_SLIVER = problem(k=91, kinds=["box", "sliver"], huge_tiny=True, res=64,
                           rotate="90", mode="udim", solve_seconds=0, fill=0.125)
 
 
+# packing.tiny's case (most charts tiny, a few others: the others packed alone, the tiny ones
+# dropped into the room they leave), with holes and slivers among the tiny ones.
+TINY_AMONG_FEW = problem(k=60, kinds=["box", "hole", "sliver"], tiny_after=3, seed=11, res=1024,
+                         pad=4.0, solve_seconds=None)
+
+
 @settings(max_examples=EXAMPLES, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(p=problems())
+@example(p=TINY_AMONG_FEW)
+@example(p=dict(TINY_AMONG_FEW, rotate="none", pad=16.0, res=256))
 @example(p=TWO_TILES_NO_PADDING)
 @example(p=PINNED_WIDE_GAPS)
 @example(p=SLIVERS_EMPTY_OFFSET)
@@ -279,7 +299,8 @@ def test_every_packed_layout_is_certified_or_a_typed_error(p):
         if options.udim:
             tiles = tuple(range(1001, int(packed.tile.max()) + 1))
         check_layout(V, F, uv, lab, packed, options, tiles=tiles, pinned=pinned)
-        event(f"{p['mode']}: certified" + (f", {len(tiles)} tiles" if options.udim else ""))
+        event(f"{p['mode']}: certified" + (f", {len(tiles)} tiles" if options.udim else "")
+              + (", a few islands among tiny ones" if p.get("tiny_after") else ""))
     assert [(a.dtype, a.shape, a.tobytes()) for a in inputs] == before, "an input was changed"
 
 
