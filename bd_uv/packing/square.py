@@ -43,11 +43,13 @@ HEADROOM = 1.10       # a strip's separation is the padding of a square this muc
 # coverage (0.6004 against 0.5995, seeds 0-9) and 20 % less CPU. For every solve (camel searches
 # 0.7 s) it lost 1.5-2 % (seeds 0-3): the layouts spyrrow narrows keep the tighter separation
 SHORT_HEADROOM = 1.20
-# ... unless a first placement re-estimated at SHORT_START a chart (measured 2026-11-28 at load
-# 0.3-2: suzanne's 27 charts 0.12-0.17 s, dino's 36 about 0.23 s, not 0.4 and 0.54) leaves a
-# search: then that search, HEADROOM, and the compaction's share times SHORT_COMPACT (a search
-# gained more a second than the compaction's tail: suzanne 0.599 -> 0.607 over 32 seeds at
-# 0.43 -> 0.50 s, dino 0.684 -> 0.692, elephant 0.679 -> 0.685; issue18-cover13-2026-11-28.md)
+# ... but where that search would be under SHORT_SEARCH of a first placement and one re-estimated
+# at SHORT_START a chart (measured 2026-11-28 at load 0.3-2: suzanne's 27 charts 0.12-0.17 s, not
+# 0.4) leaves a search: that search, HEADROOM, and the compaction's share times SHORT_COMPACT (a
+# search gained more a second than the compaction's tail: suzanne 0.596 -> 0.606 over 48 seeds
+# at 0.43 -> 0.50 s, elephant 0.681 -> 0.685 over 16; dino, whose search was 0.52 s, even over 24
+# seeds for 0.2 s more, hence SHORT_SEARCH; issue18-cover13-2026-11-28.md)
+SHORT_SEARCH = 0.5
 SHORT_START = 0.0075
 SHORT_COMPACT = 0.8
 SPREAD = (0.07, 0.025)  # each round's densities: its guess times 1 -+ SPREAD[round]
@@ -165,7 +167,7 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True):
     short = False
     if seconds > 0 and (nesting - start * rounds) / rounds < start:
         headroom = SHORT_HEADROOM
-        if rounds == 1 and nesting > SHORT_START * k:
+        if rounds == 1 and nesting - start < SHORT_SEARCH * start and nesting > SHORT_START * k:
             start, headroom, short = SHORT_START * k, HEADROOM, True
     # the strip must hold the widest chart with the separation to both its edges: its height is
     # S (1 + p headroom) + 2 tol, the chart's extent at most S (1 - p headroom) - 2 tol
