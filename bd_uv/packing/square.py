@@ -43,6 +43,15 @@ HEADROOM = 1.10       # a strip's separation is the padding of a square this muc
 # coverage (0.6004 against 0.5995, seeds 0-9) and 20 % less CPU. For every solve (camel searches
 # 0.7 s) it lost 1.5-2 % (seeds 0-3): the layouts spyrrow narrows keep the tighter separation
 SHORT_HEADROOM = 1.20
+# ... but where that search would be under SHORT_SEARCH of a first placement and one re-estimated
+# at SHORT_START a chart (measured 2026-11-28 at load 0.3-2: suzanne's 27 charts 0.12-0.17 s, not
+# 0.4) leaves a search: that search, HEADROOM, and the compaction's share times SHORT_COMPACT (a
+# search gained more a second than the compaction's tail: suzanne 0.596 -> 0.606 over 48 seeds
+# at 0.43 -> 0.50 s, elephant 0.681 -> 0.685 over 16; dino, whose search was 0.52 s, even over 24
+# seeds for 0.2 s more, hence SHORT_SEARCH; issue18-cover13-2026-11-28.md)
+SHORT_SEARCH = 0.5
+SHORT_START = 0.0075
+SHORT_COMPACT = 0.8
 SPREAD = (0.07, 0.025)  # each round's densities: its guess times 1 -+ SPREAD[round]
 COMPACT_SHARE = 0.5     # of the time: compaction of the best layout found (.compact)
 # above this many charts a compaction step (one linear program over every chart) is too slow to
@@ -155,8 +164,11 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True):
     dens = DENSITY_GUESS * np.sqrt(1 - 1 / k)
     best, solves, start = None, 0, START_PER_CHART * k
     headroom = HEADROOM
+    short = False
     if seconds > 0 and (nesting - start * rounds) / rounds < start:
         headroom = SHORT_HEADROOM
+        if rounds == 1 and nesting - start < SHORT_SEARCH * start and nesting > SHORT_START * k:
+            start, headroom, short = SHORT_START * k, HEADROOM, True
     # the strip must hold the widest chart with the separation to both its edges: its height is
     # S (1 + p headroom) + 2 tol, the chart's extent at most S (1 - p headroom) - 2 tol
     least = (widest + 2 * tol) / (1 - options.padding * headroom) * FIT[options.rotate]
@@ -211,6 +223,7 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True):
     # every 0.05 degrees, a hair above it)
     fine = float(least_squares([outlines[int(np.argmax(boxes))]], options, step=0.05)[0][0])
     outlines, start, tol = on_exact(outlines, exact, *best, options, tol)
-    pl, side, _ = compact_square(outlines, *start, options, tol, share * seconds,
+    pl, side, _ = compact_square(outlines, *start, options, tol,
+                                 share * (SHORT_COMPACT if short else 1.0) * seconds,
                                  least_side=(fine + 2 * tol) / (1 - options.padding))
     return pl, side, solves
