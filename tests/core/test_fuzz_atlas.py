@@ -122,7 +122,8 @@ def problems(draw):
     if tiny_after:
         k = draw(st.integers(5 * tiny_after, 200))
         huge_tiny, mode, solve_seconds, solves = False, "fit", None, 1
-    return dict(tiny_after=tiny_after, fits=fits, k=k, kinds=kinds, huge_tiny=huge_tiny, zero=zero, seed=seed, res=res, pad=pad,
+    return dict(tiny_after=tiny_after, fits=fits, k=k, kinds=kinds, huge_tiny=huge_tiny,
+                zero=zero, seed=seed, res=res, pad=pad,
                 rotate=rotate, mode=mode, solve_seconds=solve_seconds, fill=fill, n_pins=n_pins,
                 outside=outside, solves=solves)
 
