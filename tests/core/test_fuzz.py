@@ -21,7 +21,6 @@ from unittest import mock
 
 import clarabel
 import numpy as np
-import pytest
 from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
