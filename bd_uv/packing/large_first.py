@@ -28,7 +28,7 @@ from .around import _candidates, _place
 from .compact import compact_square
 from .nest import Placement, _area, least_squares, rotations
 from .refit import fits, on_exact
-from .relocate import _grid_cells
+from .relocate import occupied
 
 LARGE_FIRST_CHARTS = 40   # from this many charts (see docs: camel 29 and homer 24 lost 1-3 %)
 LARGE_SHARE = 0.8         # the largest charts holding this share of the area are nested alone
@@ -81,11 +81,8 @@ def large_first(outlines, exact, options, tol, seconds, nested):
         shift[large] = pl.shift * max(side / (S * LARGE_HEADROOM), 1.0)
         if fits(own, pl.angle, shift[large], side, options.padding, options.padding, tol):
             reach = 0.5 * options.padding + tol / side + h * np.sqrt(0.5)
-            occ = np.zeros((CELLS, CELLS), bool)
-            for j, i in enumerate(large):  # per large chart: its cells
-                r, c, mask = _grid_cells((outlines[i] @ R[j].T + shift[i]) / side, reach,
-                                         CELLS)
-                occ[r:r + mask.shape[0], c:c + mask.shape[1]] |= mask
+            occ = occupied([(outlines[i] @ R[j].T + shift[i]) / side
+                            for j, i in enumerate(large)], reach, CELLS)
             got = _place(occ, part, turns, np.arange(len(small)), 1.0 / side, options, tol)
             if got is not None:
                 break

@@ -36,6 +36,16 @@ def _grid_cells(q, reach, n):
     return lo[1], lo[0], shapely.contains_xy(grown, x, y)
 
 
+def occupied(placed, reach, n):
+    """(n,n) bool: the cells of the unit square's n x n grid whose centres lie within ``reach``
+    of any of the polygons ``placed`` (list of (m,2) arrays in the unit square)."""
+    occ = np.zeros((n, n), dtype=bool)
+    for q in placed:  # per chart: its cells
+        r, c, mask = _grid_cells(q, reach, n)
+        occ[r:r + mask.shape[0], c:c + mask.shape[1]] |= mask
+    return occ
+
+
 def relocate(outlines, angle, shift, side, separation, options, n=CELLS):
     """Move the small charts that bound the square into the free spot deepest inside it.
 

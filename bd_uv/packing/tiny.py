@@ -25,6 +25,7 @@ from .around import GROW, _candidates
 from .few import few_square
 from .nest import Placement, rotations
 from .refit import ROUNDING, fits
+from .relocate import occupied
 from .square import square_layout
 
 TINY_SHARE = 1e-3       # a chart under this share of the charts' area is tiny
@@ -85,23 +86,6 @@ def tiny_square(charts, options, tol, faces):
     return Placement(angle, shift, side), side, solves
 
 
-def _occupied(placed, reach, n):
-    """(n,n) bool: the cells of the unit square's grid whose centres lie within ``reach`` of
-    any of the polygons ``placed`` (list of (m,2) arrays in the unit square)."""
-    import shapely
-    h = 1.0 / n
-    occ = np.zeros((n, n), dtype=bool)
-    for q in placed:  # per chart
-        lo = np.maximum(np.floor((q.min(axis=0) - reach) / h).astype(int), 0)
-        hi = np.minimum(np.ceil((q.max(axis=0) + reach) / h).astype(int) + 1, n)
-        grown = shapely.buffer(shapely.Polygon(q), reach * GROW + 1e-12)
-        shapely.prepare(grown)
-        x, y = np.meshgrid((np.arange(lo[0], hi[0]) + 0.5) * h,
-                           (np.arange(lo[1], hi[1]) + 0.5) * h)
-        occ[lo[1]:hi[1], lo[0]:hi[0]] |= shapely.contains_xy(grown, x, y)
-    return occ
-
-
 def _masks(turned, reach, h):
     """Per polygon of ``turned`` (list of (m,2) arrays, unit square's units): the cells whose
     centres lie within ``reach`` of it, as :func:`.around._chart_cells` finds them (one shapely
@@ -141,7 +125,7 @@ def _drop(outlines, big, order, angle, shift, side, sep, options, n=CELLS):
     h = 1.0 / n
     reach = 0.5 * sep / side + h * np.sqrt(0.5)
     R = rotations(angle)
-    occ = _occupied([(outlines[i] @ R[i].T + shift[i]) / side for i in big], reach, n)
+    occ = occupied([(outlines[i] @ R[i].T + shift[i]) / side for i in big], reach, n)
     turns = _candidates([outlines[i] for i in order], options)
     turned = [(i, a, outlines[i] @ Rt.T / side)
               for i, allowed in zip(order, turns) for a, Rt in zip(allowed, rotations(allowed))]
