@@ -180,3 +180,16 @@ def sphere_cut():
     k = E.keys(added, len(V))
     cut[k[k >= 0]] = True
     return V, F, E, cut
+
+
+def record_mapped(monkeypatch, rounds):
+    """A list that grows by the vertex count of every chart ``rounds.chart_maps`` maps from
+    now on (the seam search's rounds module, patched with ``monkeypatch``)."""
+    mapped = []
+    real = rounds.chart_maps
+
+    def spy(V, charts, *args, **kwargs):
+        mapped.extend(len(c.vertices) for c in charts)
+        return real(V, charts, *args, **kwargs)
+    monkeypatch.setattr(rounds, "chart_maps", spy)
+    return mapped

@@ -27,6 +27,18 @@ def _least_gap(rings):
     return gap, nested
 
 
+def _inside_and_apart(charts, pl, side, options, tol):
+    """The placed outlines (checked: every one inside the square with half the padding plus
+    the tolerance, any two the padding plus twice the tolerance apart, none inside another)."""
+    rings = placed(charts.outlines, pl.angle, pl.shift)
+    pts = np.concatenate(rings)
+    edge = 0.5 * options.padding * side + tol
+    assert pts.min() >= edge * (1 - 1e-9) and pts.max() <= side - edge * (1 - 1e-9)
+    gap, nested = _least_gap(rings)
+    assert gap >= (options.padding * side + 2 * tol) * (1 - 1e-9) and not nested
+    return rings
+
+
 @pytest.mark.parametrize("kind, k, rotate", [("boxes", 24, "any"), ("holes", 12, "any"),
                                               ("slivers", 10, "90"), ("boxes", 16, "none")])
 def test_compaction_shrinks_the_square_and_keeps_the_padding(kind, k, rotate):
@@ -41,12 +53,7 @@ def test_compaction_shrinks_the_square_and_keeps_the_padding(kind, k, rotate):
     pl, side, steps = compact_square(charts.outlines, pl0, side0, options, tol, 1e9,
                                      max_programs=25)
     assert steps >= 1 and side < side0 * (1 - 1e-3)
-    rings = placed(charts.outlines, pl.angle, pl.shift)
-    pts = np.concatenate(rings)
-    edge = 0.5 * options.padding * side + tol
-    assert pts.min() >= edge * (1 - 1e-9) and pts.max() <= side - edge * (1 - 1e-9)
-    gap, nested = _least_gap(rings)
-    assert gap >= (options.padding * side + 2 * tol) * (1 - 1e-9) and not nested
+    rings = _inside_and_apart(charts, pl, side, options, tol)
     assert pl.width == side
     turn = (pl.angle - pl0.angle + 180) % 360 - 180
     if rotate == "any":
@@ -182,12 +189,7 @@ def test_tiny_charts_packed_close_do_not_turn_when_their_programs_are_infeasible
     pl, side, steps = compact_square(charts.outlines, pl0, side0, options, tol, 1e9,
                                      max_programs=20)
     assert steps >= 5 and side < side0 * (1 - 0.015)
-    rings = placed(charts.outlines, pl.angle, pl.shift)
-    pts = np.concatenate(rings)
-    edge = 0.5 * options.padding * side + tol
-    assert pts.min() >= edge * (1 - 1e-9) and pts.max() <= side - edge * (1 - 1e-9)
-    gap, nested = _least_gap(rings)
-    assert gap >= (options.padding * side + 2 * tol) * (1 - 1e-9) and not nested
+    rings = _inside_and_apart(charts, pl, side, options, tol)
     for xy, ring in zip(charts.outlines, rings):  # per chart: turned and moved, not mirrored
         e0, e1 = xy[1] - xy[0], ring[1] - ring[0]
         f0, f1 = xy[2] - xy[0], ring[2] - ring[0]

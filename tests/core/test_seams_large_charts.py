@@ -155,16 +155,10 @@ def test_a_chart_above_map_vertices_is_split_unmapped_and_merged_back(monkeypatc
     """The search maps no chart above ``MAP_VERTICES`` vertices top-down (its factor was the
     memory peak); a sheet that passes whole is still one chart, its pieces merged again."""
     from bd_uv.seams import auto, rounds
-    from tests.core.seams_helpers import face_singular_values
+    from tests.core.seams_helpers import face_singular_values, record_mapped
     V, F = _wavy_sheet()
     monkeypatch.setattr(rounds, "MAP_VERTICES", 200)
-    mapped = []
-    real = rounds.chart_maps
-
-    def spy(V_, charts, *a, **k):
-        mapped.extend(len(c.vertices) for c in charts)
-        return real(V_, charts, *a, **k)
-    monkeypatch.setattr(rounds, "chart_maps", spy)
+    mapped = record_mapped(monkeypatch, rounds)
     result, added, info = auto.unwrap_auto(V, F, bound=2, stretch=2)
     assert mapped and max(mapped) <= 200           # the top-down rounds mapped pieces only
     assert info["charts"] == 1 and len(added) == 0

@@ -10,13 +10,12 @@
   charts come out with and without that shortcut.
 """
 import numpy as np
-import pytest
 
 from bd_uv.seams import auto as auto_mod
 from bd_uv.seams import bisect as bisect_mod
 from bd_uv.seams import merge as merge_mod
 from bd_uv.seams.charts import MARGIN
-from seams_helpers import uv_sphere
+from seams_helpers import record_mapped, uv_sphere
 
 
 def _levels(monkeypatch, stretch, n=200, S=2.0, big=None):
@@ -116,13 +115,7 @@ def test_rounds_map_a_mid_size_disk_only_where_it_holds_a_share_of_the_mesh(monk
     nv = len(V)
     runs = {}
     for low in (None, 300):
-        mapped = []
-        chart_maps = rounds_mod.chart_maps
-
-        def recorded(V_, chs, *a, **k):
-            mapped.extend(len(c.vertices) for c in chs)
-            return chart_maps(V_, chs, *a, **k)
-        monkeypatch.setattr(rounds_mod, "chart_maps", recorded)
+        mapped = record_mapped(monkeypatch, rounds_mod)
         if low is not None:
             monkeypatch.setattr(rounds_mod, "MAP_SHARE_VERTICES", low)
             monkeypatch.setattr(rounds_mod, "MAP_SHARE", 0.7)
