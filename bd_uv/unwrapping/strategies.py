@@ -16,6 +16,7 @@ from .along import golden
 from .bounded import bend, formulate, guaranteed_bound, start_for_solve
 from .searched import search
 from .initial import Start
+from .margins import solve_bound
 
 # Minimising C stops after a Dinkelbach step that lowers C - 1 by less than this share of it.
 # Measured against C* = where 24 steps end: mushroom 1.12375 -> 1.10996 (11 %, C* 1.10980),
@@ -56,8 +57,9 @@ def minimise(prob, start, limit, budget, flags, report, t0):
     Returns (u, smallest certified C, name of the start).
     """
     if not np.isfinite(start.D):  # a flip-free start bounds C* from above
-        bent = (bend(prob, start, min(5.0, limit), report, polish=False) if start.u is not None
-                else None)
+        # (a limit at 1 leaves no room to bend into: the projection needs C > 1, as ``bounded``)
+        bent = (bend(prob, start, min(5.0, limit), report, polish=False)
+                if start.u is not None and solve_bound(min(5.0, limit)) > 1.0 else None)
         start = (Start(bent, frames_from_map(prob.alpha(bent)), start.name, prob.distortion(bent))
                  if bent is not None else start_for_solve(prob, start, report))
     best, projected, steps = None, None, budget is not None

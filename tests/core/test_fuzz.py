@@ -313,6 +313,17 @@ BOUND_A_HAIR_ABOVE_ONE = dict(
     method="lscm", frames="auto", cone="soc", solver_faults=0.0)
 
 
+# A numeric bound of exactly 1 on an island whose map overlaps itself (seed 5151 of the deep
+# run): the unfold's search for the least C within it bent its flipping start into C = 1, which
+# the projection refuses ("C must be > 1"), and the ValueError escaped the unwrap.
+BOUND_ONE_UNFOLD = dict(
+    mesh="three_peaks patch", patch_size=276, seed=24552499, noise=0.0, delete=0.0,
+    delete_kind="scattered faces", seams=5, pins=0, pin_kind="from a certified map", defect=None,
+    nonfinite=np.nan, nonfinite_at="any vertex", nonfinite_count=1, pin_fault=None, bound=1.0,
+    stretch=None, method="lscm", frames="auto", cone="soc", solver_faults=0.0,
+    seams_mode="marked", copies=0, mirror=False)
+
+
 # Two pins on one point (seed 8 at 2,000): pieces 1e-8 to 5e-14 across at u = 0.98. The
 # independent overlap test projected coordinates far from the origin onto tiny edge normals and
 # took neighbours sharing an edge for overlapping (overlap_shapes, test-side); and
@@ -381,6 +392,7 @@ COPIES_AUTO = dict(
 @example(sc=PINS_ON_ONE_POINT)
 @example(sc=dict(PINS_ON_ONE_POINT, patch_size=30, seed=0, solver_faults=1.0))
 @example(sc=BOUND_A_HAIR_ABOVE_ONE)
+@example(sc=BOUND_ONE_UNFOLD)
 @example(sc=dict(BOUND_A_HAIR_ABOVE_ONE, stretch=1.5, method="arap"))
 @example(sc=NAN_VERTEX_BESIDE_CROSSING_ISLANDS)
 @example(sc=ONE_FACE_PINNED_FAR_AWAY)
