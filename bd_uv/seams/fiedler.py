@@ -113,8 +113,10 @@ def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12, keys=None
     idx = np.arange(k)
     # Upper triangle only (the factorisation reads no more), as triplets: the ordered factor
     # sorts them in its own order (``orders.fiedler_solver``); compressed where needed.
-    rows = np.concatenate([pairs.min(axis=1), idx])
-    cols = np.concatenate([pairs.max(axis=1), idx])
+    # (``np.minimum`` of the two columns, not ``pairs.min(axis=1)``: numpy's reduction along a
+    # length-2 axis is ~30x slower, 0.2 ms on a 15k-pair chart, twice per batch)
+    rows = np.concatenate([np.minimum(pairs[:, 0], pairs[:, 1]), idx])
+    cols = np.concatenate([np.maximum(pairs[:, 0], pairs[:, 1]), idx])
     vals = np.concatenate([-w, deg + shift[group] * mass])
 
     def upper():
