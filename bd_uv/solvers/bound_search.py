@@ -168,7 +168,7 @@ class BoundSearch:
             Ufix = np.zeros((2, s.nv))
             Ufix[:, s.fixed] = self.UF.T
             self._rhs_fixed = (self.UF, FreeLift(self._free, Ufix.ravel(),
-                                                 -(s._L_fF @ self.UF).T.ravel()))
+                                                 -s.fixed_share(self.UF).T.ravel()))
         return self._rhs_fixed[1]
 
     def run(self, U, w, C, D_best, cancel=None, enough=None, ready=None, deep=False):
@@ -191,7 +191,7 @@ class BoundSearch:
         nf = len(s.free)
         if self._rhs_fixed is None or self._rhs_fixed[0] is not self.UF:
             # the fixed vertices' share of the right-hand side: the same for every target
-            self._rhs_fixed = (self.UF, (s._L_fF @ self.UF).T.ravel())
+            self._rhs_fixed = (self.UF, s.fixed_share(self.UF).T.ravel())
         rhs_fixed = self._rhs_fixed[1]
         w2 = np.stack([w.real, -w.imag])
         U = U.copy()

@@ -24,7 +24,7 @@ import numpy as np
 from ..errors import CancelledError
 from ..geometry import components, gradient_operators, local_frame
 from ..mesh import DEGENERATE_RATIO, Island
-from ..solvers.lscm import face_geometry_of, lscm_pinned
+from ..solvers.lscm import _lscm_system, face_geometry_of, lscm_pinned, ranked_triplet_solver
 from ..solvers.ordered_ldl import FIXED_RANKED, edge_ranks
 from .disk_certificate import certify_disk, certify_measured_disk
 from .margins import STORE_HEADROOM
@@ -227,9 +227,22 @@ def conformal(V, disk, Z, G, ranks):
     isl = disk.island
     geom = face_geometry_of(Z, G, disk.area)
     idx = _far_pair(V.take(isl.vertices, axis=0), isl.loops[0])
-    return lscm_pinned(geom.cbw(), geom.cb, isl.tris, len(isl.vertices), idx,
-                       np.array([0.0, 1.0], complex), (disk.twins[0], disk.twins[1], disk.loop),
-                       ranks)
+    args = (geom.cbw(), geom.cb, isl.tris, len(isl.vertices), idx, np.array([0.0, 1.0], complex),
+            (disk.twins[0], disk.twins[1], disk.loop))
+    if ranks is None:
+        return lscm_pinned(*args)
+    # ``lscm_pinned`` in the ranks' order, its system's triplets handed to the factorisation
+    # as they are: it sorts them into its own order anyway (the same matrix, the same bits),
+    # so the canonical csc matrix ``lscm_pinned`` makes first (~50-70 us of scipy's
+    # constructor on a 115-face disk) is not made
+    A, rhs, u, free = _lscm_system(*args, triplets=True)
+    solve = ranked_triplet_solver(A.rows, A.cols, A.vals, ranks[free])
+    if solve is None:                   # lscm_pinned's way where that factorisation fails
+        return lscm_pinned(*args, ranks)
+    x = solve(rhs)
+    nf = len(free)
+    u[free] = x[:nf] + 1j * x[nf:]
+    return u
 
 
 def fitted(F, disk, u, C, t0, flags, note):
