@@ -103,6 +103,7 @@ class BoundSearch:
         self.iterations = 0
         self.ended = self.pending = False   # the last run: ``enough`` stopped it; its best unasked
         self._B = self._free = None
+        self._measured = None       # (the map distortion_of measured last, its max)
         # ``limit_effort``'s: bounded as auto's least C, its iteration budget, the first
         # target's STALL
         self.least, self.budget, self.first_stall = False, None, target_watch.STALL
@@ -274,13 +275,19 @@ class BoundSearch:
         """Max conformal distortion (inf when a face flips) of the map u (nv,) complex, as
         ``search`` measures the map it starts from (its fixed vertices held where u has them;
         the lift kept when they are already there)."""
+        if self._measured is not None and self._measured[0] is u:
+            return self._measured[1]        # this very map, measured last (the same bits)
         U = np.stack([u.real, u.imag])
         UF = U[:, self.solver.fixed].T
         if self.UF is None or not np.array_equal(self.UF, UF):
             self.UF = UF
         self.solver._assemble()
         self._operators()
-        return self.max_distortion(self._lift(U))
+        D = self.max_distortion(self._lift(U))
+        # kept for ``search`` from the map its caller just measured (``disk_auto``); u is the
+        # caller's array, read-only here: a copy of it (another object) is measured again
+        self._measured = (u, D)
+        return D
 
     def search(self, u, frames_of=None, report=None, deadline=None, cancel=None, enough=None,
                ready=None, deep=False):

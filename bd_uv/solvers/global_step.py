@@ -59,9 +59,10 @@ class GlobalStep:
                                               np.concatenate([tris[:, 1], tris[:, 2]])))
         self.component = comp.astype(np.int64)
         self.face_comp = self.component[tris[:, 0]]
-        fixed = np.unique(np.asarray(fixed_idx, dtype=np.int64))
-        if not len(fixed) or np.any(np.bincount(self.component[fixed],
-                                                minlength=self.n_components) == 0):
+        fixed = np.asarray(fixed_idx, dtype=np.int64).ravel()
+        fixed = fixed.copy() if len(fixed) == 1 else np.unique(fixed)   # (np.unique's answer)
+        if not len(fixed) or (self.n_components > 1 and np.any(np.bincount(
+                self.component[fixed], minlength=self.n_components) == 0)):
             raise ValueError("every connected component needs at least one fixed vertex")
         self.fixed = fixed
         self.fixed_given = np.asarray(fixed_idx, dtype=np.int64)
@@ -72,11 +73,13 @@ class GlobalStep:
         if ranks is not None:                   # in elimination order
             self.free = self.free[np.argsort(ranks[self.free], kind="stable")]
         self.free_comp = self.component[self.free]
-        # Faces sorted by component, for per-component maxima.
-        self._order = np.argsort(self.face_comp, kind="stable")
-        counts = np.bincount(self.face_comp, minlength=self.n_components)
-        self._starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-        self._has_faces = counts > 0
+        if self.n_components > 1:   # faces sorted by component, for per-component maxima
+            self._order = np.argsort(self.face_comp, kind="stable")
+            counts = np.bincount(self.face_comp, minlength=self.n_components)
+            self._starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+            self._has_faces = counts > 0
+        else:
+            self._has_faces = np.array([len(tris) > 0])
         self._blocks = self._csc = self._G = self._GT = self._g = None
         self._solve, self.backend = None, backend
         self.setup_seconds = time.perf_counter() - t0

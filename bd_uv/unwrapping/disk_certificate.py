@@ -102,10 +102,12 @@ def simple_ccw_loop(p):
 
 
 def _simple_or_not(p, q):
-    """Step 3 on the segments p[i] -> q[i] = p[i + 1]: the star-shaped test (the common case),
-    else a polygon that surely does not turn once is refused (``turns_once``), else the full
-    test."""
-    return _star_shaped(p, q) or (turns_once(p[:, 0] + 1j * p[:, 1]) and _simple_ccw(p, q))
+    """Step 3 on the segments p[i] -> q[i] = p[i + 1]: the star-shaped test, else the full test
+    (both exact: each answers as the other where it answers; ``turns_once``, a refusal of
+    polygons the full test refuses too, is not asked first: most maps certified here are one
+    to one, and the ring patches of the issue-21 disks are not star-shaped, so the full test
+    runs on them anyway)."""
+    return _star_shaped(p, q) or _simple_ccw(p, q)
 
 
 def turns_once(z):
@@ -144,7 +146,7 @@ def _star_shaped(p, q):
     counter-clockwise (``segments._orient``'s sign, clear of its rounding bound) and the turns add
     up to one full turn. The segments then cover the directions from that point once each, so
     only consecutive ones meet, at their shared end: a simple polygon, wound counter-clockwise."""
-    c = p.mean(axis=0)
+    c = p.sum(axis=0) / len(p)          # any point serves; this one without mean()'s wrapper
     d, e = p - c, q - c
     l, r = d[:, 0] * e[:, 1], d[:, 1] * e[:, 0]
     cross = l - r
