@@ -13,7 +13,7 @@ import scipy.sparse as sp
 from scipy.sparse import _sparsetools as _st
 
 __all__ = ["face_gradients", "laplacian_blocks", "laplacian_block_arrays", "alpha_beta_lift",
-           "free_lift_arrays", "CscArrays", "as_csc"]
+           "free_lift_arrays", "CscArrays", "as_csc", "csc_arrays"]
 
 
 def face_gradients(Gx, Gy, tris):
@@ -77,6 +77,11 @@ class CscArrays(NamedTuple):
     indptr: np.ndarray
     shape: tuple
 
+    @property
+    def nnz(self):
+        """The stored entries (what ``qdldl.Solver`` reads of a matrix besides the arrays)."""
+        return int(self.indptr[-1])
+
     def times(self, X):
         """``M @ X`` for X (ncols, r) float64: scipy's compiled product, column by column of X
         (each entry of the answer summed in the same order: the same bits), without its
@@ -98,6 +103,12 @@ def as_csc(arrays):
                      copy=False)
     M.has_canonical_format = True
     return M
+
+
+def csc_arrays(vals, rows, cols, nr, nc):
+    """``CscArrays`` of the triplets (vals, rows, cols) (int64 rows and columns) of an (nr, nc)
+    matrix: scipy's conversion's arrays (``_summed``), no scipy matrix made."""
+    return _summed(vals, rows, cols, nr, nc)
 
 
 def _summed_csc(vals, rows, cols, nr, nc):
