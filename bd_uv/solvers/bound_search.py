@@ -255,7 +255,8 @@ class BoundSearch:
         """Bound the search as ``bound="auto"`` bounds it on an unpinned island with no time
         budget, up to ``target_watch.EFFORT_FACES`` faces: its first target waits FIRST_STALL
         iterations, and from a start within EFFORT_START its iterations are within a budget
-        growing with the faces (``target_watch.effort``)."""
+        growing with the faces (``target_watch.effort``), no target starting with fewer than
+        LEAST_RUN of them left."""
         if self.k <= target_watch.EFFORT_FACES:
             self.least, self.first_stall = True, target_watch.FIRST_STALL
 
@@ -325,8 +326,8 @@ class BoundSearch:
         out_of_time = False
         flat = FLAT if enough is None else 0.0
         while np.isfinite(D) and D - 1.0 > flat:
-            if self.budget is not None and self.iterations >= self.budget:
-                break
+            if self.budget is not None and self.iterations > self.budget - target_watch.LEAST_RUN:
+                break               # the budget spent, or too little of it left for a target
             if deadline is not None and time.perf_counter() > deadline and self.iterations:
                 out_of_time = True
                 break
