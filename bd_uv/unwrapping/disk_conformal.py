@@ -45,12 +45,14 @@ def conformal(V, disk, Z, G, ranks):
 
 def _qdldl_solve(M):
     """``lscm.spd_solver(M, upper=True)``'s solve of the canonical upper triangle M
-    (``CscArrays``) by qdldl, or None where qdldl is missing or refuses it (a zero pivot)."""
+    (``CscArrays``) by qdldl, or None where qdldl is missing or refuses it: a zero pivot
+    (ValueError), or a release that wants a scipy matrix rather than its arrays (the caller
+    then goes ``lscm_pinned``'s way)."""
     if qdldl is None:
         return None
     try:
         return qdldl.Solver(M, upper=True).solve
-    except ValueError:
+    except (ValueError, TypeError, AttributeError):
         return None
 
 

@@ -440,3 +440,25 @@ def test_the_disk_conformal_map_is_lscm_pinned_bit_for_bit(nx, ny):
         got = disk_conformal.conformal(V, disk, disk.Z, disk.G, ranks)
         assert got.tobytes() == want.tobytes()
         assert got[idx[0]] == 0.0 and got[idx[1]] == 1.0
+
+
+def test_the_disk_conformal_map_falls_back_where_qdldl_wants_a_matrix(monkeypatch):
+    """A qdldl that refuses bare arrays (a release wanting a scipy matrix) or is missing: the
+    map is ``lscm_pinned``'s all the same (its own way), bit for bit."""
+    from bd_uv.solvers.lscm import face_geometry_of, lscm_pinned
+    V, F = grid(7, 6, lambda x, y: 0.3 * np.sin(3 * x) * np.cos(2 * y))
+    disk = one_disk.find(V, F.astype(np.int64))
+    isl = disk.island
+    geom = face_geometry_of(disk.Z, disk.G, disk.area)
+    idx = disk_conformal._far_pair(V.take(isl.vertices, axis=0), isl.loops[0])
+    want = lscm_pinned(geom.cbw(), geom.cb, isl.tris, len(isl.vertices), idx,
+                       np.array([0.0, 1.0], complex), (disk.twins[0], disk.twins[1], disk.loop))
+
+    class Picky:
+        @staticmethod
+        def Solver(A, upper=False):
+            return A.tocsc()                # what a bare CscArrays does not have
+    for fake in (Picky, None):
+        monkeypatch.setattr(disk_conformal, "qdldl", fake)
+        got = disk_conformal.conformal(V, disk, disk.Z, disk.G, None)
+        assert got.tobytes() == want.tobytes()
