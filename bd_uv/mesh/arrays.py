@@ -31,8 +31,9 @@ def check_arrays(V, F, *, share=False):
         raise InvalidMeshError(f"faces must be an (m,3) array of triangles, got shape {F.shape}; "
                                "triangulate n-gons first")
     F = _shared(F) if share and F.dtype == np.int64 else as_indices(F, "face indices")
-    bad = np.flatnonzero(np.any((F < 0) | (F >= len(V)), axis=1))
-    if len(bad):
+    out = (F < 0) | (F >= len(V))
+    if out.any():                       # (the faces named only then)
+        bad = np.flatnonzero(out.any(axis=1))
         raise InvalidMeshError(f"{len(bad)} face(s) use vertex indices outside 0..{len(V) - 1} "
                                f"(faces {_some(bad)}); fix the face list")
     return (_shared(V) if share and V.dtype == np.float64 else as_reals(V, "vertex coordinates"),

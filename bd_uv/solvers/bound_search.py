@@ -103,6 +103,7 @@ class BoundSearch:
         self.iterations = 0
         self.ended = self.pending = False   # the last run: ``enough`` stopped it; its best unasked
         self._B = self._free = None
+        self._measured = None       # (the map distortion_of measured last, its max)
         # ``limit_effort``'s: bounded as auto's least C, its iteration budget, the first
         # target's STALL
         self.least, self.budget, self.first_stall = False, None, target_watch.STALL
@@ -168,7 +169,7 @@ class BoundSearch:
             Ufix = np.zeros((2, s.nv))
             Ufix[:, s.fixed] = self.UF.T
             self._rhs_fixed = (self.UF, FreeLift(self._free, Ufix.ravel(),
-                                                 -(s._L_fF @ self.UF).T.ravel()))
+                                                 -s.fixed_share(self.UF).T.ravel()))
         return self._rhs_fixed[1]
 
     def run(self, U, w, C, D_best, cancel=None, enough=None, ready=None, deep=False):
@@ -191,7 +192,7 @@ class BoundSearch:
         nf = len(s.free)
         if self._rhs_fixed is None or self._rhs_fixed[0] is not self.UF:
             # the fixed vertices' share of the right-hand side: the same for every target
-            self._rhs_fixed = (self.UF, (s._L_fF @ self.UF).T.ravel())
+            self._rhs_fixed = (self.UF, s.fixed_share(self.UF).T.ravel())
         rhs_fixed = self._rhs_fixed[1]
         w2 = np.stack([w.real, -w.imag])
         U = U.copy()
@@ -254,7 +255,8 @@ class BoundSearch:
         """Bound the search as ``bound="auto"`` bounds it on an unpinned island with no time
         budget, up to ``target_watch.EFFORT_FACES`` faces: its first target waits FIRST_STALL
         iterations, and from a start within EFFORT_START its iterations are within a budget
-        growing with the faces (``target_watch.effort``)."""
+        growing with the faces (``target_watch.effort``), no target starting with fewer than
+        LEAST_RUN of them left."""
         if self.k <= target_watch.EFFORT_FACES:
             self.least, self.first_stall = True, target_watch.FIRST_STALL
 
@@ -274,13 +276,19 @@ class BoundSearch:
         """Max conformal distortion (inf when a face flips) of the map u (nv,) complex, as
         ``search`` measures the map it starts from (its fixed vertices held where u has them;
         the lift kept when they are already there)."""
+        if self._measured is not None and self._measured[0] is u:
+            return self._measured[1]        # this very map, measured last (the same bits)
         U = np.stack([u.real, u.imag])
         UF = U[:, self.solver.fixed].T
         if self.UF is None or not np.array_equal(self.UF, UF):
             self.UF = UF
         self.solver._assemble()
         self._operators()
-        return self.max_distortion(self._lift(U))
+        D = self.max_distortion(self._lift(U))
+        # kept for ``search`` from the map its caller just measured (``disk_auto``); u is the
+        # caller's array, read-only here: a copy of it (another object) is measured again
+        self._measured = (u, D)
+        return D
 
     def search(self, u, frames_of=None, report=None, deadline=None, cancel=None, enough=None,
                ready=None, deep=False):
@@ -318,8 +326,8 @@ class BoundSearch:
         out_of_time = False
         flat = FLAT if enough is None else 0.0
         while np.isfinite(D) and D - 1.0 > flat:
-            if self.budget is not None and self.iterations >= self.budget:
-                break
+            if self.budget is not None and self.iterations > self.budget - target_watch.LEAST_RUN:
+                break               # the budget spent, or too little of it left for a target
             if deadline is not None and time.perf_counter() > deadline and self.iterations:
                 out_of_time = True
                 break

@@ -6,11 +6,14 @@ every face's alpha and beta are written as triplets in a few whole-array operati
 conversion to a compressed matrix, rather than by products and slices of scipy matrices (a fixed
 cost of ~3 ms on a 223-face island against ~0.5 ms here: issue 21, "no fixed costs").
 """
+from typing import NamedTuple
+
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse import _sparsetools as _st
 
-__all__ = ["face_gradients", "laplacian_blocks", "alpha_beta_lift", "free_lift_arrays"]
+__all__ = ["face_gradients", "laplacian_blocks", "laplacian_block_arrays", "alpha_beta_lift",
+           "free_lift_arrays", "CscArrays", "as_csc", "csc_arrays"]
 
 
 def face_gradients(Gx, Gy, tris):
@@ -43,6 +46,13 @@ def laplacian_blocks(gx, gy, area, tris, free, fixed, nv):
     free, fixed : vertex ids (a partition of 0..nv-1), in the order of the blocks' rows and
         columns (``global_step.GlobalStep``'s free vertices may be in an elimination order)
     """
+    return tuple(as_csc(b) for b in laplacian_block_arrays(gx, gy, area, tris, free, fixed, nv))
+
+
+def laplacian_block_arrays(gx, gy, area, tris, free, fixed, nv):
+    """``laplacian_blocks``' two blocks as bare ``CscArrays`` (the same arrays and bits; no
+    scipy matrix is made: its constructor's checks are ~10-25 us a matrix, which a small
+    island's search paid twice)."""
     vals = area[:, None, None] * (gx[:, :, None] * gx[:, None, :] + gy[:, :, None] * gy[:, None, :])
     r = np.broadcast_to(tris[:, :, None], vals.shape).ravel()
     c = np.broadcast_to(tris[:, None, :], vals.shape).ravel()
@@ -54,15 +64,64 @@ def laplacian_blocks(gx, gy, area, tris, free, fixed, nv):
     is_free[free] = True
     fr, fc = is_free[r], is_free[c]
     ff, fF = fr & fc, fr & ~fc
-    return (_summed_csc(vals[ff], pos[r[ff]], pos[c[ff]], len(free), len(free)),
-            _summed_csc(vals[fF], pos[r[fF]], pos[c[fF]], len(free), len(fixed)))
+    return (_summed(vals[ff], pos[r[ff]], pos[c[ff]], len(free), len(free)),
+            _summed(vals[fF], pos[r[fF]], pos[c[fF]], len(free), len(fixed)))
+
+
+class CscArrays(NamedTuple):
+    """A canonical csc matrix as its bare arrays (``laplacian_block_arrays``): what
+    ``ordered_ldl.solver_in_order`` reads of a matrix (``shape``, ``indptr``, ``indices``,
+    ``data``); ``as_csc`` makes the scipy matrix, ``times`` its product with a dense matrix."""
+    data: np.ndarray
+    indices: np.ndarray
+    indptr: np.ndarray
+    shape: tuple
+
+    @property
+    def nnz(self):
+        """The stored entries (what ``qdldl.Solver`` reads of a matrix besides the arrays)."""
+        return int(self.indptr[-1])
+
+    def times(self, X):
+        """``M @ X`` for X (ncols, r) float64: scipy's compiled product, column by column of X
+        (each entry of the answer summed in the same order: the same bits), without its
+        dispatch."""
+        nr, nc = self.shape
+        X = np.asarray(X, dtype=np.float64)
+        out = np.zeros((nr, X.shape[1]))
+        for j in range(X.shape[1]):
+            y = np.zeros(nr)
+            _st.csc_matvec(nr, nc, self.indptr, self.indices, self.data,
+                           np.ascontiguousarray(X[:, j]), y)
+            out[:, j] = y
+        return out
+
+
+def as_csc(arrays):
+    """The scipy csc matrix (canonical) of ``CscArrays``, on the same arrays."""
+    M = sp.csc_array((arrays.data, arrays.indices, arrays.indptr), shape=arrays.shape,
+                     copy=False)
+    M.has_canonical_format = True
+    return M
+
+
+def csc_arrays(vals, rows, cols, nr, nc):
+    """``CscArrays`` of the triplets (vals, rows, cols) (int64 rows and columns) of an (nr, nc)
+    matrix: scipy's conversion's arrays (``_summed``), no scipy matrix made."""
+    return _summed(vals, rows, cols, nr, nc)
 
 
 def _summed_csc(vals, rows, cols, nr, nc):
     """``sp.csc_array((vals, (rows, cols)), shape=(nr, nc))`` (int64 rows and columns): scipy's
-    own compiled steps of that conversion, called straight (the same arrays, bits and order of
-    summing duplicates: triplets bucketed by column, sorted within a column only when not sorted
-    yet, duplicates summed), without the ~0.1 ms of its checks and conversions a matrix."""
+    own compiled steps of that conversion, called straight (``_summed``), without the ~0.1 ms
+    of its checks and conversions a matrix."""
+    return as_csc(_summed(vals, rows, cols, nr, nc))
+
+
+def _summed(vals, rows, cols, nr, nc):
+    """``_summed_csc``'s arrays (``CscArrays``): the same arrays, bits and order of summing
+    duplicates as scipy's conversion (triplets bucketed by column, sorted within a column only
+    when not sorted yet, duplicates summed)."""
     n = len(vals)
     indptr, indices, data = np.empty(nc + 1, np.int64), np.empty(n, np.int64), np.empty(n)
     _st.coo_tocsr(nc, nr, n, cols, rows, vals, indptr, indices, data)
@@ -72,9 +131,7 @@ def _summed_csc(vals, rows, cols, nr, nc):
         _st.csr_sum_duplicates(nc, nr, indptr, indices, data)
         k = int(indptr[-1])
         indices, data = indices[:k].copy(), data[:k].copy()
-    M = sp.csc_array((data, indices, indptr), shape=(nr, nc), copy=False)
-    M.has_canonical_format = True
-    return M
+    return CscArrays(data, indices, indptr, (nr, nc))
 
 
 def _lift_entries(gx, gy, tris, nv):

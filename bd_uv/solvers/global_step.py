@@ -11,7 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..geometry import components
-from .face_operators import face_gradients, laplacian_blocks
+from .face_operators import as_csc, face_gradients, laplacian_block_arrays
 from .factor import factor_spd
 from .ordered_ldl import solver_in_order
 
@@ -59,9 +59,10 @@ class GlobalStep:
                                               np.concatenate([tris[:, 1], tris[:, 2]])))
         self.component = comp.astype(np.int64)
         self.face_comp = self.component[tris[:, 0]]
-        fixed = np.unique(np.asarray(fixed_idx, dtype=np.int64))
-        if not len(fixed) or np.any(np.bincount(self.component[fixed],
-                                                minlength=self.n_components) == 0):
+        fixed = np.asarray(fixed_idx, dtype=np.int64).ravel()
+        fixed = fixed.copy() if len(fixed) == 1 else np.unique(fixed)   # (np.unique's answer)
+        if not len(fixed) or (self.n_components > 1 and np.any(np.bincount(
+                self.component[fixed], minlength=self.n_components) == 0)):
             raise ValueError("every connected component needs at least one fixed vertex")
         self.fixed = fixed
         self.fixed_given = np.asarray(fixed_idx, dtype=np.int64)
@@ -72,12 +73,14 @@ class GlobalStep:
         if ranks is not None:                   # in elimination order
             self.free = self.free[np.argsort(ranks[self.free], kind="stable")]
         self.free_comp = self.component[self.free]
-        # Faces sorted by component, for per-component maxima.
-        self._order = np.argsort(self.face_comp, kind="stable")
-        counts = np.bincount(self.face_comp, minlength=self.n_components)
-        self._starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
-        self._has_faces = counts > 0
-        self._L_ff = self._L_fF = self._G = self._GT = self._g = None
+        if self.n_components > 1:   # faces sorted by component, for per-component maxima
+            self._order = np.argsort(self.face_comp, kind="stable")
+            counts = np.bincount(self.face_comp, minlength=self.n_components)
+            self._starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+            self._has_faces = counts > 0
+        else:
+            self._has_faces = np.array([len(tris) > 0])
+        self._blocks = self._csc = self._G = self._GT = self._g = None
         self._solve, self.backend = None, backend
         self.setup_seconds = time.perf_counter() - t0
         self.factor_seconds = 0.0
@@ -125,11 +128,34 @@ class GlobalStep:
     def _assemble(self):
         """The global step's normal matrix, scalar and shared by both coordinates:
         ``L = sum_j A_j G_j^T G_j`` (minimises ``sum_j A_j |J_j - P_j|_F^2``), split into free and
-        fixed columns (``face_operators.laplacian_blocks``: from each face's coefficients)."""
-        if self._L_ff is None:
+        fixed columns (``face_operators.laplacian_block_arrays``: from each face's coefficients),
+        kept as bare arrays (``_L_ff``, ``_L_fF``: their scipy matrices, made when asked for)."""
+        if self._blocks is None:
             gx, gy = self.face_gradients()
-            self._L_ff, self._L_fF = laplacian_blocks(gx, gy, self.area, self.tris, self.free,
-                                                      self.fixed, self.nv)
+            self._blocks = laplacian_block_arrays(gx, gy, self.area, self.tris, self.free,
+                                                  self.fixed, self.nv)
+
+    @property
+    def _L_ff(self):
+        """(nf, nf) csc: the free-free block (``_assemble`` first)."""
+        return self._block_csc()[0]
+
+    @property
+    def _L_fF(self):
+        """(nf, nfixed) csc: the free-fixed block (``_assemble`` first)."""
+        return self._block_csc()[1]
+
+    def _block_csc(self):
+        if self._csc is None:
+            self._csc = tuple(as_csc(b) for b in self._blocks)
+        return self._csc
+
+    def fixed_share(self, UF):
+        """``L_fF @ UF`` (nf, r) for the fixed vertices' values UF (nfixed, r): the right-hand
+        side's share of the fixed vertices, from the bare block (the same bits as the scipy
+        product)."""
+        self._assemble()
+        return self._blocks[1].times(UF)
 
     def global_matrix(self):
         """The global step's matrix over the free vertices, (nf, nf) csc, symmetric positive
@@ -143,7 +169,9 @@ class GlobalStep:
         if self._solve is None:
             t0 = time.perf_counter()
             self._assemble()
-            solve = None if self.ranks is None else solver_in_order(self._L_ff)
+            # in its own order from the bare arrays (what ``solver_in_order`` reads of a csc
+            # matrix), no scipy matrix made
+            solve = None if self.ranks is None else solver_in_order(self._blocks[0])
             if solve is not None:
                 self._solve, self.backend = solve, "qdldl-ordered"
             else:

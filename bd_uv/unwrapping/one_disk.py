@@ -24,9 +24,9 @@ import numpy as np
 from ..errors import CancelledError
 from ..geometry import components, gradient_operators, local_frame
 from ..mesh import DEGENERATE_RATIO, Island
-from ..solvers.lscm import face_geometry_of, lscm_pinned
 from ..solvers.ordered_ldl import FIXED_RANKED, edge_ranks
 from .disk_certificate import certify_disk, certify_measured_disk
+from .disk_conformal import conformal
 from .margins import STORE_HEADROOM
 from .results import IslandResult, UnwrapResult
 
@@ -178,17 +178,6 @@ def _walk(nl):
     return seq if j == 0 and len(seq) == b else None
 
 
-def _far_pair(P, lv):
-    """``batched._far_pairs`` of one loop ``lv`` (island vertex ids along it) of vertices at P:
-    its first vertex and the one about half the loop's length from it, the same arithmetic."""
-    Q = P.take(lv, axis=0)
-    d = np.concatenate([Q[1:], Q[:1]]) - Q
-    seg = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])
-    cum = np.cumsum(seg)
-    total = np.bincount(np.zeros(len(seg), dtype=np.int64), seg, 1)[0]
-    return np.array([lv[0], lv[int(np.argmin(np.abs((cum - seg) - 0.5 * total)))]])
-
-
 def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
     """The conformal map of a ``Disk`` at the bound C, certified from its UVs as stored.
 
@@ -217,19 +206,6 @@ def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
     if progress is not None:
         progress(1.0, "done")
     return done, None, False
-
-
-def conformal(V, disk, Z, G, ranks):
-    """The conformal map (nv,) complex128 of a ``Disk`` whose faces have the local corners Z
-    (m,3) complex and gradient operators G (m,2,3) (its own: ``batched.conformal_islands``'
-    map; or other shapes: ``capped``), pinned as the batched path pins an island (``_far_pair``
-    at 0 and 1), factorised in the vertices' order ``ranks``."""
-    isl = disk.island
-    geom = face_geometry_of(Z, G, disk.area)
-    idx = _far_pair(V.take(isl.vertices, axis=0), isl.loops[0])
-    return lscm_pinned(geom.cbw(), geom.cb, isl.tris, len(isl.vertices), idx,
-                       np.array([0.0, 1.0], complex), (disk.twins[0], disk.twins[1], disk.loop),
-                       ranks)
 
 
 def fitted(F, disk, u, C, t0, flags, note):

@@ -174,3 +174,45 @@ def test_auto_on_a_small_disk_keeps_to_its_effort_budget(monkeypatch):
         D, flipped = reference_distortion(V, F, r.corner_uv.reshape(-1, 3, 2))
         assert r.certified and not flipped.any()
         assert D.max() <= isl.bound_certified * (1 + 1e-9)
+
+
+def test_auto_starts_no_target_it_has_too_little_budget_for(monkeypatch):
+    """Within auto's iteration budget no target starts with fewer than ``LEAST_RUN`` iterations
+    left (a new target's first iterates rise above the best). Every target's start is recorded
+    here: with LEAST_RUN 1 the search starts one with fewer left on these disks, with the product's
+    value none does, and it ends with fewer iterations at the best the shorter run had reached:
+    its UVs, recomputed here, are certified at its C."""
+    import bd_uv
+    from bd_uv.solvers import target_watch
+    starts = []
+    run = BoundSearch.run
+
+    def recording(self, *a, **k):
+        starts.append((self.budget, self.iterations))
+        return run(self, *a, **k)
+    monkeypatch.setattr(BoundSearch, "run", recording)
+    shorter = 0
+    for n, z in ((8, lambda x, y: 0.3 * np.sin(4 * x) * np.cos(3 * y)),
+                 (9, lambda x, y: 0.25 * np.cos(3 * x) * np.sin(5 * y)),
+                 (10, lambda x, y: 0.2 * np.sin(5 * x + 2 * y))):
+        V, F = grid(n, n, z=z)
+        got = {}
+        for least in (1, target_watch.LEAST_RUN):
+            monkeypatch.setattr(target_watch, "LEAST_RUN", least)
+            starts.clear()
+            r = bd_uv.unwrap(V, F, bound="auto")
+            (isl,) = r.islands
+            assert starts and all(b is not None and b - i >= least for b, i in starts)
+            D, flipped = reference_distortion(V, F, r.corner_uv.reshape(-1, 3, 2))
+            assert r.certified and not flipped.any()
+            assert D.max() <= isl.bound_certified * (1 + 1e-9)
+            got[least] = (isl.iterations, isl.bound_certified,
+                          min(b - i for b, i in starts))
+        (it1, c1, left1), (it6, c6, _) = got[1], got[target_watch.LEAST_RUN]
+        assert it6 <= it1
+        if left1 < target_watch.LEAST_RUN:      # the rule stopped a short last target
+            shorter += 1
+            assert it6 < it1 and c6 >= c1
+        else:
+            assert (it6, c6) == (it1, c1)
+    assert shorter >= 1

@@ -101,3 +101,30 @@ def test_summed_csc_is_scipys_conversion_bit_for_bit():
         assert np.array_equal(got.indptr, ref.indptr)
         assert np.array_equal(got.indices, ref.indices)
         assert got.data.tobytes() == ref.data.tobytes()
+
+
+def test_bare_block_arrays_and_their_product_are_scipys_bit_for_bit():
+    """``laplacian_block_arrays`` (no scipy matrix made) holds the very arrays of
+    ``laplacian_blocks``' matrices, and its ``times`` gives scipy's product ``M @ X`` bit for bit
+    (the global step's fixed share of the right-hand side), on fixed sets of several sizes."""
+    from bd_uv.solvers.face_operators import laplacian_block_arrays
+    P, tris = _grid_island(9, 6)
+    nv = len(P)
+    ops = jacobian_operators(local_coordinates(P, tris), tris, nv)
+    Gx = sp.csr_array((ops.Are + ops.Bre)[:, :nv])
+    Gy = sp.csr_array((ops.Bim - ops.Aim)[:, :nv])
+    gx, gy = face_gradients(Gx, Gy, tris)
+    rng = np.random.default_rng(11)
+    for nfix in (1, 2, 5, 17):
+        fixed = rng.choice(nv, nfix, replace=False)
+        free = rng.permutation(np.setdiff1d(np.arange(nv), fixed))    # any order of the free
+        mats = laplacian_blocks(gx, gy, ops.area, tris, free, fixed, nv)
+        bare = laplacian_block_arrays(gx, gy, ops.area, tris, free, fixed, nv)
+        for M, b in zip(mats, bare):
+            assert M.shape == b.shape
+            assert np.array_equal(M.indptr, b.indptr) and np.array_equal(M.indices, b.indices)
+            assert M.data.tobytes() == b.data.tobytes()
+            X = rng.standard_normal((b.shape[1], 2)) * 10.0 ** rng.integers(-3, 3)
+            # a transposed view, as the search passes its fixed vertices' values
+            Xt = np.ascontiguousarray(X.T).T
+            assert (M @ X).tobytes() == b.times(Xt).tobytes()

@@ -114,3 +114,38 @@ def test_held_lscm_is_lscm_pinned():
         got = HeldLSCM(geom.cbw(), geom.cb, isl.tris, nv, sides, ranks).solve(u, held)
         assert np.allclose(got, want, rtol=0, atol=1e-9 * np.abs(want).max())
         assert np.array_equal(got[idx], u[idx])
+
+
+def test_a_mean_within_the_rise_is_refused_without_measuring_the_conformal_map(monkeypatch):
+    """``relaxed`` refuses a search's map whose mean is within (1 + MEAN_RISE) of 1 without
+    measuring the conformal map (whose mean is at least 1, recomputed here by numpy's SVD), and
+    measures it as before above that: the same answers."""
+    V, F = _three_peaks()
+    disk = one_disk.find(V, F.astype(np.int64))
+    isl = disk.island
+    r = bd_uv.unwrap(V, F, bound="auto")
+    u = r.islands[0].uv[:, 0] + 1j * r.islands[0].uv[:, 1]
+    geom = face_geometry_of(disk.Z, disk.G, disk.area)
+    u_conf = lscm_pinned(geom.cbw(), geom.cb, isl.tris, len(isl.vertices),
+                         np.array([0, 1]), np.array([0.0, 1.0], complex))
+    Dc, _ = reference_distortion(V, F, np.stack([u_conf.real, u_conf.imag], 1)[F])
+    conf_mean = _mean(V, F, Dc)
+    assert conf_mean >= 1.0
+    measured = []
+    fd = mean_relax.face_distortion
+
+    def spy(cb, tris, v):
+        measured.append(v is u_conf)
+        return fd(cb, tris, v)
+    monkeypatch.setattr(mean_relax, "face_distortion", spy)
+    rise = 1.0 + mean_relax.MEAN_RISE
+    for mean in (1.0, 1.01, rise * (1.0 - 2e-9)):
+        measured.clear()
+        assert mean_relax.relaxed(disk.Z, disk.G, disk.area, isl.tris, len(isl.vertices),
+                                  u_conf, u, mean=mean) is None
+        assert not any(measured)
+    for mean in (rise * 0.999999 * conf_mean, rise * 1.000001 * conf_mean):
+        measured.clear()
+        mean_relax.relaxed(disk.Z, disk.G, disk.area, isl.tris, len(isl.vertices), u_conf, u,
+                           mean=mean)
+        assert measured and measured[0]              # the conformal map measured first

@@ -9,7 +9,7 @@ from bd_uv.certificate import certify_islands
 from bd_uv.mesh import checked_islands
 from bd_uv.options import unwrap_options
 from bd_uv.overlap import island_overlaps
-from bd_uv.unwrapping import disk_certificate, one_disk
+from bd_uv.unwrapping import disk_certificate, disk_conformal, one_disk
 from bd_uv.unwrapping.unwrap import pin_arrays, unwrap_islands
 from helpers import grid, load_off, rings
 from unwrap_contract import distortion_and_flips
@@ -95,7 +95,7 @@ def test_the_known_edges_build_the_sorted_edges_system():
     disk = one_disk.find(V, F)
     isl = disk.island
     g = face_geometry(V[isl.vertices], isl.tris)
-    idx, val = one_disk._far_pair(V[isl.vertices], isl.loops[0]), np.array([0.0, 1.0], complex)
+    idx, val = disk_conformal._far_pair(V[isl.vertices], isl.loops[0]), np.array([0.0, 1.0], complex)
     A, rhs, _, _ = _lscm_system(g.cbw(), g.cb, isl.tris, len(isl.vertices), idx, val)
     B, rhs2, _, _ = _lscm_system(g.cbw(), g.cb, isl.tris, len(isl.vertices), idx, val,
                                  (disk.twins[0], disk.twins[1], disk.loop))
@@ -419,3 +419,46 @@ def test_auto_on_a_disk_leaves_to_the_general_path_what_it_does_not_search():
         assert disk_auto.minimise_disk(V, disk, u, 1000.0, 0.0) is None
     finally:
         bs.ONE_PRODUCT_FACES = old
+
+
+@pytest.mark.parametrize("nx, ny", [(6, 5), (12, 9)])
+def test_the_disk_conformal_map_is_lscm_pinned_bit_for_bit(nx, ny):
+    """``disk_conformal.conformal`` (no scipy matrix made) gives ``lscm.lscm_pinned``'s map bit
+    for bit: in qdldl's own order (no ranks) and in the vertices' ranks, on a small and a larger
+    bumpy grid."""
+    from bd_uv.solvers.lscm import face_geometry_of, lscm_pinned
+    V, F = grid(nx, ny, lambda x, y: 0.3 * np.sin(3 * x) * np.cos(2 * y))   # not flat
+    disk = one_disk.find(V, F.astype(np.int64))
+    assert disk is not None
+    isl = disk.island
+    geom = face_geometry_of(disk.Z, disk.G, disk.area)
+    idx = disk_conformal._far_pair(V.take(isl.vertices, axis=0), isl.loops[0])
+    for ranks in (None, disk.ranks):
+        want = lscm_pinned(geom.cbw(), geom.cb, isl.tris, len(isl.vertices), idx,
+                           np.array([0.0, 1.0], complex),
+                           (disk.twins[0], disk.twins[1], disk.loop), ranks)
+        got = disk_conformal.conformal(V, disk, disk.Z, disk.G, ranks)
+        assert got.tobytes() == want.tobytes()
+        assert got[idx[0]] == 0.0 and got[idx[1]] == 1.0
+
+
+def test_the_disk_conformal_map_falls_back_where_qdldl_wants_a_matrix(monkeypatch):
+    """A qdldl that refuses bare arrays (a release wanting a scipy matrix) or is missing: the
+    map is ``lscm_pinned``'s all the same (its own way), bit for bit."""
+    from bd_uv.solvers.lscm import face_geometry_of, lscm_pinned
+    V, F = grid(7, 6, lambda x, y: 0.3 * np.sin(3 * x) * np.cos(2 * y))
+    disk = one_disk.find(V, F.astype(np.int64))
+    isl = disk.island
+    geom = face_geometry_of(disk.Z, disk.G, disk.area)
+    idx = disk_conformal._far_pair(V.take(isl.vertices, axis=0), isl.loops[0])
+    want = lscm_pinned(geom.cbw(), geom.cb, isl.tris, len(isl.vertices), idx,
+                       np.array([0.0, 1.0], complex), (disk.twins[0], disk.twins[1], disk.loop))
+
+    class Picky:
+        @staticmethod
+        def Solver(A, upper=False):
+            return A.tocsc()                # what a bare CscArrays does not have
+    for fake in (Picky, None):
+        monkeypatch.setattr(disk_conformal, "qdldl", fake)
+        got = disk_conformal.conformal(V, disk, disk.Z, disk.G, None)
+        assert got.tobytes() == want.tobytes()

@@ -1,0 +1,67 @@
+"""The conformal map of a ``one_disk.Disk``: ``batched.conformal_islands``' map of the one island
+(``_far_pair`` pinned at 0 and 1), solved as ``lscm.lscm_pinned`` solves it, without the scipy
+matrix it makes first.
+"""
+import numpy as np
+
+try:  # lscm.spd_solver's factorisation (SuperLU there where it is missing)
+    import qdldl
+except ImportError:  # pragma: no cover - exercised where qdldl is absent
+    qdldl = None
+
+from ..solvers.face_operators import csc_arrays
+from ..solvers.lscm import _lscm_system, face_geometry_of, lscm_pinned, ranked_triplet_solver
+
+__all__ = ["conformal"]
+
+
+def conformal(V, disk, Z, G, ranks):
+    """The conformal map (nv,) complex128 of a ``Disk`` whose faces have the local corners Z
+    (m,3) complex and gradient operators G (m,2,3) (its own: ``batched.conformal_islands``'
+    map; or other shapes: ``capped``), pinned as the batched path pins an island (``_far_pair``
+    at 0 and 1), factorised in the vertices' order ``ranks``."""
+    isl = disk.island
+    geom = face_geometry_of(Z, G, disk.area)
+    idx = _far_pair(V.take(isl.vertices, axis=0), isl.loops[0])
+    args = (geom.cbw(), geom.cb, isl.tris, len(isl.vertices), idx, np.array([0.0, 1.0], complex),
+            (disk.twins[0], disk.twins[1], disk.loop))
+    # ``lscm_pinned``'s system and solve without the scipy matrix it makes first (~50-70 us of
+    # scipy's constructor on a 115-face disk): in the ranks' order its triplets go to the
+    # factorisation as they are (which sorts them into its own order: the same matrix); in
+    # qdldl's own order (below FIXED_RANKED vertices at a fixed C) qdldl reads the same
+    # canonical arrays (``face_operators.csc_arrays``) without the matrix. The same bits.
+    A, rhs, u, free = _lscm_system(*args, triplets=True)
+    if ranks is not None:
+        solve = ranked_triplet_solver(A.rows, A.cols, A.vals, ranks[free])
+    else:
+        solve = _qdldl_solve(csc_arrays(A.vals, A.rows, A.cols, A.n, A.n))
+    if solve is None:                   # lscm_pinned's way where that factorisation fails
+        return lscm_pinned(*args, ranks)
+    x = solve(rhs)
+    nf = len(free)
+    u[free] = x[:nf] + 1j * x[nf:]
+    return u
+
+
+def _qdldl_solve(M):
+    """``lscm.spd_solver(M, upper=True)``'s solve of the canonical upper triangle M
+    (``CscArrays``) by qdldl, or None where qdldl is missing or refuses it: a zero pivot
+    (ValueError), or a release that wants a scipy matrix rather than its arrays (the caller
+    then goes ``lscm_pinned``'s way)."""
+    if qdldl is None:
+        return None
+    try:
+        return qdldl.Solver(M, upper=True).solve
+    except (ValueError, TypeError, AttributeError):
+        return None
+
+
+def _far_pair(P, lv):
+    """``batched._far_pairs`` of one loop ``lv`` (island vertex ids along it) of vertices at P:
+    its first vertex and the one about half the loop's length from it, the same arithmetic."""
+    Q = P.take(lv, axis=0)
+    d = np.concatenate([Q[1:], Q[:1]]) - Q
+    seg = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])
+    cum = np.cumsum(seg)
+    total = np.bincount(np.zeros(len(seg), dtype=np.int64), seg, 1)[0]
+    return np.array([lv[0], lv[int(np.argmin(np.abs((cum - seg) - 0.5 * total)))]])
