@@ -124,7 +124,8 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
         if found is None:
             found = few_square(charts.outlines, options, tol, charts.exact)
             if found is None or options.solve_seconds is not None or options.solves > 1:
-                nested = square_layout(charts.outlines, options, tol, seconds, charts.exact)
+                nested = square_layout(charts.outlines, options, tol, seconds, charts.exact,
+                                       coarse=True)
                 if found is None or nested[1] < found[1]:
                     found = nested
                 else:
