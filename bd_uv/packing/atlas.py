@@ -114,6 +114,9 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
         side = 1.0
     else:
         f = 1.0
+        # (a chart holding much of the area: less time, options.DOMINANT_SHARE)
+        seconds = options.search_seconds(k, int((lab >= 0).sum()),
+                                         float(charts.area.max() / charts.area.sum()))
         # mostly tiny charts: the others packed alone, the tiny ones dropped into the space
         # left (.tiny); else (or when a tiny chart finds no room) 2-5 charts laid out without
         # spyrrow (.few), more (or when it finds none) nested, and nested too when a search

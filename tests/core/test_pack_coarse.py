@@ -1,12 +1,15 @@
-"""The nesting's coarse outlines (issue 18, benchmarks/results/issue18-packtime13-2026-11-28.md):
-they hold the exact ones within their tolerance (distances recomputed here), and layouts nested
-from them are certified by ``packing_checks.check_layout`` (exact triangle overlap, brute-force
-gaps, inside the square, one density)."""
+"""The nesting's coarse outlines and the budget of a set one chart dominates (issue 18,
+benchmarks/results/issue18-packtime13-2026-11-28.md): the coarse outlines hold the exact ones
+within their tolerance (distances recomputed here), layouts nested from them are certified by
+``packing_checks.check_layout`` (exact triangle overlap, brute-force gaps, inside the square, one
+density), and the budget's share rule is recomputed from the areas."""
 import numpy as np
 import pytest
 
+import bd_uv.packing.atlas as atlas
 import bd_uv.packing.square as square
 from bd_uv.packing import PackOptions, pack_islands
+from bd_uv.packing.options import DOMINANT_MAX_CHARTS, DOMINANT_SHARE
 from packing_checks import check_layout
 
 
@@ -28,6 +31,14 @@ def _wavy_discs(k, seed, n=240, big=None):
         uvs.append((P * rng.uniform(0.2, 3.0) + rng.uniform(-4, 4, 2))[T])
     return (np.concatenate(Vs), np.concatenate(Fs), np.concatenate(uvs),
             np.repeat(np.arange(k), n))
+
+
+def _shares(V, F, lab):
+    """Each chart's share of the charts' 3D area (recomputed here)."""
+    P = V[F]
+    a = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+    s = np.bincount(lab, a)
+    return s / s.sum()
 
 
 def test_coarse_outline_holds_every_exact_point_within_its_tolerance():
@@ -89,3 +100,35 @@ def test_outlines_the_simplification_barely_shortens_are_nested_as_they_are(monk
     options = PackOptions(seed=0)
     check_layout(V, F, uv, lab, pack_islands(V, F, uv, lab, options), options)
     assert len(made) == 1 and not refits
+
+
+def test_budget_shrinks_by_the_largest_charts_share_above_the_threshold():
+    """Up to DOMINANT_MAX_CHARTS charts, the adaptive time times DOMINANT_SHARE / largest share
+    above DOMINANT_SHARE (rocker-arm's 10 charts of 20,088 faces, largest 0.43: 0.6 s -> 0.419
+    s); at or below the share, above the chart count or with a time given: unchanged."""
+    auto = PackOptions()
+    assert auto.search_seconds(10, 20088) == pytest.approx(0.6)
+    assert auto.search_seconds(10, 20088, 0.43) == pytest.approx(0.6 * 0.3 / 0.43)
+    assert auto.search_seconds(10, 20088, DOMINANT_SHARE) == pytest.approx(0.6)
+    assert auto.search_seconds(6, 634, 0.6) == pytest.approx(0.5 * 0.3 / 0.6)   # the floor too
+    many = DOMINANT_MAX_CHARTS + 1
+    assert auto.search_seconds(many, 10 ** 4, 0.9) == auto.search_seconds(many, 10 ** 4)
+    assert PackOptions(solve_seconds=0.7).search_seconds(10, 20088, 0.43) == 0.7
+    assert auto.search_seconds(1, 100, 1.0) == 0.0
+
+
+def test_pack_gives_the_nesting_the_budget_of_its_largest_chart(monkeypatch):
+    """pack_islands asks the budget with the largest chart's share of the 3D area (recomputed
+    here from the faces), and the layout stays certified."""
+    seen = []
+    real = atlas.square_layout
+    monkeypatch.setattr(atlas, "square_layout",
+                        lambda o, opt, tol, s, ex, **kw: seen.append(s) or real(o, opt, tol, s, ex,
+                                                                                  **kw))
+    V, F, uv, lab = _wavy_discs(9, 4, n=60, big=3.0)
+    share = _shares(V, F, lab).max()
+    assert share > DOMINANT_SHARE
+    options = PackOptions(seed=1)
+    packed = pack_islands(V, F, uv, lab, options)
+    assert seen == [pytest.approx(options.search_seconds(9, len(F)) * DOMINANT_SHARE / share)]
+    check_layout(V, F, uv, lab, packed, options)
