@@ -33,10 +33,12 @@ AUTO_SECONDS_MIN = 0.5
 AUTO_SECONDS_MIN_PER_CHART = 0.1
 # and, up to DOMINANT_MAX_CHARTS charts, times DOMINANT_SHARE / s where the largest chart holds a
 # share s of the charts' area above DOMINANT_SHARE: the layout is then mostly where that chart
-# goes, and the search finds it sooner. Measured (issue18-packtime13-2026-11-28.md): rocker-arm's
-# 10 charts (largest 0.43: 0.6 s -> 0.42 s, the one set above 0.2x Blender's time at 0.6 s) kept
-# their coverage, and so did the other such sets (Blender's monkey's 6 charts, 0.41; the Utah
-# teapot's 12, 0.39)
+# goes. Measured (issue18-packtime13-2026-11-28.md, seeds 0-11, with the coarse nesting of
+# .square): rocker-arm's 10 charts (largest 0.43; 0.6 -> 0.42 s, the one set above 0.2x
+# Blender's exact-shape time at 0.6 s) 0.620 -> 0.631 against main; Blender's monkey's 6 charts
+# (0.41) 0.615 -> 0.616; the Utah teapot's 12 (0.39) 0.631 at the full time and 0.639 at 0.75x
+# (the same minutes; it loses to main by the coarse nesting, see .square). A stronger cut lost
+# 0.003-0.01 on all three (0.85x of this: rocker-arm 0.630 -> 0.621)
 DOMINANT_SHARE = 0.3
 DOMINANT_MAX_CHARTS = 30
 

@@ -72,11 +72,12 @@ FEW_CHARTS = 3
 # padding more between the nested outlines is then compacted away on the exact outlines. Measured
 # (12 seeds each, interleaved, same budget; issue18-packtime13-2026-11-28.md): rocker-arm 0.611
 # -> 0.629, knight 0.697 -> 0.709, cesiumman 0.691 -> 0.707, cheburashka 0.697 -> 0.707,
-# fancyteapot 0.664 -> 0.670, eight, spot, the Utah teapot within 0.004; on more charts the
-# compaction had too many gaps to close in its time: homer's 24 charts 0.646 -> 0.631,
-# suzanne's 27 0.602 -> 0.579; and where the coarse outlines keep more than COARSE_KEEP of the
-# points, spyrrow gains little and the compaction only has more to close (eight's 6 charts, 262
-# -> 243 points: the same coverage, its compaction 15 % longer)
+# fancyteapot 0.664 -> 0.670, eight and spot within 0.003; the Utah teapot's 12 charts lost
+# 0.004-0.014 (three runs); on more charts the compaction had too many gaps to close in its
+# time: homer's 24 charts 0.646 -> 0.631, suzanne's 27 0.602 -> 0.579 (hence COARSE_MAX_CHARTS);
+# and where the coarse outlines keep more than COARSE_KEEP of the points, spyrrow gains little
+# and the compaction only has more to close (eight's 6 charts, 262 -> 243 points: the same
+# coverage, 10-15 % more CPU)
 COARSE = 0.5
 COARSE_MAX_CHARTS = 20
 COARSE_KEEP = 0.7
