@@ -31,6 +31,16 @@ AUTO_SECONDS_MIN = 0.5
 # and 0.6 s for fandisk's 4 was 0.217x its time; 0.4 s reached the same coverage (0.663-0.664,
 # 3 seeds), 0.3 s for the sphere's 3 charts too (0.713-0.717)
 AUTO_SECONDS_MIN_PER_CHART = 0.1
+# and, up to DOMINANT_MAX_CHARTS charts, times DOMINANT_SHARE / s where the largest chart holds a
+# share s of the charts' area above DOMINANT_SHARE: the layout is then mostly where that chart
+# goes. Measured (issue18-packtime13-2026-11-28.md, seeds 0-11, with the coarse nesting of
+# .square): rocker-arm's 10 charts (largest 0.43; 0.6 -> 0.42 s, the one set above 0.2x
+# Blender's exact-shape time at 0.6 s) 0.620 -> 0.631 against main; Blender's monkey's 6 charts
+# (0.41) 0.615 -> 0.616; the Utah teapot's 12 (0.39) 0.631 at the full time and 0.639 at 0.75x
+# (the same minutes; it loses to main by the coarse nesting, see .square). A stronger cut lost
+# 0.003-0.01 on all three (0.85x of this: rocker-arm 0.630 -> 0.621)
+DOMINANT_SHARE = 0.3
+DOMINANT_MAX_CHARTS = 30
 
 
 @dataclass(frozen=True)
@@ -98,19 +108,24 @@ class PackOptions:
         if not (isinstance(self.solves, int) and self.solves >= 1):
             raise PackError(f"solves must be a whole number >= 1, not {self.solves!r}")
 
-    def search_seconds(self, charts, faces=0):
+    def search_seconds(self, charts, faces=0, largest=0.0):
         """Seconds of nesting for ``charts`` charts of ``faces`` faces: ``solve_seconds``, or
         adaptive: ``AUTO_SECONDS_PER_ROOT`` sqrt(charts x faces), at most
         ``AUTO_SECONDS_PER_CHART`` a chart and ``AUTO_SECONDS_MAX``, at least
         ``AUTO_SECONDS_MIN`` or ``AUTO_SECONDS_MIN_PER_CHART`` a chart, the less (0 for one
-        chart)."""
+        chart); up to ``DOMINANT_MAX_CHARTS`` charts, times ``DOMINANT_SHARE`` / ``largest``
+        where the largest chart's share of the charts' area, ``largest``, is above
+        ``DOMINANT_SHARE``."""
         if self.solve_seconds is not None:
             return float(self.solve_seconds)
         if charts < 2:
             return 0.0
-        return max(min(AUTO_SECONDS_PER_ROOT * float(np.sqrt(charts * max(faces, charts))),
-                       AUTO_SECONDS_PER_CHART * charts, AUTO_SECONDS_MAX),
-                   min(AUTO_SECONDS_MIN, AUTO_SECONDS_MIN_PER_CHART * charts))
+        seconds = max(min(AUTO_SECONDS_PER_ROOT * float(np.sqrt(charts * max(faces, charts))),
+                          AUTO_SECONDS_PER_CHART * charts, AUTO_SECONDS_MAX),
+                      min(AUTO_SECONDS_MIN, AUTO_SECONDS_MIN_PER_CHART * charts))
+        if charts <= DOMINANT_MAX_CHARTS and largest > DOMINANT_SHARE:
+            seconds *= DOMINANT_SHARE / largest
+        return seconds
 
     @property
     def padding(self):

@@ -31,7 +31,7 @@ from .compact import compact_square
 from .large_first import LARGE_FIRST_CHARTS, large_first
 from .nest import (FIT, Placement, _area, _strip, least_squares, nest, rotations,
                    single_layout)
-from .refit import on_exact
+from .refit import EXACT_TOL, ROUNDING, on_exact, refitted
 
 DENSITY_GUESS = 0.63  # strip density expected (measured 0.58-0.70 on 27-46 charts of 5 meshes)
 START_PER_CHART = 0.015  # seconds of a solve's first placement per chart (measured, quiet)
@@ -64,6 +64,23 @@ COMPACT_MAX_CHARTS = 200
 # 0.3-0.5 s; eight's 6 charts lost 1 % on one worker over 20 seeds and doubled the spread
 # (0.584 sd 0.027 against 0.590 sd 0.012; benchmarks/results/bench_pack-2026-11-27-workers.md)
 FEW_CHARTS = 3
+# up to COARSE_MAX_CHARTS charts (:func:`square_layout` asked ``coarse``) spyrrow nests the exact
+# outlines simplified by COARSE of the padding at the guessed square (2 px at 4 px, not 0.1 px):
+# the long outlines of charts of many faces lose half their points or more (rocker-arm 1,345 ->
+# 664, knight 648 -> 280, cheburashka 1,132 -> 547), spyrrow's first placement costs about in
+# proportion (rocker-arm 0.17 -> 0.10 s) and its search goes further in its time; the 2 COARSE
+# padding more between the nested outlines is then compacted away on the exact outlines. Measured
+# (12 seeds each, interleaved, same budget; issue18-packtime13-2026-11-28.md): rocker-arm 0.611
+# -> 0.629, knight 0.697 -> 0.709, cesiumman 0.691 -> 0.707, cheburashka 0.697 -> 0.707,
+# fancyteapot 0.664 -> 0.670, eight and spot within 0.003; the Utah teapot's 12 charts lost
+# 0.004-0.014 (three runs); on more charts the compaction had too many gaps to close in its
+# time: homer's 24 charts 0.646 -> 0.631, suzanne's 27 0.602 -> 0.579 (hence COARSE_MAX_CHARTS);
+# and where the coarse outlines keep more than COARSE_KEEP of the points, spyrrow gains little
+# and the compaction only has more to close (eight's 6 charts, 262 -> 243 points: the same
+# coverage, 10-15 % more CPU)
+COARSE = 0.5
+COARSE_MAX_CHARTS = 20
+COARSE_KEEP = 0.7
 
 
 def _squares(points, owner, placements, tol, padding):
@@ -109,7 +126,7 @@ def _solve_all(outlines, sides, options, tol, seconds, headroom=HEADROOM):
     return out, (refused[-1] if refused else None)
 
 
-def square_layout(outlines, options, tol, seconds, exact=None, split=True):
+def square_layout(outlines, options, tol, seconds, exact=None, split=True, coarse=False):
     """The smallest square found that holds every outline with the padding.
 
     The padding scales with the square (it is in texels). A solve packs a strip of height H for
@@ -136,6 +153,9 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True):
     exact : list of (m_i,2) float arrays, optional: the outlines before their simplification
         (same frame), compacted instead of the simplified ones (:func:`.refit.on_exact`)
     split : bool, the large charts first where there are many (False: all nested at once)
+    coarse : bool, up to ``COARSE_MAX_CHARTS`` charts with ``exact`` outlines: spyrrow nests the
+        exact outlines simplified by ``COARSE`` of the padding (:func:`_coarse`) when that keeps
+        at most ``COARSE_KEEP`` of the points, the compaction the exact ones
 
     Returns
     -------
@@ -151,6 +171,15 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True):
         if found is not None:
             return found
     area = sum(_area(xy) for xy in outlines)
+    given = tol
+    if coarse and exact is not None and k <= COARSE_MAX_CHARTS:
+        fewer, wider = _coarse(exact, max(tol, COARSE * options.padding
+                                          * float(np.sqrt(area / DENSITY_GUESS))))
+        coarse = sum(map(len, fewer)) <= COARSE_KEEP * sum(map(len, outlines))
+        if coarse:
+            outlines, tol = fewer, wider
+    else:
+        coarse = False
     points = np.concatenate(outlines)
     owner = np.repeat(np.arange(k), [len(xy) for xy in outlines])
     boxes = least_squares(outlines, options)[0]
@@ -221,9 +250,30 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True):
     # its share of the time, in CPU seconds: compaction of the best layout
     # (no layout is smaller than the widest chart's least square with the padding; sampled
     # every 0.05 degrees, a hair above it)
-    fine = float(least_squares([outlines[int(np.argmax(boxes))]], options, step=0.05)[0][0])
-    outlines, start, tol = on_exact(outlines, exact, *best, options, tol)
+    big = int(np.argmax(boxes))
+    if not coarse:
+        fine = float(least_squares([outlines[big]], options, step=0.05)[0][0])
+        outlines, start, tol = on_exact(outlines, exact, *best, options, tol)
+    else:   # the exact outlines, with the margin on_exact gives them (else the coarse ones)
+        margin = max(EXACT_TOL * given, ROUNDING * best[1])
+        start = refitted(exact, best[0], options, margin)
+        outlines, start, tol = (exact, start, margin) if start is not None else \
+            (outlines, best, tol)
+        fine = float(least_squares([outlines[big]], options, step=0.05)[0][0])
     pl, side, _ = compact_square(outlines, *start, options, tol,
                                  share * (SHORT_COMPACT if short else 1.0) * seconds,
                                  least_side=(fine + 2 * tol) / (1 - options.padding))
     return pl, side, solves
+
+
+def _coarse(exact, tol):
+    """The exact outlines simplified by ``tol`` (Douglas-Peucker: every point of each within
+    ``tol`` of its simplified one, so simplified outlines ``sep`` apart keep the exact ones
+    ``sep - 2 tol`` apart, as :mod:`.outlines` does at 0.1 texel), counter-clockwise, in the
+    same frame: (outlines, tol)."""
+    import shapely
+    out = []
+    for xy in exact:  # per chart
+        ring = shapely.simplify(shapely.Polygon(xy), tol, preserve_topology=True)
+        out.append(np.asarray(shapely.get_coordinates(shapely.orient_polygons(ring)))[:-1])
+    return out, tol
