@@ -5,7 +5,9 @@
   decided by orientation signs with rounding error bounds, or one chart inside another);
 - the least gap between two charts: the exact distance between their UV boundaries (GEOS
   segment-to-segment distances over an STRtree of the charts' boundaries), in texels;
-- the density spread: largest over smallest texel density (sqrt of UV area over 3D area).
+- the density spread: largest over smallest texel density (sqrt of UV area over 3D area);
+- every face turning the way it did when packed (counter-clockwise, as ``pack_islands`` takes
+  charts): a face too thin for float32 at its place in the texture collapses or flips as stored.
 Nothing is rasterised.
 """
 from dataclasses import dataclass
@@ -22,7 +24,8 @@ class LayoutCertificate:
 
     Attributes
     ----------
-    certified : bool, inside, overlap-free, least gap >= padding and edge gap >= padding / 2
+    certified : bool, inside, overlap-free, least gap >= padding, edge gap >= padding / 2 and
+        no face flipped or collapsed as stored
     reason : str, why not (empty when certified)
     resolution : int
     padding_px : float, the padding asked for
@@ -34,6 +37,7 @@ class LayoutCertificate:
     tiles : list of int, UDIM numbers used
     density_spread : float, largest over smallest texel density (inf: a chart with 3D area has
         no UV area as stored)
+    flipped_faces : int, faces of the layout whose signed UV area as stored is not positive
     """
     certified: bool
     reason: str
@@ -46,6 +50,7 @@ class LayoutCertificate:
     coverage: float
     tiles: list
     density_spread: float
+    flipped_faces: int = 0
 
     def summary(self):
         """The JSON report's figures (the ``pack`` object gets these)."""
@@ -57,7 +62,8 @@ class LayoutCertificate:
                     tiles=self.tiles,
                     density_spread=None if not np.isfinite(self.density_spread)
                     else round(self.density_spread, 6),
-                    overlapping_pairs=int(len(self.overlaps)))
+                    overlapping_pairs=int(len(self.overlaps)),
+                    flipped_faces=int(self.flipped_faces))
 
 
 def least_gaps(F, corner_uv, face_island):
@@ -122,7 +128,11 @@ def layout_certificate(V, F, corner_uv, face_island, tile, resolution, padding_p
             g[sel] = sub
             gap = min(gap, float(least_gaps(F, uv, g).min()) * resolution)
     e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
-    auv = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    signed = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    auv = 0.5 * np.abs(signed)
+    # a chart's faces turn counter-clockwise (``pack_islands`` refuses others): one that does
+    # not as stored was flipped or collapsed by the storage's rounding (a sliver 1e-8 across)
+    flipped = int(np.sum(np.isfinite(signed) & ~(signed > 0)))
     P3 = V[F[use]]
     a3 = 0.5 * np.linalg.norm(np.cross(P3[:, 1] - P3[:, 0], P3[:, 2] - P3[:, 0]), axis=1)
     present = np.unique(lab[use])
@@ -140,9 +150,13 @@ def layout_certificate(V, F, corner_uv, face_island, tile, resolution, padding_p
         reasons.append(f"least gap {gap:.3f} px < padding {padding_px:g} px")
     if edge < 0.5 * padding_px:
         reasons.append(f"a chart is {edge:.3f} px from its tile's edge < {0.5 * padding_px:g} px")
+    if flipped:
+        reasons.append(f"{flipped} face(s) flipped or collapsed as stored (too thin for the "
+                       "stored precision at their place in the texture)")
     # a chart whose UV area is 0 as stored (a degenerate island of any UV map, or one
     # collapsed by float32 storage) has texel density 0: the spread is unbounded
     spread = (1.0 if not len(dens) else np.inf if dens.min() <= 0
               else float(dens.max() / dens.min()))
     return LayoutCertificate(not reasons, "; ".join(reasons), int(resolution), float(padding_px),
-                             gap, float(edge), inside, overlaps, coverage, tiles, spread)
+                             gap, float(edge), inside, overlaps, coverage, tiles, spread,
+                             flipped)

@@ -183,6 +183,38 @@ def test_a_chart_with_no_uv_area_has_an_unbounded_density_spread():
     assert 1.0 <= fine.density_spread < 1.001 and fine.summary()["density_spread"] >= 1.0
 
 
+def test_a_face_flipped_or_collapsed_as_stored_fails_the_layout_certificate():
+    """Every face turns counter-clockwise as packed; the certificate counts the faces that do
+    not as stored: one chart mirrored (all its faces), and one sliver thinner than float32's
+    step at its place (it collapses in float32 and the certificate of the float32 UVs says so,
+    while the float64 UVs pass)."""
+    V, F, uv, lab = chart_set("boxes", 3, seed=1)
+    packed = pack_islands(V, F, uv, lab, PackOptions(solves=1))
+    out = packed.corner_uv
+    assert layout_certificate(V, F, out, lab, packed.tile, 1024, 4).flipped_faces == 0
+    mirrored = out.copy()
+    c = mirrored[lab == 1]
+    c[..., 0] = 2 * c[..., 0].mean() - c[..., 0]             # chart 1 mirrored in place
+    mirrored[lab == 1] = c
+    cert = layout_certificate(V, F, mirrored, lab, packed.tile, 1024, 4)
+    assert cert.flipped_faces == int((lab == 1).sum()) and not cert.certified
+    assert f"{cert.flipped_faces} face(s) flipped or collapsed as stored" in cert.reason
+    assert cert.summary()["flipped_faces"] == cert.flipped_faces
+    # a sliver: chart 0's first face 1e-9 thin along a float32-exact edge near 0.5, far below
+    # float32's 6e-8 step there (only the flip count is read: the face may now overlap)
+    thin = out.copy()
+    f = int(np.flatnonzero(lab == 0)[0])
+    thin[f] = [[0.5, 0.5], [0.75, 0.5], [0.625, 0.5 + 1e-9]]
+    twice = np.cross(thin[f, 1] - thin[f, 0], thin[f, 2] - thin[f, 0])
+    assert twice > 0                                        # counter-clockwise in float64
+    assert layout_certificate(V, F, thin, lab, packed.tile, 1024, 4).flipped_faces == 0
+    s32 = thin.astype(np.float32)
+    e = s32[f].astype(np.float64)
+    assert not np.cross(e[1] - e[0], e[2] - e[0]) > 0       # gone in float32
+    cert = layout_certificate(V, F, s32, lab, packed.tile, 1024, 4)
+    assert cert.flipped_faces == 1 and not cert.certified
+
+
 def test_uv_islands_follow_shared_uvs_not_shared_vertices():
     # two triangles sharing mesh edge (1, 2): one island when the UVs agree along it, two when not
     F = np.array([[0, 1, 2], [2, 1, 3]])
