@@ -82,3 +82,35 @@ def test_the_square_grows_until_the_small_charts_fit(monkeypatch):
         assert min(r.min() for r in rings) >= edge * (1 - 1e-9)
         assert max(r.max() for r in rings) <= s - edge * (1 - 1e-9)
         assert _least_gap(rings) >= options.padding * s * (1 - 1e-9)
+
+
+def test_a_long_chart_is_nested_with_the_large_ones():
+    """Six 1 x 1.5 boxes (88 % of the area), a 2.0 x 0.05 strip (1 %) and thirty 0.2 x 0.2
+    squares: the strip, longer than ``LONG`` of the side the area would fill at ``DENSITY``
+    (recomputed here from the corners), goes to the nesting with the boxes, the squares do not;
+    the layout keeps every chart inside with half the padding and every two the padding apart
+    (brute force)."""
+    unit = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
+    boxes = [unit * [1.0, 1.5] for _ in range(6)]
+    strip = unit * [2.0, 0.05]
+    small = [0.2 * unit for _ in range(30)]
+    outlines = boxes + small[:15] + [strip] + small[15:]
+    options = PackOptions(resolution=64, padding_px=1.0)
+    tol = 1e-6
+    side = np.sqrt((6 * 1.5 + 2.0 * 0.05 + 30 * 0.04) / lf.DENSITY)
+    assert np.hypot(2.0, 0.05) >= lf.LONG * side > np.hypot(0.2, 0.2)
+    given = []
+
+    def nested(outl, opt, seconds, exact):
+        given.append(outl)
+        return sq.square_layout(outl, opt, tol, seconds, exact, split=False)
+
+    pl, s, _ = lf.large_first(outlines, None, options, tol, 0.3, nested)
+    assert len(given) == 1 and len(given[0]) == 7
+    assert sum(o is strip for o in given[0]) == 1
+    assert sum(any(o is b for b in boxes) for o in given[0]) == 6
+    rings = placed(outlines, pl.angle, pl.shift)
+    edge = 0.5 * options.padding * s
+    assert min(r.min() for r in rings) >= edge * (1 - 1e-9)
+    assert max(r.max() for r in rings) <= s - edge * (1 - 1e-9)
+    assert _least_gap(rings) >= options.padding * s * (1 - 1e-9)
