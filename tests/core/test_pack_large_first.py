@@ -82,3 +82,80 @@ def test_the_square_grows_until_the_small_charts_fit(monkeypatch):
         assert min(r.min() for r in rings) >= edge * (1 - 1e-9)
         assert max(r.max() for r in rings) <= s - edge * (1 - 1e-9)
         assert _least_gap(rings) >= options.padding * s * (1 - 1e-9)
+
+
+def test_a_long_chart_is_nested_with_the_large_ones():
+    """Six 1 x 1.5 boxes (88 % of the area), a 2.0 x 0.05 strip (1 %) and thirty 0.2 x 0.2
+    squares: the strip, longer than ``LONG`` of the side the area would fill at ``DENSITY``
+    (recomputed here from the corners), goes to the nesting with the boxes, the squares do not;
+    the layout keeps every chart inside with half the padding and every two the padding apart
+    (brute force)."""
+    unit = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
+    boxes = [unit * [1.0, 1.5] for _ in range(6)]
+    strip = unit * [2.0, 0.05]
+    small = [0.2 * unit for _ in range(30)]
+    outlines = boxes + small[:15] + [strip] + small[15:]
+    options = PackOptions(resolution=64, padding_px=1.0)
+    tol = 1e-6
+    side = np.sqrt((6 * 1.5 + 2.0 * 0.05 + 30 * 0.04) / lf.DENSITY)
+    assert np.hypot(2.0, 0.05) >= lf.LONG * side > np.hypot(0.2, 0.2)
+    given = []
+
+    def nested(outl, opt, seconds, exact):
+        given.append(outl)
+        return sq.square_layout(outl, opt, tol, seconds, exact, split=False)
+
+    pl, s, _ = lf.large_first(outlines, None, options, tol, 0.3, nested)
+    assert len(given) == 1 and len(given[0]) == 7
+    assert sum(o is strip for o in given[0]) == 1
+    assert sum(any(o is b for b in boxes) for o in given[0]) == 6
+    rings = placed(outlines, pl.angle, pl.shift)
+    edge = 0.5 * options.padding * s
+    assert min(r.min() for r in rings) >= edge * (1 - 1e-9)
+    assert max(r.max() for r in rings) <= s - edge * (1 - 1e-9)
+    assert _least_gap(rings) >= options.padding * s * (1 - 1e-9)
+
+
+def test_the_large_layout_is_turned_where_the_small_charts_needed_much_growth(monkeypatch):
+    """Six 1 x 1.9 boxes laid out (by a stand-in for the nesting) in a square of side 4.2 with
+    a free strip 0.8 wide along its left edge, and four 0.9 x 0.9 squares: as laid out, the
+    squares fit only once the square has grown ~20 % (the right edge's band, 0.2 wide, grows with
+    it: 9 growths or more); turned by a half turn, the strip meets that band and 4 growths do. The
+    layout handed to the compaction is the turned one at the smaller side, and it and the
+    compacted one keep every chart inside with half the padding and every two the padding
+    apart (brute force)."""
+    unit = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
+    outlines = [unit * [1.0, 1.9] for _ in range(6)] + [0.9 * unit for _ in range(4)]
+    options = PackOptions(resolution=64, padding_px=1.0)
+    tol = 1e-6
+    S = 4.2
+    centres = np.array([[1.3 + 1.1 * (i % 3), 1.1 + 2.0 * (i // 3)] for i in range(6)])
+
+    def nested(outl, opt, seconds, exact):
+        return Placement(np.zeros(6), centres.copy(), S), S, 1
+
+    monkeypatch.setattr(lf, "LARGE_SHARE", 0.7)
+    monkeypatch.setattr(lf, "LONG", 9.0)
+    starts = []
+    compact = lf.compact_square
+
+    def spy(outl, placement, side, *args, **kwargs):
+        starts.append((placement, side))
+        return compact(outl, placement, side, *args, **kwargs)
+
+    monkeypatch.setattr(lf, "compact_square", spy)
+    pl, side, solves = lf.large_first(outlines, None, options, tol, 0.3, nested)
+    start, start_side = starts[0]
+    assert start_side <= S * lf.GROW ** 4 * (1 + 1e-9)
+    assert np.allclose(start.angle[:6], 180.0)
+    # as laid out (no turn): 9 growths or more
+    monkeypatch.setattr(lf, "QUARTERS", 1)
+    starts.clear()
+    lf.large_first(outlines, None, options, tol, 0.3, nested)
+    assert starts[-1][1] >= S * lf.GROW ** 9 * (1 - 1e-9)
+    for layout, s in ((start, start_side), (pl, side)):  # the raster's layout, the compacted one
+        rings = placed(outlines, layout.angle, layout.shift)
+        edge = 0.5 * options.padding * s
+        assert min(r.min() for r in rings) >= edge * (1 - 1e-9)
+        assert max(r.max() for r in rings) <= s - edge * (1 - 1e-9)
+        assert _least_gap(rings) >= options.padding * s * (1 - 1e-9)
