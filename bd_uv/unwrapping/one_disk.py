@@ -24,6 +24,7 @@ import numpy as np
 from ..errors import CancelledError
 from ..geometry import components, gradient_operators, local_frame
 from ..mesh import DEGENERATE_RATIO, Island
+from ..solvers.forest import component_count
 from ..solvers.ordered_ldl import FIXED_RANKED, edge_ranks
 from .disk_certificate import certify_disk, certify_measured_disk
 from .disk_conformal import conformal
@@ -150,7 +151,11 @@ def find(V, F):
     # Euler characteristic 1 with one boundary loop: genus 0 and no bow-tie (a vertex of several
     # corner fans would count once here and once per fan in the cut mesh), given one component
     # (which also leaves out two faces on the same three vertices: a closed piece of their own).
-    if nv - (len(h1) + nb) + m != 1 or components(m, h1 // 3, h2 // 3)[0] != 1:
+    if nv - (len(h1) + nb) + m != 1:
+        return None
+    f1, f2 = h1 // 3, h2 // 3
+    count = component_count(f1, f2, m)
+    if (components(m, f1, f2)[0] if count is None else count) != 1:
         return None
     local = np.empty(n, dtype=np.int64)
     local[verts] = np.arange(nv)
