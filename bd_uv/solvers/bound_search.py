@@ -37,6 +37,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..frames import frames_from_map
+from ..geometry import quiet
 from .face_operators import free_lift_arrays
 from .framed_cone import framed_cone_projection, gradient_products, project_framed
 from .free_admm import FreeLift, run_free
@@ -134,7 +135,7 @@ class BoundSearch:
     def max_distortion(self, W):
         """Max conformal distortion (eq. 4.9) of the map with doubled alpha and beta W (4, k)
         (``_operators``); inf when a face flips or collapses."""
-        with np.errstate(invalid="ignore", divide="ignore"):
+        with quiet("invalid", "divide"):
             return self._max_distortion(W)
 
     @staticmethod
@@ -199,7 +200,7 @@ class BoundSearch:
         GU = self._lift(U)
         lam = np.zeros_like(GU)
         rhs = np.empty(2 * nf)
-        with np.errstate(invalid="ignore", divide="ignore"):
+        with quiet("invalid", "divide"):
             best, D_best = self._iterate(U, GU, lam, rhs, w2, kappa, C, D_best, solve, BtA,
                                          rhs_fixed, cancel, ask, alpha)
         return best, D_best, best is not None and D_best <= C

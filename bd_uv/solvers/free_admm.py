@@ -23,6 +23,8 @@ import math
 import numpy as np
 import scipy.sparse as sp
 
+from ..geometry import quiet
+
 __all__ = ["FreeLift", "run_free", "sparse_product"]
 
 
@@ -147,7 +149,7 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
     kappa_, kc, c_, alpha_ = (np.array(v) for v in (kappa, kappa * c, c, alpha))
     zero, one = np.zeros(()), np.ones(())
     kept = None
-    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+    with quiet("invalid", "divide", "over"):
         for it in itertools.count():
             if cancel is not None and cancel.is_set():
                 break

@@ -10,7 +10,7 @@ import time
 import numpy as np
 import scipy.sparse as sp
 
-from ..geometry import components
+from ..geometry import components, quiet
 from .face_operators import as_csc, face_gradients, laplacian_block_arrays
 from .factor import factor_spd
 from .ordered_ldl import solver_in_order
@@ -205,6 +205,6 @@ class GlobalStep:
         uv = self.area * np.abs(np.abs(a) ** 2 - np.abs(b) ** 2)
         A = np.bincount(self.face_comp, weights=self.area, minlength=self.n_components)
         S = np.bincount(self.face_comp, weights=uv, minlength=self.n_components)
-        with np.errstate(invalid="ignore", divide="ignore"):
+        with quiet("invalid", "divide"):
             s = np.sqrt(S / A)
         return np.where(np.isfinite(s) & (s > 0), s, 1.0)

@@ -22,7 +22,7 @@ import time
 import numpy as np
 
 from ..errors import CancelledError
-from ..geometry import components, gradient_operators, local_frame
+from ..geometry import components, gradient_operators, local_frame, quiet
 from ..mesh import DEGENERATE_RATIO, Island
 from ..solvers.forest import component_count
 from ..solvers.ordered_ldl import FIXED_RANKED, edge_ranks
@@ -116,7 +116,7 @@ def find(V, F):
     e01 = P[:, 1] - P[:, 0]
     e02 = P[:, 2] - P[:, 0]
     e12 = P[:, 2] - P[:, 1]
-    with np.errstate(invalid="ignore", over="ignore"):
+    with quiet("invalid", "over"):
         area = 0.5 * _cross_norm(e01, e02)
         lmax2 = np.maximum(np.maximum(np.einsum("ij,ij->i", e01, e01),
                                       np.einsum("ij,ij->i", e02, e02)),
@@ -226,7 +226,7 @@ def fitted(F, disk, u, C, t0, flags, note):
     uc = u.take(isl.tris)
     e1, e2 = uc[:, 1] - uc[:, 0], uc[:, 2] - uc[:, 0]
     one = np.zeros(len(F), dtype=np.int64)
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with quiet("invalid", "divide"):
         s = np.sqrt(np.bincount(one, disk.area, 1)[0]
                     / np.bincount(one, 0.5 * (e1.conj() * e2).imag, 1)[0])
     us = u * s
