@@ -200,7 +200,8 @@ class GlobalStep:
 
     def component_scale(self, u):
         """sqrt(UV area / 3D area) of each component, from unsigned face areas, (c,)."""
-        U = np.stack([u.real, u.imag], 1)
+        U = np.empty((len(u), 2))
+        U[:, 0], U[:, 1] = u.real, u.imag
         a, b = self._alpha_beta(self.jacobians(U))
         uv = self.area * np.abs(np.abs(a) ** 2 - np.abs(b) ** 2)
         A = np.bincount(self.face_comp, weights=self.area, minlength=self.n_components)

@@ -159,7 +159,8 @@ def ranked_triplet_solver(rows, cols, vals, keys):
     by side; None where the factorisation fails (``lscm_pinned``, ``lscm_held``)."""
     nf = len(keys)
     p = np.argsort(keys, kind="stable")
-    perm = np.stack([p, p + nf], axis=1).ravel()
+    perm = np.empty(2 * nf, np.int64)        # u and v of a vertex side by side
+    perm[0::2], perm[1::2] = p, p + nf
     f = ordered_ldl.Factor(rows, cols, vals, 2 * nf, perm)
     return f.solve if f.lnz >= 0 and f.factor() else None
 

@@ -162,7 +162,7 @@ def find(V, F):
     tris = local.take(F)
     loop = bnd.take(seq)
     island = Island(0, np.arange(m, dtype=np.int64), verts, tris, (local.take(bsrc.take(seq)),))
-    return Disk(island, np.stack([h1, h2]), loop, first_corner, e01, e02, area)
+    return Disk(island, np.array([h1, h2]), loop, first_corner, e01, e02, area)
 
 
 def _cross_norm(a, b):
