@@ -37,7 +37,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..frames import frames_from_map
-from ..geometry import quiet
+from ..geometry import einsum, quiet
 from .face_operators import free_lift_arrays
 from .framed_cone import framed_cone_projection, gradient_products, project_framed
 from .free_admm import FreeLift, run_free
@@ -141,9 +141,9 @@ class BoundSearch:
     @staticmethod
     def _max_distortion(W):
         """``max_distortion`` where the caller has silenced division warnings."""
-        num = np.einsum("ij,ij->j", W[2:], W[2:])                   # |2 beta|^2
-        num /= np.einsum("ij,ij->j", W[:2], W[:2])                  # over |2 alpha|^2
-        r = float(num.max())                                        # |beta|^2 / |alpha|^2
+        num = einsum("ij,ij->j", W[2:], W[2:])                      # |2 beta|^2
+        num /= einsum("ij,ij->j", W[:2], W[:2])                     # over |2 alpha|^2
+        r = float(np.maximum.reduce(num))                           # |beta|^2 / |alpha|^2
         if not r < 1.0:
             return np.inf
         r = np.sqrt(r)

@@ -159,7 +159,8 @@ def _free_entries(data, cols, area, free, nv):
     mask of them among all, the compressed rows' pointer (4k + 1,), each entry's weight: half
     its face's area)."""
     k = len(area)
-    pos = np.full(2 * nv, -1, dtype=np.int64)
+    pos = np.empty(2 * nv, dtype=np.int64)
+    pos.fill(-1)
     nf = len(free)
     pos[free] = np.arange(nf)
     pos[free + nv] = np.arange(nf, 2 * nf)
@@ -169,7 +170,7 @@ def _free_entries(data, cols, area, free, nv):
     w[...] = (0.5 * area)[None, :, None]
     w = w.reshape(-1)
     indptr = np.zeros(4 * k + 1, dtype=np.int64)
-    indptr[1:] = np.cumsum(keep)[5::6]      # kept entries up to each row's end
+    indptr[1:] = keep.cumsum()[5::6]        # kept entries up to each row's end
     return tr, keep, indptr, w
 
 

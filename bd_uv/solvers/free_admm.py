@@ -65,7 +65,7 @@ class FreeLift:
         self.lift_fixed = np.bincount(frows, weights=fdata * Ufix.take(fcols), minlength=4 * k)
         self.rhs_fixed = rhs_fixed
         self.n1 = int(indptr[k])            # entries of the Re 2alpha rows (as many as Im's)
-        self.rows = np.repeat(np.arange(k), np.diff(indptr[:k + 1]))   # their faces
+        self.rows = np.arange(k).repeat(indptr[1:k + 1] - indptr[:k])   # their faces
         self.lift = sparse_product("csr", (4 * k, 2 * nf), indptr, indices)
         self.rhs = sparse_product("csc", (2 * nf, 4 * k), indptr, indices)
         self._framed = (data.copy(), wdata.copy(), self.lift_fixed.copy())

@@ -66,9 +66,10 @@ class GlobalStep:
             raise ValueError("every connected component needs at least one fixed vertex")
         self.fixed = fixed
         self.fixed_given = np.asarray(fixed_idx, dtype=np.int64)
-        is_free = np.ones(nv, dtype=bool)
+        is_free = np.empty(nv, dtype=bool)
+        is_free.fill(True)
         is_free[fixed] = False
-        self.free = np.flatnonzero(is_free)     # np.setdiff1d's answer without its sort
+        self.free = is_free.nonzero()[0]        # np.setdiff1d's answer without its sort
         self.ranks = ranks
         if ranks is not None:                   # in elimination order
             self.free = self.free[np.argsort(ranks[self.free], kind="stable")]

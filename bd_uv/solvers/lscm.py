@@ -11,7 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from ..geometry import face_areas, gradient_operators, local_coordinates
+from ..geometry import einsum, face_areas, gradient_operators, local_coordinates
 from . import ordered_ldl, radix
 from .face_operators import csc_arrays
 from ..trim import CHUNK
@@ -177,10 +177,10 @@ def _lscm_system(cbw, cb, tris, n, idx, val, sides=None, triplets=False):
     u0 = np.zeros(n, dtype=np.complex128)
     u0[idx] = val
     flat = tris.ravel()
-    hu = (cbw * np.einsum("fb,fb->f", cb, u0[tris])[:, None]).ravel()      # (h u0) per corner
+    hu = (cbw * einsum("fb,fb->f", cb, u0[tris])[:, None]).ravel()      # (h u0) per corner
     rhs_c = -(np.bincount(flat, hu.real, n) + 1j * np.bincount(flat, hu.imag, n))
-    pos = np.cumsum(~pinned) - 1
-    nf = int(n - pinned.sum())
+    pos = (~pinned).cumsum() - 1            # (np.cumsum's and .sum's wrappers: ~1.5 us each)
+    nf = n - int(np.count_nonzero(pinned))
     diag = np.bincount(flat, (cbw * cb).real.ravel(), n)
     # One entry per face side (j, k), summed per edge {lo, hi}: Re H and Im H[lo, hi].
     J, K = tris, tris[:, [1, 2, 0]]
@@ -207,7 +207,7 @@ def _lscm_system(cbw, cb, tris, n, idx, val, sides=None, triplets=False):
     # keeps the two Laplacian blocks apart but for the boundary: half the fill to factor.
     rim &= on
     bl, bh, im_b = pos[lo[rim]], pos[hi[rim]], im_e[rim]
-    free = np.flatnonzero(~pinned)
+    free = (~pinned).nonzero()[0]
     pd = pos[free]
     # No two entries share a place (one per free vertex, per edge, per boundary edge and side).
     A = Upper(np.concatenate([pd, pl, pd + nf, pl + nf, bl, bh]),

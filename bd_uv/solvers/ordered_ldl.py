@@ -179,7 +179,7 @@ def solver_in_order(M):
     if not available():
         return None
     n = M.shape[0]
-    cols = np.repeat(np.arange(n, dtype=np.int64), np.diff(M.indptr))
+    cols = np.arange(n, dtype=np.int64).repeat(M.indptr[1:] - M.indptr[:-1])
     rows = M.indices.astype(np.int64)
     up = rows <= cols
     f = Factor(rows[up], cols[up], M.data[up], n, np.arange(n, dtype=np.int64))

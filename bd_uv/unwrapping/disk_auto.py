@@ -72,7 +72,7 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
     if not searches(disk):
         return None
     t = time.perf_counter()
-    area3d = float(disk.area.sum())
+    area3d = float(np.add.reduce(disk.area))
     unfold = requested != "auto"
     if unfold:
         # the disk's own geometry: the iterations do not depend on its scale or place (the same

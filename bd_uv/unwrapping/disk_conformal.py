@@ -62,6 +62,6 @@ def _far_pair(P, lv):
     Q = P.take(lv, axis=0)
     d = np.concatenate([Q[1:], Q[:1]]) - Q
     seg = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])
-    cum = np.cumsum(seg)
+    cum = seg.cumsum()
     total = np.bincount(np.zeros(len(seg), dtype=np.int64), seg, 1)[0]
-    return np.array([lv[0], lv[int(np.argmin(np.abs((cum - seg) - 0.5 * total)))]])
+    return np.array([lv[0], lv[int(np.abs((cum - seg) - 0.5 * total).argmin())]])
