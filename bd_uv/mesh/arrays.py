@@ -33,7 +33,7 @@ def check_arrays(V, F, *, share=False):
                                "triangulate n-gons first")
     F = _shared(F) if share and F.dtype == np.int64 else as_indices(F, "face indices")
     out = (F < 0) | (F >= len(V))
-    if out.any():                       # (the faces named only then)
+    if np.logical_or.reduce(out, axis=None):        # (the faces named only then)
         bad = np.flatnonzero(out.any(axis=1))
         raise InvalidMeshError(f"{len(bad)} face(s) use vertex indices outside 0..{len(V) - 1} "
                                f"(faces {_some(bad)}); fix the face list")
