@@ -16,7 +16,6 @@ loop. Anything else, a map over the bound or a boundary the certificate cannot c
 the general way, which words its errors, bends maps and cuts overlaps.
 """
 from dataclasses import dataclass
-import functools
 import time
 
 import numpy as np
@@ -34,6 +33,25 @@ from .results import IslandResult, UnwrapResult
 # Up to this many boundary edges the loop is walked in Python (a few tenths of a microsecond a
 # step); a longer one goes the general way (``geometry.ordered_loops``' pointer jumping).
 WALK = 4096
+
+
+class _kept:
+    """``functools.cached_property`` without its lock (Python 3.11 takes an RLock on every read
+    until the value is kept: ~1-2 us, three a small disk's call): made on first read, then kept
+    in the instance's dict, which shadows this descriptor. A Disk is made and read within one
+    unwrap call; two threads reading it first at once would each make the same value."""
+
+    def __init__(self, fn):
+        self.fn, self.name, self.__doc__ = fn, fn.__name__, fn.__doc__
+
+    def __set_name__(self, owner, name):
+        self.name = name
+
+    def __get__(self, obj, cls=None):
+        if obj is None:
+            return self
+        value = obj.__dict__[self.name] = self.fn(obj)
+        return value
 
 
 @dataclass(frozen=True)
@@ -65,15 +83,15 @@ class Disk:
     e02: np.ndarray
     area: np.ndarray
 
-    @functools.cached_property
+    @_kept
     def Z(self):
         return local_frame(self.e01, self.e02)
 
-    @functools.cached_property
+    @_kept
     def G(self):
         return gradient_operators(self.Z)
 
-    @functools.cached_property
+    @_kept
     def ranks(self):
         """The vertices' elimination order (``ordered_ldl.vertex_ranks`` of the island's
         triangles, as the general path finds it; here from the edges known: ``edge_ranks``, the
