@@ -4,6 +4,8 @@ The canonical local frame of face j has its origin at the first corner, e1 along
 e2 = n x e1 (Lipman 2012, eq. 4.1 with the frame's rotation kept separately, see ``frames``)."""
 import numpy as np
 
+from .numpy_calls import einsum, quiet
+
 
 def face_areas(V, F):
     """Area of each triangle.
@@ -66,9 +68,9 @@ def local_frame(e01, e02):
     e02 (m,3) float64."""
     # np.linalg.norm(e01, axis=1)'s sum in its order (the same bits), without its dispatch
     l01 = np.sqrt(e01[:, 0] * e01[:, 0] + e01[:, 1] * e01[:, 1] + e01[:, 2] * e01[:, 2])
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with quiet("invalid", "divide"):
         e1 = e01 / l01[:, None]
-        x2 = np.einsum("ij,ij->i", e02, e1)
+        x2 = einsum("ij,ij->i", e02, e1)
         y2 = _cross_norm(e1, e02)
     Z = np.zeros((len(e01), 3), dtype=np.complex128)
     Z[:, 1] = l01
@@ -97,7 +99,7 @@ def gradient_operators(Z):
     # edge differences), written out: products by 1 and 0 are exact, so the same numbers as the
     # matrix product, without the stacking and the batched product's fixed cost.
     G = np.empty((len(Z), 2, 3))
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with quiet("invalid", "divide"):
         G[:, 0, 1] = d / det
         G[:, 0, 2] = -b / det
         G[:, 1, 1] = -c / det

@@ -5,6 +5,7 @@
 import numpy as np
 
 from ..errors import InvalidMeshError
+from ..numpy_calls import quiet
 
 # A face is degenerate when twice its area is below this fraction of its longest edge squared.
 DEGENERATE_RATIO = 1e-12
@@ -32,7 +33,7 @@ def check_arrays(V, F, *, share=False):
                                "triangulate n-gons first")
     F = _shared(F) if share and F.dtype == np.int64 else as_indices(F, "face indices")
     out = (F < 0) | (F >= len(V))
-    if out.any():                       # (the faces named only then)
+    if np.logical_or.reduce(out, axis=None):        # (the faces named only then)
         bad = np.flatnonzero(out.any(axis=1))
         raise InvalidMeshError(f"{len(bad)} face(s) use vertex indices outside 0..{len(V) - 1} "
                                f"(faces {_some(bad)}); fix the face list")
@@ -88,7 +89,7 @@ TOO_LARGE = "coordinates beyond 1e60 (too large to measure)"   # how messages sa
 def measurable(P):
     """(m,) bool: faces (corners ``P`` (m,3,3)) whose coordinates are finite and at most
     ``MEASURABLE`` in magnitude."""
-    with np.errstate(invalid="ignore"):
+    with quiet("invalid"):
         return np.all(np.abs(P) <= MEASURABLE, axis=(1, 2))
 
 
@@ -110,7 +111,7 @@ def thinner_than_precision(P, A, lmax2, precision):
     """
     if precision is None or np.dtype(precision) == np.float64:
         return np.zeros(len(A), dtype=bool)
-    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+    with quiet("invalid", "over", "divide"):
         step = np.spacing(np.abs(P).max(axis=(1, 2)).astype(precision)).astype(np.float64)
         total = float(np.sum(A[np.isfinite(A)]))
         uv_step = float(np.spacing(np.asarray(0.5, dtype=precision))) * np.sqrt(total)

@@ -37,6 +37,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..frames import frames_from_map
+from ..numpy_calls import einsum, quiet
 from .face_operators import free_lift_arrays
 from .framed_cone import framed_cone_projection, gradient_products, project_framed
 from .free_admm import FreeLift, run_free
@@ -134,15 +135,15 @@ class BoundSearch:
     def max_distortion(self, W):
         """Max conformal distortion (eq. 4.9) of the map with doubled alpha and beta W (4, k)
         (``_operators``); inf when a face flips or collapses."""
-        with np.errstate(invalid="ignore", divide="ignore"):
+        with quiet("invalid", "divide"):
             return self._max_distortion(W)
 
     @staticmethod
     def _max_distortion(W):
         """``max_distortion`` where the caller has silenced division warnings."""
-        num = np.einsum("ij,ij->j", W[2:], W[2:])                   # |2 beta|^2
-        num /= np.einsum("ij,ij->j", W[:2], W[:2])                  # over |2 alpha|^2
-        r = float(num.max())                                        # |beta|^2 / |alpha|^2
+        num = einsum("ij,ij->j", W[2:], W[2:])                      # |2 beta|^2
+        num /= einsum("ij,ij->j", W[:2], W[:2])                     # over |2 alpha|^2
+        r = float(np.maximum.reduce(num))                           # |beta|^2 / |alpha|^2
         if not r < 1.0:
             return np.inf
         r = np.sqrt(r)
@@ -194,12 +195,12 @@ class BoundSearch:
             # the fixed vertices' share of the right-hand side: the same for every target
             self._rhs_fixed = (self.UF, s.fixed_share(self.UF).T.ravel())
         rhs_fixed = self._rhs_fixed[1]
-        w2 = np.stack([w.real, -w.imag])
+        w2 = np.array([w.real, -w.imag])       # np.stack's rows (its wrapper: ~4 us)
         U = U.copy()
         GU = self._lift(U)
         lam = np.zeros_like(GU)
         rhs = np.empty(2 * nf)
-        with np.errstate(invalid="ignore", divide="ignore"):
+        with quiet("invalid", "divide"):
             best, D_best = self._iterate(U, GU, lam, rhs, w2, kappa, C, D_best, solve, BtA,
                                          rhs_fixed, cancel, ask, alpha)
         return best, D_best, best is not None and D_best <= C
@@ -278,7 +279,7 @@ class BoundSearch:
         the lift kept when they are already there)."""
         if self._measured is not None and self._measured[0] is u:
             return self._measured[1]        # this very map, measured last (the same bits)
-        U = np.stack([u.real, u.imag])
+        U = np.array([u.real, u.imag])          # np.stack's rows, without its wrapper
         UF = U[:, self.solver.fixed].T
         if self.UF is None or not np.array_equal(self.UF, UF):
             self.UF = UF
@@ -318,7 +319,7 @@ class BoundSearch:
         D : float, its max distortion
         out_of_time : bool, the deadline stopped the search
         """
-        U = np.stack([u.real, u.imag])
+        U = np.array([u.real, u.imag])
         D = self.distortion_of(u)
         if self.least:
             self.budget = target_watch.effort(self.k, D)

@@ -23,6 +23,8 @@ import math
 import numpy as np
 import scipy.sparse as sp
 
+from ..numpy_calls import quiet
+
 __all__ = ["FreeLift", "run_free", "sparse_product"]
 
 
@@ -63,7 +65,7 @@ class FreeLift:
         self.lift_fixed = np.bincount(frows, weights=fdata * Ufix.take(fcols), minlength=4 * k)
         self.rhs_fixed = rhs_fixed
         self.n1 = int(indptr[k])            # entries of the Re 2alpha rows (as many as Im's)
-        self.rows = np.repeat(np.arange(k), np.diff(indptr[:k + 1]))   # their faces
+        self.rows = np.arange(k).repeat(indptr[1:k + 1] - indptr[:k])   # their faces
         self.lift = sparse_product("csr", (4 * k, 2 * nf), indptr, indices)
         self.rhs = sparse_product("csc", (2 * nf, 4 * k), indptr, indices)
         self._framed = (data.copy(), wdata.copy(), self.lift_fixed.copy())
@@ -147,7 +149,7 @@ def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):
     kappa_, kc, c_, alpha_ = (np.array(v) for v in (kappa, kappa * c, c, alpha))
     zero, one = np.zeros(()), np.ones(())
     kept = None
-    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+    with quiet("invalid", "divide", "over"):
         for it in itertools.count():
             if cancel is not None and cancel.is_set():
                 break

@@ -11,6 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..geometry import components
+from ..numpy_calls import quiet
 from .face_operators import as_csc, face_gradients, laplacian_block_arrays
 from .factor import factor_spd
 from .ordered_ldl import solver_in_order
@@ -66,9 +67,10 @@ class GlobalStep:
             raise ValueError("every connected component needs at least one fixed vertex")
         self.fixed = fixed
         self.fixed_given = np.asarray(fixed_idx, dtype=np.int64)
-        is_free = np.ones(nv, dtype=bool)
+        is_free = np.empty(nv, dtype=bool)
+        is_free.fill(True)
         is_free[fixed] = False
-        self.free = np.flatnonzero(is_free)     # np.setdiff1d's answer without its sort
+        self.free = is_free.nonzero()[0]        # np.setdiff1d's answer without its sort
         self.ranks = ranks
         if ranks is not None:                   # in elimination order
             self.free = self.free[np.argsort(ranks[self.free], kind="stable")]
@@ -200,11 +202,12 @@ class GlobalStep:
 
     def component_scale(self, u):
         """sqrt(UV area / 3D area) of each component, from unsigned face areas, (c,)."""
-        U = np.stack([u.real, u.imag], 1)
+        U = np.empty((len(u), 2))
+        U[:, 0], U[:, 1] = u.real, u.imag
         a, b = self._alpha_beta(self.jacobians(U))
         uv = self.area * np.abs(np.abs(a) ** 2 - np.abs(b) ** 2)
         A = np.bincount(self.face_comp, weights=self.area, minlength=self.n_components)
         S = np.bincount(self.face_comp, weights=uv, minlength=self.n_components)
-        with np.errstate(invalid="ignore", divide="ignore"):
+        with quiet("invalid", "divide"):
             s = np.sqrt(S / A)
         return np.where(np.isfinite(s) & (s > 0), s, 1.0)

@@ -62,7 +62,7 @@ class HeldLSCM:
 def _solver(rows, cols, vals, n, keys):
     """The solve of the system of upper-triangle triplets (unknowns ``[u; v]`` of the free
     vertices), eliminated in the order of the free vertices' ``keys`` (u and v of a vertex side
-    by side, as ``lscm._ranked_solver``), or by ``lscm.spd_solver`` where that cannot run."""
+    by side, as ``lscm.ranked_triplet_solver``), or by ``lscm.spd_solver`` where that cannot run."""
     solve = (ranked_triplet_solver(rows, cols, vals, keys)
              if keys is not None and ordered_ldl.available() else None)
     return solve or spd_solver(sp.csc_matrix((vals, (rows, cols)), shape=(n, n)), upper=True)

@@ -280,4 +280,4 @@ def frame_turn(prob, u, w):
 def uv_area(u, tris):
     """Signed UV area of a map."""
     p = u[tris]
-    return float(np.sum(0.5 * ((p[:, 1] - p[:, 0]).conj() * (p[:, 2] - p[:, 0])).imag))
+    return float(np.add.reduce(0.5 * ((p[:, 1] - p[:, 0]).conj() * (p[:, 2] - p[:, 0])).imag))

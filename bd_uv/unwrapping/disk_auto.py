@@ -72,7 +72,7 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
     if not searches(disk):
         return None
     t = time.perf_counter()
-    area3d = float(disk.area.sum())
+    area3d = float(np.add.reduce(disk.area))
     unfold = requested != "auto"
     if unfold:
         # the disk's own geometry: the iterations do not depend on its scale or place (the same
@@ -164,7 +164,8 @@ def _certified(u, disk, area3d, requested, bound, most=HIGH_DISTORTION):
     distortion, min and max singular values, the certificate), or None."""
     isl = disk.island
     us = placed(u, isl.tris, area3d)
-    uv = np.stack([us.real, us.imag], axis=1)
+    uv = np.empty((len(us), 2))            # np.stack(..., axis=1) without its wrapper
+    uv[:, 0], uv[:, 1] = us.real, us.imag
     corner_uv = uv.take(isl.tris, axis=0)
     Dm, smin, smax = measure_disk(corner_uv, disk.G)
     mx = float(Dm.max())

@@ -9,7 +9,6 @@ try:  # lscm.spd_solver's factorisation (SuperLU there where it is missing)
 except ImportError:  # pragma: no cover - exercised where qdldl is absent
     qdldl = None
 
-from ..solvers.face_operators import csc_arrays
 from ..solvers.lscm import _lscm_system, face_geometry_of, lscm_pinned, ranked_triplet_solver
 
 __all__ = ["conformal"]
@@ -25,16 +24,17 @@ def conformal(V, disk, Z, G, ranks):
     idx = _far_pair(V.take(isl.vertices, axis=0), isl.loops[0])
     args = (geom.cbw(), geom.cb, isl.tris, len(isl.vertices), idx, np.array([0.0, 1.0], complex),
             (disk.twins[0], disk.twins[1], disk.loop))
-    # ``lscm_pinned``'s system and solve without the scipy matrix it makes first (~50-70 us of
-    # scipy's constructor on a 115-face disk): in the ranks' order its triplets go to the
-    # factorisation as they are (which sorts them into its own order: the same matrix); in
-    # qdldl's own order (below FIXED_RANKED vertices at a fixed C) qdldl reads the same
-    # canonical arrays (``face_operators.csc_arrays``) without the matrix. The same bits.
+    # ``lscm_pinned``'s system and solve without a scipy matrix (~50-70 us of scipy's
+    # constructor on a 115-face disk): in the ranks' order its triplets go to the
+    # factorisation as they are (which sorts them into its own order: the same matrix, as
+    # ``lscm_pinned`` does); in qdldl's own order (below FIXED_RANKED vertices at a fixed C)
+    # qdldl reads the same canonical arrays (``Upper.csc_arrays``) without the matrix, where
+    # ``lscm_pinned`` makes it. The same bits.
     A, rhs, u, free = _lscm_system(*args, triplets=True)
     if ranks is not None:
         solve = ranked_triplet_solver(A.rows, A.cols, A.vals, ranks[free])
     else:
-        solve = _qdldl_solve(csc_arrays(A.vals, A.rows, A.cols, A.n, A.n))
+        solve = _qdldl_solve(A.csc_arrays())
     if solve is None:                   # lscm_pinned's way where that factorisation fails
         return lscm_pinned(*args, ranks)
     x = solve(rhs)
@@ -62,6 +62,6 @@ def _far_pair(P, lv):
     Q = P.take(lv, axis=0)
     d = np.concatenate([Q[1:], Q[:1]]) - Q
     seg = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])
-    cum = np.cumsum(seg)
+    cum = seg.cumsum()
     total = np.bincount(np.zeros(len(seg), dtype=np.int64), seg, 1)[0]
-    return np.array([lv[0], lv[int(np.argmin(np.abs((cum - seg) - 0.5 * total)))]])
+    return np.array([lv[0], lv[int(np.abs((cum - seg) - 0.5 * total).argmin())]])

@@ -28,7 +28,7 @@ def placed(u, tris, area3d):
     """A map of no pin placed as the unwrap places it: UV area = 3D area (``area_scale``),
     bounding box at (0, 0)."""
     u = area_scale(u, tris, area3d) * u
-    return u - (u.real.min() + 1j * u.imag.min())
+    return u - (np.minimum.reduce(u.real) + 1j * np.minimum.reduce(u.imag))
 
 
 def finish(prob, u, C, bound, frames_name, flags, t0, stretch=None):

@@ -16,14 +16,15 @@ loop. Anything else, a map over the bound or a boundary the certificate cannot c
 the general way, which words its errors, bends maps and cuts overlaps.
 """
 from dataclasses import dataclass
-import functools
 import time
 
 import numpy as np
 
 from ..errors import CancelledError
 from ..geometry import components, gradient_operators, local_frame
+from ..numpy_calls import einsum, quiet
 from ..mesh import DEGENERATE_RATIO, Island
+from ..solvers.forest import component_count
 from ..solvers.ordered_ldl import FIXED_RANKED, edge_ranks
 from .disk_certificate import certify_disk, certify_measured_disk
 from .disk_conformal import conformal
@@ -33,6 +34,25 @@ from .results import IslandResult, UnwrapResult
 # Up to this many boundary edges the loop is walked in Python (a few tenths of a microsecond a
 # step); a longer one goes the general way (``geometry.ordered_loops``' pointer jumping).
 WALK = 4096
+
+
+class _kept:
+    """``functools.cached_property`` without its lock (Python 3.11 takes an RLock on every read
+    until the value is kept: ~1-2 us, three a small disk's call): made on first read, then kept
+    in the instance's dict, which shadows this descriptor. A Disk is made and read within one
+    unwrap call; two threads reading it first at once would each make the same value."""
+
+    def __init__(self, fn):
+        self.fn, self.name, self.__doc__ = fn, fn.__name__, fn.__doc__
+
+    def __set_name__(self, owner, name):
+        self.name = name
+
+    def __get__(self, obj, cls=None):
+        if obj is None:
+            return self
+        value = obj.__dict__[self.name] = self.fn(obj)
+        return value
 
 
 @dataclass(frozen=True)
@@ -64,15 +84,15 @@ class Disk:
     e02: np.ndarray
     area: np.ndarray
 
-    @functools.cached_property
+    @_kept
     def Z(self):
         return local_frame(self.e01, self.e02)
 
-    @functools.cached_property
+    @_kept
     def G(self):
         return gradient_operators(self.Z)
 
-    @functools.cached_property
+    @_kept
     def ranks(self):
         """The vertices' elimination order (``ordered_ldl.vertex_ranks`` of the island's
         triangles, as the general path finds it; here from the edges known: ``edge_ranks``, the
@@ -103,11 +123,12 @@ def find(V, F):
     order = key.argsort()
     ks = key.take(order)
     same = ks[1:] == ks[:-1]
-    if (same[1:] & same[:-1]).any():                       # an edge in three faces or more
+    # (ufunc reductions: ndarray.any/all/min's Python wrappers cost ~1.5 us a call)
+    if np.logical_or.reduce(same[1:] & same[:-1]):         # an edge in three faces or more
         return None
-    i = np.flatnonzero(same)
+    i = same.nonzero()[0]
     h1, h2 = order.take(i), order.take(i + 1)
-    if not (src.take(h1) == dst.take(h2)).all():           # oriented against a neighbour
+    if not np.logical_and.reduce(src.take(h1) == dst.take(h2)):   # oriented against a neighbour
         return None
     # Degenerate or not finite (a face repeating a vertex has no area; coordinates that overflow
     # make an area or a squared edge inf or NaN).
@@ -115,49 +136,56 @@ def find(V, F):
     e01 = P[:, 1] - P[:, 0]
     e02 = P[:, 2] - P[:, 0]
     e12 = P[:, 2] - P[:, 1]
-    with np.errstate(invalid="ignore", over="ignore"):
+    with quiet("invalid", "over"):
         area = 0.5 * _cross_norm(e01, e02)
-        lmax2 = np.maximum(np.maximum(np.einsum("ij,ij->i", e01, e01),
-                                      np.einsum("ij,ij->i", e02, e02)),
-                           np.einsum("ij,ij->i", e12, e12))
-        if not ((2 * area > (DEGENERATE_RATIO * _CLEAR) * lmax2).all()
-                and np.isfinite(area).all()):
+        lmax2 = np.maximum(np.maximum(einsum("ij,ij->i", e01, e01),
+                                      einsum("ij,ij->i", e02, e02)),
+                           einsum("ij,ij->i", e12, e12))
+        if not (np.logical_and.reduce(2 * area > (DEGENERATE_RATIO * _CLEAR) * lmax2)
+                and np.logical_and.reduce(np.isfinite(area))):
             return None
     interior = np.zeros(3 * m, dtype=bool)
     interior[h1] = True
     interior[h2] = True
-    bnd = np.flatnonzero(~interior)
+    bnd = (~interior).nonzero()[0]
     nb = len(bnd)
     if nb == 0 or nb > WALK:
         return None
     # One boundary loop: every boundary vertex starts one boundary half-edge, and the walk from
     # the first comes back to it after all of them.
     bsrc = src.take(bnd)
-    pos = np.full(n, -1, dtype=np.int64)
+    pos = np.empty(n, dtype=np.int64)
+    pos.fill(-1)
     pos[bsrc] = np.arange(nb)
     nxt = pos.take(dst.take(bnd))
-    if not (pos.take(bsrc) == np.arange(nb)).all() or nxt.min() < 0:
+    if (not np.logical_and.reduce(pos.take(bsrc) == np.arange(nb))
+            or np.minimum.reduce(nxt) < 0):
         return None
     seq = _walk(nxt.tolist())
     if seq is None:
         return None
     # Vertices numbered by their first corner, as checked_islands numbers cut vertices.
-    first = np.full(n, 3 * m, dtype=np.int64)
+    first = np.empty(n, dtype=np.int64)
+    first.fill(3 * m)
     first[src[::-1]] = np.arange(3 * m)[::-1]
-    first_corner = np.flatnonzero(first.take(src) == np.arange(3 * m))
+    first_corner = (first.take(src) == np.arange(3 * m)).nonzero()[0]
     verts = src.take(first_corner)
     nv = len(verts)
     # Euler characteristic 1 with one boundary loop: genus 0 and no bow-tie (a vertex of several
     # corner fans would count once here and once per fan in the cut mesh), given one component
     # (which also leaves out two faces on the same three vertices: a closed piece of their own).
-    if nv - (len(h1) + nb) + m != 1 or components(m, h1 // 3, h2 // 3)[0] != 1:
+    if nv - (len(h1) + nb) + m != 1:
+        return None
+    f1, f2 = h1 // 3, h2 // 3
+    count = component_count(f1, f2, m)
+    if (components(m, f1, f2)[0] if count is None else count) != 1:
         return None
     local = np.empty(n, dtype=np.int64)
     local[verts] = np.arange(nv)
     tris = local.take(F)
     loop = bnd.take(seq)
     island = Island(0, np.arange(m, dtype=np.int64), verts, tris, (local.take(bsrc.take(seq)),))
-    return Disk(island, np.stack([h1, h2]), loop, first_corner, e01, e02, area)
+    return Disk(island, np.array([h1, h2]), loop, first_corner, e01, e02, area)
 
 
 def _cross_norm(a, b):
@@ -221,11 +249,11 @@ def fitted(F, disk, u, C, t0, flags, note):
     uc = u.take(isl.tris)
     e1, e2 = uc[:, 1] - uc[:, 0], uc[:, 2] - uc[:, 0]
     one = np.zeros(len(F), dtype=np.int64)
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with quiet("invalid", "divide"):
         s = np.sqrt(np.bincount(one, disk.area, 1)[0]
                     / np.bincount(one, 0.5 * (e1.conj() * e2).imag, 1)[0])
     us = u * s
-    us -= us.real.min() + 1j * us.imag.min()
+    us -= np.minimum.reduce(us.real) + 1j * np.minimum.reduce(us.imag)
     uv = us.view(np.float64).reshape(nv, 2)
     corner_uv = uv.take(isl.tris, axis=0)
     cert, D, smin, smax = certify_disk(corner_uv, disk.G, disk, C)

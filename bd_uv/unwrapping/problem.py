@@ -18,6 +18,7 @@ from ..energies import energy, jacobian_operators
 from ..errors import InfeasibleError
 from ..frames import _far_pair, frames_from_map, lscm_map
 from ..geometry import face_areas, local_coordinates
+from ..numpy_calls import quiet
 from ..overlap import island_overlaps
 from .conic_solves import ConicSolves
 from .disk_certificate import turning
@@ -144,7 +145,7 @@ class IslandProblem(ConicSolves):
     def face_distortion(self, u):
         """Conformal distortion per face (eq. 4.9); inf where a face flips or collapses."""
         a, b = np.abs(self.alpha(u)), np.abs(self.beta(u))
-        with np.errstate(invalid="ignore", divide="ignore"):
+        with quiet("invalid", "divide"):
             D = (a + b) / (a - b)
         D[~(a > b) | ~np.isfinite(D)] = np.inf
         return D

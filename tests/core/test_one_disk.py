@@ -462,3 +462,17 @@ def test_the_disk_conformal_map_falls_back_where_qdldl_wants_a_matrix(monkeypatc
         monkeypatch.setattr(disk_conformal, "qdldl", fake)
         got = disk_conformal.conformal(V, disk, disk.Z, disk.G, None)
         assert got.tobytes() == want.tobytes()
+
+
+def test_a_disks_kept_values_are_made_once_and_are_the_functions_own():
+    """``Disk``'s Z, G and ranks (``one_disk._kept``: a cached property without a lock) are made
+    on first read, kept, and equal what their functions make of the disk afresh."""
+    from bd_uv.geometry import gradient_operators, local_frame
+    V, F = curved_grid(6)
+    disk = one_disk.find(V, F.astype(np.int64))
+    Z = disk.Z
+    assert disk.Z is Z and disk.G is disk.G and disk.ranks is disk.ranks
+    want_Z = local_frame(disk.e01, disk.e02)
+    assert Z.tobytes() == want_Z.tobytes()
+    assert disk.G.tobytes() == gradient_operators(want_Z).tobytes()
+    assert isinstance(one_disk.Disk.Z, one_disk._kept) and "Z" in vars(disk)

@@ -121,3 +121,32 @@ def test_job_options_of_a_dict_keeps_the_old_meaning():
     assert JobOptions.of({"bound": 3.0}) == JobOptions(UnwrapOptions(bound=3.0))
     assert JobOptions.of({"bound": 3.0, "cut": False, "pack": True}) == JobOptions(
         UnwrapOptions(bound=3.0, overlap="fail"), pack=True, cut=False)
+
+
+def test_options_made_from_plain_values_are_kept_and_still_checked():
+    """``unwrap_options`` keeps what it made of plain values (frozen, so one object serves every
+    call): the same options as made afresh; a value equal to a kept one but of another type is
+    checked on its own (True == 1.0, and True is no bound); refused values stay refused."""
+    from bd_uv.options import _MADE, unwrap_options
+    _MADE.clear()
+    a = unwrap_options(None, bound=5.0, method="lscm")
+    assert unwrap_options(None, bound=5.0, method="lscm") is a
+    assert a == UnwrapOptions(bound=5.0, method="lscm")
+    assert unwrap_options(None, bound="auto") == UnwrapOptions(bound="auto")
+    one = unwrap_options(None, bound=1.0)
+    assert one.bound == 1.0
+    for _ in range(2):
+        with pytest.raises(OptionError):
+            unwrap_options(None, bound=True)
+        with pytest.raises(OptionError):
+            unwrap_options(None, bound=0.5)
+        with pytest.raises(OptionError):
+            unwrap_options(None, bound=float("nan"))
+    assert unwrap_options(None, bound=1) == UnwrapOptions(bound=1)
+    # a value that is not plain (a numpy float) is checked and made every time, not kept
+    b = unwrap_options(None, bound=np.float64(3.0))
+    assert b == UnwrapOptions(bound=3.0) and b is not unwrap_options(None, bound=np.float64(3.0))
+    # the store stays small
+    for k in range(200):
+        unwrap_options(None, bound=1.0 + k)
+    assert len(_MADE) <= 64
