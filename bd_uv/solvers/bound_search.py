@@ -254,12 +254,14 @@ class BoundSearch:
 
     def limit_effort(self):
         """Bound the search as ``bound="auto"`` bounds it on an unpinned island with no time
-        budget, up to ``target_watch.EFFORT_FACES`` faces: its first target waits FIRST_STALL
-        iterations, and from a start within EFFORT_START its iterations are within a budget
-        growing with the faces (``target_watch.effort``), no target starting with fewer than
-        LEAST_RUN of them left."""
+        budget, up to ``target_watch.EFFORT_FACES`` faces: from a start within EFFORT_START its
+        iterations are within a budget growing with the faces (``target_watch.effort``), no
+        target starting with fewer than LEAST_RUN of them left; up to FIRST_STALL_FACES faces its
+        first target waits FIRST_STALL iterations."""
         if self.k <= target_watch.EFFORT_FACES:
-            self.least, self.first_stall = True, target_watch.FIRST_STALL
+            self.least = True
+        if self.k <= target_watch.FIRST_STALL_FACES:
+            self.first_stall = target_watch.FIRST_STALL
 
     def _watch(self, D_best, ask):
         """A target's ``Watch``: its iterations within the search's budget where it has one, the

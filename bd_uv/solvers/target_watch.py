@@ -29,12 +29,25 @@ FLIPPING = 6        # or after this many flipping iterates in a row from its sta
 # max stays within 0.1 % of 1.0606 for 28 iterations, then falls to 1.0512 by the 60th; at
 # STALL 12 the search ended at 1.05969 after 40 iterations, over Blender LSCM's 1.05958; at 16,
 # 1.0499 after 104 in this budget; no other disk of issue 21's table changes but
-# hemisphere-patch400, 77 -> 81 iterations at the same C). Larger islands: their set-up
-# dominates, their search is not bounded.
-EFFORT_FACES = 1000
+# hemisphere-patch400, 77 -> 81 iterations at the same C).
+# Up to EFFORT_FACES = 5000 faces (was 1000), the budget grows by EFFORT_PER_FACE a face up to
+# EFFORT_KNEE faces, then by EFFORT_PER_FACE_BEYOND (issue 21 on 1k-5k-face disks, auto15: at
+# 0.13 a face all along, libigl arm's 1,234-face patch ran 200 iterations, 2.3x ABF's CPU, and
+# spot's 1,046-face patch 153, 2.8x; an iteration costs as much as ~9-13 faces of ABF there,
+# the same as at 800 faces, so 0.13 a face is ~1.1-1.7x ABF's time before any set-up). At 0.02
+# beyond 600: arm 90 iterations, C 1.02373 -> 1.02638 (the peers' least max 1.0464); spot 81,
+# 1.1719 -> 1.1830 (1.2009); knight-patch800 104 -> 82, 1.04995 -> 1.05126 (1.05958); at a knee of
+# 500 the unseen elephant's 600-face patch rose 1.1131 -> 1.1165, over ABF's 1.1159. The first
+# target's FIRST_STALL stays with islands up to FIRST_STALL_FACES (above: 4 more iterations on
+# 5 of 16 disks of 1.5-4.6k faces, the same C). Larger islands: their set-up dominates, their
+# search is not bounded.
+EFFORT_FACES = 5000
 EFFORT_START = 2.0
 EFFORT_PER_FACE = 0.13
+EFFORT_KNEE = 600
+EFFORT_PER_FACE_BEYOND = 0.02
 EFFORT_MIN = 15
+FIRST_STALL_FACES = 1000
 # ... and no target starts with fewer than LEAST_RUN iterations of the budget left: a new target's
 # first iterates rise above the best (its multipliers start from zero, its frames are new) and
 # fall back below it only after several (face-patch200's second target: 8 iterations;
@@ -107,7 +120,8 @@ def effort(k, D):
     k faces from a start of max distortion D (see EFFORT_FACES)."""
     if k > EFFORT_FACES or not D <= EFFORT_START:
         return None
-    return max(EFFORT_MIN, int(EFFORT_PER_FACE * k))
+    n = EFFORT_PER_FACE * min(k, EFFORT_KNEE) + EFFORT_PER_FACE_BEYOND * max(0, k - EFFORT_KNEE)
+    return max(EFFORT_MIN, int(n))
 
 
 def ask(enough, ready, u):

@@ -176,6 +176,48 @@ def test_auto_on_a_small_disk_keeps_to_its_effort_budget(monkeypatch):
         assert D.max() <= isl.bound_certified * (1 + 1e-9)
 
 
+def test_auto_budget_grows_slower_beyond_its_knee_up_to_its_gate():
+    """``target_watch.effort``: EFFORT_PER_FACE a face up to EFFORT_KNEE faces, then
+    EFFORT_PER_FACE_BEYOND a face, never falling as the island grows, up to EFFORT_FACES faces
+    (above: no budget), and none from a start over EFFORT_START."""
+    from bd_uv.solvers import target_watch as T
+    ks = list(range(1, T.EFFORT_FACES + 1))
+    budgets = [T.effort(k, 1.5) for k in ks]
+    assert all(b is not None for b in budgets) and budgets == sorted(budgets)
+    assert budgets[0] == T.EFFORT_MIN
+    assert T.effort(T.EFFORT_KNEE, 1.5) == int(T.EFFORT_PER_FACE * T.EFFORT_KNEE)
+    k = T.EFFORT_KNEE + 1000
+    assert T.effort(k, 1.5) == int(T.EFFORT_PER_FACE * T.EFFORT_KNEE
+                                   + T.EFFORT_PER_FACE_BEYOND * 1000)
+    assert T.effort(T.EFFORT_FACES + 1, 1.5) is None
+    assert T.effort(100, T.EFFORT_START * 1.01) is None
+
+
+def test_auto_on_a_disk_over_a_thousand_faces_keeps_to_its_effort_budget(monkeypatch):
+    """A 1,152-face curved grid (over FIRST_STALL_FACES and EFFORT_KNEE, under EFFORT_FACES):
+    ``bound="auto"`` iterates within ``target_watch.effort`` (89: 78 up to the knee, 0.02 a face
+    beyond); the same call gives the same UVs bit for bit (a count, no clock); with the gate at
+    1000 faces (unbounded here) the search runs longer, to a C no higher; both certified from
+    the UVs recomputed here, the bounded C within 0.2 % of the unbounded one."""
+    import bd_uv
+    from bd_uv.solvers import target_watch
+    V, F = grid(25, 25, z=lambda x, y: 0.3 * np.sin(4 * x) * np.cos(3 * y))
+    assert len(F) > max(target_watch.FIRST_STALL_FACES, target_watch.EFFORT_KNEE)
+    budget = target_watch.effort(len(F), 1.0)
+    runs = [bd_uv.unwrap(V, F, bound="auto") for _ in range(2)]
+    assert np.array_equal(runs[0].corner_uv, runs[1].corner_uv)
+    monkeypatch.setattr(target_watch, "EFFORT_FACES", 1000)
+    runs.append(bd_uv.unwrap(V, F, bound="auto"))
+    (bounded,), (free,) = runs[0].islands, runs[2].islands
+    assert 0 < bounded.iterations <= budget < free.iterations
+    assert free.bound_certified <= bounded.bound_certified <= 1.002 * free.bound_certified
+    for r in (runs[0], runs[2]):
+        (isl,) = r.islands
+        D, flipped = reference_distortion(V, F, r.corner_uv.reshape(-1, 3, 2))
+        assert r.certified and not flipped.any()
+        assert D.max() <= isl.bound_certified * (1 + 1e-9)
+
+
 def test_auto_starts_no_target_it_has_too_little_budget_for(monkeypatch):
     """Within auto's iteration budget no target starts with fewer than ``LEAST_RUN`` iterations
     left (a new target's first iterates rise above the best). Every target's start is recorded
