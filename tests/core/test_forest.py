@@ -8,9 +8,9 @@ from scipy.sparse.csgraph import connected_components
 
 from bd_uv.geometry import components
 from bd_uv.solvers import forest, ordered_ldl
+from qdldl_marks import needs_ordered_ldl
 
-pytestmark = pytest.mark.skipif(not ordered_ldl.available(),
-                                reason="qdldl's module does not export QDLDL and AMD here")
+pytestmark = needs_ordered_ldl
 
 
 @pytest.fixture(autouse=True)

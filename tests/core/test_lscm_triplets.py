@@ -9,9 +9,9 @@ from bd_uv.mesh import checked_islands
 from bd_uv.solvers import ordered_ldl
 from bd_uv.solvers.lscm import _lscm_system, face_geometry, lscm_pinned, ranked_triplet_solver
 from helpers import grid, load_off
+from qdldl_marks import needs_ordered_ldl
 
-pytestmark = pytest.mark.skipif(not ordered_ldl.available(),
-                                reason="qdldl's module does not export QDLDL and AMD here")
+pytestmark = needs_ordered_ldl
 
 
 @pytest.fixture(autouse=True)

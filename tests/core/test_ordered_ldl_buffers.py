@@ -9,9 +9,9 @@ from bd_uv.solvers import ordered_ldl
 from bd_uv.solvers.lscm import face_geometry, _lscm_system
 from bd_uv.mesh import checked_islands
 from helpers import grid, load_off
+from qdldl_marks import needs_ordered_ldl
 
-pytestmark = pytest.mark.skipif(not ordered_ldl.available(),
-                                reason="qdldl's module does not export QDLDL and AMD here")
+pytestmark = needs_ordered_ldl
 
 
 @pytest.fixture(autouse=True)

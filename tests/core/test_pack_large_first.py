@@ -27,6 +27,20 @@ def _least_gap(rings):
     return best
 
 
+
+def _spy_compaction(monkeypatch):
+    """The (placement, side) each ``compact_square`` call of ``large_first`` starts from, listed
+    as they come (the compaction itself runs as it would)."""
+    starts = []
+    compact = lf.compact_square
+
+    def spy(outl, placement, side, *args, **kwargs):
+        starts.append((placement, side))
+        return compact(outl, placement, side, *args, **kwargs)
+
+    monkeypatch.setattr(lf, "compact_square", spy)
+    return starts
+
 def test_many_charts_go_large_first_and_stay_certified(monkeypatch):
     """44 charts, one huge and 43 tiny: the square search takes the large-first way (it returns
     a layout), and the packed layout passes the independent layout check."""
@@ -63,14 +77,7 @@ def test_the_square_grows_until_the_small_charts_fit(monkeypatch):
         assert len(outl) == 6 and opt.padding_px == options.padding_px * lf.LARGE_HEADROOM
         return Placement(np.zeros(6), centres.copy(), S), S, 1
 
-    starts = []
-    compact = lf.compact_square
-
-    def spy(outl, placement, side, *args, **kwargs):
-        starts.append((placement, side))
-        return compact(outl, placement, side, *args, **kwargs)
-
-    monkeypatch.setattr(lf, "compact_square", spy)
+    starts = _spy_compaction(monkeypatch)
     pl, side, solves = lf.large_first(outlines, None, options, tol, 0.5, nested)
     assert solves == 1 and len(starts) == 1
     start, start_side = starts[0]
@@ -136,14 +143,7 @@ def test_the_large_layout_is_turned_where_the_small_charts_needed_much_growth(mo
 
     monkeypatch.setattr(lf, "LARGE_SHARE", 0.7)
     monkeypatch.setattr(lf, "LONG", 9.0)
-    starts = []
-    compact = lf.compact_square
-
-    def spy(outl, placement, side, *args, **kwargs):
-        starts.append((placement, side))
-        return compact(outl, placement, side, *args, **kwargs)
-
-    monkeypatch.setattr(lf, "compact_square", spy)
+    starts = _spy_compaction(monkeypatch)
     pl, side, solves = lf.large_first(outlines, None, options, tol, 0.3, nested)
     start, start_side = starts[0]
     assert start_side <= S * lf.GROW ** 4 * (1 + 1e-9)

@@ -22,9 +22,9 @@ from bd_uv.seams.topology import charts
 from bd_uv.solvers import ordered_ldl
 from bd_uv.solvers.lscm import Upper, _lscm_system, face_geometry
 from seams_helpers import sphere_cut, uv_sphere
+from qdldl_marks import needs_ordered_ldl
 
-pytestmark = pytest.mark.skipif(not ordered_ldl.available(),
-                                reason="qdldl's module does not export QDLDL and AMD here")
+pytestmark = needs_ordered_ldl
 
 
 def _bumpy_disk(k=7):
