@@ -4,7 +4,7 @@ The canonical local frame of face j has its origin at the first corner, e1 along
 e2 = n x e1 (Lipman 2012, eq. 4.1 with the frame's rotation kept separately, see ``frames``)."""
 import numpy as np
 
-from .numpy_calls import einsum, quiet
+from .array_calls import einsum, quiet
 
 
 def face_areas(V, F):

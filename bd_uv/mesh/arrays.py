@@ -5,7 +5,7 @@
 import numpy as np
 
 from ..errors import InvalidMeshError
-from ..numpy_calls import quiet
+from ..array_calls import quiet
 
 # A face is degenerate when twice its area is below this fraction of its longest edge squared.
 DEGENERATE_RATIO = 1e-12

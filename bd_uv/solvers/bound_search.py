@@ -37,7 +37,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..frames import frames_from_map
-from ..numpy_calls import einsum, quiet
+from ..array_calls import einsum, quiet
 from .face_operators import free_lift_arrays
 from .framed_cone import framed_cone_projection, gradient_products, project_framed
 from .free_admm import FreeLift, run_free

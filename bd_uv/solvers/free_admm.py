@@ -23,7 +23,7 @@ import math
 import numpy as np
 import scipy.sparse as sp
 
-from ..numpy_calls import quiet
+from ..array_calls import quiet
 
 __all__ = ["FreeLift", "run_free", "sparse_product"]
 

@@ -11,7 +11,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..geometry import components
-from ..numpy_calls import quiet
+from ..array_calls import quiet
 from .face_operators import as_csc, face_gradients, laplacian_block_arrays
 from .factor import factor_spd
 from .ordered_ldl import solver_in_order

@@ -12,7 +12,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from ..geometry import face_areas, gradient_operators, local_coordinates
-from ..numpy_calls import einsum
+from ..array_calls import einsum
 from . import ordered_ldl, radix
 from .face_operators import csc_arrays
 from ..trim import CHUNK

@@ -21,7 +21,7 @@ which cuts an overlapping island), so its reasons are worded in one place.
 import numpy as np
 
 from ..certificate import RTOL, Certificate
-from ..numpy_calls import einsum, quiet
+from ..array_calls import einsum, quiet
 from ..segments import segments_meet
 
 

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import CancelledError
 from ..geometry import components, gradient_operators, local_frame
-from ..numpy_calls import einsum, quiet
+from ..array_calls import einsum, quiet
 from ..mesh import DEGENERATE_RATIO, Island
 from ..solvers.forest import component_count
 from ..solvers.ordered_ldl import FIXED_RANKED, edge_ranks

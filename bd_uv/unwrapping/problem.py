@@ -18,7 +18,7 @@ from ..energies import energy, jacobian_operators
 from ..errors import InfeasibleError
 from ..frames import _far_pair, frames_from_map, lscm_map
 from ..geometry import face_areas, local_coordinates
-from ..numpy_calls import quiet
+from ..array_calls import quiet
 from ..overlap import island_overlaps
 from .conic_solves import ConicSolves
 from .disk_certificate import turning

@@ -1,4 +1,4 @@
-"""``numpy_calls.quiet``: the small path's ``np.errstate(kind="ignore", ...)`` without its Python
+"""``array_calls.quiet``: the small path's ``np.errstate(kind="ignore", ...)`` without its Python
 ``seterr``/``geterr``: the same modes inside (the kinds named ignored, the others as they were),
 the modes before restored on leaving (also after an error), per thread as numpy keeps them."""
 import itertools
@@ -8,7 +8,7 @@ import warnings
 import numpy as np
 import pytest
 
-from bd_uv.numpy_calls import quiet
+from bd_uv.array_calls import quiet
 
 KINDS = ("divide", "over", "under", "invalid")
 
@@ -77,8 +77,8 @@ def test_each_thread_keeps_its_own_modes():
 
 def test_without_numpys_error_object_it_is_errstate(monkeypatch):
     """numpy 2 has no ``geterrobj``: ``quiet`` is ``np.errstate`` itself there."""
-    from bd_uv import numpy_calls
-    monkeypatch.setattr(numpy_calls, "_FAST", False)
+    from bd_uv import array_calls
+    monkeypatch.setattr(array_calls, "_FAST", False)
     q = quiet("invalid", "divide")
     assert isinstance(q, np.errstate)
     with np.errstate(all="raise"):
