@@ -1,6 +1,8 @@
 """A mesh that is one clean disk, found, solved and certified in one pass (``unwrapping.one_disk``,
 ``unwrapping.disk_certificate``): the same island, map and certificate as the general path, and
 nothing accepted that the general path would refuse or word otherwise."""
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -63,6 +65,15 @@ def test_the_island_is_checked_islands_one(name):
     assert len(a.loops) == len(isl.loops) == 1 and np.array_equal(a.loops[0], isl.loops[0])
 
 
+
+def _same(a, b):
+    """Two certificates equal field by field, NaN equal to NaN (a dataclass's == compares NaN
+    fields by identity, which numpy 2's scalars do not keep)."""
+    fa, fb = dataclasses.astuple(a), dataclasses.astuple(b)
+    return type(a) is type(b) and all(
+        x == y or (isinstance(x, float) and isinstance(y, float) and x != x and y != y)
+        for x, y in zip(fa, fb))
+
 @pytest.mark.parametrize("name", sorted(DISKS))
 @pytest.mark.parametrize("bound", [5.0, 1.05, "auto"])
 def test_the_one_pass_gives_the_general_paths_map_and_certificate(name, bound):
@@ -74,7 +85,8 @@ def test_the_one_pass_gives_the_general_paths_map_and_certificate(name, bound):
     fast = bd_uv.unwrap(V, F, bound=bound)
     ref = general(V, np.asarray(F, np.int64), bound=bound)
     assert np.array_equal(fast.corner_uv, ref.corner_uv, equal_nan=True)
-    assert fast.certificates == ref.certificates
+    assert len(fast.certificates) == len(ref.certificates)
+    assert all(map(_same, fast.certificates, ref.certificates))
     (r,) = fast.islands
     (g,) = ref.islands
     assert r.status == g.status == "certified" and r.flags == g.flags
@@ -85,7 +97,7 @@ def test_the_one_pass_gives_the_general_paths_map_and_certificate(name, bound):
     assert np.isclose(r.min_singular, g.min_singular, rtol=1e-12)
     assert np.isclose(r.max_singular, g.max_singular, rtol=1e-12)
     (c,) = certify_islands(V, F, fast.corner_uv, fast.face_island, [r.bound_certified])
-    assert c.certified and c == fast.certificates[0]
+    assert c.certified and _same(c, fast.certificates[0])
     assert r.max_distortion == c.max_distortion
 
 
@@ -383,8 +395,8 @@ def test_finishs_measure_certifies_as_the_disk_certificates_own(name):
     disk = one_disk.find(V, F)
     C = r.bound_certified
     anew = one_disk.certify(disk, res.corner_uv, C)
-    assert anew is not None and one_disk.certify(disk, res.corner_uv, C, r.distortion) == anew
-    assert anew == res.certificates[0]
+    assert anew is not None and _same(one_disk.certify(disk, res.corner_uv, C, r.distortion), anew)
+    assert _same(anew, res.certificates[0])
     over = r.distortion.copy()
     over[len(over) // 2] = C * 1.01
     assert one_disk.certify(disk, res.corner_uv, C, over) is None
