@@ -9,7 +9,7 @@ try:  # lscm.spd_solver's factorisation (SuperLU there where it is missing)
 except ImportError:  # pragma: no cover - exercised where qdldl is absent
     qdldl = None
 
-from ..solvers.lscm import _lscm_system, face_geometry_of, lscm_pinned, ranked_triplet_solver
+from ..solvers.lscm import _lscm_system, face_geometry_of, lscm_pinned
 
 __all__ = ["conformal"]
 
@@ -24,19 +24,15 @@ def conformal(V, disk, Z, G, ranks):
     idx = _far_pair(V.take(isl.vertices, axis=0), isl.loops[0])
     args = (geom.cbw(), geom.cb, isl.tris, len(isl.vertices), idx, np.array([0.0, 1.0], complex),
             (disk.twins[0], disk.twins[1], disk.loop))
-    # ``lscm_pinned``'s system and solve without a scipy matrix (~50-70 us of scipy's
-    # constructor on a 115-face disk): in the ranks' order its triplets go to the
-    # factorisation as they are (which sorts them into its own order: the same matrix, as
-    # ``lscm_pinned`` does); in qdldl's own order (below FIXED_RANKED vertices at a fixed C)
-    # qdldl reads the same canonical arrays (``Upper.csc_arrays``) without the matrix, where
-    # ``lscm_pinned`` makes it. The same bits.
-    A, rhs, u, free = _lscm_system(*args, triplets=True)
-    if ranks is not None:
-        solve = ranked_triplet_solver(A.rows, A.cols, A.vals, ranks[free])
-    else:
-        solve = _qdldl_solve(A.csc_arrays())
-    if solve is None:                   # lscm_pinned's way where that factorisation fails
+    if ranks is not None:               # its triplets straight to the ordered factorisation
         return lscm_pinned(*args, ranks)
+    # In qdldl's own order (below FIXED_RANKED vertices at a fixed C), qdldl reads the canonical
+    # arrays (``Upper.csc_arrays``) without the scipy matrix ``lscm_pinned`` makes (~50-70 us of
+    # its constructor on a 115-face disk). The same bits.
+    A, rhs, u, free = _lscm_system(*args, triplets=True)
+    solve = _qdldl_solve(A.csc_arrays())
+    if solve is None:                   # lscm_pinned's way where qdldl refuses the arrays
+        return lscm_pinned(*args)
     x = solve(rhs)
     nf = len(free)
     u[free] = x[:nf] + 1j * x[nf:]
