@@ -13,15 +13,20 @@ from . import stretch as stretch_search
 from .conic_solves import Cancelled
 from .finish import finish
 from .fixed_boundary import FRAMES_NAME, fixed_boundary_island, with_premises
+from .angle_start import angle_start
 from .initial import start_map
 from .problem import IslandProblem
 from .results import IslandResult
 
-__all__ = ["batched_options", "failed_result", "quiet", "solve_island", "unfolder"]
+__all__ = ["angle_unfolder", "batched_options", "failed_result", "quiet", "solve_island",
+           "unfolder"]
 
 
 def solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=None,
-                  faces_3d=None, ranks=None, unfolding=False):
+                  faces_3d=None, ranks=None, unfolding=False, one_to_one=False):
+    """One island's certified map (see the module's docstring). ``one_to_one``: with
+    ``bound="auto"``, the least C among the search's maps that do not lie over themselves
+    (``strategies.least_one_to_one``: ``lscm`` is an angle start, ``angle_start``)."""
     t0 = time.perf_counter()
     o = options
     method, bound, boundary, stretch = o.method, o.bound, o.boundary, o.stretch
@@ -51,14 +56,14 @@ def solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=None
     except BDError as exc:
         return failed_result(island, SolverError(f"island {island.index}: {exc}", island.index), t0,
                        bound)
-    flags = []
+    flags = ["angle_start"] if one_to_one else []
     try:
         if bound == "auto" and stretch is not None:
             u, C, name = stretch_search.minimise_stretch(prob, start, stretch, o.time_budget,
                                                          flags, report, t0)
         elif bound == "auto":
             u, C, name = strategies.minimise(prob, start, o.bound_limit, o.time_budget, flags,
-                                             report, t0)
+                                             report, t0, one_to_one)
         elif stretch is not None:
             u, C, name = stretch_search.bounded_stretch(prob, start, float(bound), stretch,
                                                         report, flags)
@@ -108,6 +113,28 @@ def unfolder(isl, V, pins, options, cancel):
         return dataclasses.replace(res, bound_requested=o.bound, bound_certified=C,
                                    flags=res.flags + ("unfolded",),
                                    message=f"{res.message} (unfolded: certified at C = {C:.4g})")
+    return unfold
+
+
+def angle_unfolder(disk, V, pins, options, cancel):
+    """For ``overlap_certificate``: for a ``one_disk.Disk`` whose ``bound="auto"`` map from its
+    conformal start lies over itself, the same search from its angle start
+    (``angle_start.angle_start``), ending at its least map that does not
+    (``strategies.least_one_to_one``); None where there is no angle start or it does not
+    certify (the island is cut then). Not under a time budget."""
+    if options.time_budget is not None or options.stretch is not None:
+        return None
+
+    def unfold(index):
+        u = angle_start(V, disk)
+        if u is None:
+            return None
+        try:
+            res = solve_island(disk.island, V, pins, options, None, quiet(cancel), cancel, u,
+                               (disk.G, disk.area), disk.ranks, one_to_one=True)
+        except Cancelled:
+            raise CancelledError("unwrap cancelled; nothing was changed") from None
+        return res if res.status == "certified" else None
     return unfold
 
 
