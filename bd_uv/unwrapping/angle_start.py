@@ -30,15 +30,15 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..geometry import corner_angles, gradient_operators
-from ..solvers.lscm import spd_solver
+from ..solvers.lscm import _lscm_system, face_geometry_of, spd_solver
 from .capped import from_angles
-from .disk_conformal import conformal
+from .disk_conformal import _far_pair, conformal, qdldl
 from .disk_certificate import measure_disk, turning
 
 __all__ = ["angle_start", "better_start", "linear_abf"]
 
 CAP = 0.97          # a boundary vertex whose angles reach CAP x 2 pi is held at CAP x 2 pi
-ATTEMPTS = 4        # solves at most (the caps lowered where the map still wraps round)
+ATTEMPTS = 4        # conformal solves at most (the angles scaled further where the map still wraps)
 LEAST_ANGLE = 1e-3  # the solved angles kept above this (a first-order step may overshoot)
 NEAR = 6            # sides of a boundary at most this far apart are checked for a crossing
 # A conformal start whose max distortion is over this is bad (``target_watch.EFFORT_START``'s
@@ -127,12 +127,14 @@ def angle_start(V, disk):
     theta3 = np.bincount(flat, np.abs(corner_angles(disk.Z)).ravel(), nv)
     caps = np.full(nv, np.nan)
     caps[loop] = np.where(theta3.take(loop) >= CAP * full, CAP * full, np.nan)
+    angles = linear_abf(disk, caps)
+    if angles is None:
+        return None
+    scale = np.ones(nv)
+    solve = _Conformal(V, disk)
     for _ in range(ATTEMPTS):
-        angles = linear_abf(disk, caps)
-        if angles is None:
-            return None
-        Z = from_angles(angles, disk.area)
-        u = conformal(V, disk, Z, gradient_operators(Z), disk.ranks)
+        Z = from_angles(_scaled(angles, scale, tris), disk.area)
+        u = solve(Z, gradient_operators(Z))
         a = corner_angles(u.take(tris))
         if not (np.isfinite(u).all() and (a > 0.0).all()):
             return None
@@ -145,21 +147,76 @@ def angle_start(V, disk):
             over = _near_crossings(u.take(loop)) & (theta > np.pi)
             if not over.any():
                 return u
-        # asked lower by the share the map missed (its sum over the one asked)
-        asked = np.where(np.isfinite(caps.take(loop)), caps.take(loop), theta3.take(loop))
+        # the angles there scaled down by the share the map missed (its sum over CAP x 2 pi),
+        # the solve of the angles not made again (a conformal solve each)
         v = loop[over]
-        caps[v] = asked[over] * np.minimum(CAP * full / theta[over], CAP)
+        scale[v] *= np.minimum(CAP * full / theta[over], CAP)
     return None
+
+
+class _Conformal:
+    """``disk_conformal.conformal`` of the disk's faces given other shapes, again and again:
+    where qdldl orders the system itself (no vertex ranks: over
+    ``ordered_ldl.RANKED_VERTICES``), its factorisation is kept and refilled (``update``: the
+    system's pattern is the disk's, whatever the shapes) instead of ordered anew (homer's
+    3,521-face patch: ~7 ms a solve, most of it the order)."""
+
+    def __init__(self, V, disk):
+        self.V, self.disk, self.solver = V, disk, None
+
+    def __call__(self, Z, G):
+        disk = self.disk
+        if disk.ranks is not None or qdldl is None:
+            return conformal(self.V, disk, Z, G, disk.ranks)
+        isl = disk.island
+        geom = face_geometry_of(Z, G, disk.area)
+        idx = _far_pair(self.V.take(isl.vertices, axis=0), isl.loops[0])
+        A, rhs, u, free = _lscm_system(geom.cbw(), geom.cb, isl.tris, len(isl.vertices), idx,
+                                       np.array([0.0, 1.0], complex),
+                                       (disk.twins[0], disk.twins[1], disk.loop), triplets=True)
+        M = A.csc_arrays()
+        try:
+            if self.solver is None:
+                self.solver = qdldl.Solver(M, upper=True)
+            else:
+                self.solver.update(M, upper=True)
+        except (ValueError, TypeError, AttributeError):
+            self.solver = None
+            return conformal(self.V, disk, Z, G, None)
+        x = self.solver.solve(rhs)
+        nf = len(free)
+        u[free] = x[:nf] + 1j * x[nf:]
+        return u
+
+
+def _scaled(angles, scale, tris):
+    """The corner angles (m,3) with those at each vertex scaled by ``scale`` (nv,) (where
+    below 1), the rest of each face's pi given to its other corners pro rata (``capped``'s
+    rule: a face whose corners are all scaled is scaled back to pi)."""
+    s = scale.take(tris)
+    faces = (s < 1.0).any(axis=1).nonzero()[0]
+    if not len(faces):
+        return angles
+    s = s[faces]
+    A = angles[faces] * s
+    rest = np.where(s < 1.0, 0.0, A)
+    share = rest.sum(axis=1)
+    A += rest * ((np.pi - A.sum(axis=1)) / np.where(share > 0, share, 1.0))[:, None]
+    none = share <= 0
+    A[none] *= (np.pi / A[none].sum(axis=1))[:, None]
+    out = angles.copy()
+    out[faces] = A
+    return out
 
 
 def better_start(V, disk, u):
     """The angle start (``angle_start``) of a disk whose conformal map u (nv,) complex is bad:
     it flips a face, its boundary does not turn once (it lies over itself), or its max
-    distortion is over BAD; taken where its own max distortion is within BAD and below u's
-    (three_peaks.off and mannequin-devil's 706-face patch, whose conformal maps flip, have
-    angle starts at 6.3 and 5.6: from them auto ended at 2.122 and 3.536 against 2.075 and
-    3.477 from the bent conformal map). None else (u is kept: every other disk keeps its
-    conformal start)."""
+    distortion is over BAD. Taken where u lies over itself without a flip, or its max
+    distortion is below u's; where u flips, only within BAD (three_peaks.off and
+    mannequin-devil's 706-face patch, whose conformal maps flip, have angle starts at 6.3 and
+    5.6: from them auto ended at 2.122 and 3.536 against 2.075 and 3.477 from the bent
+    conformal map). None else (u is kept: every other disk keeps its conformal start)."""
     loop = disk.island.loops[0]
     D0 = _max_distortion(disk, u)
     over = turning(u.take(loop)) != 1
@@ -169,7 +226,9 @@ def better_start(V, disk, u):
     if v is None:
         return None
     D = _max_distortion(disk, v)
-    return v if D <= BAD and D < D0 else None
+    if not np.isfinite(D0):             # the conformal map flips: bent, it may do better
+        return v if D <= BAD else None
+    return v if over or D < D0 else None
 
 
 def _near_crossings(z):
