@@ -35,7 +35,7 @@ from .capped import from_angles
 from .disk_conformal import _far_pair, conformal, qdldl
 from .disk_certificate import measure_disk, turning
 
-__all__ = ["angle_start", "better_start", "linear_abf"]
+__all__ = ["angle_start", "better_start", "linear_abf", "max_distortion"]
 
 CAP = 0.97          # a boundary vertex whose angles reach CAP x 2 pi is held at CAP x 2 pi
 ATTEMPTS = 4        # conformal solves at most (the angles scaled further where the map still wraps)
@@ -209,26 +209,40 @@ def _scaled(angles, scale, tris):
     return out
 
 
-def better_start(V, disk, u):
+def better_start(V, disk, u, C=None, limit=np.inf):
     """The angle start (``angle_start``) of a disk whose conformal map u (nv,) complex is bad:
     it flips a face, its boundary does not turn once (it lies over itself), or its max
-    distortion is over BAD. Taken where u lies over itself without a flip, or its max
-    distortion is below u's; where u flips, only within BAD (three_peaks.off and
-    mannequin-devil's 706-face patch, whose conformal maps flip, have angle starts at 6.3 and
-    5.6: from them auto ended at 2.122 and 3.536 against 2.075 and 3.477 from the bent
-    conformal map). None else (u is kept: every other disk keeps its conformal start)."""
+    distortion is over BAD (over C, for a number C asked).
+
+    For ``bound="auto"`` (C None) it is taken where its max distortion is below u's, or where
+    u lies over itself without a flip and it is within ``limit`` (``bound_limit``: a start
+    over it is not searched from, conic steps are); where u flips, only within BAD.
+    three_peaks.off and mannequin-devil's 706-face patch, whose conformal maps flip, have
+    angle starts at 6.3 and 5.6: from them auto ended at 2.122 and 3.536 against 2.075 and
+    3.477 from the bent conformal map. Patches of cow.off whose conformal maps lie over
+    themselves have angle starts up to 441 that the search unfolds to one island at 2.07-2.47
+    (Linear ABF's first-order angles at the horns' tips), and two at 1,720 and 3,670 that the
+    conic steps after it did not, in 3-4x the time. For a number C it is taken within C
+    (``one_disk.fitted`` certifies it there).
+
+    Returns (the angle start taken or None (u is kept), the angle start found or None, whether
+    u was found bad): every other disk keeps its conformal start."""
     loop = disk.island.loops[0]
-    D0 = _max_distortion(disk, u)
+    D0 = max_distortion(disk, u)
     over = turning(u.take(loop)) != 1
-    if np.isfinite(D0) and D0 <= BAD and not over:
-        return None
+    if np.isfinite(D0) and D0 <= (BAD if C is None else C) and not over:
+        return None, None, False
     v = angle_start(V, disk)
     if v is None:
-        return None
-    D = _max_distortion(disk, v)
-    if not np.isfinite(D0):             # the conformal map flips: bent, it may do better
-        return v if D <= BAD else None
-    return v if over or D < D0 else None
+        return None, None, True
+    D = max_distortion(disk, v)
+    if C is not None:
+        ok = D <= C
+    elif not np.isfinite(D0):           # the conformal map flips: bent, it may do better
+        ok = D <= BAD
+    else:
+        ok = D < D0 or (over and D <= limit)
+    return (v if ok else None), v, True
 
 
 def _near_crossings(z):
@@ -250,7 +264,7 @@ def _near_crossings(z):
     return marked
 
 
-def _max_distortion(disk, u):
+def max_distortion(disk, u):
     """Max conformal distortion (inf where a face flips) of the map u (nv,) complex."""
     uc = u.take(disk.island.tris)
     corner_uv = np.empty(uc.shape + (2,))

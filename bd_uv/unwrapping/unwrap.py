@@ -90,7 +90,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             raise OptionError("frames", "frames='input-uv' needs initial_uv (m,3,2)")
         initial_uv = np.asarray(initial_uv, dtype=np.float64).reshape(m, 3, 2)
     pins = pin_arrays(pin_corners, pin_uv, m)
-    conformal, unfold, one_to_one = None, True, False
+    conformal, unfold, one_to_one, angle = None, True, False, None
     if (seams is None or not len(seams)) and not len(pins[0]) and batched_options(opts) \
             and opts.boundary == "free" and opts.stretch is None \
             and (precision is None or np.dtype(precision) == np.float64):
@@ -115,7 +115,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
         if done is None and opts.bound != "auto" and opts.time_budget is None:
             # a number C: the angle start of a disk whose conformal start is bad, certified
             # at C when within it and one simple boundary (else the general path, as before)
-            v = angle_start.better_start(V, disk, u)
+            v = angle_start.better_start(V, disk, u, float(opts.bound))[0]
             if v is not None:
                 done = one_disk.fitted(F, disk, v, float(opts.bound), t0, ("angle_start",),
                                        " (from its angle start)")[0]
@@ -125,20 +125,22 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             # a conformal start that flips, lies over itself or is far from conformal: the
             # angle start where it is better, its search's least map that does not lie over
             # itself (every other disk keeps its conformal start)
-            v = angle_start.better_start(V, disk, u)
+            v, found, bad = angle_start.better_start(V, disk, u, limit=opts.bound_limit)
             if v is not None:
                 u, one_to_one = v, True
+            elif bad:       # the angle start found (or none), tried before a cut as it is
+                angle = False if found is None else found
         conformal = {0: u}
     return unwrap_islands(V, F, [disk.island] if disk is not None else
                           split_islands(V, F, seams, precision), pins, opts, initial_uv=initial_uv,
                           face_groups=face_groups, progress=progress, cancel=cancel,
                           conformal=conformal, t0=t0, disk=disk, unfold=unfold,
-                          one_to_one=one_to_one)
+                          one_to_one=one_to_one, angle=angle)
 
 
 def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, progress=None,
                    cancel=None, conformal=None, t0=None, disk=None, unfold=True,
-                   one_to_one=False):
+                   one_to_one=False, angle=None):
     """``unwrap`` on islands already found (``mesh.islands``, or charts of a validated mesh).
 
     Parameters
@@ -162,6 +164,9 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
         ``bound="auto"`` its search ends at its least map that does not lie over itself. Where
         an auto map of the disk from its conformal start lies over itself, the angle start is
         tried so (``angle_unfolder``) before the island is cut
+    angle : (nv,) complex128, the disk's angle start where ``angle_start.better_start`` found
+        it and did not take it (False: it found none), for ``angle_unfolder``; None: made there
+        when needed
 
     Returns
     -------
@@ -217,8 +222,9 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
         release_memory(m)                   # the solves' freed heap, before the certificate
         results, face_island, corner_uv, certs = overlap_certificate(
             V, F, results, face_island, corner_uv, pinned, o.overlap == "cut", face_groups,
-            angle_unfolder(disk, V, pins, o, cancel) if o.bound == "auto" and disk is not None
-            and not one_to_one else unfolder(isl, V, pins, o, cancel) if unfold else None)
+            angle_unfolder(disk, V, pins, o, cancel, angle) if o.bound == "auto"
+            and disk is not None and not one_to_one and angle is not False
+            else unfolder(isl, V, pins, o, cancel) if unfold else None)
     if progress is not None:
         progress(1.0, "done")
     return UnwrapResult(corner_uv, face_island, results, time.perf_counter() - t0, o.method,
