@@ -84,13 +84,19 @@ def failed_result(island, error, t0, bound, frames_name="", flags=(), timings=No
                         timings=timings or {})
 
 
-def unfolder(isl, V, pins, options, cancel):
+def unfolder(isl, V, pins, options, cancel, start=None, again=True):
     """For ``overlap_certificate``: for an island whose map within the numeric bound asked lies
     over itself, the search for the smallest C within it (``strategies.minimise``, as
     ``bound="auto"`` with ``bound_limit`` that C) up to its first map that does not (a map of
     lower distortion often unfolds it): it stays one island (flag "unfolded"), certified at
     that C. None where that does not apply: a fixed boundary, a stretch bound, a time budget
-    (conic steps), a method or frames other than the default's."""
+    (conic steps), a method or frames other than the default's.
+
+    ``start``: (index, u) the angle start (``angle_start``) of that island's disk, over C, where
+    its conformal start was bad: first ``bound="auto"``'s search from it, ending at its least
+    map that does not lie over itself (``strategies.least_one_to_one``), taken when within C
+    (flags "angle_start", "unfolded"); else as above, unless ``again`` is False (that search
+    from the conformal start was made: ``disk_auto``)."""
     o = options
     if (o.bound == "auto" or o.boundary != "free" or o.stretch is not None
             or o.time_budget is not None or not batched_options(o)):
@@ -101,8 +107,17 @@ def unfolder(isl, V, pins, options, cancel):
 
     def unfold(index):
         try:
-            res = solve_island(by_index[index], V, pins, auto, None, quiet(cancel), cancel,
-                                unfolding=True)
+            res = None
+            if start is not None and start[0] == index:
+                res = solve_island(by_index[index], V, pins, dataclasses.replace(o, bound="auto"),
+                                   None, quiet(cancel), cancel, start[1], one_to_one=True)
+                if res.status != "certified" or not res.bound_certified <= C:
+                    res = None
+            if res is None and not again:
+                return None
+            if res is None:
+                res = solve_island(by_index[index], V, pins, auto, None, quiet(cancel), cancel,
+                                   unfolding=True)
         except Cancelled:
             raise CancelledError("unwrap cancelled; nothing was changed") from None
         if res.status != "certified" or not res.bound_certified <= C:

@@ -15,6 +15,7 @@ from . import mean_relax
 from .along import golden
 from .bounded import bend, formulate, guaranteed_bound, start_for_solve
 from .searched import search
+from .disk_certificate import simple_ccw_loop
 from .initial import Start
 from .margins import solve_bound
 
@@ -147,8 +148,15 @@ def least_one_to_one(prob, start, report, budget, flags, t0, least):
         kept[-1] = (u, D)
     else:
         kept.append((u, D))
+    loops = prob.island.loops
     for v, Dv in sorted(kept, key=lambda c: c[1]):
-        if prob.may_be_one_to_one(v) and prob.one_to_one(v):
+        if not (np.isfinite(Dv) and prob.may_be_one_to_one(v)):
+            continue
+        # a flip-free map of a disk is one to one where its boundary is a simple polygon wound
+        # counter-clockwise (Lipman 2012, Theorem 5.1): the loop's test alone
+        # (``disk_certificate.simple_ccw_loop``), not the island's whole overlap test
+        if (simple_ccw_loop(np.stack([v.real, v.imag], axis=1).take(loops[0], axis=0))
+                if len(loops) == 1 else prob.one_to_one(v)):
             return v, Dv
     return u, D
 

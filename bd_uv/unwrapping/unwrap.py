@@ -115,10 +115,13 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
         if done is None and opts.bound != "auto" and opts.time_budget is None:
             # a number C: the angle start of a disk whose conformal start is bad, certified
             # at C when within it and one simple boundary (else the general path, as before)
-            v = angle_start.better_start(V, disk, u, float(opts.bound))[0]
+            v, found, _ = angle_start.better_start(V, disk, u, float(opts.bound))
             if v is not None:
                 done = one_disk.fitted(F, disk, v, float(opts.bound), t0, ("angle_start",),
                                        " (from its angle start)")[0]
+            if (done is None and found is not None
+                    and angle_start.max_distortion(disk, found) <= opts.bound_limit):
+                angle = found   # the unfold of its map before a cut starts from it
         if done is not None:
             return done
         if opts.bound == "auto" and opts.time_budget is None:
@@ -165,8 +168,8 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
         an auto map of the disk from its conformal start lies over itself, the angle start is
         tried so (``angle_unfolder``) before the island is cut
     angle : (nv,) complex128, the disk's angle start where ``angle_start.better_start`` found
-        it and did not take it (False: it found none), for ``angle_unfolder``; None: made there
-        when needed
+        it and did not take it (False: it found none), for ``angle_unfolder`` (``unfolder`` at a
+        number C); None: made there when needed (at a number C: not tried)
 
     Returns
     -------
@@ -174,6 +177,7 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
     """
     t0 = time.perf_counter() if t0 is None else t0
     m = len(F)
+    start = None if angle is None or angle is False else (disk.island.index, angle)
     total = float(m)
     done = 0.0
     results = []
@@ -224,7 +228,8 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
             V, F, results, face_island, corner_uv, pinned, o.overlap == "cut", face_groups,
             angle_unfolder(disk, V, pins, o, cancel, angle) if o.bound == "auto"
             and disk is not None and not one_to_one and angle is not False
-            else unfolder(isl, V, pins, o, cancel) if unfold else None)
+            else unfolder(isl, V, pins, o, cancel, start, unfold) if unfold or start
+            else None)
     if progress is not None:
         progress(1.0, "done")
     return UnwrapResult(corner_uv, face_island, results, time.perf_counter() - t0, o.method,

@@ -67,12 +67,23 @@ def test_a_disk_whose_conformal_start_overlaps_is_one_certified_island_at_auto(s
     assert np.array_equal(bd_uv.unwrap(V, F, bound="auto").corner_uv, res.corner_uv)
 
 
-def test_a_number_c_takes_the_angle_start_where_it_fits():
-    V, F = rings(*load_off("cow.off"), *COW[0])
+# (seed, faces, flag): at C = 5, the angle start certified as it is (within 5; main cut this
+# disk into 2 pieces), or over 5 (max 25.9), auto's search from it unfolded within 5 (main: 4)
+AT_FIVE = [(5243, 400, "initial"), (2628, 400, "unfolded")]
+
+
+@pytest.mark.parametrize("seed, faces, way", AT_FIVE)
+def test_a_number_c_takes_the_angle_start_where_it_fits_or_unfolds_from_it(seed, faces, way):
+    V, F = rings(*load_off("cow.off"), seed, faces)
     disk = one_disk.find(V, F)
     res = bd_uv.unwrap(V, F, bound=5.0)
     r, D = _one_certified_island(V, F, res, disk, 5.0)
     assert r.bound_certified == 5.0 and D.max() < 5.0
+    assert ("unfolded" in r.flags) == (way == "unfolded")
+    if way == "unfolded":
+        v = angle_start.angle_start(V, disk)
+        Dv, _ = distortion_and_flips(V, F, np.stack([v.real, v.imag], 1)[disk.island.tris])
+        assert Dv.max() > 5.0
 
 
 def test_the_angle_start_is_flip_free_turns_once_and_nearer_conformal_than_lscm():
