@@ -2,7 +2,8 @@
 
 Per island (Lipman 2012, sections 4 and 6; issue 9's "never worse than its start"):
 1. a start map (``initial.start_map``): the free-boundary conformal map when it has no flipped
-   face, else a flip-free map;
+   face, else a flip-free map; on one clean disk whose conformal map flips, lies over itself or
+   is far from conformal, its angle start (``angle_start``, Linear ABF) where that is better;
 2. a start within the bound is returned as it is; otherwise it is bent only where the bound demands
    (``bounded.bounded``), or C is minimised (``strategies.minimise``);
 3. every result is certified from its final UVs: no flipped face and max distortion <= C.
