@@ -44,6 +44,12 @@ NEAR = 6            # sides of a boundary at most this far apart are checked for
 # A conformal start whose max distortion is over this is bad (``target_watch.EFFORT_START``'s
 # value: the bound search's budget does not apply from there either)
 BAD = 2.0
+# Up to this many faces a bad conformal start is replaced (``better_start``; above, the angle
+# start is made only before a cut, ``island_solve.angle_unfolder``): on lion-head.off (16.7k
+# faces, conformal max 2.67, angle start 2.93: not taken) and mannequin-devil.off (25.9k, its
+# conformal map and its angle start flip) the angle start cost 120 and 220 ms of CPU for
+# nothing (auto 0.32 -> 0.45 s, 0.49 -> 0.71 s; C = 5 0.23 -> 0.41 s)
+ANGLE_FACES = 5000
 
 
 def linear_abf(disk, caps):
@@ -225,8 +231,12 @@ def better_start(V, disk, u, C=None, limit=np.inf):
     conic steps after it did not, in 3-4x the time. For a number C it is taken within C
     (``one_disk.fitted`` certifies it there).
 
+    Not asked above ANGLE_FACES faces (None, None, False).
+
     Returns (the angle start taken or None (u is kept), the angle start found or None, whether
     u was found bad): every other disk keeps its conformal start."""
+    if len(disk.island.tris) > ANGLE_FACES:
+        return None, None, False
     loop = disk.island.loops[0]
     D0 = max_distortion(disk, u)
     over = turning(u.take(loop)) != 1
