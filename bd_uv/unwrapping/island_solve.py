@@ -13,15 +13,20 @@ from . import stretch as stretch_search
 from .conic_solves import Cancelled
 from .finish import finish
 from .fixed_boundary import FRAMES_NAME, fixed_boundary_island, with_premises
+from .angle_start import angle_start, max_distortion
 from .initial import start_map
 from .problem import IslandProblem
 from .results import IslandResult
 
-__all__ = ["batched_options", "failed_result", "quiet", "solve_island", "unfolder"]
+__all__ = ["angle_unfolder", "batched_options", "failed_result", "quiet", "solve_island",
+           "unfolder"]
 
 
 def solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=None,
-                  faces_3d=None, ranks=None, unfolding=False):
+                  faces_3d=None, ranks=None, unfolding=False, one_to_one=False):
+    """One island's certified map (see the module's docstring). ``one_to_one``: with
+    ``bound="auto"``, the least C among the search's maps that do not lie over themselves
+    (``strategies.least_one_to_one``: ``lscm`` is an angle start, ``angle_start``)."""
     t0 = time.perf_counter()
     o = options
     method, bound, boundary, stretch = o.method, o.bound, o.boundary, o.stretch
@@ -51,14 +56,14 @@ def solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=None
     except BDError as exc:
         return failed_result(island, SolverError(f"island {island.index}: {exc}", island.index), t0,
                        bound)
-    flags = []
+    flags = ["angle_start"] if one_to_one else []
     try:
         if bound == "auto" and stretch is not None:
             u, C, name = stretch_search.minimise_stretch(prob, start, stretch, o.time_budget,
                                                          flags, report, t0)
         elif bound == "auto":
             u, C, name = strategies.minimise(prob, start, o.bound_limit, o.time_budget, flags,
-                                             report, t0)
+                                             report, t0, one_to_one)
         elif stretch is not None:
             u, C, name = stretch_search.bounded_stretch(prob, start, float(bound), stretch,
                                                         report, flags)
@@ -79,13 +84,19 @@ def failed_result(island, error, t0, bound, frames_name="", flags=(), timings=No
                         timings=timings or {})
 
 
-def unfolder(isl, V, pins, options, cancel):
+def unfolder(isl, V, pins, options, cancel, start=None, again=True):
     """For ``overlap_certificate``: for an island whose map within the numeric bound asked lies
     over itself, the search for the smallest C within it (``strategies.minimise``, as
     ``bound="auto"`` with ``bound_limit`` that C) up to its first map that does not (a map of
     lower distortion often unfolds it): it stays one island (flag "unfolded"), certified at
     that C. None where that does not apply: a fixed boundary, a stretch bound, a time budget
-    (conic steps), a method or frames other than the default's."""
+    (conic steps), a method or frames other than the default's.
+
+    ``start``: (index, u) the angle start (``angle_start``) of that island's disk, over C, where
+    its conformal start was bad: first ``bound="auto"``'s search from it, ending at its least
+    map that does not lie over itself (``strategies.least_one_to_one``), taken when within C
+    (flags "angle_start", "unfolded"); else as above, unless ``again`` is False (that search
+    from the conformal start was made: ``disk_auto``)."""
     o = options
     if (o.bound == "auto" or o.boundary != "free" or o.stretch is not None
             or o.time_budget is not None or not batched_options(o)):
@@ -96,8 +107,17 @@ def unfolder(isl, V, pins, options, cancel):
 
     def unfold(index):
         try:
-            res = solve_island(by_index[index], V, pins, auto, None, quiet(cancel), cancel,
-                                unfolding=True)
+            res = None
+            if start is not None and start[0] == index:
+                res = solve_island(by_index[index], V, pins, dataclasses.replace(o, bound="auto"),
+                                   None, quiet(cancel), cancel, start[1], one_to_one=True)
+                if res.status != "certified" or not res.bound_certified <= C:
+                    res = None
+            if res is None and not again:
+                return None
+            if res is None:
+                res = solve_island(by_index[index], V, pins, auto, None, quiet(cancel), cancel,
+                                   unfolding=True)
         except Cancelled:
             raise CancelledError("unwrap cancelled; nothing was changed") from None
         if res.status != "certified" or not res.bound_certified <= C:
@@ -108,6 +128,30 @@ def unfolder(isl, V, pins, options, cancel):
         return dataclasses.replace(res, bound_requested=o.bound, bound_certified=C,
                                    flags=res.flags + ("unfolded",),
                                    message=f"{res.message} (unfolded: certified at C = {C:.4g})")
+    return unfold
+
+
+def angle_unfolder(disk, V, pins, options, cancel, start=None):
+    """For ``overlap_certificate``: for a ``one_disk.Disk`` whose ``bound="auto"`` map from its
+    conformal start lies over itself, the same search from its angle start
+    (``angle_start.angle_start``), ending at its least map that does not
+    (``strategies.least_one_to_one``); None where there is no angle start, its max distortion
+    is over ``bound_limit`` (conic steps would follow, not the search) or it does not certify
+    (the island is cut then). ``start``: the angle start where it is known. Not under a time
+    budget."""
+    if options.time_budget is not None or options.stretch is not None:
+        return None
+
+    def unfold(index):
+        u = angle_start(V, disk) if start is None else start
+        if u is None or not max_distortion(disk, u) <= options.bound_limit:
+            return None
+        try:
+            res = solve_island(disk.island, V, pins, options, None, quiet(cancel), cancel, u,
+                               (disk.G, disk.area), disk.ranks, one_to_one=True)
+        except Cancelled:
+            raise CancelledError("unwrap cancelled; nothing was changed") from None
+        return res if res.status == "certified" else None
     return unfold
 
 

@@ -15,6 +15,7 @@ from . import mean_relax
 from .along import golden
 from .bounded import bend, formulate, guaranteed_bound, start_for_solve
 from .searched import search
+from .disk_certificate import simple_ccw_loop
 from .initial import Start
 from .margins import solve_bound
 
@@ -35,7 +36,7 @@ AUTO_MEAN_RISE = 0.02
 LINE_SEARCH = 14        # distortion evaluations along each Dinkelbach step (``best_along``)
 
 
-def minimise(prob, start, limit, budget, flags, report, t0):
+def minimise(prob, start, limit, budget, flags, report, t0, one_to_one=False):
     """Algorithm 1's goal, the smallest certified C, without a conic solve where a flip-free map
     is at hand (issue 21).
 
@@ -54,6 +55,8 @@ def minimise(prob, start, limit, budget, flags, report, t0):
       when they raised the mean distortion by more than AUTO_MEAN_RISE, one energy solve at the
       certified C lowers it (``lower_mean``).
     The budget also bounds the search (no new target after it; at least one is tried).
+    ``one_to_one``: the least C among the maps that do not lie over themselves
+    (``least_one_to_one``: an angle start, ``angle_start``, whose search's map may).
     Returns (u, smallest certified C, name of the start).
     """
     if not np.isfinite(start.D):  # a flip-free start bounds C* from above
@@ -66,8 +69,9 @@ def minimise(prob, start, limit, budget, flags, report, t0):
     if np.isfinite(start.D) and start.D <= limit:
         best = (start.u, start.D)   # the start is certified at its own distortion
         # the least C of an unpinned island with no time budget: ``one_disk``'s, bounded alike
-        u, D = search(prob, start.u, report, budget, flags, t0,
-                      least=not steps and not len(prob.pin_idx) and prob.enough is None)
+        least = not steps and not len(prob.pin_idx) and prob.enough is None
+        u, D = (least_one_to_one(prob, start, report, budget, flags, t0, least) if one_to_one
+                else search(prob, start.u, report, budget, flags, t0, least=least))
         if D < best[1]:
             ok, D = prob.check(u, D)    # the map's max distortion, measured anew
             if ok:
@@ -124,6 +128,37 @@ def minimise(prob, start, limit, budget, flags, report, t0):
     elif projected is not None and best[0] is projected[0]:
         flags.append("projected")    # no conic solve bettered the search
     return best + (start.name,)
+
+
+def least_one_to_one(prob, start, report, budget, flags, t0, least):
+    """``search`` from a flip-free start, ending at the least max distortion among the start
+    and the search's targets' best maps that lays the island out without overlapping itself
+    (``IslandProblem.one_to_one``). Each target's best is kept at its end (``enough``, never
+    accepting); after the search they are asked from the least up (a map whose boundary does
+    not turn once refused at once, ``may_be_one_to_one``), so a search whose own map does not
+    overlap costs one test. The search's own map where none passes (the overlap repair cuts
+    it then). Returns (u, its max distortion)."""
+    kept = [(start.u, start.D)]
+
+    def record(v):                  # never ends the search
+        kept.append((v, prob.distortion(v)))
+        return False
+    u, D = search(prob, start.u, report, budget, flags, t0, enough=record, least=least)
+    if np.array_equal(kept[-1][0], u):     # the search's map is its last target's best
+        kept[-1] = (u, D)
+    else:
+        kept.append((u, D))
+    loops = prob.island.loops
+    for v, Dv in sorted(kept, key=lambda c: c[1]):
+        if not (np.isfinite(Dv) and prob.may_be_one_to_one(v)):
+            continue
+        # a flip-free map of a disk is one to one where its boundary is a simple polygon wound
+        # counter-clockwise (Lipman 2012, Theorem 5.1): the loop's test alone
+        # (``disk_certificate.simple_ccw_loop``), not the island's whole overlap test
+        if (simple_ccw_loop(np.stack([v.real, v.imag], axis=1).take(loops[0], axis=0))
+                if len(loops) == 1 else prob.one_to_one(v)):
+            return v, Dv
+    return u, D
 
 
 def lower_mean(prob, best, budget, flags, report, t0):

@@ -2,7 +2,8 @@
 
 Per island (Lipman 2012, sections 4 and 6; issue 9's "never worse than its start"):
 1. a start map (``initial.start_map``): the free-boundary conformal map when it has no flipped
-   face, else a flip-free map;
+   face, else a flip-free map; on one clean disk whose conformal map flips, lies over itself or
+   is far from conformal, its angle start (``angle_start``, Linear ABF) where that is better;
 2. a start within the bound is returned as it is; otherwise it is bent only where the bound demands
    (``bounded.bounded``), or C is minimised (``strategies.minimise``);
 3. every result is certified from its final UVs: no flipped face and max distortion <= C.
@@ -21,9 +22,9 @@ from ..errors import CancelledError, InvalidMeshError, OptionError
 from ..mesh import as_indices, as_reals, check_arrays, checked_islands as split_islands
 from ..options import unwrap_options
 from ..trim import release_memory
-from . import capped, disk_auto, one_disk
+from . import angle_start, capped, disk_auto, one_disk
 from .batched import conformal_islands
-from .island_solve import batched_options, solve_island, unfolder
+from .island_solve import angle_unfolder, batched_options, solve_island, unfolder
 from .overlap_certificate import overlap_certificate
 from .conic_solves import Cancelled
 from .results import UnwrapResult
@@ -90,7 +91,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             raise OptionError("frames", "frames='input-uv' needs initial_uv (m,3,2)")
         initial_uv = np.asarray(initial_uv, dtype=np.float64).reshape(m, 3, 2)
     pins = pin_arrays(pin_corners, pin_uv, m)
-    conformal, unfold = None, True
+    conformal, unfold, one_to_one, angle = None, True, False, None
     if (seams is None or not len(seams)) and not len(pins[0]) and batched_options(opts) \
             and opts.boundary == "free" and opts.stretch is None \
             and (precision is None or np.dtype(precision) == np.float64):
@@ -112,17 +113,38 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             done = disk_auto.minimise_disk(
                 V, disk, u, opts.bound_limit if opts.bound == "auto" else float(opts.bound), t0,
                 progress, cancel, opts.bound)
+        if done is None and opts.bound != "auto" and opts.time_budget is None:
+            # a number C: the angle start of a disk whose conformal start is bad, certified
+            # at C when within it and one simple boundary (else the general path, as before)
+            v, found, _ = angle_start.better_start(V, disk, u, float(opts.bound))
+            if v is not None:
+                done = one_disk.fitted(F, disk, v, float(opts.bound), t0, ("angle_start",),
+                                       " (from its angle start)")[0]
+            if (done is None and found is not None
+                    and angle_start.max_distortion(disk, found) <= opts.bound_limit):
+                angle = found   # the unfold of its map before a cut starts from it
         if done is not None:
             return done
+        if opts.bound == "auto" and opts.time_budget is None:
+            # a conformal start that flips, lies over itself or is far from conformal: the
+            # angle start where it is better, its search's least map that does not lie over
+            # itself (every other disk keeps its conformal start)
+            v, found, bad = angle_start.better_start(V, disk, u, limit=opts.bound_limit)
+            if v is not None:
+                u, one_to_one = v, True
+            elif bad:       # the angle start found (or none), tried before a cut as it is
+                angle = False if found is None else found
         conformal = {0: u}
     return unwrap_islands(V, F, [disk.island] if disk is not None else
                           split_islands(V, F, seams, precision), pins, opts, initial_uv=initial_uv,
                           face_groups=face_groups, progress=progress, cancel=cancel,
-                          conformal=conformal, t0=t0, disk=disk, unfold=unfold)
+                          conformal=conformal, t0=t0, disk=disk, unfold=unfold,
+                          one_to_one=one_to_one, angle=angle)
 
 
 def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, progress=None,
-                   cancel=None, conformal=None, t0=None, disk=None, unfold=True):
+                   cancel=None, conformal=None, t0=None, disk=None, unfold=True,
+                   one_to_one=False, angle=None):
     """``unwrap`` on islands already found (``mesh.islands``, or charts of a validated mesh).
 
     Parameters
@@ -142,6 +164,13 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
     unfold : bool, an unpinned island certified at a numeric C whose UVs lie over themselves
         gets the smallest C within it (``unfolder``) before it is cut; False where that search
         was already made (``disk_auto``)
+    one_to_one : bool, ``conformal`` holds the disk's angle start (``angle_start``): with
+        ``bound="auto"`` its search ends at its least map that does not lie over itself. Where
+        an auto map of the disk from its conformal start lies over itself, the angle start is
+        tried so (``angle_unfolder``) before the island is cut
+    angle : (nv,) complex128, the disk's angle start where ``angle_start.better_start`` found
+        it and did not take it (False: it found none), for ``angle_unfolder`` (``unfolder`` at a
+        number C); None: made there when needed (at a number C: not tried)
 
     Returns
     -------
@@ -149,6 +178,7 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
     """
     t0 = time.perf_counter() if t0 is None else t0
     m = len(F)
+    start = None if angle is None or angle is False else (disk.island.index, angle)
     total = float(m)
     done = 0.0
     results = []
@@ -177,7 +207,8 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
                 res = solve_island(island, V, pins, o, initial_uv, report, cancel,
                                     starts.get(island.index),
                                     None if disk is None else (disk.G, disk.area),
-                                    None if disk is None or o.bound != "auto" else disk.ranks)
+                                    None if disk is None or o.bound != "auto" else disk.ranks,
+                                    one_to_one=one_to_one)
         except Cancelled:
             raise CancelledError("unwrap cancelled; nothing was changed") from None
         if res.status == "certified":
@@ -196,7 +227,10 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
         release_memory(m)                   # the solves' freed heap, before the certificate
         results, face_island, corner_uv, certs = overlap_certificate(
             V, F, results, face_island, corner_uv, pinned, o.overlap == "cut", face_groups,
-            unfolder(isl, V, pins, o, cancel) if unfold else None)
+            angle_unfolder(disk, V, pins, o, cancel, angle) if o.bound == "auto"
+            and disk is not None and not one_to_one and angle is not False
+            else unfolder(isl, V, pins, o, cancel, start, unfold) if unfold or start
+            else None)
     if progress is not None:
         progress(1.0, "done")
     return UnwrapResult(corner_uv, face_island, results, time.perf_counter() - t0, o.method,

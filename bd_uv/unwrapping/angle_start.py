@@ -1,0 +1,282 @@
+"""An angle-based start for a disk whose conformal map is bad (issue 21 item 1: auto on disks
+whose conformal start flips or lies over itself).
+
+The free-boundary conformal map (LSCM, two far vertices pinned) can flip faces or lie over
+itself on disks with long curved parts and saw-toothed boundaries: on camel's 1,324-face patch,
+homer's 3,521-face patch and libigl elephant's 2,004-face patch its max distortion is inf (a
+flipped face), inf and 19.3 (Blender's LSCM: 6.6, 56, 104), and the bound search from it ends in
+a map that lies over itself at C 2.8-3.2, which the overlap repair cuts into 14-19 pieces.
+Blender's ABF lays the same disks out at 1.28, 1.63 and 1.20.
+
+Here the faces' angles are solved first, as Linear ABF does (Zayer, Levy and Seidel 2007): the
+least change ``e`` of the 3D angles (weighted by ``1 / beta^2``, ABF's weights; the angles at an
+interior vertex first scaled to add up to 2 pi) such that, to first order, every triangle's
+angles add up to pi, every interior vertex's to 2 pi, and the law of sines closes round every
+interior vertex (the wheel condition). One sparse symmetric solve of the constraints'
+normal equations ``(A W^-1 A^T) lam = r``, ``e = W^-1 A^T lam``. To that, at every boundary vertex
+whose angles add up to CAP x 2 pi or more (a saddle at the boundary, or a tooth of it, round which
+any map close to conformal wraps), their sum is asked to be CAP x 2 pi: the UV boundary then
+turns less than a full turn there. Each face is rebuilt from its angles at its own area
+(``capped.from_angles``) and the conformal map of these shapes is solved (``one_disk.conformal``:
+the same system, pins and elimination order as the conformal map). Where the map still wraps
+round a boundary vertex (the solve is first order), that vertex's sum is asked lower, by the
+share it missed, up to ATTEMPTS solves.
+
+On the five disks above and two more (bunny's 1,595-face and ChineseDragon's 1,577-face
+patches) its max distortion is 1.21-1.53 where Blender ABF's is 1.20-1.63 (3.76 against 4.13 on
+ChineseDragon), flip-free, in one solve of the angles and one conformal solve (7-22 ms).
+"""
+import numpy as np
+import scipy.sparse as sp
+
+from ..geometry import corner_angles, gradient_operators
+from ..solvers.lscm import _lscm_system, face_geometry_of, spd_solver
+from .capped import from_angles
+from .disk_conformal import _far_pair, conformal, qdldl
+from .disk_certificate import measure_disk, turning
+
+__all__ = ["angle_start", "better_start", "linear_abf", "max_distortion"]
+
+CAP = 0.97          # a boundary vertex whose angles reach CAP x 2 pi is held at CAP x 2 pi
+ATTEMPTS = 4        # conformal solves at most (the angles scaled further where the map still wraps)
+LEAST_ANGLE = 1e-3  # the solved angles kept above this (a first-order step may overshoot)
+NEAR = 6            # sides of a boundary at most this far apart are checked for a crossing
+# A conformal start whose max distortion is over this is bad (``target_watch.EFFORT_START``'s
+# value: the bound search's budget does not apply from there either)
+BAD = 2.0
+# Up to this many faces a bad conformal start is replaced (``better_start``; above, the angle
+# start is made only before a cut, ``island_solve.angle_unfolder``): on lion-head.off (16.7k
+# faces, conformal max 2.67, angle start 2.93: not taken) and mannequin-devil.off (25.9k, its
+# conformal map and its angle start flip) the angle start cost 120 and 220 ms of CPU for
+# nothing (auto 0.32 -> 0.45 s, 0.49 -> 0.71 s; C = 5 0.23 -> 0.41 s)
+ANGLE_FACES = 5000
+
+
+def linear_abf(disk, caps):
+    """Each face's corner angles (m,3), Linear ABF's solve of the disk's angles (see the
+    module's docstring) with the angle sums ``caps`` (nv,) float64 (NaN: free) asked at
+    boundary vertices; each row adds up to pi. None where the solve fails."""
+    isl = disk.island
+    tris, nv = isl.tris, len(isl.vertices)
+    m = len(tris)
+    beta = np.abs(corner_angles(disk.Z))
+    onb = np.zeros(nv, dtype=bool)
+    onb[isl.loops[0]] = True
+    flat = tris.ravel()
+    vsum = np.bincount(flat, beta.ravel(), nv)
+    inner = ~onb
+    beta = beta * np.where(inner, 2.0 * np.pi / vsum, 1.0).take(tris)
+    wi = (beta * beta).ravel()                  # W^-1: ABF's weights are 1 / beta^2
+    corner = np.arange(3 * m).reshape(m, 3)
+    iv = inner.nonzero()[0]
+    vid = np.full(nv, -1, dtype=np.int64)
+    vid[iv] = np.arange(len(iv))
+    held = (onb & np.isfinite(caps)).nonzero()[0]
+    hid = np.full(nv, -1, dtype=np.int64)
+    hid[held] = np.arange(len(held))
+    ni, nh = len(iv), len(held)
+    # the triangles' rows are eliminated at once (their block of A W^-1 A^T is diagonal: each
+    # holds its own three corners): the system left is the vertices' and wheels' rows R,
+    # (R W^-1 R^T - R W^-1 T^T D^-1 T W^-1 R^T) lam_R = r_R - R W^-1 T^T D^-1 r_T
+    rows, cols, vals = [], [], []
+    at = inner.take(flat).nonzero()[0]          # corners at interior vertices
+    rows.append(vid.take(flat.take(at)))
+    cols.append(at)
+    vals.append(np.ones(len(at)))
+    cot = 1.0 / np.tan(beta)
+    logsin = np.log(np.sin(beta))
+    wheel = np.zeros(nv)
+    for k in range(3):
+        f = inner.take(tris[:, k]).nonzero()[0]
+        r = ni + vid.take(tris.take(f * 3 + k))
+        k1, k2 = (k + 1) % 3, (k + 2) % 3
+        rows += [r, r]
+        cols += [corner[f, k2], corner[f, k1]]
+        vals += [cot[f, k2], -cot[f, k1]]
+        np.add.at(wheel, tris[:, k], logsin[:, k2] - logsin[:, k1])
+    at = (hid.take(flat) >= 0).nonzero()[0]     # corners at held boundary vertices
+    rows.append(2 * ni + hid.take(flat.take(at)))
+    cols.append(at)
+    vals.append(np.ones(len(at)))
+    n = 2 * ni + nh
+    R = sp.csr_array((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                     shape=(n, 3 * m))
+    T = sp.csr_array((np.ones(3 * m), (np.repeat(np.arange(m), 3), corner.ravel())),
+                     shape=(m, 3 * m))
+    dinv = 1.0 / wi.reshape(m, 3).sum(axis=1)
+    RWT = (R * wi) @ T.T                        # (n, m)
+    bsum = np.bincount(flat, beta.ravel(), nv)
+    r_t = np.pi - beta.sum(axis=1)
+    rhs = (np.concatenate([2.0 * np.pi - bsum.take(iv), -wheel.take(iv),
+                           caps.take(held) - bsum.take(held)]) - RWT @ (dinv * r_t))
+    M = sp.triu((R * wi) @ R.T - (RWT * dinv) @ RWT.T, format="csc")
+    try:
+        lam_r = spd_solver(M, upper=True)(rhs)
+    except (ValueError, RuntimeError, np.linalg.LinAlgError):
+        return None
+    lam_t = dinv * (r_t - RWT.T @ lam_r)
+    angles = (beta.ravel() + wi * (R.T @ lam_r + T.T @ lam_t)).reshape(m, 3)
+    if not np.isfinite(angles).all():
+        return None
+    angles = np.maximum(angles, LEAST_ANGLE)
+    return angles * (np.pi / angles.sum(axis=1))[:, None]
+
+
+def angle_start(V, disk):
+    """The conformal map (nv,) complex128 of the disk's faces rebuilt from Linear ABF's angles
+    (``linear_abf``), its boundary held below a full turn round every boundary vertex; None
+    where no solve of ATTEMPTS gives a flip-free map whose boundary turns once."""
+    isl = disk.island
+    tris, loop, nv = isl.tris, isl.loops[0], len(isl.vertices)
+    flat = tris.ravel()
+    full = 2.0 * np.pi
+    theta3 = np.bincount(flat, np.abs(corner_angles(disk.Z)).ravel(), nv)
+    caps = np.full(nv, np.nan)
+    caps[loop] = np.where(theta3.take(loop) >= CAP * full, CAP * full, np.nan)
+    angles = linear_abf(disk, caps)
+    if angles is None:
+        return None
+    scale = np.ones(nv)
+    solve = _Conformal(V, disk)
+    for _ in range(ATTEMPTS):
+        Z = from_angles(_scaled(angles, scale, tris), disk.area)
+        u = solve(Z, gradient_operators(Z))
+        a = corner_angles(u.take(tris))
+        if not (np.isfinite(u).all() and (a > 0.0).all()):
+            return None
+        theta = np.bincount(flat, a.ravel(), nv).take(loop)
+        over = theta >= full
+        if not over.any():
+            if turning(u.take(loop)) != 1:
+                return None                     # lies over itself elsewhere than round a vertex
+            # a tooth of the boundary folded onto its neighbours: its reflex vertices held lower
+            over = _near_crossings(u.take(loop)) & (theta > np.pi)
+            if not over.any():
+                return u
+        # the angles there scaled down by the share the map missed (its sum over CAP x 2 pi),
+        # the solve of the angles not made again (a conformal solve each)
+        v = loop[over]
+        scale[v] *= np.minimum(CAP * full / theta[over], CAP)
+    return None
+
+
+class _Conformal:
+    """``disk_conformal.conformal`` of the disk's faces given other shapes, again and again:
+    where qdldl orders the system itself (no vertex ranks: over
+    ``ordered_ldl.RANKED_VERTICES``), its factorisation is kept and refilled (``update``: the
+    system's pattern is the disk's, whatever the shapes) instead of ordered anew (homer's
+    3,521-face patch: ~7 ms a solve, most of it the order)."""
+
+    def __init__(self, V, disk):
+        self.V, self.disk, self.solver = V, disk, None
+
+    def __call__(self, Z, G):
+        disk = self.disk
+        if disk.ranks is not None or qdldl is None:
+            return conformal(self.V, disk, Z, G, disk.ranks)
+        isl = disk.island
+        geom = face_geometry_of(Z, G, disk.area)
+        idx = _far_pair(self.V.take(isl.vertices, axis=0), isl.loops[0])
+        A, rhs, u, free = _lscm_system(geom.cbw(), geom.cb, isl.tris, len(isl.vertices), idx,
+                                       np.array([0.0, 1.0], complex),
+                                       (disk.twins[0], disk.twins[1], disk.loop), triplets=True)
+        M = A.csc_arrays()
+        try:
+            if self.solver is None:
+                self.solver = qdldl.Solver(M, upper=True)
+            else:
+                self.solver.update(M, upper=True)
+        except (ValueError, TypeError, AttributeError):
+            self.solver = None
+            return conformal(self.V, disk, Z, G, None)
+        x = self.solver.solve(rhs)
+        nf = len(free)
+        u[free] = x[:nf] + 1j * x[nf:]
+        return u
+
+
+def _scaled(angles, scale, tris):
+    """The corner angles (m,3) with those at each vertex scaled by ``scale`` (nv,) (where
+    below 1), the rest of each face's pi given to its other corners pro rata (``capped``'s
+    rule: a face whose corners are all scaled is scaled back to pi)."""
+    s = scale.take(tris)
+    faces = (s < 1.0).any(axis=1).nonzero()[0]
+    if not len(faces):
+        return angles
+    s = s[faces]
+    A = angles[faces] * s
+    rest = np.where(s < 1.0, 0.0, A)
+    share = rest.sum(axis=1)
+    A += rest * ((np.pi - A.sum(axis=1)) / np.where(share > 0, share, 1.0))[:, None]
+    none = share <= 0
+    A[none] *= (np.pi / A[none].sum(axis=1))[:, None]
+    out = angles.copy()
+    out[faces] = A
+    return out
+
+
+def better_start(V, disk, u, C=None, limit=np.inf):
+    """The angle start (``angle_start``) of a disk whose conformal map u (nv,) complex is bad:
+    it flips a face, its boundary does not turn once (it lies over itself), or its max
+    distortion is over BAD (over C, for a number C asked).
+
+    For ``bound="auto"`` (C None) it is taken where its max distortion is below u's, or where
+    u lies over itself without a flip and it is within ``limit`` (``bound_limit``: a start
+    over it is not searched from, conic steps are); where u flips, only within BAD.
+    three_peaks.off and mannequin-devil's 706-face patch, whose conformal maps flip, have
+    angle starts at 6.3 and 5.6: from them auto ended at 2.122 and 3.536 against 2.075 and
+    3.477 from the bent conformal map. Patches of cow.off whose conformal maps lie over
+    themselves have angle starts up to 441 that the search unfolds to one island at 2.07-2.47
+    (Linear ABF's first-order angles at the horns' tips), and two at 1,720 and 3,670 that the
+    conic steps after it did not, in 3-4x the time. For a number C it is taken within C
+    (``one_disk.fitted`` certifies it there).
+
+    Not asked above ANGLE_FACES faces (None, None, False).
+
+    Returns (the angle start taken or None (u is kept), the angle start found or None, whether
+    u was found bad): every other disk keeps its conformal start."""
+    if len(disk.island.tris) > ANGLE_FACES:
+        return None, None, False
+    loop = disk.island.loops[0]
+    D0 = max_distortion(disk, u)
+    over = turning(u.take(loop)) != 1
+    if np.isfinite(D0) and D0 <= (BAD if C is None else C) and not over:
+        return None, None, False
+    v = angle_start(V, disk)
+    if v is None:
+        return None, None, True
+    D = max_distortion(disk, v)
+    if C is not None:
+        ok = D <= C
+    elif not np.isfinite(D0):           # the conformal map flips: bent, it may do better
+        ok = D <= BAD
+    else:
+        ok = D < D0 or (over and D <= limit)
+    return (v if ok else None), v, True
+
+
+def _near_crossings(z):
+    """(b,) bool, the vertices of the closed polygon z (b,) complex that lie between two of its
+    sides at most NEAR sides apart that cross (a tooth of a UV boundary folded over)."""
+    b = len(z)
+    p, q = z, np.roll(z, -1)
+    marked = np.zeros(b, dtype=bool)
+
+    def side(a, c, d):
+        w = (c - a).conj() * (d - a)
+        return w.imag
+    for k in range(2, min(NEAR, b - 2) + 1):
+        p2, q2 = np.roll(p, -k), np.roll(q, -k)
+        cross = ((side(p, q, p2) * side(p, q, q2) < 0.0)
+                 & (side(p2, q2, p) * side(p2, q2, q) < 0.0))
+        for j in range(1, k + 1):           # side i runs from vertex i to i + 1
+            marked |= np.roll(cross, j)
+    return marked
+
+
+def max_distortion(disk, u):
+    """Max conformal distortion (inf where a face flips) of the map u (nv,) complex."""
+    uc = u.take(disk.island.tris)
+    corner_uv = np.empty(uc.shape + (2,))
+    corner_uv[..., 0], corner_uv[..., 1] = uc.real, uc.imag
+    return float(measure_disk(corner_uv, disk.G)[0].max())

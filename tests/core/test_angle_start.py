@@ -1,0 +1,120 @@
+"""A disk whose conformal start lies over itself or flips is unwrapped from its angle start
+(``unwrapping.angle_start``: Linear ABF's angles, the boundary held below a full turn round each
+vertex) as one certified island, not cut (issue 21 item 1).
+
+Checked from the stored UVs alone, independently of the code under test: each face's distortion
+and orientation from its Jacobian in its own 3D frame (numpy's SVD,
+``unwrap_contract.distortion_and_flips``), as float64 and as float32; the boundary a simple polygon
+wound counter-clockwise whose inside is exactly the triangles' union (shapely); the premise (the
+conformal start lies over itself) from the boundary's exterior angles.
+"""
+import numpy as np
+import pytest
+
+import bd_uv
+from bd_uv.unwrapping import angle_start, one_disk
+from helpers import load_off, rings
+from unwrap_contract import distortion_and_flips
+
+# (seed face, faces at least) of cow.off: disks whose conformal map lies over itself; on main
+# (4fd3e0a) auto cut them into 3 and 8 pieces, at C = 5 the first into 2
+COW = [(5243, 400), (4848, 400)]
+
+
+def _turns(z):
+    """The turning number of the closed polygon z (n,) complex, from its exterior angles."""
+    e = np.roll(z, -1) - z
+    return int(round(np.angle(np.roll(e, -1) / e).sum() / (2 * np.pi)))
+
+
+def _one_certified_island(V, F, res, disk, bound):
+    import shapely
+    (r,) = res.islands
+    assert r.status == "certified" and "angle_start" in r.flags and r.overlap_free
+    assert r.bound_certified <= bound
+    uv = res.corner_uv
+    for stored in (uv, uv.astype(np.float32).astype(np.float64)):
+        D, flipped = distortion_and_flips(V, F, stored)
+        assert not flipped.any() and D.max() <= r.bound_certified
+    D, _ = distortion_and_flips(V, F, uv)
+    assert D.max() == pytest.approx(r.max_distortion, rel=1e-9)
+    area = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
+    assert r.mean_distortion == pytest.approx((area * D).sum() / area.sum(), rel=1e-9)
+    loop = disk.island.loops[0]
+    vuv = np.zeros((len(disk.island.vertices), 2))
+    vuv[disk.island.tris.ravel()] = uv.reshape(-1, 2)
+    ring = shapely.Polygon(vuv[loop])
+    assert ring.is_valid and ring.exterior.is_ccw
+    tris = shapely.polygons(uv)
+    union = shapely.union_all(tris)
+    assert shapely.area(union) == pytest.approx(shapely.area(tris).sum(), rel=1e-9)
+    assert shapely.area(ring) == pytest.approx(shapely.area(union), rel=1e-9)
+    return r, D
+
+
+@pytest.mark.parametrize("seed, faces", COW)
+def test_a_disk_whose_conformal_start_overlaps_is_one_certified_island_at_auto(seed, faces):
+    V, F = rings(*load_off("cow.off"), seed, faces)
+    disk = one_disk.find(V, F)
+    _, u, _ = one_disk.unwrap_disk(V, F, disk, None, 0.0)
+    D0, flipped0 = distortion_and_flips(V, F, np.stack([u.real, u.imag], 1)[disk.island.tris])
+    assert flipped0.any() or _turns(u[disk.island.loops[0]]) != 1     # the premise
+    res = bd_uv.unwrap(V, F, bound="auto")
+    r, D = _one_certified_island(V, F, res, disk, np.inf)
+    # below the conformal start's max, where it has one
+    assert flipped0.any() or D.max() < D0.max()
+    # the same call, the same bits
+    assert np.array_equal(bd_uv.unwrap(V, F, bound="auto").corner_uv, res.corner_uv)
+
+
+# (seed, faces, flag): at C = 5, the angle start certified as it is (within 5; main cut this
+# disk into 2 pieces), or over 5 (max 25.9), auto's search from it unfolded within 5 (main: 4)
+AT_FIVE = [(5243, 400, "initial"), (2628, 400, "unfolded")]
+
+
+@pytest.mark.parametrize("seed, faces, way", AT_FIVE)
+def test_a_number_c_takes_the_angle_start_where_it_fits_or_unfolds_from_it(seed, faces, way):
+    V, F = rings(*load_off("cow.off"), seed, faces)
+    disk = one_disk.find(V, F)
+    res = bd_uv.unwrap(V, F, bound=5.0)
+    r, D = _one_certified_island(V, F, res, disk, 5.0)
+    assert r.bound_certified == 5.0 and D.max() < 5.0
+    assert ("unfolded" in r.flags) == (way == "unfolded")
+    if way == "unfolded":
+        v = angle_start.angle_start(V, disk)
+        Dv, _ = distortion_and_flips(V, F, np.stack([v.real, v.imag], 1)[disk.island.tris])
+        assert Dv.max() > 5.0
+
+
+def test_the_angle_start_is_flip_free_turns_once_and_nearer_conformal_than_lscm():
+    """On the first disk: its map from Linear ABF's angles has every face positive, a boundary
+    turning once, and a lower max distortion than the conformal map's (which flips or wraps)."""
+    V, F = rings(*load_off("cow.off"), *COW[1])
+    disk = one_disk.find(V, F)
+    v = angle_start.angle_start(V, disk)
+    corner = np.stack([v.real, v.imag], 1)[disk.island.tris]
+    D, flipped = distortion_and_flips(V, F, corner)
+    assert not flipped.any() and _turns(v[disk.island.loops[0]]) == 1
+    _, u, _ = one_disk.unwrap_disk(V, F, disk, None, 0.0)
+    D0, _ = distortion_and_flips(V, F, np.stack([u.real, u.imag], 1)[disk.island.tris])
+    assert D.max() < D0.max()
+
+
+def test_linear_abf_angles_close_the_triangles_and_the_interior_vertices():
+    """Linear ABF's angles: each triangle's add up to pi, each interior vertex's to 2 pi (the
+    constraints are linear in the angles: met to rounding), every held boundary vertex's to
+    its cap."""
+    V, F = rings(*load_off("cow.off"), *COW[1])
+    disk = one_disk.find(V, F)
+    isl = disk.island
+    nv = len(isl.vertices)
+    loop = isl.loops[0]
+    caps = np.full(nv, np.nan)
+    caps[loop[:3]] = 0.9 * np.pi
+    A = angle_start.linear_abf(disk, caps)
+    assert (A > 0).all() and np.allclose(A.sum(axis=1), np.pi, atol=1e-12)
+    sums = np.bincount(isl.tris.ravel(), A.ravel(), nv)
+    inner = np.ones(nv, dtype=bool)
+    inner[loop] = False
+    assert np.allclose(sums[inner], 2 * np.pi, atol=1e-9)
+    assert np.allclose(sums[loop[:3]], 0.9 * np.pi, atol=1e-9)
