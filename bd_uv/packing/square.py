@@ -7,8 +7,8 @@ costs about 15 ms of CPU a chart and every solve starts from scratch, so solves 
 another (the old search over heights) spend most of a short budget placing; a density guessed
 off by a fraction e costs about e of coverage. Hence:
 
-- the density is guessed (0.63 times sqrt(1 - 1/k): fewer charts pack looser); no measure of the
-  charts' shapes predicted it better (area over convex hull area: worse);
+- the density is guessed (0.63 times sqrt(1 - 1/k): fewer charts pack looser; more where the
+  search is longer, :func:`searched_density`); no shape measure predicted it better;
 - one solve at the guess by default (``solves`` 1), then compaction (:mod:`.compact`) of its
   best square for ``COMPACT_SHARE`` of the time: every further solve pays spyrrow's first
   placement again (1-4 s wall on 27-46 charts under load ~10), and compaction gains more a
