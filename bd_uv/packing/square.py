@@ -7,8 +7,8 @@ costs about 15 ms of CPU a chart and every solve starts from scratch, so solves 
 another (the old search over heights) spend most of a short budget placing; a density guessed
 off by a fraction e costs about e of coverage. Hence:
 
-- the density is guessed (0.63 times sqrt(1 - 1/k): fewer charts pack looser); no measure of the
-  charts' shapes predicted it better (area over convex hull area: worse);
+- the density is guessed (0.63 times sqrt(1 - 1/k): fewer charts pack looser; more where the
+  search is longer, :func:`searched_density`); no shape measure predicted it better;
 - one solve at the guess by default (``solves`` 1), then compaction (:mod:`.compact`) of its
   best square for ``COMPACT_SHARE`` of the time: every further solve pays spyrrow's first
   placement again (1-4 s wall on 27-46 charts under load ~10), and compaction gains more a
@@ -28,6 +28,7 @@ import numpy as np
 
 from ..errors import PackError
 from .compact import compact_square
+from .few import FEW_MAX
 from .large_first import LARGE_FIRST_CHARTS, large_first
 from .nest import (FIT, Placement, _area, _strip, least_squares, nest, rotations,
                    single_layout)
@@ -81,6 +82,17 @@ FEW_CHARTS = 3
 COARSE = 0.5
 COARSE_MAX_CHARTS = 20
 COARSE_KEEP = 0.7
+# On the coarse path the density guessed follows the search time: a strip's height is fixed, and
+# once spyrrow's layout is narrower than the strip is high the square is the strip's height, so
+# the rest of the search is lost. The guess holds for GUESS_SEARCH seconds of search a chart
+# (the adaptive budget gives 0.015 or less); each e-fold more multiplies it by 1 + GUESS_GAIN,
+# up to GUESS_MAX; from FEW_MAX + 1 charts (up to 5 the adaptive budget's minimum gives
+# 0.035-0.043 s a chart). Measured (issue18-cover16-2026-11-28.md, load 9-10, seeds 0-3): at 4 s
+# (0.1 s a chart on igl-elephant's 17) the guess 0.63 gave igl-elephant 0.671-0.716, the same as
+# 1 s, and 0.70 gave 0.722-0.732; igl-arm, cheburashka, knight and rocker-arm 0.01-0.04 more.
+GUESS_SEARCH = 0.03
+GUESS_GAIN = 0.09
+GUESS_MAX = 0.70 / 0.63
 
 
 def _squares(points, owner, placements, tol, padding):
@@ -198,6 +210,8 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True, coars
         headroom = SHORT_HEADROOM
         if rounds == 1 and nesting - start < SHORT_SEARCH * start and nesting > SHORT_START * k:
             start, headroom, short = SHORT_START * k, HEADROOM, True
+    if coarse and k > FEW_MAX:   # (2-5 charts: see GUESS_SEARCH)
+        dens *= searched_density((nesting - start * rounds) / rounds / k)
     # the strip must hold the widest chart with the separation to both its edges: its height is
     # S (1 + p headroom) + 2 tol, the chart's extent at most S (1 - p headroom) - 2 tol
     least = (widest + 2 * tol) / (1 - options.padding * headroom) * FIT[options.rotate]
@@ -264,6 +278,15 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True, coars
                                  share * (SHORT_COMPACT if short else 1.0) * seconds,
                                  least_side=(fine + 2 * tol) / (1 - options.padding))
     return pl, side, solves
+
+
+def searched_density(per_chart):
+    """The factor on the guessed density for a first round searching ``per_chart`` seconds a
+    chart: 1 up to ``GUESS_SEARCH``, then 1 + ``GUESS_GAIN`` a e-fold more, at most
+    ``GUESS_MAX``."""
+    if not per_chart > GUESS_SEARCH:
+        return 1.0
+    return float(min(1 + GUESS_GAIN * np.log(per_chart / GUESS_SEARCH), GUESS_MAX))
 
 
 def _coarse(exact, tol):

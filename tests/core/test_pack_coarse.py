@@ -132,3 +132,35 @@ def test_pack_gives_the_nesting_the_budget_of_its_largest_chart(monkeypatch):
     packed = pack_islands(V, F, uv, lab, options)
     assert seen == [pytest.approx(options.search_seconds(9, len(F)) * DOMINANT_SHARE / share)]
     check_layout(V, F, uv, lab, packed, options)
+
+
+def test_the_guessed_density_follows_the_search_time():
+    """1 up to GUESS_SEARCH seconds a chart, 1 + GUESS_GAIN ln(x / GUESS_SEARCH) above it,
+    GUESS_MAX at most (recomputed here)."""
+    g = square.GUESS_SEARCH
+    assert square.searched_density(0.0) == 1.0 and square.searched_density(g) == 1.0
+    assert square.searched_density(-1.0) == 1.0
+    assert square.searched_density(2 * g) == pytest.approx(1 + square.GUESS_GAIN * np.log(2))
+    assert square.searched_density(100 * g) == pytest.approx(square.GUESS_MAX)
+    assert square.GUESS_MAX == pytest.approx(0.70 / 0.63)
+
+
+def test_a_longer_search_nests_a_tighter_strip(monkeypatch):
+    """On the coarse path, a search of more than GUESS_SEARCH seconds a chart asks spyrrow for a
+    strip whose square is smaller by sqrt of the factor (recomputed from the time asked) than the
+    adaptive budget's, whose factor is 1; both layouts are certified."""
+    sides = []
+    real = square._solve_all
+    monkeypatch.setattr(square, "_solve_all",
+                        lambda o, s, *a, **kw: sides.append(list(s)) or real(o, s, *a, **kw))
+    k, seconds = 8, 1.2
+    V, F, uv, lab = _wavy_discs(k, 2)
+    for solve in (None, seconds):  # the adaptive budget, then a longer one
+        options = PackOptions(seed=0, solve_seconds=solve)
+        check_layout(V, F, uv, lab, pack_islands(V, F, uv, lab, options), options)
+    auto = PackOptions().search_seconds(k, len(F), float(_shares(V, F, lab).max()))
+    assert (0.5 * auto - square.START_PER_CHART * k) / k <= square.GUESS_SEARCH
+    # (the long search is not short: its first placement is START_PER_CHART a chart)
+    x = (0.5 * seconds - square.START_PER_CHART * k) / k
+    f = 1 + square.GUESS_GAIN * np.log(x / square.GUESS_SEARCH)
+    assert sides[1][0] / sides[0][0] == pytest.approx(1 / np.sqrt(f), rel=2e-3)
