@@ -153,7 +153,7 @@ def certify_islands(V, F, corner_uv, face_island, bounds, rtol=RTOL):
         if why and width[i] < TINY:
             why.append(f"the island is {width[i]:.2g} of the UV square across, too small to "
                        "measure: raise the texel density")
-        overlap_free = bool(ov.overlap_free[i]) and n_faces[i] > 0
+        overlap_free = bool(ov.overlap_free[i] and n_faces[i] > 0)   # a bool, not np.bool_
         certs.append(Certificate(
             island=i, certified=not why, bound=float(bounds[i]), max_distortion=float(maxD[i]),
             mean_distortion=float(meanD[i]), flipped=int(n_flip[i]), overlap_free=overlap_free,

@@ -57,9 +57,10 @@ for entry in "${contracts[@]}"; do
     rc=$?
     secs=$(( $(date +%s) - start ))
     rm -rf "$work"
-    # Hypothesis statistics: "- N passing examples, M failing examples, ..." per test and phase.
-    ran=$(grep -oE '[0-9]+ passing examples, [0-9]+ failing' "$log" \
-          | awk '{s += $1 + $4} END {print s + 0}')
+    # Hypothesis statistics, per test and phase: "- N passing examples, M failing examples, ..."
+    # (Hypothesis 6.155) or "- N passing, M failing, and K invalid test cases" (6.170).
+    ran=$(grep -oE '[0-9]+ passing( examples)?, [0-9]+ failing' "$log" | grep -oE '[0-9]+' \
+          | awk '{s += $1} END {print s + 0}')
     if [ "$rc" -eq 0 ]; then
         outcome="passed"
     else

@@ -424,17 +424,21 @@ def test_linked_duplicates_share_one_unwrap(addon, capsys):
 # -- UV-map limit --------------------------------------------------------------------------------
 
 def test_mesh_at_the_uv_map_limit(addon, capsys):
-    """Blender allows 8 UV maps and always keeps one active while any exist (checked below), so
-    bd_unwrap never needs a new map there: it writes the active one and leaves the other seven
-    and every pin layer byte-for-byte as they were."""
+    """Blender allows 8 UV maps and keeps one active in Edit Mode while any exist (checked
+    below), so bd_unwrap never needs a new map there: it writes the active one and leaves the
+    other seven and every pin layer byte-for-byte as they were."""
     obj = add_grid(6, 5)
     mesh = obj.data
     names = add_uv_maps(obj, 7)
     assert len(names) == 8 and mesh.uv_layers.new(name="Ninth") is None  # the limit
     pin_some(obj, "Extra2")
-    # There is no way to leave 8 maps without an active one.
+    # There is no way to leave 8 maps without an active one where bd_unwrap runs (Edit Mode):
+    # Blender 5.0 keeps one active even in Object Mode; 5.1 lets Object Mode clear it, and
+    # entering Edit Mode makes one active again.
     mesh.uv_layers.active_index = -1
     mesh.uv_layers.active = None
+    set_mode(obj, 'EDIT')
+    set_mode(obj, 'OBJECT')
     assert mesh.uv_layers.active is not None
     mesh.uv_layers.active = mesh.uv_layers["Extra4"]
     before = snapshot(mesh)

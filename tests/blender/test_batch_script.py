@@ -212,7 +212,7 @@ finally:  # the enabled extension's own package was used, not a second copy
 '''
 
 
-def test_script_runs_from_the_installed_extension(scene_blend, tmp_path, linux_extension_zip):
+def test_script_runs_from_the_installed_extension(scene_blend, tmp_path, linux_extension_zips):
     """Installed from the zip into a fresh Blender user folder, the script at
     extensions/user_default/bd_uv/scripts/ finds bd_uv and mesh_data next to it: with the
     extension disabled (it imports the extension root itself) and enabled (it reuses Blender's
@@ -220,7 +220,9 @@ def test_script_runs_from_the_installed_extension(scene_blend, tmp_path, linux_e
     env = dict(os.environ, BLENDER_USER_RESOURCES=str(tmp_path / "user"))
     install = ("import sys, bpy; print(sorted(bpy.ops.extensions.package_install_files("
                "filepath=sys.argv[1], repo='user_default', enable_on_install=False)))")
-    proc = subprocess.run([sys.executable, "-c", install, str(linux_extension_zip)], env=env,
+    # the zip for this bpy: Python 3.11's declares Blender < 5.1, Python 3.13's 5.1 and later
+    zip_path = linux_extension_zips[f"{sys.version_info.major}.{sys.version_info.minor}"]
+    proc = subprocess.run([sys.executable, "-c", install, str(zip_path)], env=env,
                           capture_output=True, text=True)
     assert "FINISHED" in proc.stdout, proc.stdout + proc.stderr
     script = tmp_path / "user" / "extensions" / "user_default" / "bd_uv" / "scripts" / SCRIPT.name

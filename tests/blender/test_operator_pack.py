@@ -60,12 +60,21 @@ def test_bd_pack_packs_blender_islands_as_certified(addon):
     assert np.allclose(J[good, 0, 0], J[good, 1, 1], atol=1e-3 * np.abs(J).max())
 
 
+def pin_first_loop(mesh, layer):
+    """Pin loop 0 of ``layer``, through foreach_set: in Blender 5.1.2 an item of
+    ``MeshUVLoopLayer.pin`` reads as the UV (``Float2AttributeValue``, no ``value``), while the
+    collection's foreach_get/foreach_set still address the pins (the operators read them so)."""
+    layer.pin_ensure()
+    pins = np.zeros(len(mesh.loops), bool)
+    pins[0] = True
+    layer.pin.foreach_set("value", pins)
+
+
 def test_bd_pack_keeps_pinned_islands_and_packs_the_rest_beside_them(addon):
     from bd_uv_addon.bd_uv.packing import uv_islands
     ob = smart_suzanne()
     layer = ob.data.uv_layers.active
-    layer.pin_ensure()
-    layer.pin[0].value = True
+    pin_first_loop(ob.data, layer)
     V, F, loops = triangles(ob)
     before = loop_uv_array(ob.data)[loops].astype(np.float64)
     lab = uv_islands(F, before)
@@ -87,8 +96,7 @@ def test_bd_pack_refuses_a_pinned_island_outside_the_square_and_writes_nothing(a
     layer = ob.data.uv_layers.active
     uv = loop_uv_array(ob.data) + 3.0                                # every island moved out
     layer.uv.foreach_set("vector", uv.ravel())
-    layer.pin_ensure()
-    layer.pin[0].value = True
+    pin_first_loop(ob.data, layer)
     before = loop_uv_array(ob.data).copy()
     set_mode(ob, 'EDIT')
     bpy.ops.mesh.select_all(action='SELECT')

@@ -3,6 +3,7 @@
 Nothing here calls bd_uv's metrics: distortion is recomputed from singular values of the 2x2 map
 between each triangle's own 2D shape and its UV triangle.
 """
+import dataclasses
 import os
 
 import numpy as np
@@ -87,3 +88,13 @@ def rings(V, F, seed, faces):
     keep = np.flatnonzero(ring <= np.sort(ring)[faces - 1])
     used, inv = np.unique(F[keep], return_inverse=True)
     return V[used], inv.reshape(-1, 3)
+
+
+def same_certificate(a, b):
+    """Two certificates equal field by field, NaN equal to NaN. A dataclass's ``==`` compared
+    its fields as one tuple up to Python 3.12, where a NaN default (``min_singular``) equals
+    itself by identity; from Python 3.13 (Blender 5.1+) it compares field by field, NaN != NaN."""
+    fa, fb = dataclasses.astuple(a), dataclasses.astuple(b)
+    return type(a) is type(b) and all(
+        x == y or (isinstance(x, float) and isinstance(y, float) and x != x and y != y)
+        for x, y in zip(fa, fb))

@@ -47,7 +47,7 @@ def read_obj(path):
 def write_grid_obj(path):
     V, F = grid(12, 10, z=lambda x, y: 0.2 * np.sin(3 * x) * np.cos(2 * y))
     with open(path, "w") as fh:
-        fh.writelines(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V)
+        fh.writelines(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V.tolist())
         fh.writelines(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F)
     return V, F
 

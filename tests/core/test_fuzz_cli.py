@@ -46,7 +46,14 @@ TETRA = (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float),
          np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]]))
 
 
+def _floats(V):
+    """Rows of Python floats: their repr is the number on numpy 1.26 and 2 alike (numpy 2's
+    scalars repr as ``np.float64(...)``, which no mesh reader parses)."""
+    return np.asarray(V, dtype=np.float64).tolist()
+
+
 def obj_text(V, F, with_uv=False):
+    V = _floats(V)
     lines = [f"v {x!r} {y!r} {z!r}" for x, y, z in V]
     if with_uv:   # the 3D x, y as UVs: a planar projection, one UV per vertex (no UV seams)
         lines += [f"vt {x!r} {y!r}" for x, y, _ in V]
@@ -57,7 +64,8 @@ def obj_text(V, F, with_uv=False):
 
 
 def off_text(V, F):
-    return "OFF\n%d %d 0\n" % (len(V), len(F)) + "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in V) \
+    return "OFF\n%d %d 0\n" % (len(V), len(F)) \
+        + "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in _floats(V)) \
         + "".join(f"3 {a} {b} {c}\n" for a, b, c in F)
 
 
@@ -65,7 +73,7 @@ def ply_text(V, F):
     head = ("ply\nformat ascii 1.0\nelement vertex %d\nproperty float x\nproperty float y\n"
             "property float z\nelement face %d\nproperty list uchar int vertex_indices\n"
             "end_header\n" % (len(V), len(F)))
-    return head + "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in V) \
+    return head + "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in _floats(V)) \
         + "".join(f"3 {a} {b} {c}\n" for a, b, c in F)
 
 

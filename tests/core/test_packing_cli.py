@@ -28,7 +28,7 @@ def grids(tmp_path, sizes=((5, 3), (8, 2), (3, 3), (6, 6), (2, 9), (4, 1))):
     path = tmp_path / "grids.off"
     with open(path, "w") as fh:
         fh.write(f"OFF\n{len(V)} {len(F)} 0\n")
-        fh.writelines(f"{x!r} {y!r} {z!r}\n" for x, y, z in V)
+        fh.writelines(f"{x!r} {y!r} {z!r}\n" for x, y, z in V.tolist())
         fh.writelines(f"3 {a} {b} {c}\n" for a, b, c in F)
     return path, V, F
 

@@ -23,7 +23,7 @@ def grouped_obj(tmp_path, key):
     group = np.repeat(np.arange(len(SIZES)) % 3, per)
     path = tmp_path / "grouped.obj"
     with open(path, "w") as fh:
-        fh.writelines(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V)
+        fh.writelines(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V.tolist())
         last = None
         for f, g in zip(F, group):
             if g != last:

@@ -114,7 +114,7 @@ def test_core_api_unwraps_every_other_face(make):
 def test_command_line_unwraps_every_other_face(make, tmp_path):
     V, F, skip, words = make()
     src = tmp_path / "messy.obj"
-    src.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V)
+    src.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V.tolist())
                    + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F))
     out, rep = tmp_path / "out.obj", tmp_path / "r.json"
     r = subprocess.run([sys.executable, "-m", "bd_uv", "unwrap", str(src), "-o", str(out),
