@@ -50,6 +50,14 @@ BAD = 2.0
 # conformal map and its angle start flip) the angle start cost 120 and 220 ms of CPU for
 # nothing (auto 0.32 -> 0.45 s, 0.49 -> 0.71 s; C = 5 0.23 -> 0.41 s)
 ANGLE_FACES = 5000
+# A flip-free angle start whose boundary turns once is searched from up to this max distortion,
+# whatever ``bound_limit`` says: the search's map, not the start, must be within that limit
+# (``strategies.minimise`` with ``one_to_one``), and the alternative is a cut. Under
+# ``bound_limit`` (1,000) as the gate, disks whose conformal start lay over itself with angle
+# starts of 1,312-5,265 were cut into 5-24 pieces; searched from, each was one island at the
+# same or a lower C in 58-82 % of the CPU (issue21-unseen16-2026-11-28.md, section 3). No
+# angle start over 1e4 turned up in a scan of 600 patches.
+ANGLE_LIMIT = 1e5
 
 
 def linear_abf(disk, caps):
@@ -215,20 +223,21 @@ def _scaled(angles, scale, tris):
     return out
 
 
-def better_start(V, disk, u, C=None, limit=np.inf):
+def better_start(V, disk, u, C=None):
     """The angle start (``angle_start``) of a disk whose conformal map u (nv,) complex is bad:
     it flips a face, its boundary does not turn once (it lies over itself), or its max
     distortion is over BAD (over C, for a number C asked).
 
     For ``bound="auto"`` (C None) it is taken where its max distortion is below u's, or where
-    u lies over itself without a flip and it is within ``limit`` (``bound_limit``: a start
-    over it is not searched from, conic steps are); where u flips, only within BAD.
+    u lies over itself without a flip and it is within ANGLE_LIMIT (the search from it must
+    end within ``bound_limit``: ``strategies.minimise``); where u flips, only within BAD.
     three_peaks.off and mannequin-devil's 706-face patch, whose conformal maps flip, have
     angle starts at 6.3 and 5.6: from them auto ended at 2.122 and 3.536 against 2.075 and
     3.477 from the bent conformal map. Patches of cow.off whose conformal maps lie over
     themselves have angle starts up to 441 that the search unfolds to one island at 2.07-2.47
-    (Linear ABF's first-order angles at the horns' tips), and two at 1,720 and 3,670 that the
-    conic steps after it did not, in 3-4x the time. For a number C it is taken within C
+    (Linear ABF's first-order angles at the horns' tips), and two at 1,720 and 3,670, over
+    ``bound_limit``, that the search from them unfolds too (conic steps from them did not, in
+    3-4x the time). For a number C it is taken within C
     (``one_disk.fitted`` certifies it there).
 
     Not asked above ANGLE_FACES faces (None, None, False).
@@ -251,7 +260,7 @@ def better_start(V, disk, u, C=None, limit=np.inf):
     elif not np.isfinite(D0):           # the conformal map flips: bent, it may do better
         ok = D <= BAD
     else:
-        ok = D < D0 or (over and D <= limit)
+        ok = D < D0 or (over and D <= ANGLE_LIMIT)
     return (v if ok else None), v, True
 
 

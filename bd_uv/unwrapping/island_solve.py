@@ -13,7 +13,7 @@ from . import stretch as stretch_search
 from .conic_solves import Cancelled
 from .finish import finish
 from .fixed_boundary import FRAMES_NAME, fixed_boundary_island, with_premises
-from .angle_start import angle_start, max_distortion
+from .angle_start import ANGLE_LIMIT, angle_start, max_distortion
 from .initial import start_map
 from .problem import IslandProblem
 from .results import IslandResult
@@ -136,15 +136,14 @@ def angle_unfolder(disk, V, pins, options, cancel, start=None):
     conformal start lies over itself, the same search from its angle start
     (``angle_start.angle_start``), ending at its least map that does not
     (``strategies.least_one_to_one``); None where there is no angle start, its max distortion
-    is over ``bound_limit`` (conic steps would follow, not the search) or it does not certify
-    (the island is cut then). ``start``: the angle start where it is known. Not under a time
-    budget."""
+    is over ``angle_start.ANGLE_LIMIT`` or it does not certify (the island is cut then).
+    ``start``: the angle start where it is known. Not under a time budget."""
     if options.time_budget is not None or options.stretch is not None:
         return None
 
     def unfold(index):
         u = angle_start(V, disk) if start is None else start
-        if u is None or not max_distortion(disk, u) <= options.bound_limit:
+        if u is None or not max_distortion(disk, u) <= ANGLE_LIMIT:
             return None
         try:
             res = solve_island(disk.island, V, pins, options, None, quiet(cancel), cancel, u,

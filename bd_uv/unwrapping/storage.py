@@ -6,9 +6,9 @@ faces about 4e-5 as large as the island's median face). Certified in float64, su
 few float32 steps wide once the island is packed into the unit square: rounding its corners
 moves its distortion by whole units (4.96 -> 5.36 against C = 5 on the teapot's handle).
 
-The bound :func:`rounding_distortion` says, for every face, how far its distortion can go when
-each stored coordinate moves by at most ``h``. The repair :func:`with_storage_headroom` re-solves
-the islands that failed as stored with a stretch limit S (every face's singular values within
+The bound ``rounding.rounding_distortion`` says, for every face, how far its distortion can go
+when each stored coordinate moves by at most ``h``. The repair :func:`with_storage_headroom`
+re-solves the islands that failed as stored with a stretch limit S (every face's singular values within
 [1/S, S] at the island's own scale, Lipman 2012 section 6.3; the loosest S of
 :data:`STRETCH_LADDER` that certifies the island whole), so no face can collapse below 1/S of its
 3D size; :func:`stored_layout_with_headroom` wraps ``layout.stored_layout``: store, and when an
@@ -21,47 +21,11 @@ import numpy as np
 from ..errors import InfeasibleError
 from ..layout import stored_layout
 from ..geometry import face_areas
-from ..metrics import conformal_distortion, signed_uv_areas, singular_values
+from ..metrics import conformal_distortion, signed_uv_areas
+from .rounding import predicted_to_fail
 
 #: stretch limits tried in turn, loosest first (each must be >= sqrt(C))
 STRETCH_LADDER = (64.0, 16.0, 8.0, 4.0)
-
-
-def float_step(dtype, magnitude=1.0):
-    """Half the spacing of ``dtype`` numbers at ``magnitude``: the most one rounding moves a
-    coordinate of that size."""
-    return float(np.spacing(np.asarray(magnitude, dtype=dtype))) / 2.0
-
-
-def rounding_distortion(V, F, corner_uv, h):
-    """Per-face upper bound on the conformal distortion after each UV coordinate moves by <= h.
-
-    The Jacobian is J = U X^-1 (U: the UV edge vectors, X: the face's own 2D edge vectors). Each
-    entry of U moves by at most 2h, so ||dJ||_2 <= ||dU||_F ||X^-1||_2 <= 4h / s_min(X) = e, and
-    the singular values of J move by at most e (Weyl): distortion <= (s1 + e) / (s2 - e).
-
-    Parameters
-    ----------
-    V : (n,3) float, F : (m,3) int, corner_uv : (m,3,2) float, h : float
-
-    Returns
-    -------
-    (m,) float64, inf where s2 <= e (the face may flip or collapse when rounded)
-    """
-    V = np.asarray(V, dtype=np.float64)
-    F = np.asarray(F, dtype=np.int64)
-    smax, smin = singular_values(V, F, corner_uv, normalize=False)
-    P = V[F]
-    e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
-    # s_min of the 2x2 edge matrix X from its Gram matrix (no face loop)
-    a, b, c = (e1 * e1).sum(1), (e1 * e2).sum(1), (e2 * e2).sum(1)
-    root = np.sqrt(np.maximum((a - c) ** 2 + 4 * b * b, 0.0))
-    smin_x = np.sqrt(np.maximum((a + c - root) / 2.0, 0.0))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        e = 4.0 * h / smin_x
-        low = smin - e
-        out = np.where(low > 0, (smax + e) / low, np.inf)
-    return out
 
 
 def solve_with_stretch(V, F, island, bound, method="lscm", ladder=STRETCH_LADDER):
@@ -152,54 +116,11 @@ def stored_layout_with_headroom(V, F, res, stretch=None, ladder=STRETCH_LADDER,
     return stored_layout(V, F, fixed, **layout_options), fixed, done
 
 
-def predicted_to_fail(V, F, res, dtype=np.float32, coverage=0.25):
-    """Unwrap islands whose certificate is not expected to survive packing and rounding to
-    ``dtype``.
-
-    Used where the packed scale is not known before writing (the Blender operator packs after
-    it writes). Each island is placed as a packer would at one texel density, UV area =
-    ``coverage`` x its 3D area / the total 3D area (``coverage`` low: a small scale, the
-    pessimistic side), centred in the unit square's upper half of coordinates (where float
-    steps are largest), rounded to ``dtype`` and measured; it is flagged when that exceeds its
-    certified bound, or when :func:`rounding_distortion` says a face may collapse or flip
-    (s_min within one rounding). The certificate of the UVs as really stored still decides what
-    is written: this only chooses what to re-solve before writing.
-
-    Returns
-    -------
-    list of int, certified unwrap islands flagged
-    """
-    V = np.asarray(V, dtype=np.float64)
-    F = np.asarray(F, dtype=np.int64)
-    uv = np.asarray(res.corner_uv, dtype=np.float64)
-    ok = [i for i, r in enumerate(res.islands) if r.status == "certified"]
-    faces = np.concatenate([res.islands[i].faces for i in ok]) if ok else np.zeros(0, np.int64)
-    total = float(face_areas(V, F[faces]).sum()) if len(faces) else 0.0
-    if total <= 0:
-        return []
-    h = float_step(dtype, 1.0)
-    out = []
-    for i in ok:   # per island (its own UV scale), vectorised over its faces
-        r = res.islands[i]
-        f, u = F[r.faces], uv[r.faces]
-        uv_area = float(np.abs(signed_uv_areas(u)).sum())
-        if not uv_area > 0:
-            continue
-        u = u * (np.sqrt(face_areas(V, f).sum() / uv_area) * np.sqrt(coverage / total))
-        lo, hi = u.min(axis=(0, 1)), u.max(axis=(0, 1))
-        u = u - lo + np.maximum(0.5 * (1.0 - (hi - lo)), 0.0)
-        stored = u.astype(dtype).astype(np.float64)
-        if (conformal_distortion(V, f, stored).max() > r.bound_certified
-                or not np.isfinite(rounding_distortion(V, f, u, h)).all()):
-            out.append(i)
-    return out
-
-
 def beyond_headroom(V, F, res, ladder=STRETCH_LADDER):
     """Certified islands whose texel density varies more than the loosest stretch limit could
     hold: the largest to smallest face scale (sqrt of UV over 3D area) above ``ladder[0]``
     squared. Their smallest faces get less than a texel where their largest get thousands, no
-    float32 texture may hold them (:func:`predicted_to_fail` flags them at some packed scale),
+    float32 texture may hold them (``rounding.predicted_to_fail`` flags them at some packed scale),
     and a stretch re-solve would have to move the map far from itself and seldom certifies
     (measured: two 3,300-face shells of Khronos' BrainStem, spread 1e10 and 5e13, failed every S
     of the ladder in 16 s); seams serve them (``seams.needed``).
@@ -231,7 +152,7 @@ def beyond_headroom(V, F, res, ladder=STRETCH_LADDER):
 
 
 def with_predicted_headroom(V, F, res, dtype=np.float32, ladder=STRETCH_LADDER):
-    """``res`` with the islands :func:`predicted_to_fail` re-solved under a stretch limit
+    """``res`` with the islands ``rounding.predicted_to_fail`` re-solved under a stretch limit
     (:func:`with_storage_headroom`), before anything is written.
 
     Returns

@@ -56,7 +56,8 @@ def minimise(prob, start, limit, budget, flags, report, t0, one_to_one=False):
       certified C lowers it (``lower_mean``).
     The budget also bounds the search (no new target after it; at least one is tried).
     ``one_to_one``: the least C among the maps that do not lie over themselves
-    (``least_one_to_one``: an angle start, ``angle_start``, whose search's map may).
+    (``least_one_to_one``: an angle start, ``angle_start``, whose search's map may), searched
+    from even where the start is over ``limit``.
     Returns (u, smallest certified C, name of the start).
     """
     if not np.isfinite(start.D):  # a flip-free start bounds C* from above
@@ -66,13 +67,16 @@ def minimise(prob, start, limit, budget, flags, report, t0, one_to_one=False):
         start = (Start(bent, frames_from_map(prob.alpha(bent)), start.name, prob.distortion(bent))
                  if bent is not None else start_for_solve(prob, start, report))
     best, projected, steps = None, None, budget is not None
-    if np.isfinite(start.D) and start.D <= limit:
-        best = (start.u, start.D)   # the start is certified at its own distortion
+    # an angle start over the limit is searched from too: its search's map must be within it
+    # (``angle_start.ANGLE_LIMIT``), the alternative being conic steps, then a cut
+    if np.isfinite(start.D) and (start.D <= limit or one_to_one):
+        # the start is certified at its own distortion (within the limit)
+        best = (start.u, start.D) if start.D <= limit else None
         # the least C of an unpinned island with no time budget: ``one_disk``'s, bounded alike
         least = not steps and not len(prob.pin_idx) and prob.enough is None
         u, D = (least_one_to_one(prob, start, report, budget, flags, t0, least) if one_to_one
                 else search(prob, start.u, report, budget, flags, t0, least=least))
-        if D < best[1]:
+        if (D < best[1]) if best is not None else (D <= limit):
             ok, D = prob.check(u, D)    # the map's max distortion, measured anew
             if ok:
                 best = projected = (u, D)

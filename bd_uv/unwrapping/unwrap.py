@@ -26,6 +26,7 @@ from . import angle_start, capped, disk_auto, one_disk
 from .batched import conformal_islands
 from .island_solve import angle_unfolder, batched_options, solve_island, unfolder
 from .overlap_certificate import overlap_certificate
+from .rounding import predicted_to_fail
 from .conic_solves import Cancelled
 from .results import UnwrapResult
 
@@ -121,25 +122,38 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
                 done = one_disk.fitted(F, disk, v, float(opts.bound), t0, ("angle_start",),
                                        " (from its angle start)")[0]
             if (done is None and found is not None
-                    and angle_start.max_distortion(disk, found) <= opts.bound_limit):
+                    and angle_start.max_distortion(disk, found) <= angle_start.ANGLE_LIMIT):
                 angle = found   # the unfold of its map before a cut starts from it
         if done is not None:
             return done
+        conformal_u = u
         if opts.bound == "auto" and opts.time_budget is None:
             # a conformal start that flips, lies over itself or is far from conformal: the
             # angle start where it is better, its search's least map that does not lie over
             # itself (every other disk keeps its conformal start)
-            v, found, bad = angle_start.better_start(V, disk, u, limit=opts.bound_limit)
+            v, found, bad = angle_start.better_start(V, disk, u)
             if v is not None:
                 u, one_to_one = v, True
             elif bad:       # the angle start found (or none), tried before a cut as it is
                 angle = False if found is None else found
         conformal = {0: u}
-    return unwrap_islands(V, F, [disk.island] if disk is not None else
-                          split_islands(V, F, seams, precision), pins, opts, initial_uv=initial_uv,
-                          face_groups=face_groups, progress=progress, cancel=cancel,
-                          conformal=conformal, t0=t0, disk=disk, unfold=unfold,
-                          one_to_one=one_to_one, angle=angle)
+    res = unwrap_islands(V, F, [disk.island] if disk is not None else
+                         split_islands(V, F, seams, precision), pins, opts, initial_uv=initial_uv,
+                         face_groups=face_groups, progress=progress, cancel=cancel,
+                         conformal=conformal, t0=t0, disk=disk, unfold=unfold,
+                         one_to_one=one_to_one, angle=angle)
+    if (opts.bound == "auto" and disk is not None and angle is not False
+            and any("angle_start" in r.flags for r in res.islands)
+            and predicted_to_fail(V, F, res)):
+        # the least C from the angle start holds in float64, but a cone-like tip (a cow's horn)
+        # is shrunk below float32's step once packed, and no stretch limit keeps it one island
+        # at that C (``storage.with_storage_headroom``): the conformal start's way instead, cut
+        # where it lies over itself (UVs as before the angle start)
+        res = unwrap_islands(V, F, [disk.island], pins, opts, initial_uv=initial_uv,
+                             face_groups=face_groups, progress=progress, cancel=cancel,
+                             conformal={0: conformal_u}, t0=t0, disk=disk, unfold=unfold,
+                             angle=False)
+    return res
 
 
 def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, progress=None,

@@ -118,3 +118,56 @@ def test_linear_abf_angles_close_the_triangles_and_the_interior_vertices():
     inner[loop] = False
     assert np.allclose(sums[inner], 2 * np.pi, atol=1e-9)
     assert np.allclose(sums[loop[:3]], 0.9 * np.pi, atol=1e-9)
+
+
+
+# (seed, faces) of cow.off: the conformal start lies over itself and the angle start's max is
+# over ``bound_limit`` (1,000; about 3,700 here): gated by that limit, auto cut this disk into 24
+# pieces at C 2.045 (main 19a8c44); searched from, it is one island
+OVER_LIMIT = (159, 1200)
+
+
+def test_an_angle_start_over_bound_limit_is_searched_from_not_cut():
+    V, F = rings(*load_off("cow.off"), *OVER_LIMIT)
+    disk = one_disk.find(V, F)
+    v = angle_start.angle_start(V, disk)
+    Dv, flipped = distortion_and_flips(V, F, np.stack([v.real, v.imag], 1)[disk.island.tris])
+    limit = bd_uv.UnwrapOptions().bound_limit
+    assert not flipped.any() and Dv.max() > limit          # the premise
+    assert _turns(v[disk.island.loops[0]]) == 1
+    res = bd_uv.unwrap(V, F, bound="auto")
+    r, D = _one_certified_island(V, F, res, disk, limit)
+    assert D.max() < 2.05
+
+
+# (seed, faces) of cow.off whose least C from the angle start (one island, 2.489) holds in
+# float64 but not once packed and stored as float32 (a horn's tip shrunk below float32's step)
+HORN_TIP = (3177, 400)
+
+
+def test_an_angle_start_map_that_float32_would_break_gives_way_to_the_conformal_start(
+        monkeypatch):
+    from bd_uv.layout import stored_layout
+    import importlib
+    unwrap_module = importlib.import_module("bd_uv.unwrapping.unwrap")   # the module
+    V, F = rings(*load_off("cow.off"), *HORN_TIP)
+    res = bd_uv.unwrap(V, F, bound="auto")
+    assert not any("angle_start" in r.flags for r in res.islands)
+    assert all(r.status == "certified" for r in res.islands)
+    # the premise: the one island its angle start gives fails as packed and stored
+    with monkeypatch.context() as m:
+        m.setattr(unwrap_module, "predicted_to_fail", lambda V, F, res: [])
+        one = bd_uv.unwrap(V, F, bound="auto")
+    (r,) = one.islands
+    assert "angle_start" in r.flags and r.status == "certified"
+    assert not all(c.certified for c in stored_layout(V, F, one, dtype=np.float32).certificates)
+    # and recomputed: scaled into the unit square (as a packer does) and rounded to float32
+    u = one.corner_uv - one.corner_uv.min(axis=(0, 1))
+    u = (u / u.max()).astype(np.float32).astype(np.float64)
+    D, flipped = distortion_and_flips(V, F, u)
+    assert flipped.any() or D.max() > r.bound_certified
+    # what it gives instead: the conformal start's way, bit for bit
+    with monkeypatch.context() as m:
+        m.setattr(angle_start, "better_start", lambda *a, **k: (None, None, False))
+        plain = bd_uv.unwrap(V, F, bound="auto")
+    assert np.array_equal(plain.corner_uv, res.corner_uv, equal_nan=True)

@@ -6,8 +6,8 @@ import numpy as np
 import bd_uv
 from bd_uv.layout import stored_layout
 from bd_uv.packing import PackOptions
-from bd_uv.unwrapping.storage import (float_step, predicted_to_fail, rounding_distortion,
-                                      stored_layout_with_headroom, with_predicted_headroom)
+from bd_uv.unwrapping.rounding import float_step, predicted_to_fail, rounding_distortion
+from bd_uv.unwrapping.storage import stored_layout_with_headroom, with_predicted_headroom
 from helpers import reference_distortion
 from finger import finger
 from teapot import teapot, triangulated

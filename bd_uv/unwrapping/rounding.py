@@ -1,0 +1,90 @@
+"""How far float32 storage moves a certified map: the rounding step of a coordinate
+(:func:`float_step`), a per-face bound on the distortion once every coordinate moved by it
+(:func:`rounding_distortion`) and the islands whose certificate is not expected to survive
+packing and rounding (:func:`predicted_to_fail`). Imports nothing that solves, so the unwrap
+itself can ask (``unwrap.unwrap``'s angle start) and ``storage`` re-solves what it flags.
+"""
+import numpy as np
+
+from ..geometry import face_areas
+from ..metrics import conformal_distortion, signed_uv_areas, singular_values
+
+
+def float_step(dtype, magnitude=1.0):
+    """Half the spacing of ``dtype`` numbers at ``magnitude``: the most one rounding moves a
+    coordinate of that size."""
+    return float(np.spacing(np.asarray(magnitude, dtype=dtype))) / 2.0
+
+
+def rounding_distortion(V, F, corner_uv, h):
+    """Per-face upper bound on the conformal distortion after each UV coordinate moves by <= h.
+
+    The Jacobian is J = U X^-1 (U: the UV edge vectors, X: the face's own 2D edge vectors). Each
+    entry of U moves by at most 2h, so ||dJ||_2 <= ||dU||_F ||X^-1||_2 <= 4h / s_min(X) = e, and
+    the singular values of J move by at most e (Weyl): distortion <= (s1 + e) / (s2 - e).
+
+    Parameters
+    ----------
+    V : (n,3) float, F : (m,3) int, corner_uv : (m,3,2) float, h : float
+
+    Returns
+    -------
+    (m,) float64, inf where s2 <= e (the face may flip or collapse when rounded)
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    smax, smin = singular_values(V, F, corner_uv, normalize=False)
+    P = V[F]
+    e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
+    # s_min of the 2x2 edge matrix X from its Gram matrix (no face loop)
+    a, b, c = (e1 * e1).sum(1), (e1 * e2).sum(1), (e2 * e2).sum(1)
+    root = np.sqrt(np.maximum((a - c) ** 2 + 4 * b * b, 0.0))
+    smin_x = np.sqrt(np.maximum((a + c - root) / 2.0, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        e = 4.0 * h / smin_x
+        low = smin - e
+        out = np.where(low > 0, (smax + e) / low, np.inf)
+    return out
+
+
+def predicted_to_fail(V, F, res, dtype=np.float32, coverage=0.25):
+    """Unwrap islands whose certificate is not expected to survive packing and rounding to
+    ``dtype``.
+
+    Used where the packed scale is not known before writing (the Blender operator packs after
+    it writes). Each island is placed as a packer would at one texel density, UV area =
+    ``coverage`` x its 3D area / the total 3D area (``coverage`` low: a small scale, the
+    pessimistic side), centred in the unit square's upper half of coordinates (where float
+    steps are largest), rounded to ``dtype`` and measured; it is flagged when that exceeds its
+    certified bound, or when :func:`rounding_distortion` says a face may collapse or flip
+    (s_min within one rounding). The certificate of the UVs as really stored still decides what
+    is written: this only chooses what to re-solve before writing.
+
+    Returns
+    -------
+    list of int, certified unwrap islands flagged
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    uv = np.asarray(res.corner_uv, dtype=np.float64)
+    ok = [i for i, r in enumerate(res.islands) if r.status == "certified"]
+    faces = np.concatenate([res.islands[i].faces for i in ok]) if ok else np.zeros(0, np.int64)
+    total = float(face_areas(V, F[faces]).sum()) if len(faces) else 0.0
+    if total <= 0:
+        return []
+    h = float_step(dtype, 1.0)
+    out = []
+    for i in ok:   # per island (its own UV scale), vectorised over its faces
+        r = res.islands[i]
+        f, u = F[r.faces], uv[r.faces]
+        uv_area = float(np.abs(signed_uv_areas(u)).sum())
+        if not uv_area > 0:
+            continue
+        u = u * (np.sqrt(face_areas(V, f).sum() / uv_area) * np.sqrt(coverage / total))
+        lo, hi = u.min(axis=(0, 1)), u.max(axis=(0, 1))
+        u = u - lo + np.maximum(0.5 * (1.0 - (hi - lo)), 0.0)
+        stored = u.astype(dtype).astype(np.float64)
+        if (conformal_distortion(V, f, stored).max() > r.bound_certified
+                or not np.isfinite(rounding_distortion(V, f, u, h)).all()):
+            out.append(i)
+    return out
