@@ -14,7 +14,8 @@ mark ("peak", ``VmHWM``: the most resident memory at any moment of the call, bas
 Where ``/proc`` cannot do that, both come from ``resource.getrusage(RUSAGE_SELF).ru_maxrss``
 (then the peak also covers loading and warm-up). ``RUSAGE_CHILDREN`` covers worker processes the
 method waited for, reported separately when it grew during the call (a fork during bpy's warm-up
-does not count). Then the UVs are measured with ``measure.uv_stats`` and one JSON line prefixed
+does not count). Then the UVs are measured with ``measure.uv_stats`` and, for the disk methods,
+``map_shape`` (pieces in UV and whether a piece overlaps itself), and one JSON line prefixed
 ``BENCH_RESULT`` is printed; the peak was read before, so measuring does not change it.
 """
 from __future__ import annotations
@@ -130,6 +131,50 @@ def _footprint_main(what):
     print(MARK + json.dumps({"rss_mb": _maxrss_mb()}), flush=True)
 
 
+DISK_KINDS = ("blender", "slim", "bd")     # methods whose map's pieces and overlap are reported
+
+
+def map_shape(F, corner_uv, flips):
+    """(pieces, overlaps) of a map, from its corner UVs alone.
+
+    ``pieces``: connected components of the faces, two faces joined where they share a mesh edge
+    and both its corners' UVs (exactly: a cut gives each side its own UVs). ``overlaps``: True
+    where the map has a flipped face (a flip lies over its neighbours) or a piece whose UV
+    boundary is not simple and counter-clockwise (``bd_uv.overlap.island_overlaps``, Lipman 2012
+    Theorems 5.1-5.2, per piece: pieces are not tested against each other).
+    """
+    import numpy as np
+    from scipy.sparse import coo_array
+    from scipy.sparse.csgraph import connected_components
+
+    from bd_uv.overlap import island_overlaps
+
+    F = np.asarray(F, dtype=np.int64)
+    uv = np.asarray(corner_uv, dtype=np.float64)
+    m = len(F)
+    nxt = [1, 2, 0]
+    a, b = F.ravel(), F[:, nxt].ravel()                        # half-edge (a, b) of face f
+    f = np.repeat(np.arange(m), 3)
+    ua, ub = uv.reshape(-1, 2), uv[:, nxt].reshape(-1, 2)
+    n = int(F.max()) + 1
+    key, rkey = a * n + b, b * n + a
+    order = np.argsort(key)
+    pos = np.searchsorted(key[order], rkey)
+    pos = np.minimum(pos, len(key) - 1)
+    twin = order[pos]
+    has = key[twin] == rkey                                   # half-edge (b, a) exists
+    i = np.flatnonzero(has)
+    j = twin[i]
+    same = (ua[i] == ub[j]).all(axis=1) & (ub[i] == ua[j]).all(axis=1)
+    i, j = i[same], j[same]
+    g = coo_array((np.ones(len(i)), (f[i], f[j])), shape=(m, m))
+    k, lab = connected_components(g, directed=False)
+    if flips:
+        return int(k), True
+    ov = island_overlaps(F, uv, lab, k)
+    return int(k), bool(not ov.overlap_free.all())
+
+
 def main(argv=None):
     import argparse
 
@@ -172,6 +217,10 @@ def main(argv=None):
            "flips": st.flips, "faces": int(len(F)), "rss_base_mb": base, "rss_peak_mb": peak,
            "peak_source": "VmHWM" if hwm else "ru_maxrss",
            "rss_children_mb": peak_children if peak_children > base_children else 0.0}
+    from methods import METHODS
+
+    if METHODS[a.key][1] in DISK_KINDS:
+        res["pieces"], res["overlaps"] = map_shape(F, cu, st.flips)
     print(MARK + json.dumps(res), flush=True)
     return 0
 

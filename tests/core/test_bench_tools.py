@@ -204,6 +204,73 @@ def test_no_waiting_disk_table_reports_a_refused_disk_and_fails_it():
     assert not verdict["auto's mean <= 1.05 x ABF's"]
 
 
+def _strip_disk(n=6):
+    """A 2 x n vertex strip (2 (n-1) triangles, counter-clockwise in (x, y)) in the plane."""
+    x = np.arange(n, dtype=np.float64)
+    V = np.r_[np.c_[x, np.zeros(n), np.zeros(n)], np.c_[x, np.ones(n), np.zeros(n)]]
+    i = np.arange(n - 1)
+    F = np.r_[np.c_[i, i + 1, i + n + 1], np.c_[i, i + n + 1, i + n]].astype(np.int64)
+    return V, F
+
+
+def test_map_shape_counts_uv_pieces_and_finds_a_self_overlap():
+    """``isolate.map_shape`` on hand-made UVs of a planar strip: the identity map is one piece
+    with no overlap; moving the last column's UVs apart cuts it into two pieces; a map wound
+    round past a full turn (no flip, boundary crossing itself) overlaps; a mirrored face
+    overlaps."""
+    from isolate import map_shape
+    V, F = _strip_disk(6)
+    cu = V[F][:, :, :2].copy()
+    assert map_shape(F, cu, 0) == (1, False)
+    cut = cu.copy()
+    last = np.isin(F, [4, 5, 10, 11]).all(axis=1)            # the two faces of the last cell
+    assert last.sum() == 2
+    cut[last] += 10.0                                          # their own UVs, away from the rest
+    assert map_shape(F, cut, 0) == (2, False)
+    # wrap the strip's long axis round an annulus through 1.6 turns: locally fine, globally
+    # lying over itself
+    n = 12
+    V, F = _strip_disk(n)
+    t = V[:, 0] / (n - 1) * 1.6 * 2 * np.pi
+    r = 3.0 - V[:, 1]                                     # inward with y: counter-clockwise
+    U = np.c_[r * np.cos(t), r * np.sin(t)]
+    cu = U[F]
+    st = uv_stats(V, F, cu)
+    assert st.flips == 0
+    assert map_shape(F, cu, st.flips) == (1, True)
+    assert map_shape(F, V[F][:, :, :2], 0) == (1, False)
+    flipped = V[F][:, :, :2].copy()
+    flipped[0] = flipped[0][[0, 2, 1]]
+    assert map_shape(F, flipped, 1)[1]
+
+
+def test_no_waiting_disk_table_judges_c_against_one_to_one_peers_and_counts_pieces():
+    """The table prints each peer's max with "ov" where the peer's map overlaps itself, auto's C
+    against all peers (as before) and against the one-to-one peers only, and the pieces at auto
+    and C = 5; one piece per disk is a criterion of its own."""
+    import bench_no_waiting as bnw
+    row = dict(seconds=0.01, faces=500, max_d=1.2, mean_d=1.05, certified_c=None, note="",
+               overlaps=False, pieces=1)
+    res = {}
+    for p in ("a.obj", "b.obj"):
+        for k in bnw.PEERS:
+            res[(p, k)] = dict(row, max_d=3.0)
+        res[(p, "bd-lscm-5")] = dict(row, seconds=0.005, certified_c=5.0)
+        res[(p, "bd-lscm-auto")] = dict(row, certified_c=1.5)
+    res[("a.obj", "blender-abf")] = dict(row, max_d=1.3, overlaps=True)   # below C, overlapping
+    res[("b.obj", "bd-lscm-5")]["pieces"] = 3
+    lines, crit = bnw.disk_table(["a.obj", "b.obj"], res)
+    verdict = dict(crit)
+    a = next(ln for ln in lines if ln.startswith("| a.obj |")).split(" | ")
+    assert a[8:12] == ["1.3", "3", "1.3 ov, 3, 3, 3", "1, 1"]
+    b = next(ln for ln in lines if ln.startswith("| b.obj |")).split(" | ")
+    assert b[8:12] == ["3", "3", "3, 3, 3, 3", "1, 3"]
+    assert not verdict["auto's certified C < every peer's max distortion"]
+    one_to_one = [ok for what, ok in crit if "does not overlap itself" in what]
+    assert one_to_one == [True]
+    assert not verdict["one piece per disk at auto and at C = 5"]
+
+
 def test_patch_of_a_surface_with_no_disk_ring_is_refused(tmp_path):
     """A torus's rings around a face close into an annulus (the ball wraps around the tube) and
     then the whole torus: from some size no whole ring is a disk, and patch says so instead of
