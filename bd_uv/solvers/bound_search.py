@@ -93,12 +93,16 @@ class BoundSearch:
     connected : bool, ``tris`` are one connected piece (one ``mesh.Island``): its components
         are not searched for (``GlobalStep``)
     ranks : (nv,) int64, optional, the vertices' elimination order (``GlobalStep``)
+    free : bool, optional, iterate on the free unknowns in every face's frame (``free_admm``)
+        whatever the size; by default up to ONE_PRODUCT_FACES faces (``disk_auto`` asks it up
+        to its own gate: ``ops`` may then lack the (4k, 2nv) operators)
     """
 
-    def __init__(self, ops, nv, tris, fixed, connected=False, ranks=None):
+    def __init__(self, ops, nv, tris, fixed, connected=False, ranks=None, free=None):
         self.solver = s = GlobalStep(ops, nv, fixed, tris=tris, connected=connected,
                                      ranks=ranks)
         self.k = len(s.area)
+        self.on_free = self.k <= ONE_PRODUCT_FACES if free is None else bool(free)
         self.UF = None
         self._rhs_fixed = None      # (UF, its share of the right-hand side; small: its FreeLift)
         self.iterations = 0
@@ -117,11 +121,11 @@ class BoundSearch:
         these coordinates is the same step (its right-hand side ``B_free^T A (z - lam) / 2``), and
         the cone projection needs no change of coordinates: about half the array operations an
         iteration made on the (u_x, u_y; v_x, v_y) rows. Returns (lift, rhs), each
-        ``f(x, out)``: above ONE_PRODUCT_FACES faces by the gradient operator
+        ``f(x, out)``: off the free path (``on_free``) by the gradient operator
         (``framed_cone.gradient_products``), the same values."""
         if self._B is None and self._free is None:
             s = self.solver
-            if self.k <= ONE_PRODUCT_FACES:
+            if self.on_free:
                 gx, gy = s.face_gradients()
                 self._B = self._BtA = None      # the free lift's (``_free_lift``)
                 self._free = free_lift_arrays(gx, gy, s.area, s.tris, s.free, s.nv)
@@ -186,7 +190,7 @@ class BoundSearch:
         margin, alpha = (UNFOLD_MARGIN, UNFOLD_ALPHA) if deep else (MARGIN, ALPHA)
         Cm = 1.0 + margin * (C - 1.0)
         kappa = (Cm - 1.0) / (Cm + 1.0)
-        if self.k <= ONE_PRODUCT_FACES:
+        if self.on_free:
             return self._run_free(U, w, kappa, C, D_best, cancel, ask, alpha)
         solve = s.factorize()
         BtA = self._operators()[1]
@@ -230,8 +234,8 @@ class BoundSearch:
         return watch.kept, watch.best
 
     def _run_free(self, U, w, kappa, C, D_best, cancel, ask=None, alpha=ALPHA):
-        """``run`` on a small island (up to ONE_PRODUCT_FACES faces): ``free_admm.run_free``, the
-        iterations on the free unknowns in every face's frame."""
+        """``run`` on the free path (``on_free``: by default up to ONE_PRODUCT_FACES faces):
+        ``free_admm.run_free``, the iterations on the free unknowns in every face's frame."""
         s, nf = self.solver, len(self.solver.free)
         self._operators()
         x0 = np.concatenate([U[0, s.free], U[1, s.free]])

@@ -39,7 +39,9 @@ def test_the_mean_is_lowered_at_the_same_certified_bound(path, monkeypatch):
     """On the one-disk path (``disk_auto``) and the general one (``strategies.minimise``)."""
     if path == "general":
         from bd_uv.solvers import bound_search
-        monkeypatch.setattr(bound_search, "ONE_PRODUCT_FACES", 0)   # disk_auto.searches: no
+        from bd_uv.unwrapping import disk_auto
+        monkeypatch.setattr(bound_search, "ONE_PRODUCT_FACES", 0)
+        monkeypatch.setattr(disk_auto, "AUTO_FACES", 0)   # disk_auto.searches: no
     V, F = _three_peaks()
     r = bd_uv.unwrap(V, F, bound="auto")
     (isl,) = r.islands
