@@ -45,13 +45,15 @@ __all__ = ["minimise_disk", "searches"]
 
 # ``bound="auto"`` on a clean disk of up to this many faces is searched here, on the free
 # unknowns (``bound_search.BoundSearch``'s free path, whatever ``ONE_PRODUCT_FACES``). Was
-# ONE_PRODUCT_FACES (1000): from 1,000 to 5,000 faces the general path's set-up (its island
-# problem, the sparse operators, ``finish``, the general certificate) cost 1-3 ms more, and its
-# iterations on the whole map ~10-25 % more an iteration than the free ones (spot's 1,046-face
-# patch 2.0x -> 1.55x Blender ABF's CPU, libigl arm's 1,234-face patch 1.35x -> 1.05x; the same
-# iterations and C: issue21-auto16). Above ~5,000 faces the free iterations cost more
-# (horse's 10k-face patch: 118 -> 133 ms for 106 iterations).
-AUTO_FACES = 5000
+# ONE_PRODUCT_FACES (1000): from 1,000 to 2,000 faces the general path's set-up (its island
+# problem, the sparse operators, ``finish``, the general certificate) cost 1-3 ms more and its
+# iterations on the whole map 10-25 % more an iteration than the free ones (spot's 1,046-face
+# patch 1.8-2.0x -> 1.5-1.7x Blender ABF's CPU, libigl arm's 1,234-face patch 1.25-1.36x ->
+# 1.07-1.10x, screwdriver's 1,846-face patch 1.33-1.36x -> 1.11-1.14x; the same iterations and
+# C, the UVs to 3e-13: issue21-auto16). From ~2,000 faces the free iterations (twice the
+# gradient products' entries) cost as much, and more from 2,500 (libigl max's 2,594-face patch
+# +13 %, hemisphere.obj's 4,000 faces +10 % at load 10).
+AUTO_FACES = 2000
 
 
 def searches(disk, auto=False):

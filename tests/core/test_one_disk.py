@@ -252,10 +252,11 @@ def test_a_search_whose_map_the_disk_certificate_refuses_is_not_run_again(monkey
         runs.append(self.k)
         return run(self, *a, **k)
     monkeypatch.setattr(bs.BoundSearch, "search", counted)
+    gate = disk_auto.AUTO_FACES
     monkeypatch.setattr(disk_auto, "AUTO_FACES", 0)
     ref = bd_uv.unwrap(V, F, bound="auto")
     assert len(runs) == 1
-    monkeypatch.setattr(disk_auto, "AUTO_FACES", 5000)
+    monkeypatch.setattr(disk_auto, "AUTO_FACES", gate)
     monkeypatch.setattr(disk_auto, "_certified", lambda *a, **k: None)
     res = bd_uv.unwrap(V, F, bound="auto")
     assert len(runs) == 2                       # the one-disk path's search only
