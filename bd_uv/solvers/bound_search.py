@@ -28,20 +28,20 @@ iteration budget growing with its faces, its first target waiting longer (``targ
 
 The iterations: up to ONE_PRODUCT_FACES faces on the free unknowns in every face's frame
 (``free_admm``), above on the whole map by the gradient operator (``framed_cone``); each target's
-stop (STALL, PROGRESS, FLIPPING, MAX_ITER) and ``enough`` are watched by ``target_watch``.
+stop (STALL, PROGRESS, FLIPPING, MAX_ITER) and ``enough`` are watched by ``target_watch``; the
+lift of the maps and their max distortion are ``search_lift``'s.
 """
 import functools
 import time
 
 import numpy as np
-import scipy.sparse as sp
 
 from ..frames import frames_from_map
-from ..array_calls import einsum, quiet
-from .face_operators import free_lift_arrays
-from .framed_cone import framed_cone_projection, gradient_products, project_framed
-from .free_admm import FreeLift, run_free
+from ..array_calls import quiet
+from .framed_cone import framed_cone_projection, project_framed
+from .free_admm import run_free
 from .global_step import GlobalStep
+from .search_lift import SearchLift
 from . import target_watch
 from .target_watch import Watch, ask as _ask
 
@@ -80,7 +80,7 @@ UNFOLD_MARGIN, UNFOLD_ALPHA = 0.9, 1.7
 ONE_PRODUCT_FACES = 1000
 
 
-class BoundSearch:
+class BoundSearch(SearchLift):
     """Lower a flip-free map's max conformal distortion by ADMM onto F_C with frames.
 
     Parameters
@@ -93,85 +93,20 @@ class BoundSearch:
     connected : bool, ``tris`` are one connected piece (one ``mesh.Island``): its components
         are not searched for (``GlobalStep``)
     ranks : (nv,) int64, optional, the vertices' elimination order (``GlobalStep``)
+    free : bool, optional, iterate on the free unknowns in every face's frame (``free_admm``)
+        whatever the size; by default up to ONE_PRODUCT_FACES faces (``disk_auto`` asks it up
+        to its own gate: ``ops`` may then lack the (4k, 2nv) operators)
     """
 
-    def __init__(self, ops, nv, tris, fixed, connected=False, ranks=None):
-        self.solver = s = GlobalStep(ops, nv, fixed, tris=tris, connected=connected,
-                                     ranks=ranks)
-        self.k = len(s.area)
-        self.UF = None
-        self._rhs_fixed = None      # (UF, its share of the right-hand side; small: its FreeLift)
+    def __init__(self, ops, nv, tris, fixed, connected=False, ranks=None, free=None):
+        solver = GlobalStep(ops, nv, fixed, tris=tris, connected=connected, ranks=ranks)
+        super().__init__(solver, len(solver.area) <= ONE_PRODUCT_FACES if free is None
+                         else bool(free))
         self.iterations = 0
         self.ended = self.pending = False   # the last run: ``enough`` stopped it; its best unasked
-        self._B = self._free = None
-        self._measured = None       # (the map distortion_of measured last, its max)
         # ``limit_effort``'s: bounded as auto's least C, its iteration budget, the first
         # target's STALL
         self.least, self.budget, self.first_stall = False, None, target_watch.STALL
-
-    def _operators(self):
-        """The lift of a map straight to every face's doubled alpha and beta (eq. 4.19), one
-        sparse product: ``B`` (4k, 2nv) takes ``[u; v]`` to rows ``Re 2alpha = u_x + v_y``,
-        ``Im 2alpha = v_x - u_y``, ``Re 2beta = u_x - v_y``, ``Im 2beta = v_x + u_y``. The
-        Jacobians' Frobenius norm is half this one's, so the area-weighted least-squares step in
-        these coordinates is the same step (its right-hand side ``B_free^T A (z - lam) / 2``), and
-        the cone projection needs no change of coordinates: about half the array operations an
-        iteration made on the (u_x, u_y; v_x, v_y) rows. Returns (lift, rhs), each
-        ``f(x, out)``: above ONE_PRODUCT_FACES faces by the gradient operator
-        (``framed_cone.gradient_products``), the same values."""
-        if self._B is None and self._free is None:
-            s = self.solver
-            if self.k <= ONE_PRODUCT_FACES:
-                gx, gy = s.face_gradients()
-                self._B = self._BtA = None      # the free lift's (``_free_lift``)
-                self._free = free_lift_arrays(gx, gy, s.area, s.tris, s.free, s.nv)
-            else:
-                G = s.G
-                GTA = s.GT[s.free] @ sp.diags_array(np.concatenate([s.area, s.area]))
-                self._B, self._BtA = gradient_products(G, sp.csr_array(GTA), self.k, s.nv,
-                                                         len(s.free))
-        return self._B, self._BtA
-
-    def max_distortion(self, W):
-        """Max conformal distortion (eq. 4.9) of the map with doubled alpha and beta W (4, k)
-        (``_operators``); inf when a face flips or collapses."""
-        with quiet("invalid", "divide"):
-            return self._max_distortion(W)
-
-    @staticmethod
-    def _max_distortion(W):
-        """``max_distortion`` where the caller has silenced division warnings."""
-        num = einsum("ij,ij->j", W[2:], W[2:])                      # |2 beta|^2
-        num /= einsum("ij,ij->j", W[:2], W[:2])                     # over |2 alpha|^2
-        r = float(np.maximum.reduce(num))                           # |beta|^2 / |alpha|^2
-        if not r < 1.0:
-            return np.inf
-        r = np.sqrt(r)
-        return (1.0 + r) / (1.0 - r)
-
-    def _alpha2(self, U):
-        """(k,) complex, every face's doubled alpha of the map U (2, nv)."""
-        W = self._lift(U)
-        return W[0] + 1j * W[1]
-
-    def _lift(self, U, out=None):
-        """(4, k) doubled alpha and beta of the map U (2, nv) (into ``out`` when given)."""
-        if self._free is not None:
-            free = self.solver.free
-            return self._free_lift().lift_map(np.concatenate([U[0, free], U[1, free]]), out)
-        out = np.empty((4, self.k)) if out is None else out
-        self._B(U.ravel(), out.reshape(-1))
-        return out
-
-    def _free_lift(self):
-        """The small island's ``free_admm.FreeLift`` at the fixed vertices' values ``UF``."""
-        if self._rhs_fixed is None or self._rhs_fixed[0] is not self.UF:
-            s = self.solver
-            Ufix = np.zeros((2, s.nv))
-            Ufix[:, s.fixed] = self.UF.T
-            self._rhs_fixed = (self.UF, FreeLift(self._free, Ufix.ravel(),
-                                                 -s.fixed_share(self.UF).T.ravel()))
-        return self._rhs_fixed[1]
 
     def run(self, U, w, C, D_best, cancel=None, enough=None, ready=None, deep=False):
         """ADMM towards F_C with frames w (unit complex, (k,)), from U (2, nv): rows u and v;
@@ -186,7 +121,7 @@ class BoundSearch:
         margin, alpha = (UNFOLD_MARGIN, UNFOLD_ALPHA) if deep else (MARGIN, ALPHA)
         Cm = 1.0 + margin * (C - 1.0)
         kappa = (Cm - 1.0) / (Cm + 1.0)
-        if self.k <= ONE_PRODUCT_FACES:
+        if self.on_free:
             return self._run_free(U, w, kappa, C, D_best, cancel, ask, alpha)
         solve = s.factorize()
         BtA = self._operators()[1]
@@ -230,8 +165,8 @@ class BoundSearch:
         return watch.kept, watch.best
 
     def _run_free(self, U, w, kappa, C, D_best, cancel, ask=None, alpha=ALPHA):
-        """``run`` on a small island (up to ONE_PRODUCT_FACES faces): ``free_admm.run_free``, the
-        iterations on the free unknowns in every face's frame."""
+        """``run`` on the free path (``on_free``: by default up to ONE_PRODUCT_FACES faces):
+        ``free_admm.run_free``, the iterations on the free unknowns in every face's frame."""
         s, nf = self.solver, len(self.solver.free)
         self._operators()
         x0 = np.concatenate([U[0, s.free], U[1, s.free]])
@@ -274,24 +209,6 @@ class BoundSearch:
 
     def _count(self, n):
         self.iterations += n
-
-    def distortion_of(self, u):
-        """Max conformal distortion (inf when a face flips) of the map u (nv,) complex, as
-        ``search`` measures the map it starts from (its fixed vertices held where u has them;
-        the lift kept when they are already there)."""
-        if self._measured is not None and self._measured[0] is u:
-            return self._measured[1]        # this very map, measured last (the same bits)
-        U = np.array([u.real, u.imag])          # np.stack's rows, without its wrapper
-        UF = U[:, self.solver.fixed].T
-        if self.UF is None or not np.array_equal(self.UF, UF):
-            self.UF = UF
-        self.solver._assemble()
-        self._operators()
-        D = self.max_distortion(self._lift(U))
-        # kept for ``search`` from the map its caller just measured (``disk_auto``); u is the
-        # caller's array, read-only here: a copy of it (another object) is measured again
-        self._measured = (u, D)
-        return D
 
     def search(self, u, frames_of=None, report=None, deadline=None, cancel=None, enough=None,
                ready=None, deep=False):

@@ -16,9 +16,12 @@ well over the conformal map's, its faces below the max are given back to the con
 (``mean_relax``, as the general path does): kept when that map certifies at a C no higher.
 
 Anything else goes the general way: a conformal map that flips or exceeds the limit (bent into a
-bound first), a time budget (Dinkelbach steps), more than ``bound_search.ONE_PRODUCT_FACES`` faces
-(the search's sparse operators: the set-up is a small part there), a map the disk certificate does
-not clear.
+bound first), a time budget (Dinkelbach steps), more than AUTO_FACES faces for the least C (more
+than ``bound_search.ONE_PRODUCT_FACES`` for a numeric C whose conformal map lies over itself), a
+map the disk certificate does not clear. Over ``bound_search.ONE_PRODUCT_FACES`` faces (where the
+general path searched before AUTO_FACES was raised) a conformal map whose boundary is not one
+simple loop goes the general way at once: its search here would mostly end in a map the
+certificate does not clear, and the general path would search again.
 """
 import time
 
@@ -30,8 +33,9 @@ from ..errors import CancelledError
 from ..geometry import local_coordinates
 from ..metrics import mean_distortion
 from ..solvers import bound_search
-from .disk_certificate import certify_measured_disk, measure_disk, turns_once
-from . import mean_relax
+from .disk_certificate import (certify_measured_disk, measure_disk, simple_ccw_loop,
+                               turns_once)
+from . import mean_relax, searched
 from .finish import HIGH_DISTORTION, certified_bound, placed
 from .one_disk import report_step
 from .problem import normalised
@@ -39,11 +43,25 @@ from .results import IslandResult, UnwrapResult
 
 __all__ = ["minimise_disk", "searches"]
 
+# ``bound="auto"`` on a clean disk of up to this many faces is searched here, on the free
+# unknowns (``bound_search.BoundSearch``'s free path, whatever ``ONE_PRODUCT_FACES``). Was
+# ONE_PRODUCT_FACES (1000): from 1,000 to 2,000 faces the general path's set-up (its island
+# problem, the sparse operators, ``finish``, the general certificate) cost 1-3 ms more and its
+# iterations on the whole map 10-25 % more an iteration than the free ones (spot's 1,046-face
+# patch 1.8-2.0x -> 1.5-1.7x Blender ABF's CPU, libigl arm's 1,234-face patch 1.25-1.36x ->
+# 1.07-1.10x, screwdriver's 1,846-face patch 1.33-1.36x -> 1.11-1.14x; the same iterations and
+# C, the UVs to 3e-13: issue21-auto16). From ~2,000 faces the free iterations (twice the
+# gradient products' entries) cost as much, and more from 2,500 (libigl max's 2,594-face patch
+# +13 %, hemisphere.obj's 4,000 faces +10 % at load 10).
+AUTO_FACES = 2000
 
-def searches(disk):
-    """Does ``minimise_disk`` search this ``Disk`` (else it leaves it to the general path)?"""
-    # ONE_PRODUCT_FACES is read at the call (tests set it)
-    return len(disk.island.tris) <= bound_search.ONE_PRODUCT_FACES
+
+def searches(disk, auto=False):
+    """Does ``minimise_disk`` search this ``Disk`` (else it leaves it to the general path), for
+    a numeric C whose conformal map lies over itself (``unwrap``'s question), or for the least C
+    (``auto``)?"""
+    # the gates are read at the call (tests set them)
+    return len(disk.island.tris) <= (AUTO_FACES if auto else bound_search.ONE_PRODUCT_FACES)
 
 
 def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="auto"):
@@ -69,11 +87,14 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
     """
     isl = disk.island
     k, nv = len(isl.tris), len(isl.vertices)
-    if not searches(disk):
+    unfold = requested != "auto"
+    if not searches(disk, not unfold):
         return None
+    if k > bound_search.ONE_PRODUCT_FACES and not simple_ccw_loop(
+            np.array([u.real, u.imag]).T.take(isl.loops[0], axis=0)):
+        return None     # lying over itself: the general path (see the module's docstring)
     t = time.perf_counter()
     area3d = float(np.add.reduce(disk.area))
-    unfold = requested != "auto"
     if unfold:
         # the disk's own geometry: the iterations do not depend on its scale or place (the same
         # maps up to rounding), and the unfold is not compared with the general path's bits
@@ -84,7 +105,7 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
                                                              area3d), isl.tris))
     ops = JacobianOperators(None, None, None, None, An, isl.tris, Gn[:, 0, :], Gn[:, 1, :])
     bs = bound_search.BoundSearch(ops, nv, isl.tris, isl.loops[0][:1], connected=True,
-                                  ranks=disk.ranks)
+                                  ranks=disk.ranks, free=True)
     D0 = bs.distortion_of(u)
     if not (np.isfinite(D0) and D0 <= limit):
         return None
@@ -123,6 +144,8 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
     done = (found[-1] if found else
             _certified(us, disk, area3d, requested, certified_bound(D) * (1.0 + RTOL)))
     if done is None:
+        if not unfold and D < D0:   # the general path's search from u: this one's map
+            searched.hand_over(isl, u, us, D, bs.iterations)
         return None
     relax = 0.0
     if not unfold and D < D0:

@@ -4,7 +4,10 @@ with and ``bounded.bend`` polishes a projected map with; and ``over_bound``, a f
 whose max distortion is over the bound asked, lowered by that search rather than bent by
 projection iterations.
 """
+import threading
 import time
+
+import numpy as np
 
 from ..solvers.bound_search import BoundSearch
 from ..solvers.ordered_ldl import vertex_ranks
@@ -18,6 +21,29 @@ from .margins import certified_bound, solve_bound
 # optimum's 1.993, lion-head 1.59 against 1.5703), so FAR leaves room for a C it did not reach.
 FAR = 1.25
 MEAN_SEARCH = 12   # distortion evaluations between the start and the searched map (``along``)
+# A search already run on an island by ``disk_auto`` whose map its certificate did not clear
+# (the map lies over itself): handed to the general path's search of the same island from the
+# same start, which would run the same iterations again (``hand_over``)
+_handed = threading.local()
+
+
+def hand_over(island, u, searched, D, iterations):
+    """Keep ``bound="auto"``'s search of ``island`` (``mesh.Island``) from the map u (nv,)
+    complex: its map ``searched`` of max distortion D after ``iterations``, for the next
+    ``search`` of this very island from this very start on this thread (the least C, no time
+    budget): its answer without the iterations (the same map, to rounding: ``disk_auto`` runs
+    them on the same normalised geometry and start)."""
+    _handed.entry = (island, u, searched, D, iterations)
+
+
+def _handed_over(prob, u, least):
+    """The search ``hand_over`` kept for this island and start u, or None (then forgotten)."""
+    entry = getattr(_handed, "entry", None)
+    _handed.entry = None
+    if entry is None or not least or entry[0] is not prob.island or len(prob.pin_idx) \
+            or not np.array_equal(entry[1], u):
+        return None
+    return entry[2:]
 
 
 def search(prob, u, report, budget, flags, t0, enough=None, least=False):
@@ -30,6 +56,11 @@ def search(prob, u, report, budget, flags, t0, enough=None, least=False):
     stopped it."""
     if len(prob.pin_idx) >= prob.nv:
         return u, prob.distortion(u)
+    handed = _handed_over(prob, u, least and budget is None)
+    if handed is not None:
+        us, D, iterations = handed
+        prob.iterations += iterations
+        return us.copy(), D
     t = time.perf_counter()
     fixed = prob.pin_idx if len(prob.pin_idx) else prob.island.loops[0][:1]
     u = u.copy()

@@ -39,7 +39,9 @@ def test_the_mean_is_lowered_at_the_same_certified_bound(path, monkeypatch):
     """On the one-disk path (``disk_auto``) and the general one (``strategies.minimise``)."""
     if path == "general":
         from bd_uv.solvers import bound_search
-        monkeypatch.setattr(bound_search, "ONE_PRODUCT_FACES", 0)   # disk_auto.searches: no
+        from bd_uv.unwrapping import disk_auto
+        monkeypatch.setattr(bound_search, "ONE_PRODUCT_FACES", 0)
+        monkeypatch.setattr(disk_auto, "AUTO_FACES", 0)   # disk_auto.searches: no
         # from its conformal map (max 3.05): the general path would take the disk's angle start
         # (``angle_start.better_start``: max 2.28 < 3.05; C 2.110, mean 1.314, relaxed too)
         from bd_uv.unwrapping import angle_start

@@ -192,6 +192,89 @@ def test_an_overlapping_conformal_map_is_cut_by_the_general_path():
                                                  [5.0, 5.0])] == [True, True]
 
 
+def _helix_strip():
+    """``test_an_overlapping_conformal_map_is_cut_by_the_general_path``'s strip (298 faces)."""
+    t = np.linspace(0, 3 * np.pi, 150)
+    n = len(t)
+    V = np.r_[np.stack([np.cos(t), np.sin(t), 0.1 * t], 1),
+              np.stack([1.3 * np.cos(t), 1.3 * np.sin(t), 0.1 * t], 1)]
+    j = np.arange(n - 1)
+    return V, np.r_[np.c_[j, n + j, j + 1], np.c_[n + j, n + j + 1, j + 1]].astype(np.int64)
+
+
+def test_auto_over_one_product_faces_leaves_a_conformal_map_over_itself_to_the_general_path(
+        monkeypatch):
+    """bound="auto" on a disk over ONE_PRODUCT_FACES faces (within AUTO_FACES): a conformal map
+    whose boundary is not one simple loop is left to the general path before any search here
+    (which would search it again): the general path's UVs bit for bit, one search only."""
+    import time
+    import bd_uv.solvers.bound_search as bs
+    from bd_uv.unwrapping import disk_auto
+    V, F = _helix_strip()
+    disk = one_disk.find(V, F)
+    _, u, _ = one_disk.unwrap_disk(V, F, disk, None, time.perf_counter())
+    assert not disk_certificate.simple_ccw_loop(np.c_[u.real, u.imag][disk.island.loops[0]])
+    monkeypatch.setattr(bs, "ONE_PRODUCT_FACES", len(F) - 1)
+    assert len(F) <= disk_auto.AUTO_FACES
+    searches = []
+    run = bs.BoundSearch.search
+
+    def counted(self, *a, **k):
+        searches.append(self.k)
+        return run(self, *a, **k)
+    monkeypatch.setattr(bs.BoundSearch, "search", counted)
+    assert disk_auto.minimise_disk(V, disk, u, 1000.0, 0.0) is None and not searches
+    res = bd_uv.unwrap(V, F, bound="auto")
+    n = len(searches)
+    monkeypatch.setattr(disk_auto, "AUTO_FACES", 0)
+    ref = bd_uv.unwrap(V, F, bound="auto")
+    assert len(searches) == 2 * n
+    assert np.array_equal(res.corner_uv, ref.corner_uv, equal_nan=True)
+    assert [r.flags for r in res.islands] == [r.flags for r in ref.islands]
+    certs = certify_islands(V, F, res.corner_uv, res.face_island,
+                            [r.bound_certified for r in res.islands])
+    assert all(c.certified and c.overlap_free for c in certs)
+
+
+def test_a_search_whose_map_the_disk_certificate_refuses_is_not_run_again(monkeypatch):
+    """bound="auto": where the one-disk path's searched map is not cleared by its certificate
+    (a map lying over itself, as libigl bunny's 1,595-face patch: its conformal map is one
+    simple loop, its searched map turns twice), the general path takes that search
+    (``searched.hand_over``) instead of running its iterations again: one search, the general
+    path's iterations, bound and UVs to rounding; a search of another start runs as ever."""
+    import bd_uv.solvers.bound_search as bs
+    from bd_uv.unwrapping import disk_auto, searched
+    V, F = curved_grid()
+    runs = []
+    run = bs.BoundSearch.search
+
+    def counted(self, *a, **k):
+        runs.append(self.k)
+        return run(self, *a, **k)
+    monkeypatch.setattr(bs.BoundSearch, "search", counted)
+    gate = disk_auto.AUTO_FACES
+    monkeypatch.setattr(disk_auto, "AUTO_FACES", 0)
+    ref = bd_uv.unwrap(V, F, bound="auto")
+    assert len(runs) == 1
+    monkeypatch.setattr(disk_auto, "AUTO_FACES", gate)
+    monkeypatch.setattr(disk_auto, "_certified", lambda *a, **k: None)
+    res = bd_uv.unwrap(V, F, bound="auto")
+    assert len(runs) == 2                       # the one-disk path's search only
+    (a,), (b,) = res.islands, ref.islands
+    assert a.iterations == b.iterations and a.bound_certified == b.bound_certified
+    assert a.flags == b.flags and "projected" in a.flags
+    assert np.abs(res.corner_uv - ref.corner_uv).max() < 1e-12
+    assert certify_islands(V, F, res.corner_uv, res.face_island, [a.bound_certified])[0].certified
+    # kept for that island and start only, and once
+    prob = type("P", (), {"island": object(), "pin_idx": np.zeros(0, np.int64)})()
+    u = np.arange(3.0) + 0j
+    searched.hand_over(prob.island, u, u + 1, 1.5, 7)
+    assert searched._handed_over(prob, u + 0, True)[1:] == (1.5, 7)
+    assert searched._handed_over(prob, u, True) is None
+    searched.hand_over(prob.island, u, u + 1, 1.5, 7)
+    assert searched._handed_over(prob, u + 1, True) is None
+
+
 def _central_rings(V, F, faces):
     """Whole rings of faces around the face nearest the vertices' mean, grown over shared edges
     until at least ``faces`` faces: a disk cut from a closed or larger mesh."""
@@ -316,9 +399,11 @@ def test_the_free_unknowns_iterations_reach_the_whole_maps_bound(monkeypatch):
     the iterations on the whole map (the path of islands over ONE_PRODUCT_FACES faces) reach the
     same bound, to rounding."""
     import bd_uv.solvers.bound_search as bs
+    from bd_uv.unwrapping import disk_auto
     V, F = load_off("nefertiti.off")
     small = bd_uv.unwrap(V, F, bound="auto")
     monkeypatch.setattr(bs, "ONE_PRODUCT_FACES", 0)
+    monkeypatch.setattr(disk_auto, "AUTO_FACES", 0)     # the general path: the whole map
     whole = bd_uv.unwrap(V, F, bound="auto")
     a, b = small.islands[0], whole.islands[0]
     assert a.iterations == b.iterations
@@ -407,7 +492,7 @@ def test_finishs_measure_certifies_as_the_disk_certificates_own(name):
 
 def test_auto_on_a_disk_leaves_to_the_general_path_what_it_does_not_search():
     """``disk_auto.minimise_disk`` answers only a flip-free conformal map within the limit on an
-    island of up to ONE_PRODUCT_FACES faces; otherwise None (the general path bends, solves or
+    island of up to AUTO_FACES faces; otherwise None (the general path bends, solves or
     searches on the whole map). Where it answers, its C is the map's max distortion as
     ``certify_islands`` measures it from the UVs, and the search lowered it below the conformal
     map's."""
@@ -425,12 +510,22 @@ def test_auto_on_a_disk_leaves_to_the_general_path_what_it_does_not_search():
     assert r.flags == ("projected",) and r.iterations > 0 and r.max_distortion < D0
     (c,) = certify_islands(V, F, done.corner_uv, done.face_island, [r.bound_certified])
     assert c.certified and c.max_distortion == r.max_distortion <= r.bound_certified
+    old = disk_auto.AUTO_FACES
+    try:
+        disk_auto.AUTO_FACES = len(F) - 1
+        assert disk_auto.minimise_disk(V, disk, u, 1000.0, 0.0) is None
+    finally:
+        disk_auto.AUTO_FACES = old
+    # over ONE_PRODUCT_FACES faces (the general path's free iterations end there) and within
+    # AUTO_FACES: searched here on the free unknowns, the general path's iterations and bound
     old = bs.ONE_PRODUCT_FACES
     try:
         bs.ONE_PRODUCT_FACES = len(F) - 1
-        assert disk_auto.minimise_disk(V, disk, u, 1000.0, 0.0) is None
+        big = disk_auto.minimise_disk(V, disk, u, 1000.0, 0.0).islands[0]
     finally:
         bs.ONE_PRODUCT_FACES = old
+    assert big.iterations == r.iterations and big.bound_certified == r.bound_certified
+    assert np.abs(big.uv - r.uv).max() < 1e-12
 
 
 @pytest.mark.parametrize("nx, ny", [(6, 5), (12, 9)])
