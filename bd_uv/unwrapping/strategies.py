@@ -87,6 +87,13 @@ def minimise(prob, start, limit, budget, flags, report, t0, one_to_one=False):
                 if relaxed is not None:
                     best = projected = relaxed
                     flags.append("mean_relaxed")
+                # a mean still far over the conformal start's: C given back for it
+                capped = (mean_relax.capped_island(prob, start.u, best[0], start.D)
+                          if not steps and prob.enough is None and not one_to_one
+                          and start.name == "conformal" else None)
+                if capped is not None:
+                    best = projected = capped
+                    flags.append("mean_capped")
     if best is None or steps:  # the conic programs' anchors, weights and scale, at the map
         formulate(prob, start if projected is None else  # the steps start from
                   Start(projected[0], frames_from_map(prob.alpha(projected[0])), start.name,

@@ -155,3 +155,30 @@ def test_a_mean_within_the_rise_is_refused_without_measuring_the_conformal_map(m
         mean_relax.relaxed(disk.Z, disk.G, disk.area, isl.tris, len(isl.vertices), u_conf, u,
                            mean=mean)
         assert measured and measured[0]              # the conformal map measured first
+
+
+def test_capped_moves_a_map_back_towards_the_conformal_map_until_its_mean_is_within_the_cap():
+    """``mean_relax.capped``: a map whose mean is far over the conformal map's (here the
+    conformal map stretched 1.8x along u) is taken back along the segment to the conformal map
+    until its mean is within 1 + MEAN_CAP of the conformal map's, and no further (16 halvings);
+    a map within the cap is left alone. Means recomputed by SVD."""
+    V, F = _three_peaks()
+    disk = one_disk.find(V, F)
+    _, u0, _ = one_disk.unwrap_disk(V, F, disk, None, 0.0)
+    u1 = 1.8 * u0.real + 1j * u0.imag
+    tris = disk.island.tris
+    cb = 0.5 * (disk.G[:, 0] + 1j * disk.G[:, 1])
+
+    Fi = F[disk.island.faces]
+
+    def mean(u):
+        return _mean(V, Fi, reference_distortion(V, Fi, np.stack([u.real, u.imag], 1)[tris])[0])
+    cap = (1.0 + mean_relax.MEAN_CAP) * mean(u0)
+    assert mean(u1) > cap                                   # the premise
+    y = mean_relax.capped(cb, disk.area, tris, u0, u1)
+    s = float(np.real((y - u0) @ np.conj(u1 - u0)) / np.real((u1 - u0) @ np.conj(u1 - u0)))
+    assert np.allclose(y, u0 + s * (u1 - u0), atol=1e-12)   # on the segment
+    assert 0.0 < s < 1.0
+    assert mean(y) <= cap * (1 + 1e-12)
+    assert mean(u0 + (s + 2.0 ** -15) * (u1 - u0)) > cap    # and no nearer the search's map
+    assert mean_relax.capped(cb, disk.area, tris, u0, 1.01 * u0.real + 1j * u0.imag) is None
