@@ -118,14 +118,19 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
     voff = np.concatenate([[0], np.cumsum(nvs)])
     foff = np.concatenate([[0], np.cumsum(nfs)])
     n = int(voff[-1])
-    P = V[np.concatenate([c.vertices for c in charts])]
-    idx = _far_pairs(P, charts, voff)
-    del P                   # the batch's positions are not held through the factors
-    val = np.tile(np.array([0.0, 1.0], np.complex128), k)
-
     if n > BATCH_VERTICES:  # a large batch's factors are memory peaks: AMD's fill (orders.py)
         orders = None
-    vk, fresh = orders.keys(charts, voff) if orders is not None else (None, None)
+    # The batch's mesh vertices (chart after chart), formed once: held through the solves only
+    # where ``orders`` reads them (a batch of at most ``orders.BATCH_VERTICES`` vertices).
+    gv = np.concatenate([c.vertices for c in charts])
+    P = V[gv]
+    idx = _far_pairs(P, charts, voff)
+    del P                   # the batch's positions are not held through the factors
+    if orders is None:
+        gv = None
+    val = np.tile(np.array([0.0, 1.0], np.complex128), k)
+
+    vk, fresh = orders.keys(charts, voff, gv) if orders is not None else (None, None)
     budget = SLACK * orders.fill if orders is not None else 0.0
 
     def run(r):
@@ -162,7 +167,6 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
         runs = [(0, j), (j, k)]
         out = map_blocks(run, runs)
     if orders is not None:
-        gv = np.concatenate([c.vertices for c in charts])
         orders.solved(charts, runs, [(fill, rank, gv[voff[a]:voff[b]][free])
                                      for (a, b), ((fill, rank, free), *_) in zip(runs, out)],
                       fresh)
