@@ -94,7 +94,7 @@ def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None, big=None):
                 break
             continue
         # Every piece's restricted stretch at once.
-        sig = np.concatenate([todo[j][1][np.searchsorted(todo[j][0], piece)]
+        sig = np.concatenate([todo[j][1][todo[j][0].searchsorted(piece)]
                               for piece, j in pieces])
         fa = np.concatenate([piece for piece, _ in pieces])
         label = np.repeat(np.arange(len(pieces)), [len(piece) for piece, _ in pieces])
@@ -184,7 +184,7 @@ def bisect(pieces, E, cut, A, cen, poly=None, orders=None):
     else:
         nowner = np.zeros(len(mass), dtype=np.int64)
         nowner[node] = owner
-    offsets = np.searchsorted(nowner, np.arange(len(pieces) + 1))
+    offsets = nowner.searchsorted(np.arange(len(pieces) + 1))
     na, nb = (la, lb) if node is None else (node[la], node[lb])     # each face its own node
     across = na != nb
     if across.all():
@@ -201,7 +201,7 @@ def bisect(pieces, E, cut, A, cen, poly=None, orders=None):
     fside = side if node is None else side[node]
     new = fe[fside[la] != fside[lb]]
     cut[new[split[owner[local[E.faces[new, 0]]]]]] = True
-    for j in np.flatnonzero(split):
+    for j in split.ravel().nonzero()[0]:
         f = pieces[j]
         sj = fside[local[f]]
         out[j] = (f[sj], f[~sj])

@@ -89,7 +89,7 @@ class ChartMaps:
         map), for the final unwrap to certify rather than solve again. Copies: a view would
         keep the whole batch's map alive (on a 500k-face mesh ~20 MB of maps held to the end
         for ~4 MB of charts that passed)."""
-        for j in np.flatnonzero(passed):
+        for j in passed.ravel().nonzero()[0]:
             known[charts[j].faces.tobytes()] = self.u[self.voff[j]:self.voff[j + 1]].copy()
 
 
@@ -115,8 +115,8 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
     k = len(charts)
     nvs = np.array([len(c.vertices) for c in charts])
     nfs = np.array([len(c.faces) for c in charts])
-    voff = np.concatenate([[0], np.cumsum(nvs)])
-    foff = np.concatenate([[0], np.cumsum(nfs)])
+    voff = np.concatenate([[0], nvs.cumsum()])
+    foff = np.concatenate([[0], nfs.cumsum()])
     n = int(voff[-1])
     if n > BATCH_VERTICES:  # a large batch's factors are memory peaks: AMD's fill (orders.py)
         orders = None
@@ -178,7 +178,7 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
     if limits is None:
         cross = boundary_crossings(uv, [c.loops[0] + voff[j] for j, c in enumerate(charts)])
     else:
-        ask = np.flatnonzero(np.isfinite(maxD) & (maxS <= limits[0]) & (meanD <= limits[1]))
+        ask = (np.isfinite(maxD) & (maxS <= limits[0]) & (meanD <= limits[1])).ravel().nonzero()[0]
         cross = np.full(k, -1, dtype=np.int64)
         cross[ask] = boundary_crossings(uv, [charts[j].loops[0] + voff[j] for j in ask])
     return ChartMaps(uv, voff, foff, D, St, maxD, maxS, cross, np.stack([a + b, a - b], axis=1),

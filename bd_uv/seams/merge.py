@@ -89,7 +89,7 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
             diff &= ((ga >= 0) | (gb >= 0)) & (ga != gb)
         if not diff.any():
             return chs
-        ei = np.flatnonzero(inner)[diff]
+        ei = inner.ravel().nonzero()[0][diff]
         la, lb = np.minimum(la[diff], lb[diff]), np.maximum(la[diff], lb[diff])
         uk, inv, _ = radix.unique(la * len(chs) + lb, len(chs) ** 2)   # np.unique's
         shared = np.bincount(inv, E.length[ei] * E.cost[ei])
@@ -124,20 +124,20 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
             trial[ei[gone]] = False
             if E.fans is not None:          # the unions from their two charts (``unions``)
                 chosen = np.array(chosen, dtype=np.int64)
-                at = np.argsort(chosen)
-                owner = at[np.searchsorted(chosen[at], inv[gone])]
+                at = chosen.argsort()
+                owner = at[chosen[at].searchsorted(inv[gone])]
                 for i, c in union_charts(F, E, chs, label, uk[chosen] // len(chs),
                                          uk[chosen] % len(chs), ei[gone], owner, trial):
                     if c.kind == "disk":
                         disks.append((c, trial, int(chosen[i])))
                 continue
-            faces = np.flatnonzero(used[lay][label])
+            faces = used[lay][label].ravel().nonzero()[0]
             for c in charts(F, E, trial, faces):
                 lab = label[c.faces]
                 other = lab[lab != lab[0]]
                 if c.kind == "disk" and len(other):
                     a, b = min(lab[0], other[0]), max(lab[0], other[0])
-                    disks.append((c, trial, int(np.searchsorted(uk, a * len(chs) + b))))
+                    disks.append((c, trial, int(uk.searchsorted(a * len(chs) + b))))
         if not disks:
             if not any(layers):
                 return chs
@@ -147,7 +147,7 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
                             if (len(c.faces), len(c.vertices), len(c.loops[0])) in sizes
                             else np.nan for c, _, _ in disks])
         ok = np.zeros(len(disks), dtype=bool)
-        new = np.flatnonzero(np.isnan(stretch))
+        new = np.isnan(stretch).ravel().nonzero()[0]
         if len(new):
             union = [disks[j][0] for j in new]
             cm = chart_maps(V, union, geom, limits=(S * MARGIN, mean_cap(C)), orders=orders)
@@ -158,7 +158,7 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
                 cm.remember(union, ok[new], known)
         pair = np.array([p for _, _, p in disks], dtype=np.int64)
         px, py = uk[pair] // len(chs), uk[pair] % len(chs)
-        for j in np.flatnonzero(~(stretch <= HOPELESS * S)):
+        for j in (~(stretch <= HOPELESS * S)).ravel().nonzero()[0]:
             far_a.append(int(chs[px[j]].faces[0]))
             far_b.append(int(chs[py[j]].faces[0]))
         merged = np.zeros(len(chs), dtype=bool)
@@ -189,7 +189,7 @@ def _member(a, b):
     if len(b) == 0 or len(a) == 0:
         return np.zeros(len(a), dtype=bool)
     b = np.sort(b)
-    return b[np.minimum(np.searchsorted(b, a), len(b) - 1)] == a
+    return b[np.minimum(b.searchsorted(a), len(b) - 1)] == a
 
 
 def _quantize(x, digits=9):

@@ -84,7 +84,7 @@ class Orders:
         at = _starts(pieces)
         b = self.face_block[fa]
         lo, hi = np.minimum.reduceat(b, at), np.maximum.reduceat(b, at)
-        for j in np.flatnonzero((lo < 0) | (lo != hi)).tolist():
+        for j in ((lo < 0) | (lo != hi)).ravel().nonzero()[0].tolist():
             keys[at[j]:at[j] + len(pieces[j])] = -1
         return keys
 
@@ -94,7 +94,7 @@ class Orders:
         self.face_key[fa] = keys
         at = _starts(pieces)
         changed = np.logical_or.reduceat(before != keys, at)
-        for j in np.flatnonzero(changed).tolist():
+        for j in changed.ravel().nonzero()[0].tolist():
             self.face_block[pieces[j]] = self.blocks
             self.blocks += 1
 
@@ -138,14 +138,14 @@ class Orders:
                                          != s1 * s1)
                     k[sep] += LAST
                     rank = np.empty(len(sep), np.int64)
-                    rank[np.argsort(k[sep], kind="stable")] = np.arange(len(sep))
+                    rank[k[sep].argsort(kind="stable")] = np.arange(len(sep))
                     self.key[c.vertices[sep]] = self.given + rank
                     self.given += len(sep)
                     self._block(c.faces)
                 vk[voff[j]:voff[j + 1]] = k
         if fresh.any():
-            self._fresh([charts[j] for j in np.flatnonzero(fresh)])
-            for j in np.flatnonzero(fresh):
+            self._fresh([charts[j] for j in fresh.ravel().nonzero()[0]])
+            for j in fresh.ravel().nonzero()[0]:
                 vk[voff[j]:voff[j + 1]] = self.key[charts[j].vertices]
         return vk, fresh
 
@@ -170,7 +170,7 @@ class Orders:
         """AMD of the charts' vertex graphs (one block-diagonal pattern); their vertices keyed
         in its order (the batch after every key so far), each chart's faces one block."""
         nvs = np.array([len(c.vertices) for c in charts])
-        off = np.concatenate([[0], np.cumsum(nvs)])
+        off = np.concatenate([[0], nvs.cumsum()])
         t = np.concatenate([c.tris + off[j] for j, c in enumerate(charts)])
         a, b = t.ravel(), t[:, [1, 2, 0]].ravel()
         n = int(off[-1])
@@ -233,13 +233,13 @@ def _factor(A, keys):
 def _ranks(keys):
     """The stable order of ``keys``, their dense ranks (``np.unique``'s inverse; None where no
     two keys are equal) and the number of distinct keys: one sort, not ``np.unique``'s."""
-    o = np.argsort(keys, kind="stable")
+    o = keys.argsort(kind="stable")
     s = keys[o]
     new = s[1:] != s[:-1]
     if new.all():
         return o, None, len(o)
     rs = np.zeros(len(o), np.int64)
-    np.cumsum(new, out=rs[1:])
+    new.cumsum(out=rs[1:])
     r = np.empty(len(o), np.int64)
     r[o] = rs
     return o, r, int(rs[-1]) + 1 if len(o) else 0
@@ -259,7 +259,7 @@ def fiedler_solver(rows, cols, vals, keys, upper):
     k = len(keys)
     if (keys >= 0).all():
         # The keys' stable order (the radix order of their dense ranks, as it was formed)
-        f = ordered_ldl.Factor(rows, cols, vals, k, np.argsort(keys, kind="stable"))
+        f = ordered_ldl.Factor(rows, cols, vals, k, keys.argsort(kind="stable"))
         if not f.repeated():
             return f.solve if f.lnz >= 0 and f.factor() else spd_solver(upper(), upper=True)
     K = upper()
@@ -270,7 +270,7 @@ def fiedler_solver(rows, cols, vals, keys, upper):
     if (keys >= 0).all():
         cols = np.repeat(np.arange(k, dtype=np.int64), np.diff(K.indptr))
         f = ordered_ldl.Factor(K.indices.astype(np.int64), cols, K.data, k,
-                               np.argsort(keys, kind="stable"))
+                               keys.argsort(kind="stable"))
         if f.lnz >= 0 and f.factor():
             return f.solve
     return spd_solver(K, upper=True)
