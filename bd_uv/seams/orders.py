@@ -23,10 +23,10 @@ qdldl's order (the same added seams bit for bit on suzanne, cow, dino, fandisk a
 Where ``ordered_ldl`` cannot run, ``Orders.of`` is None and qdldl orders every system.
 """
 import numpy as np
-import scipy.sparse as sp
 
 from ..solvers import ordered_ldl, radix
 from ..solvers.lscm import spd_solver
+from .compressed import compressed
 
 # Factor entries per unknown a reused order may reach, relative to the fresh orders' most
 # (1.5 let fandisk's merged unions reach 1.5-2x the fill of AMD's order and cost more than it).
@@ -174,9 +174,11 @@ class Orders:
         t = np.concatenate([c.tris + off[j] for j, c in enumerate(charts)])
         a, b = t.ravel(), t[:, [1, 2, 0]].ravel()
         n = int(off[-1])
-        g = sp.csc_matrix((np.ones(2 * len(a)), (np.concatenate([a, b]), np.concatenate([b, a]))),
-                          shape=(n, n))
-        p = ordered_ldl.amd(g.indptr, g.indices, n)
+        # The vertex graph's canonical compressed pattern (what ``sp.csc_matrix`` of these
+        # pairs holds: sorted, duplicates summed), without scipy's COO conversion (~0.3 ms).
+        _, indices, indptr = compressed(np.concatenate([b, a]), np.concatenate([a, b]),
+                                        np.ones(2 * len(a)), n)
+        p = ordered_ldl.amd(indptr, indices, n)
         rank = np.empty(n, np.int64)
         rank[p if p is not None else np.arange(n)] = np.arange(n)
         for j, c in enumerate(charts):
@@ -204,15 +206,20 @@ def ordered_solver(A, keys, budget):
     if f is not None and (budget <= 0 or f.lnz <= budget * n) and f.factor():
         return f.solve, f.lnz / max(n, 1), None
     nf = n // 2
-    C = A.csc()
-    p = ordered_ldl.amd(C.indptr[:nf + 1], C.indices[:C.indptr[nf]], nf)
+    # AMD reads the pattern of ``A.csc()`` (its indptr and row indices), formed here as that
+    # does, without the scipy matrix (its constructor: ~50 us), built only for ``spd_solver``.
+    order = radix.order(A.cols * n + A.rows, n * n)
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.bincount(A.cols, minlength=n).cumsum(out=indptr[1:])
+    p = ordered_ldl.amd(indptr[:nf + 1], A.rows[order[:indptr[nf]]], nf)
+    del order
     if p is not None:
         rank = np.empty(nf, np.int64)
         rank[p] = np.arange(nf)
         f = _factor(A, rank)
         if f is not None and f.factor():
             return f.solve, f.lnz / max(n, 1), rank
-    return spd_solver(C, upper=True), None, None
+    return spd_solver(A.csc(), upper=True), None, None
 
 
 def _factor(A, keys):
@@ -247,9 +254,9 @@ def _ranks(keys):
 
 def fiedler_solver(rows, cols, vals, keys, upper):
     """Solve of a Fiedler system (its upper triangle as triplets ``rows``, ``cols``, ``vals``,
-    one node a face; ``upper()`` the canonical csc matrix, duplicates summed) in the order of its
-    nodes' ``keys``; where a key is -1 the system is ordered afresh (AMD) and ``keys`` (a view
-    the caller reads back) rewritten with it. A piece of a chart keeps the chart's order: the
+    one node a face; ``upper()`` the canonical csc matrix, duplicates summed, as ``compressed``
+    forms it from them) in the order of its nodes' ``keys``; where a key is -1 the system is
+    ordered afresh (AMD) and ``keys`` (a view the caller reads back) rewritten with it. A piece of a chart keeps the chart's order: the
     dual graph of a piece is a subgraph of the chart's, so its fill is within the chart's.
     ``spd_solver`` where the factorisation fails.
 
@@ -262,15 +269,17 @@ def fiedler_solver(rows, cols, vals, keys, upper):
         f = ordered_ldl.Factor(rows, cols, vals, k, keys.argsort(kind="stable"))
         if not f.repeated():
             return f.solve if f.lnz >= 0 and f.factor() else spd_solver(upper(), upper=True)
-    K = upper()
+    # ``upper()``'s arrays (``compressed``, as it forms them), without its scipy matrix
+    # (~50 us), which only ``spd_solver`` needs.
+    data, indices, indptr = compressed(cols, rows, vals, k)
     if (keys < 0).any():
-        p = ordered_ldl.amd(K.indptr, K.indices, k)
+        p = ordered_ldl.amd(indptr, indices, k)
         if p is not None:
             keys[p] = np.arange(k)
     if (keys >= 0).all():
-        cols = np.repeat(np.arange(k, dtype=np.int64), np.diff(K.indptr))
-        f = ordered_ldl.Factor(K.indices.astype(np.int64), cols, K.data, k,
+        cols = np.repeat(np.arange(k, dtype=np.int64), np.diff(indptr))
+        f = ordered_ldl.Factor(indices.astype(np.int64), cols, data, k,
                                keys.argsort(kind="stable"))
         if f.lnz >= 0 and f.factor():
             return f.solve
-    return spd_solver(K, upper=True)
+    return spd_solver(upper(), upper=True)
