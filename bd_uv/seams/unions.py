@@ -11,6 +11,7 @@ import numpy as np
 
 from ..geometry import components
 from .topology import Chart, _disk_loops
+from ..trim import CHUNK
 
 
 def union_charts(F, E, chs, label, xs, ys, removed, owner, trial):
@@ -47,7 +48,11 @@ def union_charts(F, E, chs, label, xs, ys, removed, owner, trial):
     order = key.argsort(kind="stable")  # (runs: a merge of sorted runs, no full sort)
     key, uf, fu = key[order], faces[order], part[order] // 2
     del faces, part
-    T = np.concatenate([(c.tris + int(voff[i])).astype(it) for i, c in enumerate(parts)])[order]
+    # The parts' triangles at once in ``it``, each shifted by its part's vertex offset (the
+    # same integers as part by part, without two temporaries a part).
+    T = np.concatenate([c.tris for c in parts], dtype=it, casting="unsafe")
+    T += np.repeat(voff[:-1].astype(it), nf)[:, None]
+    T = T[order]
     del order
     # Each removed edge joins, at each end, the vertex of its face on one side to the vertex
     # of its face on the other (the half-edges F[f,j] -> F[f,j+1] of the two faces run
@@ -110,10 +115,13 @@ def union_charts(F, E, chs, label, xs, ys, removed, owner, trial):
     fb = np.concatenate([[0], nfu.cumsum()]).tolist()
     vb = np.concatenate([[0], nvu.cumsum()]).tolist()
     out = []
-    for i in range(p):                      # chart-local ids in int64, as ``charts`` gives
+    # Chart-local ids in int64, as ``charts`` gives: converted at once on a small round (one
+    # call, not one a union), union by union on a large one (no (k,3) int64 copy beside them).
+    t64 = tri.astype(np.int64) if len(tri) <= CHUNK else None
+    for i in range(p):
         s, e, v0 = fb[i], fb[i + 1], vb[i]
         out.append((i, Chart(uf[s:e].copy(), vm[v0:vb[i + 1]].copy(),
-                             tri[s:e].astype(np.int64) - v0,
+                             (t64[s:e] if t64 is not None else tri[s:e].astype(np.int64)) - v0,
                              (loops[i].astype(np.int64) - v0,) if i in loops else (),
                              kinds[i])))
     out.sort(key=lambda t: int(t[1].faces[0]))
