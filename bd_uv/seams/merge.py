@@ -166,16 +166,20 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
         # merged once per round.
         gain = shared[pair]
         unions = []
-        for j in np.lexsort((np.arange(len(gain)), -_quantize(gain))):
-            if not ok[j] or merged[px[j]] or merged[py[j]]:
+        accepted = np.zeros(len(uk), dtype=bool)     # the pairs merged: their seams go at once
+        okl, pxl, pyl = ok.tolist(), px.tolist(), py.tolist()
+        for j in np.lexsort((np.arange(len(gain)), -_quantize(gain))).tolist():
+            x, y = pxl[j], pyl[j]
+            if not okl[j] or merged[x] or merged[y]:
                 continue
-            merged[[px[j], py[j]]] = True
-            cut[ei[inv == pair[j]]] = False
+            merged[x] = merged[y] = True
+            accepted[pair[j]] = True
             unions.append(disks[j][0])
             # The two charts' maps are no final chart's now (merging never splits): dropped,
             # not held to the final unwrap (on a 500k-face mesh 14 MB of 22).
-            for c in (chs[px[j]], chs[py[j]]) if known is not None else ():
+            for c in (chs[x], chs[y]) if known is not None else ():
                 known.pop(c.faces.tobytes(), None)
+        cut[ei[accepted[inv]]] = False
         # The charts after this round: the unions (as found on the trial cut, which agrees with
         # the new cut on their faces) and every chart not merged, as they were.
         chs = sorted([c for j, c in enumerate(chs) if not merged[j]] + unions,
