@@ -80,7 +80,7 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
             label[np.concatenate([c.faces for c in chs])] = np.repeat(np.arange(len(chs)), nfc)
         firsts = [int(c.faces[0]) for c in chs]
         ident = list(zip(firsts, nfc))
-        good = np.array([c.kind == "disk" for c in chs]) & ~invalid[firsts]
+        good = np.array([c.kind == "disk" for c in chs], dtype=bool) & ~invalid[firsts]
         inner = (E.faces[:, 1] >= 0) & cut & ~original
         la, lb = label[E.faces[inner, 0]], label[E.faces[inner, 1]]
         diff = (la != lb) & good[la] & good[lb]
