@@ -34,14 +34,23 @@ class FaceCentroids:
 
     def __getitem__(self, faces):
         faces = np.asarray(faces)
-        if faces.ndim != 1 or len(faces) <= CHUNK:
+        if faces.ndim != 1:
             return self.V[self.F[faces]].mean(axis=1)
+        if len(faces) <= CHUNK:
+            return _mean3(self.V, self.F[faces])
         # ``CHUNK`` rows at a time (each row's own mean: the same bits): the (k,3,3) corner
         # positions of a 500k-face sphere's first split were 36 MB at once.
         out = np.empty((len(faces), 3))
         for i in range(0, len(faces), CHUNK):
-            out[i:i + CHUNK] = self.V[self.F[faces[i:i + CHUNK]]].mean(axis=1)
+            out[i:i + CHUNK] = _mean3(self.V, self.F[faces[i:i + CHUNK]])
         return out
+
+
+def _mean3(V, Ff):
+    """``V[Ff].mean(axis=1)`` to the bit: numpy's sum over that length-3 axis adds the corners
+    in turn ((a + b) + c: no pairwise sum below 9 terms) and then divides by 3, as here, without
+    the (k,3,3) gather and the strided reduction (half the time on a 4k-face batch)."""
+    return (V[Ff[:, 0]] + V[Ff[:, 1]] + V[Ff[:, 2]]) / 3
 
 
 def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None, big=None):
