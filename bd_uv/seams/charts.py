@@ -16,6 +16,7 @@ from .crossings import boundary_crossings
 from .orders import BATCH_VERTICES, SLACK, ordered_solver
 from ..trim import CHUNK, release_memory
 from ..unwrapping.batched import _far_pairs
+from ..array_calls import einsum, quiet
 
 # Charts are accepted a little inside S: bending a map into C moves its stretch slightly.
 MARGIN = 0.98
@@ -206,7 +207,7 @@ def _per_face(u, geom, faces, tris, nfs, nvs):
     # singular values of the map with the chart at its 3D size.
     uv_area = np.bincount(face_c, w, minlength=k)
     del w
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with quiet("invalid", "divide"):
         s = np.sqrt(1.0 / np.abs(uv_area))
     s[~np.isfinite(s)] = 1.0
     us = u * s[vert_c]
@@ -218,16 +219,16 @@ def _per_face(u, geom, faces, tris, nfs, nvs):
         f = slice(i, i + CHUNK)
         cb = geom.cb[faces[f]] * root[face_c[f]][:, None]
         ut = us[tris[f]]
-        a[f] = np.abs(np.einsum("fk,fk->f", cb.conj(), ut))
-        b[f] = np.abs(np.einsum("fk,fk->f", cb, ut))
+        a[f] = np.abs(einsum("fk,fk->f", cb.conj(), ut))
+        b[f] = np.abs(einsum("fk,fk->f", cb, ut))
     cb = ut = None
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with quiet("invalid", "divide"):
         ok = a > b
         D = np.where(ok, (a + b) / (a - b), np.inf)
         St = np.where(ok, np.maximum(a + b, 1.0 / (a - b)), np.inf)
     D[~np.isfinite(D)] = np.inf
     St[~np.isfinite(St)] = np.inf
-    with np.errstate(invalid="ignore"):
+    with quiet("invalid"):
         meanD = np.bincount(face_c, A3 * D, minlength=k) / area
     meanD[~np.isfinite(meanD)] = np.inf
     return us * np.sqrt(area)[vert_c], D, St, a, b, meanD
@@ -289,7 +290,7 @@ def piece_stretch(sigma, area3, label, k):
     ``s = sqrt(sum area3 / sum area3 sigma_1 sigma_2)`` (inf where a face is flipped)
     """
     uv_area = np.bincount(label, area3 * sigma[:, 0] * sigma[:, 1], minlength=k)
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with quiet("invalid", "divide"):
         s = np.sqrt(np.bincount(label, area3, minlength=k) / uv_area)[label]
         st = np.where(sigma[:, 1] > 0, np.maximum(s * sigma[:, 0], 1.0 / (s * sigma[:, 1])),
                       np.inf)

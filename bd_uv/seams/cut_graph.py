@@ -8,6 +8,7 @@ from scipy.sparse.csgraph import dijkstra, minimum_spanning_tree
 from ..geometry import components
 from ..solvers import radix
 from .compressed import compressed
+from ..array_calls import quiet
 
 # Roots tried (farthest-point samples) for the loops of a closed chart of genus >= 1.
 ROOT_TRIES = 6
@@ -126,7 +127,7 @@ def quantised_weights(w, real):
     fin = real & np.isfinite(w)
     low = _percentile10(w[fin]) if fin.any() else 1.0
     q = 2.0 ** np.floor(np.log2(max(low, 1e-300) * QUANTUM))
-    with np.errstate(over="ignore", invalid="ignore"):
+    with quiet("over", "invalid"):
         k = np.round(np.where(np.isfinite(w), w, np.inf) / q)
     return np.clip(k, 1.0, 2.0 ** 40)
 

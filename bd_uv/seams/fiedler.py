@@ -16,6 +16,7 @@ from .charts import spd_solver
 from . import cluster_fiedler
 from .compressed import compressed
 from .orders import fiedler_solver
+from ..array_calls import einsum
 
 # Charts of one batch are split into two systems factored side by side when each holds at
 # least this many nodes.
@@ -100,7 +101,7 @@ def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12, keys=None
     mean = np.stack([np.bincount(group, mass * centroid[:, i], g) for i in range(3)], 1)
     c = centroid - (mean / np.maximum(total, 1e-300)[:, None])[group]
     axes = _principal_axes(c, mass, offsets, group)
-    x = np.einsum("ij,ij->i", c, axes[group])
+    x = einsum("ij,ij->i", c, axes[group])
     scale = np.zeros(g)
     np.maximum.at(scale, group, np.abs(x))
     noise = np.concatenate([_noise(int(n)) if n <= 5000 else
@@ -169,7 +170,7 @@ def _principal_axes(c, mass, offsets, group):
             cov[:, a, b] = cov[:, b, a] = np.bincount(group, mass * c[:, a] * c[:, b], g)
     w, vec = np.linalg.eigh(cov)
     axes = vec[:, :, 2].copy()
-    proj = np.einsum("ij,ij->i", c, axes[group])
+    proj = einsum("ij,ij->i", c, axes[group])
     big = np.zeros(g)
     np.maximum.at(big, group, np.abs(proj))
     on = (np.abs(proj) > 1e-9 * big[group]).ravel().nonzero()[0]
