@@ -224,10 +224,10 @@ def _ranked_loops(nxt, lisl, verts, n_isl):
         ptr = nptr
     ordr = np.lexsort((-rank, lab))
     lens = np.bincount(lab, minlength=n_loops)
-    cuts = np.concatenate([[0], np.cumsum(lens)])
+    cuts = np.concatenate([[0], lens.cumsum()])
     loop_isl = lisl[start]
-    by_isl = np.argsort(loop_isl, kind="stable")
-    ibounds = np.searchsorted(loop_isl[by_isl], np.arange(n_isl + 1))
+    by_isl = loop_isl.argsort(kind="stable")
+    ibounds = loop_isl[by_isl].searchsorted(np.arange(n_isl + 1))
     verts = verts[ordr]
     loops_of = []
     for idx in range(n_isl):
@@ -263,12 +263,12 @@ def components(n, a, b):
     lab = np.arange(n if n <= HOOK_VERTICES else 0, dtype=np.int64)
     for _ in range(HOOK_ROUNDS if n <= HOOK_VERTICES else 0):
         la, lb = lab[a], lab[b]
-        if np.array_equal(la, lb):
+        if not (la != lb).any():        # np.array_equal(la, lb), without its wrapper
             # Every edge joins equal labels: each component carries its least vertex's label,
             # so its least vertex is the one labelled itself; components are numbered in the
             # order of those (no sort).
-            root = lab == np.arange(n)
-            return int(root.sum()), (np.cumsum(root) - 1)[lab]
+            cs = (lab == np.arange(n)).cumsum()
+            return (int(cs[-1]) if n else 0), (cs - 1)[lab]
         lo = np.minimum(la, lb)
         # Hook each label onto the least one it meets (both ends in one call).
         np.minimum.at(lab, np.concatenate([la, lb]), np.concatenate([lo, lo]))

@@ -34,14 +34,23 @@ class FaceCentroids:
 
     def __getitem__(self, faces):
         faces = np.asarray(faces)
-        if faces.ndim != 1 or len(faces) <= CHUNK:
+        if faces.ndim != 1:
             return self.V[self.F[faces]].mean(axis=1)
+        if len(faces) <= CHUNK:
+            return _mean3(self.V, self.F[faces])
         # ``CHUNK`` rows at a time (each row's own mean: the same bits): the (k,3,3) corner
         # positions of a 500k-face sphere's first split were 36 MB at once.
         out = np.empty((len(faces), 3))
         for i in range(0, len(faces), CHUNK):
-            out[i:i + CHUNK] = self.V[self.F[faces[i:i + CHUNK]]].mean(axis=1)
+            out[i:i + CHUNK] = _mean3(self.V, self.F[faces[i:i + CHUNK]])
         return out
+
+
+def _mean3(V, Ff):
+    """``V[Ff].mean(axis=1)`` to the bit: numpy's sum over that length-3 axis adds the corners
+    in turn ((a + b) + c: no pairwise sum below 9 terms) and then divides by 3, as here, without
+    the (k,3,3) gather and the strided reduction (half the time on a 4k-face batch)."""
+    return (V[Ff[:, 0]] + V[Ff[:, 1]] + V[Ff[:, 2]]) / 3
 
 
 def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None, big=None):
@@ -94,7 +103,7 @@ def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None, big=None):
                 break
             continue
         # Every piece's restricted stretch at once.
-        sig = np.concatenate([todo[j][1][np.searchsorted(todo[j][0], piece)]
+        sig = np.concatenate([todo[j][1][todo[j][0].searchsorted(piece)]
                               for piece, j in pieces])
         fa = np.concatenate([piece for piece, _ in pieces])
         label = np.repeat(np.arange(len(pieces)), [len(piece) for piece, _ in pieces])
@@ -184,7 +193,7 @@ def bisect(pieces, E, cut, A, cen, poly=None, orders=None):
     else:
         nowner = np.zeros(len(mass), dtype=np.int64)
         nowner[node] = owner
-    offsets = np.searchsorted(nowner, np.arange(len(pieces) + 1))
+    offsets = nowner.searchsorted(np.arange(len(pieces) + 1))
     na, nb = (la, lb) if node is None else (node[la], node[lb])     # each face its own node
     across = na != nb
     if across.all():
@@ -201,7 +210,7 @@ def bisect(pieces, E, cut, A, cen, poly=None, orders=None):
     fside = side if node is None else side[node]
     new = fe[fside[la] != fside[lb]]
     cut[new[split[owner[local[E.faces[new, 0]]]]]] = True
-    for j in np.flatnonzero(split):
+    for j in split.ravel().nonzero()[0]:
         f = pieces[j]
         sj = fside[local[f]]
         out[j] = (f[sj], f[~sj])

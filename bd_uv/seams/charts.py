@@ -16,6 +16,7 @@ from .crossings import boundary_crossings
 from .orders import BATCH_VERTICES, SLACK, ordered_solver
 from ..trim import CHUNK, release_memory
 from ..unwrapping.batched import _far_pairs
+from ..array_calls import einsum, quiet
 
 # Charts are accepted a little inside S: bending a map into C moves its stretch slightly.
 MARGIN = 0.98
@@ -89,7 +90,7 @@ class ChartMaps:
         map), for the final unwrap to certify rather than solve again. Copies: a view would
         keep the whole batch's map alive (on a 500k-face mesh ~20 MB of maps held to the end
         for ~4 MB of charts that passed)."""
-        for j in np.flatnonzero(passed):
+        for j in passed.ravel().nonzero()[0]:
             known[charts[j].faces.tobytes()] = self.u[self.voff[j]:self.voff[j + 1]].copy()
 
 
@@ -115,17 +116,22 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
     k = len(charts)
     nvs = np.array([len(c.vertices) for c in charts])
     nfs = np.array([len(c.faces) for c in charts])
-    voff = np.concatenate([[0], np.cumsum(nvs)])
-    foff = np.concatenate([[0], np.cumsum(nfs)])
+    voff = np.concatenate([[0], nvs.cumsum()])
+    foff = np.concatenate([[0], nfs.cumsum()])
     n = int(voff[-1])
-    P = V[np.concatenate([c.vertices for c in charts])]
-    idx = _far_pairs(P, charts, voff)
-    del P                   # the batch's positions are not held through the factors
-    val = np.tile(np.array([0.0, 1.0], np.complex128), k)
-
     if n > BATCH_VERTICES:  # a large batch's factors are memory peaks: AMD's fill (orders.py)
         orders = None
-    vk, fresh = orders.keys(charts, voff) if orders is not None else (None, None)
+    # The batch's mesh vertices (chart after chart), formed once: held through the solves only
+    # where ``orders`` reads them (a batch of at most ``orders.BATCH_VERTICES`` vertices).
+    gv = np.concatenate([c.vertices for c in charts])
+    P = V[gv]
+    idx = _far_pairs(P, charts, voff)
+    del P                   # the batch's positions are not held through the factors
+    if orders is None:
+        gv = None
+    val = np.tile(np.array([0.0, 1.0], np.complex128), k)
+
+    vk, fresh = orders.keys(charts, voff, gv) if orders is not None else (None, None)
     budget = SLACK * orders.fill if orders is not None else 0.0
 
     def run(r):
@@ -162,7 +168,6 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
         runs = [(0, j), (j, k)]
         out = map_blocks(run, runs)
     if orders is not None:
-        gv = np.concatenate([c.vertices for c in charts])
         orders.solved(charts, runs, [(fill, rank, gv[voff[a]:voff[b]][free])
                                      for (a, b), ((fill, rank, free), *_) in zip(runs, out)],
                       fresh)
@@ -174,7 +179,7 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
     if limits is None:
         cross = boundary_crossings(uv, [c.loops[0] + voff[j] for j, c in enumerate(charts)])
     else:
-        ask = np.flatnonzero(np.isfinite(maxD) & (maxS <= limits[0]) & (meanD <= limits[1]))
+        ask = (np.isfinite(maxD) & (maxS <= limits[0]) & (meanD <= limits[1])).ravel().nonzero()[0]
         cross = np.full(k, -1, dtype=np.int64)
         cross[ask] = boundary_crossings(uv, [charts[j].loops[0] + voff[j] for j in ask])
     return ChartMaps(uv, voff, foff, D, St, maxD, maxS, cross, np.stack([a + b, a - b], axis=1),
@@ -202,7 +207,7 @@ def _per_face(u, geom, faces, tris, nfs, nvs):
     # singular values of the map with the chart at its 3D size.
     uv_area = np.bincount(face_c, w, minlength=k)
     del w
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with quiet("invalid", "divide"):
         s = np.sqrt(1.0 / np.abs(uv_area))
     s[~np.isfinite(s)] = 1.0
     us = u * s[vert_c]
@@ -214,16 +219,16 @@ def _per_face(u, geom, faces, tris, nfs, nvs):
         f = slice(i, i + CHUNK)
         cb = geom.cb[faces[f]] * root[face_c[f]][:, None]
         ut = us[tris[f]]
-        a[f] = np.abs(np.einsum("fk,fk->f", cb.conj(), ut))
-        b[f] = np.abs(np.einsum("fk,fk->f", cb, ut))
+        a[f] = np.abs(einsum("fk,fk->f", cb.conj(), ut))
+        b[f] = np.abs(einsum("fk,fk->f", cb, ut))
     cb = ut = None
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with quiet("invalid", "divide"):
         ok = a > b
         D = np.where(ok, (a + b) / (a - b), np.inf)
         St = np.where(ok, np.maximum(a + b, 1.0 / (a - b)), np.inf)
     D[~np.isfinite(D)] = np.inf
     St[~np.isfinite(St)] = np.inf
-    with np.errstate(invalid="ignore"):
+    with quiet("invalid"):
         meanD = np.bincount(face_c, A3 * D, minlength=k) / area
     meanD[~np.isfinite(meanD)] = np.inf
     return us * np.sqrt(area)[vert_c], D, St, a, b, meanD
@@ -285,7 +290,7 @@ def piece_stretch(sigma, area3, label, k):
     ``s = sqrt(sum area3 / sum area3 sigma_1 sigma_2)`` (inf where a face is flipped)
     """
     uv_area = np.bincount(label, area3 * sigma[:, 0] * sigma[:, 1], minlength=k)
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with quiet("invalid", "divide"):
         s = np.sqrt(np.bincount(label, area3, minlength=k) / uv_area)[label]
         st = np.where(sigma[:, 1] > 0, np.maximum(s * sigma[:, 0], 1.0 / (s * sigma[:, 1])),
                       np.inf)

@@ -16,9 +16,9 @@ def compressed(major, minor, vals, n):
     key = key[order]
     first = np.ones(len(key), dtype=bool)
     first[1:] = key[1:] != key[:-1]
-    starts = np.flatnonzero(first)
+    starts = first.ravel().nonzero()[0]
     data = np.add.reduceat(vals[order], starts) if len(starts) else vals[:0]
     key = key[starts]
     indptr = np.zeros(n + 1, dtype=np.int32)
-    np.cumsum(np.bincount(key // n, minlength=n), out=indptr[1:])
+    np.bincount(key // n, minlength=n).cumsum(out=indptr[1:])
     return data, (key % n).astype(np.int32), indptr

@@ -31,12 +31,12 @@ def boundary_crossings(uv, loops):
         return np.zeros(k, np.int64)
     if (lens == 0).any():                   # empty loops: none of their edges cross
         out = np.zeros(k, np.int64)
-        some = np.flatnonzero(lens > 0)
+        some = (lens > 0).ravel().nonzero()[0]
         out[some] = boundary_crossings(uv, [loops[j] for j in some])
         return out
     owner = np.repeat(np.arange(k), lens)
     a_idx = np.concatenate(loops)
-    start = np.concatenate([[0], np.cumsum(lens)[:-1]])
+    start = np.concatenate([[0], lens.cumsum()[:-1]])
     nxt = np.arange(len(a_idx)) + 1
     nxt[start + lens - 1] = start
     p, q = uv[a_idx], uv[a_idx[nxt]]
@@ -46,7 +46,7 @@ def boundary_crossings(uv, loops):
         # Each edge with every later edge of its loop (i < j).
         later = (start + lens)[owner] - 1 - np.arange(len(p))
         i = np.repeat(np.arange(len(p)), later)
-        j = i + 1 + np.arange(len(i)) - np.repeat(np.cumsum(later) - later, later)
+        j = i + 1 + np.arange(len(i)) - np.repeat(later.cumsum() - later, later)
         keep = (nxt[i] != j) & (nxt[j] != i)
         # Only edges whose boxes meet (touching included) can cross: a few comparisons per
         # pair before the orientation tests, on the few pairs left.
@@ -75,15 +75,15 @@ def boundary_crossings(uv, loops):
     cx, cy = cx - cx.min(), cy - cy.min()
     ny = int(cy.max()) + 1
     cell_id = (owner[sid] * (int(cx.max()) + 1) + cx) * ny + cy
-    order = np.argsort(cell_id, kind="stable")
+    order = cell_id.argsort(kind="stable")
     cell_id, sid = cell_id[order], sid[order]
-    bounds = np.flatnonzero(np.diff(cell_id)) + 1
+    bounds = np.diff(cell_id).ravel().nonzero()[0] + 1
     starts = np.concatenate([[0], bounds])
     sizes = np.diff(np.concatenate([starts, [len(cell_id)]]))
     # All pairs within each cell.
     reps = sizes ** 2
     grp = np.repeat(np.arange(len(starts)), reps)
-    r = np.arange(reps.sum()) - np.repeat(np.cumsum(reps) - reps, reps)
+    r = np.arange(reps.sum()) - np.repeat(reps.cumsum() - reps, reps)
     i = sid[starts[grp] + r // sizes[grp]]
     j = sid[starts[grp] + r % sizes[grp]]
     keep = i < j

@@ -43,13 +43,13 @@ def _cut_corners(F, E, cut, faces):
         mask = np.zeros(m, dtype=bool)
         mask[faces] = True
     # Only the corners of the faces asked for take part.
-    corners = np.flatnonzero(np.repeat(mask, 3))
+    corners = np.repeat(mask, 3).ravel().nonzero()[0]
     if E.fans is not None:
         corner = _fan_runs(E.fans, cut, mask, corners)
     else:                                   # not an oriented manifold: a graph search
         on = np.zeros(len(E.ends), dtype=bool)
         on[E.face_edges[mask].ravel()] = True
-        edges = np.flatnonzero(on & (E.faces[:, 1] >= 0) & ~cut)
+        edges = (on & (E.faces[:, 1] >= 0) & ~cut).ravel().nonzero()[0]
         edges = edges[mask[E.faces[edges, 0]] & mask[E.faces[edges, 1]]]
         cn = E.corners[edges]
         rows, cols = [cn[:, 0, 0], cn[:, 0, 1]], [cn[:, 1, 0], cn[:, 1, 1]]
@@ -87,7 +87,7 @@ def _fan_runs(fans, cut, mask, corners):
         f = np.unique(fans.fan[corners])
         lo, hi = fans.starts[f], fans.starts[f + 1]
         lens = hi - lo
-        at = np.arange(int(lens.sum())) + np.repeat(lo - (np.cumsum(lens) - lens), lens)
+        at = np.arange(int(lens.sum())) + np.repeat(lo - (lens.cumsum() - lens), lens)
         c, first, ring = fans.order[at], fans.first[at], fans.ring[at]
     else:
         c, first, ring = fans.order, fans.first, fans.ring
@@ -96,11 +96,11 @@ def _fan_runs(fans, cut, mask, corners):
     joined = (nx >= 0) & ~cut[fans.edge[c]] & mask[c // 3] & mask[np.maximum(nx, 0) // 3]
     new = first.copy()
     new[1:] |= ~joined[:-1]
-    starts = np.flatnonzero(new)
+    starts = new.ravel().nonzero()[0]
     low = np.minimum.reduceat(c, starts)
-    run = np.cumsum(new, dtype=c.dtype) - 1
+    run = new.cumsum(dtype=c.dtype) - 1
     # A closed fan whose last corner turns back to its first: its first and last runs are one.
-    fan_first = np.flatnonzero(first)
+    fan_first = first.ravel().nonzero()[0]
     fan_last = np.append(fan_first[1:] - 1, len(c) - 1)
     join = ring[fan_first] & joined[fan_last] & (run[fan_first] != run[fan_last])
     a, b = run[fan_first[join]], run[fan_last[join]]
@@ -114,4 +114,4 @@ def _fan_runs(fans, cut, mask, corners):
     label = label[corners]
     used = np.zeros(len(fans.order), dtype=bool)
     used[label] = True
-    return (np.cumsum(used, dtype=label.dtype) - 1)[label]
+    return (used.cumsum(dtype=label.dtype) - 1)[label]

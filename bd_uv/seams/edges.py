@@ -46,7 +46,7 @@ class EdgeTable:
         pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
         k = np.minimum(pairs[:, 0], pairs[:, 1]) * n + np.maximum(pairs[:, 0], pairs[:, 1])
         mine = self.ends[:, 0].astype(np.int64) * n + self.ends[:, 1]
-        pos = np.clip(np.searchsorted(mine, k), 0, len(mine) - 1)
+        pos = np.clip(mine.searchsorted(k), 0, len(mine) - 1)
         return np.where(mine[pos] == k, pos, -1)
 
 
@@ -85,8 +85,8 @@ def edge_table(V, F, face_groups=None, crease_angle=np.radians(30.0)):
     e = len(uniq)
     ends = np.stack([uniq // n, uniq % n], axis=1).astype(idx)
     del uniq
-    order = np.argsort(inv, kind="stable").astype(idx)
-    first = np.searchsorted(inv[order], np.arange(e, dtype=idx)).astype(idx)
+    order = inv.argsort(kind="stable").astype(idx)
+    first = inv[order].searchsorted(np.arange(e, dtype=idx)).astype(idx)
     count = np.bincount(inv, minlength=e)
     faces = np.full((e, 2), -1, dtype=idx)
     faces[:, 0] = order[first] // 3
@@ -109,7 +109,7 @@ def edge_table(V, F, face_groups=None, crease_angle=np.radians(30.0)):
     Fs = Ns = None
     cost = np.ones(e)
     f0, f1 = faces[two, 0], faces[two, 1]
-    tw = np.flatnonzero(two)
+    tw = two.ravel().nonzero()[0]
     c = np.empty(len(tw))
     for i in range(0, len(tw), CHUNK):
         s = slice(i, i + CHUNK)
@@ -219,8 +219,8 @@ def _fans(F, face_edges, faces, ends, corners):
     first = np.r_[True, start[order][1:] != start[order][:-1]]
     del start
     fan = np.empty(3 * m, dtype=np.int32)
-    fan[order] = np.cumsum(first) - 1
-    starts = np.append(np.flatnonzero(first), 3 * m)
+    fan[order] = first.cumsum() - 1
+    starts = np.append(first.ravel().nonzero()[0], 3 * m)
     return Fans(nxt.astype(idx, copy=False), edge.astype(idx, copy=False), order.astype(idx),
                 first, first & ring[order], fan, starts.astype(idx))
 

@@ -16,6 +16,7 @@ from .charts import spd_solver
 from . import cluster_fiedler
 from .compressed import compressed
 from .orders import fiedler_solver
+from ..array_calls import einsum
 
 # Charts of one batch are split into two systems factored side by side when each holds at
 # least this many nodes.
@@ -46,7 +47,7 @@ def fiedler_vectors(pairs, w, mass, centroid, offsets, group, iters=12, coarsen=
             return _fiedler_block(pairs, w, mass, centroid, offsets, group, iters, keys)
         cuts = [0, j, g]
     # The run of each pair (both its nodes are in one chart, so in one run).
-    which = np.searchsorted(offsets[cuts[1:-1]], pairs[:, 0], side="right")
+    which = (offsets[cuts[1:-1]]).searchsorted(pairs[:, 0], side="right")
 
     def run(i):
         a, b = cuts[i], cuts[i + 1]
@@ -100,7 +101,7 @@ def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12, keys=None
     mean = np.stack([np.bincount(group, mass * centroid[:, i], g) for i in range(3)], 1)
     c = centroid - (mean / np.maximum(total, 1e-300)[:, None])[group]
     axes = _principal_axes(c, mass, offsets, group)
-    x = np.einsum("ij,ij->i", c, axes[group])
+    x = einsum("ij,ij->i", c, axes[group])
     scale = np.zeros(g)
     np.maximum.at(scale, group, np.abs(x))
     noise = np.concatenate([_noise(int(n)) if n <= 5000 else
@@ -169,10 +170,10 @@ def _principal_axes(c, mass, offsets, group):
             cov[:, a, b] = cov[:, b, a] = np.bincount(group, mass * c[:, a] * c[:, b], g)
     w, vec = np.linalg.eigh(cov)
     axes = vec[:, :, 2].copy()
-    proj = np.einsum("ij,ij->i", c, axes[group])
+    proj = einsum("ij,ij->i", c, axes[group])
     big = np.zeros(g)
     np.maximum.at(big, group, np.abs(proj))
-    on = np.flatnonzero(np.abs(proj) > 1e-9 * big[group])
+    on = (np.abs(proj) > 1e-9 * big[group]).ravel().nonzero()[0]
     gon = group[on]
     if len(gon) and (np.diff(gon) >= 0).all():    # grouped chart by chart (every caller):
         first = on[np.r_[True, gon[1:] != gon[:-1]]]   # each chart's first, without a sort
@@ -183,7 +184,7 @@ def _principal_axes(c, mass, offsets, group):
     axes[flip] *= -1
     size = np.diff(offsets)
     axes[size == 0] = (1.0, 0.0, 0.0)
-    for j in np.flatnonzero((w[:, 1] >= w[:, 2] * (1.0 - 1e-6)) & (size > 0)):
+    for j in ((w[:, 1] >= w[:, 2] * (1.0 - 1e-6)) & (size > 0)).ravel().nonzero()[0]:
         axes[j] = _principal_axis(c[offsets[j]:offsets[j + 1]], mass[offsets[j]:offsets[j + 1]])
     return axes
 
@@ -215,7 +216,7 @@ def _principal_axis(c, mass):
             if np.linalg.norm(a) > 1e-6 * np.sqrt(max(w[0], 1e-300) / mass.sum()):
                 axis = a / np.linalg.norm(a)
                 break
-    first = np.flatnonzero(np.abs(c @ axis) > 1e-9 * np.abs(c @ axis).max(initial=0.0))
+    first = (np.abs(c @ axis) > 1e-9 * np.abs(c @ axis).max(initial=0.0)).ravel().nonzero()[0]
     if len(first) and c[first[0]] @ axis < 0:
         axis = -axis
     return axis

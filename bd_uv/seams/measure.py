@@ -24,8 +24,8 @@ def measure_charts(V, F, E, cut, result, chs=None):
         return st.tolist(), cr.tolist()
     nvs = np.array([len(r.vertices) for r in rs])
     nfs = np.array([len(r.tris) for r in rs])
-    voff = np.concatenate([[0], np.cumsum(nvs)])
-    foff = np.concatenate([[0], np.cumsum(nfs)])
+    voff = np.concatenate([[0], nvs.cumsum()])
+    foff = np.concatenate([[0], nfs.cumsum()])
     fc = np.repeat(np.arange(len(rs)), nfs)
     P = V[np.concatenate([r.vertices for r in rs])]
     uv = np.concatenate([r.uv for r in rs])
@@ -88,7 +88,7 @@ def _loop(chart, r):
     if chart is None or not chart.loops or len(chart.faces) != len(r.faces):
         return np.zeros(0, dtype=np.int64)
     # Same faces, vertices numbered differently: map chart vertex -> result vertex by corner.
-    pos = np.searchsorted(chart.faces, r.faces)
+    pos = chart.faces.searchsorted(r.faces)
     ids = np.full(len(chart.vertices), -1, dtype=np.int64)
     ids[chart.tris[pos].ravel()] = r.tris.ravel()
     return ids[chart.loops[0]]

@@ -8,6 +8,7 @@ import numpy as np
 from .charts import MARGIN, chart_maps, mean_cap
 from .topology import charts
 from .unions import union_charts
+from ..solvers import radix
 from ..trim import release_memory
 
 # Rounds of pairwise merging (each merges a matching of neighbouring charts).
@@ -71,11 +72,15 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
     original = keep
     for _ in range(MERGE_ROUNDS if rounds is None else rounds):
         release_memory(len(F))              # the last round's freed heap (its factors' arrays)
+        # Each face's chart, each chart's first face and size, at once (not a few numpy calls
+        # a chart a round: a small mesh's merging has 30-100 charts and ~15 rounds).
+        nfc = [len(c.faces) for c in chs]
         label = np.empty(len(F), dtype=np.int64)
-        for j, c in enumerate(chs):
-            label[c.faces] = j
-        ident = [(int(c.faces[0]), len(c.faces)) for c in chs]
-        good = np.array([c.kind == "disk" and not invalid[c.faces[0]] for c in chs])
+        if chs:
+            label[np.concatenate([c.faces for c in chs])] = np.repeat(np.arange(len(chs)), nfc)
+        firsts = [int(c.faces[0]) for c in chs]
+        ident = list(zip(firsts, nfc))
+        good = np.array([c.kind == "disk" for c in chs], dtype=bool) & ~invalid[firsts]
         inner = (E.faces[:, 1] >= 0) & cut & ~original
         la, lb = label[E.faces[inner, 0]], label[E.faces[inner, 1]]
         diff = (la != lb) & good[la] & good[lb]
@@ -84,13 +89,12 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
             diff &= ((ga >= 0) | (gb >= 0)) & (ga != gb)
         if not diff.any():
             return chs
-        ei = np.flatnonzero(inner)[diff]
+        ei = inner.ravel().nonzero()[0][diff]
         la, lb = np.minimum(la[diff], lb[diff]), np.maximum(la[diff], lb[diff])
-        uk, inv = np.unique(la * len(chs) + lb, return_inverse=True)
-        inv = inv.ravel()
+        uk, inv, _ = radix.unique(la * len(chs) + lb, len(chs) ** 2)   # np.unique's
         shared = np.bincount(inv, E.length[ei] * E.cost[ei])
         fa, fb = label[np.array(far_a, np.int64)], label[np.array(far_b, np.int64)]
-        hopeless = np.isin(uk, np.minimum(fa, fb) * len(chs) + np.maximum(fa, fb))
+        hopeless = _member(uk, np.minimum(fa, fb) * len(chs) + np.maximum(fa, fb))
         # Matchings ("layers"): dearest shared seam first, each chart in at most one pair of a
         # layer; every layer's unions are tested in one batched solve.
         used = np.zeros((MERGE_LAYERS, len(chs)), dtype=bool)
@@ -114,24 +118,26 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
                 continue
             used[lay, list(busy[lay])] = True
             trial = cut.copy()
-            gone = np.isin(inv, chosen)
+            gone = np.zeros(len(uk), dtype=bool)
+            gone[chosen] = True
+            gone = gone[inv]                # np.isin(inv, chosen)
             trial[ei[gone]] = False
             if E.fans is not None:          # the unions from their two charts (``unions``)
                 chosen = np.array(chosen, dtype=np.int64)
-                at = np.argsort(chosen)
-                owner = at[np.searchsorted(chosen[at], inv[gone])]
+                at = chosen.argsort()
+                owner = at[chosen[at].searchsorted(inv[gone])]
                 for i, c in union_charts(F, E, chs, label, uk[chosen] // len(chs),
                                          uk[chosen] % len(chs), ei[gone], owner, trial):
                     if c.kind == "disk":
                         disks.append((c, trial, int(chosen[i])))
                 continue
-            faces = np.flatnonzero(used[lay][label])
+            faces = used[lay][label].ravel().nonzero()[0]
             for c in charts(F, E, trial, faces):
                 lab = label[c.faces]
                 other = lab[lab != lab[0]]
                 if c.kind == "disk" and len(other):
                     a, b = min(lab[0], other[0]), max(lab[0], other[0])
-                    disks.append((c, trial, int(np.searchsorted(uk, a * len(chs) + b))))
+                    disks.append((c, trial, int(uk.searchsorted(a * len(chs) + b))))
         if not disks:
             if not any(layers):
                 return chs
@@ -141,7 +147,7 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
                             if (len(c.faces), len(c.vertices), len(c.loops[0])) in sizes
                             else np.nan for c, _, _ in disks])
         ok = np.zeros(len(disks), dtype=bool)
-        new = np.flatnonzero(np.isnan(stretch))
+        new = np.isnan(stretch).ravel().nonzero()[0]
         if len(new):
             union = [disks[j][0] for j in new]
             cm = chart_maps(V, union, geom, limits=(S * MARGIN, mean_cap(C)), orders=orders)
@@ -152,7 +158,7 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
                 cm.remember(union, ok[new], known)
         pair = np.array([p for _, _, p in disks], dtype=np.int64)
         px, py = uk[pair] // len(chs), uk[pair] % len(chs)
-        for j in np.flatnonzero(~(stretch <= HOPELESS * S)):
+        for j in (~(stretch <= HOPELESS * S)).ravel().nonzero()[0]:
             far_a.append(int(chs[px[j]].faces[0]))
             far_b.append(int(chs[py[j]].faces[0]))
         merged = np.zeros(len(chs), dtype=bool)
@@ -160,21 +166,34 @@ def merge_charts(V, F, E, cut, keep, invalid, S, C, rounds=None, group=None, kno
         # merged once per round.
         gain = shared[pair]
         unions = []
-        for j in np.lexsort((np.arange(len(gain)), -_quantize(gain))):
-            if not ok[j] or merged[px[j]] or merged[py[j]]:
+        accepted = np.zeros(len(uk), dtype=bool)     # the pairs merged: their seams go at once
+        okl, pxl, pyl = ok.tolist(), px.tolist(), py.tolist()
+        for j in np.lexsort((np.arange(len(gain)), -_quantize(gain))).tolist():
+            x, y = pxl[j], pyl[j]
+            if not okl[j] or merged[x] or merged[y]:
                 continue
-            merged[[px[j], py[j]]] = True
-            cut[ei[inv == pair[j]]] = False
+            merged[x] = merged[y] = True
+            accepted[pair[j]] = True
             unions.append(disks[j][0])
             # The two charts' maps are no final chart's now (merging never splits): dropped,
             # not held to the final unwrap (on a 500k-face mesh 14 MB of 22).
-            for c in (chs[px[j]], chs[py[j]]) if known is not None else ():
+            for c in (chs[x], chs[y]) if known is not None else ():
                 known.pop(c.faces.tobytes(), None)
+        cut[ei[accepted[inv]]] = False
         # The charts after this round: the unions (as found on the trial cut, which agrees with
         # the new cut on their faces) and every chart not merged, as they were.
         chs = sorted([c for j, c in enumerate(chs) if not merged[j]] + unions,
                      key=lambda ch: int(ch.faces[0]))
     return chs
+
+
+def _member(a, b):
+    """``np.isin(a, b)`` of integer arrays (``b`` a few pairs far beyond S): one sort and one
+    search, not ``isin``'s set-up (~50 us a call, twice a merging round)."""
+    if len(b) == 0 or len(a) == 0:
+        return np.zeros(len(a), dtype=bool)
+    b = np.sort(b)
+    return b[np.minimum(b.searchsorted(a), len(b) - 1)] == a
 
 
 def _quantize(x, digits=9):

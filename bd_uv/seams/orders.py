@@ -23,10 +23,10 @@ qdldl's order (the same added seams bit for bit on suzanne, cow, dino, fandisk a
 Where ``ordered_ldl`` cannot run, ``Orders.of`` is None and qdldl orders every system.
 """
 import numpy as np
-import scipy.sparse as sp
 
 from ..solvers import ordered_ldl, radix
 from ..solvers.lscm import spd_solver
+from .compressed import compressed
 
 # Factor entries per unknown a reused order may reach, relative to the fresh orders' most
 # (1.5 let fandisk's merged unions reach 1.5-2x the fill of AMD's order and cost more than it).
@@ -43,6 +43,14 @@ BATCH_VERTICES = 12_500
 MESH_VERTICES = 20_000
 # Keys of the vertices put last in a union (above any key given).
 LAST = 1 << 50
+
+
+def _starts(parts):
+    """The offset of each of ``parts`` (arrays, none empty) in their concatenation."""
+    at = np.zeros(len(parts), np.int64)
+    if len(parts) > 1:
+        at[1:] = np.cumsum([len(p) for p in parts[:-1]])
+    return at
 
 
 class Orders:
@@ -71,24 +79,24 @@ class Orders:
         piece whose faces all come from one order keeps it, the others get -1 (their system is
         ordered afresh, ``fiedler_solver``). Hand the keys back with ``faces_ordered``."""
         keys = self.face_key[fa]
-        at = 0
-        for f in pieces:
-            b = self.face_block[f]
-            if b.min() < 0 or b.min() != b.max():
-                keys[at:at + len(f)] = -1
-            at += len(f)
+        # Every piece's least and largest block at once (``reduceat`` over the pieces, none
+        # empty), not two reductions a piece (a small search's splits: ~100 pieces a call).
+        at = _starts(pieces)
+        b = self.face_block[fa]
+        lo, hi = np.minimum.reduceat(b, at), np.maximum.reduceat(b, at)
+        for j in ((lo < 0) | (lo != hi)).ravel().nonzero()[0].tolist():
+            keys[at[j]:at[j] + len(pieces[j])] = -1
         return keys
 
     def faces_ordered(self, pieces, fa, before, keys):
         """After the Fiedler solves: the faces' keys as ordered (``keys``, written by
         ``fiedler_solver``); a piece whose keys changed (ordered afresh) is one block now."""
         self.face_key[fa] = keys
-        at = 0
-        for f in pieces:
-            if not np.array_equal(before[at:at + len(f)], keys[at:at + len(f)]):
-                self.face_block[f] = self.blocks
-                self.blocks += 1
-            at += len(f)
+        at = _starts(pieces)
+        changed = np.logical_or.reduceat(before != keys, at)
+        for j in changed.ravel().nonzero()[0].tolist():
+            self.face_block[pieces[j]] = self.blocks
+            self.blocks += 1
 
     @classmethod
     def of(cls, n, m):
@@ -97,37 +105,47 @@ class Orders:
         ``MESH_VERTICES`` vertices."""
         return cls(n, m) if n <= MESH_VERTICES and ordered_ldl.available() else None
 
-    def keys(self, charts, voff):
-        """Keys of the batch's vertices (chart after chart, ``voff`` their offsets), giving
-        fresh orders and ordering unions as the module says. Returns (nv,) int64 and a (k,)
-        bool array: the charts ordered afresh."""
-        vk = np.empty(int(voff[-1]), np.int64)
-        fresh = np.zeros(len(charts), dtype=bool)
-        for j, c in enumerate(charts):
-            k = self.key[c.vertices]
-            if (k < 0).any():
-                fresh[j] = True
-                continue
-            fb = self.block[c.faces]
-            if fb.min() != fb.max():            # a union: where blocks meet goes last
-                # A vertex's corners all of one block iff count * sum(b^2) == sum(b)^2 (exact:
-                # integers far below 2^53).
-                b = np.repeat((fb - fb.min()).astype(np.float64), 3)
-                t, nv = c.tris.ravel(), len(k)
-                s1 = np.bincount(t, b, nv)
-                sep = np.flatnonzero(np.bincount(t, minlength=nv) * np.bincount(t, b * b, nv)
-                                     != s1 * s1)
-                k = k.copy()
-                k[sep] += LAST
-                rank = np.empty(len(sep), np.int64)
-                rank[np.argsort(k[sep], kind="stable")] = np.arange(len(sep))
-                self.key[c.vertices[sep]] = self.given + rank
-                self.given += len(sep)
-                self._block(c.faces)
-            vk[voff[j]:voff[j + 1]] = k
+    def keys(self, charts, voff, gv=None):
+        """Keys of the batch's vertices (chart after chart, ``voff`` their offsets; ``gv`` their
+        mesh vertices, optional), giving fresh orders and ordering unions as the module says.
+        Returns (nv,) int64 and a (k,) bool array: the charts ordered afresh."""
+        # Which charts have a vertex never ordered, and which hold faces of several blocks (a
+        # union), for all charts at once (``reduceat``; no chart is empty). A union's new keys
+        # are never -1, so neither test changes as the unions are keyed below.
+        if gv is None:
+            gv = np.concatenate([c.vertices for c in charts])
+        gk = self.key[gv]
+        fresh = np.logical_or.reduceat(gk < 0, voff[:-1])
+        fb = self.block[np.concatenate([c.faces for c in charts])]
+        foff = _starts([c.faces for c in charts])
+        union = (np.minimum.reduceat(fb, foff) != np.maximum.reduceat(fb, foff)) & ~fresh
+        if not union.any():
+            vk = gk                         # no key changes before the fresh charts'
+        else:
+            vk = np.empty(int(voff[-1]), np.int64)
+            for j, c in enumerate(charts):
+                if fresh[j]:
+                    continue
+                k = self.key[c.vertices]    # as keyed by the unions before this one
+                if union[j]:                # a union: where blocks meet goes last
+                    fb = self.block[c.faces]
+                    # A vertex's corners all of one block iff count * sum(b^2) == sum(b)^2
+                    # (exact: integers far below 2^53).
+                    b = np.repeat((fb - fb.min()).astype(np.float64), 3)
+                    t, nv = c.tris.ravel(), len(k)
+                    s1 = np.bincount(t, b, nv)
+                    sep = np.flatnonzero(np.bincount(t, minlength=nv) * np.bincount(t, b * b, nv)
+                                         != s1 * s1)
+                    k[sep] += LAST
+                    rank = np.empty(len(sep), np.int64)
+                    rank[k[sep].argsort(kind="stable")] = np.arange(len(sep))
+                    self.key[c.vertices[sep]] = self.given + rank
+                    self.given += len(sep)
+                    self._block(c.faces)
+                vk[voff[j]:voff[j + 1]] = k
         if fresh.any():
-            self._fresh([charts[j] for j in np.flatnonzero(fresh)])
-            for j in np.flatnonzero(fresh):
+            self._fresh([charts[j] for j in fresh.ravel().nonzero()[0]])
+            for j in fresh.ravel().nonzero()[0]:
                 vk[voff[j]:voff[j + 1]] = self.key[charts[j].vertices]
         return vk, fresh
 
@@ -152,13 +170,15 @@ class Orders:
         """AMD of the charts' vertex graphs (one block-diagonal pattern); their vertices keyed
         in its order (the batch after every key so far), each chart's faces one block."""
         nvs = np.array([len(c.vertices) for c in charts])
-        off = np.concatenate([[0], np.cumsum(nvs)])
+        off = np.concatenate([[0], nvs.cumsum()])
         t = np.concatenate([c.tris + off[j] for j, c in enumerate(charts)])
         a, b = t.ravel(), t[:, [1, 2, 0]].ravel()
         n = int(off[-1])
-        g = sp.csc_matrix((np.ones(2 * len(a)), (np.concatenate([a, b]), np.concatenate([b, a]))),
-                          shape=(n, n))
-        p = ordered_ldl.amd(g.indptr, g.indices, n)
+        # The vertex graph's canonical compressed pattern (what ``sp.csc_matrix`` of these
+        # pairs holds: sorted, duplicates summed), without scipy's COO conversion (~0.3 ms).
+        _, indices, indptr = compressed(np.concatenate([b, a]), np.concatenate([a, b]),
+                                        np.ones(2 * len(a)), n)
+        p = ordered_ldl.amd(indptr, indices, n)
         rank = np.empty(n, np.int64)
         rank[p if p is not None else np.arange(n)] = np.arange(n)
         for j, c in enumerate(charts):
@@ -186,31 +206,57 @@ def ordered_solver(A, keys, budget):
     if f is not None and (budget <= 0 or f.lnz <= budget * n) and f.factor():
         return f.solve, f.lnz / max(n, 1), None
     nf = n // 2
-    C = A.csc()
-    p = ordered_ldl.amd(C.indptr[:nf + 1], C.indices[:C.indptr[nf]], nf)
+    # AMD reads the pattern of ``A.csc()`` (its indptr and row indices), formed here as that
+    # does, without the scipy matrix (its constructor: ~50 us), built only for ``spd_solver``.
+    order = radix.order(A.cols * n + A.rows, n * n)
+    indptr = np.zeros(n + 1, dtype=np.int64)
+    np.bincount(A.cols, minlength=n).cumsum(out=indptr[1:])
+    p = ordered_ldl.amd(indptr[:nf + 1], A.rows[order[:indptr[nf]]], nf)
+    del order
     if p is not None:
         rank = np.empty(nf, np.int64)
         rank[p] = np.arange(nf)
         f = _factor(A, rank)
         if f is not None and f.factor():
             return f.solve, f.lnz / max(n, 1), rank
-    return spd_solver(C, upper=True), None, None
+    return spd_solver(A.csc(), upper=True), None, None
 
 
 def _factor(A, keys):
-    # The keys' dense ranks keep their order (ties included), so the radix order of the ranks
-    # is the keys' stable order (``solvers.radix``): one sort of n / 2 keys, not of n.
-    uk, r = np.unique(keys, return_inverse=True)
-    perm = radix.order(np.concatenate([2 * r, 2 * r + 1]), 2 * len(uk))
+    # The unknowns u, v of each vertex in the stable order of the vertices' keys, the u of
+    # vertices with equal keys (one vertex of two charts in a batch) before their v: the
+    # stable order of (2 rank, 2 rank + 1) over the keys' dense ranks, as it was formed from
+    # ``np.unique``; where no two keys are equal it is each vertex's u then its v.
+    o, r, nr = _ranks(keys)
+    if r is None:
+        perm = np.empty(2 * len(o), np.int64)
+        perm[0::2], perm[1::2] = o, o + len(o)
+    else:
+        perm = radix.order(np.concatenate([2 * r, 2 * r + 1]), 2 * nr)
     f = ordered_ldl.Factor(A.rows, A.cols, A.vals, A.n, perm)
     return f if f.lnz >= 0 else None
 
 
+def _ranks(keys):
+    """The stable order of ``keys``, their dense ranks (``np.unique``'s inverse; None where no
+    two keys are equal) and the number of distinct keys: one sort, not ``np.unique``'s."""
+    o = keys.argsort(kind="stable")
+    s = keys[o]
+    new = s[1:] != s[:-1]
+    if new.all():
+        return o, None, len(o)
+    rs = np.zeros(len(o), np.int64)
+    new.cumsum(out=rs[1:])
+    r = np.empty(len(o), np.int64)
+    r[o] = rs
+    return o, r, int(rs[-1]) + 1 if len(o) else 0
+
+
 def fiedler_solver(rows, cols, vals, keys, upper):
     """Solve of a Fiedler system (its upper triangle as triplets ``rows``, ``cols``, ``vals``,
-    one node a face; ``upper()`` the canonical csc matrix, duplicates summed) in the order of its
-    nodes' ``keys``; where a key is -1 the system is ordered afresh (AMD) and ``keys`` (a view
-    the caller reads back) rewritten with it. A piece of a chart keeps the chart's order: the
+    one node a face; ``upper()`` the canonical csc matrix, duplicates summed, as ``compressed``
+    forms it from them) in the order of its nodes' ``keys``; where a key is -1 the system is
+    ordered afresh (AMD) and ``keys`` (a view the caller reads back) rewritten with it. A piece of a chart keeps the chart's order: the
     dual graph of a piece is a subgraph of the chart's, so its fill is within the chart's.
     ``spd_solver`` where the factorisation fails.
 
@@ -219,20 +265,21 @@ def fiedler_solver(rows, cols, vals, keys, upper):
     unless two share a place (two faces with two edges in common), which ``upper()`` sums."""
     k = len(keys)
     if (keys >= 0).all():
-        uk, r = np.unique(keys, return_inverse=True)     # (as ``_factor``)
-        f = ordered_ldl.Factor(rows, cols, vals, k, radix.order(r, len(uk)))
+        # The keys' stable order (the radix order of their dense ranks, as it was formed)
+        f = ordered_ldl.Factor(rows, cols, vals, k, keys.argsort(kind="stable"))
         if not f.repeated():
             return f.solve if f.lnz >= 0 and f.factor() else spd_solver(upper(), upper=True)
-    K = upper()
+    # ``upper()``'s arrays (``compressed``, as it forms them), without its scipy matrix
+    # (~50 us), which only ``spd_solver`` needs.
+    data, indices, indptr = compressed(cols, rows, vals, k)
     if (keys < 0).any():
-        p = ordered_ldl.amd(K.indptr, K.indices, k)
+        p = ordered_ldl.amd(indptr, indices, k)
         if p is not None:
             keys[p] = np.arange(k)
     if (keys >= 0).all():
-        cols = np.repeat(np.arange(k, dtype=np.int64), np.diff(K.indptr))
-        uk, r = np.unique(keys, return_inverse=True)     # (as ``_factor``)
-        f = ordered_ldl.Factor(K.indices.astype(np.int64), cols, K.data, k,
-                               radix.order(r, len(uk)))
+        cols = np.repeat(np.arange(k, dtype=np.int64), np.diff(indptr))
+        f = ordered_ldl.Factor(indices.astype(np.int64), cols, data, k,
+                               keys.argsort(kind="stable"))
         if f.lnz >= 0 and f.factor():
             return f.solve
-    return spd_solver(K, upper=True)
+    return spd_solver(upper(), upper=True)

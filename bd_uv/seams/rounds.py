@@ -50,7 +50,7 @@ def refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None
     at merging's test too) goes into ``failed`` (``merge.chart_key`` -> its map's max stretch).
     ``orders``: the mesh's ``orders.Orders`` for the maps' solves, optional.
     """
-    sub = np.flatnonzero(~frozen)
+    sub = (~frozen).ravel().nonzero()[0]
     if len(sub) == 0:
         return False
     # Each step of a round (charts, cut graphs, maps, splits) starts on the heap the last one

@@ -100,9 +100,9 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost,
     del pos
     diff = np.bincount(lo + 1, c, minlength=k + 1) - np.bincount(hi + 1, c, minlength=k + 1)
     del lo, hi
-    cutw = np.cumsum(diff)                 # cutw[start_j + t]: prefix of t nodes of chart j
+    cutw = diff.cumsum()                 # cutw[start_j + t]: prefix of t nodes of chart j
     del diff
-    acum = np.cumsum(face_area[order])
+    acum = face_area[order].cumsum()
     base = np.concatenate([[0.0], acum])[start]
     total = np.bincount(group, face_area, g)
     p = np.arange(k)
@@ -178,7 +178,7 @@ def _least_per_group(s, gp, g):
         return best[np.r_[True, gp[best][1:] != gp[best][:-1]]]
     least = np.full(g, np.inf)
     np.minimum.at(least, gp, s)
-    idx = np.flatnonzero(s == least[gp])
+    idx = (s == least[gp]).ravel().nonzero()[0]
     return idx[np.r_[True, gp[idx][1:] != gp[idx][:-1]]]
 
 
@@ -244,7 +244,7 @@ def _snap_many(side, pairs, cost, group, g, rings=BAND_RINGS):
         left = G.data > flow.data
         rows = np.repeat(np.arange(nb + 2), np.diff(indptr))
         rptr = np.zeros(nb + 3, dtype=np.int32)
-        np.cumsum(np.bincount(rows[left], minlength=nb + 2), out=rptr[1:])
+        np.bincount(rows[left], minlength=nb + 2).cumsum(out=rptr[1:])
         residual = sp.csr_matrix((np.ones(len(rows[left])), indices[left], rptr),
                                  shape=G.shape)
     else:

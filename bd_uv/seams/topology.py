@@ -62,7 +62,7 @@ def charts(F, E, cut, faces=None):
     # A face listed twice is joined to its copy through their vertices only (below).
     fans = E.fans is not None and len(T) == len(faces)
     if len(T) != len(faces):
-        T = T[np.searchsorted(np.unique(faces), faces)]
+        T = T[np.unique(faces).searchsorted(faces)]
     del corners, corner
     # Compact the cut vertices used; faces connected through a shared cut vertex (a corner
     # glued across an uncut edge) form one chart. The per-corner arrays are int32 where the
@@ -70,8 +70,8 @@ def charts(F, E, cut, faces=None):
     # 500k-face mesh).
     used = np.zeros(len(voc), dtype=bool)
     used[T.ravel()] = True
-    ids = np.flatnonzero(used)
-    tri = (np.cumsum(used, dtype=T.dtype) - 1)[T]
+    ids = used.ravel().nonzero()[0]
+    tri = (used.cumsum(dtype=T.dtype) - 1)[T]
     del T, used
     nv, k = len(ids), len(faces)
     # Boundary half-edges: on a seam, on the mesh boundary, or next to a face not asked for
@@ -88,7 +88,7 @@ def charts(F, E, cut, faces=None):
         # Each inner edge once, from its first face (f0), as CSR rows of the faces.
         inner = ~bnd.reshape(k, 3) & (f0.reshape(k, 3) == faces[:, None])
         indptr = np.zeros(k + 1, dtype=np.int64)
-        np.cumsum(inner.sum(axis=1), out=indptr[1:])
+        inner.sum(axis=1).cumsum(out=indptr[1:])
         other = f1[inner.ravel()]
         if k != len(F):                     # input face ids -> positions in ``faces``
             pos = np.empty(len(F), dtype=np.int64)
@@ -106,7 +106,7 @@ def charts(F, E, cut, faces=None):
                                 np.add(tri.ravel(), k, dtype=idx), k + nv)
         fl, vl = comp[:k], comp[k:]
     del fe, f0, f1, inset
-    hb = np.flatnonzero(bnd)                # boundary half-edges, as corners of ``tri``
+    hb = bnd.ravel().nonzero()[0]                # boundary half-edges, as corners of ``tri``
     del bnd
     ba, bb = tri.ravel()[hb], np.roll(tri, -1, axis=1).ravel()[hb]
     nb = np.bincount(fl[hb // 3], minlength=n_c)
@@ -117,8 +117,8 @@ def charts(F, E, cut, faces=None):
     disk = (nb > 0) & (chi == 1)
     if not fans:
         # Without fans a chart need not be a surface: its boundary loops are counted.
-        bo = np.argsort(ba, kind="stable")
-        _, lab = _components(np.concatenate([[0], np.cumsum(np.bincount(ba, minlength=nv))]),
+        bo = ba.argsort(kind="stable")
+        _, lab = _components(np.concatenate([[0], np.bincount(ba, minlength=nv).cumsum()]),
                              bb[bo], nv)
         rep_v = np.full(nv, -1, dtype=np.int64)
         rep_v[lab[ba]] = ba                 # a boundary vertex of each loop
@@ -127,9 +127,9 @@ def charts(F, E, cut, faces=None):
     # a boundary is one loop.)
     # Group faces and vertices by chart.
     forder = radix.order(fl, n_c)
-    fb = np.searchsorted(fl[forder], np.arange(n_c + 1))
+    fb = fl[forder].searchsorted(np.arange(n_c + 1))
     vorder = radix.order(vl, n_c)
-    vb = np.searchsorted(vl[vorder], np.arange(n_c + 1))
+    vb = vl[vorder].searchsorted(np.arange(n_c + 1))
     local = np.empty(nv, dtype=np.int64)
     local[vorder] = np.arange(nv) - vb[vl[vorder]]
     loops = _disk_loops(ba, bb, vl, disk, nv, fans)
@@ -220,6 +220,6 @@ def _disk_loops(ba, bb, vl, disk, nv, walk=False):
         r[sa], nxt[sa] = r[sa] + r[s_], nxt[s_]
     # r: steps to the loop's end; the start has the most.
     order = np.lexsort((-r[sa], cs))
-    bounds = np.searchsorted(cs[order], charts_)
+    bounds = cs[order].searchsorted(charts_)
     ends = np.append(bounds[1:], len(order))
     return {int(c): sa[order[b:e]] for c, b, e in zip(charts_, bounds, ends)}

@@ -11,6 +11,7 @@ import numpy as np
 
 from ..geometry import components
 from .topology import Chart, _disk_loops
+from ..trim import CHUNK
 
 
 def union_charts(F, E, chs, label, xs, ys, removed, owner, trial):
@@ -34,7 +35,7 @@ def union_charts(F, E, chs, label, xs, ys, removed, owner, trial):
     parts = [chs[c] for pair in zip(xs, ys) for c in pair]
     nv = np.array([len(c.vertices) for c in parts], dtype=np.int64)
     nf = np.array([len(c.faces) for c in parts], dtype=np.int64)
-    voff = np.concatenate([[0], np.cumsum(nv)])
+    voff = np.concatenate([[0], nv.cumsum()])
     N = int(voff[-1])
     # Per-corner arrays in int32 where the ids fit (a merge round of a 500k-face mesh covers
     # it whole: (m,3) int64 arrays are 12 MB each), dropped as soon as read.
@@ -44,17 +45,21 @@ def union_charts(F, E, chs, label, xs, ys, removed, owner, trial):
     # Faces by union, then by face id (each union's faces sorted, as ``charts`` lists them).
     m = len(F)
     key = (part // 2).astype(np.int64) * m + faces      # distinct; each chart's faces a run
-    order = np.argsort(key, kind="stable")  # (runs: a merge of sorted runs, no full sort)
+    order = key.argsort(kind="stable")  # (runs: a merge of sorted runs, no full sort)
     key, uf, fu = key[order], faces[order], part[order] // 2
     del faces, part
-    T = np.concatenate([(c.tris + int(voff[i])).astype(it) for i, c in enumerate(parts)])[order]
+    # The parts' triangles at once in ``it``, each shifted by its part's vertex offset (the
+    # same integers as part by part, without two temporaries a part).
+    T = np.concatenate([c.tris for c in parts], dtype=it, casting="unsafe")
+    T += np.repeat(voff[:-1].astype(it), nf)[:, None]
+    T = T[order]
     del order
     # Each removed edge joins, at each end, the vertex of its face on one side to the vertex
     # of its face on the other (the half-edges F[f,j] -> F[f,j+1] of the two faces run
     # opposite ways along it).
     f0, f1 = E.faces[removed, 0].astype(np.int64), E.faces[removed, 1].astype(np.int64)
-    p0 = np.searchsorted(key, owner * m + f0)
-    p1 = np.searchsorted(key, owner * m + f1)
+    p0 = key.searchsorted(owner * m + f0)
+    p1 = key.searchsorted(owner * m + f1)
     del key
     j0 = np.argmax(E.face_edges[f0] == removed[:, None], axis=1)
     j1 = np.argmax(E.face_edges[f1] == removed[:, None], axis=1)
@@ -62,7 +67,7 @@ def union_charts(F, E, chs, label, xs, ys, removed, owner, trial):
     b = np.concatenate([T[p1, (j1 + 1) % 3], T[p1, j1]])
     # Components of the few vertices the removed edges touch; the others stay alone.
     touched = np.unique(np.concatenate([a, b]))
-    _, cl = components(len(touched), np.searchsorted(touched, a), np.searchsorted(touched, b))
+    _, cl = components(len(touched), touched.searchsorted(a), touched.searchsorted(b))
     lab = np.arange(N, dtype=it)
     lab[touched] = N + cl                   # labels apart from the untouched vertices'
     # Union vertices numbered by their first corner (faces in order, then corner): ``charts``
@@ -73,9 +78,9 @@ def union_charts(F, E, chs, label, xs, ys, removed, owner, trial):
     L = len(flat)
     first = np.full(N + len(touched), L, dtype=np.int64)
     np.minimum.at(first, flat, np.arange(L))
-    uniq = np.flatnonzero(first < L)
+    uniq = (first < L).ravel().nonzero()[0]
     new = np.empty(len(first), dtype=it)
-    new[uniq[np.argsort(first[uniq])]] = np.arange(len(uniq), dtype=it)
+    new[uniq[first[uniq].argsort()]] = np.arange(len(uniq), dtype=it)
     del first
     n = len(uniq)
     vm = np.empty(n, dtype=np.int64)
@@ -102,18 +107,21 @@ def union_charts(F, E, chs, label, xs, ys, removed, owner, trial):
     chi = nvu - (3 * nfu + nb) // 2 + nfu
     disk = (nb > 0) & (chi == 1)
     kinds = np.where(disk, "disk", np.where((nb == 0) & (chi == 2), "sphere", "open")).tolist()
-    hb = np.flatnonzero(bnd.ravel())
+    hb = bnd.ravel().nonzero()[0]
     del bnd
     ba, bb = tri.ravel()[hb], np.roll(tri, -1, axis=1).ravel()[hb]
     loops = _disk_loops(ba, bb, vu, disk, n, True)
     del ba, bb, hb, vu
-    fb = np.concatenate([[0], np.cumsum(nfu)]).tolist()
-    vb = np.concatenate([[0], np.cumsum(nvu)]).tolist()
+    fb = np.concatenate([[0], nfu.cumsum()]).tolist()
+    vb = np.concatenate([[0], nvu.cumsum()]).tolist()
     out = []
-    for i in range(p):                      # chart-local ids in int64, as ``charts`` gives
+    # Chart-local ids in int64, as ``charts`` gives: converted at once on a small round (one
+    # call, not one a union), union by union on a large one (no (k,3) int64 copy beside them).
+    t64 = tri.astype(np.int64) if len(tri) <= CHUNK else None
+    for i in range(p):
         s, e, v0 = fb[i], fb[i + 1], vb[i]
         out.append((i, Chart(uf[s:e].copy(), vm[v0:vb[i + 1]].copy(),
-                             tri[s:e].astype(np.int64) - v0,
+                             (t64[s:e] if t64 is not None else tri[s:e].astype(np.int64)) - v0,
                              (loops[i].astype(np.int64) - v0,) if i in loops else (),
                              kinds[i])))
     out.sort(key=lambda t: int(t[1].faces[0]))

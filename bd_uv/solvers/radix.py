@@ -22,18 +22,17 @@ def order(key, bound, passes=2):
     do, numpy's stable sort beyond (and for more than ``LARGE`` keys)."""
     key = np.asarray(key)
     if len(key) > LARGE:
-        return np.argsort(key, kind="stable")
+        return key.argsort(kind="stable")
     if bound <= DIGIT:
-        return np.argsort(key.astype(np.uint16), kind="stable")
+        return key.astype(np.uint16).argsort(kind="stable")
     need = 1
     while need < 4 and bound > 1 << (16 * need):
         need += 1
     if need > passes or bound > 1 << 63:
-        return np.argsort(key, kind="stable")
-    o = np.argsort((key & (DIGIT - 1)).astype(np.uint16), kind="stable")
+        return key.argsort(kind="stable")
+    o = (key & (DIGIT - 1)).astype(np.uint16).argsort(kind="stable")
     for d in range(1, need):
-        o = o[np.argsort(((key[o] >> (16 * d)) & (DIGIT - 1)).astype(np.uint16),
-                         kind="stable")]
+        o = o[((key[o] >> (16 * d)) & (DIGIT - 1)).astype(np.uint16).argsort(kind="stable")]
     return o
 
 
@@ -48,7 +47,7 @@ def unique(key, bound):
     s = key[o]
     first = np.ones(len(s), dtype=bool)
     first[1:] = s[1:] != s[:-1]
-    starts = np.flatnonzero(first)
+    starts = first.ravel().nonzero()[0]
     inv = np.empty(len(s), dtype=np.intp)
-    inv[o] = np.cumsum(first) - 1
+    inv[o] = first.cumsum() - 1
     return s[starts], inv, np.diff(np.append(starts, len(s)))
