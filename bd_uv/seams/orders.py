@@ -256,8 +256,9 @@ def fiedler_solver(rows, cols, vals, keys, upper):
     """Solve of a Fiedler system (its upper triangle as triplets ``rows``, ``cols``, ``vals``,
     one node a face; ``upper()`` the canonical csc matrix, duplicates summed, as ``compressed``
     forms it from them) in the order of its nodes' ``keys``; where a key is -1 the system is
-    ordered afresh (AMD) and ``keys`` (a view the caller reads back) rewritten with it. A piece of a chart keeps the chart's order: the
-    dual graph of a piece is a subgraph of the chart's, so its fill is within the chart's.
+    ordered afresh (AMD) and ``keys`` (a view the caller reads back) rewritten with it. A
+    piece of a chart keeps the chart's order: the dual graph of a piece is a subgraph of the
+    chart's, so its fill is within the chart's.
     ``spd_solver`` where the factorisation fails.
 
     Where every key is given, the triplets go to ``ordered_ldl.Factor`` as they are (it sorts

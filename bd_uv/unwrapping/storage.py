@@ -8,10 +8,10 @@ moves its distortion by whole units (4.96 -> 5.36 against C = 5 on the teapot's 
 
 The bound ``rounding.rounding_distortion`` says, for every face, how far its distortion can go
 when each stored coordinate moves by at most ``h``. The repair :func:`with_storage_headroom`
-re-solves the islands that failed as stored with a stretch limit S (every face's singular values within
-[1/S, S] at the island's own scale, Lipman 2012 section 6.3; the loosest S of
-:data:`STRETCH_LADDER` that certifies the island whole), so no face can collapse below 1/S of its
-3D size; :func:`stored_layout_with_headroom` wraps ``layout.stored_layout``: store, and when an
+re-solves the islands that failed as stored with a stretch limit S (every face's singular
+values within [1/S, S] at the island's own scale, Lipman 2012 section 6.3; the loosest S of
+:data:`STRETCH_LADDER` that certifies the island whole), so no face can collapse below 1/S of
+its 3D size; :func:`stored_layout_with_headroom` wraps ``layout.stored_layout``: store, and when an
 island fails as stored, re-solve it so, then pack and certify again from the stored UVs.
 """
 import dataclasses
