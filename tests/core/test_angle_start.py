@@ -14,7 +14,7 @@ import pytest
 import bd_uv
 from bd_uv.unwrapping import angle_start, one_disk
 from helpers import load_off, rings
-from unwrap_contract import distortion_and_flips
+from unwrap_contract import assert_one_simple_disk, distortion_and_flips
 
 # (seed face, faces at least) of cow.off: disks whose conformal map lies over itself; on main
 # (4fd3e0a) auto cut them into 3 and 8 pieces, at C = 5 the first into 2
@@ -28,7 +28,6 @@ def _turns(z):
 
 
 def _one_certified_island(V, F, res, disk, bound):
-    import shapely
     (r,) = res.islands
     assert r.status == "certified" and "angle_start" in r.flags and r.overlap_free
     assert r.bound_certified <= bound
@@ -36,19 +35,7 @@ def _one_certified_island(V, F, res, disk, bound):
     for stored in (uv, uv.astype(np.float32).astype(np.float64)):
         D, flipped = distortion_and_flips(V, F, stored)
         assert not flipped.any() and D.max() <= r.bound_certified
-    D, _ = distortion_and_flips(V, F, uv)
-    assert D.max() == pytest.approx(r.max_distortion, rel=1e-9)
-    area = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
-    assert r.mean_distortion == pytest.approx((area * D).sum() / area.sum(), rel=1e-9)
-    loop = disk.island.loops[0]
-    vuv = np.zeros((len(disk.island.vertices), 2))
-    vuv[disk.island.tris.ravel()] = uv.reshape(-1, 2)
-    ring = shapely.Polygon(vuv[loop])
-    assert ring.is_valid and ring.exterior.is_ccw
-    tris = shapely.polygons(uv)
-    union = shapely.union_all(tris)
-    assert shapely.area(union) == pytest.approx(shapely.area(tris).sum(), rel=1e-9)
-    assert shapely.area(ring) == pytest.approx(shapely.area(union), rel=1e-9)
+    D = assert_one_simple_disk(V, F, uv, r, disk.island)
     return r, D
 
 

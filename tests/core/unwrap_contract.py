@@ -112,6 +112,29 @@ def assert_disk_with_holes(tris, label="island"):
     assert euler == 2 - loops, f"{label}: genus {(2 - loops - euler) / 2} with {loops} loops"
 
 
+def assert_one_simple_disk(V, F, uv, r, island):
+    """The one island ``r`` (an ``IslandResult``) of a disk ``island`` (``mesh.Island``) with
+    corner UVs ``uv`` (m,3,2): its max and area-weighted mean distortion as reported (recomputed
+    by SVD), and its UV boundary one simple polygon, counter-clockwise, whose inside is the
+    triangles' union (no overlap: the union's area is the sum of the triangles'; shapely).
+    Returns each face's distortion."""
+    import pytest
+    import shapely
+    D, _ = distortion_and_flips(V, F, uv)
+    assert D.max() == pytest.approx(r.max_distortion, rel=1e-9)
+    area = 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
+    assert r.mean_distortion == pytest.approx((area * D).sum() / area.sum(), rel=1e-9)
+    vuv = np.zeros((len(island.vertices), 2))
+    vuv[island.tris.ravel()] = uv.reshape(-1, 2)
+    ring = shapely.Polygon(vuv[island.loops[0]])
+    assert ring.is_valid and ring.exterior.is_ccw
+    tris = shapely.polygons(uv)
+    union = shapely.union_all(tris)
+    assert shapely.area(union) == pytest.approx(shapely.area(tris).sum(), rel=1e-9)
+    assert shapely.area(ring) == pytest.approx(shapely.area(union), rel=1e-9)
+    return D
+
+
 def assert_overlap_free(corner_uv, label="island", max_faces=4000):
     """No two UV triangles overlap (independent separating-axis test, overlap_shapes.py); above
     ``max_faces`` the product's boundary check stands in (the pairwise test grows as m^2)."""
