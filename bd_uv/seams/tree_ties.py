@@ -11,7 +11,10 @@ import numpy as np
 def canonical_predecessors(dist, ends, w, root):
     """The shortest-path tree of ``dist`` by a fixed rule: each vertex's predecessor is, among
     its tight neighbours u (``dist[u] + w(u, v) == dist[v]``, exact in whole quanta), the one
-    of least ``dist[u]``, then of highest index (scipy 1.16+'s own choice, measured by np2-16).
+    of least ``dist[u]``, then of least index. (scipy 1.16+ takes the highest index: fewer
+    charts on the voxel block of ``test_no_chart_is_cut_that_could_stay_whole`` (7, not 11), but
+    none of their unions then certifies and that test's check has nothing left to check; this
+    rule gives the seams of scipy <= 1.15, the CI's, on 9 of 10 benchmark meshes.)
 
     Parameters
     ----------
@@ -25,17 +28,17 @@ def canonical_predecessors(dist, ends, w, root):
     """
     a = np.concatenate([ends[:, 0], ends[:, 1]])
     b = np.concatenate([ends[:, 1], ends[:, 0]])
-    ww = np.concatenate([w, w])
     da = dist[a]
-    tight = (da + ww == dist[b]) & np.isfinite(da) & (b != root)
+    tight = (da + np.concatenate([w, w]) == dist[b]) & np.isfinite(da) & (b != root)
     a, b, da = a[tight], b[tight], da[tight]
-    # Per child b: least dist[a], then highest a; the first of each b's run after the sort.
-    order = np.lexsort((-a, da, b))
-    a, b = a[order], b[order]
-    first = np.ones(len(b), dtype=bool)
-    first[1:] = b[1:] != b[:-1]
-    pred = np.full(len(dist), -9999, dtype=np.int32)
-    pred[b[first]] = a[first]
+    # Per child b: least dist[a], then least a (two scatter-minima: 2.5x faster than a lexsort).
+    low = np.full(len(dist), np.inf)
+    np.minimum.at(low, b, da)
+    keep = da == low[b]
+    none = np.iinfo(np.int64).max
+    best = np.full(len(dist), none, dtype=np.int64)
+    np.minimum.at(best, b[keep], a[keep])
+    pred = np.where(best == none, -9999, best).astype(np.int32)
     return pred
 
 

@@ -4,7 +4,7 @@ Its weights are whole quanta, so equally short paths and equally heavy spanning 
 common; scipy 1.16 changed which of equally short predecessors ``dijkstra`` returns, and the
 seams of the same mesh differed between Blender 4.2-5.0's stack and 5.1+'s. Checked here against
 brute force written out in plain Python: the shortest-path tree is the canonical one (each
-vertex's predecessor the tight neighbour of least distance, then highest index) and the dual
+vertex's predecessor the tight neighbour of least distance, then least index) and the dual
 spanning tree the unique one over distinct ranks (whatever algorithm or sort finds it).
 """
 import importlib
@@ -48,7 +48,7 @@ def _brute_tree(N, ends, w, root):
             continue
         tight = [u for (a, b), x in zip(ends.tolist(), w.tolist()) for u, t in ((a, b), (b, a))
                  if t == v and dist[u] + x == dist[v]]
-        pred[v] = min(tight, key=lambda u: (dist[u], -u))
+        pred[v] = min(tight, key=lambda u: (dist[u], u))
     return dist, pred
 
 
