@@ -152,7 +152,8 @@ def _loops_from(root, graph):
     big = loop_len[dual].max(initial=0.0) + 1.0
     fd0, fd1 = f0[dual], f1[dual]
     # Equal loop lengths are common (whole quanta): the tree is taken over distinct ranks
-    # (ties by the dual graph's row-major order), unique, so no sort's tie order decides it.
+    # (equal ones the later in the dual graph's row-major order first), unique, so no sort's
+    # tie order decides it.
     dg = _csr(big - loop_len[dual] + 1e-12, fd0, fd1, nf)
     dg.data = distinct_ranks(dg.data)
     mst = minimum_spanning_tree(dg).tocoo()

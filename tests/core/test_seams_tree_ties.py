@@ -4,8 +4,9 @@ Its weights are whole quanta, so equally short paths and equally heavy spanning 
 common; scipy 1.16 changed which of equally short predecessors ``dijkstra`` returns, and the
 seams of the same mesh differed between Blender 4.2-5.0's stack and 5.1+'s. Checked here against
 brute force written out in plain Python: the shortest-path tree is the canonical one (each
-vertex's predecessor the tight neighbour of least distance, then least index) and the dual
-spanning tree the unique one over distinct ranks (whatever algorithm or sort finds it).
+vertex's predecessor the tight neighbour of least distance, then highest index) and the dual
+spanning tree the unique one over distinct ranks, equal weights the later first (whatever
+algorithm or sort finds it).
 """
 import importlib
 
@@ -48,7 +49,7 @@ def _brute_tree(N, ends, w, root):
             continue
         tight = [u for (a, b), x in zip(ends.tolist(), w.tolist()) for u, t in ((a, b), (b, a))
                  if t == v and dist[u] + x == dist[v]]
-        pred[v] = min(tight, key=lambda u: (dist[u], u))
+        pred[v] = min(tight, key=lambda u: (dist[u], -u))
     return dist, pred
 
 
@@ -70,6 +71,17 @@ def test_shortest_path_tree_is_the_canonical_one_by_brute_force():
                 ties += len(tight) > 1
             assert canonical_predecessors(dist, ends, w, root).tolist() == want_p
     assert ties > 50                         # the graphs do have ties to break
+
+
+def test_distinct_ranks_order_equal_weights_the_later_first():
+    from bd_uv.seams.tree_ties import distinct_ranks
+    rng = np.random.default_rng(5)
+    for n in (0, 1, 2, 7, 60):
+        x = rng.integers(0, 4, n).astype(np.float64)
+        want = [0.0] * n
+        for r, i in enumerate(sorted(range(n), key=lambda i: (x[i], -i))):
+            want[i] = float(r + 1)
+        assert distinct_ranks(x).tolist() == want
 
 
 def _kruskal(n, rows, cols, data, reverse_ties):
