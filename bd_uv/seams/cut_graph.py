@@ -8,6 +8,7 @@ from scipy.sparse.csgraph import dijkstra, minimum_spanning_tree
 from ..geometry import components
 from ..solvers import radix
 from .compressed import compressed
+from .tree_ties import canonical_predecessors, distinct_ranks
 from ..array_calls import quiet
 
 # Roots tried (farthest-point samples) for the loops of a closed chart of genus >= 1.
@@ -80,7 +81,7 @@ def cut_graph(tris, nv, weight):
         # Genus 0 (the capped surface's Euler characteristic is 2: an annulus, a disk with
         # holes) leaves no edge outside the tree and the cotree (2g = 0 of them): the cut is
         # the tree paths from the caps alone; the dual spanning tree need not be formed.
-        pred = dijkstra(G, directed=False, indices=nv, return_predecessors=True)[1]
+        pred = _shortest_tree(G, nv, ends, w)[1]
         return _tree_paths(np.zeros(0, np.int64), pred, uniq, ends, w, N, nv, n_caps)[0]
     order = inv.argsort(kind="stable")
     first = inv[order].searchsorted(np.arange(len(uniq)))
@@ -139,7 +140,7 @@ def _loops_from(root, graph):
     weights, f0, f1 (e,) each edge's two faces, nf faces, N vertices with the caps, nv chart
     vertices, n_caps), the same for every root."""
     G, uniq, ends, w, f0, f1, nf, N, nv, n_caps = graph
-    dist, pred = dijkstra(G, directed=False, indices=root, return_predecessors=True)
+    dist, pred = _shortest_tree(G, root, ends, w)
     in_tree = np.zeros(len(uniq), dtype=bool)
     child = (pred >= 0).ravel().nonzero()[0]
     tk = np.minimum(child, pred[child]) * N + np.maximum(child, pred[child])
@@ -150,7 +151,13 @@ def _loops_from(root, graph):
     dual = ~in_tree
     big = loop_len[dual].max(initial=0.0) + 1.0
     fd0, fd1 = f0[dual], f1[dual]
-    mst = minimum_spanning_tree(_csr(big - loop_len[dual] + 1e-12, fd0, fd1, nf)).tocoo()
+    # Equal loop lengths are common (whole quanta): the tree is taken over distinct ranks
+    # (equal ones the later in the dual graph's row-major order first), unique, so no sort's
+    # tie order decides it.
+    dg = _csr(big - loop_len[dual] + 1e-12, fd0, fd1, nf)
+    dg.data = distinct_ranks(dg.data)
+    mst = minimum_spanning_tree(dg).tocoo()
+    del dg
     cot = np.zeros(len(uniq), dtype=bool)
     r, c = mst.row.astype(np.int64), mst.col.astype(np.int64)  # int32: pair keys overflow
     del mst
@@ -160,12 +167,19 @@ def _loops_from(root, graph):
     # was a memory peak of the seam search.
     dk = np.minimum(fd0, fd1) * nf + np.maximum(fd0, fd1)
     del fd0, fd1
-    dorder = dk.argsort()
+    dorder = dk.argsort(kind="stable")     # two edges on one face pair: the first, always
     hit = dorder[dk[dorder].searchsorted(tree_keys)]
     del dk, dorder, tree_keys
     cot[dual.ravel().nonzero()[0][hit]] = True
     left = (~in_tree & ~cot).ravel().nonzero()[0]
     return _tree_paths(left, pred, uniq, ends, w, N, nv, n_caps)
+
+
+def _shortest_tree(G, root, ends, w):
+    """(dist, pred) from ``root``: scipy's exact distances (whole quanta) and the canonical
+    predecessors of ``tree_ties`` (scipy's own broke ties differently before and after 1.16)."""
+    dist = dijkstra(G, directed=False, indices=root)
+    return dist, canonical_predecessors(dist, ends, w, root)
 
 
 def _tree_paths(left, pred, uniq, ends, w, N, nv, n_caps):
