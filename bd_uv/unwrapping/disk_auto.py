@@ -160,9 +160,11 @@ def minimise_disk(V, disk, u, limit, t0, progress=None, cancel=None, requested="
         better = None if y is None else _certified(y, disk, area3d, requested, np.inf, done[2])
         if better is not None and better[3] < done[3]:
             done, flags, us = better, flags + ("mean_relaxed",), y
-        # a mean still far over the conformal map's: C given back for it (``mean_relax.capped``)
-        y = mean_relax.capped(0.5 * (disk.G[:, 0] + 1j * disk.G[:, 1]), disk.area, isl.tris,
-                              u, us, done[3])
+        # a mean still far over the conformal map's: C given back for it (``mean_relax.capped``;
+        # a mean within its cap is refused there unmeasured, asked here before any array op)
+        y = (mean_relax.capped(0.5 * (disk.G[:, 0] + 1j * disk.G[:, 1]), disk.area, isl.tris,
+                               u, us, done[3])
+             if done[3] > (1.0 + mean_relax.MEAN_CAP) * (1.0 - 1e-9) else None)
         better = None if y is None else _certified(y, disk, area3d, requested, D0)
         if better is not None and better[1].max() < D0:
             done, flags = better, flags + ("mean_capped",)
