@@ -354,12 +354,7 @@ BOUND_ONE_UNFOLD = dict(
 # with no defect added the contract took it for a disk and asked it certified, but "marked"
 # refuses the bow-tie as it should (NonManifoldError, naming the vertex; the other modes split
 # it, ``repair``). The contract now asks a disk of the unperturbed patch only (``manifold_disk``).
-BOWTIE_PATCH = dict(
-    mesh="three_peaks patch", patch_size=381, seed=43566927, noise=0.0, delete=0.0,
-    delete_kind="scattered faces", seams=0, pins=0, pin_kind="from a certified map", defect=None,
-    nonfinite=np.nan, nonfinite_at="any vertex", nonfinite_count=1, pin_fault=None, bound=1.0,
-    stretch=None, method="lscm", frames="auto", cone="soc", solver_faults=0.0,
-    seams_mode="marked", copies=0, mirror=False)
+BOWTIE_PATCH = dict(BOUND_ONE_UNFOLD, patch_size=381, seed=43566927, seams=0)
 
 
 # Two pins on one point (seed 8 at 2,000): pieces 1e-8 to 5e-14 across at u = 0.98. The
