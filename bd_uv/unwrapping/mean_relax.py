@@ -162,11 +162,13 @@ def capped_island(prob, u_start, u, D0):
     conformal start u_start (max distortion D0) towards the search's map u. Returns (map, its
     max distortion) where that is below D0 and the map lays the island out without overlapping
     itself where u does, else None."""
+    mean_u = prob.mean_distortion(u)
+    if not mean_u > (1.0 + MEAN_CAP) * (1.0 - 1e-9):    # ``capped``'s own refusal, asked first
+        return None
     ops = prob.ops
     G = (np.stack([ops.gx, ops.gy], axis=1) if ops.gx is not None
          else gradient_operators(prob.Z))
-    y = capped(0.5 * (G[:, 0] + 1j * G[:, 1]), ops.area, prob.island.tris, u_start, u,
-               prob.mean_distortion(u))
+    y = capped(0.5 * (G[:, 0] + 1j * G[:, 1]), ops.area, prob.island.tris, u_start, u, mean_u)
     if y is None:
         return None
     ok, Dy = prob.check(y, D0)
