@@ -158,22 +158,32 @@ def test_auto_on_a_small_disk_keeps_to_its_effort_budget(monkeypatch):
     iterates at most EFFORT_PER_FACE a face (``target_watch.effort``); the same call gives the
     same UVs bit for bit (an iteration count, no clock), certified from the UVs recomputed here;
     unbounded (EFFORT_FACES 0) the search runs longer, to a C no higher."""
-    import bd_uv
     from bd_uv.solvers import target_watch
     V, F = grid(11, 11, z=lambda x, y: 0.3 * np.sin(4 * x) * np.cos(3 * y))
     budget = max(target_watch.EFFORT_MIN, int(target_watch.EFFORT_PER_FACE * len(F)))
-    runs = [bd_uv.unwrap(V, F, bound="auto") for _ in range(2)]
-    assert np.array_equal(runs[0].corner_uv, runs[1].corner_uv)
-    monkeypatch.setattr(target_watch, "EFFORT_FACES", 0)
-    runs.append(bd_uv.unwrap(V, F, bound="auto"))
-    (bounded,), (free,) = runs[0].islands, runs[2].islands
-    assert 0 < bounded.iterations <= budget < free.iterations
+    bounded, free, runs = _bounded_and_unbounded(monkeypatch, V, F, 0, budget)
     assert free.bound_certified <= bounded.bound_certified
     for r in (runs[0], runs[2]):
         (isl,) = r.islands
         D, flipped = reference_distortion(V, F, r.corner_uv.reshape(-1, 3, 2))
         assert r.certified and not flipped.any()
         assert D.max() <= isl.bound_certified * (1 + 1e-9)
+
+
+def _bounded_and_unbounded(monkeypatch, V, F, gate, budget):
+    """``bound="auto"`` twice with the effort budget (the same UVs bit for bit: a count, no
+    clock), then with ``target_watch.EFFORT_FACES`` at ``gate`` (no budget for this disk): the
+    bounded run within ``budget`` iterations, the unbounded one past it. Returns (bounded
+    island, unbounded island, [the three results])."""
+    import bd_uv
+    from bd_uv.solvers import target_watch
+    runs = [bd_uv.unwrap(V, F, bound="auto") for _ in range(2)]
+    assert np.array_equal(runs[0].corner_uv, runs[1].corner_uv)
+    monkeypatch.setattr(target_watch, "EFFORT_FACES", gate)
+    runs.append(bd_uv.unwrap(V, F, bound="auto"))
+    (bounded,), (free,) = runs[0].islands, runs[2].islands
+    assert 0 < bounded.iterations <= budget < free.iterations
+    return bounded, free, runs
 
 
 def test_auto_budget_grows_slower_beyond_its_knee_up_to_its_gate():
@@ -199,17 +209,11 @@ def test_auto_on_a_disk_over_a_thousand_faces_keeps_to_its_effort_budget(monkeyp
     beyond); the same call gives the same UVs bit for bit (a count, no clock); with the gate at
     1000 faces (unbounded here) the search runs longer, to a C no higher; both certified from
     the UVs recomputed here, the bounded C within 0.2 % of the unbounded one."""
-    import bd_uv
     from bd_uv.solvers import target_watch
     V, F = grid(25, 25, z=lambda x, y: 0.3 * np.sin(4 * x) * np.cos(3 * y))
     assert len(F) > max(target_watch.FIRST_STALL_FACES, target_watch.EFFORT_KNEE)
     budget = target_watch.effort(len(F), 1.0)
-    runs = [bd_uv.unwrap(V, F, bound="auto") for _ in range(2)]
-    assert np.array_equal(runs[0].corner_uv, runs[1].corner_uv)
-    monkeypatch.setattr(target_watch, "EFFORT_FACES", 1000)
-    runs.append(bd_uv.unwrap(V, F, bound="auto"))
-    (bounded,), (free,) = runs[0].islands, runs[2].islands
-    assert 0 < bounded.iterations <= budget < free.iterations
+    bounded, free, runs = _bounded_and_unbounded(monkeypatch, V, F, 1000, budget)
     assert free.bound_certified <= bounded.bound_certified <= 1.002 * free.bound_certified
     for r in (runs[0], runs[2]):
         (isl,) = r.islands
