@@ -104,6 +104,10 @@ def minimise(prob, start, limit, budget, flags, report, t0, one_to_one=False):
     # the mean before any conic step (measured only where a step ran or may run)
     mean0 = (prob.mean_distortion(best[0]) if best is not None and (steps or prob.solves)
              else np.inf)
+    # a searched map that lays the island out stays so through the conic steps: a step's map
+    # lying over itself would be cut by the overlap repair (camel-patch1200 under the command
+    # line's time budget: 20 pieces at C 2.74 where its search gave one island at 1.19)
+    laid = steps and projected is not None and lays_out(prob, projected[0])
     while steps and best is not None and prob.solves < AUTO_MAX_SOLVES:
         if budget is not None and time.perf_counter() - t0 > budget and (
                 prob.solves or projected is not None):
@@ -115,7 +119,7 @@ def minimise(prob, start, limit, budget, flags, report, t0, one_to_one=False):
         if u is not None:
             u = best_along(prob, best[0], u)
         ok, D = prob.check(u, best[1])
-        if not ok or D >= best[1]:
+        if not ok or D >= best[1] or (laid and not lays_out(prob, u)):
             break
         gain = (best[1] - D) / (best[1] - 1.0)
         best = (u, D)
@@ -123,7 +127,7 @@ def minimise(prob, start, limit, budget, flags, report, t0, one_to_one=False):
             break
     if (prob.solves and best is not None
             and prob.mean_distortion(best[0]) > mean0 * (1.0 + AUTO_MEAN_RISE)):
-        best = lower_mean(prob, best, budget, flags, report, t0)
+        best = lower_mean(prob, best, budget, flags, report, t0, laid)
     if best is None:
         failure = prob.solver_failure()
         if failure is not None:
@@ -159,24 +163,31 @@ def least_one_to_one(prob, start, report, budget, flags, t0, least):
         kept[-1] = (u, D)
     else:
         kept.append((u, D))
-    loops = prob.island.loops
     for v, Dv in sorted(kept, key=lambda c: c[1]):
-        if not (np.isfinite(Dv) and prob.may_be_one_to_one(v)):
-            continue
-        # a flip-free map of a disk is one to one where its boundary is a simple polygon wound
-        # counter-clockwise (Lipman 2012, Theorem 5.1): the loop's test alone
-        # (``disk_certificate.simple_ccw_loop``), not the island's whole overlap test
-        if (simple_ccw_loop(np.stack([v.real, v.imag], axis=1).take(loops[0], axis=0))
-                if len(loops) == 1 else prob.one_to_one(v)):
+        if np.isfinite(Dv) and lays_out(prob, v):
             return v, Dv
     return u, D
 
 
-def lower_mean(prob, best, budget, flags, report, t0):
+def lays_out(prob, v):
+    """Does the flip-free map v lay the island out without overlapping itself? A flip-free map
+    of a disk is one to one where its boundary is a simple polygon wound counter-clockwise
+    (Lipman 2012, Theorem 5.1): the loop's test alone (``disk_certificate.simple_ccw_loop``),
+    not the island's whole overlap test; a loop that does not turn once is refused at once
+    (``may_be_one_to_one``)."""
+    if not prob.may_be_one_to_one(v):
+        return False
+    loops = prob.island.loops
+    return bool(simple_ccw_loop(np.stack([v.real, v.imag], axis=1).take(loops[0], axis=0))
+                if len(loops) == 1 else prob.one_to_one(v))
+
+
+def lower_mean(prob, best, budget, flags, report, t0, laid=False):
     """One energy solve over F_C at the bound the map ``best`` = (u, D) certifies, from its own
     frames (where it is feasible, eq. 4.21): the min-max steps leave faces below the max wherever
     that helped the max, the energy brings them back (issue 9, "a final energy solve at the
-    certified C"). Returns the solve's map when it certifies with a lower mean, else ``best``."""
+    certified C"). Returns the solve's map when it certifies with a lower mean (and, with
+    ``laid``, lays the island out without overlapping itself), else ``best``."""
     if budget is not None and time.perf_counter() - t0 > budget:
         flags.append("time_budget_exhausted")
         return best
@@ -184,7 +195,8 @@ def lower_mean(prob, best, budget, flags, report, t0):
     report(0.9, f"lowering the mean distortion at C = {C:.4g}")
     u, _ = prob.solve(frames_from_map(prob.alpha(best[0])), C)
     ok, D = prob.check(u, C)
-    if ok and prob.mean_distortion(u) < prob.mean_distortion(best[0]):
+    if ok and prob.mean_distortion(u) < prob.mean_distortion(best[0]) and (
+            not laid or lays_out(prob, u)):
         return u, D
     return best
 

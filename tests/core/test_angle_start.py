@@ -158,3 +158,19 @@ def test_an_angle_start_map_that_float32_would_break_gives_way_to_the_conformal_
         m.setattr(angle_start, "better_start", lambda *a, **k: (None, None, False))
         plain = bd_uv.unwrap(V, F, bound="auto")
     assert np.array_equal(plain.corner_uv, res.corner_uv, equal_nan=True)
+
+
+@pytest.mark.parametrize("seed, faces", COW + [AT_FIVE[1][:2]])
+def test_with_the_command_lines_time_budget_the_disk_stays_one_certified_island(seed, faces):
+    """``--bound auto`` on the command line has a time budget (``arguments.TIME_BUDGET``), so
+    Dinkelbach steps refine the searched map: from the angle start, and never into a map that
+    lies over itself (b620c89 cut these disks into 3, 8 and 12 pieces: the steps' maps overlapped
+    and the overlap repair cut them). The conic step's C may be lower, never higher than the
+    search's alone."""
+    from bd_uv.arguments import TIME_BUDGET
+    V, F = rings(*load_off("cow.off"), seed, faces)
+    disk = one_disk.find(V, F)
+    res = bd_uv.unwrap(V, F, bound="auto", time_budget=TIME_BUDGET)
+    r, D = _one_certified_island(V, F, res, disk, np.inf)
+    (plain,) = bd_uv.unwrap(V, F, bound="auto").islands
+    assert r.bound_certified <= plain.bound_certified and D.max() <= r.bound_certified
