@@ -127,10 +127,11 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
         if done is not None:
             return done
         conformal_u = u
-        if opts.bound == "auto" and opts.time_budget is None:
+        if opts.bound == "auto":
             # a conformal start that flips, lies over itself or is far from conformal: the
             # angle start where it is better, its search's least map that does not lie over
-            # itself (every other disk keeps its conformal start)
+            # itself (every other disk keeps its conformal start); with a time budget too, whose
+            # conic steps keep such a map one island (``strategies.lays_out``)
             v, found, bad = angle_start.better_start(V, disk, u)
             if v is not None:
                 u, one_to_one = v, True
