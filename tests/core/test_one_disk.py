@@ -80,20 +80,33 @@ def test_the_one_pass_gives_the_general_paths_map_and_certificate(name, bound):
     """At C = 5 the conformal map fits; at 1.05 it does not (but for the one face) and the
     general path bends it from the same conformal map; "auto" searches from it and is certified
     by the one-disk certificate. The same UVs bit for bit, the same certificate, the island's
-    figures as its certificate measures them."""
+    figures as its certificate measures them; for "auto" to rounding (its search runs on the
+    disk's own geometry, the general path's on a copy scaled to unit area: the same iterations
+    and C, the UVs within 1e-11 of their extent)."""
     V, F = DISKS[name]()
     fast = bd_uv.unwrap(V, F, bound=bound)
     ref = general(V, np.asarray(F, np.int64), bound=bound)
-    assert np.array_equal(fast.corner_uv, ref.corner_uv, equal_nan=True)
+    if bound == "auto":
+        extent = np.ptp(ref.corner_uv.reshape(-1, 2), axis=0).max()
+        assert np.abs(fast.corner_uv - ref.corner_uv).max() <= 1e-11 * extent
+        assert fast.islands[0].iterations == ref.islands[0].iterations
+        a, b = fast.certificates[0], ref.certificates[0]
+        assert a.certified and b.certified and a.bound == b.bound
+        assert np.isclose(a.max_distortion, b.max_distortion, rtol=1e-12, atol=0)
+        assert np.isclose(a.mean_distortion, b.mean_distortion, rtol=1e-12, atol=0)
+    else:
+        assert np.array_equal(fast.corner_uv, ref.corner_uv, equal_nan=True)
+        assert all(map(_same, fast.certificates, ref.certificates))
     assert len(fast.certificates) == len(ref.certificates)
-    assert all(map(_same, fast.certificates, ref.certificates))
     (r,) = fast.islands
     (g,) = ref.islands
     assert r.status == g.status == "certified" and r.flags == g.flags
     assert r.bound_certified == g.bound_certified
     assert np.isclose(r.max_distortion, g.max_distortion, rtol=1e-12, atol=0)
     assert np.isclose(r.mean_distortion, g.mean_distortion, rtol=1e-12, atol=0)
-    assert np.allclose(r.distortion, g.distortion, rtol=1e-12, atol=0)
+    # (a face's distortion moves with its corners: 4e-12 on nefertiti's at "auto")
+    assert np.allclose(r.distortion, g.distortion, rtol=1e-12 if bound != "auto" else 1e-10,
+                       atol=0)
     assert np.isclose(r.min_singular, g.min_singular, rtol=1e-12)
     assert np.isclose(r.max_singular, g.max_singular, rtol=1e-12)
     (c,) = certify_islands(V, F, fast.corner_uv, fast.face_island, [r.bound_certified])
