@@ -31,7 +31,7 @@ THIN = 1e-3
 # Depth of the quadtree of spyrrow's collision engine (jagua-rs; spyrrow's default 4). At 3 its
 # search reached denser layouts in the same wall time on the charts of closed meshes: measured
 # at the default budget (issue18-pack21-2026-11-28.md, seeds 0-7, interleaved, load 2-8), 16
-# sets of 7-20 charts +0.0057 coverage (se 0.0014; 64 wins, 40 losses, the same CPU), 9 sets of
+# sets of 7-20 charts +0.0057 coverage (se 0.0014; 64 wins, 40 losses, the same CPU), 10 sets of
 # 24-116 charts +0.0006 (se 0.0020; 13/13); 5 gave 0.003 less than 4 (seed 0, 16 sets)
 QUADTREE_DEPTH = 3
 
