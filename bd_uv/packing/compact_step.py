@@ -4,6 +4,8 @@ within reach and of the square's edges, and the pairs close after a move (rows f
 Split from :mod:`.compact` (the sequence of steps, its checks and stops)."""
 import numpy as np
 
+from .highs_lp import solve_lp
+
 __all__ = ["TURN_MAX", "close", "step_lp"]
 
 TURN_MAX = 0.1    # largest turn of a chart in one step, radians
@@ -77,7 +79,6 @@ def step_lp(Q, owner, nxt, centre, radius, S, pad, pm, tol, step, turn, seconds,
     the side reached, or None; and whether the program was infeasible. ``hold``: the charts
     turning by TURN_MAX in a pair whose gap leaves no room for the turns' error terms do not
     turn (``HOLD``)."""
-    from scipy.optimize import linprog
     from scipy.sparse import coo_array
     k = len(centre)
     nv = 3 * k + 1                    # per chart dx, dy, turn; then S
@@ -134,9 +135,9 @@ def step_lp(Q, owner, nxt, centre, radius, S, pad, pm, tol, step, turn, seconds,
     bounds[:-1, 0] *= -1
     bounds[-1] = (0.0, S)
     # (dual simplex without presolve: measured 1.5x faster on these small, tall programs)
-    res = linprog(cost, A_ub=A, b_ub=np.concatenate(rhs), bounds=bounds, method="highs-ds",
-                  options={"presolve": False, "time_limit": max(float(seconds), 1e-3)})
-    if res.status != 0:
-        return None, res.status == 2
-    x = res.x[:-1].reshape(k, 3)
-    return (x[:, :2], x[:, 2], float(res.x[-1])), False
+    sol, status = solve_lp(cost, A, np.concatenate(rhs), bounds[:, 0], bounds[:, 1],
+                           max(float(seconds), 1e-3))
+    if status != 0:
+        return None, status == 2
+    x = sol[:-1].reshape(k, 3)
+    return (x[:, :2], x[:, 2], float(sol[-1])), False

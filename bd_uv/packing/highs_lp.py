@@ -1,0 +1,97 @@
+"""The compaction's linear programs handed to HiGHS without ``scipy.optimize.linprog``'s wrapper.
+
+A compaction step (:mod:`.compact_step`) solves a small, tall program (3 k + 1 columns, a few
+hundred to a few thousand rows) with HiGHS' dual simplex and no presolve. Through ``linprog``
+about as much CPU went into scipy's checks, its sparse stacking and conversions and its option
+handling (each option checked against HiGHS' tables on every call) as into HiGHS itself:
+measured on the compaction of igl-elephant, dino and igl-arm from their nested layouts (232
+programs), HiGHS 1.07 s, ``linprog`` around it 1.00 s more. Here the same program (the same
+matrix in columns, the same options: dual simplex, presolve off, the time limit, no output) is
+passed to the HiGHS that scipy ships (``scipy.optimize._highspy._core``, private: scipy 1.15 and
+later) and its answer read back as ``linprog`` reads it, with the same feasibility check of
+the solution (``scipy.optimize._linprog_util._check_result``: bounds and rows within
+10 sqrt(1e-9)). Where that module is missing or differs, ``linprog`` is called as before.
+"""
+import numpy as np
+
+__all__ = ["solve_lp"]
+
+_TOL = 10 * np.sqrt(1e-9)   # linprog's check of a solution (its tol 1e-9, _check_result)
+
+
+def _core():
+    """scipy's HiGHS binding, or None where this scipy has none (or another one)."""
+    try:
+        from scipy.optimize._highspy import _core as h
+        h.HighsLp, h._Highs, h.HighsOptions, h.MatrixFormat.kColwise   # noqa: B018
+        h.HighsModelStatus.kOptimal, h.HighsModelStatus.kInfeasible   # noqa: B018
+        h.simplex_constants.SimplexStrategy.kSimplexStrategyDual   # noqa: B018
+    except (ImportError, AttributeError):
+        return None
+    return h
+
+
+def solve_lp(cost, A, rhs, lb, ub, seconds):
+    """min cost . x subject to A x <= rhs and lb <= x <= ub, by HiGHS' dual simplex with no
+    presolve, for at most ``seconds``.
+
+    Parameters
+    ----------
+    cost : (n,) float64
+    A : scipy sparse (m, n)
+    rhs, lb, ub : (m,), (n,), (n,) float64, finite
+
+    Returns
+    -------
+    x (n,) float64 or None, status as ``linprog``'s (0 solved, 2 infeasible, others failed)
+    """
+    h = _core()
+    if h is None:
+        return _linprog(cost, A, rhs, lb, ub, seconds)
+    A = A.tocsc()
+    A.sort_indices()
+    n, m = len(cost), len(rhs)
+    lp = h.HighsLp()
+    lp.num_col_, lp.num_row_ = n, m
+    lp.a_matrix_.num_col_, lp.a_matrix_.num_row_ = n, m
+    lp.a_matrix_.format_ = h.MatrixFormat.kColwise
+    lp.col_cost_ = np.ascontiguousarray(cost, dtype=np.float64)
+    lp.col_lower_ = np.ascontiguousarray(lb, dtype=np.float64)
+    lp.col_upper_ = np.ascontiguousarray(ub, dtype=np.float64)
+    lp.row_lower_ = np.full(m, -h.kHighsInf)
+    lp.row_upper_ = np.ascontiguousarray(rhs, dtype=np.float64)
+    lp.a_matrix_.start_ = A.indptr
+    lp.a_matrix_.index_ = A.indices
+    lp.a_matrix_.value_ = A.data
+    highs = h._Highs()
+    opt = h.HighsOptions()
+    opt.presolve = "off"
+    opt.solver = "simplex"
+    opt.simplex_strategy = int(h.simplex_constants.SimplexStrategy.kSimplexStrategyDual)
+    opt.time_limit = float(seconds)
+    opt.output_flag = False
+    opt.log_to_console = False
+    if (highs.passOptions(opt) == h.HighsStatus.kError
+            or highs.passModel(lp) == h.HighsStatus.kError
+            or highs.run() == h.HighsStatus.kError):
+        return None, 4
+    status = highs.getModelStatus()
+    if status == h.HighsModelStatus.kInfeasible:
+        return None, 2
+    if status != h.HighsModelStatus.kOptimal:
+        return None, 4
+    sol = highs.getSolution()
+    x = np.array(sol.col_value)
+    slack = rhs - np.asarray(sol.row_value)
+    if (np.isnan(x).any() or np.isnan(slack).any() or (x < lb - _TOL).any()
+            or (x > ub + _TOL).any() or (slack < -_TOL).any()):
+        return None, 4
+    return x, 0
+
+
+def _linprog(cost, A, rhs, lb, ub, seconds):
+    """:func:`solve_lp` through ``scipy.optimize.linprog`` (method highs-ds)."""
+    from scipy.optimize import linprog
+    res = linprog(cost, A_ub=A, b_ub=rhs, bounds=np.stack([lb, ub], 1), method="highs-ds",
+                  options={"presolve": False, "time_limit": float(seconds)})
+    return (res.x if res.status == 0 else None), int(res.status)
