@@ -34,6 +34,7 @@ AUTO_MAX_SOLVES = 24
 # more than this share (mannequin-devil: 1.071 -> 1.150 after two steps).
 AUTO_MEAN_RISE = 0.02
 LINE_SEARCH = 14        # distortion evaluations along each Dinkelbach step (``best_along``)
+FOLDED_ENDS = True
 
 
 def minimise(prob, start, limit, budget, flags, report, t0, one_to_one=False):
@@ -150,16 +151,17 @@ def least_one_to_one(prob, start, report, budget, flags, t0, least):
     overlap costs one test. The search's own map where none passes (the overlap repair cuts
     it then). Returns (u, its max distortion)."""
     kept = [(start.u, start.D)]
+    loops = prob.island.loops
 
-    def record(v):                  # never ends the search
+    def record(v):                  # ends the search at a map whose boundary folded
         kept.append((v, prob.distortion(v)))
-        return False
-    u, D = search(prob, start.u, report, budget, flags, t0, enough=record, least=least)
+        return FOLDED_ENDS and not prob.may_be_one_to_one(v)
+    u, D = search(prob, start.u, report, budget, flags, t0, enough=record, least=least,
+                  ready=_always if FOLDED_ENDS else None)
     if np.array_equal(kept[-1][0], u):     # the search's map is its last target's best
         kept[-1] = (u, D)
     else:
         kept.append((u, D))
-    loops = prob.island.loops
     for v, Dv in sorted(kept, key=lambda c: c[1]):
         if not (np.isfinite(Dv) and prob.may_be_one_to_one(v)):
             continue
@@ -170,6 +172,10 @@ def least_one_to_one(prob, start, report, budget, flags, t0, least):
                 if len(loops) == 1 else prob.one_to_one(v)):
             return v, Dv
     return u, D
+
+
+def _always(v):
+    return True
 
 
 def lower_mean(prob, best, budget, flags, report, t0):

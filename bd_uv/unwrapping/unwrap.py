@@ -111,12 +111,11 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             # angles capped (one island, near the conformal map), else the search below
             done = capped.unfold(V, F, disk, u, float(opts.bound), t0, progress, cancel)
         angled = None
-        if done is None and opts.bound == "auto" and opts.time_budget is None:
+        if (done is None and opts.bound == "auto" and opts.time_budget is None
+                and len(disk.island.tris) > angle_start.FIRST_FACES):
             # a conformal start that flips, lies over itself or is far from conformal: its
             # angle start where that is better (``angle_start.better_start``), asked before the
-            # search from the conformal start, which it replaces (igl bunny's 1,595-face patch:
-            # conformal max 2.49, the search from it, 99 iterations, 16 ms, ended in a map
-            # lying over itself, then the angle start's search ran)
+            # search from the conformal start, which it replaces (see FIRST_FACES)
             angled = angle_start.better_start(V, disk, u)
         if done is None and (opts.bound == "auto" or overlaps) and opts.time_budget is None \
                 and (angled is None or angled[0] is None):
@@ -140,7 +139,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             # a conformal start that flips, lies over itself or is far from conformal: the
             # angle start where it is better, its search's least map that does not lie over
             # itself (every other disk keeps its conformal start)
-            v, found, bad = angled
+            v, found, bad = angled if angled is not None else angle_start.better_start(V, disk, u)
             if v is not None:
                 u, one_to_one = v, True
             elif bad:       # the angle start found (or none), tried before a cut as it is
