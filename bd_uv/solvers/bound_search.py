@@ -72,6 +72,14 @@ ZERO_SMALL = True
 # (1.0695 -> 1.0696, 1.0695), screwdriver:1800 102 -> 68 (1.1023 -> 1.1105); none of the small
 # standing disks
 AFTER_SHORT = True
+# Both also end a least-C search whose start was over ``target_watch.EFFORT_START`` (no budget)
+# once its map is within it, as they end one that started there (LATE_BUDGETED: homer's
+# 1,982-face strip from its angle start, 2.51: 76 -> 49 iterations, C 1.3456 -> 1.3647, the
+# peers' least max 1.585; ChineseDragon's 1,577-face patch 85 -> 42, 1.5114 -> 1.5496, 2.103;
+# knight-ball3000top 152 -> 93, 1.6629 -> 1.6841, 2.59, its mean the same; DamagedHelmet's
+# 741-face piece 102 -> 39, 1.7875 -> 1.8946, 3.206; no other of 54 disks changes C. Not over
+# it: cow's 1,240-face disk ends at 2.03, where its cut reached 2.045)
+LATE_BUDGETED = True
 MARGIN = 0.98       # the cones are aimed at 1 + MARGIN (C - 1)
 # A map this close to an isometry is not searched further: the bound ``auto`` reports keeps
 # STORE_HEADROOM (2e-4) above its max and rounds C - 1 up to 4 significant digits (1.0002001), so
@@ -285,8 +293,11 @@ class BoundSearch(SearchLift):
                 step = min(MAX_STEP, 1.5 * step)
                 small, short = 0, False
                 continue
-            # within an effort budget a fruitless target counts as a small one (ZERO_SMALL)
-            zero = ZERO_SMALL and self.budget is not None
+            # within an effort budget a fruitless target counts as a small one (ZERO_SMALL),
+            # and in a search the budget was spared from its start once its map is within
+            # EFFORT_START (LATE_BUDGETED)
+            zero = ZERO_SMALL and (self.budget is not None or (
+                LATE_BUDGETED and self.least and D <= target_watch.EFFORT_START))
             small = small + 1 if (gain < SMALL if zero else 0.0 < gain < SMALL) else 0
             step *= 0.5
             if step < TOLERANCE or small >= 2 or (AFTER_SHORT and zero and short and gain <= 0.0):
