@@ -16,8 +16,8 @@ from .projection import ProjectionSolver
 
 __all__ = ["flip_free_map"]
 
-# A start whose projection has not bettered it after WINDOW iterations is given up: the LSCM
-# map with no flip-free iterate yet, the harmonic map with none of a lower max. Where the bend
+# The LSCM start is given up when none of its projection's first WINDOW iterates is flip-free
+# (then the harmonic start, projected where ``harmonic``, else None). Where the bend
 # works the LSCM start's iterates are flip-free within 1-5 iterations and within C in 3-10
 # (three_peaks.off, mannequin-devil.off and its 700-face patch, DamagedHelmet's 1,506-face
 # piece), within 1-8 on 8 ring patches of three_peaks.off and cow.off (one flip-free at 16
@@ -69,19 +69,16 @@ def flip_free_map(Z, tris, nv, loops, u_lscm, C=5.0, *, pins=None, margin=0.9, m
             "factor_seconds": 0.0, "max_distortion": np.inf}
     scale = solver.component_scale(np.asarray(u_lscm, np.complex128))
 
-    def project(u, D0):
-        """The projection from u (max distortion D0), given up after WINDOW iterations when
-        none bettered D0 (then continued from its best iterate)."""
-        res = solver.project(u, C, values, margin=margin, scale=scale,
-                             max_iter=min(WINDOW, max_iter), cancel=cancel)
+    # the LSCM start's first WINDOW iterations; run again in full (the same iterates as one run)
+    # where one of them was flip-free but they did not converge
+    res = solver.project(u_lscm, C, values, margin=margin, scale=scale,
+                         max_iter=min(WINDOW, max_iter), cancel=cancel)
+    info["iterations"] += res.iterations
+    if (not res.all_converged and res.iterations >= WINDOW and max_iter > WINDOW
+            and np.isfinite(np.max(res.max_distortion))):
+        res = solver.project(u_lscm, C, values, margin=margin, scale=scale, max_iter=max_iter,
+                             cancel=cancel)
         info["iterations"] += res.iterations
-        if (not res.all_converged and res.iterations >= WINDOW and max_iter > WINDOW
-                and np.max(res.max_distortion) < D0):
-            res = solver.project(res.u, C, values, margin=margin, scale=scale,
-                                 max_iter=max_iter - res.iterations, cancel=cancel)
-            info["iterations"] += res.iterations
-        return res
-    res = project(u_lscm, np.inf)
     info["max_distortion"] = float(np.max(res.max_distortion))
     info["factor_seconds"] = solver.factor_seconds
     if res.all_converged:
@@ -94,10 +91,9 @@ def flip_free_map(Z, tris, nv, loops, u_lscm, C=5.0, *, pins=None, margin=0.9, m
     uh = harmonic_map(Z, tris, nv, loops)
     sh = solver.component_scale(uh)
     uh = (uh - uh[fixed[0]]) * (scale[0] / sh[0]) + values[0]
-    # its own max (no iteration: the measure of the start)
-    D0 = float(np.max(solver.project(uh, C, values, margin=margin, scale=scale, max_iter=0,
-                                     cancel=cancel).max_distortion))
-    res = project(uh, D0)
+    res = solver.project(uh, C, values, margin=margin, scale=scale, max_iter=max_iter,
+                         cancel=cancel)
+    info["iterations"] += res.iterations
     info["max_distortion"] = float(np.max(res.max_distortion))
     info["seconds"] = time.perf_counter() - t0
     info["factor_seconds"] = solver.factor_seconds

@@ -101,21 +101,7 @@ def bounded(prob, start, C, raise_bound, limit, flags, report):
         bent = bend(prob, start, C, report, flags)
         if bent is not None:
             return bent, C, start.name
-    flipping = start
     start = start_for_solve(prob, start, report)
-    if (start is not flipping and not solved and prob.method == "lscm" and start.u is not None
-            and np.isfinite(start.D) and solve_bound(C) > 1.0):
-        # the bend failed: the bound search from the flip-free (harmonic) start before a conic
-        # solve (igl decimated-knight's 976-face strip at C = 5: a Clarabel solve, 209 ms, where
-        # the search reaches C in ~50 iterations, ~6 ms)
-        found, searched = over_bound(prob, start, C, raise_bound, limit, report)
-        if found is not None:
-            flags += ["projected", "bound_raised"]
-            return found + (start.name,)
-        within = searched_fallback(prob, start, searched, C, False, limit)
-        if within is not None:
-            flags += [f for f in within[1] if f not in flags]
-            return within[0] + (start.name,)
     formulate(prob, start)
     w, best, prev_e, retried, resets = start.frames, None, None, False, 0
     D0 = start.D
@@ -197,11 +183,10 @@ def bend(prob, start, C, report, flags=None, polish=True):
     report(0.1, f"bending into C = {C:.3g}")
     t = time.perf_counter()
     pins = (prob.pin_idx, prob.pin_val) if len(prob.pin_idx) else None
-    # where the LSCM start fails, BD-LSCM searches from the harmonic map (``minimise``, and
-    # ``bounded`` before a conic solve) instead of projecting it
+    # where the LSCM start fails, ``minimise`` (no polish) searches from the harmonic map
+    # instead of projecting it
     u, info = flip_free_map(prob.Z, prob.island.tris, prob.nv, prob.island.loops, start.u,
-                            solve_bound(C), pins=pins, cancel=prob.cancel,
-                            harmonic=polish and prob.method != "lscm")
+                            solve_bound(C), pins=pins, cancel=prob.cancel, harmonic=polish)
     prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
     prob.iterations += info["iterations"]
     if u is None or not prob.check(u, C)[0]:
