@@ -183,8 +183,10 @@ def bend(prob, start, C, report, flags=None, polish=True):
     report(0.1, f"bending into C = {C:.3g}")
     t = time.perf_counter()
     pins = (prob.pin_idx, prob.pin_val) if len(prob.pin_idx) else None
+    # where the LSCM start fails, ``minimise`` (no polish) searches from the harmonic map
+    # instead of projecting it
     u, info = flip_free_map(prob.Z, prob.island.tris, prob.nv, prob.island.loops, start.u,
-                            solve_bound(C), pins=pins, cancel=prob.cancel)
+                            solve_bound(C), pins=pins, cancel=prob.cancel, harmonic=polish)
     prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
     prob.iterations += info["iterations"]
     if u is None or not prob.check(u, C)[0]:

@@ -46,12 +46,13 @@ def _handed_over(prob, u, least):
     return entry[2:]
 
 
-def search(prob, u, report, budget, flags, t0, enough=None, least=False):
+def search(prob, u, report, budget, flags, t0, enough=None, least=False, ready=None):
     """Lower the bound of a flip-free map ``u`` by ADMM onto F_C with frames
     (``solvers.bound_search``), holding the pins (or one boundary vertex, where ``u`` has it),
     ending at the first best map ``enough`` (else ``prob.enough``) accepts where it is set.
     ``least``: the search for ``bound="auto"``'s least C on an unpinned island with no time budget,
-    bounded as ``BoundSearch.limit_effort`` bounds it.
+    bounded as ``BoundSearch.limit_effort`` bounds it. ``ready``: with ``enough``, its gate
+    (``BoundSearch.search``'s; the search does not aim deeper for it).
     Returns (the best map, its max distortion); flags "time_budget_exhausted" when the budget
     stopped it."""
     if len(prob.pin_idx) >= prob.nv:
@@ -79,9 +80,10 @@ def search(prob, u, report, budget, flags, t0, enough=None, least=False):
     deadline = None if budget is None else t0 + budget
     # the problem's own test (the unfold's one-to-one) comes with its cheap gate and aims deep;
     # one given here (``over_bound``'s: within C, else the least C) has neither
-    enough, ready = (enough, None) if enough is not None else (prob.enough, prob.ready)
+    deep = enough is None and prob.ready is not None
+    enough, ready = (enough, ready) if enough is not None else (prob.enough, prob.ready)
     u, D, out_of_time = bs.search(u, None, progress, deadline, prob.cancel, enough, ready,
-                                  deep=ready is not None)
+                                  deep=deep)
     if prob.cancel is not None and prob.cancel.is_set():
         raise Cancelled
     if out_of_time:

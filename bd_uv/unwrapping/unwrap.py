@@ -110,7 +110,15 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             # the conformal map wrapping round a few boundary vertices: solved again with their
             # angles capped (one island, near the conformal map), else the search below
             done = capped.unfold(V, F, disk, u, float(opts.bound), t0, progress, cancel)
-        if done is None and (opts.bound == "auto" or overlaps) and opts.time_budget is None:
+        angled = None
+        if (done is None and opts.bound == "auto" and opts.time_budget is None
+                and len(disk.island.tris) > angle_start.FIRST_FACES):
+            # a conformal start that flips, lies over itself or is far from conformal: its
+            # angle start where that is better (``angle_start.better_start``), asked before the
+            # search from the conformal start, which it replaces (see FIRST_FACES)
+            angled = angle_start.better_start(V, disk, u)
+        if done is None and (opts.bound == "auto" or overlaps) and opts.time_budget is None \
+                and (angled is None or angled[0] is None):
             done = disk_auto.minimise_disk(
                 V, disk, u, opts.bound_limit if opts.bound == "auto" else float(opts.bound), t0,
                 progress, cancel, opts.bound)
@@ -132,7 +140,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             # angle start where it is better, its search's least map that does not lie over
             # itself (every other disk keeps its conformal start); with a time budget too, whose
             # conic steps keep such a map one island (``strategies.lays_out``)
-            v, found, bad = angle_start.better_start(V, disk, u)
+            v, found, bad = angled if angled is not None else angle_start.better_start(V, disk, u)
             if v is not None:
                 u, one_to_one = v, True
             elif bad:       # the angle start found (or none), tried before a cut as it is

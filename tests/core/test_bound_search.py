@@ -176,7 +176,11 @@ def _bounded_and_unbounded(monkeypatch, V, F, gate, budget):
     bounded run within ``budget`` iterations, the unbounded one past it. Returns (bounded
     island, unbounded island, [the three results])."""
     import bd_uv
-    from bd_uv.solvers import target_watch
+    from bd_uv.solvers import bound_search, target_watch
+    # the budget alone: the stop after two fruitless targets off (``bound_search.ZERO_SMALL``,
+    # ``test_two_fruitless_targets_end_the_search``: on these grids it ends the unbounded
+    # search within the budget)
+    monkeypatch.setattr(bound_search, "ZERO_SMALL", False)
     runs = [bd_uv.unwrap(V, F, bound="auto") for _ in range(2)]
     assert np.array_equal(runs[0].corner_uv, runs[1].corner_uv)
     monkeypatch.setattr(target_watch, "EFFORT_FACES", gate)
@@ -262,3 +266,24 @@ def test_auto_starts_no_target_it_has_too_little_budget_for(monkeypatch):
         else:
             assert (it6, c6) == (it1, c1)
     assert shorter >= 1
+
+
+def test_two_fruitless_targets_end_the_search(monkeypatch):
+    """Two targets in a row that fall short gaining less than SMALL of D - 1, nothing included,
+    end the search (``bound_search.ZERO_SMALL``): fewer iterations, each map certified, C within
+    0.5 % of the search that goes on halving its step (measured: 58 against 89 iterations,
+    1.0292 against 1.0269)."""
+    import bd_uv
+    from bd_uv.solvers import bound_search
+    V, F = grid(25, 25, z=lambda x, y: 0.3 * np.sin(4 * x) * np.cos(3 * y))
+    res = {}
+    for zero in (False, True):
+        monkeypatch.setattr(bound_search, "ZERO_SMALL", zero)
+        res[zero] = bd_uv.unwrap(V, F, bound="auto").islands[0]
+    for isl in res.values():
+        D, flipped = reference_distortion(V[isl.vertices], isl.tris,
+                                          isl.uv.take(isl.tris, axis=0))
+        assert isl.status == "certified" and not flipped.any()
+        assert D.max() <= isl.bound_certified
+    assert res[True].iterations < res[False].iterations
+    assert res[True].bound_certified <= 1.005 * res[False].bound_certified

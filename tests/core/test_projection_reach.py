@@ -161,8 +161,12 @@ def test_needed_mode_cuts_the_cone_after_a_window_with_the_same_charts(monkeypat
     assert all(i.status == "certified" for i in a.islands) and len(a.islands) >= 2
     # the island as marked went through both starts of the projection (LSCM, then harmonic)
     assert sum(r.iterations for r in rb) >= 600
-    assert sum(r.iterations for r in ra) <= 4 * REACH_WINDOW
-    assert all(r.out_of_reach.all() for r in ra if not r.all_converged)
+    from bd_uv.solvers.flip_free import WINDOW     # (the LSCM start's first WINDOW run again)
+    assert sum(r.iterations for r in ra) <= 4 * REACH_WINDOW + WINDOW
+    # given up (the LSCM start's first ``flip_free.WINDOW`` iterations aside: run again in full
+    # where one of them is flip-free)
+    assert all(r.out_of_reach.all() for r in ra if not r.all_converged
+               and r.iterations != WINDOW)
 
 
 @pytest.mark.parametrize("shrink", [0.9, 0.0])
