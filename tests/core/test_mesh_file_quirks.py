@@ -1,14 +1,20 @@
 """Mesh files as real tools and hand-written assets write them (found in unseen21 on
 github.com/kovacsv/Online3DViewer's test files, MIT): blank and ``comment`` lines inside an ASCII
-PLY's body and a comment after an OBJ record. Each is read as the
+PLY's body, a comment after an OBJ record, and glTF triangle strips and fans. Each is read as the
 clean file it stands for; a file no reader can parse is an ``InvalidMeshError`` naming the file,
 never a traceback."""
+import json
+
 import numpy as np
 import pytest
 
 import bd_uv.meshio
+from bd_uv.cli import main
 from bd_uv.errors import InvalidMeshError
 from bd_uv.meshio import load_mesh
+from gltf_build import Builder, Reader
+from helpers import reference_distortion
+from overlap_shapes import overlapping_triangle_pairs
 
 PLY_HEAD = ("ply\nformat ascii 1.0\n{comment}element vertex 5\nproperty float x\nproperty float y\n"
             "property float z\nelement face 2\nproperty list uchar int vertex_index\nend_header\n")
@@ -59,3 +65,66 @@ def test_obj_comment_after_a_record(tmp_path):
     assert np.array_equal(a.F, b.F) and np.array_equal(a.corner_uv, b.corner_uv)
     assert a.F.tolist() == [[0, 1, 2], [0, 2, 3], [0, 2, 3]]
     assert b.labels["material"].tolist() == [0, 0, 1]    # "Green#2": a '#' inside a name stays
+
+
+def _strip_and_fan():
+    """A strip of 2 x 6 points (a band restarted by a repeated index: two empty triangles, and
+    the two halves meet at one point, a bow-tie the unwrap splits) and a
+    fan round the centre of a bent octagon; each an indexed primitive of its own mesh."""
+    b = Builder()
+    x = np.linspace(0, 2.5, 6)
+    band = np.stack([np.repeat(x, 2), np.tile([0.0, 1.0], 6), 0.2 * np.repeat(x, 2) ** 2], 1)
+    order = list(range(12))
+    strip_idx = order[:6] + [5] + order[6:]          # index 5 twice: a degenerate join
+    t = np.arange(8) * np.pi / 4
+    disk = np.concatenate([[[0, 0, 0.3]], np.stack([np.cos(t), np.sin(t), 0.1 * np.cos(2 * t)], 1)])
+    fan_idx = [0, 1, 2, 3, 4, 5, 6, 7, 8, 1]
+    meshes = []
+    for name, P, idx, mode in (("Strip", band, strip_idx, 5), ("Fan", disk, fan_idx, 6)):
+        prim = {"attributes": {"POSITION": b.accessor(P.astype(np.float32), 5126, "VEC3",
+                                                       minmax=True)},
+                "indices": b.accessor(np.array(idx).reshape(-1, 1), 5123, "SCALAR"),
+                "mode": mode}
+        meshes.append({"name": name, "primitives": [prim]})
+    b.doc["meshes"] = meshes
+    b.doc["nodes"] = [{"name": "S", "mesh": 0}, {"name": "F", "mesh": 1}]
+    b.doc["scenes"], b.doc["scene"] = [{"nodes": [0, 1]}], 0
+    # the triangles each draws, by the glTF specification, written out by hand
+    # strip positions hold 0,1,2,3,4,5,5,6,...,11; (4,5,5) and (5,5,6) are empty and dropped
+    strip_tris = [(0, 1, 2), (2, 1, 3), (2, 3, 4), (4, 3, 5), (5, 6, 7), (7, 6, 8), (7, 8, 9),
+                  (9, 8, 10), (9, 10, 11)]
+    fan_tris = [(0, k, k + 1) for k in range(1, 8)] + [(0, 8, 1)]
+    return b, (band, strip_tris), (disk, fan_tris)
+
+
+def _canonical(tris):
+    """Triangles as sets of corner positions in cyclic order starting at the least (winding kept)."""
+    out = []
+    for t in tris:
+        t = [tuple(np.round(p, 5)) for p in t]
+        k = t.index(min(t))
+        out.append(tuple(t[k:] + t[:k]))
+    return sorted(out)
+
+
+def test_strips_and_fans_are_unwrapped_and_written_as_triangle_lists(tmp_path):
+    b, (band, strip_tris), (disk, fan_tris) = _strip_and_fan()
+    b.write(str(tmp_path / "in.gltf"))
+    assert main(["unwrap", str(tmp_path / "in.gltf"), "-o", str(tmp_path / "out.gltf"),
+                 "--report", str(tmp_path / "r.json")]) == 0
+    report = json.loads((tmp_path / "r.json").read_text())
+    r = Reader(str(tmp_path / "out.gltf"))
+    for k, (P, tris) in enumerate(((band, strip_tris), (disk, fan_tris))):
+        prim = r.doc["meshes"][k]["primitives"][0]
+        assert prim.get("mode", 4) == 4
+        idx = r.accessor(prim["indices"])[:, 0]
+        pos = r.accessor(prim["attributes"]["POSITION"]).astype(np.float64)
+        uv = r.accessor(prim["attributes"]["TEXCOORD_0"]).astype(np.float64)
+        F = idx.reshape(-1, 3)
+        # the same surface, the same winding: each drawn triangle once, the empty join gone
+        assert _canonical(pos[F]) == _canonical(P.astype(np.float32).astype(np.float64)[np.array(tris)])
+        corner_uv = np.stack([uv[:, 0], 1.0 - uv[:, 1]], -1)[F]
+        D, flipped = reference_distortion(pos, F, corner_uv)
+        assert not flipped.any()
+        assert D.max() <= report["meshes"][k]["bound_certified"] * (1 + 1e-9)
+        assert len(overlapping_triangle_pairs(corner_uv)) == 0
