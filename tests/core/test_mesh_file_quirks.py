@@ -13,7 +13,7 @@ from bd_uv.cli import main
 from bd_uv.errors import InvalidMeshError
 from bd_uv.meshio import load_mesh
 from gltf_build import Builder, Reader
-from helpers import reference_distortion
+from helpers import grid, reference_distortion
 from overlap_shapes import overlapping_triangle_pairs
 
 PLY_HEAD = ("ply\nformat ascii 1.0\n{comment}element vertex 5\nproperty float x\nproperty float y\n"
@@ -128,3 +128,70 @@ def test_strips_and_fans_are_unwrapped_and_written_as_triangle_lists(tmp_path):
         assert not flipped.any()
         assert D.max() <= report["meshes"][k]["bound_certified"] * (1 + 1e-9)
         assert len(overlapping_triangle_pairs(corner_uv)) == 0
+
+
+def _grid_with_duplicates():
+    """A bent 5 x 4 grid with two of its faces written twice, same winding (the Grille of
+    Online3DViewer's car.glb holds 12 such faces: a double-sided part exported twice)."""
+    V, F = grid(5, 4, z=lambda x, y: 0.2 * x * y)
+    return V, np.concatenate([F, F[[3, 7]]]), {len(F): 3, len(F) + 1: 7}
+
+
+def _duplicates_stored_as_twins(P, F, corner_uv, twins, bound):
+    """Every face but the duplicates certified from the file (0 flips, max <= bound, no overlap);
+    each duplicate stores its twin's UV at every vertex."""
+    keep = np.setdiff1d(np.arange(len(F)), list(twins))
+    D, flipped = reference_distortion(P, F[keep], corner_uv[keep])
+    assert not flipped.any() and D.max() <= bound * (1 + 1e-9)
+    assert len(overlapping_triangle_pairs(corner_uv[keep])) == 0
+    for d, t in twins.items():
+        for c in range(3):
+            assert np.array_equal(corner_uv[d, c], corner_uv[t, list(F[t]).index(F[d, c])])
+
+
+@pytest.mark.parametrize("out_name", ["out.glb", "out.gltf"])
+def test_gltf_mesh_with_duplicate_faces_is_written(tmp_path, out_name):
+    V, F, twins = _grid_with_duplicates()
+    b = Builder()
+    prim = {"attributes": {"POSITION": b.accessor(V.astype(np.float32), 5126, "VEC3",
+                                                   minmax=True)},
+            "indices": b.accessor(F.reshape(-1, 1), 5123, "SCALAR")}
+    b.doc["meshes"] = [{"name": "Grille", "primitives": [prim]}]
+    b.doc["nodes"] = [{"name": "G", "mesh": 0}]
+    b.write(str(tmp_path / "in.glb"), glb=True)
+    assert main(["unwrap", str(tmp_path / "in.glb"), "-o", str(tmp_path / out_name),
+                 "--report", str(tmp_path / "r.json")]) == 0
+    (e,) = json.loads((tmp_path / "r.json").read_text())["meshes"]
+    assert e["status"] == "certified" and e["stored"]["overlap_free"]
+    r = Reader(str(tmp_path / out_name))
+    prim = r.doc["meshes"][0]["primitives"][0]
+    idx = r.accessor(prim["indices"])[:, 0].reshape(-1, 3)
+    pos = r.accessor(prim["attributes"]["POSITION"]).astype(np.float64)
+    uv = r.accessor(prim["attributes"]["TEXCOORD_0"]).astype(np.float64)
+    # the written vertices are split copies: map each back to its input vertex by position
+    back = np.array([np.flatnonzero((V.astype(np.float32) == p).all(1))[0] for p in pos])
+    assert np.array_equal(back[idx], F)
+    _duplicates_stored_as_twins(V, F, np.stack([uv[:, 0], 1 - uv[:, 1]], -1)[idx], twins,
+                                e["bound_certified"])
+
+
+def test_usd_mesh_with_duplicate_faces_is_written(tmp_path):
+    pytest.importorskip("pxr")
+    from pxr import Usd, UsdGeom, Vt
+    V, F, twins = _grid_with_duplicates()
+    stage = Usd.Stage.CreateNew(str(tmp_path / "in.usda"))
+    m = UsdGeom.Mesh.Define(stage, "/Grille")
+    m.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(V.astype(np.float32)))
+    m.CreateFaceVertexCountsAttr([3] * len(F))
+    m.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(F.reshape(-1).astype(np.int32)))
+    stage.GetRootLayer().Save()
+    assert main(["unwrap", str(tmp_path / "in.usda"), "-o", str(tmp_path / "out.usda"),
+                 "--report", str(tmp_path / "r.json")]) == 0
+    (e,) = json.loads((tmp_path / "r.json").read_text())["meshes"]
+    assert e["status"] == "certified"
+    out = Usd.Stage.Open(str(tmp_path / "out.usda"))   # held: a prim lives while its stage does
+    mesh = UsdGeom.Mesh(out.GetPrimAtPath("/Grille"))
+    pv = UsdGeom.PrimvarsAPI(mesh.GetPrim()).GetPrimvar("st")
+    uv = np.asarray(pv.Get(), np.float64)[np.asarray(pv.GetIndices())].reshape(-1, 3, 2)
+    assert np.array_equal(np.asarray(mesh.GetFaceVertexIndicesAttr().Get()).reshape(-1, 3), F)
+    _duplicates_stored_as_twins(V, F, uv, twins, e["bound_certified"])
