@@ -219,3 +219,39 @@ def test_a_file_cut_short_is_refused_and_nothing_written(tmp_path, capsys, kind)
     err = capsys.readouterr().err
     assert "cut short" in err and str(path) in err
     assert {p.name: p.read_bytes() for p in tmp_path.iterdir()} == before
+
+
+def test_usd_uvs_whose_indices_are_only_time_sampled(tmp_path):
+    """tinyusdz's texture-plane-indexed-primvar-uv-timesampled.usda (a Blender 4.1 export):
+    ``primvars:UVMap:indices`` has time samples and no default. It stopped the file with "USD could
+    not read its values, the file is damaged"; its seams are now read at the first sample, and the
+    new UVs hold at every time (the old samples blocked)."""
+    pytest.importorskip("pxr")
+    from pxr import Sdf, Usd, UsdGeom, Vt
+    V, F = grid(4, 3, z=lambda x, y: 0.1 * x * y)
+    stage = Usd.Stage.CreateNew(str(tmp_path / "in.usda"))
+    m = UsdGeom.Mesh.Define(stage, "/Grid")
+    m.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(V.astype(np.float32)))
+    m.CreateFaceVertexCountsAttr([3] * len(F))
+    m.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(F.reshape(-1).astype(np.int32)))
+    pv = UsdGeom.PrimvarsAPI(m.GetPrim()).CreatePrimvar("UVMap", Sdf.ValueTypeNames.TexCoord2fArray,
+                                                        UsdGeom.Tokens.faceVarying)
+    pv.Set(Vt.Vec2fArray.FromNumpy(V[:, :2].astype(np.float32)))
+    corners = F.reshape(-1).astype(np.int32)
+    pv.CreateIndicesAttr().Set(Vt.IntArray.FromNumpy(corners), 0.0)       # time samples only
+    pv.GetIndicesAttr().Set(Vt.IntArray.FromNumpy(corners[::-1].copy()), 10.0)
+    stage.GetRootLayer().Save()
+    assert main(["unwrap", str(tmp_path / "in.usda"), "-o", str(tmp_path / "out.usda"),
+                 "--uv-name", "UVMap", "--report", str(tmp_path / "r.json")]) == 0
+    (e,) = json.loads((tmp_path / "r.json").read_text())["meshes"]
+    assert e["status"] == "certified"
+    assert any("time-sampled with no default" in w for w in e["warnings"])
+    out = Usd.Stage.Open(str(tmp_path / "out.usda"))
+    pv = UsdGeom.PrimvarsAPI(out.GetPrimAtPath("/Grid")).GetPrimvar("UVMap")
+    at = [np.asarray(pv.ComputeFlattened(t), np.float64)
+          for t in (Usd.TimeCode.Default(), Usd.TimeCode(0.0), Usd.TimeCode(7.0))]
+    assert all(np.array_equal(at[0], a) for a in at[1:])
+    uv = at[0].reshape(-1, 3, 2)
+    D, flipped = reference_distortion(V, F, uv)
+    assert not flipped.any() and D.max() <= e["bound_certified"] * (1 + 1e-9)
+    assert len(overlapping_triangle_pairs(uv)) == 0
