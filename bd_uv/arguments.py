@@ -92,6 +92,10 @@ def unwrap_options_of(args):
     as_they_are = args.bound == "auto" or args.frames == "input-uv" or args.boundary != "free"
     if seams is None:
         mode = "marked" if as_they_are else ENTRY_SEAMS_MODE
+    elif seams in ("needed", "auto") and args.bound == "auto":   # said in the flags' terms
+        raise OptionError("seams", f"--seams {seams} certifies the charts it makes at a number "
+                          "C: give --bound a number (e.g. --bound 2); --bound auto takes the "
+                          "islands as they are (--seams uv or none)")
     else:
         mode = seams if seams in ("needed", "auto") else "marked"
     return UnwrapOptions(

@@ -5,11 +5,14 @@ loaders that split vertices at UV seams would change the topology. OFF and PLY g
 with ``process=False`` (vertex order kept).
 """
 import os
+import re
 from dataclasses import dataclass
 
 import numpy as np
 
 from .errors import InvalidMeshError
+
+_COMMENT = re.compile(r"\s#.*")   # an OBJ comment after a record (a '#' inside a name stays)
 
 
 @dataclass(frozen=True)
@@ -58,20 +61,41 @@ def load_mesh(path):
         if ext == ".obj":
             V, F, cuv, labels = _read_obj(path)
         elif ext in (".off", ".ply"):
-            import trimesh
-            m = trimesh.load(path, process=False, force="mesh")
-            V = np.asarray(m.vertices, dtype=np.float64)
-            F = np.asarray(m.faces, dtype=np.int64)
+            V, F = _read_trimesh(path, ext)
             cuv = None
         else:
             raise InvalidMeshError(f"{path}: unsupported format {ext!r}; use .obj, .off or .ply")
     except InvalidMeshError:
         raise
-    except (OSError, ValueError, IndexError, KeyError, AttributeError) as exc:
-        raise InvalidMeshError(f"{path}: cannot read the mesh ({exc})") from exc
+    except Exception as exc:   # trimesh's loaders fail in many ways on files they cannot parse
+        raise InvalidMeshError(f"{path}: cannot read the mesh as {ext.lstrip('.').upper()} "
+                               f"({type(exc).__name__}: {exc})") from exc
     if len(F) == 0:
         raise InvalidMeshError(f"{path}: the file holds no faces")
     return Mesh(V, F.reshape(-1, 3), cuv, name, labels)
+
+
+def _read_trimesh(path, ext):
+    """V, F of an OFF or PLY file through trimesh. An ASCII PLY whose body has blank lines or
+    ``comment`` lines (hand-written files, some exporters) is read with those lines dropped:
+    trimesh's ASCII reader takes the body as one run of numbers and misreads it otherwise."""
+    import io
+
+    import trimesh
+    file_obj, file_type = path, None
+    if ext == ".ply":
+        with open(path, "rb") as fh:
+            data = fh.read()
+        head, sep, body = data.partition(b"end_header")
+        if sep and b"format ascii" in head:
+            eol = body.find(b"\n")
+            lines = body[eol + 1:].splitlines() if eol >= 0 else []
+            keep = [ln for ln in lines if ln.strip() and not ln.lstrip().startswith(b"comment")]
+            if len(keep) != len(lines):
+                file_obj = io.BytesIO(head + sep + body[:eol + 1] + b"\n".join(keep) + b"\n")
+                file_type = "ply"
+    m = trimesh.load(file_obj, file_type=file_type, process=False, force="mesh")
+    return np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces, dtype=np.int64)
 
 
 def _read_obj(path):
@@ -82,6 +106,7 @@ def _read_obj(path):
     mat, obj = None, None
     with open(path, "r", encoding="utf-8", errors="replace") as fh:
         for line in fh:
+            line = _COMMENT.sub("", line)   # "f 1 2 3 # note": a comment ends a record
             if line.startswith(("usemtl ", "usemtl\t")):
                 mat = line.split(None, 1)[1].strip() if len(line.split()) > 1 else ""
             elif line.startswith(("o ", "o\t")):

@@ -78,8 +78,11 @@ def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=Non
         if (lay is not None and entry["status"] != "failed"
                 and ((lay.face_island >= 0) | zero).all()):
             bounds = np.array([c.bound for c in lay.certificates], dtype=np.float64)
-            charts[k] = Charts(with_neighbour_uvs(sm.mesh.F, lay.corner_uv, zero),
-                               lay.face_island, bounds)
+            # a duplicate face is stored with its twin's UVs and certified through its twin, as
+            # ``layout`` does: counted in the island, it would overlap its twin
+            dup = getattr(result.result, "duplicate_of", None)
+            island = lay.face_island if dup is None else np.where(dup >= 0, -1, lay.face_island)
+            charts[k] = Charts(with_neighbour_uvs(sm.mesh.F, lay.corner_uv, zero), island, bounds)
             if zero.any():   # every face with an area is certified: the mesh is
                 entry.update(status="certified", error=None, message="",
                              zero_area_faces=int(zero.sum()))

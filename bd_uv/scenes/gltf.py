@@ -1,11 +1,12 @@
 """glTF 2.0 scenes: every triangle primitive unwrapped once per mesh, the document patched.
 
-Reading: each mesh's triangle primitives (mode 4) become one unwrap problem in the mesh's own
+Reading: each mesh's triangle primitives (lists, strips and fans: modes 4, 5, 6) become one unwrap problem in the mesh's own
 space (a mesh used by several nodes is unwrapped once); their positions are welded by exact value,
 so the file's vertex splits (hard normals, old seams) do not cut the surface (parts that only touch
 at a point stay apart: ``weld.py``); the UVs already in
-the file (the set written, else ``TEXCOORD_0``) give the seams, as an OBJ's ``vt`` do. Lines,
-points, strips and fans pass through unchanged.
+the file (the set written, else ``TEXCOORD_0``) give the seams, as an OBJ's ``vt`` do. Lines and
+points pass through unchanged; a strip or fan given new UVs is written as the triangle list it
+draws (mode 4: its split vertices no longer follow one another).
 
 Writing: a glTF vertex carries one UV, so a vertex is split wherever the new UVs differ; every
 attribute of the primitive (POSITION, NORMAL, COLOR_n, JOINTS_n/WEIGHTS_n, other TEXCOORD_n,
@@ -29,6 +30,7 @@ from .gltf_mesh import _mesh_arrays, _refusal
 from .gltf_patch import _patch_primitive
 
 TRIANGLES = 4
+SURFACE_MODES = (TRIANGLES, 5, 6)   # triangle lists, strips and fans
 
 
 def node_paths(doc):
@@ -71,10 +73,10 @@ class GltfScene:
             label = f"mesh {mi}" + (f" {mesh['name']!r}" if mesh.get("name") else "") + (
                 f" (node {', '.join(paths[mi])})" if paths.get(mi) else "")
             prims = [(j, p) for j, p in enumerate(mesh.get("primitives", []))
-                     if p.get("mode", TRIANGLES) == TRIANGLES]
+                     if p.get("mode", TRIANGLES) in SURFACE_MODES]
             warnings = [f"{label}: primitive {j} (mode {p['mode']}) is not a triangle list; "
                         "left as it is" for j, p in enumerate(mesh.get("primitives", []))
-                        if p.get("mode", TRIANGLES) not in (TRIANGLES, 0, 1, 2, 3)]
+                        if p.get("mode", TRIANGLES) not in SURFACE_MODES + (0, 1, 2, 3)]
             if not prims:
                 continue
             names = paths.get(mi) or [label]

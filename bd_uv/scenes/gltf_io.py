@@ -115,6 +115,9 @@ def read_gltf(path):
             magic, version, length = struct.unpack_from("<III", raw, 0)
             if version != 2:
                 raise ValueError(f"GLB version {version}, not 2")
+            if len(raw) < length:   # an interrupted download or copy: its last bytes are lost
+                raise SceneFileError(f"{path}: the file is cut short: its GLB header says "
+                                     f"{length} bytes, the file holds {len(raw)}")
             clen, ctype = struct.unpack_from("<II", raw, 12)
             if ctype != JSON_CHUNK:
                 raise ValueError("the first GLB chunk is not JSON")
@@ -132,7 +135,15 @@ def read_gltf(path):
         raise SceneFileError(f"{path}: not a glTF 2.0 document (asset.version is not 2.x)")
     buffers = []
     for i, buf in enumerate(doc.get("buffers", [])):
-        buffers.append(_buffer_bytes(path, i, buf, bin_chunk if glb and i == 0 else None))
+        data = _buffer_bytes(path, i, buf, bin_chunk if glb and i == 0 else None)
+        declared = buf.get("byteLength") if isinstance(buf, dict) else None
+        if (isinstance(declared, int) and len(data) < declared
+                and not (data == b"" and MESHOPT & set(buf.get("extensions") or {}))):
+            # written as it is, the file would carry the loss on (textures, animation cut off)
+            raise SceneFileError(f"{path}: buffer {i} is cut short: it declares {declared} "
+                                 f"bytes, {'the GLB BIN chunk' if 'uri' not in buf else 'its data'}"
+                                 f" holds {len(data)}")
+        buffers.append(data)
     return GltfFile(path, doc, buffers, glb)
 
 

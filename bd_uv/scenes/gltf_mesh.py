@@ -1,6 +1,6 @@
 """One glTF mesh read as arrays: its triangle primitives' positions (normalised integers mapped
 to floats), indices checked, the UVs already in the file as seams, welded by exact value into one
-``meshio.Mesh`` with each face's material; primitives bd-uv cannot decode (Draco, meshopt) are
+``meshio.Mesh`` with each face's material (strips and fans as the triangles they draw); primitives bd-uv cannot decode (Draco, meshopt) are
 named for the refusal (``gltf.GltfScene.read``).
 """
 import numpy as np
@@ -10,6 +10,23 @@ from ..meshio import Mesh
 from .weld import welded
 
 DRACO = "KHR_draco_mesh_compression"
+TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN = 4, 5, 6
+
+
+def strip_or_fan_triangles(idx, mode):
+    """(m,3) triangles of a TRIANGLE_STRIP (5) or TRIANGLE_FAN (6) index list, in the glTF
+    specification's order and winding (strip: odd triangles swap their first two corners; fan:
+    every triangle ends at the first index); triangles that repeat an index (a strip's joins)
+    are dropped: they have no area and no UV to give."""
+    k = np.arange(max(len(idx) - 2, 0))
+    if mode == TRIANGLE_STRIP:
+        odd = (k % 2).astype(bool)
+        F = np.stack([np.where(odd, idx[k + 1], idx[k]), np.where(odd, idx[k], idx[k + 1]),
+                      idx[k + 2]], 1)
+    else:
+        F = np.stack([idx[k + 1], idx[k + 2], np.full(len(k), idx[0] if len(idx) else 0)], 1)
+    keep = (F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 0] != F[:, 2])
+    return F[keep].astype(np.int64)
 
 
 def _as_float(values, acc):
@@ -59,14 +76,15 @@ def _mesh_arrays(gf, label, prims, uv_set, name):
             idx = gf.accessor(p["indices"], where + " indices")[:, 0].astype(np.int64)
         else:
             idx = np.arange(n, dtype=np.int64)
-        if len(idx) % 3:
+        mode = p.get("mode", TRIANGLES)
+        if mode == TRIANGLES and len(idx) % 3:
             raise SceneFileError(f"{gf.path}: {where}: {len(idx)} indices is not a whole "
                                  "number of triangles")
         if len(idx) and (idx.max() >= n or idx.min() < 0):   # signed types can go below 0
             bad = int(idx.min()) if idx.min() < 0 else int(idx.max())
             raise SceneFileError(f"{gf.path}: {where}: index {bad} is out of range "
                                  f"({n} vertices)")
-        F = idx.reshape(-1, 3)
+        F = idx.reshape(-1, 3) if mode == TRIANGLES else strip_or_fan_triangles(idx, mode)
         key = f"TEXCOORD_{uv_set}" if f"TEXCOORD_{uv_set}" in attrs else "TEXCOORD_0"
         if UVs is not None and key in attrs:
             uv = _as_float(gf.accessor(attrs[key], f"{where} {key}"),

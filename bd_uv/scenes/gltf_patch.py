@@ -58,6 +58,7 @@ def _patch_primitive(gf, mesh, j, corner_vertex, uv32, uv_set, writer, name):
     nv = len(src)
     ctype = 5123 if nv <= 65535 else 5125     # the type's largest value is reserved (restart)
     prim["indices"] = writer.accessor(inv.reshape(-1, 1), ctype, "SCALAR", ELEMENT_ARRAY_BUFFER)
+    prim.pop("mode", None)   # a strip or fan is now the triangle list it drew (mode 4, default)
     return warnings
 
 

@@ -34,7 +34,8 @@ class Charts:
     Attributes
     ----------
     corner_uv : (m,3,2) float64, v upwards (Blender's convention), every face written
-    face_island : (m,) int64, stored island of each face
+    face_island : (m,) int64, stored island of each face; -1 for a face certified through
+        others: zero-area (its neighbours' UVs) or a duplicate face (its twin's UVs)
     bounds : (k,) float64, the certified bound C of each stored island
     """
     corner_uv: np.ndarray

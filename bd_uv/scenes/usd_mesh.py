@@ -130,7 +130,7 @@ def mesh_arrays(mesh, where, uv_name, Usd):
     if mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded:
         T = T[:, ::-1].copy()                    # the front face winds clockwise
     F = indices[T]
-    corner_uv = _existing_uv(mesh, uv_name, T, indices, len(V), where)
+    corner_uv = _existing_uv(mesh, uv_name, T, indices, len(V), where, warnings)
     info = {"prim": str(mesh.GetPath()), "uv_name": uv_name, "polygons": int(len(counts)),
             "holes": int(len(holes)),
             "subdivision": str(mesh.GetSubdivisionSchemeAttr().Get())}
@@ -173,13 +173,23 @@ def _numbers(value, dtype, what, width=None):
     return arr.reshape(-1, width) if width is not None else arr.reshape(-1)
 
 
-def _existing_uv(mesh, uv_name, T, indices, n_points, where=""):
-    """The mesh's UVs per triangle corner (m,3,2), or None."""
-    from pxr import UsdGeom
+def _existing_uv(mesh, uv_name, T, indices, n_points, where="", warnings=None):
+    """The mesh's UVs per triangle corner (m,3,2), or None. A primvar whose values or indices are
+    only time-sampled (no default: Blender 4.1's animated UV indices) is read at its first time
+    sample, as the points are (``warnings`` says so)."""
+    from pxr import Usd, UsdGeom
     pv = UsdGeom.PrimvarsAPI(mesh.GetPrim()).GetPrimvar(uv_name)
     if not pv or not pv.HasValue():
         return None
-    vals = pv.ComputeFlattened()
+    time = Usd.TimeCode.Default()
+    sampled = [a for a in (pv.GetAttr(), pv.GetIndicesAttr())
+               if a and a.GetNumTimeSamples() and a.Get(time) is None]
+    if sampled:
+        time = Usd.TimeCode(min(a.GetTimeSamples()[0] for a in sampled))
+        if warnings is not None:
+            warnings.append(f"primvars:{uv_name} is time-sampled with no default: its seams "
+                            f"are read at time {time.GetValue():g}")
+    vals = pv.ComputeFlattened(time)
     if vals is None:
         return None
     try:
