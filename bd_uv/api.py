@@ -13,9 +13,9 @@ import numpy as np
 
 from .errors import OptionError
 from .options import unwrap_options
-from .seams import unwrap_auto
 from .seams.pack_shape import atlas_cuts_of
 from .seams.needed import unwrap_needed
+from .seams.repaired import unwrap_auto_repaired
 from .unwrapping import unwrap as unwrap_given_seams
 
 
@@ -73,10 +73,12 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
         return unwrap_needed(V, F, seams, polygons=face_groups, options=opts,
                              progress=progress, cancel=cancel, precision=precision)
     # face_groups (polygons) are kept whole by the seams added too: unwrap_auto's polygons.
-    res, added, info = unwrap_auto(V, F, seams=seams, bound=opts.bound,
-                                   stretch=opts.seams_stretch, method=opts.method,
-                                   frames=opts.frames, cone=opts.cone, progress=progress,
-                                   cancel=cancel, polygons=face_groups,
-                                   atlas_cuts=opts.atlas_cuts)
+    # A mesh with a defect the repair mends (a bow-tie, an edge of three faces, a duplicate or
+    # zero-area face) is repaired and searched again (``seams.repaired``), not failed whole.
+    res, added, info, _ = unwrap_auto_repaired(V, F, seams=seams, bound=opts.bound,
+                                               stretch=opts.seams_stretch, method=opts.method,
+                                               frames=opts.frames, cone=opts.cone,
+                                               progress=progress, cancel=cancel,
+                                               polygons=face_groups, atlas_cuts=opts.atlas_cuts)
     return dataclasses.replace(res, seams_added=np.asarray(added, dtype=np.int64).reshape(-1, 2),
                                atlas_cuts=atlas_cuts_of(info))

@@ -27,7 +27,7 @@ from .planar_cli import add_planar_parsers
 from .progress import TerminalProgress
 from .scenes import BLENDER_SUFFIXES, GLTF_SUFFIXES, SCENE_SUFFIXES, USD_SUFFIXES, read_scene
 from .scheduling.atomic import atomic_path
-from .seams import unwrap_auto
+from .seams.repaired import unwrap_auto_repaired
 from .seams.pack_shape import atlas_cuts_of
 from .seams.needed import AUTO_BOUND
 
@@ -195,11 +195,13 @@ def auto_seams(mesh, seams, options, progress=None):
     """Seams added where needed (``options.seams_mode == "auto"``): ``seams`` (the file's UV
     seams, or None) kept, more added; prints what was added. ``progress(fraction, message)``,
     optional."""
-    res, added, info = unwrap_auto(mesh.V, mesh.F, seams=seams, bound=options.bound,
-                                   stretch=options.seams_stretch, method=options.method,
-                                   frames=options.frames, cone=options.cone, progress=progress,
-                                   atlas_cuts=options.atlas_cuts)
+    res, added, info, rep = unwrap_auto_repaired(
+        mesh.V, mesh.F, seams=seams, bound=options.bound, stretch=options.seams_stretch,
+        method=options.method, frames=options.frames, cone=options.cone, progress=progress,
+        atlas_cuts=options.atlas_cuts)
     res = dataclasses.replace(res, seams_added=added, atlas_cuts=atlas_cuts_of(info))
+    for note in res.repair:
+        print(f"repaired: {note}")
     print(f"seams auto: {info['charts']} charts, {len(added)} edges added, seam length "
           f"{info['seam_length']:.4g} ({100 * info['seam_length'] / info['edge_length']:.2f}% of "
           f"all edge length), max stretch {max(info['max_stretch'], default=1.0):.3f} <= "

@@ -1,0 +1,55 @@
+"""``seams="auto"`` on a messy mesh: the seam search of a mesh repaired first where it needs it.
+
+``unwrap_auto`` takes the mesh as it is: a bow-tie vertex, an edge of three faces, faces
+oriented against each other, a duplicate or a zero-area face fails the whole island it is in
+(Online3DViewer's ``cow.ply``, 5,804 faces with 13 bow-tie vertices: 0 of 1 islands, "split the
+vertex (Mesh > Split)", a Blender menu named to a command-line user), where the default seams
+mode (``seams.needed``) repairs such a mesh and certifies every piece (51 of 51 islands). Here the
+search runs as it is; only where an island failed for a defect ``repair.repair_mesh`` mends is
+the mesh repaired (bow-ties split, such edges cut, duplicates and zero-area faces left out) and
+searched again, and the result given on the input's faces and vertices (``needed.result_on_input``:
+a duplicate gets its twin's UVs, zero-area faces one failed island). A clean mesh pays nothing
+(the repair alone is 4 ms of suzanne's 90 and 58 ms of camel's 760).
+"""
+import dataclasses
+
+import numpy as np
+
+from ..errors import (DegenerateFacesError, DuplicateFacesError, NonFiniteError,
+                      NonManifoldError, OrientationError)
+from ..repair import repair_mesh
+from .auto import unwrap_auto
+from .needed import result_on_input
+
+# the island failures a repair mends
+REPAIRABLE = (NonManifoldError, DegenerateFacesError, DuplicateFacesError, NonFiniteError,
+              OrientationError)
+
+
+def unwrap_auto_repaired(V, F, seams=None, polygons=None, method="lscm", **search):
+    """``unwrap_auto(V, F, seams=seams, polygons=polygons, method=method, **search)``, on the
+    repaired mesh where an island of the mesh as it is failed for a defect the repair mends.
+
+    Returns
+    -------
+    (UnwrapResult over the input faces, added (k,2) int64 input vertex pairs, info as
+    ``unwrap_auto``'s with ``atlas_seams`` in input vertices, the ``repair.Repair`` or None
+    where the mesh was searched as it is); the result's ``repair`` names what was repaired
+    """
+    res, added, info = unwrap_auto(V, F, seams=seams, polygons=polygons, method=method, **search)
+    if not any(isinstance(r.error, REPAIRABLE) for r in res.islands):
+        return res, added, info, None
+    rep = repair_mesh(V, F)
+    if not rep.changed:
+        return res, added, info, None
+    poly = None if polygons is None else np.asarray(polygons, np.int64)[rep.faces]
+    part, found, info = unwrap_auto(rep.V, rep.F, seams=rep.seams(seams), polygons=poly,
+                                    method=method, **search)
+    res = result_on_input(part, rep, np.asarray(F, np.int64), method)
+    src = rep.vertex_source
+    found = np.asarray(found, np.int64).reshape(-1, 2)
+    added = (np.unique(np.sort(src[found], axis=1), axis=0) if len(found)
+             else found)
+    atlas = np.asarray(info["atlas_seams"], np.int64).reshape(-1, 2)
+    info = dict(info, atlas_seams=np.sort(src[atlas], axis=1) if len(atlas) else atlas)
+    return dataclasses.replace(res, repair=tuple(rep.notes())), added, info, rep

@@ -1,0 +1,56 @@
+"""``seams="auto"`` on a messy mesh (``seams.repaired``): a bow-tie vertex, an edge of three
+faces, a part wound the other way, a duplicate, a zero-area or a NaN face no longer fails the
+whole island it is in (b620c89: 0 of 1 islands, Online3DViewer's cow.ply among them); the mesh is
+repaired as the default seams mode repairs it, and every face but the ones no map can certify
+gets certified UVs, checked as stored (float32) by this test's own SVD and triangle tests
+(``test_repair._check_certified``)."""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import bd_uv
+from bd_uv.layout import stored_layout
+from test_repair import DEFECTS, _check_certified, bowtie
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+
+
+@pytest.mark.parametrize("make", DEFECTS, ids=lambda f: f.__name__)
+def test_seams_auto_repairs_and_certifies_every_other_face(make):
+    V, F, skip, words = make()
+    res = bd_uv.unwrap(V, F, seams="auto")
+    assert any(words in note for note in res.repair), res.repair
+    layout = stored_layout(V, F, res, dtype=np.float32)
+    _check_certified(V, F, layout.corner_uv, skip)
+    failed = [r for r in res.islands if r.status != "certified"]
+    assert sorted(int(f) for r in failed for f in r.faces) == sorted(skip)
+    # the seams added are edges of the input mesh, in its own vertex ids
+    edges = {frozenset(e) for f in F.tolist() for e in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0]))}
+    assert all(frozenset(e) in edges for e in res.seams_added.tolist())
+
+
+def test_a_clean_mesh_is_searched_as_it_is():
+    V, F, _, _ = bowtie()
+    F = F[F.min(axis=1) > 0]        # the bow-tie's fans apart: no defect left
+    res = bd_uv.unwrap(V, F, seams="auto")
+    assert res.repair == () and all(r.status == "certified" for r in res.islands)
+
+
+def test_command_line_seams_auto_on_a_bowtie(tmp_path):
+    V, F, skip, words = bowtie()
+    src = tmp_path / "bowtie.obj"
+    src.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V.tolist())
+                   + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F))
+    out, rep = tmp_path / "out.obj", tmp_path / "r.json"
+    r = subprocess.run([sys.executable, "-m", "bd_uv", "unwrap", str(src), "-o", str(out),
+                        "--seams", "auto", "--report", str(rep)], capture_output=True, text=True,
+                       cwd=REPO)
+    assert r.returncode == 0, r.stderr
+    assert "repaired: " in r.stdout and words in r.stdout
+    report = json.loads(rep.read_text())
+    assert any(words in note for note in report["repair"])
+    assert all(i["status"] == "certified" for i in report["islands"])
