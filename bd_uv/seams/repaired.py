@@ -40,8 +40,8 @@ def unwrap_auto_repaired(V, F, seams=None, polygons=None, method="lscm", **searc
     if not any(isinstance(r.error, REPAIRABLE) for r in res.islands):
         return res, added, info, None
     rep = repair_mesh(V, F)
-    if not rep.changed:
-        return res, added, info, None
+    if not rep.changed or not len(rep.F):   # nothing mended, or nothing left to solve: the
+        return res, added, info, None       # islands' own errors say why (NaN, 1e80, ...)
     poly = None if polygons is None else np.asarray(polygons, np.int64)[rep.faces]
     part, found, info = unwrap_auto(rep.V, rep.F, seams=rep.seams(seams), polygons=poly,
                                     method=method, **search)
