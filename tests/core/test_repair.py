@@ -110,15 +110,23 @@ def test_core_api_unwraps_every_other_face(make):
     assert np.isnan(layout.corner_uv[list(skip)]).all()
 
 
-@pytest.mark.parametrize("make", DEFECTS, ids=lambda f: f.__name__)
-def test_command_line_unwraps_every_other_face(make, tmp_path):
-    V, F, skip, words = make()
+def run_command_line(tmp_path, V, F, *options):
+    """The mesh written as an OBJ file and unwrapped by ``python -m bd_uv unwrap`` with
+    ``options``. Returns (the finished process, the output OBJ's path, the report's path)."""
     src = tmp_path / "messy.obj"
     src.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V.tolist())
                    + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F))
     out, rep = tmp_path / "out.obj", tmp_path / "r.json"
     r = subprocess.run([sys.executable, "-m", "bd_uv", "unwrap", str(src), "-o", str(out),
-                        "--report", str(rep)], capture_output=True, text=True, cwd=REPO)
+                        "--report", str(rep), *options], capture_output=True, text=True,
+                       cwd=REPO)
+    return r, out, rep
+
+
+@pytest.mark.parametrize("make", DEFECTS, ids=lambda f: f.__name__)
+def test_command_line_unwraps_every_other_face(make, tmp_path):
+    V, F, skip, words = make()
+    r, out, rep = run_command_line(tmp_path, V, F)
     assert r.returncode == (1 if skip else 0), r.stderr
     assert words in r.stdout
     report = json.loads(rep.read_text())

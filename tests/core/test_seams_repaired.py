@@ -5,18 +5,13 @@ repaired as the default seams mode repairs it, and every face but the ones no ma
 gets certified UVs, checked as stored (float32) by this test's own SVD and triangle tests
 (``test_repair._check_certified``)."""
 import json
-import os
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
 import bd_uv
 from bd_uv.layout import stored_layout
-from test_repair import DEFECTS, _check_certified, bowtie
-
-REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+from test_repair import DEFECTS, _check_certified, bowtie, run_command_line
 
 
 @pytest.mark.parametrize("make", DEFECTS, ids=lambda f: f.__name__)
@@ -42,13 +37,7 @@ def test_a_clean_mesh_is_searched_as_it_is():
 
 def test_command_line_seams_auto_on_a_bowtie(tmp_path):
     V, F, skip, words = bowtie()
-    src = tmp_path / "bowtie.obj"
-    src.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V.tolist())
-                   + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F))
-    out, rep = tmp_path / "out.obj", tmp_path / "r.json"
-    r = subprocess.run([sys.executable, "-m", "bd_uv", "unwrap", str(src), "-o", str(out),
-                        "--seams", "auto", "--report", str(rep)], capture_output=True, text=True,
-                       cwd=REPO)
+    r, _, rep = run_command_line(tmp_path, V, F, "--seams", "auto")
     assert r.returncode == 0, r.stderr
     assert "repaired: " in r.stdout and words in r.stdout
     report = json.loads(rep.read_text())
