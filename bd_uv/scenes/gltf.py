@@ -1,9 +1,9 @@
 """glTF 2.0 scenes: every triangle primitive unwrapped once per mesh, the document patched.
 
-Reading: each mesh's triangle primitives (lists, strips and fans: modes 4, 5, 6) become one unwrap problem in the mesh's own
-space (a mesh used by several nodes is unwrapped once); their positions are welded by exact value,
-so the file's vertex splits (hard normals, old seams) do not cut the surface (parts that only touch
-at a point stay apart: ``weld.py``); the UVs already in
+Reading: each mesh's triangle primitives (lists, strips and fans: modes 4, 5, 6) become one
+unwrap problem in the mesh's own space (a mesh used by several nodes is unwrapped once); their
+positions are welded by exact value, so the file's vertex splits (hard normals, old seams) do not
+cut the surface (parts that only touch at a point stay apart: ``weld.py``); the UVs already in
 the file (the set written, else ``TEXCOORD_0``) give the seams, as an OBJ's ``vt`` do. Lines and
 points pass through unchanged; a strip or fan given new UVs is written as the triangle list it
 draws (mode 4: its split vertices no longer follow one another).

@@ -1,7 +1,8 @@
 """One glTF mesh read as arrays: its triangle primitives' positions (normalised integers mapped
 to floats), indices checked, the UVs already in the file as seams, welded by exact value into one
-``meshio.Mesh`` with each face's material (strips and fans as the triangles they draw); primitives bd-uv cannot decode (Draco, meshopt) are
-named for the refusal (``gltf.GltfScene.read``).
+``meshio.Mesh`` with each face's material (strips and fans as the triangles they draw);
+primitives bd-uv cannot decode (Draco, meshopt) are named for the refusal
+(``gltf.GltfScene.read``).
 """
 import numpy as np
 
