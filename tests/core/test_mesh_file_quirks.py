@@ -98,7 +98,8 @@ def _strip_and_fan():
 
 
 def _canonical(tris):
-    """Triangles as sets of corner positions in cyclic order starting at the least (winding kept)."""
+    """Triangles as sets of corner positions in cyclic order starting at the least (winding
+    kept)."""
     out = []
     for t in tris:
         t = [tuple(np.round(p, 5)) for p in t]
@@ -122,7 +123,8 @@ def test_strips_and_fans_are_unwrapped_and_written_as_triangle_lists(tmp_path):
         uv = r.accessor(prim["attributes"]["TEXCOORD_0"]).astype(np.float64)
         F = idx.reshape(-1, 3)
         # the same surface, the same winding: each drawn triangle once, the empty join gone
-        assert _canonical(pos[F]) == _canonical(P.astype(np.float32).astype(np.float64)[np.array(tris)])
+        stored = P.astype(np.float32).astype(np.float64)
+        assert _canonical(pos[F]) == _canonical(stored[np.array(tris)])
         corner_uv = np.stack([uv[:, 0], 1.0 - uv[:, 1]], -1)[F]
         D, flipped = reference_distortion(pos, F, corner_uv)
         assert not flipped.any()
