@@ -20,9 +20,10 @@ import numpy as np
 from ..bd_uv.repair import repair_mesh
 from ..bd_uv.seams.measure import splice
 from ..bd_uv.seams.needed import AUTO_BOUND, island_submesh, needs_seams, result_on_input
+from ..bd_uv.seams.repaired import REPAIRABLE
 from . import auto_seams
 
-__all__ = ["applies", "solve"]
+__all__ = ["applies", "solve", "auto_repaired"]
 
 
 def applies(minimise, frames, boundary, pinned):
@@ -98,6 +99,49 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
     cuts = [p for p in (added, rep.nonmanifold_edges, rep.orientation_edges) if len(p)]
     added = (np.unique(np.sort(np.concatenate(cuts), axis=1), axis=0) if cuts
              else np.zeros((0, 2), dtype=np.int64))
+    charts = sum(1 for r in result.islands if r.status == "certified")
+    return auto_seams.AutoSeams(result, added, charts, tuple(rep.notes(
+        indices=False, count=lambda tris: len(np.unique(tri_poly[tris])))), atlas_cuts=atlas)
+
+
+def auto_repaired(V, F, *, tri_poly, tri_loops, seams=None, method="lscm", **search):
+    """Seams "Add Automatically" (:func:`auto_seams.solve`) on a messy mesh: solved as it is,
+    and only where an island failed for a defect the repair mends (``bd_uv.seams.repaired``'s
+    ``REPAIRABLE``: a bow-tie, an edge of three faces, parts wound against each other, a
+    duplicate, zero-area or NaN face) repaired as step 1 above and solved again, the result on
+    the input's triangles, the edges the repair cut marked with the seams added, ``notes`` what
+    was repaired (a bow-tie was refused whole: "split the vertex (Mesh > Split)").
+
+    Returns
+    -------
+    auto_seams.AutoSeams
+    """
+    auto = auto_seams.solve(V, F, tri_poly=tri_poly, tri_loops=tri_loops, seams=seams,
+                            method=method, **search)
+    if not any(isinstance(r.error, REPAIRABLE) for r in auto.result.islands):
+        return auto
+    V = np.asarray(V, np.float64)
+    F = np.asarray(F, np.int64)
+    tri_poly = np.asarray(tri_poly, np.int64)
+    rep = repair_mesh(V, F)
+    if not rep.changed or not len(rep.F):
+        return auto
+    keep = rep.faces
+    groups = search.pop("face_groups", None)
+    part = auto_seams.solve(rep.V, rep.F, tri_poly=tri_poly[keep],
+                            tri_loops=np.asarray(tri_loops, np.int64)[keep],
+                            seams=rep.seams(seams), method=method,
+                            face_groups=None if groups is None else np.asarray(groups)[keep],
+                            **search)
+    result = result_on_input(part.result, rep, F, method)
+    src = rep.vertex_source
+    cuts = [p for p in (src[part.added] if len(part.added) else part.added,
+                        rep.nonmanifold_edges, rep.orientation_edges) if len(p)]
+    added = (np.unique(np.sort(np.concatenate(cuts), axis=1), axis=0) if cuts
+             else np.zeros((0, 2), dtype=np.int64))
+    atlas = part.atlas_cuts
+    if atlas is not None and len(atlas["seams"]):
+        atlas = dict(atlas, seams=np.sort(src[atlas["seams"]], axis=1).reshape(-1, 2))
     charts = sum(1 for r in result.islands if r.status == "certified")
     return auto_seams.AutoSeams(result, added, charts, tuple(rep.notes(
         indices=False, count=lambda tris: len(np.unique(tri_poly[tris])))), atlas_cuts=atlas)

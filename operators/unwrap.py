@@ -24,7 +24,7 @@ from .unwrap_items import _BOUNDARY, _FRAMES, _METHODS, _OVERLAP, _SEAMS
 # The background job's solve function (tests substitute a gated one to control timing).
 SOLVE = bd_uv.unwrap
 # ... and with Seams "Add Where Needed".
-AUTO_SOLVE = auto_seams.solve
+AUTO_SOLVE = needed_seams.auto_repaired   # auto_seams.solve, a messy mesh repaired
 # ... and with Seams "Add Where Needed" (the default).
 NEEDED_SOLVE = needed_seams.solve
 # The core's defaults (bd_uv.UnwrapOptions) are the operator's: one line there changes both.

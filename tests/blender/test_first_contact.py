@@ -124,14 +124,23 @@ def _grid(nx, ny):
     return V, quads
 
 
-def test_bowtie_vertex_is_split_and_every_face_certified(addon, capsys):
+@pytest.mark.parametrize("seams", [None, 'AUTO'])
+def test_bowtie_vertex_is_split_and_every_face_certified(addon, capsys, seams):
     # A 4 x 3 grid whose corner vertices (0,0) and (4,0) are one vertex: two fans meet there
-    # while the faces stay one connected piece (a bow-tie inside one island).
+    # while the faces stay one connected piece (a bow-tie inside one island). With the default
+    # seams (Add Where Needed) and with Add Automatically (79b5f85 refused it whole there:
+    # "split the vertex (Mesh > Split)").
     V, Q = _grid(4, 3)
     far = 4 * 4
     Q[Q == far] = 0
     obj = _from_arrays("bowtie", V, Q)
-    result, reports = _unwrap_defaults(capsys, obj)
+    if seams is None:
+        result, reports = _unwrap_defaults(capsys, obj)
+    else:
+        set_mode(obj, 'EDIT')
+        bpy.ops.mesh.select_all(action='SELECT')
+        result, reports = run(capsys, seams=seams)
+        set_mode(obj, 'OBJECT')
     assert result == {'FINISHED'}, reports
     assert "non-manifold vertex" in reports[-1][1]
     _certified_as_stored(obj)
