@@ -20,7 +20,7 @@ import numpy as np
 from ..bd_uv.repair import repair_mesh
 from ..bd_uv.seams.measure import splice
 from ..bd_uv.seams.needed import AUTO_BOUND, island_submesh, needs_seams, result_on_input
-from ..bd_uv.seams.repaired import REPAIRABLE
+from ..bd_uv.seams.repaired import needs_repair
 from . import auto_seams
 
 __all__ = ["applies", "solve", "auto_repaired"]
@@ -106,9 +106,9 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
 
 def auto_repaired(V, F, *, tri_poly, tri_loops, seams=None, method="lscm", **search):
     """Seams "Add Automatically" (:func:`auto_seams.solve`) on a messy mesh: solved as it is,
-    and only where an island failed for a defect the repair mends (``bd_uv.seams.repaired``'s
-    ``REPAIRABLE``: a bow-tie, an edge of three faces, parts wound against each other, a
-    duplicate, zero-area or NaN face) repaired as step 1 above and solved again, the result on
+    and only where an island failed for a defect the repair mends
+    (``bd_uv.seams.repaired.needs_repair``: a bow-tie, an edge of three faces, parts wound
+    against each other, a duplicate, zero-area or NaN face) repaired as step 1 above and solved again, the result on
     the input's triangles, the edges the repair cut marked with the seams added, ``notes`` what
     was repaired (a bow-tie was refused whole: "split the vertex (Mesh > Split)").
 
@@ -118,7 +118,7 @@ def auto_repaired(V, F, *, tri_poly, tri_loops, seams=None, method="lscm", **sea
     """
     auto = auto_seams.solve(V, F, tri_poly=tri_poly, tri_loops=tri_loops, seams=seams,
                             method=method, **search)
-    if not any(isinstance(r.error, REPAIRABLE) for r in auto.result.islands):
+    if not needs_repair(auto.result):
         return auto
     V = np.asarray(V, np.float64)
     F = np.asarray(F, np.int64)

@@ -26,6 +26,11 @@ REPAIRABLE = (NonManifoldError, DegenerateFacesError, DuplicateFacesError, NonFi
               OrientationError)
 
 
+def needs_repair(result):
+    """Did an island of ``result`` (an UnwrapResult) fail for a defect the repair mends?"""
+    return any(isinstance(r.error, REPAIRABLE) for r in result.islands)
+
+
 def unwrap_auto_repaired(V, F, seams=None, polygons=None, method="lscm", **search):
     """``unwrap_auto(V, F, seams=seams, polygons=polygons, method=method, **search)``, on the
     repaired mesh where an island of the mesh as it is failed for a defect the repair mends.
@@ -37,7 +42,7 @@ def unwrap_auto_repaired(V, F, seams=None, polygons=None, method="lscm", **searc
     where the mesh was searched as it is); the result's ``repair`` names what was repaired
     """
     res, added, info = unwrap_auto(V, F, seams=seams, polygons=polygons, method=method, **search)
-    if not any(isinstance(r.error, REPAIRABLE) for r in res.islands):
+    if not needs_repair(res):
         return res, added, info, None
     rep = repair_mesh(V, F)
     if not rep.changed or not len(rep.F):   # nothing mended, or nothing left to solve: the
