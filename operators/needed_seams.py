@@ -110,7 +110,8 @@ def auto_repaired(V, F, *, tri_poly, tri_loops, seams=None, method="lscm", **sea
     (``bd_uv.seams.repaired.needs_repair``: a bow-tie, an edge of three faces, parts wound
     against each other, a duplicate, zero-area or NaN face) repaired as step 1 above and solved
     again, the result on the input's triangles, the edges the repair cut marked with the seams
-    added, ``notes`` what was repaired (a bow-tie was refused whole: "split the vertex (Mesh > Split)").
+    added, ``notes`` what was repaired (a bow-tie was refused whole: "split the vertex (Mesh >
+    Split)").
 
     Returns
     -------
