@@ -79,6 +79,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
                                                stretch=opts.seams_stretch, method=opts.method,
                                                frames=opts.frames, cone=opts.cone,
                                                progress=progress, cancel=cancel,
-                                               polygons=face_groups, atlas_cuts=opts.atlas_cuts)
+                                               polygons=face_groups, atlas_cuts=opts.atlas_cuts,
+                                               precision=precision)
     return dataclasses.replace(res, seams_added=np.asarray(added, dtype=np.int64).reshape(-1, 2),
                                atlas_cuts=atlas_cuts_of(info))

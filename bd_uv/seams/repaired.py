@@ -31,9 +31,14 @@ def needs_repair(result):
     return any(isinstance(r.error, REPAIRABLE) for r in result.islands)
 
 
-def unwrap_auto_repaired(V, F, seams=None, polygons=None, method="lscm", **search):
+def unwrap_auto_repaired(V, F, seams=None, polygons=None, method="lscm", precision=None,
+                         **search):
     """``unwrap_auto(V, F, seams=seams, polygons=polygons, method=method, **search)``, on the
     repaired mesh where an island of the mesh as it is failed for a defect the repair mends.
+    ``precision``: the float type V was stored in (``bd_uv.unwrap``'s): the repair then leaves
+    out, as zero-area, the faces it cannot tell from a line, as ``seams.needed`` does (a glTF or
+    USD mesh; a flipped byte in a crate file's points made 19 such faces certified in float64
+    and flat as written)
 
     Returns
     -------
@@ -44,7 +49,7 @@ def unwrap_auto_repaired(V, F, seams=None, polygons=None, method="lscm", **searc
     res, added, info = unwrap_auto(V, F, seams=seams, polygons=polygons, method=method, **search)
     if not needs_repair(res):
         return res, added, info, None
-    rep = repair_mesh(V, F)
+    rep = repair_mesh(V, F, precision)
     if not rep.changed or not len(rep.F):   # nothing mended, or nothing left to solve: the
         return res, added, info, None       # islands' own errors say why (NaN, 1e80, ...)
     poly = None if polygons is None else np.asarray(polygons, np.int64)[rep.faces]

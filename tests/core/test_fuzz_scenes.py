@@ -429,6 +429,11 @@ def _check_stage(out, report):
 @example(breakage="empty stage", seed=187, cut=None, flips=[(0.8039064004546381, 40),
                                                             (0.5821245074526117, 7)],
          suffix=".usdc", seams="needed")
+# a flipped byte in the crate's points left 19 faces float32 cannot tell from a line and 6 of
+# zero area: with seams "auto" the repair (``seams.repaired``) left out only the 6 and wrote the
+# 19 certified in float64, flat as stored; it now takes the stored precision (as "needed" does)
+@example(breakage="none", seed=0, cut=None, flips=[(0.296875, 64)], suffix=".usdc",
+         seams="auto")
 @given(breakage=st.sampled_from(USD_BREAKAGES), seed=st.integers(0, 2 ** 16),
        cut=st.one_of(st.none(), st.floats(0.0, 0.999)),
        flips=st.lists(st.tuples(st.floats(0, 0.999), st.integers(1, 255)), max_size=2),
