@@ -40,9 +40,10 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     precision : the float type ``V`` was stored in, optional (``np.float32`` for glTF, USD and
         Blender positions): faces thinner than one step of it at their coordinates are
         zero-area faces (``mesh.thinner_than_precision``): left out with them with
-        ``seams_mode="needed"``; with "marked" they refuse their island
+        ``seams_mode="needed"`` and, where two lie side by side, with "auto" (the mesh repaired
+        before the search, ``seams.repaired``); with "marked" they refuse their island
         (``DegenerateFacesError``) at once, rather than after solves that cannot certify it as
-        stored. "auto" does not take it: its search cuts such faces into charts of their own
+        stored
     **values : UnwrapOptions fields replacing those of ``options``: ``bd_uv.unwrap(V, F,
         bound=3.0, method="arap")``
 

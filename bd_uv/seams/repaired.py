@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import (DegenerateFacesError, DuplicateFacesError, NonFiniteError,
                       NonManifoldError, OrientationError)
-from ..repair import repair_mesh
+from ..repair import repair_mesh, stored_precision
 from .auto import unwrap_auto
 from .needed import result_on_input
 
@@ -38,7 +38,10 @@ def unwrap_auto_repaired(V, F, seams=None, polygons=None, method="lscm", precisi
     ``precision``: the float type V was stored in (``bd_uv.unwrap``'s): the repair then leaves
     out, as zero-area, the faces it cannot tell from a line, as ``seams.needed`` does (a glTF or
     USD mesh; a flipped byte in a crate file's points made 19 such faces certified in float64
-    and flat as written)
+    and flat as written). Two such faces side by side (``repair.stored_precision``) make the
+    repair run first: no store in that float type keeps them apart, so the search's chart
+    holding them fails as stored at any stretch (a grid split by a strip one float32 step high,
+    as a GLB: "0/1 mesh(es) certified: nothing written", where the default seams wrote it).
 
     Returns
     -------
@@ -46,12 +49,16 @@ def unwrap_auto_repaired(V, F, seams=None, polygons=None, method="lscm", precisi
     ``unwrap_auto``'s with ``atlas_seams`` in input vertices, the ``repair.Repair`` or None
     where the mesh was searched as it is); the result's ``repair`` names what was repaired
     """
-    res, added, info = unwrap_auto(V, F, seams=seams, polygons=polygons, method=method, **search)
-    if not needs_repair(res):
-        return res, added, info, None
+    def as_it_is():
+        return unwrap_auto(V, F, seams=seams, polygons=polygons, method=method, **search)
+    flat = precision is not None and stored_precision(V, F, precision) is not None
+    if not flat:
+        res, added, info = as_it_is()
+        if not needs_repair(res):
+            return res, added, info, None
     rep = repair_mesh(V, F, precision)
     if not rep.changed or not len(rep.F):   # nothing mended, or nothing left to solve: the
-        return res, added, info, None       # islands' own errors say why (NaN, 1e80, ...)
+        return as_it_is() + (None,) if flat else (res, added, info, None)   # islands say why
     poly = None if polygons is None else np.asarray(polygons, np.int64)[rep.faces]
     part, found, info = unwrap_auto(rep.V, rep.F, seams=rep.seams(seams), polygons=poly,
                                     method=method, **search)

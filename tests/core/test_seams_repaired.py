@@ -11,7 +11,7 @@ import pytest
 
 import bd_uv
 from bd_uv.layout import stored_layout
-from test_repair import DEFECTS, _check_certified, bowtie, run_command_line
+from test_repair import DEFECTS, _check_certified, _split_grid, bowtie, run_command_line
 
 
 @pytest.mark.parametrize("make", DEFECTS, ids=lambda f: f.__name__)
@@ -43,3 +43,21 @@ def test_command_line_seams_auto_on_a_bowtie(tmp_path):
     report = json.loads(rep.read_text())
     assert any(words in note for note in report["repair"])
     assert all(i["status"] == "certified" for i in report["islands"])
+
+
+def test_float32_flat_faces_side_by_side_are_left_out_before_the_search():
+    """A grid split by a strip one float32 step high (positions as a glTF or USD file stores
+    them): with ``precision=np.float32`` the strip's 8 triangles are left out as zero-area
+    before the search, as the default seams leave them, and every other face is certified as
+    stored in float32 (recomputed here). On 0926a43 the search kept them in a chart certified
+    in float64 that failed as stored: the command line wrote nothing ("0/1 mesh(es)
+    certified")."""
+    V, F, _, flat = _split_grid()
+    res = bd_uv.unwrap(V, F, seams="auto", precision=np.float32)
+    assert any("zero-area" in note for note in res.repair), res.repair
+    failed = [r for r in res.islands if r.status != "certified"]
+    assert sorted(int(f) for r in failed for f in r.faces) == np.flatnonzero(flat).tolist()
+    layout = stored_layout(V, F, res, dtype=np.float32)
+    _check_certified(V, F, layout.corner_uv, np.flatnonzero(flat))
+    # without the stored precision float64 tells the strip from a line: searched as it is
+    assert bd_uv.unwrap(V, F, seams="auto").repair == ()
