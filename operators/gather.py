@@ -161,8 +161,11 @@ def polygon_ids(batch):
 
 
 def auto_arguments(batch, *, method, bound, minimise, stretch, frames, atlas_cuts=True):
-    """Positional and keyword arguments of :func:`auto_seams.solve` (Seams "Add Where Needed");
-    ``atlas_cuts`` as ``UnwrapOptions.atlas_cuts`` (the operator's Atlas Cuts).
+    """Positional and keyword arguments of ``needed_seams.auto_repaired`` (Seams "Add
+    Automatically"); ``atlas_cuts`` as ``UnwrapOptions.atlas_cuts`` (the operator's Atlas Cuts).
+    Blender stores positions in float32: where faces it cannot tell from a line lie side by
+    side, ``precision`` is float32 and the repair leaves them out as zero-area before the
+    search (kept, their chart failed as stored or they were written unnamed).
 
     Raises
     ------
@@ -187,7 +190,8 @@ def auto_arguments(batch, *, method, bound, minimise, stretch, frames, atlas_cut
                   face_groups=material if len(np.unique(material)) > 1 else None,
                   seams=batch.seams, method=options.method, bound=options.bound,
                   stretch=options.seams_stretch, frames=options.frames,
-                  atlas_cuts=options.atlas_cuts)
+                  atlas_cuts=options.atlas_cuts,
+                  precision=stored_precision(batch.V, batch.F, np.float32))
     return (batch.V, batch.F), kwargs
 
 
@@ -201,7 +205,6 @@ def needed_arguments(batch, *, method, bound, stretch, frames, overlap, limit_st
     args, kwargs = auto_arguments(batch, method=method, bound=bound, minimise=False,
                                   stretch=stretch, frames=frames, atlas_cuts=atlas_cuts)
     kwargs["overlap"] = overlap
-    kwargs["precision"] = stored_precision(batch.V, batch.F, np.float32)
     if limit_stretch:
         kwargs["marked_stretch"] = float(stretch)
     return args, kwargs

@@ -104,29 +104,36 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
         indices=False, count=lambda tris: len(np.unique(tri_poly[tris])))), atlas_cuts=atlas)
 
 
-def auto_repaired(V, F, *, tri_poly, tri_loops, seams=None, method="lscm", **search):
+def auto_repaired(V, F, *, tri_poly, tri_loops, seams=None, method="lscm", precision=None,
+                  **search):
     """Seams "Add Automatically" (:func:`auto_seams.solve`) on a messy mesh: solved as it is,
     and only where an island failed for a defect the repair mends
     (``bd_uv.seams.repaired.needs_repair``: a bow-tie, an edge of three faces, parts wound
     against each other, a duplicate, zero-area or NaN face) repaired as step 1 above and solved
     again, the result on the input's triangles, the edges the repair cut marked with the seams
     added, ``notes`` what was repaired (a bow-tie was refused whole: "split the vertex (Mesh >
-    Split)").
+    Split)"). ``precision`` as for :func:`solve` (``gather.auto_arguments``: float32 where faces
+    Blender's float32 positions cannot tell from a line lie side by side, else None): the mesh
+    is repaired first, those faces left out as zero-area as "Add Where Needed" and
+    ``bd_uv.seams.repaired`` leave them (kept, their chart failed as stored, CANCELLED).
 
     Returns
     -------
     auto_seams.AutoSeams
     """
-    auto = auto_seams.solve(V, F, tri_poly=tri_poly, tri_loops=tri_loops, seams=seams,
-                            method=method, **search)
-    if not needs_repair(auto.result):
-        return auto
+    def as_it_is():
+        return auto_seams.solve(V, F, tri_poly=tri_poly, tri_loops=tri_loops, seams=seams,
+                                method=method, **search)
+    if precision is None:    # (else faces float32 cannot tell from a line lie side by side)
+        auto = as_it_is()
+        if not needs_repair(auto.result):
+            return auto
     V = np.asarray(V, np.float64)
     F = np.asarray(F, np.int64)
     tri_poly = np.asarray(tri_poly, np.int64)
-    rep = repair_mesh(V, F)
+    rep = repair_mesh(V, F, precision)
     if not rep.changed or not len(rep.F):
-        return auto
+        return as_it_is() if precision is not None else auto
     keep = rep.faces
     groups = search.pop("face_groups", None)
     part = auto_seams.solve(rep.V, rep.F, tri_poly=tri_poly[keep],
