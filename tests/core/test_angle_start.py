@@ -8,6 +8,8 @@ and orientation from its Jacobian in its own 3D frame (numpy's SVD,
 wound counter-clockwise whose inside is exactly the triangles' union (shapely); the premise (the
 conformal start lies over itself) from the boundary's exterior angles.
 """
+import json
+
 import numpy as np
 import pytest
 
@@ -174,3 +176,36 @@ def test_with_the_command_lines_time_budget_the_disk_stays_one_certified_island(
     r, D = _one_certified_island(V, F, res, disk, np.inf)
     (plain,) = bd_uv.unwrap(V, F, bound="auto").islands
     assert r.bound_certified <= plain.bound_certified and D.max() <= r.bound_certified
+
+
+def test_with_the_time_budget_a_disk_the_steps_cut_takes_the_call_without_one(tmp_path):
+    """Cow 1522/400: under the command line's time budget its angle start's map is predicted to
+    fail in float32 and the conformal start's conic steps lie over themselves, so the overlap
+    repair cut the disk into 25 pieces (39a0aec); the call without a budget keeps it one island
+    and is taken: the same map, and the command line (whose ``--bound auto`` has the budget)
+    writes it as one island, checked here from the OBJ's UVs as written."""
+    from bd_uv.arguments import TIME_BUDGET
+    from test_repair import run_command_line
+    V, F = rings(*load_off("cow.off"), 1522, 400)
+    disk = one_disk.find(V, F)
+    res = bd_uv.unwrap(V, F, bound="auto", time_budget=TIME_BUDGET)
+    plain = bd_uv.unwrap(V, F, bound="auto")
+    (r,) = res.islands
+    assert r.status == "certified" and r.overlap_free
+    assert np.array_equal(res.corner_uv, plain.corner_uv)
+    D, flipped = distortion_and_flips(V, F, res.corner_uv)
+    assert not flipped.any() and D.max() <= r.bound_certified
+    assert_one_simple_disk(V, F, res.corner_uv, r, disk.island)
+    run, out, rep = run_command_line(tmp_path, V, F, "--bound", "auto")
+    assert run.returncode == 0, run.stderr
+    (island,) = json.loads(rep.read_text())["islands"]
+    assert island["status"] == "certified"
+    vt, ft = [], []
+    for line in out.read_text().splitlines():
+        p = line.split()
+        if p and p[0] == "vt":
+            vt.append([float(t) for t in p[1:3]])
+        elif p and p[0] == "f":
+            ft.append([int(t.split("/")[1]) - 1 for t in p[1:]])
+    D, flipped = distortion_and_flips(V, F, np.array(vt)[np.array(ft)])
+    assert not flipped.any() and D.max() <= island["bound_certified"]
