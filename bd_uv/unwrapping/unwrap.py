@@ -32,7 +32,7 @@ from .results import UnwrapResult
 
 def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
            face_groups=None, progress=None, cancel=None, options=None, precision=None,
-           disk=None, **values):
+           disk=None, whole=True, **values):
     """Map a triangle mesh, cut along the given seams, to the plane with no flipped face and
     conformal distortion <= C.
 
@@ -57,6 +57,8 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     disk : one_disk.Disk, optional, ``one_disk.find(V, F)`` where the caller has found it
         already (``seams.needed.clean_disk``): not found again; used only where ``find`` would
         be called
+    whole : bool, with ``bound="auto"`` a disk left cut is tried again (``_kept_whole``);
+        False inside those tries
     **values : UnwrapOptions fields replacing those of ``options`` (``bound=3.0``, ...). How each
         works: ``method`` "biharmonic" (eq. 6.1) with a free boundary is held at two boundary
         vertices of the start map; "stretch-l1" (section 6.1) holds the island's scale (the
@@ -158,23 +160,60 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
         # is shrunk below float32's step once packed, and no stretch limit keeps it one island
         # at that C (``storage.with_storage_headroom``): the conformal start's way instead, cut
         # where it lies over itself (UVs as before the angle start)
+        least = max(r.bound_certified for r in res.islands)
         res = unwrap_islands(V, F, [disk.island], pins, opts, initial_uv=initial_uv,
                              face_groups=face_groups, progress=progress, cancel=cancel,
                              conformal={0: conformal_u}, t0=t0, disk=disk, unfold=unfold,
                              angle=False)
-    if (opts.bound == "auto" and opts.time_budget is not None and disk is not None
-            and len(res.islands) > 1 and disk_auto.searches(disk, True)):
-        # under a time budget the conic steps went on from a map lying over itself and the
-        # overlap repair cut the disk: the call without a budget, whose unfold searches keep
-        # it whole where they can, is taken when it gives fewer pieces, all certified (cow.off's
-        # patches 1522/400 and 4355/400, 408 and 406 faces: 25 and 15 pieces at C 2.45 under
-        # the command line's budget; 1 island at C 2.52 and 7 pieces at 2.48 without it)
-        whole = unwrap(V, F, progress=progress, cancel=cancel,
-                       options=dataclasses.replace(opts, time_budget=None), disk=disk)
-        if (len(whole.islands) < len(res.islands)
-                and all(r.status == "certified" for r in whole.islands)):
-            return dataclasses.replace(whole, seconds=time.perf_counter() - t0)
+    else:
+        least = None
+    if opts.bound == "auto" and disk is not None and whole and len(res.islands) > 1:
+        res = _kept_whole(V, F, disk, opts, res, least, t0, progress, cancel)
     return res
+
+
+# ``_kept_whole``'s numbers C, as multiples of the least C whose map was predicted to fail
+ABOVE = (1.1, 1.25, 1.5)
+
+
+def _kept_whole(V, F, disk, opts, res, least, t0, progress, cancel):
+    """A disk that ``bound="auto"`` left cut into ``res``' pieces, tried again:
+
+    - under a time budget, the call without one (its unfold searches keep the disk whole
+      where the conic steps went on from a map lying over itself and the overlap repair cut
+      it): taken when it gives fewer pieces, all certified (cow.off's patches 1522/400 and
+      4355/400, 408 and 406 faces: 25 and 15 pieces at C 2.45 under the command line's budget,
+      1 island at C 2.52 and 7 pieces without it);
+    - still cut: a number C a little above the least C (``ABOVE``; ``least``, the angle
+      start's map's where it was predicted to fail once stored in float32, a cone-like tip as a
+      cow's horn, and the conformal start's way cut the disk; else the pieces' largest), the
+      first that gives one certified island expected to survive float32 (cow patch 1578/400: 25
+      pieces at C 2.467 -> one island at C 3.711, max distortion 2.79; 2338/400: 6 -> 1 at
+      4.07; 4355/400: 7 -> 1 at 2.73), its bound asked reported as "auto", flagged
+      "kept_whole".
+    Returns the result with the fewest pieces."""
+    if opts.time_budget is not None and disk_auto.searches(disk, True):
+        plain = unwrap(V, F, progress=progress, cancel=cancel, disk=disk, whole=False,
+                       options=dataclasses.replace(opts, time_budget=None))
+        if (len(plain.islands) < len(res.islands)
+                and all(r.status == "certified" for r in plain.islands)):
+            res = plain
+    if least is None:       # the least C of a disk its own search cut
+        least = max((r.bound_certified for r in res.islands if r.status == "certified"),
+                    default=None)
+    for k in ABOVE if least is not None and len(res.islands) > 1 else ():
+        C = float(least) * k
+        if C > opts.bound_limit:
+            break
+        one = unwrap(V, F, progress=progress, cancel=cancel, disk=disk,
+                     options=dataclasses.replace(opts, bound=C, time_budget=None))
+        if (len(one.islands) == 1 and one.islands[0].status == "certified"
+                and not predicted_to_fail(V, F, one)):
+            (r,) = one.islands
+            res = dataclasses.replace(one, islands=[dataclasses.replace(
+                r, bound_requested="auto", flags=tuple(r.flags) + ("kept_whole",))])
+            break
+    return dataclasses.replace(res, seconds=time.perf_counter() - t0)
 
 
 def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, progress=None,

@@ -209,3 +209,24 @@ def test_with_the_time_budget_a_disk_the_steps_cut_takes_the_call_without_one(tm
             ft.append([int(t.split("/")[1]) - 1 for t in p[1:]])
     D, flipped = distortion_and_flips(V, F, np.array(vt)[np.array(ft)])
     assert not flipped.any() and D.max() <= island["bound_certified"]
+
+@pytest.mark.parametrize("budget", [False, True])
+def test_a_disk_auto_cut_is_kept_whole_at_a_number_a_little_above(budget):
+    """Cow 2338/400 (a horn): its least-C map from the angle start (3.70) was predicted to fail
+    once stored in float32 and the conformal start's way cut the disk into 6 pieces (39a0aec,
+    with and without the command line's time budget). ``bound="auto"`` now keeps it one island
+    at a number a little above the least C (``unwrap.ABOVE``): certified, reported as asked for
+    "auto", flagged, checked here from its UVs in float64 and scaled into the unit square and
+    rounded to float32 (as a packer stores them), one simple disk."""
+    from bd_uv.arguments import TIME_BUDGET
+    V, F = rings(*load_off("cow.off"), 2338, 400)
+    disk = one_disk.find(V, F)
+    res = bd_uv.unwrap(V, F, bound="auto", time_budget=TIME_BUDGET if budget else None)
+    (r,) = res.islands
+    assert r.status == "certified" and "kept_whole" in r.flags and r.bound_requested == "auto"
+    assert r.bound_certified < 1.25 * 3.75          # a little above the least C, not the limit
+    u = res.corner_uv - res.corner_uv.min(axis=(0, 1))
+    for stored in (res.corner_uv, (u / u.max()).astype(np.float32).astype(np.float64)):
+        D, flipped = distortion_and_flips(V, F, stored)
+        assert not flipped.any() and D.max() <= r.bound_certified
+    assert_one_simple_disk(V, F, res.corner_uv, r, disk.island)
