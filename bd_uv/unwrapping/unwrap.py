@@ -11,7 +11,8 @@ With ``boundary`` other than "free", steps 1-2 are replaced by a solve with the 
 boundary fixed on a circle, a rectangle or its pinned polygon (``fixed_boundary``, section 5),
 certified the same way and checked for Theorems 5.1/5.2's premises (``bijective``).
 One island's solve is ``island_solve.solve_island``; here the mesh is checked and split, the
-batched conformal maps and the one-disk pass run, and the islands are gathered and certified.
+batched conformal maps and the one-disk pass run, and the islands are gathered and certified. A
+disk ``bound="auto"`` left cut is tried again to keep it one island (``_kept_whole``).
 """
 import dataclasses
 import time
