@@ -3,9 +3,9 @@
 A document whose JSON has the wrong shape where the reader and writer look (``meshes[0].
 primitives`` an object, a node's ``children`` a number, a buffer's ``uri`` a number) is refused
 with the place named, as the glTF 2.0 schema words it, instead of failing inside the reader
-(assimp's ``test/models/glTF2/wrongTypes``). A bufferView that reaches past the bytes of its
-buffer (tinygltf's ``BoundsChecking/integer-out-of-bounds.gltf``: a ``byteLength`` of 1e300) is
-a damaged file: written back, it would stay unreadable to every other tool.
+(assimp's ``test/models/glTF2/wrongTypes``). A bufferView a primitive reads that reaches past the
+bytes of its buffer (tinygltf's ``BoundsChecking/integer-out-of-bounds.gltf``: a ``byteLength``
+of 1e300) refuses the meshes reading it, whose UVs could not be written back readable.
 
 Properties bd-uv does not read (materials, animations, extensions) are not checked: they are
 written back as read. Accessors, and the indices naming them, are checked where a primitive
@@ -59,7 +59,7 @@ class _Checker:
 
 def check_document(path, doc):
     """Refuse (``SceneFileError``) a document whose arrays, nodes, meshes, primitives, buffers,
-    bufferViews or images have the wrong JSON shape where bd-uv reads or writes them."""
+    or images have the wrong JSON shape where bd-uv reads or writes them."""
     c = _Checker(path, doc)
     for key in ARRAYS:
         if key in doc:
@@ -84,27 +84,22 @@ def check_document(path, doc):
             if key == "images":
                 c.optional(item, "uri", f"{key}[{i}]", c.typed, str)
             c.optional(item, "extensions", f"{key}[{i}]", c.typed, dict)
-    for i, view in enumerate(doc.get("bufferViews", [])):
-        where = f"bufferViews[{i}]"
-        if "buffer" not in view or "byteLength" not in view:
-            c.fail(where, "lacks its buffer or byteLength, which glTF requires")
-        c.index(view["buffer"], f"{where}.buffer", "buffers")
-        c.count(view["byteLength"], f"{where}.byteLength")
-        c.optional(view, "byteOffset", where, c.count)
-        c.optional(view, "byteStride", where, c.count)
-        c.optional(view, "extensions", where, c.typed, dict)
 
 
-def check_views(path, doc, buffers, fallback=()):
-    """Refuse a bufferView that reaches past the bytes its buffer holds (``buffers``: each
-    buffer's bytes as read). The buffers in ``fallback`` (meshopt fallback buffers) hold no
-    bytes by design: their views are decoded from another buffer, and a primitive reading one
-    is refused by name."""
-    for i, view in enumerate(doc.get("bufferViews", [])):
-        data = buffers[view["buffer"]]
-        end = view.get("byteOffset", 0) + view["byteLength"]
-        if end > len(data) and view["buffer"] not in fallback:
-            raise SceneFileError(
-                f"{path}: bufferView {i} reaches past the end of buffer {view['buffer']} "
-                f"(byteOffset {view.get('byteOffset', 0)} + byteLength {view['byteLength']} > "
-                f"{len(data)} bytes): the file is damaged")
+def check_view(view_index, view, buffers):
+    """Raise ``ValueError`` naming what is wrong with bufferView ``view_index`` (``view``, a
+    dict): a buffer index, byteOffset or byteLength that is not a whole number in range, or a
+    range reaching past the bytes its buffer holds (``buffers``: each buffer's bytes as read).
+    Checked where a primitive reads the view, so only the meshes reading it are refused."""
+    where = f"bufferView {view_index}"
+    buffer, offset, length = view.get("buffer"), view.get("byteOffset", 0), view.get("byteLength")
+    for name, value in (("buffer", buffer), ("byteOffset", offset), ("byteLength", length)):
+        if not isinstance(value, int) or isinstance(value, bool) or value < 0:
+            raise ValueError(f"{where}: its {name} is {value!r}, where glTF requires a whole "
+                             "number of 0 or more")
+    if buffer >= len(buffers):
+        raise ValueError(f"{where}: buffer {buffer} does not exist ({len(buffers)} buffers)")
+    if offset + length > len(buffers[buffer]):
+        raise ValueError(f"{where} reaches past the end of buffer {buffer} (byteOffset {offset} "
+                         f"+ byteLength {length} > {len(buffers[buffer])} bytes): the file is "
+                         "damaged")

@@ -17,7 +17,7 @@ from urllib.parse import quote, unquote
 import numpy as np
 
 from ..errors import SceneFileError
-from .gltf_check import check_document, check_views
+from .gltf_check import check_document, check_view
 
 GLB_MAGIC, JSON_CHUNK, BIN_CHUNK = 0x46546C67, 0x4E4F534A, 0x004E4942
 COMPONENT = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32,
@@ -86,6 +86,7 @@ class GltfFile:
         view = self.doc["bufferViews"][view_index]
         if "EXT_meshopt_compression" in view.get("extensions", {}):
             raise SceneFileError(f"{self.path}: bufferView {view_index} is meshopt-compressed")
+        check_view(view_index, view, self.buffers)
         data = self.buffers[view["buffer"]]
         start = view.get("byteOffset", 0) + offset
         item = dt.itemsize * width
@@ -147,8 +148,6 @@ def read_gltf(path):
                                  f"bytes, {'the GLB BIN chunk' if 'uri' not in buf else 'its data'}"
                                  f" holds {len(data)}")
         buffers.append(data)
-    check_views(path, doc, buffers, {i for i, b in enumerate(doc.get("buffers", []))
-                                     if MESHOPT & set(b.get("extensions") or {})})
     return GltfFile(path, doc, buffers, glb)
 
 
