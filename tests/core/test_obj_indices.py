@@ -76,3 +76,13 @@ def test_a_later_vertex_may_be_named_before_it_is_read(tmp_path):
     p = tmp_path / "fwd.obj"
     p.write_text("v 0 0 0\nf 1 2 3\nv 1 0 0\nv 0 1 0\n")
     assert load_mesh(str(p)).F.tolist() == [[0, 1, 2]]
+
+
+def test_a_utf8_byte_order_mark_does_not_hide_the_first_record(tmp_path):
+    # Windows tools write UTF-8 with a BOM; the first record ("v ...") was read as "\ufeffv"
+    # and dropped, so every face named the vertex after the one meant
+    text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 1\nf 1 2 3\nf 2 4 3\n"
+    (tmp_path / "bom.obj").write_bytes(b"\xef\xbb\xbf" + text.encode())
+    (tmp_path / "plain.obj").write_text(text)
+    bom, plain = load_mesh(str(tmp_path / "bom.obj")), load_mesh(str(tmp_path / "plain.obj"))
+    assert np.array_equal(bom.V, plain.V) and np.array_equal(bom.F, plain.F)
