@@ -5,7 +5,9 @@ past their buffer (unseen22: assimp's ``test/models/glTF2/wrongTypes/badArray.gl
 and written back with it, unreadable to other tools). Each is refused in the schema's words
 naming the place: exit 2, one line, no traceback, the input untouched, nothing written. A
 bufferView that cannot be read refuses only the meshes reading it; the file's other meshes are
-unwrapped and written (assimp's ``IncorrectVertexArrays/Cube.gltf``: 2 of its 4 meshes)."""
+unwrapped and written (assimp's ``IncorrectVertexArrays/Cube.gltf``: 2 of its 4 meshes). That
+holds for the accessors only the writer reads (other attributes, morph targets): on main they
+stopped the whole write after the unwrap."""
 import hashlib
 import json
 
@@ -27,6 +29,10 @@ def _scene(tmp_path):
         prim = {"attributes": {"POSITION": b.accessor(V.astype(np.float32), 5126, "VEC3",
                                                       minmax=True)},
                 "indices": b.accessor(F.reshape(-1, 1), 5123, "SCALAR")}
+        if name == "Rock":   # attributes the writer copies per split vertex, never unwrapped
+            up = np.tile(np.float32([0, 0, 1]), (len(V), 1))
+            prim["attributes"]["NORMAL"] = b.accessor(up, 5126, "VEC3")
+            prim["targets"] = [{"POSITION": b.accessor(0.1 * up, 5126, "VEC3", minmax=True)}]
         meshes.append({"name": name, "primitives": [prim]})
     b.doc.update(meshes=meshes, nodes=[{"name": "Root", "children": [1]}, {"mesh": 0},
                                        {"mesh": 1}], scenes=[{"nodes": [0, 2]}], scene=0)
@@ -55,6 +61,11 @@ def _damage(doc, what, blob):
         doc["bufferViews"][prim["indices"]]["byteLength"] = 1e300
     elif what == "view past its buffer":
         doc["bufferViews"][prim["indices"]]["byteLength"] = blob + 4
+    elif what == "morph target's view past its buffer":   # read only when written
+        doc["bufferViews"][doc["accessors"][prim["targets"][0]["POSITION"]]["bufferView"]][
+            "byteLength"] = blob + 4
+    elif what == "more normals than their view holds":
+        doc["accessors"][prim["attributes"]["NORMAL"]]["count"] = 1000
     elif what == "view on a buffer that is not there":
         doc["bufferViews"][prim["attributes"]["POSITION"]]["buffer"] = 1
 
@@ -73,6 +84,12 @@ VIEW_CASES = {
     "byteLength 1e300": "its byteLength is 1e+300, where glTF requires a whole number",
     "view past its buffer": "reaches past the end of buffer 0",
     "view on a buffer that is not there": "buffer 1 does not exist (1 buffers)",
+    "morph target's view past its buffer": "primitive 0 target 0 POSITION: accessor 3 cannot be "
+                                           "read (ValueError: bufferView 3 reaches past the end "
+                                           "of buffer 0",
+    "more normals than their view holds": "primitive 0 NORMAL: accessor 2 cannot be read "
+                                          "(ValueError: bufferView 2 is too short for 1000 "
+                                          "elements)",
 }
 
 
