@@ -101,42 +101,83 @@ def _read_trimesh(path, ext):
 def _read_obj(path):
     """V, F, corner UVs or None, and each face's material (``usemtl``) and object (``o``), each
     numbered in order of first use by a face (faces before any ``usemtl`` or ``o`` make a
-    material or object of their own)."""
-    vs, vts, faces, tfaces, mats, objs = [], [], [], [], [], []
+    material or object of their own).
+
+    A negative index counts back from the last ``v`` (``vt``) read before its face, as the OBJ
+    format defines it (files written object by object use ``f -4 -3 -2 -1``). Records may be
+    separated by tabs; a file starting with a UTF-16 byte order mark is read as UTF-16. An
+    index naming no vertex is an ``InvalidMeshError`` giving the file's line."""
+    vs, vts, faces, tfaces, mats, objs, numbers = [], [], [], [], [], [], []
     mat, obj = None, None
-    with open(path, "r", encoding="utf-8", errors="replace") as fh:
-        for line in fh:
-            line = _COMMENT.sub("", line)   # "f 1 2 3 # note": a comment ends a record
-            if line.startswith(("usemtl ", "usemtl\t")):
-                mat = line.split(None, 1)[1].strip() if len(line.split()) > 1 else ""
-            elif line.startswith(("o ", "o\t")):
-                obj = line.split(None, 1)[1].strip() if len(line.split()) > 1 else ""
-            elif line.startswith("v "):
-                vs.append(line.split()[1:4])
-            elif line.startswith("vt "):
-                vts.append(line.split()[1:3])
-            elif line.startswith("f "):
-                items = [it.split("/") for it in line.split()[1:]]
-                if len(items) < 3:
-                    continue
-                vi = [int(it[0]) for it in items]
-                ti = [int(it[1]) if len(it) > 1 and it[1] else 0 for it in items]
-                for j in range(1, len(vi) - 1):  # fan-triangulate polygons
-                    faces.append((vi[0], vi[j], vi[j + 1]))
-                    tfaces.append((ti[0], ti[j], ti[j + 1]))
-                    mats.append(mat)
-                    objs.append(obj)
+    for number, line in enumerate(_obj_text(path).splitlines(), 1):
+        line = _COMMENT.sub("", line)   # "f 1 2 3 # note": a comment ends a record
+        tokens = line.split()
+        key = tokens[0] if tokens else ""
+        if key == "usemtl":
+            mat = line.split(None, 1)[1].strip() if len(tokens) > 1 else ""
+        elif key == "o":
+            obj = line.split(None, 1)[1].strip() if len(tokens) > 1 else ""
+        elif key == "v":
+            vs.append(tokens[1:4])
+        elif key == "vt":
+            vts.append(tokens[1:3])
+        elif key == "f" and len(tokens) > 3:
+            items = [it.split("/") for it in tokens[1:]]
+            vi = [_obj_index(path, number, it[0], len(vs), "v") for it in items]
+            ti = [_obj_index(path, number, it[1], len(vts), "vt") + 1
+                  if len(it) > 1 and it[1] else 0 for it in items]
+            for j in range(1, len(vi) - 1):  # fan-triangulate polygons
+                faces.append((vi[0], vi[j], vi[j + 1]))
+                tfaces.append((ti[0], ti[j], ti[j + 1]))
+                mats.append(mat)
+                objs.append(obj)
+                numbers.append(number)
     V = np.asarray(vs, dtype=np.float64).reshape(-1, 3)
     F = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    F = np.where(F < 0, F + len(V), F - 1)  # OBJ is 1-based; negative indices count back
-    T = np.asarray(tfaces, dtype=np.int64).reshape(-1, 3)
+    T = np.asarray(tfaces, dtype=np.int64).reshape(-1, 3)   # 1-based; 0: no vt
+    _check_forward(path, F, len(V), "v", numbers)
     cuv = None
     if len(vts) and len(T) and np.all(T != 0):
         VT = np.asarray(vts, dtype=np.float64).reshape(-1, 2)
-        T = np.where(T < 0, T + len(VT), T - 1)
-        cuv = VT[T]
+        _check_forward(path, T - 1, len(VT), "vt", numbers)
+        cuv = VT[T - 1]
     labels = {"material": _first_use(mats), "object": _first_use(objs)}
     return V, F, cuv, labels
+
+
+def _obj_text(path):
+    """The OBJ file's text: UTF-8 (bytes that are not are replaced), or UTF-16 after its BOM."""
+    with open(path, "rb") as fh:
+        raw = fh.read()
+    if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        return raw.decode("utf-16", errors="replace")
+    return raw.decode("utf-8-sig", errors="replace")
+
+
+def _obj_index(path, number, text, count, record):
+    """The 0-based index of ``text`` (1-based, or negative from the last of the ``count``
+    ``record``s read so far); a positive index past ``count`` is kept (a later record may
+    define it: ``_check_forward``)."""
+    try:
+        i = int(text)
+    except ValueError:
+        raise InvalidMeshError(f"{path} line {number}: {text!r} is not a {record} index") from None
+    if i == 0 or i < -count:
+        raise InvalidMeshError(
+            f"{path} line {number}: face uses {record} {i}, but {count} {record} record(s) come "
+            f"before it ({record} indices run 1..{count}, or -1..-{count} counting back)")
+    return i + count if i < 0 else i - 1
+
+
+def _check_forward(path, F, count, record, numbers):
+    """Refuse positive indices that no ``record`` of the whole file defines (``numbers``: each
+    face's line)."""
+    bad = np.flatnonzero(np.any(F >= count, axis=1))
+    if len(bad):
+        f = bad[0]
+        raise InvalidMeshError(f"{path} line {numbers[f]}: face uses {record} "
+                               f"{int(F[f].max()) + 1}, but the file has {count} {record} "
+                               f"record(s)")
 
 
 def _first_use(names):

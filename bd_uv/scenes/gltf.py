@@ -26,7 +26,7 @@ from ..errors import SceneFileError
 from ..scheduling.atomic import atomic_path
 from .model import SceneMesh
 from .gltf_io import BufferWriter, read_gltf, rebase_uris, write_glb, write_gltf_json
-from .gltf_mesh import _mesh_arrays, _refusal
+from .gltf_mesh import _copies_readable, _mesh_arrays, _refusal
 from .gltf_patch import _patch_primitive
 
 TRIANGLES = 4
@@ -86,6 +86,7 @@ class GltfScene:
                 refused = _refusal(gf, label, prims)
                 if not refused:
                     m, part = _mesh_arrays(gf, label, prims, uv_set, names[0])
+                    _copies_readable(gf, label, prims)
             except SceneFileError as exc:
                 refused = str(exc).removeprefix(f"{gf.path}: ")   # the entry names the file
             if refused:

@@ -17,6 +17,7 @@ from urllib.parse import quote, unquote
 import numpy as np
 
 from ..errors import SceneFileError
+from .gltf_check import check_document, check_view
 
 GLB_MAGIC, JSON_CHUNK, BIN_CHUNK = 0x46546C67, 0x4E4F534A, 0x004E4942
 COMPONENT = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32,
@@ -85,6 +86,7 @@ class GltfFile:
         view = self.doc["bufferViews"][view_index]
         if "EXT_meshopt_compression" in view.get("extensions", {}):
             raise SceneFileError(f"{self.path}: bufferView {view_index} is meshopt-compressed")
+        check_view(view_index, view, self.buffers)
         data = self.buffers[view["buffer"]]
         start = view.get("byteOffset", 0) + offset
         item = dt.itemsize * width
@@ -131,8 +133,10 @@ def read_gltf(path):
             doc = json.loads(raw.decode("utf-8"))
     except (ValueError, struct.error, UnicodeDecodeError) as exc:
         raise SceneFileError(f"{path}: not a glTF 2.0 file ({exc})") from exc
-    if not isinstance(doc, dict) or not str(doc.get("asset", {}).get("version", "")).startswith("2"):
+    asset = doc.get("asset") if isinstance(doc, dict) else None
+    if not isinstance(asset, dict) or not str(asset.get("version", "")).startswith("2"):
         raise SceneFileError(f"{path}: not a glTF 2.0 document (asset.version is not 2.x)")
+    check_document(path, doc)
     buffers = []
     for i, buf in enumerate(doc.get("buffers", [])):
         data = _buffer_bytes(path, i, buf, bin_chunk if glb and i == 0 else None)

@@ -60,6 +60,21 @@ def _refusal(gf, label, prims):
     return None
 
 
+def _copies_readable(gf, label, prims):
+    """Read every accessor the writer copies per split vertex (the attributes besides POSITION,
+    which ``_mesh_arrays`` reads, and the morph targets' deltas), so that one that cannot be read
+    refuses its mesh here, by name, instead of stopping the whole write after the unwrap
+    (``gltf_patch._patch_primitive``). Raises SceneFileError."""
+    for j, p in prims:
+        where = f"{label} primitive {j}"
+        for key, acc in p.get("attributes", {}).items():
+            if key != "POSITION":
+                gf.accessor(acc, f"{where} {key}")
+        for t, target in enumerate(p.get("targets", [])):
+            for key, acc in target.items():
+                gf.accessor(acc, f"{where} target {t} {key}")
+
+
 def _mesh_arrays(gf, label, prims, uv_set, name):
     """One welded triangle mesh of a glTF mesh's triangle primitives, and how to write back."""
     Vs, Fs, UVs, part, offset, lo = [], [], [], [], 0, 0
