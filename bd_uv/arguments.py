@@ -81,21 +81,22 @@ def unwrap_options_of(args):
 
     ``--seams needed`` (also the Blender script's) and ``auto`` add seams, ``uv``, ``none`` and
     ``marked`` (the script's) do not; no ``--seams`` is ``ENTRY_SEAMS_MODE`` ("needed") unless
-    an option takes only the islands as they are (``--bound auto``, ``--frames input-uv``, a
-    fixed ``--boundary``: then "marked"); the time budget counts only with ``--bound auto``.
+    an option takes only the islands as they are (``--frames input-uv``, a fixed
+    ``--boundary``: then "marked"); ``--bound auto`` with "needed" minimises C on each island
+    and on each chart the seam search cuts; the time budget counts only with ``--bound auto``.
 
     Raises
     ------
     OptionError naming an option out of range, or options that cannot go together
     """
     seams = getattr(args, "seams", None)
-    as_they_are = args.bound == "auto" or args.frames == "input-uv" or args.boundary != "free"
+    as_they_are = args.frames == "input-uv" or args.boundary != "free"
     if seams is None:
         mode = "marked" if as_they_are else ENTRY_SEAMS_MODE
-    elif seams in ("needed", "auto") and args.bound == "auto":   # said in the flags' terms
-        raise OptionError("seams", f"--seams {seams} certifies the charts it makes at a number "
-                          "C: give --bound a number (e.g. --bound 2); --bound auto takes the "
-                          "islands as they are (--seams uv or none)")
+    elif seams == "auto" and args.bound == "auto":   # said in the flags' terms
+        raise OptionError("seams", "--seams auto certifies the charts it makes at a number C: "
+                          "give --bound a number (e.g. --bound 2), or --seams needed (the "
+                          "default), which gives each island and chart its least C")
     else:
         mode = seams if seams in ("needed", "auto") else "marked"
     return UnwrapOptions(

@@ -183,8 +183,9 @@ def _print_needed(res, options, output):
     for note in res.repair:
         print(f"repaired: {note}")
     n = len(res.seams_added)
-    print(f"seams: {n} added, only on islands that could not be certified as they were (their "
-          f"charts at C = {min(float(options.bound), AUTO_BOUND):g}, stretch <= "
+    print(f"seams: {n} added, only on islands that could not be certified as they were ("
+          + ("their charts at C = 2, then each at its least C" if options.bound == "auto" else
+             f"their charts at C = {min(float(options.bound), AUTO_BOUND):g}") + ", stretch <= "
           f"{options.seams_stretch:g})" + (f"; they are UV discontinuities of {output} and "
                                           "\"seams_added\" in the report" if n else "")
           + (f"; {atlas_line(res.atlas_cuts, options)}" if n and res.atlas_cuts is not None

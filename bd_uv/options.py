@@ -132,8 +132,9 @@ class UnwrapOptions:
             if self.boundary != "free":
                 raise OptionError("seams_mode", f"{auto} makes free-boundary charts; boundary= "
                                   "needs boundary='free' there")
-            if self.bound == "auto":
-                raise OptionError("seams_mode", f"{auto} needs a numeric bound C")
+            if self.bound == "auto" and self.seams_mode == "auto":
+                raise OptionError("seams_mode", f"{auto} needs a numeric bound C (its charts "
+                                  "are certified at C; seams_mode='needed' takes bound='auto')")
             if self.frames == "input-uv":
                 raise OptionError("seams_mode", f"{auto} does not take pins or the current UVs: "
                                   "call bd_uv.seams.unwrap_auto for material groups, or mark "

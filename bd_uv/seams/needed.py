@@ -4,7 +4,9 @@ marked seams kept, and seams added only to the islands that cannot be certified 
 1. the mesh is repaired (``repair.repair_mesh``): bow-tie vertices split per fan, edges of three
    or more faces and edges between oppositely oriented parts cut, duplicate faces left out of
    the solve (they get their twin's UVs), zero-area faces left out (named, their UVs untouched);
-2. the islands the marked seams make are unwrapped at C with C never raised (``unwrap``);
+2. the islands the marked seams make are unwrapped at C with C never raised (``unwrap``); with
+   ``bound="auto"`` at their least C, where that is within AUTO_LIMIT (the default C), and the
+   charts the search of step 3 cuts at AUTO_BOUND each at its own least C (``least_charts``);
 3. only the islands that fail (closed, higher genus, no certified map within C, overlapping
    themselves, or certified with a texel density varying over 4096 times across the island,
    which no texture serves and float32 UVs seldom hold (``unwrapping.storage.beyond_headroom``),
@@ -40,6 +42,10 @@ from .measure import splice
 # The bound of the charts the seam search makes (see the module docstring); their stretch limit
 # is ``UnwrapOptions.seams_stretch`` (``options.AUTO_SEAMS_STRETCH`` = 2 unless asked).
 AUTO_BOUND = 2.0
+# With ``bound="auto"`` an island whose least C is over this (the entry points' default C) gets
+# seams, as it would at the default C (Online3DViewer's cow.ply, repaired into a disk of 5,800
+# faces: certified at C = 72 as it is; 47 charts at C <= 2 from the seam search, each minimised).
+AUTO_LIMIT = 5.0
 # Island errors that seams can fix.
 NEEDS_SEAMS = (ClosedIslandError, TopologyError, InfeasibleError, SolverError, OverlapError)
 
@@ -102,6 +108,8 @@ def unwrap_needed(V, F, seams=None, polygons=None, options=None, marked_stretch=
     # search, whose charts are cut as an artist would; with "fail" it is named
     marked = opts.replace(seams_mode="marked", raise_bound=False, stretch=marked_stretch,
                           atlas_cuts=True, overlap="fail")
+    if opts.bound == "auto":    # the least C of each island whose least C is within the
+        marked = marked.replace(bound_limit=min(opts.bound_limit, AUTO_LIMIT))   # default C
     added = np.zeros((0, 2), dtype=np.int64)
     atlas = atlas_cuts_of({"atlas_cuts": 0, "atlas_length": 0.0, "atlas_seams": added})
     if len(F2):
@@ -118,12 +126,16 @@ def unwrap_needed(V, F, seams=None, polygons=None, options=None, marked_stretch=
             bad += [res.islands[i] for i in flagged if i not in done]
         if bad:
             sub, voc, Fl = island_submesh(F2, bad)
+            least = opts.bound == "auto"
             part, found, info = unwrap_auto(
                 V2[voc], Fl,
-                bound=min(float(opts.bound), AUTO_BOUND), stretch=opts.seams_stretch,
+                bound=AUTO_BOUND if least else min(float(opts.bound), AUTO_BOUND),
+                stretch=opts.seams_stretch,
                 method=opts.method, frames=opts.frames, cone=opts.cone, progress=progress,
                 cancel=cancel, polygons=None if poly is None else poly[sub],
                 atlas_cuts=opts.atlas_cuts)
+            if least:
+                part = least_charts(V2[voc], Fl, part, marked, progress, cancel)
             res = splice(res, part, sub, voc, len(F2))
             added = voc[found]
             atlas = atlas_cuts_of(info, voc)
@@ -138,6 +150,31 @@ def unwrap_needed(V, F, seams=None, polygons=None, options=None, marked_stretch=
     return dataclasses.replace(result, seams_added=added.astype(np.int64),
                                repair=tuple(rep.notes()) if rep is not None else (),
                                atlas_cuts=atlas)
+
+
+def least_charts(V, F, part, options, progress=None, cancel=None):
+    """``bound="auto"``: the charts the seam search cut at AUTO_BOUND (``part``, an UnwrapResult
+    on F), each unwrapped again at its least C (``options``, the marked islands' with
+    ``bound="auto"``), on its own cut vertices (``island_submesh``). A chart's least map is
+    taken where it certifies as the whole chart (else the chart stays as cut, certified at
+    AUTO_BOUND)."""
+    charts = [r for r in part.islands if r.status == "certified"]
+    if not charts:
+        return part
+    sub, voc, Fl = island_submesh(F, charts)
+    again = unwrap(V[voc], Fl, progress=progress, cancel=cancel, options=options)
+    size = np.bincount(part.face_island[sub], minlength=len(part.islands))
+    ok = [r for r in again.islands if r.status == "certified"
+          and len(r.faces) == size[part.face_island[sub[r.faces[0]]]]]
+    if not ok:
+        return part
+    local = np.sort(np.concatenate([r.faces for r in ok]))
+    pos = np.full(len(sub), -1, dtype=np.int64)
+    pos[local] = np.arange(len(local))
+    kept = UnwrapResult(again.corner_uv[local], np.zeros(len(local), np.int64),
+                        [dataclasses.replace(r, faces=pos[r.faces]) for r in ok],
+                        again.seconds, again.method)
+    return splice(part, kept, sub[local], voc, len(F))
 
 
 def clean_disk(V, F, precision=None):
