@@ -19,7 +19,9 @@ import numpy as np
 
 from ..bd_uv.repair import repair_mesh
 from ..bd_uv.seams.measure import splice
-from ..bd_uv.seams.needed import AUTO_BOUND, island_submesh, needs_seams, result_on_input
+from ..bd_uv.options import UnwrapOptions
+from ..bd_uv.seams.needed import (AUTO_BOUND, AUTO_LIMIT, island_submesh, least_charts,
+                                  needs_seams, result_on_input)
 from ..bd_uv.seams.repaired import needs_repair
 from . import auto_seams
 
@@ -27,10 +29,11 @@ __all__ = ["applies", "solve", "auto_repaired"]
 
 
 def applies(minimise, frames, boundary, pinned):
-    """Whether Seams "Add Where Needed" adds seams: not with Minimise, From Current UVs
+    """Whether Seams "Add Where Needed" adds seams: not with From Current UVs
     (``frames == "input-uv"``), a fixed ``boundary`` or ``pinned`` UVs (seams added cannot keep
-    those: the islands are then taken as marked, as with Seams "Marked")."""
-    return not minimise and frames != "input-uv" and boundary == "free" and not pinned
+    those: the islands are then taken as marked, as with Seams "Marked"). With Minimise it does,
+    each island and chart at its least C (``solve``'s ``bound="auto"``)."""
+    return frames != "input-uv" and boundary == "free" and not pinned
 
 
 def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2.0,
@@ -44,7 +47,11 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
     unwrap : callable, ``bd_uv.unwrap`` (the operator's ``SOLVE``)
     tri_poly : (m,) int, tri_loops : (m,3) int, as for :func:`auto_seams.solve`
     seams : (s,2) int, the marked seams (all kept)
-    bound : float, C of the islands the marked seams make (not raised)
+    bound : float, C of the islands the marked seams make (not raised); or "auto" (Minimise):
+        each island at its least C where that is within AUTO_LIMIT (the default C), the others
+        given seams, and each chart the search cuts at AUTO_BOUND at its own least C
+        (``bd_uv.seams.needed.least_charts``), as ``bd_uv.unwrap(seams="needed",
+        bound="auto")``
     stretch : float, S of the charts the seams added make
     marked_stretch : float, optional, Limit Stretch of the islands the marked seams make
     face_groups : (m,) int, optional, material of each triangle (seams prefer its boundaries)
@@ -79,8 +86,13 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
         res = UnwrapResult(np.zeros((0, 3, 2)), np.zeros(0, np.int64), [], 0.0, method)
     else:
         extra = {} if marked_stretch is None else {"stretch": float(marked_stretch)}
+        least = bound == "auto"
+        if least:
+            extra.update(bound="auto", bound_limit=AUTO_LIMIT)
+        else:
+            extra["bound"] = float(bound)
         res = auto_seams.whole_polygons(unwrap, V2, F2, tri_poly=tp, tri_loops=tl, seams=seams2,
-                                        bound=float(bound), raise_bound=False, overlap="fail",
+                                        raise_bound=False, overlap="fail",
                                         face_groups=tp, **extra, **options)
         bad = [r for r in res.islands if r.status != "certified" and needs_seams(r, overlap)]
         if bad:
@@ -88,9 +100,15 @@ def solve(V, F, *, unwrap, tri_poly, tri_loops, seams=None, bound=5.0, stretch=2
             groups = None if face_groups is None else np.asarray(face_groups)[keep][sub]
             auto = auto_seams.solve(V2[voc], Fl, tri_poly=tp[sub],
                                     tri_loops=tl[sub],
-                                    bound=min(float(bound), AUTO_BOUND), stretch=float(stretch),
+                                    bound=AUTO_BOUND if least else min(float(bound), AUTO_BOUND),
+                                    stretch=float(stretch),
                                     face_groups=groups, atlas_cuts=atlas_cuts, **options)
-            res = splice(res, auto.result, sub, voc, len(F2))
+            part = auto.result
+            if least:   # each chart at its least C, never cut (a map over itself fails)
+                part = least_charts(V2[voc], Fl, part, UnwrapOptions(
+                    bound="auto", bound_limit=AUTO_LIMIT, overlap="fail", method=method,
+                    frames=frames), progress, cancel)
+            res = splice(res, part, sub, voc, len(F2))
             added = voc[auto.added]
             atlas = dict(auto.atlas_cuts, seams=np.sort(
                 rep.vertex_source[voc[auto.atlas_cuts["seams"]]], axis=1).reshape(-1, 2))

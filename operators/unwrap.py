@@ -72,7 +72,8 @@ class UV_OT_bd_unwrap(UnwrapFinish, BackgroundSolve, bpy.types.Operator):
                          description="Largest conformal distortion allowed on any face")
     minimise: BoolProperty(name="Minimise", default=False,
                            description="Find the smallest certified bound instead (optimal "
-                           "quasi-conformal map; slower)")
+                           "quasi-conformal map; slower). With Add Where Needed, islands whose "
+                           "smallest bound is over 5 get seams, each chart its smallest bound")
     raise_bound: BoolProperty(name="Raise C Automatically", default=DEFAULTS.raise_bound,
                               description="Seams Marked: when no map within C exists, raise C "
                               "up to the limit (with Add Where Needed such an island gets seams "
@@ -143,7 +144,7 @@ class UV_OT_bd_unwrap(UnwrapFinish, BackgroundSolve, bpy.types.Operator):
         row.active = not self.minimise
         row.prop(self, "bound")
         row = layout.row()
-        row.active = self.seams == 'MARKED' or self.minimise  # Add Where Needed: seams instead
+        row.active = self.seams == 'MARKED' and not self.minimise   # else seams or least C
         row.prop(self, "raise_bound")
         row = layout.row()
         row.active = self.raise_bound and not self.minimise and self.seams == 'MARKED'
@@ -202,7 +203,8 @@ class UV_OT_bd_unwrap(UnwrapFinish, BackgroundSolve, bpy.types.Operator):
                 args, kwargs = session.needed_arguments(
                     batch, method=self.method, bound=self.bound, stretch=self.stretch,
                     frames=self.frames, overlap='cut' if self.overlap == 'CUT' else 'fail',
-                    limit_stretch=self.limit_stretch, atlas_cuts=self.atlas_cuts)
+                    limit_stretch=self.limit_stretch, atlas_cuts=self.atlas_cuts,
+                    minimise=self.minimise)
                 return batch, 'NEEDED', args, kwargs
             if self.seams == 'AUTO':
                 args, kwargs = session.auto_arguments(

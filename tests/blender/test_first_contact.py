@@ -371,6 +371,27 @@ def test_add_automatically_leaves_float32_flat_faces_out(addon, capsys, bowtie):
     assert (det > 0).all() and D.max() <= C * SLACK
 
 
+@pytest.mark.parametrize("name", ["uv_sphere", "cube", "torus", "suzanne"])
+def test_minimise_with_the_default_seams_certifies_every_face_lower(addon, capsys, name):
+    """Minimise with the default seams (Add Where Needed): it took the islands as they were,
+    and Blender's closed primitives were CANCELLED ("add seams"); now seams are added where
+    needed and every island and chart gets its least C: FINISHED, every face certified as
+    stored (recomputed), and no face above the default unwrap's worst."""
+    worst = {}
+    for minimise in (False, True):
+        for ob in list(bpy.data.objects):
+            bpy.data.objects.remove(ob)
+        PRIMITIVES[name]()
+        obj = bpy.context.active_object
+        set_mode(obj, 'EDIT')
+        bpy.ops.mesh.select_all(action='SELECT')
+        result, reports = run(capsys, minimise=minimise)
+        set_mode(obj, 'OBJECT')
+        assert result == {'FINISHED'}, reports
+        worst[minimise] = _certified_as_stored(obj)
+    assert worst[True] <= worst[False] * SLACK, worst
+
+
 def _packed_coverage(obj):
     """The stored UVs' triangle area inside the unit square (float32 as stored)."""
     V, tris, loops, _ = _loop_triangles(obj)
