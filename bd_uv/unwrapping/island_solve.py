@@ -14,12 +14,14 @@ from .conic_solves import Cancelled
 from .finish import finish
 from .fixed_boundary import FRAMES_NAME, fixed_boundary_island, with_premises
 from .angle_start import ANGLE_LIMIT, angle_start, max_distortion
+from .disk_certificate import turning
+from .one_disk import fitted
 from .initial import start_map
 from .problem import IslandProblem
 from .results import IslandResult
 
 __all__ = ["angle_unfolder", "batched_options", "failed_result", "quiet", "solve_island",
-           "unfolder"]
+           "unfold_first", "unfolder"]
 
 
 def solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=None,
@@ -129,6 +131,25 @@ def unfolder(isl, V, pins, options, cancel, start=None, again=True):
                                    flags=res.flags + ("unfolded",),
                                    message=f"{res.message} (unfolded: certified at C = {C:.4g})")
     return unfold
+
+
+def unfold_first(V, F, disk, u, angle, pins, options, cancel, t0):
+    """At a numeric C, a ``one_disk.Disk`` whose conformal map u (nv,) complex lies over itself
+    (its boundary does not turn once) and whose angle start ``angle`` is over C: ``unfolder``'s
+    search from the angle start at once, certified as a one-disk map (``one_disk.fitted``), not
+    after the general path bent the conformal map into C and found it lying over itself (cow's
+    1,251-face strip and six 400-1,240-face cow disks: every one unfolded so, the same map).
+    Returns (UnwrapResult or None, whether it was tried: where it was, the unfold before a cut
+    is not tried again from the angle start)."""
+    if turning(u.take(disk.island.loops[0])) == 1:
+        return None, False
+    index = disk.island.index
+    unfold = unfolder([disk.island], V, pins, options, cancel, (index, angle), again=False)
+    res = unfold(index) if unfold is not None else None
+    if res is None:
+        return None, unfold is not None
+    return fitted(F, disk, res.uv[:, 0] + 1j * res.uv[:, 1], float(options.bound), t0, res.flags,
+                  " (unfolded from its angle start)")[0], True
 
 
 def angle_unfolder(disk, V, pins, options, cancel, start=None):
