@@ -139,8 +139,9 @@ def unfold_first(V, F, disk, u, angle, pins, options, cancel, t0):
     search from the angle start at once, certified as a one-disk map (``one_disk.fitted``), not
     after the general path bent the conformal map into C and found it lying over itself (cow's
     1,251-face strip and six 400-1,240-face cow disks: every one unfolded so, the same map).
-    Returns (UnwrapResult or None, whether it was tried: where it was, the unfold before a cut
-    is not tried again from the angle start)."""
+    Returns (UnwrapResult or None, whether the unfold found no map: then the unfold before a
+    cut is not tried again from the angle start; a map the one-disk certificate did not clear
+    is left to the general path's, as before)."""
     if turning(u.take(disk.island.loops[0])) == 1:
         return None, False
     index = disk.island.index
@@ -149,7 +150,7 @@ def unfold_first(V, F, disk, u, angle, pins, options, cancel, t0):
     if res is None:
         return None, unfold is not None
     return fitted(F, disk, res.uv[:, 0] + 1j * res.uv[:, 1], float(options.bound), t0, res.flags,
-                  " (unfolded from its angle start)")[0], True
+                  " (unfolded from its angle start)")[0], False
 
 
 def angle_unfolder(disk, V, pins, options, cancel, start=None):

@@ -134,8 +134,8 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
                     and angle_start.max_distortion(disk, found) <= angle_start.ANGLE_LIMIT):
                 angle = found   # the unfold of its map before a cut starts from it
                 # at once where the conformal map lies over itself (its bent map would too)
-                done, tried = unfold_first(V, F, disk, u, found, pins, opts, cancel, t0)
-                angle = False if tried and done is None else angle
+                done, none = unfold_first(V, F, disk, u, found, pins, opts, cancel, t0)
+                angle = False if none else angle
         if done is not None:
             return done
         conformal_u = u
