@@ -7,6 +7,8 @@ gathers the islands)."""
 import dataclasses
 import time
 
+import numpy as np
+
 from ..errors import BDError, CancelledError, IslandError, SolverError
 from . import bounded as within, strategies
 from . import stretch as stretch_search
@@ -135,14 +137,17 @@ def unfolder(isl, V, pins, options, cancel, start=None, again=True):
 
 def unfold_first(V, F, disk, u, angle, pins, options, cancel, t0):
     """At a numeric C, a ``one_disk.Disk`` whose conformal map u (nv,) complex lies over itself
-    (its boundary does not turn once) and whose angle start ``angle`` is over C: ``unfolder``'s
-    search from the angle start at once, certified as a one-disk map (``one_disk.fitted``), not
-    after the general path bent the conformal map into C and found it lying over itself (cow's
-    1,251-face strip and six 400-1,240-face cow disks: every one unfolded so, the same map).
+    (flip-free, its boundary does not turn once) and whose angle start ``angle`` is over C:
+    ``unfolder``'s search from the angle start at once, certified as a one-disk map
+    (``one_disk.fitted``), not after the general path bent the conformal map into C and found
+    it lying over itself (cow's
+    1,251-face strip and four 400-1,240-face cow disks: every one unfolded so, the same map).
     Returns (UnwrapResult or None, whether the unfold found no map: then the unfold before a
     cut is not tried again from the angle start; a map the one-disk certificate did not clear
     is left to the general path's, as before)."""
-    if turning(u.take(disk.island.loops[0])) == 1:
+    if turning(u.take(disk.island.loops[0])) == 1 or not np.isfinite(max_distortion(disk, u)):
+        # (a conformal map that flips may turn more than once and bend into one that does not:
+        # three_peaks.off, turning twice, bent in 7 projection iterations, its unfold 4x that)
         return None, False
     index = disk.island.index
     unfold = unfolder([disk.island], V, pins, options, cancel, (index, angle), again=False)
