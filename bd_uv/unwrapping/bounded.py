@@ -104,11 +104,11 @@ def bounded(prob, start, C, raise_bound, limit, flags, report):
         # (``energy_within``) before its projection (up to 300 iterations) and a conic solve
         quick = not np.isfinite(start.D) and prob.method == "lscm" and not len(prob.pin_idx)
         bent = bend(prob, start, C, report, flags, harmonic=not quick)
-        found = from_harmonic(prob, C, report) if quick and bent is None else None
+        found, far = from_harmonic(prob, C, report) if quick and bent is None else (None, 0)
         if found is not None:
             flags.append("projected")
             return found[0], C, found[1].name
-        if quick and bent is None:      # as before: the harmonic map projected where it fails
+        if quick and bent is None and not far:  # as before: the harmonic map projected
             bent = bend(prob, start, C, report, flags)
         if bent is not None:
             return bent, C, start.name

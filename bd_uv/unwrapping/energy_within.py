@@ -26,7 +26,7 @@ from .along import least_mean_within
 from .disk_certificate import simple_ccw_loop
 from .initial import start_map
 from .margins import solve_bound
-from .searched import MEAN_SEARCH, search
+from .searched import FAR, MEAN_SEARCH, search
 
 __all__ = ["from_harmonic", "lowest_energy"]
 
@@ -103,23 +103,27 @@ def from_harmonic(prob, C, report):
     """A map within C of an unpinned BD-LSCM island from its harmonic map (see the module's
     docstring) that lays the island out without overlapping itself, or None where the search
     from it does not reach C or its maps overlap (a 288-face teapot piece with a hole: the
-    projection of its harmonic map and a conic solve then, as before). Returns (u, its start)."""
+    projection of its harmonic map and a conic solve then, as before). Returns (u, its start)
+    or None, and whether the search ended far above C (``searched.FAR``, as ``over_bound``
+    judges C out of reach: the projection of the harmonic map into C is not tried then;
+    decimated-knight's strip at C = 3, its search ending at 4.305: 114 iterations for nothing).
+    """
     harmonic = start_map(prob, "harmonic", None, report)
     if not np.isfinite(harmonic.D):
-        return None
+        return None, False
     target = solve_bound(C)
     us, D = search(prob, harmonic.u, report, None, [], time.perf_counter(),
                    enough=lambda x: prob.distortion(x) <= target)
     if not D <= target:
-        return None
+        return None, D - 1.0 > FAR * (C - 1.0)
     t = time.perf_counter()
     ul = lowest_energy(prob, us, target)
     um = least_mean_within(prob, us, ul, target, MEAN_SEARCH)
     prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
     for u in (um, us):
         if prob.check(u, C)[0] and _lays_out(prob, u):
-            return u, harmonic
-    return None
+            return (u, harmonic), False
+    return None, False
 
 
 def _lays_out(prob, v):

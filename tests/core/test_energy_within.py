@@ -63,8 +63,8 @@ def _searched(prob, C):
 @pytest.mark.parametrize("C", [3.0, 5.0])
 def test_from_harmonic_is_within_c_one_to_one_and_no_worse_than_the_search(C):
     Vi, isl, prob = _problem()
-    u, start = from_harmonic(prob, C, _quiet)
-    assert start.name == "harmonic"
+    (u, start), far = from_harmonic(prob, C, _quiet)
+    assert start.name == "harmonic" and not far
     mean, D, flipped = _mean(Vi, isl.tris, u)
     assert not flipped.any() and D.max() <= C
     # the boundary a simple polygon wound counter-clockwise: the disk laid out one to one
@@ -75,8 +75,11 @@ def test_from_harmonic_is_within_c_one_to_one_and_no_worse_than_the_search(C):
 
 
 def test_from_harmonic_gives_none_below_the_least_bound():
-    # the least certified C of this disk is about 2.52 (``test_over_bound``)
-    assert from_harmonic(_problem()[2], 2.0, _quiet) is None
+    # the least certified C of this disk is about 2.52 (``test_over_bound``): far above 2, not
+    # far above 2.4
+    prob = _problem()[2]
+    assert from_harmonic(prob, 2.0, _quiet) == (None, True)
+    assert from_harmonic(prob, 2.4, _quiet) == (None, False)
 
 
 def test_lowest_energy_holds_the_two_anchors_and_lowers_the_conformal_energy():
