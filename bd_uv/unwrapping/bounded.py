@@ -20,6 +20,7 @@ from ..frames import frames_from_map
 from ..solvers.flip_free import flip_free_map
 from ..spaces import stretch_conformal_bound
 from .along import least_mean_within
+from .energy_within import from_harmonic
 from .initial import start_map
 from .margins import SOLVE_MARGIN, STORE_HEADROOM, STRETCH_MARGIN_SOLVE, solve_bound
 from .searched import over_bound, search, searched_fallback
@@ -98,7 +99,17 @@ def bounded(prob, start, C, raise_bound, limit, flags, report):
     else:
         searched = None
     if not solved and start.u is not None and solve_bound(C) > 1.0:   # the projection needs C > 1
-        bent = bend(prob, start, C, report, flags)
+        # an unpinned BD-LSCM island whose conformal start flips and whose projection from it
+        # stalls: its harmonic map searched into C and its energy lowered there
+        # (``energy_within``) before its projection (up to 300 iterations) and a conic solve
+        quick = not np.isfinite(start.D) and prob.method == "lscm" and not len(prob.pin_idx)
+        bent = bend(prob, start, C, report, flags, harmonic=not quick)
+        found, far = from_harmonic(prob, C, report) if quick and bent is None else (None, 0)
+        if found is not None:
+            flags.append("projected")
+            return found[0], C, found[1].name
+        if quick and bent is None and not far:  # as before: the harmonic map projected
+            bent = bend(prob, start, C, report, flags)
         if bent is not None:
             return bent, C, start.name
     start = start_for_solve(prob, start, report)
@@ -162,7 +173,7 @@ def bounded(prob, start, C, raise_bound, limit, flags, report):
         C, retried = newC, False
 
 
-def bend(prob, start, C, report, flags=None, polish=True):
+def bend(prob, start, C, report, flags=None, polish=True, harmonic=None):
     """Bend a start that breaks the bound into F_C, only where the bound demands.
 
     Projection iterations (Kovalsky et al. 2015, ``solvers.flip_free``) move the faces above C and
@@ -176,7 +187,8 @@ def bend(prob, start, C, report, flags=None, polish=True):
     mean by less than SEARCH_GAIN of its excess, one conic solve from the harmonic map's frames
     (``IslandProblem.anchor_to``) polishes it, cut short by POLISH_SETTINGS, and the map with
     the lower mean is kept.
-    ``polish=False`` skips both (``minimise`` searches the map itself).
+    ``polish=False`` skips both (``minimise`` searches the map itself). ``harmonic``: project
+    the harmonic map where the projection from the start stalls (by default where ``polish``).
     """
     if len(prob.pin_idx) >= prob.nv:
         return None  # every vertex pinned: nothing can move
@@ -186,7 +198,8 @@ def bend(prob, start, C, report, flags=None, polish=True):
     # where the LSCM start fails, ``minimise`` (no polish) searches from the harmonic map
     # instead of projecting it
     u, info = flip_free_map(prob.Z, prob.island.tris, prob.nv, prob.island.loops, start.u,
-                            solve_bound(C), pins=pins, cancel=prob.cancel, harmonic=polish)
+                            solve_bound(C), pins=pins, cancel=prob.cancel,
+                            harmonic=polish if harmonic is None else harmonic)
     prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
     prob.iterations += info["iterations"]
     if u is None or not prob.check(u, C)[0]:

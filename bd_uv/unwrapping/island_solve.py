@@ -7,6 +7,8 @@ gathers the islands)."""
 import dataclasses
 import time
 
+import numpy as np
+
 from ..errors import BDError, CancelledError, IslandError, SolverError
 from . import bounded as within, strategies
 from . import stretch as stretch_search
@@ -14,12 +16,14 @@ from .conic_solves import Cancelled
 from .finish import finish
 from .fixed_boundary import FRAMES_NAME, fixed_boundary_island, with_premises
 from .angle_start import ANGLE_LIMIT, angle_start, max_distortion
+from .disk_certificate import turning
+from .one_disk import fitted
 from .initial import start_map
 from .problem import IslandProblem
 from .results import IslandResult
 
 __all__ = ["angle_unfolder", "batched_options", "failed_result", "quiet", "solve_island",
-           "unfolder"]
+           "unfold_first", "unfolder"]
 
 
 def solve_island(island, V, pins, options, initial_uv, report, cancel, lscm=None,
@@ -129,6 +133,29 @@ def unfolder(isl, V, pins, options, cancel, start=None, again=True):
                                    flags=res.flags + ("unfolded",),
                                    message=f"{res.message} (unfolded: certified at C = {C:.4g})")
     return unfold
+
+
+def unfold_first(V, F, disk, u, angle, pins, options, cancel, t0):
+    """At a numeric C, a ``one_disk.Disk`` whose conformal map u (nv,) complex lies over itself
+    (flip-free, its boundary does not turn once) and whose angle start ``angle`` is over C:
+    ``unfolder``'s search from the angle start at once, certified as a one-disk map
+    (``one_disk.fitted``), not after the general path bent the conformal map into C and found
+    it lying over itself (cow's
+    1,251-face strip and four 400-1,240-face cow disks: every one unfolded so, the same map).
+    Returns (UnwrapResult or None, whether the unfold found no map: then the unfold before a
+    cut is not tried again from the angle start; a map the one-disk certificate did not clear
+    is left to the general path's, as before)."""
+    if turning(u.take(disk.island.loops[0])) == 1 or not np.isfinite(max_distortion(disk, u)):
+        # (a conformal map that flips may turn more than once and bend into one that does not:
+        # three_peaks.off, turning twice, bent in 7 projection iterations, its unfold 4x that)
+        return None, False
+    index = disk.island.index
+    unfold = unfolder([disk.island], V, pins, options, cancel, (index, angle), again=False)
+    res = unfold(index) if unfold is not None else None
+    if res is None:
+        return None, unfold is not None
+    return fitted(F, disk, res.uv[:, 0] + 1j * res.uv[:, 1], float(options.bound), t0, res.flags,
+                  " (unfolded from its angle start)")[0], False
 
 
 def angle_unfolder(disk, V, pins, options, cancel, start=None):

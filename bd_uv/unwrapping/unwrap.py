@@ -25,7 +25,8 @@ from ..options import unwrap_options
 from ..trim import release_memory
 from . import angle_start, capped, disk_auto, one_disk
 from .batched import conformal_islands
-from .island_solve import angle_unfolder, batched_options, solve_island, unfolder
+from .island_solve import (angle_unfolder, batched_options, solve_island, unfold_first,
+                           unfolder)
 from .overlap_certificate import overlap_certificate
 from .rounding import predicted_to_fail
 from .conic_solves import Cancelled
@@ -135,6 +136,9 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             if (done is None and found is not None
                     and angle_start.max_distortion(disk, found) <= angle_start.ANGLE_LIMIT):
                 angle = found   # the unfold of its map before a cut starts from it
+                # at once where the conformal map lies over itself (its bent map would too)
+                done, none = unfold_first(V, F, disk, u, found, pins, opts, cancel, t0)
+                angle = False if none else angle
         if done is not None:
             return done
         conformal_u = u

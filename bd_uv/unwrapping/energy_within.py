@@ -1,0 +1,136 @@
+"""A map within a numeric C of low mean distortion without a conic solve, for an island whose
+conformal start flips and whose projection from it stalls (issue 21: default C = 5 within ABF's
+time on every disk).
+
+``from_harmonic``: the harmonic map (flip-free) lowered into C by the bound search, stopping at
+its first map within C (``searched.search``, as ``over_bound``), then ``lowest_energy``: the
+conformal (LSCM) energy minimised over F_C with that map's frames by ADMM (the cone product and the
+least-squares step of ``solvers.bound_search``, the energy taken into the cone step; two anchors
+hold the scale as ``IslandProblem.anchor_to``'s), and the map of least mean distortion within C
+on the segment between the two (``along.least_mean_within``: F_C with fixed frames is convex, the
+searched map is in it, the ADMM iterate is at most slightly outside).
+
+Before, such an island (libigl decimated-knight's 976-face strip with a 6-edge hole at C = 5)
+projected its harmonic map for up to 300 iterations, which failed (~0.09 s), then took one
+Clarabel solve from the harmonic frames (~0.11 s): max 4.989, mean 2.171. Here: the search, 9 ms;
+25 ADMM iterations, ~5 ms; mean ~2.15.
+"""
+import time
+
+import numpy as np
+import scipy.sparse as sp
+
+from ..frames import _far_pair, frames_from_map
+from ..solvers.global_step import GlobalStep
+from .along import least_mean_within
+from .disk_certificate import simple_ccw_loop
+from .initial import start_map
+from .margins import solve_bound
+from .searched import FAR, MEAN_SEARCH, search
+
+__all__ = ["from_harmonic", "lowest_energy"]
+
+# ADMM iterations of ``lowest_energy`` and the energy's weight next to the splitting's penalty
+# (the optimum does not depend on it, the iterations' path does). decimated-knight's strip at
+# C = 5, from the searched map (mean 2.623): at 0.3, 20 iterations 2.151, 30 2.148, 60 2.173 (the
+# iterate nearer the cone's boundary, the segment's best further back); at 0.1, 20 2.277, 40
+# 2.154; at 1, 20-60 2.178-2.179. The conic solve reached 2.171 in 80 iterations (0.11 s).
+ITERATIONS = 25
+TAU = 0.3
+
+
+def lowest_energy(prob, us, C, iterations=ITERATIONS, tau=TAU):
+    """ADMM towards the least conformal energy ``sum_j A_j |beta_j|^2`` over F_C with the frames
+    of the flip-free map us (nv,) complex whose max distortion is within C: from us, the island's
+    two far boundary vertices held where us has them (its scale). Returns the last iterate
+    (nv,) complex, near F_C but not certainly in it (``from_harmonic`` takes the best map
+    between it and us)."""
+    ops, nv = prob.ops, prob.nv
+    k = len(ops.area)
+    idx, _ = _far_pair(prob.Z, prob.island.tris, nv, prob.island.loops[0])
+    gs = GlobalStep(ops, nv, idx, prob.island.tris, connected=True, ranks=prob.ranks)
+    solve = gs.factorize()
+    free, fixed = gs.free, gs.fixed
+    G = gs.G                                    # (2k, nv): d/dx of every face, then d/dy
+    GTA = sp.csr_array(G.T) @ _diag(np.concatenate([gs.area, gs.area]))
+    U = np.stack([us.real, us.imag], axis=1)    # (nv, 2): u, v
+    share = gs.fixed_share(U[fixed])
+    w = frames_from_map(prob.alpha(us))
+    wr, wi = w.real, w.imag
+    kappa = (C - 1.0) / (C + 1.0)
+    # the cone step with the energy: min tau |beta|^2 + |z - q|^2 over |beta| <= kappa Re(w
+    # alpha) is the projection of (alpha_q, beta_q / s) onto the cone of kappa s, s =
+    # sqrt(1 + tau), its beta then divided by s
+    s = np.sqrt(1.0 + tau)
+    ks = kappa * s
+    lam = np.zeros((4, k))
+    P = np.empty((2 * k, 2))
+
+    def lift():                                 # alpha, beta of the map U, (4, k)
+        g = G @ U
+        ux, uy, vx, vy = g[:k, 0], g[k:, 0], g[:k, 1], g[k:, 1]
+        return np.array([0.5 * (ux + vy), 0.5 * (vx - uy), 0.5 * (ux - vy), 0.5 * (vx + uy)])
+    J = lift()
+    for _ in range(iterations):
+        q = J + lam
+        X = wr * q[0] - wi * q[1]               # Re(w alpha)
+        Y = wr * q[1] + wi * q[0]               # Im(w alpha)
+        br, bi = q[2] / s, q[3] / s
+        nb = np.hypot(br, bi)
+        t = np.maximum(X + ks * nb, 0.0) / (1.0 + ks * ks)     # the cone's boundary ray's point
+        f = np.minimum(ks * t / np.maximum(nb, 1e-300), 1.0) / s
+        X = np.where(nb <= ks * X, X, t)        # inside the cone: as it is
+        z = np.array([wr * X + wi * Y, wr * Y - wi * X, f * br, f * bi])
+        z -= lam
+        # the least-squares step: the map whose (u_x, u_y, v_x, v_y) are nearest z's
+        np.add(z[0], z[2], out=P[:k, 0])
+        np.subtract(z[3], z[1], out=P[k:, 0])
+        np.add(z[1], z[3], out=P[:k, 1])
+        np.subtract(z[0], z[2], out=P[k:, 1])
+        rhs = (GTA @ P)[free] - share
+        U[free, 0] = solve(np.ascontiguousarray(rhs[:, 0]))
+        U[free, 1] = solve(np.ascontiguousarray(rhs[:, 1]))
+        J = lift()
+        lam = J - z         # lam + G x - (the cone step), z holding the cone step less lam
+    return U[:, 0] + 1j * U[:, 1]
+
+
+def _diag(a):
+    return sp.diags(a, format="csr")
+
+
+def from_harmonic(prob, C, report):
+    """A map within C of an unpinned BD-LSCM island from its harmonic map (see the module's
+    docstring) that lays the island out without overlapping itself, or None where the search
+    from it does not reach C or its maps overlap (a 288-face teapot piece with a hole: the
+    projection of its harmonic map and a conic solve then, as before). Returns (u, its start)
+    or None, and whether the search ended far above C (``searched.FAR``, as ``over_bound``
+    judges C out of reach: the projection of the harmonic map into C is not tried then;
+    decimated-knight's strip at C = 3, its search ending at 4.305: 114 iterations for nothing).
+    """
+    harmonic = start_map(prob, "harmonic", None, report)
+    if not np.isfinite(harmonic.D):
+        return None, False
+    target = solve_bound(C)
+    us, D = search(prob, harmonic.u, report, None, [], time.perf_counter(),
+                   enough=lambda x: prob.distortion(x) <= target)
+    if not D <= target:
+        return None, D - 1.0 > FAR * (C - 1.0)
+    t = time.perf_counter()
+    ul = lowest_energy(prob, us, target)
+    um = least_mean_within(prob, us, ul, target, MEAN_SEARCH)
+    prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
+    for u in (um, us):
+        if prob.check(u, C)[0] and _lays_out(prob, u):
+            return (u, harmonic), False
+    return None, False
+
+
+def _lays_out(prob, v):
+    """``strategies.lays_out`` (which imports this module's importer): does the flip-free map v
+    lay the island out without overlapping itself?"""
+    if not prob.may_be_one_to_one(v):
+        return False
+    loops = prob.island.loops
+    return bool(simple_ccw_loop(np.stack([v.real, v.imag], axis=1).take(loops[0], axis=0))
+                if len(loops) == 1 else prob.one_to_one(v))
