@@ -172,13 +172,20 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
                              angle=False)
     else:
         least = None
-    if opts.bound == "auto" and disk is not None and whole and len(res.islands) > 1:
+    if opts.bound == "auto" and disk is not None and whole and _pieces(res) > (0, 1):
         res = _kept_whole(V, F, disk, opts, res, least, t0, progress, cancel)
     return res
 
 
 # ``_kept_whole``'s numbers C, as multiples of the least C whose map was predicted to fail
 ABOVE = (1.1, 1.25, 1.5)
+
+
+def _pieces(res):
+    """(islands not certified, islands): the fewer the better, in that order. A disk cut by the
+    overlap repair has many; one whose map lies over itself with ``overlap="fail"`` (the
+    default seams' first pass) has one that failed."""
+    return sum(r.status != "certified" for r in res.islands), len(res.islands)
 
 
 def _kept_whole(V, F, disk, opts, res, least, t0, progress, cancel):
@@ -192,21 +199,20 @@ def _kept_whole(V, F, disk, opts, res, least, t0, progress, cancel):
     - still cut: a number C a little above the least C (``ABOVE``; ``least``, the angle
       start's map's where it was predicted to fail once stored in float32, a cone-like tip as a
       cow's horn, and the conformal start's way cut the disk; else the pieces' largest), the
-      first that gives one certified island expected to survive float32 (cow patch 1578/400: 25
-      pieces at C 2.467 -> one island at C 3.711, max distortion 2.79; 2338/400: 6 -> 1 at
-      4.07; 4355/400: 7 -> 1 at 2.73), its bound asked reported as "auto", flagged
-      "kept_whole".
+      first that gives one certified island expected to survive float32 (cow patch 2338/400:
+      6 pieces at C 3.79 -> one island at C 4.07, max distortion 3.70; 4355/400: 7 -> 1 at
+      2.73, max 2.48; 1578/400 stays in 25: each of its maps at 1.1-3x its least C is flagged),
+      its bound asked reported as "auto", flagged "kept_whole".
     Returns the result with the fewest pieces."""
     if opts.time_budget is not None and disk_auto.searches(disk, True):
         plain = unwrap(V, F, progress=progress, cancel=cancel, disk=disk, whole=False,
                        options=dataclasses.replace(opts, time_budget=None))
-        if (len(plain.islands) < len(res.islands)
-                and all(r.status == "certified" for r in plain.islands)):
+        if _pieces(plain) < _pieces(res):
             res = plain
     if least is None:       # the least C of a disk its own search cut
         least = max((r.bound_certified for r in res.islands if r.status == "certified"),
                     default=None)
-    for k in ABOVE if least is not None and len(res.islands) > 1 else ():
+    for k in ABOVE if least is not None and _pieces(res) > (0, 1) else ():
         C = float(least) * k
         if C > opts.bound_limit:
             break
