@@ -65,6 +65,14 @@ COMPACT_MAX_CHARTS = 200
 # 0.3-0.5 s; eight's 6 charts lost 1 % on one worker over 20 seeds and doubled the spread
 # (0.584 sd 0.027 against 0.590 sd 0.012; benchmarks/results/bench_pack-2026-11-27-workers.md)
 FEW_CHARTS = 3
+# ... and above that, the cores but SPARE_CORES, shared among the solves at once: spyrrow's
+# workers meet after every step of its search (each step keeps the best worker's layout), so a
+# worker without a core holds the others up, and the process's own thread and the machine's
+# other work want one. Measured on the 2-core machine (one worker against two, one solve,
+# interleaved per seed, load 3-7; issue18-pack22-2026-11-28.md): 16 sets of 7-20 charts, seeds
+# 0-5, coverage 0.6837 -> 0.6910 (56 wins, 35 losses), the same CPU and wall; igl-arm 0.675 ->
+# 0.705
+SPARE_CORES = 1
 # up to COARSE_MAX_CHARTS charts (:func:`square_layout` asked ``coarse``) spyrrow nests the exact
 # outlines simplified by COARSE of the padding at the guessed square (2 px at 4 px, not 0.1 px):
 # the long outlines of charts of many faces lose half their points or more (rocker-arm 1,345 ->
@@ -113,9 +121,11 @@ def _solve_all(outlines, sides, options, tol, seconds, headroom=HEADROOM):
     """One solve per square side, all at once (threads): per side, every feasible layout reached
     (reports, then the result), or None where spyrrow gave up (it panics when it cannot place a
     chart in the strip); the last such refusal (PackError) or None. Each solve searches on
-    ``os.cpu_count() // len(sides)`` threads, one up to ``FEW_CHARTS`` charts."""
+    ``(os.cpu_count() - SPARE_CORES) // len(sides)`` threads (at least one), one up to
+    ``FEW_CHARTS`` charts."""
     out, errors, refused = [None] * len(sides), [], []
-    workers = 1 if len(outlines) <= FEW_CHARTS else max(1, (os.cpu_count() or 1) // len(sides))
+    workers = 1 if len(outlines) <= FEW_CHARTS else max(
+        1, ((os.cpu_count() or 1) - SPARE_CORES) // len(sides))
 
     def work(i):
         try:

@@ -164,3 +164,23 @@ def test_a_longer_search_nests_a_tighter_strip(monkeypatch):
     x = (0.5 * seconds - square.START_PER_CHART * k) / k
     f = 1 + square.GUESS_GAIN * np.log(x / square.GUESS_SEARCH)
     assert sides[1][0] / sides[0][0] == pytest.approx(1 / np.sqrt(f), rel=2e-3)
+
+
+@pytest.mark.parametrize("cores", [1, 2, 3, 8])
+def test_spyrrow_gets_the_cores_but_one_shared_among_the_solves(monkeypatch, cores):
+    """Each solve at once searches on (cores - SPARE_CORES) // solves workers, at least one, and
+    on one up to FEW_CHARTS charts (spyrrow's workers meet after every step: one without a core
+    holds the others up); the count is recomputed here and the packs stay certified."""
+    asked = []
+    real = square.nest
+    monkeypatch.setattr(square.os, "cpu_count", lambda: cores)
+    monkeypatch.setattr(square, "nest",
+                        lambda *a, **kw: asked.append(a[6]) or real(*a, **kw))
+    for k, solves in ((3, 1), (8, 1), (8, 3)):   # few charts; one solve; three at once
+        V, F, uv, lab = _wavy_discs(k, 5, n=60)
+        options = PackOptions(seed=0, solve_seconds=0.1, solves=solves)
+        asked.clear()
+        check_layout(V, F, uv, lab, pack_islands(V, F, uv, lab, options), options)
+        first = (solves + 1) // 2     # the first round's solves at once
+        want = 1 if k <= square.FEW_CHARTS else max(1, (cores - square.SPARE_CORES) // first)
+        assert asked and asked[0] == want
