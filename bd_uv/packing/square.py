@@ -66,12 +66,13 @@ COMPACT_MAX_CHARTS = 200
 # (0.584 sd 0.027 against 0.590 sd 0.012; benchmarks/results/bench_pack-2026-11-27-workers.md)
 FEW_CHARTS = 3
 # ... and above that, the cores but SPARE_CORES, shared among the solves at once: spyrrow's
-# workers meet after every step of its search (each step keeps the best worker's layout), so a
-# worker without a core holds the others up, and the process's own thread and the machine's
+# workers meet after every step of its search (sparrow keeps the best worker's layout), so a
+# worker without a core can hold the others up, and the process's own thread and the machine's
 # other work want one. Measured on the 2-core machine (one worker against two, one solve,
-# interleaved per seed, load 3-7; issue18-pack22-2026-11-28.md): 16 sets of 7-20 charts, seeds
-# 0-5, coverage 0.6837 -> 0.6910 (56 wins, 35 losses), the same CPU and wall; igl-arm 0.675 ->
-# 0.705
+# interleaved per seed, load 3-10; issue18-pack22-2026-11-28.md): 25 sets of 7-116 charts,
+# 346 pairs, coverage +0.0049 (se 0.0010; 200 wins, 129 losses), the same CPU and wall; main
+# against this in separate processes, 25 sets x 3 seeds: 0.6724 -> 0.6802 (50/20). Not
+# measured idle, nor on more cores (there: one worker less than before)
 SPARE_CORES = 1
 # up to COARSE_MAX_CHARTS charts (:func:`square_layout` asked ``coarse``) spyrrow nests the exact
 # outlines simplified by COARSE of the padding at the guessed square (2 px at 4 px, not 0.1 px):
