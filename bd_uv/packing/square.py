@@ -69,8 +69,8 @@ FEW_CHARTS = 3
 # workers meet after every step of its search (sparrow keeps the best worker's layout), so a
 # worker without a core can hold the others up, and the process's own thread and the machine's
 # other work want one. Measured on the 2-core machine (one worker against two, one solve,
-# interleaved per seed, load 3-10; issue18-pack22-2026-11-28.md): 25 sets of 7-116 charts,
-# 346 pairs, coverage +0.0049 (se 0.0010; 200 wins, 129 losses), the same CPU and wall; main
+# interleaved per seed, load 1.4-10; issue18-pack22-2026-11-28.md): 25 sets of 7-116 charts,
+# 410 pairs, coverage +0.0054 (se 0.0010; 241 wins, 151 losses), the same CPU and wall; main
 # against this in separate processes, 25 sets x 3 seeds: 0.6724 -> 0.6802 (50/20). Not
 # measured idle, nor on more cores (there: one worker less than before)
 SPARE_CORES = 1
