@@ -70,7 +70,8 @@ FEW_CHARTS = 3
 # (sparrow keeps the best worker's layout), so a worker without a core can hold the others up.
 # Measured on the 2-core machine (one worker against two, one solve, interleaved per seed, load
 # 1.4-10; issue18-pack22-2026-11-28.md): 16 sets of 7-20 charts, 350 pairs, coverage +0.0059
-# (se 0.0010; 207 wins, 129 losses), the same CPU and wall; igl-arm 0.685 -> 0.692. Off that
+# (se 0.0010; 207 wins, 129 losses), the same CPU and wall; igl-arm 0.685 -> 0.692; against
+# main in separate processes at load ~2.5, 64 pairs: 0.6869 -> 0.6961 (40/23). Off that
 # path (21-116 charts, and the large charts of large_first) it was even or lost: cow -0.005
 # over 17 pairs, suzanne -0.002, dino +0.005. Not measured idle, nor on more cores (there: one
 # worker less than before)
