@@ -65,6 +65,17 @@ COMPACT_MAX_CHARTS = 200
 # 0.3-0.5 s; eight's 6 charts lost 1 % on one worker over 20 seeds and doubled the spread
 # (0.584 sd 0.027 against 0.590 sd 0.012; benchmarks/results/bench_pack-2026-11-27-workers.md)
 FEW_CHARTS = 3
+# ... and above that, on the coarse path (COARSE_MAX_CHARTS below), the cores but SPARE_CORES,
+# shared among the solves at once: spyrrow's workers meet after every step of its search
+# (sparrow keeps the best worker's layout), so a worker without a core can hold the others up.
+# Measured on the 2-core machine (one worker against two, one solve, interleaved per seed, load
+# 1.4-10; issue18-pack22-2026-11-28.md): 16 sets of 7-20 charts, 350 pairs, coverage +0.0059
+# (se 0.0010; 207 wins, 129 losses), the same CPU and wall; igl-arm 0.685 -> 0.692; against
+# main in separate processes at load ~2.5, 64 pairs: 0.6869 -> 0.6961 (40/23). Off that
+# path (21-116 charts, and the large charts of large_first) it was even or lost: cow -0.005
+# over 17 pairs, suzanne -0.002, dino +0.005. Not measured idle, nor on more cores (there: one
+# worker less than before)
+SPARE_CORES = 1
 # up to COARSE_MAX_CHARTS charts (:func:`square_layout` asked ``coarse``) spyrrow nests the exact
 # outlines simplified by COARSE of the padding at the guessed square (2 px at 4 px, not 0.1 px):
 # the long outlines of charts of many faces lose half their points or more (rocker-arm 1,345 ->
@@ -109,13 +120,15 @@ def _squares(points, owner, placements, tol, padding):
     return side, low
 
 
-def _solve_all(outlines, sides, options, tol, seconds, headroom=HEADROOM):
+def _solve_all(outlines, sides, options, tol, seconds, headroom=HEADROOM, spare=0):
     """One solve per square side, all at once (threads): per side, every feasible layout reached
     (reports, then the result), or None where spyrrow gave up (it panics when it cannot place a
     chart in the strip); the last such refusal (PackError) or None. Each solve searches on
-    ``os.cpu_count() // len(sides)`` threads, one up to ``FEW_CHARTS`` charts."""
+    ``(os.cpu_count() - spare) // len(sides)`` threads (at least one), one up to
+    ``FEW_CHARTS`` charts."""
     out, errors, refused = [None] * len(sides), [], []
-    workers = 1 if len(outlines) <= FEW_CHARTS else max(1, (os.cpu_count() or 1) // len(sides))
+    workers = 1 if len(outlines) <= FEW_CHARTS else max(
+        1, ((os.cpu_count() or 1) - spare) // len(sides))
 
     def work(i):
         try:
@@ -235,7 +248,8 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True, coars
         sides = [max(float(s), least, 1.05 * max(sides) if grow else 0.0) for s in fresh]
         t1 = time.perf_counter()
         runs, refused = _solve_all(outlines, sides, options, tol, search,
-                                   **({} if headroom == HEADROOM else {"headroom": headroom}))
+                                   **({} if headroom == HEADROOM else {"headroom": headroom}),
+                                   **({"spare": SPARE_CORES} if coarse else {}))
         start = max(time.perf_counter() - t1 - search, 0.0)
         solves += len(sides)
         # all refused: larger sides (by 1.1, and 1.05 more for the larger squares after the

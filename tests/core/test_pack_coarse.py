@@ -164,3 +164,37 @@ def test_a_longer_search_nests_a_tighter_strip(monkeypatch):
     x = (0.5 * seconds - square.START_PER_CHART * k) / k
     f = 1 + square.GUESS_GAIN * np.log(x / square.GUESS_SEARCH)
     assert sides[1][0] / sides[0][0] == pytest.approx(1 / np.sqrt(f), rel=2e-3)
+
+
+@pytest.mark.parametrize("cores", [1, 2, 3, 8])
+def test_the_coarse_nesting_leaves_a_core_to_the_rest(monkeypatch, cores):
+    """On the coarse path each solve at once searches on (cores - SPARE_CORES) // solves workers,
+    at least one; off it (21 charts and more) on cores // solves; on one up to FEW_CHARTS charts
+    (spyrrow's workers meet after every step: one without a core holds the others up). The
+    counts are recomputed here; whether the coarse outlines were nested is recomputed from the
+    points they keep; the packs stay certified."""
+    asked, kept = [], []
+    real, simplify = square.nest, square._coarse
+    monkeypatch.setattr(square.os, "cpu_count", lambda: cores)
+    monkeypatch.setattr(square, "nest",
+                        lambda *a, **kw: asked.append(a[6]) or real(*a, **kw))
+
+    def spy(exact, tol):
+        fewer, wider = simplify(exact, tol)
+        kept.append(sum(map(len, fewer)) / sum(map(len, exact)))
+        return fewer, wider
+    monkeypatch.setattr(square, "_coarse", spy)
+    # few charts; the coarse path, one solve and three (two at once first); 21 charts
+    for k, n, solves in ((3, 60, 1), (8, 240, 1), (8, 240, 3), (21, 60, 1)):
+        V, F, uv, lab = _wavy_discs(k, 2, n=n)
+        options = PackOptions(seed=0, solve_seconds=0.1, solves=solves)
+        asked.clear()
+        kept.clear()
+        check_layout(V, F, uv, lab, pack_islands(V, F, uv, lab, options), options)
+        # (the exact outlines have at least as many points as the nested ones at 0.1 texel)
+        coarse = k <= square.COARSE_MAX_CHARTS and bool(kept) and kept[0] <= square.COARSE_KEEP
+        assert coarse == (k < 21)    # the cases are what they say
+        first = (solves + 1) // 2     # the first round's solves at once
+        spare = square.SPARE_CORES if coarse else 0
+        want = 1 if k <= square.FEW_CHARTS else max(1, (cores - spare) // first)
+        assert asked and asked[0] == want
