@@ -22,6 +22,7 @@ from ..errors import InfeasibleError
 from ..layout import stored_layout
 from ..geometry import face_areas
 from ..metrics import conformal_distortion, signed_uv_areas
+from .margins import certified_bound
 from .rounding import predicted_to_fail
 
 #: stretch limits tried in turn, loosest first (each must be >= sqrt(C))
@@ -106,6 +107,12 @@ def stored_layout_with_headroom(V, F, res, stretch=None, ladder=STRETCH_LADDER,
     if stretch is not None:
         return layout, res, {}
     ok = [r.status == "certified" for r in res.islands]
+    for _ in range(AUTO_TRIES):
+        raised = _auto_bounds_as_stored(res, layout, ok)
+        if raised is None:
+            break
+        res = raised
+        layout = stored_layout(V, F, res, **layout_options)
     failed = {int(s) for c, s in zip(layout.certificates, layout.source)
               if not c.certified and ok[int(s)]}
     if not failed:
@@ -114,6 +121,38 @@ def stored_layout_with_headroom(V, F, res, stretch=None, ladder=STRETCH_LADDER,
     if not done:
         return layout, res, done
     return stored_layout(V, F, fixed, **layout_options), fixed, done
+
+
+# Layouts made again with raised bounds (``_auto_bounds_as_stored``) before the re-solve
+AUTO_TRIES = 2
+
+
+def _auto_bounds_as_stored(res, layout, ok):
+    """``res`` with the bound of each ``bound="auto"`` island whose UVs as stored failed by the
+    bound alone (no face flipped, one to one, finite) raised to what they showed, with the float32
+    move counted twice over (``certified_bound`` of max + 2 x (stored max - max)), flagged
+    "bound_as_stored"; None when there is none. The least C of a near-isometric piece has only
+    STORE_HEADROOM (2e-4) above its max, and float32 UVs of its small faces in a large atlas move
+    it by up to ~1e-3 (Khronos' 2CylinderEngine: 21 flat pieces certified at 1.0002, stored at
+    1.0002-1.0014, not written). For "auto" the bound is bd-uv's to choose, so it is raised: the
+    next layout is certified against it as ever."""
+    worst = {}
+    for c, s in zip(layout.certificates, layout.source):
+        i = int(s)
+        if (not c.certified and ok[i] and res.islands[i].bound_requested == "auto"
+                and c.flipped == 0 and c.overlap_free and np.isfinite(c.max_distortion)):
+            worst[i] = max(worst.get(i, 1.0), float(c.max_distortion))
+    if not worst:
+        return None
+    islands = list(res.islands)
+    for i, stored in worst.items():
+        r = islands[i]
+        C = certified_bound(stored + 2.0 * max(stored - r.max_distortion, 0.0))
+        if not C > r.bound_certified:
+            return None
+        flags = tuple(r.flags) + (() if "bound_as_stored" in r.flags else ("bound_as_stored",))
+        islands[i] = dataclasses.replace(r, bound_certified=C, flags=flags)
+    return dataclasses.replace(res, islands=islands)
 
 
 def beyond_headroom(V, F, res, ladder=STRETCH_LADDER):

@@ -1,6 +1,8 @@
 """A certified map must survive being stored: the Utah teapot (Newell's patches, tests/data)
 with a glove finger beside it (``finger.py``), packed and rounded to float32 (as Blender and the
 batch store UVs)."""
+import json
+
 import numpy as np
 
 import bd_uv
@@ -308,3 +310,53 @@ def test_a_face_thinner_than_a_float32_uv_step_is_left_out_not_its_island():
     assert np.array_equal(uv.astype(np.float32).astype(np.float64), uv)
     D, flipped = reference_distortion(V, F[1:], uv)
     assert not flipped.any() and D.max() <= out.entry["bound_certified"] * (1 + 1e-9)
+
+
+def _graded_disk(K=22, n=24):
+    """A planar disk graded towards its centre: rings of n vertices at radii 0.6^k (faces from
+    ~1 down to ~1e-5 across), its least C 1 (the plane's own map)."""
+    V = [[0.0, 0.0, 0.0]]
+    for k in range(K + 1):
+        a = 2 * np.pi * (np.arange(n) + 0.5 * (k % 2)) / n
+        V += [[0.6 ** (K - k) * np.cos(t), 0.6 ** (K - k) * np.sin(t), 0.0] for t in a]
+    F = [[0, 1 + j, 1 + (j + 1) % n] for j in range(n)]
+    for k in range(K):
+        for j in range(n):
+            a, b = 1 + k * n + j, 1 + k * n + (j + 1) % n
+            c, d = a + n, b + n
+            F += [[a, c, b], [b, c, d]] if k % 2 == 0 else [[a, d, b], [a, c, d]]
+    V, F = np.array(V), np.array(F)
+    P = V[F]
+    ccw = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])[:, 2] > 0
+    return V, np.where(ccw[:, None], F, F[:, ::-1])
+
+
+def test_bound_auto_is_raised_to_what_float32_stores(tmp_path):
+    """``--bound auto`` on a glTF disk whose least C is 1 (a plane) and whose smallest faces are
+    ~1e-5 of it: certified at 1.0002 in float64, its float32 UVs showed 1.038, and nothing was
+    written (13cd197: "0/1 mesh(es) certified"; Khronos' 2CylinderEngine lost 21 flat pieces so).
+    The bound of "auto" is bd-uv's to choose: it is raised to what the stored UVs show, and
+    the file written holds UVs within the bound reported (read back, recomputed by SVD)."""
+    from bd_uv.cli import main
+    from bd_uv.scenes import read_scene
+    from gltf_build import Builder
+    from helpers import reference_distortion
+    V, F = _graded_disk()
+    b = Builder()
+    b.doc["meshes"] = [{"name": "Plate", "primitives": [{
+        "attributes": {"POSITION": b.accessor(V.astype(np.float32), 5126, "VEC3",
+                                              minmax=True)},
+        "indices": b.accessor(F.reshape(-1, 1), 5125, "SCALAR")}]}]
+    b.doc["nodes"] = [{"name": "Plate", "mesh": 0}]
+    b.write(str(tmp_path / "plate.gltf"))
+    out, rep = tmp_path / "out.gltf", tmp_path / "r.json"
+    assert main(["unwrap", str(tmp_path / "plate.gltf"), "-o", str(out), "--bound", "auto",
+                 "--seams", "none", "--report", str(rep), "--quiet"]) == 0
+    (entry,) = json.loads(rep.read_text())["meshes"]
+    (island,) = entry["islands"]
+    assert entry["status"] == "certified" and "bound_as_stored" in island["flags"]
+    C = island["bound_certified"]
+    assert 1.0002 < C < 1.5
+    (sm,) = read_scene(str(out)).meshes
+    D, flipped = reference_distortion(sm.mesh.V, sm.mesh.F, sm.mesh.corner_uv)
+    assert not flipped.any() and 1.0002 < D.max() <= C
