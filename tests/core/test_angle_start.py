@@ -187,7 +187,7 @@ def test_with_the_time_budget_a_disk_the_steps_cut_takes_the_call_without_one(tm
     texel density varies too much to texture, seams of its own) writes it as one island,
     checked here from the OBJ's UVs as written."""
     from bd_uv.arguments import TIME_BUDGET
-    from test_repair import run_command_line
+    from test_repair import run_command_line, written_corner_uv
     V, F = rings(*load_off("cow.off"), 1522, 400)
     disk = one_disk.find(V, F)
     res = bd_uv.unwrap(V, F, bound="auto", time_budget=TIME_BUDGET)
@@ -202,14 +202,7 @@ def test_with_the_time_budget_a_disk_the_steps_cut_takes_the_call_without_one(tm
     assert run.returncode == 0, run.stderr
     (island,) = json.loads(rep.read_text())["islands"]
     assert island["status"] == "certified"
-    vt, ft = [], []
-    for line in out.read_text().splitlines():
-        p = line.split()
-        if p and p[0] == "vt":
-            vt.append([float(t) for t in p[1:3]])
-        elif p and p[0] == "f":
-            ft.append([int(t.split("/")[1]) - 1 for t in p[1:]])
-    D, flipped = distortion_and_flips(V, F, np.array(vt)[np.array(ft)])
+    D, flipped = distortion_and_flips(V, F, written_corner_uv(out))
     assert not flipped.any() and D.max() <= island["bound_certified"]
 
 @pytest.mark.parametrize("budget", [False, True])

@@ -9,7 +9,7 @@ import pytest
 
 from bd_uv.cli import main
 from bd_uv.layout import stored_layout
-from test_repair import DEFECTS, _check_certified
+from test_repair import DEFECTS, _check_certified, written_corner_uv
 
 
 def test_bound_auto_with_seams_auto_is_said_in_flags(tmp_path, capsys):
@@ -74,14 +74,7 @@ def test_bound_auto_on_a_closed_mesh_from_the_command_line(tmp_path):
     report = json.loads(rep.read_text())
     assert report["seams_added"] and all(i["status"] == "certified" for i in report["islands"])
     assert all(i["bound_certified"] < 2.0 for i in report["islands"])
-    vt, ft = [], []
-    for line in out.read_text().splitlines():
-        p = line.split()
-        if p and p[0] == "vt":
-            vt.append([float(t) for t in p[1:3]])
-        elif p and p[0] == "f":
-            ft.append([int(t.split("/")[1]) - 1 for t in p[1:]])
-    _check_certified(V, F, np.array(vt)[np.array(ft)], [])
+    _check_certified(V, F, written_corner_uv(out), [])
 
 
 @pytest.mark.parametrize("make", DEFECTS, ids=lambda f: f.__name__)

@@ -93,13 +93,18 @@ VIEW_CASES = {
 }
 
 
-@pytest.mark.parametrize("what", list(CASES))
-def test_a_malformed_document_is_refused_naming_the_place(tmp_path, capsys, what):
+def _damaged(tmp_path, what):
+    """The scene written with damage ``what``: (its path, each file's sha1 before a run)."""
     path, blob = _scene(tmp_path)
     doc = json.loads(path.read_text())
     _damage(doc, what, blob)
     path.write_text(json.dumps(doc))
-    before = {p.name: hashlib.sha1(p.read_bytes()).hexdigest() for p in tmp_path.iterdir()}
+    return path, {p.name: hashlib.sha1(p.read_bytes()).hexdigest() for p in tmp_path.iterdir()}
+
+
+@pytest.mark.parametrize("what", list(CASES))
+def test_a_malformed_document_is_refused_naming_the_place(tmp_path, capsys, what):
+    path, before = _damaged(tmp_path, what)
     with pytest.raises(SceneFileError) as err:
         read_scene(str(path))
     assert CASES[what] in str(err.value) and str(err.value).startswith(str(path))
@@ -116,11 +121,7 @@ def test_a_malformed_document_is_refused_naming_the_place(tmp_path, capsys, what
 
 @pytest.mark.parametrize("what", list(VIEW_CASES))
 def test_a_view_that_cannot_be_read_refuses_only_the_meshes_reading_it(tmp_path, capsys, what):
-    path, blob = _scene(tmp_path)
-    doc = json.loads(path.read_text())
-    _damage(doc, what, blob)
-    path.write_text(json.dumps(doc))
-    before = {p.name: hashlib.sha1(p.read_bytes()).hexdigest() for p in tmp_path.iterdir()}
+    path, before = _damaged(tmp_path, what)
     scene = read_scene(str(path))
     assert VIEW_CASES[what] in scene.meshes[0].refused
     assert scene.meshes[0].refused.startswith("mesh 0 'Rock'")
@@ -136,6 +137,7 @@ def test_a_view_that_cannot_be_read_refuses_only_the_meshes_reading_it(tmp_path,
                       for p in tmp_path.iterdir() if p.is_file()}
     written = json.loads(out.read_text())
     # Rock is kept as read (its damaged view too: it is the file's, not bd-uv's); Leaf has UVs
+    doc = json.loads(path.read_text())
     assert written["meshes"][0]["primitives"] == doc["meshes"][0]["primitives"]
     assert "TEXCOORD_0" in written["meshes"][1]["primitives"][0]["attributes"]
     leaf = [m for m in read_scene(str(out)).meshes if m.info["mesh_index"] == 1][0]
