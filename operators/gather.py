@@ -199,9 +199,10 @@ def needed_arguments(batch, *, method, bound, stretch, frames, overlap, limit_st
                      atlas_cuts=True, minimise=False):
     """Positional and keyword arguments of :func:`needed_seams.solve` (Seams "Add Where
     Needed"): those of :func:`auto_arguments`, the Overlaps choice for the marked islands and,
-    with Limit Stretch, its S for them too; with Minimise the bound "auto". Blender stores positions in float32: faces it
-    cannot tell from a line, side by side, are left out as zero-area (``precision``; they fail
-    their island as stored at any stretch, and trying costs minutes on OpenChessSet's bishops)."""
+    with Limit Stretch, its S for them too; with Minimise the bound "auto". Blender stores
+    positions in float32: faces it cannot tell from a line, side by side, are left out as
+    zero-area (``precision``; they fail their island as stored at any stretch, and trying costs
+    minutes on OpenChessSet's bishops)."""
     args, kwargs = auto_arguments(batch, method=method, bound=bound, minimise=False,
                                   stretch=stretch, frames=frames, atlas_cuts=atlas_cuts)
     kwargs["overlap"] = overlap

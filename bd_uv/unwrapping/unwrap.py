@@ -165,7 +165,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
         # is shrunk below float32's step once packed, and no stretch limit keeps it one island
         # at that C (``storage.with_storage_headroom``): the conformal start's way instead, cut
         # where it lies over itself (UVs as before the angle start)
-        least = max(r.bound_certified for r in res.islands)
+        least = _least(res)
         res = unwrap_islands(V, F, [disk.island], pins, opts, initial_uv=initial_uv,
                              face_groups=face_groups, progress=progress, cancel=cancel,
                              conformal={0: conformal_u}, t0=t0, disk=disk, unfold=unfold,
@@ -186,6 +186,11 @@ def _pieces(res):
     overlap repair has many; one whose map lies over itself with ``overlap="fail"`` (the
     default seams' first pass) has one that failed."""
     return sum(r.status != "certified" for r in res.islands), len(res.islands)
+
+
+def _least(res):
+    """The largest C certified among ``res``' islands (None where none is certified)."""
+    return max((r.bound_certified for r in res.islands if r.status == "certified"), default=None)
 
 
 def _kept_whole(V, F, disk, opts, res, least, t0, progress, cancel):
@@ -210,8 +215,7 @@ def _kept_whole(V, F, disk, opts, res, least, t0, progress, cancel):
         if _pieces(plain) < _pieces(res):
             res = plain
     if least is None:       # the least C of a disk its own search cut
-        least = max((r.bound_certified for r in res.islands if r.status == "certified"),
-                    default=None)
+        least = _least(res)
     for k in ABOVE if least is not None and _pieces(res) > (0, 1) else ():
         C = float(least) * k
         if C > opts.bound_limit:
