@@ -22,7 +22,7 @@ from .batch.report import item_line
 from .batch.scene_files import unwrap_scene_file
 from .errors import BDError, OptionError
 from .unwrapping.storage import stored_layout_with_headroom
-from .meshio import load_mesh, write_obj
+from .meshio import load_mesh, welded_entry, write_obj
 from .planar_cli import add_planar_parsers
 from .progress import TerminalProgress
 from .scenes import BLENDER_SUFFIXES, GLTF_SUFFIXES, SCENE_SUFFIXES, USD_SUFFIXES, read_scene
@@ -73,6 +73,10 @@ def run_unwrap(args):
     options = unwrap_options_of(args)
     layout_options = layout_kwargs(args)      # bad packing options: said before solving
     mesh = load_mesh(args.input)
+    if mesh.welded:
+        print(f"{mesh.name}: {mesh.welded} of the file's vertices lie where another does (split "
+              f"by its exporter): welded for the unwrap; the OBJ keeps the file's vertices and "
+              f"faces")
     if args.seams == "uv" and mesh.corner_uv is None:
         print(f"error: {args.input} has no UVs, so --seams uv has nothing to cut along",
               file=sys.stderr)
@@ -98,7 +102,8 @@ def run_unwrap(args):
     if options.seams_mode == "needed":
         _print_needed(res, options, args.output)
     islands = layout.island_entries(res)
-    report = {"input": os.path.abspath(args.input), **res.report(), "islands": islands,
+    report = {"input": os.path.abspath(args.input), **welded_entry(mesh), **res.report(),
+              "islands": islands,
               "summary": layout.totals(), "layout_overlaps": layout.overlaps.tolist(),
               "pack": layout.pack}
     any_certified = any(e["status"] == "certified" for e in islands)
@@ -122,7 +127,8 @@ def run_unwrap(args):
                 json.dump(report, fh, indent=2)
         if any_certified:
             uv, F_uv = layout.vertex_uv(mesh.F)
-            write_obj(stack.enter_context(atomic_path(args.output)), mesh.V, mesh.F, uv, F_uv)
+            write_obj(stack.enter_context(atomic_path(args.output)), mesh.V, mesh.faces_to_write,
+                      uv, F_uv)
     _print_report(mesh.name, islands, layout, res.seconds, args, sys.stdout)
     failed = [e for e in islands if e["status"] != "certified"]
     for e in failed:

@@ -2,7 +2,11 @@
 
 OBJ is read by position index (``v`` records) so vertex order and topology are the file's own;
 loaders that split vertices at UV seams would change the topology. OFF and PLY go through trimesh
-with ``process=False`` (vertex order kept).
+with ``process=False`` (vertex order kept). They have no ``vt``: an exporter splits a vertex
+wherever its normal or UV differs, and a PLY or OFF written face by face (a triangle soup) splits
+every vertex, so the unwrap would see one island a face. Their vertices at equal positions are
+therefore welded for the unwrap (``mesh.weld.welded_in_place``: each named by the least of the
+file's vertices, the file's vertex list unchanged) and the file's faces are written as they were.
 """
 import os
 import re
@@ -11,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import InvalidMeshError
+from .mesh.weld import welded_in_place
 
 _COMMENT = re.compile(r"\s#.*")   # an OBJ comment after a record (a '#' inside a name stays)
 
@@ -29,12 +34,27 @@ class Mesh:
         (``bd_uv.packing.pack_islands``' ``face_labels``): "material" (m,) int64 (OBJ
         ``usemtl``, glTF primitive materials, USD "materialBind" GeomSubsets; -1: none) and
         "object" (m,) int64 (OBJ ``o``); None when the format says nothing of it (OFF, PLY)
+    file_F : (m,3) int64 or None, the faces as the file names their vertices, when ``F`` welds
+        vertices the file split (OFF, PLY); what is written back
     """
     V: np.ndarray
     F: np.ndarray
     corner_uv: np.ndarray = None
     name: str = ""
     labels: dict = None
+    file_F: np.ndarray = None
+
+    @property
+    def faces_to_write(self):
+        """The faces as the file had them (its own vertex ids), for the OBJ written."""
+        return self.F if self.file_F is None else self.file_F
+
+    @property
+    def welded(self):
+        """How many of the file's vertices were welded onto another at the same position."""
+        if self.file_F is None:
+            return 0
+        return int(len(np.unique(self.file_F)) - len(np.unique(self.F)))
 
     def uv_seams(self):
         """Edges where the file's UVs are discontinuous, (s,2) vertex pairs; None without UVs."""
@@ -57,12 +77,13 @@ def load_mesh(path):
     ext = os.path.splitext(path)[1].lower()
     name = os.path.splitext(os.path.basename(path))[0]
     try:
-        labels = None
+        labels, file_F = None, None
         if ext == ".obj":
             V, F, cuv, labels = _read_obj(path)
         elif ext in (".off", ".ply"):
-            V, F = _read_trimesh(path, ext)
-            cuv = None
+            V, F, vuv = _read_trimesh(path, ext)
+            cuv = None if vuv is None else vuv[F]
+            file_F, F = _welded(V, F)
         else:
             raise InvalidMeshError(f"{path}: unsupported format {ext!r}; use .obj, .off or .ply")
     except InvalidMeshError:
@@ -72,11 +93,28 @@ def load_mesh(path):
                                f"({type(exc).__name__}: {exc})") from exc
     if len(F) == 0:
         raise InvalidMeshError(f"{path}: the file holds no faces")
-    return Mesh(V, F.reshape(-1, 3), cuv, name, labels)
+    return Mesh(V, F.reshape(-1, 3), cuv, name, labels, file_F)
+
+
+def welded_entry(mesh):
+    """The report's word on a weld: ``{"welded_vertices": k}`` (the file's vertices welded onto
+    another at the same position; its faces are written as they were), or nothing."""
+    return {"welded_vertices": mesh.welded} if mesh.welded else {}
+
+
+def _welded(V, F):
+    """(file_F, F): ``F`` with the vertices the file split at equal positions welded, and the
+    file's own faces; (None, F) when nothing is welded."""
+    F = F.reshape(-1, 3)
+    if len(F) == 0 or not np.all((F >= 0) & (F < len(V))):
+        return None, F       # the arrays' own check names what is wrong
+    G = welded_in_place(V, F)
+    return (None, F) if np.array_equal(G, F) else (F, G)
 
 
 def _read_trimesh(path, ext):
-    """V, F of an OFF or PLY file through trimesh. An ASCII PLY whose body has blank lines or
+    """V, F and the vertices' UVs (a PLY's ``s t``/``u v``; None without) of an OFF or PLY file
+    through trimesh. An ASCII PLY whose body has blank lines or
     ``comment`` lines (hand-written files, some exporters) is read with those lines dropped:
     trimesh's ASCII reader takes the body as one run of numbers and misreads it otherwise."""
     import io
@@ -95,7 +133,10 @@ def _read_trimesh(path, ext):
                 file_obj = io.BytesIO(head + sep + body[:eol + 1] + b"\n".join(keep) + b"\n")
                 file_type = "ply"
     m = trimesh.load(file_obj, file_type=file_type, process=False, force="mesh")
-    return np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces, dtype=np.int64)
+    V = np.asarray(m.vertices, dtype=np.float64)
+    uv = getattr(m.visual, "uv", None)
+    uv = None if uv is None or len(uv) != len(V) else np.asarray(uv, dtype=np.float64)[:, :2]
+    return V, np.asarray(m.faces, dtype=np.int64), uv
 
 
 def _read_obj(path):

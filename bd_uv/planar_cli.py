@@ -46,11 +46,11 @@ def run_deform(args):
     V2 = _flat(mesh, args.input)
     with open(args.handles, encoding="utf-8") as fh:
         h = json.load(fh)
-    res = deform(V2, mesh.F, np.asarray(h["vertices"], dtype=np.int64),
+    res = deform(V2, mesh.faces_to_write, np.asarray(h["vertices"], dtype=np.int64),
                  np.asarray(h["positions"], dtype=np.float64), method=args.method,
                  bound=args.bound, frames=args.frames, stretch=args.stretch)
-    _write(args.output, res.uv, mesh.F)
-    print(f"{mesh.name}: BD-{args.method.upper()} deformation, {len(mesh.F)} faces, "
+    _write(args.output, res.uv, mesh.faces_to_write)
+    print(f"{mesh.name}: BD-{args.method.upper()} deformation, {len(mesh.faces_to_write)} faces, "
           f"max distortion {res.max_distortion:.4f} <= C = {res.bound:g}, {res.flipped} flipped, "
           f"{res.solves} solves, {res.seconds:.2f} s"
           + (" (mended: the direct solve overlapped itself; reached in certified steps)"
@@ -63,18 +63,18 @@ def run_improve(args):
     from .improve import improve
     mesh = load_mesh(args.input)
     V2 = _flat(mesh, args.input)
-    res = improve(V2, mesh.F)
-    _write(args.output, res.V2, mesh.F)
+    res = improve(V2, mesh.faces_to_write)
+    _write(args.output, res.V2, mesh.faces_to_write)
     fixed = "" if res.movable_after == res.max_after else (
         f"; faces with an interior vertex {res.movable_before:.4f} -> {res.movable_after:.4f} "
         "(the rest have all corners on the fixed boundary)")
-    print(f"{mesh.name}: {len(mesh.F)} faces, max distortion vs equilateral {res.max_before:.4f} "
+    print(f"{mesh.name}: {len(mesh.faces_to_write)} faces, max distortion vs equilateral {res.max_before:.4f} "
           f"-> {res.max_after:.4f} ({100 * (1 - res.max_after / res.max_before):.1f}% lower)"
           f"{fixed}, boundary unchanged, {res.flipped} flipped, {res.solves} solves, "
           f"{res.seconds:.2f} s -> {args.output}")
     if args.report:
         with open(args.report, "w", encoding="utf-8") as fh:
-            json.dump({"input": os.path.abspath(args.input), "faces": int(len(mesh.F)),
+            json.dump({"input": os.path.abspath(args.input), "faces": int(len(mesh.faces_to_write)),
                        "max_distortion_before": res.max_before,
                        "max_distortion_after": res.max_after,
                        "movable_max_distortion_before": res.movable_before,

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 from ..arguments import pack_flags
 from ..errors import BDError
-from ..meshio import load_mesh, write_obj
+from ..meshio import load_mesh, welded_entry, write_obj
 from ..scenes import BLENDER_SUFFIXES, SCENE_SUFFIXES, blender_command
 from ..scheduling import run_pool
 from ..scheduling.atomic import atomic_path
@@ -63,11 +63,11 @@ def _unwrap_file(task, options, seams_mode):
         job = Job(mesh.name, mesh.V, mesh.F, seams=seams, corner_uv=mesh.corner_uv,
                   face_labels=mesh.labels)
         result = unwrap_job(job, options, png=task.png)
-        entry = {**base, **result.entry}
+        entry = {**base, **welded_entry(mesh), **result.entry}
         if entry["status"] != "failed":
             uv, F_uv = result.layout.vertex_uv(mesh.F)
             with atomic_path(task.output) as tmp:
-                write_obj(tmp, mesh.V, mesh.F, uv, F_uv)
+                write_obj(tmp, mesh.V, mesh.faces_to_write, uv, F_uv)
             entry["output"] = os.path.abspath(task.output)
         return [entry]
     except Exception as exc:  # one bad file never stops the rest: everything goes in its entry

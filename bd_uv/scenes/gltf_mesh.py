@@ -8,7 +8,7 @@ import numpy as np
 
 from ..errors import SceneFileError
 from ..meshio import Mesh
-from .weld import welded
+from ..mesh.weld import welded
 
 DRACO = "KHR_draco_mesh_compression"
 TRIANGLES, TRIANGLE_STRIP, TRIANGLE_FAN = 4, 5, 6

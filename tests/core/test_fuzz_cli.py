@@ -41,6 +41,8 @@ def small_patch(n_faces=60):
 
 PATCH = small_patch()
 PATCH32 = (PATCH[0].astype(np.float32).astype(np.float64), PATCH[1])   # as the PLY stores it
+# the patch as a PLY or OFF written face by face (a triangle soup): every vertex split
+SOUP = (PATCH32[0][PATCH[1]].reshape(-1, 3), np.arange(3 * len(PATCH[1])).reshape(-1, 3))
 NAN_PATCH = (np.concatenate([[[np.nan, *PATCH[0][0, :2]]], PATCH[0][1:]]), PATCH[1])  # "v nan x y z"
 TETRA = (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float),
          np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]]))
@@ -83,6 +85,8 @@ INPUTS = {   # name -> (file name, bytes or None for "no such file", or "dir")
     "patch.off": ("in.off", off_text(*PATCH).encode()),
     "patch.ply": ("in.ply", ply_text(*PATCH).encode()),
     "closed tetra.obj": ("in.obj", obj_text(*TETRA).encode()),
+    "soup.ply": ("in.ply", ply_text(*SOUP).encode()),
+    "soup.off": ("in.off", off_text(*SOUP).encode()),
     "nan vertex.obj": ("in.obj", obj_text(*PATCH).replace("v ", "v nan ", 1).encode()),
     "index out of range.obj": ("in.obj", (obj_text(*PATCH) + "f 1 2 9999\n").encode()),
     "truncated.obj": ("in.obj", obj_text(*PATCH).encode()[:700]),
@@ -119,7 +123,8 @@ def command_lines(draw):
     maybe("--frames", ["auto", "harmonic", "conformal", "input-uv", "constant"], ["uv"])
     # the input first: "--seams uv" is a valid value only for an input with UVs (for the others
     # it is a refusal, drawn as a bad value)
-    valid = ["patch.obj", "patch.obj with vt", "patch.off", "patch.ply", "closed tetra.obj"]
+    valid = ["patch.obj", "patch.obj with vt", "patch.off", "patch.ply", "closed tetra.obj",
+             "soup.ply", "soup.off"]
     source = draw(st.sampled_from(valid) if clean else
                   st.sampled_from(valid) | st.sampled_from(sorted(INPUTS)))
     has_uv = source == "patch.obj with vt"
@@ -232,7 +237,8 @@ def check_written(inp_mesh, out, report, stdout, packed):
     V, VT, F, FT = read_obj(out)
     V0, F0 = inp_mesh
     assert np.array_equal(F, F0)
-    assert np.allclose(V, V0, rtol=1e-6 if inp_mesh is PATCH32 else 1e-12, equal_nan=True)
+    stored32 = inp_mesh is PATCH32 or inp_mesh is SOUP          # PLY and OFF hold float32
+    assert np.allclose(V, V0, rtol=1e-6 if stored32 else 1e-12, equal_nan=True)
     has = (FT >= 0).all(axis=1)
     assert has.any(), "an OBJ was written with no certified island"
     uv = VT[FT[has]]
@@ -250,6 +256,8 @@ def check_written(inp_mesh, out, report, stdout, packed):
         isl = uv_islands(FT[has])
         pairs = pairs[isl[pairs[:, 0]] == isl[pairs[:, 1]]]
     assert len(pairs) == 0, pairs[:5]
+    if inp_mesh is SOUP:     # welded for the unwrap: its islands are the patch's, not its faces
+        assert uv_islands(FT[has]).max() + 1 < has.sum() / 3
 
 
 def uv_islands(FT):
@@ -265,7 +273,7 @@ def uv_islands(FT):
 def mesh_of(sc):
     """The (V, F) the input holds when it is a valid mesh, else None."""
     return {"patch.obj": PATCH, "patch.obj with vt": PATCH, "patch.off": PATCH,
-            "patch.ply": PATCH32, "closed tetra.obj": TETRA,
+            "patch.ply": PATCH32, "closed tetra.obj": TETRA, "soup.ply": SOUP, "soup.off": SOUP,
             "nan vertex.obj": NAN_PATCH}.get(sc["input"])
 
 

@@ -281,7 +281,7 @@ def test_core_imports_no_format_package(tmp_path):
 
 
 def test_weld_joins_split_vertices_but_not_point_contacts():
-    from bd_uv.scenes.weld import welded
+    from bd_uv.mesh.weld import welded
     # two triangles sharing an edge, its vertices split (as an exporter does at a UV seam) ...
     V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.]])
     F = np.array([[0, 1, 2], [3, 5, 4]])

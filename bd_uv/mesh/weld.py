@@ -1,6 +1,7 @@
-"""Welding a scene's split vertices back into one surface, without pinching it.
+"""Welding a mesh's split vertices back into one surface, without pinching it.
 
-glTF exporters split a vertex wherever its normal or UV differs; the unwrap wants the surface
+glTF, PLY and OFF exporters split a vertex wherever its normal or UV differs (a PLY or OFF written
+face by face splits every vertex); the unwrap wants the surface
 whole, so vertices with the same position are welded. Two distinct vertices of a mesh can also
 share a position where its parts only touch (a point contact): welding them would join faces at a
 single vertex (a bow-tie), which no UV island can hold. So after the weld each vertex is split
@@ -26,6 +27,33 @@ def welded(V, F):
     """
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
+    key = _fan_keys(V, F)
+    _, first, G = np.unique(key, return_index=True, return_inverse=True)
+    W = V[F.ravel()[first]]
+    return W, G.reshape(len(F), 3)
+
+
+def welded_in_place(V, F):
+    """The faces of :func:`welded`, on the file's own vertices: each welded vertex is named by
+    the least file vertex among its corners, so ``V`` stays as it is (the vertices welded away
+    are left unused) and every vertex id a report gives is one of the file's.
+
+    Returns
+    -------
+    G : (m,3) int64, same face order and corner order as ``F``
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    key = _fan_keys(V, F)
+    _, group = np.unique(key, return_inverse=True)
+    group = group.reshape(-1)
+    least = np.full(group.max() + 1 if len(group) else 0, np.iinfo(np.int64).max, np.int64)
+    np.minimum.at(least, group, F.ravel())
+    return least[group].reshape(F.shape)
+
+
+def _fan_keys(V, F):
+    """(3m,) int64: one key per corner, equal for the corners of one (position, fan)."""
     m = len(F)
     _, pos = np.unique(V, axis=0, return_inverse=True)
     P = pos.reshape(-1)[F]                        # (m,3) position ids
@@ -44,8 +72,5 @@ def welded(V, F):
     cols = np.concatenate([np.where(flip, cb[h2], ca[h2]), np.where(flip, ca[h2], cb[h2])])
     graph = sp.coo_array((np.ones(len(rows)), (rows, cols)), shape=(3 * m, 3 * m))
     _, fan = connected_components(graph, directed=False)
-    # a new vertex per (position, fan); a fan never spans two positions (joins keep the end)
-    key = P.ravel() * (3 * m) + fan
-    _, first, G = np.unique(key, return_index=True, return_inverse=True)
-    W = V[F.ravel()[first]]
-    return W, G.reshape(m, 3)
+    # a vertex per (position, fan); a fan never spans two positions (joins keep the end)
+    return P.ravel() * (3 * m) + fan

@@ -1,0 +1,129 @@
+"""OFF and PLY files whose exporter split vertices (assimp's Wuson.ply: 11,184 vertices at 2,117
+positions, every face its own three; Blender's PLY exporter splits wherever a normal or UV
+differs). Read as they were, each face was an island of its own: 3,732 one-face islands. Now
+their vertices at equal positions are welded for the unwrap (never where faces only touch at a
+point), the file's own UVs still mark its seams, and the OBJ written keeps the file's vertices
+and faces."""
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from bd_uv.meshio import load_mesh
+from bd_uv.mesh.weld import welded_in_place
+from helpers import grid, reference_distortion
+from overlap_shapes import overlapping_triangle_pairs
+from test_repair import REPO, written_corner_uv
+
+
+def soup(V, F):
+    """The mesh written face by face: three vertices of its own per face."""
+    return V[F].reshape(-1, 3), np.arange(3 * len(F)).reshape(-1, 3)
+
+
+def ply_text(V, F, uv=None):
+    props = "property float x\nproperty float y\nproperty float z\n"
+    props += "property float s\nproperty float t\n" if uv is not None else ""
+    rows = V if uv is None else np.column_stack([V, uv])
+    return (f"ply\nformat ascii 1.0\nelement vertex {len(V)}\n{props}element face {len(F)}\n"
+            "property list uchar int vertex_indices\nend_header\n"
+            + "".join(" ".join(repr(float(x)) for x in r) + "\n" for r in rows)
+            + "".join(f"3 {a} {b} {c}\n" for a, b, c in F))
+
+
+def off_text(V, F):
+    return (f"OFF\n{len(V)} {len(F)} 0\n" + "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in V)
+            + "".join(f"3 {a} {b} {c}\n" for a, b, c in F))
+
+
+def faces_joined(F):
+    """Number of edge-connected components of the faces (islands, without seams)."""
+    from scipy.sparse import coo_array
+    from scipy.sparse.csgraph import connected_components
+    e = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+    face = np.tile(np.arange(len(F)), 3)
+    _, edge = np.unique(e, axis=0, return_inverse=True)
+    edge = edge.reshape(-1)
+    g = coo_array((np.ones(len(face)), (face, len(F) + edge)), shape=(len(F) + edge.max() + 1,) * 2)
+    return connected_components(g, directed=False)[0]
+
+
+@pytest.mark.parametrize("suffix", [".ply", ".off"])
+def test_a_triangle_soup_is_read_as_one_surface(tmp_path, suffix):
+    V0, F0 = grid(6, 5, z=lambda x, y: 0.3 * x * y)
+    V, F = soup(V0, F0)
+    p = tmp_path / ("m" + suffix)
+    p.write_text(ply_text(V, F) if suffix == ".ply" else off_text(V, F))
+    m = load_mesh(str(p))
+    assert np.array_equal(m.V, V.astype(np.float32) if suffix == ".ply" else V)
+    assert np.array_equal(m.file_F, F)                # the file's faces, kept to be written
+    assert faces_joined(m.F) == 1 and faces_joined(F) == len(F)
+    # each corner now names the least file vertex at its position: the grid's topology
+    first = {}
+    for c, v in enumerate(F.ravel()):
+        first.setdefault(F0.ravel()[c], v)
+    assert np.array_equal(m.F, np.vectorize(first.get)(F0))
+    assert m.welded == len(V) - len(V0)
+
+
+def test_faces_that_only_touch_at_a_point_are_not_joined():
+    # two triangles with a vertex each at the origin, written twice: a point contact (bow-tie)
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 0, 0], [-1, 0, 0], [-1, -1, 0]], float)
+    F = np.array([[0, 1, 2], [3, 4, 5]])
+    assert np.array_equal(welded_in_place(V, F), F)
+    # and joined through an edge they are welded: vertex 3 and 4 lie on 0 and 2
+    V2 = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 0, 0], [1, 1, 0], [0, 1, 0]], float)
+    assert np.array_equal(welded_in_place(V2, F), [[0, 1, 2], [0, 2, 5]])
+
+
+def test_the_files_own_uvs_mark_its_seams(tmp_path):
+    # two squares side by side, written face by face: within each square the split vertices
+    # carry equal UVs (as a split normal leaves them), across the middle line they differ
+    V0, F0 = grid(3, 2)
+    V, F = soup(V0, F0)
+    uv = V[:, :2].copy()
+    left = V0[F0][:, :, 0].mean(axis=1) < 0.5
+    moved = np.repeat(~left, 3)
+    uv[moved] += [2.0, 0.0]                        # the right square elsewhere in the file's UVs
+    p = tmp_path / "m.ply"
+    p.write_text(ply_text(V, F, uv))
+    m = load_mesh(str(p))
+    assert faces_joined(m.F) == 1
+    seams = {tuple(sorted(e)) for e in m.uv_seams().tolist()}
+    mid = {tuple(sorted(m.V[list(e)][:, 0].round(6))) for e in seams}
+    assert mid == {(0.5, 0.5)}                     # only the middle line, x = 0.5 at both ends
+    assert np.allclose(m.corner_uv, uv[F].astype(np.float32))
+
+
+def test_the_command_line_writes_the_files_vertices_and_faces(tmp_path):
+    V0, F0 = grid(7, 6, z=lambda x, y: 0.4 * x * x)
+    V, F = soup(V0, F0)
+    src = tmp_path / "soup.ply"
+    src.write_text(ply_text(V, F))
+    before = src.read_bytes()
+    out, rep = tmp_path / "out.obj", tmp_path / "r.json"
+    r = subprocess.run([sys.executable, "-m", "bd_uv", "unwrap", str(src), "-o", str(out),
+                        "--report", str(rep)], capture_output=True, text=True, cwd=REPO)
+    assert r.returncode == 0, r.stderr
+    assert src.read_bytes() == before
+    assert f"{len(V) - len(V0)} of the file's vertices lie where another does" in r.stdout
+    report = json.loads(rep.read_text())
+    assert report["welded_vertices"] == len(V) - len(V0)
+    assert len(report["islands"]) == 1 and report["islands"][0]["status"] == "certified"
+    lines = out.read_text().splitlines()
+    Vw = np.array([[float(t) for t in ln.split()[1:4]] for ln in lines if ln.startswith("v ")])
+    Fw = np.array([[int(t.split("/")[0]) - 1 for t in ln.split()[1:]]
+                   for ln in lines if ln.startswith("f ")])
+    assert np.allclose(Vw, V.astype(np.float32)) and np.array_equal(Fw, F)
+    cuv = written_corner_uv(out)
+    D, flipped = reference_distortion(Vw, Fw, cuv)
+    assert not flipped.any()
+    assert D.max() <= report["islands"][0]["bound_certified"] * (1 + 1e-6)
+    assert len(overlapping_triangle_pairs(cuv)) == 0
+    # one island: corners at one position carry one UV (the weld made the surface whole)
+    pos = {}
+    for c, (x, y) in zip(Vw[Fw].reshape(-1, 3).round(6).tolist(), cuv.reshape(-1, 2).tolist()):
+        pos.setdefault(tuple(c), set()).add((round(x, 9), round(y, 9)))
+    assert max(len(s) for s in pos.values()) == 1
