@@ -62,11 +62,14 @@ def run_unwrap(args):
         return 2
     check_outputs(args.input, args.output, args.report, args.png)
     ext = os.path.splitext(args.input)[1].lower()
-    if ext in SCENE_SUFFIXES or ext in BLENDER_SUFFIXES:
+    out_ext = os.path.splitext(args.output)[1].lower()
+    # An STL holds no UVs: written as an OBJ it is read here (welded: STL splits every vertex);
+    # to any other format it goes through Blender (its message says how).
+    mesh_file = ext == ".stl" and out_ext == ".obj"
+    if (ext in SCENE_SUFFIXES or ext in BLENDER_SUFFIXES) and not mesh_file:
         if ext in BLENDER_SUFFIXES:
             read_scene(args.input)     # raises with the Blender command that handles the file
         return run_scene_unwrap(args)
-    out_ext = os.path.splitext(args.output)[1].lower()
     if out_ext in (".off", ".ply") + SCENE_SUFFIXES + BLENDER_SUFFIXES:
         raise OptionError("output", f"a mesh file is written as OBJ: give -o an .obj path, not "
                                     f"{out_ext!r} (that file would hold OBJ text)")

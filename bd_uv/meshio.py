@@ -2,7 +2,8 @@
 
 OBJ is read by position index (``v`` records) so vertex order and topology are the file's own;
 loaders that split vertices at UV seams would change the topology. OFF and PLY go through trimesh
-with ``process=False`` (vertex order kept). They have no ``vt``: an exporter splits a vertex
+with ``process=False`` (vertex order kept), and so does STL (always written face by face, no
+UVs). They have no ``vt``: an exporter splits a vertex
 wherever its normal or UV differs, and a PLY or OFF written face by face (a triangle soup) splits
 every vertex, so the unwrap would see one island a face. Their vertices at equal positions are
 therefore welded for the unwrap (``mesh.weld.welded_in_place``: each named by the least of the
@@ -64,7 +65,7 @@ class Mesh:
 
 
 def load_mesh(path):
-    """Load an OBJ, OFF or PLY file.
+    """Load an OBJ, OFF, PLY or STL file.
 
     Returns
     -------
@@ -80,12 +81,13 @@ def load_mesh(path):
         labels, file_F = None, None
         if ext == ".obj":
             V, F, cuv, labels = _read_obj(path)
-        elif ext in (".off", ".ply"):
+        elif ext in (".off", ".ply", ".stl"):
             V, F, vuv = _read_trimesh(path, ext)
             cuv = None if vuv is None else vuv[F]
             file_F, F = _welded(V, F)
         else:
-            raise InvalidMeshError(f"{path}: unsupported format {ext!r}; use .obj, .off or .ply")
+            raise InvalidMeshError(f"{path}: unsupported format {ext!r}; use .obj, .off, .ply "
+                                   f"or .stl")
     except InvalidMeshError:
         raise
     except Exception as exc:   # trimesh's loaders fail in many ways on files they cannot parse
@@ -113,8 +115,8 @@ def _welded(V, F):
 
 
 def _read_trimesh(path, ext):
-    """V, F and the vertices' UVs (a PLY's ``s t``/``u v``; None without) of an OFF or PLY file
-    through trimesh. An ASCII PLY whose body has blank lines or
+    """V, F and the vertices' UVs (a PLY's ``s t``/``u v``; None without) of an OFF, PLY or STL
+    file through trimesh. An ASCII PLY whose body has blank lines or
     ``comment`` lines (hand-written files, some exporters) is read with those lines dropped:
     trimesh's ASCII reader takes the body as one run of numbers and misreads it otherwise."""
     import io

@@ -47,6 +47,8 @@ def read_scene(path, uv_set=0, uv_name=None):
         from .usd import UsdScene
         return UsdScene.read(path, uv_name=uv_name)
     if ext in BLENDER_SUFFIXES:
+        own = (" (or give -o an .obj path: bd-uv reads an STL itself and writes its UVs as OBJ)"
+               if ext == ".stl" else "")
         raise BDError(f"{path}: {ext} files are read by Blender's own importer: "
-                      f"{blender_command(path)}")
+                      f"{blender_command(path)}{own}")
     raise BDError(f"{path}: unsupported format {ext!r}")

@@ -127,3 +127,38 @@ def test_the_command_line_writes_the_files_vertices_and_faces(tmp_path):
     for c, (x, y) in zip(Vw[Fw].reshape(-1, 3).round(6).tolist(), cuv.reshape(-1, 2).tolist()):
         pos.setdefault(tuple(c), set()).add((round(x, 9), round(y, 9)))
     assert max(len(s) for s in pos.values()) == 1
+
+
+def stl_text(V, F):
+    """An ASCII STL: every face its three corners written out (no shared vertices)."""
+    rows = ["solid part"]
+    for f in F:
+        rows += ["  facet normal 0 0 1", "    outer loop"]
+        rows += [f"      vertex {x!r} {y!r} {z!r}" for x, y, z in V[f].tolist()]
+        rows += ["    endloop", "  endfacet"]
+    return "\n".join(rows + ["endsolid part"]) + "\n"
+
+
+def test_an_stl_written_as_obj_is_read_without_blender(tmp_path):
+    V0, F0 = grid(6, 5, z=lambda x, y: 0.2 * y * y)
+    src = tmp_path / "part.stl"
+    src.write_text(stl_text(V0, F0))
+    out, rep = tmp_path / "part.obj", tmp_path / "r.json"
+    r = subprocess.run([sys.executable, "-m", "bd_uv", "unwrap", str(src), "-o", str(out),
+                        "--report", str(rep)], capture_output=True, text=True, cwd=REPO)
+    assert r.returncode == 0, r.stderr
+    report = json.loads(rep.read_text())
+    assert report["welded_vertices"] == 3 * len(F0) - len(V0)
+    assert [e["status"] for e in report["islands"]] == ["certified"]
+    lines = out.read_text().splitlines()
+    Vw = np.array([[float(t) for t in ln.split()[1:4]] for ln in lines if ln.startswith("v ")])
+    Fw = np.array([[int(t.split("/")[0]) - 1 for t in ln.split()[1:]]
+                   for ln in lines if ln.startswith("f ")])
+    assert len(Vw) == 3 * len(F0) and np.allclose(Vw[Fw], V0[F0], atol=1e-6)
+    D, flipped = reference_distortion(Vw, Fw, written_corner_uv(out))
+    assert not flipped.any() and D.max() <= report["islands"][0]["bound_certified"] * (1 + 1e-6)
+    # to any other format an STL still goes through Blender, and the message names both ways
+    r = subprocess.run([sys.executable, "-m", "bd_uv", "unwrap", str(src), "-o",
+                        str(tmp_path / "part.blend")], capture_output=True, text=True, cwd=REPO)
+    assert r.returncode == 2 and "blender -b --python" in r.stderr
+    assert "give -o an .obj path" in r.stderr and not (tmp_path / "part.blend").exists()
