@@ -79,6 +79,16 @@ def ply_text(V, F):
         + "".join(f"3 {a} {b} {c}\n" for a, b, c in F)
 
 
+def stl_text(V, F):
+    """An ASCII STL: every face's three corners written out."""
+    rows = ["solid fuzz"]
+    for f in F:
+        rows += ["facet normal 0 0 1", "outer loop"]
+        rows += [f"vertex {x!r} {y!r} {z!r}" for x, y, z in _floats(V[f])]
+        rows += ["endloop", "endfacet"]
+    return "\n".join(rows + ["endsolid fuzz"]) + "\n"
+
+
 INPUTS = {   # name -> (file name, bytes or None for "no such file", or "dir")
     "patch.obj": ("in.obj", obj_text(*PATCH).encode()),
     "patch.obj with vt": ("in.obj", obj_text(*PATCH, with_uv=True).encode()),
@@ -94,7 +104,9 @@ INPUTS = {   # name -> (file name, bytes or None for "no such file", or "dir")
     "garbage.off": ("in.off", bytes(range(256)) * 4),
     "empty.obj": ("in.obj", b""),
     "no faces.off": ("in.off", b"OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n"),
-    "unknown suffix": ("in.stl", b"solid x\nendsolid x\n"),
+    "soup.stl": ("in.stl", stl_text(*SOUP).encode()),
+    "empty.stl": ("in.stl", b"solid x\nendsolid x\n"),
+    "unknown suffix": ("in.xyz", b"solid x\nendsolid x\n"),
     "missing file": ("missing.obj", None),
     "a directory": ("adir.obj", "dir"),
 }
@@ -124,7 +136,7 @@ def command_lines(draw):
     # the input first: "--seams uv" is a valid value only for an input with UVs (for the others
     # it is a refusal, drawn as a bad value)
     valid = ["patch.obj", "patch.obj with vt", "patch.off", "patch.ply", "closed tetra.obj",
-             "soup.ply", "soup.off"]
+             "soup.ply", "soup.off", "soup.stl"]
     source = draw(st.sampled_from(valid) if clean else
                   st.sampled_from(valid) | st.sampled_from(sorted(INPUTS)))
     has_uv = source == "patch.obj with vt"
@@ -274,6 +286,7 @@ def mesh_of(sc):
     """The (V, F) the input holds when it is a valid mesh, else None."""
     return {"patch.obj": PATCH, "patch.obj with vt": PATCH, "patch.off": PATCH,
             "patch.ply": PATCH32, "closed tetra.obj": TETRA, "soup.ply": SOUP, "soup.off": SOUP,
+            "soup.stl": SOUP,
             "nan vertex.obj": NAN_PATCH}.get(sc["input"])
 
 
