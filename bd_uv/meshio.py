@@ -1,13 +1,16 @@
 """Reading and writing mesh files.
 
-OBJ is read by position index (``v`` records) so vertex order and topology are the file's own;
-loaders that split vertices at UV seams would change the topology. OFF and PLY go through trimesh
-with ``process=False`` (vertex order kept), and so does STL (always written face by face, no
-UVs). They have no ``vt``: an exporter splits a vertex
-wherever its normal or UV differs, and a PLY or OFF written face by face (a triangle soup) splits
-every vertex, so the unwrap would see one island a face. Their vertices at equal positions are
-therefore welded for the unwrap (``mesh.weld.welded_in_place``: each named by the least of the
-file's vertices, the file's vertex list unchanged) and the file's faces are written as they were.
+OBJ is read by position index (``v`` records) so vertex order is the file's own; loaders that
+split vertices at UV seams would change the topology. OFF, PLY and STL go through trimesh with
+``process=False`` (vertex order kept).
+
+Exporters split a vertex wherever its normal or UV differs (OFF and PLY have no ``vt`` to do it
+with); a file written face by face (every STL, three.js's exporters for unindexed geometry, many
+PLY and OBJ converters) splits every vertex, so the unwrap would see one island a face. Vertices
+at equal positions are therefore welded for the unwrap (``mesh.weld.welded_in_place``: never
+where faces only touch at a point nor across an OBJ's objects; each named by the least of the
+file's vertices, the vertex list unchanged), the file's UVs still mark its seams, and the file's
+faces are written as they were.
 """
 import os
 import re
@@ -81,6 +84,7 @@ def load_mesh(path):
         labels, file_F = None, None
         if ext == ".obj":
             V, F, cuv, labels = _read_obj(path)
+            file_F, F = _welded(V, F, labels["object"])
         elif ext in (".off", ".ply", ".stl"):
             V, F, vuv = _read_trimesh(path, ext)
             cuv = None if vuv is None else vuv[F]
@@ -104,13 +108,14 @@ def welded_entry(mesh):
     return {"welded_vertices": mesh.welded} if mesh.welded else {}
 
 
-def _welded(V, F):
-    """(file_F, F): ``F`` with the vertices the file split at equal positions welded, and the
-    file's own faces; (None, F) when nothing is welded."""
+def _welded(V, F, parts=None):
+    """(file_F, F): ``F`` with the vertices the file split at equal positions welded (within
+    each of ``parts``, an OBJ's objects), and the file's own faces; (None, F) when nothing is
+    welded."""
     F = F.reshape(-1, 3)
     if len(F) == 0 or not np.all((F >= 0) & (F < len(V))):
         return None, F       # the arrays' own check names what is wrong
-    G = welded_in_place(V, F)
+    G = welded_in_place(V, F, parts)
     return (None, F) if np.array_equal(G, F) else (F, G)
 
 

@@ -33,10 +33,13 @@ def welded(V, F):
     return W, G.reshape(len(F), 3)
 
 
-def welded_in_place(V, F):
+def welded_in_place(V, F, parts=None):
     """The faces of :func:`welded`, on the file's own vertices: each welded vertex is named by
     the least file vertex among its corners, so ``V`` stays as it is (the vertices welded away
     are left unused) and every vertex id a report gives is one of the file's.
+
+    ``parts`` : (m,) int array or None, each face's part (an OBJ's ``o`` object): faces of two
+    parts are never welded together (Blender imports each object on its own).
 
     Returns
     -------
@@ -44,7 +47,7 @@ def welded_in_place(V, F):
     """
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
-    key = _fan_keys(V, F)
+    key = _fan_keys(V, F, parts)
     _, group = np.unique(key, return_inverse=True)
     group = group.reshape(-1)
     least = np.full(group.max() + 1 if len(group) else 0, np.iinfo(np.int64).max, np.int64)
@@ -52,11 +55,15 @@ def welded_in_place(V, F):
     return least[group].reshape(F.shape)
 
 
-def _fan_keys(V, F):
-    """(3m,) int64: one key per corner, equal for the corners of one (position, fan)."""
+def _fan_keys(V, F, parts=None):
+    """(3m,) int64: one key per corner, equal for the corners of one (position, fan) (of one
+    part, when ``parts`` gives each face's)."""
     m = len(F)
     _, pos = np.unique(V, axis=0, return_inverse=True)
     P = pos.reshape(-1)[F]                        # (m,3) position ids
+    if parts is not None:                         # a position id per (position, part)
+        both = np.stack([P.ravel(), np.repeat(np.asarray(parts, dtype=np.int64), 3)], 1)
+        P = np.unique(both, axis=0, return_inverse=True)[1].reshape(m, 3)
     # corners c = 3f + j; the half-edge j of face f runs P[f,j] -> P[f,(j+1)%3]
     a, b = P.ravel(), np.roll(P, -1, axis=1).ravel()
     ca = np.arange(3 * m)                          # the corner at a

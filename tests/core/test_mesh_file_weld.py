@@ -162,3 +162,36 @@ def test_an_stl_written_as_obj_is_read_without_blender(tmp_path):
                         str(tmp_path / "part.blend")], capture_output=True, text=True, cwd=REPO)
     assert r.returncode == 2 and "blender -b --python" in r.stderr
     assert "give -o an .obj path" in r.stderr and not (tmp_path / "part.blend").exists()
+
+
+def test_an_obj_soup_is_welded_within_each_object_only(tmp_path):
+    # two bent grids written face by face (three.js's OBJ exporter on unindexed geometry), as
+    # two objects that share the line x = 1 exactly: each is welded whole, never to the other
+    V0, F0 = grid(5, 4, z=lambda x, y: 0.2 * x * y)
+    V1 = V0 + [1.0, 0.0, 0.0]
+    V1[:, 2] = 0.2 * (2.0 - V1[:, 0]) * V1[:, 1]      # the same positions along x = 1
+    Va, Fa = soup(V0, F0)
+    Vb, Fb = soup(V1, F0)
+    rows = [f"v {x!r} {y!r} {z!r}" for x, y, z in np.concatenate([Va, Vb]).tolist()]
+    rows += ["o left"] + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in Fa]
+    rows += ["o right"] + [f"f {a + 1} {b + 1} {c + 1}" for a, b, c in Fb + len(Va)]
+    p = tmp_path / "two.obj"
+    p.write_text("\n".join(rows) + "\n")
+    m = load_mesh(str(p))
+    assert np.array_equal(m.file_F, np.concatenate([Fa, Fb + len(Va)]))
+    left, right = m.F[:len(Fa)], m.F[len(Fa):]
+    assert faces_joined(left) == 1 and faces_joined(right) == 1 and faces_joined(m.F) == 2
+    assert not set(left.ravel()) & set(right.ravel())
+    assert m.welded == 2 * (len(Va) - len(V0))
+    # without objects the shared line joins them (one surface)
+    p.write_text("\n".join(r for r in rows if not r.startswith("o ")) + "\n")
+    assert faces_joined(load_mesh(str(p)).F) == 1
+
+
+def test_an_obj_without_split_vertices_is_read_as_it_is(tmp_path):
+    V0, F0 = grid(4, 3)
+    p = tmp_path / "m.obj"
+    p.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V0.tolist())
+                 + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F0))
+    m = load_mesh(str(p))
+    assert m.file_F is None and m.welded == 0 and np.array_equal(m.F, F0)
