@@ -190,7 +190,14 @@ def rebase_uris(doc, src_dir, out_dir):
             if uri is None or uri.startswith("data:") or "://" in uri or os.path.isabs(unquote(uri)):
                 continue
             target = os.path.join(os.path.abspath(src_dir), unquote(uri))
-            item["uri"] = quote(os.path.relpath(target, os.path.abspath(out_dir)).replace(os.sep, "/"))
+            try:
+                rel = os.path.relpath(target, os.path.abspath(out_dir))
+            except ValueError:   # Windows: another drive, which no relative URI can reach
+                raise SceneFileError(
+                    f"{key[:-1]} {doc[key].index(item)} ({uri!r}) is on another drive than "
+                    f"the output folder {out_dir}: a glTF refers to its files by relative "
+                    f"paths, so write the output on the drive of {target}") from None
+            item["uri"] = quote(rel.replace(os.sep, "/"))
 
 
 class BufferWriter:

@@ -244,12 +244,20 @@ def _reanchor(src, asset, out_dir, package_local=False):
         package, inside = full[:full.index("[")], full[full.index("["):]
         if package_local or inner or not os.path.isfile(package):
             return asset + inner
-        rel = os.path.relpath(package, out_dir).replace(os.sep, "/")
-        return (rel if rel.startswith("../") else "./" + rel) + inside
+        return _relative(package, out_dir) + inside
     if not asset.startswith(("./", "../")) and not os.path.exists(full):
         return asset + inner                     # a search path, resolved by the resolver
-    rel = os.path.relpath(full, out_dir).replace(os.sep, "/")
-    return (rel if rel.startswith("../") else "./" + rel) + inner
+    return _relative(full, out_dir) + inner
+
+
+def _relative(path, out_dir):
+    """``path`` as an anchored relative asset path from ``out_dir`` ("./x", "../x"), or as the
+    absolute path where none exists (Windows: another drive); USD resolves either."""
+    try:
+        rel = os.path.relpath(path, out_dir).replace(os.sep, "/")
+    except ValueError:
+        return os.path.abspath(path).replace(os.sep, "/")
+    return rel if rel.startswith("../") else "./" + rel
 
 
 def _pxr_message(exc):

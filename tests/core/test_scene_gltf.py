@@ -413,3 +413,23 @@ def test_equal_meshes_are_unwrapped_once_and_each_certified_as_written(tmp_path)
     assert np.array_equal(uvs[0], uvs[1]) and len(uvs[2]) != len(uvs[0])
     for m, e in zip(doc["meshes"], entries):
         _check_uvs(reader, m["primitives"][0], "TEXCOORD_0", e)
+
+
+def test_a_file_on_another_drive_is_named_and_nothing_written(scene, tmp_path, monkeypatch,
+                                                                capsys):
+    # Windows: os.path.relpath raises ValueError across drives (C: to D:), and a glTF can only
+    # refer to its image by a relative URI: a clear error, no traceback, no output written
+    src, b, arrays = scene
+    relpath = os.path.relpath
+
+    def across_drives(path, start=os.curdir):
+        if "tex ture.png" in str(path):
+            raise ValueError("path is on mount 'C:', start on mount 'D:'")
+        return relpath(path, start)
+    monkeypatch.setattr(os.path, "relpath", across_drives)
+    out = tmp_path / "other" / "o.gltf"
+    rc = main(["unwrap", str(src / "scene.gltf"), "-o", str(out)])
+    err = capsys.readouterr().err
+    assert rc != 0 and "Traceback" not in err
+    assert "'tex%20ture.png'" in err or "'tex ture.png'" in err
+    assert "another drive" in err and not out.exists()

@@ -667,3 +667,23 @@ def test_an_instanced_asset_whose_uvs_have_another_type_keeps_them(tmp_path):
     (entry,) = json.loads(rep.read_text())["meshes"]
     assert entry["status"] == "failed" and "float2[]" in entry["message"]
     assert not out.exists()
+
+
+def test_an_asset_on_another_drive_is_kept_by_its_absolute_path(tmp_path, monkeypatch):
+    # Windows: os.path.relpath raises ValueError across drives; USD resolves absolute asset
+    # paths, so the texture is re-anchored by its absolute path and still resolves
+    src = tmp_path / "in"
+    shot, asset = build_stage(str(src))
+    relpath = os.path.relpath
+
+    def across_drives(path, start=os.curdir):
+        if "wood.png" in str(path):
+            raise ValueError("path is on mount 'C:', start on mount 'D:'")
+        return relpath(path, start)
+    monkeypatch.setattr(os.path, "relpath", across_drives)
+    out = tmp_path / "elsewhere" / "shot_uv.usda"
+    assert main(["unwrap", shot, "-o", str(out), "--bound", "3"]) == 0
+    stage = Usd.Stage.Open(str(out))
+    tex = stage.GetPrimAtPath("/World/Looks/Wood/Tex").GetAttribute("inputs:file").Get()
+    assert os.path.isabs(tex.path)
+    assert os.path.samefile(tex.resolvedPath, src / "lib" / "tex" / "wood.png")
