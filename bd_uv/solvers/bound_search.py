@@ -104,6 +104,11 @@ UNFOLD_MARGIN, UNFOLD_ALPHA = 0.9, 1.7
 ONE_PRODUCT_FACES = 1000
 
 
+def _complex(V):
+    """The map (nv,) complex of a map's rows (2, nv)."""
+    return V[0] + 1j * V[1]
+
+
 class BoundSearch(SearchLift):
     """Lower a flip-free map's max conformal distortion by ADMM onto F_C with frames.
 
@@ -131,6 +136,9 @@ class BoundSearch(SearchLift):
         # ``limit_effort``'s: bounded as auto's least C, its iteration budget, the first
         # target's STALL
         self.least, self.budget, self.first_stall = False, None, target_watch.STALL
+        # asked of every CHECK_EVERY-th new best iterate of a target (``target_watch.Watch``);
+        # True ends the search there (``strategies.least_one_to_one``: the map lies over itself)
+        self.check = None
 
     def run(self, U, w, C, D_best, cancel=None, enough=None, ready=None, deep=False):
         """ADMM towards F_C with frames w (unit complex, (k,)), from U (2, nv): rows u and v;
@@ -183,7 +191,7 @@ class BoundSearch(SearchLift):
             np.subtract(GU, Z, out=lam)         # lam + G x - z
             self.iterations += 1
 
-        watch = self._watch(D_best, None if ask is None else lambda V: ask(V[0] + 1j * V[1]))
+        watch = self._watch(D_best, ask, _complex)
         watch.iterate(step, lambda: self._max_distortion(GU), U.copy, C, cancel)
         self.ended, self.pending = watch.ended, watch.pending
         return watch.kept, watch.best
@@ -200,10 +208,7 @@ class BoundSearch(SearchLift):
             V[0, s.free], V[1, s.free] = x[:nf], x[nf:]
             return V
 
-        def asked(x):
-            V = whole(x)
-            return ask(V[0] + 1j * V[1])
-        watch = self._watch(D_best, None if ask is None else asked)
+        watch = self._watch(D_best, ask, lambda x: _complex(whole(x)))
         best, D = run_free(self._free_lift(), s.factorize(), x0, w, kappa, C, watch, alpha,
                            cancel, self._count)
         self.ended, self.pending = watch.ended, watch.pending
@@ -222,14 +227,17 @@ class BoundSearch(SearchLift):
         if self.k <= target_watch.FIRST_STALL_FACES:
             self.first_stall = target_watch.FIRST_STALL
 
-    def _watch(self, D_best, ask):
+    def _watch(self, D_best, ask, to_u):
         """A target's ``Watch``: its iterations within the search's budget where it has one, the
-        first target's STALL ``first_stall``."""
+        first target's STALL ``first_stall``; ``ask`` and ``check`` (``search``'s) asked of the
+        map (nv,) complex ``to_u(kept)`` of an iterate kept."""
         limit = target_watch.MAX_ITER
         if self.budget is not None:
             limit = min(limit, self.budget - self.iterations)
-        return Watch(D_best, ask, limit,
-                     self.first_stall if self.iterations == 0 else target_watch.STALL)
+        check = self.check
+        return Watch(D_best, None if ask is None else lambda kept: ask(to_u(kept)), limit,
+                     self.first_stall if self.iterations == 0 else target_watch.STALL,
+                     None if check is None else lambda kept: check(to_u(kept)))
 
     def _count(self, n):
         self.iterations += n

@@ -26,6 +26,18 @@ __all__ = ["flip_free_map"]
 # after 109 iterations and no iterate of the harmonic one's 114 bettered its own max (44.5):
 # 223 iterations, 140 ms of CPU, for nothing.
 WINDOW = 20
+# ... and after its first iterate where the LSCM map flips FLIP_LEAST faces or more and that
+# iterate flips more than FLIP_RISE times as many. Of 20 LSCM starts flipping 3 or more (issue
+# 21's disks, unseen16, auto15, start16's cow patches; ring patches of three_peaks, cow, dino,
+# camel, mannequin-devil, ChineseDragon, horse, lion-head, fandisk, holes, nefertiti and
+# armadillo at auto and C = 5), the 7 that bend flip fewer or as many at the first iterate
+# (30 -> 13, 19 -> 3, 3 -> 3, 5 -> 3, ...); of the 13 that do not, 12 flip 2.1-80 times as
+# many (decimated-knight's strip 4 -> 293, cow.off patches 3 -> 10, 33 -> 68, dino's 4 -> 321,
+# camel's 49 -> 181: their window given up for nothing, knight ~17 ms of CPU of auto's ~45;
+# a three_peaks patch, 16 -> 5, still runs the window). Fewer than 3 flips says little: cow.off's 1578/400 patch bends from 1 to
+# 13 flips to none in 67 iterations
+FLIP_RISE = 1.5
+FLIP_LEAST = 3
 
 
 def flip_free_map(Z, tris, nv, loops, u_lscm, C=5.0, *, pins=None, margin=0.9, max_iter=300,
@@ -72,7 +84,7 @@ def flip_free_map(Z, tris, nv, loops, u_lscm, C=5.0, *, pins=None, margin=0.9, m
     # the LSCM start's first WINDOW iterations; run again in full (the same iterates as one run)
     # where one of them was flip-free but they did not converge
     res = solver.project(u_lscm, C, values, margin=margin, scale=scale,
-                         max_iter=min(WINDOW, max_iter), cancel=cancel)
+                         max_iter=min(WINDOW, max_iter), cancel=cancel, flip_rise=(FLIP_RISE, FLIP_LEAST))
     info["iterations"] += res.iterations
     if (not res.all_converged and res.iterations >= WINDOW and max_iter > WINDOW
             and np.isfinite(np.max(res.max_distortion))):

@@ -95,7 +95,7 @@ class ProjectionSolver(GlobalStep):
     # -- the iterations -------------------------------------------------------------------------
     def project(self, u0, C, fixed_values=None, *, margin=0.9, smin=None, smax=None, scale=None,
                 stretch_margin=0.01, floor=1e-3, max_iter=200, stall=30, reach=REACH_WINDOW,
-                accelerate=True, shrink=0.5, cancel=None):
+                accelerate=True, shrink=0.5, cancel=None, flip_rise=None):
         """Iterate local projections and global back-solves until the map is within the bounds.
 
         Parameters
@@ -121,6 +121,9 @@ class ProjectionSolver(GlobalStep):
             faces, they continue alone on a smaller system (factorised anew; the iterates are
             the same but for a restart of the acceleration)
         cancel : object with ``is_set()``, checked once per iteration -> ``CancelledError``
+        flip_rise : (float, int) or None, (r, n): stop after the first iteration where every
+            unconverged component whose start flips n faces or more flips more than r times as
+            many (``flip_free.FLIP_RISE``; out of reach; None: never)
 
         Returns
         -------
@@ -183,6 +186,13 @@ class ProjectionSolver(GlobalStep):
                 U_saved[nv_new] = U[nv_new]
             if done.all() or it >= max_iter:
                 break
+            if flip_rise is not None and it <= 1:
+                flips = np.bincount(self.face_comp, weights=~(s2 > 0), minlength=ncomp)
+                if not it:
+                    flips0 = flips
+                elif np.all(done | ((flips0 >= flip_rise[1]) & (flips > flip_rise[0] * flips0))):
+                    out_of_reach |= ~done
+                    break
             # The least distorted iterate of each unconverged component is what it returns.
             key = self._per_comp_max(D)
             better = ~done & ((key < best_key) | (np.isinf(key) & np.isinf(best_key)))

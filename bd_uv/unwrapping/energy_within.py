@@ -23,7 +23,6 @@ import scipy.sparse as sp
 from ..frames import _far_pair, frames_from_map
 from ..solvers.global_step import GlobalStep
 from .along import least_mean_within
-from .disk_certificate import simple_ccw_loop
 from .initial import start_map
 from .margins import solve_bound
 from .searched import FAR, MEAN_SEARCH, search
@@ -121,16 +120,6 @@ def from_harmonic(prob, C, report):
     um = least_mean_within(prob, us, ul, target, MEAN_SEARCH)
     prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
     for u in (um, us):
-        if prob.check(u, C)[0] and _lays_out(prob, u):
+        if prob.check(u, C)[0] and prob.lays_out(u):
             return (u, harmonic), False
     return None, False
-
-
-def _lays_out(prob, v):
-    """``strategies.lays_out`` (which imports this module's importer): does the flip-free map v
-    lay the island out without overlapping itself?"""
-    if not prob.may_be_one_to_one(v):
-        return False
-    loops = prob.island.loops
-    return bool(simple_ccw_loop(np.stack([v.real, v.imag], axis=1).take(loops[0], axis=0))
-                if len(loops) == 1 else prob.one_to_one(v))

@@ -124,7 +124,7 @@ def relax_island(prob, u_start, u, D):
     if y is None:
         return None
     ok, Dy = prob.check(y, D)
-    if not (ok and Dy <= D) or (not prob.one_to_one(y) and prob.one_to_one(u)):
+    if not (ok and Dy <= D) or (not prob.lays_out(y) and prob.lays_out(u)):
         return None
     return y, Dy
 
@@ -172,6 +172,6 @@ def capped_island(prob, u_start, u, D0):
     if y is None:
         return None
     ok, Dy = prob.check(y, D0)
-    if not (ok and Dy < D0) or (not prob.one_to_one(y) and prob.one_to_one(u)):
+    if not (ok and Dy < D0) or (not prob.lays_out(y) and prob.lays_out(u)):
         return None
     return y, Dy

@@ -46,7 +46,8 @@ def _handed_over(prob, u, least):
     return entry[2:]
 
 
-def search(prob, u, report, budget, flags, t0, enough=None, least=False, ready=None):
+def search(prob, u, report, budget, flags, t0, enough=None, least=False, ready=None,
+           check=None):
     """Lower the bound of a flip-free map ``u`` by ADMM onto F_C with frames
     (``solvers.bound_search``), holding the pins (or one boundary vertex, where ``u`` has it),
     ending at the first best map ``enough`` (else ``prob.enough``) accepts where it is set.
@@ -73,6 +74,7 @@ def search(prob, u, report, budget, flags, t0, enough=None, least=False, ready=N
     bs = BoundSearch(prob.ops, prob.nv, prob.island.tris, fixed, connected=True, ranks=ranks)
     if least:
         bs.limit_effort()
+    bs.check = check
 
     def progress(D, C):
         report(0.1, f"minimising C: C* <= {D:.4g}, aiming at {C:.4g}")
