@@ -46,11 +46,11 @@ DOMINANT_MAX_CHARTS = 30
 # once its layout is square (.square, .early_stop): the cut matches Blender's time on some such
 # meshes (igl-arm 2.8 s) and not on others (igl-elephant 12.6 s, homer 10.3 s, cheburashka 6.8 s),
 # and nothing in the outlines told them apart. Measured (issue18-pack24-2026-11-28.md, CPU, load
-# 9-14): at 3x, 10 such sets against main +0.0226 coverage (se 0.0044; 20 wins, 5 losses; camel
-# -0.006) at 16 % more CPU, igl-elephant 0.690 -> 0.725 (0.80 -> 1.04 s), igl-arm 0.668 -> 0.717
-# (0.82 -> 1.27 s: its time, 0.2x Blender's, fails either way); at 4x the guess reaches GUESS_MAX
-# on them: igl-elephant 0.720 -> 0.740 (1.00 -> 1.27 s), cheburashka 0.723 -> 0.743, fancyteapot
-# 0.698 -> 0.721, homer the same; 5x as 4x
+# 9-14): at 3x, 10 such sets against main +0.0217 coverage (se 0.0040; 24 wins, 6 losses; camel
+# -0.006, knight -0.005) at 19 % more CPU, igl-elephant 0.690 -> 0.725 (0.80 -> 1.04 s), igl-arm
+# 0.668 -> 0.717 (0.82 -> 1.27 s: its time, 0.2x Blender's, fails either way); at 4x the guess
+# reaches GUESS_MAX on them: igl-elephant 0.720 -> 0.740 (1.00 -> 1.27 s), cheburashka 0.723 ->
+# 0.743, fancyteapot 0.698 -> 0.721, homer the same; 5x as 4x
 REACH = 4.0
 
 
