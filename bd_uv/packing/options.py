@@ -140,9 +140,9 @@ class PackOptions:
 
     def reach(self, charts, faces=0, largest=0.0):
         """``REACH`` where the adaptive time of :meth:`search_seconds` is cut by
-        ``AUTO_SECONDS_PER_CHART`` and no chart holds more than ``DOMINANT_SHARE`` of the area;
-        else 1."""
-        if self.solve_seconds is not None or charts < 2 or (
+        ``AUTO_SECONDS_PER_CHART`` and no chart holds more than ``DOMINANT_SHARE`` of the area,
+        with one solve (only a single solve can be ended early: :mod:`.early_stop`); else 1."""
+        if self.solve_seconds is not None or self.solves > 1 or charts < 2 or (
                 charts <= DOMINANT_MAX_CHARTS and largest > DOMINANT_SHARE):
             return 1.0
         root = AUTO_SECONDS_PER_ROOT * float(np.sqrt(charts * max(faces, charts)))

@@ -39,6 +39,7 @@ def _reach(k, faces, largest=0.0):
 def test_reach_only_where_the_per_chart_cut_sets_the_time(k, faces, largest):
     assert PackOptions().reach(k, faces, largest) == _reach(k, faces, largest)
     assert PackOptions(solve_seconds=1.0).reach(k, faces, largest) == 1.0
+    assert PackOptions(solves=2).reach(k, faces, largest) == 1.0
     assert REACH > 1
 
 
