@@ -259,7 +259,7 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True, coars
         runs, refused = _solve_all(outlines, sides, options, tol, search,
                                    **({} if headroom == HEADROOM else {"headroom": headroom}),
                                    **({"spare": SPARE_CORES} if coarse else {}),
-                                   square=reach > 1 and r < rounds)
+                                   **({"square": True} if reach > 1 and r < rounds else {}))
         start = max(time.perf_counter() - t1 - search, 0.0)
         solves += len(sides)
         # all refused: larger sides (by 1.1, and 1.05 more for the larger squares after the

@@ -157,4 +157,4 @@ def test_where_it_applies_the_pack_nests_longer_ending_each_search_at_its_square
         ends.clear()
         check_layout(V, F, uv, lab, pack_islands(V, F, uv, lab, options), options)
         assert seen == [REACH if solve is None else 1.0]
-        assert ends and ends[0] is (solve is None)
+        assert ends and ends[0] is (True if solve is None else None)
