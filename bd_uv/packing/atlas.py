@@ -115,8 +115,8 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
     else:
         f = 1.0
         # (a chart holding much of the area: less time, options.DOMINANT_SHARE)
-        seconds = options.search_seconds(k, int((lab >= 0).sum()),
-                                         float(charts.area.max() / charts.area.sum()))
+        largest = float(charts.area.max() / charts.area.sum())
+        seconds = options.search_seconds(k, int((lab >= 0).sum()), largest)
         # mostly tiny charts: the others packed alone, the tiny ones dropped into the space
         # left (.tiny); else (or when a tiny chart finds no room) 2-5 charts laid out without
         # spyrrow (.few), more (or when it finds none) nested, and nested too when a search
@@ -128,7 +128,8 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
             found = few_square(charts.outlines, options, tol, charts.exact)
             if found is None or options.solve_seconds is not None or options.solves > 1:
                 nested = square_layout(charts.outlines, options, tol, seconds, charts.exact,
-                                       coarse=True)
+                                       coarse=True,
+                                       reach=options.reach(k, int((lab >= 0).sum()), largest))
                 if found is None or nested[1] < found[1]:
                     found = nested
                 else:

@@ -12,6 +12,7 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
 from ..errors import PackError
+from .early_stop import solve_until
 
 # An outline too thin for spyrrow is grown to this fraction of the strip's height (with no
 # padding: "Offset resulted in an empty polygon" when spyrrow offsets a sliver inwards)
@@ -59,7 +60,7 @@ def rotations(angle):
 
 
 def nest(outlines, height, separation, options, seconds=0.0, reports=None, workers=None,
-         retry=True):
+         retry=True, narrow=None):
     """One spyrrow solve: every outline in a strip of ``height``, ``separation`` apart.
 
     Parameters
@@ -75,6 +76,8 @@ def nest(outlines, height, separation, options, seconds=0.0, reports=None, worke
     workers : int, optional: threads of spyrrow's search (default: one per core)
     retry : bool, nest the outlines grown by half the separation with none between
         (:func:`_nest_grown`), and after a panic grown by a hair; False: as given
+    narrow : float, optional (with ``reports``): the search ends at the first feasible layout
+        this narrow where it can (:mod:`.early_stop`)
 
     Returns
     -------
@@ -91,7 +94,8 @@ def nest(outlines, height, separation, options, seconds=0.0, reports=None, worke
         if any(_thin(xy) for xy in outlines):
             grow = max(separation, EMPTY_RETRY * height)
         if grow > 0:
-            return _nest_grown(outlines, height, grow, options, seconds, reports, workers)
+            return _nest_grown(outlines, height, grow, options, seconds, reports, workers,
+                               narrow)
     items = [spyrrow.Item(str(i), [tuple(p) for p in xy], demand=1,
                           allowed_orientations=options.orientations())
              for i, xy in enumerate(outlines)]
@@ -104,8 +108,12 @@ def nest(outlines, height, separation, options, seconds=0.0, reports=None, worke
     cfg.exploration_time = timedelta(seconds=0.8 * seconds)
     cfg.compression_time = timedelta(seconds=0.2 * seconds)
     queue = spyrrow.ProgressQueue() if reports is not None else None
+    drained = None
     try:
-        sol = inst.solve(cfg, queue) if queue is not None else inst.solve(cfg)
+        if queue is not None and narrow is not None:
+            sol, drained, _ = solve_until(inst, cfg, queue, FEASIBLE, narrow)
+        else:
+            sol = inst.solve(cfg, queue) if queue is not None else inst.solve(cfg)
     except BaseException as exc:  # a Rust panic arrives as pyo3's PanicException (BaseException)
         if type(exc).__name__ != "PanicException":
             raise
@@ -114,11 +122,11 @@ def nest(outlines, height, separation, options, seconds=0.0, reports=None, worke
             # (a chart's outline too thin for its pole of inaccessibility, "no pole found": a
             # bishop of OpenChessSet; outlines are nested grown by a hair of the height)
             return _nest_grown(outlines, height, EMPTY_RETRY * height, options, seconds,
-                               reports, workers)
+                               reports, workers, narrow)
         raise PackError(f"the nesting failed on these charts: {first}") from None
     if queue is not None:
-        reports.extend(_placement(s, len(outlines)) for kind, s in queue.drain()
-                       if int(kind) in FEASIBLE)
+        reports.extend(_placement(s, len(outlines)) for kind, s in
+                       (queue.drain() if drained is None else drained) if int(kind) in FEASIBLE)
     return _placement(sol, len(outlines))
 
 
@@ -151,7 +159,7 @@ def _area(xy):
 
 
 def _nest_grown(outlines, height, separation, options, seconds=0.0, reports=None,
-                workers=None):
+                workers=None, narrow=None):
     """:func:`nest` of outlines ``separation`` apart, each outline grown by half of it.
 
     The grown outlines (mitred: the grown outline holds every point within that distance, and
@@ -170,7 +178,8 @@ def _nest_grown(outlines, height, separation, options, seconds=0.0, reports=None
         shapely.Polygon(shapely.buffer(shapely.Polygon(xy), half, join_style="mitre")
                         .exterior))))[:-1]) for xy in outlines]
     more = [] if reports is not None else None
-    pl = nest(grown, height - separation, 0.0, options, seconds, more, workers, retry=False)
+    pl = nest(grown, height - separation, 0.0, options, seconds, more, workers, retry=False,
+              narrow=None if narrow is None else narrow - separation)
     if reports is not None:
         reports.extend(Placement(r.angle, r.shift + half, r.width + separation) for r in more)
     return Placement(pl.angle, pl.shift + half, pl.width + separation)

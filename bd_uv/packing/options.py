@@ -41,6 +41,17 @@ AUTO_SECONDS_MIN_PER_CHART = 0.1
 # 0.003-0.01 on all three (0.85x of this: rocker-arm 0.630 -> 0.621)
 DOMINANT_SHARE = 0.3
 DOMINANT_MAX_CHARTS = 30
+# Where AUTO_SECONDS_PER_CHART cut the time (many faces in each chart) and no chart dominates, the
+# nesting may take REACH times its share, its density guessed for that search, each search ending
+# once its layout is square (.square, .early_stop): the cut matches Blender's time on some such
+# meshes (igl-arm 2.8 s) and not on others (igl-elephant 12.6 s, homer 10.3 s, cheburashka 6.8 s),
+# and nothing in the outlines told them apart. Measured (issue18-pack24-2026-11-28.md, CPU, load
+# 9-14): at 3x, 10 such sets against main +0.0217 coverage (se 0.0040; 24 wins, 6 losses; camel
+# -0.006, knight -0.005) at 19 % more CPU, igl-elephant 0.690 -> 0.725 (0.80 -> 1.04 s), igl-arm
+# 0.668 -> 0.717 (0.82 -> 1.27 s: its time, 0.2x Blender's, fails either way); at 4x the guess
+# reaches GUESS_MAX on them: igl-elephant 0.720 -> 0.740 (1.00 -> 1.27 s), cheburashka 0.723 ->
+# 0.743, fancyteapot 0.698 -> 0.721, homer the same; 5x as 4x
+REACH = 4.0
 
 
 @dataclass(frozen=True)
@@ -126,6 +137,18 @@ class PackOptions:
         if charts <= DOMINANT_MAX_CHARTS and largest > DOMINANT_SHARE:
             seconds *= DOMINANT_SHARE / largest
         return seconds
+
+    def reach(self, charts, faces=0, largest=0.0):
+        """``REACH`` where the adaptive time of :meth:`search_seconds` is cut by
+        ``AUTO_SECONDS_PER_CHART`` and no chart holds more than ``DOMINANT_SHARE`` of the area,
+        with one solve (only a single solve can be ended early: :mod:`.early_stop`); else 1."""
+        if self.solve_seconds is not None or self.solves > 1 or charts < 2 or (
+                charts <= DOMINANT_MAX_CHARTS and largest > DOMINANT_SHARE):
+            return 1.0
+        root = AUTO_SECONDS_PER_ROOT * float(np.sqrt(charts * max(faces, charts)))
+        cut = AUTO_SECONDS_PER_CHART * charts
+        return REACH if cut < min(root, AUTO_SECONDS_MAX) and cut > min(
+            AUTO_SECONDS_MIN, AUTO_SECONDS_MIN_PER_CHART * charts) else 1.0
 
     @property
     def padding(self):

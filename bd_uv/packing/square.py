@@ -120,12 +120,14 @@ def _squares(points, owner, placements, tol, padding):
     return side, low
 
 
-def _solve_all(outlines, sides, options, tol, seconds, headroom=HEADROOM, spare=0):
+def _solve_all(outlines, sides, options, tol, seconds, headroom=HEADROOM, spare=0,
+               square=False):
     """One solve per square side, all at once (threads): per side, every feasible layout reached
     (reports, then the result), or None where spyrrow gave up (it panics when it cannot place a
     chart in the strip); the last such refusal (PackError) or None. Each solve searches on
     ``(os.cpu_count() - spare) // len(sides)`` threads (at least one), one up to
-    ``FEW_CHARTS`` charts."""
+    ``FEW_CHARTS`` charts. ``square``: each search ends once its layout is no wider than the
+    strip is high (then on this thread for a single side, so that it can: :mod:`.early_stop`)."""
     out, errors, refused = [None] * len(sides), [], []
     workers = 1 if len(outlines) <= FEW_CHARTS else max(
         1, ((os.cpu_count() or 1) - spare) // len(sides))
@@ -134,7 +136,8 @@ def _solve_all(outlines, sides, options, tol, seconds, headroom=HEADROOM, spare=
         try:
             height, sep, _ = _strip(sides[i], options, tol, headroom)
             reports = []
-            final = nest(outlines, height, sep, options, seconds, reports, workers)
+            final = nest(outlines, height, sep, options, seconds, reports, workers,
+                         narrow=height if square else None)
             out[i] = reports + [final]
         except PackError as exc:
             refused.append(exc)
@@ -142,6 +145,9 @@ def _solve_all(outlines, sides, options, tol, seconds, headroom=HEADROOM, spare=
             errors.append(exc)
 
     threads = [threading.Thread(target=work, args=(i,)) for i in range(len(sides))]
+    if square and len(sides) == 1:
+        work(0)
+        threads = []
     for t in threads:  # per solve
         t.start()
     for t in threads:  # per solve
@@ -151,7 +157,8 @@ def _solve_all(outlines, sides, options, tol, seconds, headroom=HEADROOM, spare=
     return out, (refused[-1] if refused else None)
 
 
-def square_layout(outlines, options, tol, seconds, exact=None, split=True, coarse=False):
+def square_layout(outlines, options, tol, seconds, exact=None, split=True, coarse=False,
+                  reach=1.0):
     """The smallest square found that holds every outline with the padding.
 
     The padding scales with the square (it is in texels). A solve packs a strip of height H for
@@ -181,6 +188,8 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True, coars
     coarse : bool, up to ``COARSE_MAX_CHARTS`` charts with ``exact`` outlines: spyrrow nests the
         exact outlines simplified by ``COARSE`` of the padding (:func:`_coarse`) when that keeps
         at most ``COARSE_KEEP`` of the points, the compaction the exact ones
+    reach : float, above 1: the nesting may take ``reach`` times its share (the density guessed
+        for that search), each search ending once its layout is square (:func:`_solve_all`)
 
     Returns
     -------
@@ -210,7 +219,7 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True, coars
     boxes = least_squares(outlines, options)[0]
     widest = float(boxes.max())
     share = COMPACT_SHARE if k <= COMPACT_MAX_CHARTS else 0.0
-    nesting = (1 - share) * seconds
+    nesting = (1 - share) * seconds * reach
     # (solves + 1) // 2 solves at once around the guess, then solves // 2 around the density the
     # one nearest to a square reached
     rounds = 1 if options.solves == 1 else 2
@@ -249,7 +258,8 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True, coars
         t1 = time.perf_counter()
         runs, refused = _solve_all(outlines, sides, options, tol, search,
                                    **({} if headroom == HEADROOM else {"headroom": headroom}),
-                                   **({"spare": SPARE_CORES} if coarse else {}))
+                                   **({"spare": SPARE_CORES} if coarse else {}),
+                                   **({"square": True} if reach > 1 and r < rounds else {}))
         start = max(time.perf_counter() - t1 - search, 0.0)
         solves += len(sides)
         # all refused: larger sides (by 1.1, and 1.05 more for the larger squares after the

@@ -1,0 +1,77 @@
+"""A spyrrow solve ended as soon as its layout is narrow enough (the square can shrink no more).
+
+spyrrow 0.9 searches for the time it is given; its only other way out is a Python signal: its
+terminator calls ``PyErr_CheckSignals``, which acts on the main thread only, and on an error ends
+the search and returns the best layout found (the error is dropped). So a watcher thread drains
+the solve's progress queue and, at the first feasible layout no wider than ``narrow``, trips the
+main thread's SIGINT flag (``_thread.interrupt_main``: no OS signal). That is done only when the
+solve runs on the main thread and Python's own SIGINT handler is installed (a Python process,
+``import bpy`` keeps it); elsewhere the solve runs its time, as before.
+
+A trip the search did not see (it ended by its own clock in between) raises the
+``KeyboardInterrupt`` just after ``solve`` returns, before its value is stored: it is caught here
+and the last feasible report (spyrrow queues its final layout too) is the result. A user's
+Ctrl-C during a solve ends the search early, as it did before (spyrrow drops it).
+"""
+import _thread
+import signal
+import threading
+
+POLL = 0.005  # seconds between two drains of the progress queue
+
+
+def can_stop():
+    """True where a solve on this thread can be ended early (see the module's docstring)."""
+    return (threading.current_thread() is threading.main_thread()
+            and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+
+
+def solve_until(inst, cfg, queue, feasible, narrow):
+    """``inst.solve(cfg, queue)``, ended at the first feasible report (kind in ``feasible``) of
+    width at most ``narrow`` when :func:`can_stop`.
+
+    Returns
+    -------
+    solution, [(kind, solution)] every report drained, in order, and whether it was ended early
+    """
+    drained, done, lock = [], threading.Event(), threading.Lock()
+    tripped = [False]
+    watch = can_stop()
+
+    def watcher():
+        while not done.is_set():
+            for kind, sol in queue.drain():   # per report
+                drained.append((kind, sol))
+                if watch and not tripped[0] and int(kind) in feasible and sol.width <= narrow:
+                    with lock:
+                        if not done.is_set():
+                            tripped[0] = True
+                            _thread.interrupt_main()
+            done.wait(POLL)
+
+    thread = threading.Thread(target=watcher, daemon=True)
+    sol = None
+    try:
+        try:
+            thread.start()
+            sol = inst.solve(cfg, queue)
+        finally:
+            with lock:
+                done.set()
+            _settled()   # a trip the search did not see is raised here at the latest
+    except KeyboardInterrupt:
+        if not tripped[0]:
+            raise
+    finally:
+        done.set()
+        if thread.ident is not None:
+            thread.join()
+        drained.extend(queue.drain())
+    if sol is None:
+        sol = [s for kind, s in drained if int(kind) in feasible][-1]
+    return sol, drained, tripped[0]
+
+
+def _settled():
+    """A call: the interpreter handles a pending signal at it."""
+    return None
