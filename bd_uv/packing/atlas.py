@@ -19,6 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import PackError
+from .early_stop import can_stop
 from .nest import rotations, tile_layouts
 from .options import PackOptions, udim_tile
 from .outlines import chart_outlines
@@ -127,9 +128,13 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
         if found is None:
             found = few_square(charts.outlines, options, tol, charts.exact)
             if found is None or options.solve_seconds is not None or options.solves > 1:
+                # the longer reach only where its search can end early (.early_stop: the main
+                # thread of a Python process); on a worker thread (Blender's operator, Dask) it
+                # would run all of it, so there the time is as it was
                 nested = square_layout(charts.outlines, options, tol, seconds, charts.exact,
                                        coarse=True,
-                                       reach=options.reach(k, int((lab >= 0).sum()), largest))
+                                       reach=options.reach(k, int((lab >= 0).sum()), largest)
+                                       if can_stop() else 1.0)
                 if found is None or nested[1] < found[1]:
                     found = nested
                 else:

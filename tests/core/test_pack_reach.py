@@ -158,3 +158,21 @@ def test_where_it_applies_the_pack_nests_longer_ending_each_search_at_its_square
         check_layout(V, F, uv, lab, pack_islands(V, F, uv, lab, options), options)
         assert seen == [REACH if solve is None else 1.0]
         assert ends and ends[0] is (True if solve is None else None)
+
+
+def test_on_a_worker_thread_the_pack_keeps_its_time(monkeypatch):
+    """The same discs packed on a thread (Blender's operator, a Dask worker): the search could
+    not be ended there, so pack_islands asks for no reach (it would run all of it)."""
+    seen = []
+    real = atlas.square_layout
+    monkeypatch.setattr(atlas, "square_layout",
+                        lambda *a, **kw: seen.append(kw.get("reach")) or real(*a, **kw))
+    k = 10
+    V, F, uv, lab = _wavy_discs(k, 8)
+    assert _reach(k, len(F), float(_shares(V, F, lab).max())) == REACH
+    options, out = PackOptions(seed=0), []
+    t = threading.Thread(target=lambda: out.append(pack_islands(V, F, uv, lab, options)))
+    t.start()
+    t.join()
+    assert seen == [1.0]
+    check_layout(V, F, uv, lab, out[0], options)
