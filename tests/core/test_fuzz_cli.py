@@ -268,8 +268,8 @@ def check_written(inp_mesh, out, report, stdout, packed):
         isl = uv_islands(FT[has])
         pairs = pairs[isl[pairs[:, 0]] == isl[pairs[:, 1]]]
     assert len(pairs) == 0, pairs[:5]
-    if inp_mesh is SOUP:     # welded for the unwrap: its islands are the patch's, not its faces
-        assert uv_islands(FT[has]).max() + 1 < has.sum() / 3
+    if inp_mesh is SOUP:     # welded for the unwrap (its islands the patch's: test_mesh_file_weld)
+        assert "of the file's vertices lie where another does" in stdout, stdout
 
 
 def uv_islands(FT):
