@@ -109,7 +109,7 @@ def _read_obj(path):
     index naming no vertex is an ``InvalidMeshError`` giving the file's line."""
     vs, vts, faces, tfaces, mats, objs, numbers = [], [], [], [], [], [], []
     mat, obj = None, None
-    for number, line in enumerate(_obj_text(path).splitlines(), 1):
+    for number, line in _obj_records(_obj_text(path)):
         line = _COMMENT.sub("", line)   # "f 1 2 3 # note": a comment ends a record
         tokens = line.split()
         key = tokens[0] if tokens else ""
@@ -143,6 +143,24 @@ def _read_obj(path):
         cuv = VT[T - 1]
     labels = {"material": _first_use(mats), "object": _first_use(objs)}
     return V, F, cuv, labels
+
+
+def _obj_records(text):
+    """(line number, record) of each record of an OBJ's text: a line ending in a backslash goes
+    on on the next line (the OBJ format's continuation, as Rhino writes long faces); the number
+    is the record's first line."""
+    pending, start = None, 0
+    for number, line in enumerate(text.splitlines(), 1):
+        if pending is not None:
+            line, number = pending + " " + line, start
+        body = line.rstrip()
+        if body.endswith("\\"):
+            pending, start = body[:-1], number
+            continue
+        pending = None
+        yield number, line
+    if pending is not None:
+        yield start, pending
 
 
 def _obj_text(path):

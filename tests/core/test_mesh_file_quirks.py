@@ -67,6 +67,23 @@ def test_obj_comment_after_a_record(tmp_path):
     assert b.labels["material"].tolist() == [0, 0, 1]    # "Green#2": a '#' inside a name stays
 
 
+def test_obj_record_continued_on_the_next_line(tmp_path):
+    """A line ending in a backslash goes on on the next line (the OBJ format; Rhino writes long
+    faces so: trimesh's wallhole.obj, CRLF line ends). Main refused that file ("wallhole.obj line
+    282: '\\' is not a v index") and this one. An index naming no vertex after a continuation
+    names the record's first line."""
+    lines = ["v 0 0 0", "v 1 0 0", "v 1 1 \\", "  0", "v 0 1 0", "vt 0 0", "vt 1 0", "vt 1 1",
+             "vt 0 1", "f 1/1 2/2 \\", "3/3 4/4", "f 1/1 3/3 4/4"]
+    (tmp_path / "a.obj").write_bytes(("\r\n".join(lines) + "\r\n").encode())
+    a = load_mesh(str(tmp_path / "a.obj"))
+    assert a.V.tolist() == [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
+    assert a.F.tolist() == [[0, 1, 2], [0, 2, 3], [0, 2, 3]]
+    assert a.corner_uv[1].tolist() == [[0, 0], [1, 1], [0, 1]]
+    (tmp_path / "b.obj").write_text("\n".join(lines[:-1] + ["f 1 2 \\", "9"]) + "\n")
+    with pytest.raises(InvalidMeshError, match=r"b\.obj line 12: face uses v 9"):
+        load_mesh(str(tmp_path / "b.obj"))
+
+
 def _strip_and_fan():
     """A strip of 2 x 6 points (a band restarted by a repeated index: two empty triangles, and
     the two halves meet at one point, a bow-tie the unwrap splits) and a
