@@ -118,9 +118,9 @@ def _read_obj(path):
         elif key == "o":
             obj = line.split(None, 1)[1].strip() if len(tokens) > 1 else ""
         elif key == "v":
-            vs.append(tokens[1:4])
+            vs.append((number, tokens[1:4]))
         elif key == "vt":
-            vts.append(tokens[1:3])
+            vts.append((number, tokens[1:3]))
         elif key == "f" and len(tokens) > 3:
             items = [it.split("/") for it in tokens[1:]]
             vi = [_obj_index(path, number, it[0], len(vs), "v") for it in items]
@@ -132,17 +132,37 @@ def _read_obj(path):
                 mats.append(mat)
                 objs.append(obj)
                 numbers.append(number)
-    V = np.asarray(vs, dtype=np.float64).reshape(-1, 3)
+    V = _numbers(path, vs, "v", 3)
     F = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     T = np.asarray(tfaces, dtype=np.int64).reshape(-1, 3)   # 1-based; 0: no vt
     _check_forward(path, F, len(V), "v", numbers)
     cuv = None
     if len(vts) and len(T) and np.all(T != 0):
-        VT = np.asarray(vts, dtype=np.float64).reshape(-1, 2)
+        VT = _numbers(path, vts, "vt", 2)
         _check_forward(path, T - 1, len(VT), "vt", numbers)
         cuv = VT[T - 1]
     labels = {"material": _first_use(mats), "object": _first_use(objs)}
     return V, F, cuv, labels
+
+
+def _numbers(path, rows, record, width):
+    """(len(rows), width) float64 of the (line number, tokens) ``rows`` of ``record``s; a value
+    that is not a number, or a record too short, is an ``InvalidMeshError`` giving its line."""
+    try:
+        return np.asarray([t for _, t in rows], dtype=np.float64).reshape(-1, width)
+    except ValueError:
+        pass
+    for number, tokens in rows:
+        if len(tokens) < width:
+            raise InvalidMeshError(f"{path} line {number}: a {record} record needs {width} "
+                                   f"numbers, this one has {len(tokens)}")
+        for t in tokens:
+            try:
+                float(t)
+            except ValueError:
+                raise InvalidMeshError(f"{path} line {number}: {t!r} in a {record} record is "
+                                       f"not a number") from None
+    raise InvalidMeshError(f"{path}: the {record} records cannot be read as numbers")
 
 
 def _obj_records(text):

@@ -4,6 +4,7 @@ PLY's body, a comment after an OBJ record, and glTF triangle strips and fans. Ea
 clean file it stands for; a file no reader can parse is an ``InvalidMeshError`` naming the file,
 never a traceback."""
 import json
+import re
 
 import numpy as np
 import pytest
@@ -82,6 +83,25 @@ def test_obj_record_continued_on_the_next_line(tmp_path):
     (tmp_path / "b.obj").write_text("\n".join(lines[:-1] + ["f 1 2 \\", "9"]) + "\n")
     with pytest.raises(InvalidMeshError, match=r"b\.obj line 12: face uses v 9"):
         load_mesh(str(tmp_path / "b.obj"))
+
+
+@pytest.mark.parametrize("record, words", [
+    ("v 1.#IND -1.#IND 1.#IND", "line 2: '1.#IND' in a v record is not a number"),  # MSVC NaN
+    ("v 3.1+e2 0 0", "line 2: '3.1+e2' in a v record is not a number"),   # assimp's own test
+    ("v 1 0", "line 2: a v record needs 3 numbers, this one has 2"),
+    ("vt 0.5 zero", "line 2: 'zero' in a vt record is not a number"),
+])
+def test_obj_value_that_is_no_number_is_refused_with_its_line(tmp_path, record, words):
+    """tinyobjloader's test-nan.obj (MSVC's ``1.#IND``) and assimp's number_formats.obj were
+    refused without a line ("could not convert string to float: '1.#IND'"); a short ``v`` gave
+    numpy's "setting an array element with a sequence"."""
+    p = tmp_path / "m.obj"
+    uv = record.startswith("vt")
+    p.write_text("\n".join(["v 0 0 0", record, "v 0 1 0", "v 1 1 0", "v 1 0 0"]
+                           + (["vt 0 0"] if uv else [])
+                           + ["f 1/1 3/2 4/2" if uv else "f 1 3 4"]) + "\n")
+    with pytest.raises(InvalidMeshError, match=re.escape(f"m.obj {words}")):
+        load_mesh(str(p))
 
 
 def _strip_and_fan():
