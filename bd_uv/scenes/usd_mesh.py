@@ -106,12 +106,13 @@ def mesh_arrays(mesh, where, uv_name, Usd):
         uv_name, note = uv_primvar(mesh.GetPrim())
         if note:
             warnings.append(note)
+    for attr in (mesh.GetFaceVertexCountsAttr(), mesh.GetFaceVertexIndicesAttr()):
+        if attr.GetNumTimeSamples() > 1:   # before the default's absence is named below
+            raise SceneFileError(f"{where}: {attr.GetName()} is time-sampled (changing "
+                                 "topology); bd-uv unwraps one topology")
     if P is None or counts is None or indices is None:
         raise SceneFileError(f"{where}: a mesh without points, faceVertexCounts or "
                              "faceVertexIndices")
-    if mesh.GetFaceVertexCountsAttr().GetNumTimeSamples() > 1:
-        raise SceneFileError(f"{where}: faceVertexCounts is time-sampled (changing topology); "
-                             "bd-uv unwraps one topology")
     V = _numbers(P, np.float64, f"{where}: points", width=3)
     counts = _numbers(counts, np.int64, f"{where}: faceVertexCounts")
     indices = _numbers(indices, np.int64, f"{where}: faceVertexIndices")

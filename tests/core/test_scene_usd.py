@@ -541,6 +541,27 @@ def test_an_empty_mesh_prim_is_skipped_and_the_others_unwrapped(tmp_path, capsys
     assert not (tmp_path / "q.usda").exists()
 
 
+def test_topology_only_time_sampled_is_named_as_changing(tmp_path, capsys):
+    """OpenUSD's meshVaryingTopologyWithSharing.usda: faceVertexCounts and faceVertexIndices
+    only as time samples, no default. It was refused as "a mesh without points,
+    faceVertexCounts or faceVertexIndices", which it has; now its changing topology is named,
+    and the stage's other mesh is unwrapped."""
+    src, out = str(tmp_path / "in.usda"), str(tmp_path / "o.usda")
+    _grid_stage(src, ["st"])
+    stage = Usd.Stage.Open(src)
+    m = UsdGeom.Mesh.Define(stage, "/World/Morphing")
+    m.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)])
+    for t, (counts, idx) in {1: ([3], [0, 1, 2]), 2: ([3, 3], [0, 1, 2, 0, 2, 3])}.items():
+        m.CreateFaceVertexCountsAttr().Set(counts, t)
+        m.CreateFaceVertexIndicesAttr().Set(idx, t)
+    stage.GetRootLayer().Save()
+    assert main(["unwrap", src, "-o", out]) == 1
+    err = capsys.readouterr().err
+    assert "/World/Morphing: faceVertexCounts is time-sampled (changing topology)" in err
+    assert "without points" not in err
+    _check_st(Usd.Stage.Open(out), "/World/Grid", 5.0)
+
+
 def test_a_fan_diagonal_along_another_polygons_side_is_turned_away(tmp_path):
     # A cube whose last side is a non-planar pentagon through a ninth point: fanned from its
     # first corner, its diagonal 2-0 runs along the side 0-2 of the quad (0, 4, 6, 2), an edge of
