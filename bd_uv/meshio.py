@@ -200,6 +200,10 @@ def _obj_index(path, number, text, count, record):
         i = int(text)
     except ValueError:
         raise InvalidMeshError(f"{path} line {number}: {text!r} is not a {record} index") from None
+    if i < -count and not count:
+        raise InvalidMeshError(f"{path} line {number}: face uses {record} {i}, but no {record} "
+                               f"record comes before it (a negative index counts back from "
+                               f"the {record} records before the face)")
     if i == 0 or i < -count:
         raise InvalidMeshError(
             f"{path} line {number}: face uses {record} {i}, but {count} {record} record(s) come "
