@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InvalidMeshError
+from .errors import InvalidMeshError, refuse_lfs_pointer
 
 _COMMENT = re.compile(r"\s#.*")   # an OBJ comment after a record (a '#' inside a name stays)
 
@@ -56,6 +56,7 @@ def load_mesh(path):
     """
     ext = os.path.splitext(path)[1].lower()
     name = os.path.splitext(os.path.basename(path))[0]
+    refuse_lfs_pointer(path)
     try:
         labels = None
         if ext == ".obj":

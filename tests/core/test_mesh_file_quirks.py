@@ -104,6 +104,21 @@ def test_obj_value_that_is_no_number_is_refused_with_its_line(tmp_path, record, 
         load_mesh(str(p))
 
 
+@pytest.mark.parametrize("suffix", [".obj", ".ply", ".gltf", ".glb", ".usd", ".usdz"])
+def test_a_git_lfs_pointer_is_named_as_one(tmp_path, capsys, suffix):
+    """A repository cloned without its LFS objects holds pointers in the assets' place (NVIDIA
+    warp's examples/assets/*.usd). Each reader refused them in its own words: "not a USD stage
+    USD can open (Error in 'pxrInternal_..." for USD, "the file holds no faces" for OBJ."""
+    p = tmp_path / ("asset" + suffix)
+    p.write_text("version https://git-lfs.github.com/spec/v1\noid sha256:"
+                 "bf8557a5481f3885e65b75d6005f0f2a6e1a40d8e3c9c3c4f2e4b5a6c7d8e9f0\nsize 3105\n")
+    out = tmp_path / ("out" + (suffix if suffix not in (".obj", ".ply") else ".obj"))
+    assert main(["unwrap", str(p), "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert f"{p}: a Git LFS pointer, not the file itself" in err and "git lfs pull" in err
+    assert "Traceback" not in err and not out.exists()
+
+
 def _strip_and_fan():
     """A strip of 2 x 6 points (a band restarted by a repeated index: two empty triangles, and
     the two halves meet at one point, a bow-tie the unwrap splits) and a
