@@ -562,6 +562,54 @@ def test_topology_only_time_sampled_is_named_as_changing(tmp_path, capsys):
     _check_st(Usd.Stage.Open(out), "/World/Grid", 5.0)
 
 
+def _package(path, files):
+    """A .usdz of ``files`` {path inside: file}, the first its root layer, as USD writes one."""
+    z = Sdf.ZipFileWriter.CreateNew(str(path))
+    for inside, f in files.items():
+        z.AddFile(str(f), inside)
+    z.Save()
+
+
+def test_a_package_whose_root_layer_is_in_a_folder_keeps_its_texture(tmp_path):
+    """OpenUSD's nestedUsdz/simpleMaterial.usdz holds simpleMaterial.usdz_FILES/simpleMaterial.usdc
+    and simpleMaterial.usdz_FILES/0/USDLogoLrg.png, which the layer names "0/USDLogoLrg.png".
+    The texture was unpacked at its path from the package's top, where the new layer did not
+    find it: "the .usdz package could not be written", nothing written."""
+    (tmp_path / "FILES" / "0").mkdir(parents=True)
+    layer, tex = tmp_path / "FILES" / "pkg.usdc", tmp_path / "FILES" / "0" / "tex.png"
+    tex.write_bytes(b"\x89PNG not really")
+    _grid_stage(str(layer), ["st"])
+    stage = Usd.Stage.Open(str(layer))
+    stage.GetPrimAtPath("/World/Grid").CreateAttribute(
+        "info:texture", Sdf.ValueTypeNames.Asset).Set(Sdf.AssetPath("0/tex.png"))
+    stage.GetRootLayer().Save()
+    src, out = tmp_path / "pkg.usdz", tmp_path / "o" / "out.usdz"
+    _package(src, {"pkg.usdz_FILES/pkg.usdc": layer, "pkg.usdz_FILES/0/tex.png": tex})
+    assert main(["unwrap", str(src), "-o", str(out), "-q"]) == 0
+    import zipfile
+    with zipfile.ZipFile(out) as z:
+        assert z.read("0/tex.png") == tex.read_bytes()
+    _check_st(Usd.Stage.Open(str(out)), "/World/Grid", 5.0)
+
+
+def test_a_package_naming_a_missing_asset_says_which(tmp_path, capsys):
+    """OpenUSD's usdUdims.usdz names texture_<UDIM>.jpg, which it does not hold: no package can
+    be written, and the message now names the asset instead of only "could not be written"."""
+    layer = tmp_path / "pkg.usdc"
+    _grid_stage(str(layer), ["st"])
+    stage = Usd.Stage.Open(str(layer))
+    stage.GetPrimAtPath("/World/Grid").CreateAttribute(
+        "info:texture", Sdf.ValueTypeNames.Asset).Set(Sdf.AssetPath("./gone.png"))
+    stage.GetRootLayer().Save()
+    src, out = tmp_path / "pkg.usdz", tmp_path / "o" / "out.usdz"
+    _package(src, {"pkg.usdc": layer})
+    assert main(["unwrap", str(src), "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "could not be written: 1 asset(s) the scene references resolve to no file (gone.png)" \
+        in err
+    assert not out.exists()
+
+
 def test_a_fan_diagonal_along_another_polygons_side_is_turned_away(tmp_path):
     # A cube whose last side is a non-planar pentagon through a ninth point: fanned from its
     # first corner, its diagonal 2-0 runs along the side 0-2 of the quad (0, 4, 6, 2), an edge of
