@@ -164,6 +164,9 @@ class UsdScene:
             prim = seen = stage.GetPrimAtPath(sm.name)
         else:   # on the prototype's class, which every instance inherits (usd_instances)
             prim, seen = target_prim(stage, instanced)
+        if not prim or not seen:   # the copied layer composes no such prim (a reference lost)
+            return _refused(certs, f"{sm.name} is not in the stage as written (a reference of "
+                                   "the copied root layer does not resolve there)")
         api = UsdGeom.PrimvarsAPI(prim)
         warnings = []
         name = part["uv_name"]

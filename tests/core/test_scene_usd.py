@@ -592,6 +592,27 @@ def test_a_package_whose_root_layer_is_in_a_folder_keeps_its_texture(tmp_path):
     _check_st(Usd.Stage.Open(str(out)), "/World/Grid", 5.0)
 
 
+def test_a_package_of_packages_in_a_folder_is_written(tmp_path):
+    """OpenUSD's nestedUsdz/combined.usdz: combined.usdz_FILES/combined.usda references
+    simpleMesh.usdz beside it in the package. Main ended in a traceback, "RuntimeError:
+    Accessed schema on invalid prim" (the copied layer's reference found nothing)."""
+    inner = tmp_path / "mesh.usdc"
+    _grid_stage(str(inner), ["st"])
+    grid = Usd.Stage.Open(str(inner))
+    grid.SetDefaultPrim(grid.GetPrimAtPath("/World"))
+    grid.GetRootLayer().Save()
+    _package(tmp_path / "mesh.usdz", {"mesh.usdc": inner})
+    root = tmp_path / "root.usda"
+    stage = Usd.Stage.CreateNew(str(root))
+    stage.DefinePrim("/Asset").GetReferences().AddReference("mesh.usdz")
+    stage.GetRootLayer().Save()
+    src, out = tmp_path / "pkg.usdz", tmp_path / "o" / "out.usdz"
+    _package(src, {"pkg.usdz_FILES/root.usda": root,
+                   "pkg.usdz_FILES/mesh.usdz": tmp_path / "mesh.usdz"})
+    assert main(["unwrap", str(src), "-o", str(out), "-q"]) == 0
+    _check_st(Usd.Stage.Open(str(out)), "/Asset/Grid", 5.0)
+
+
 def test_a_package_naming_a_missing_asset_says_which(tmp_path, capsys):
     """OpenUSD's usdUdims.usdz names texture_<UDIM>.jpg, which it does not hold: no package can
     be written, and the message now names the asset instead of only "could not be written"."""
