@@ -86,6 +86,17 @@ def _nothing(attr, value):
     return hasattr(value, "__len__") and len(value) == 0
 
 
+def _sole_sample(attr, warnings):
+    """The attribute's default value; with none, its one time sample (Houdini's exports and
+    OpenUSD's animatedTop tutorial author the whole topology at one time code, no default)."""
+    value = attr.Get()
+    if value is None and attr.GetNumTimeSamples() == 1:
+        t = attr.GetTimeSamples()[0]
+        value = attr.Get(t)
+        warnings.append(f"{attr.GetName()} is time-sampled with no default: read at time {t:g}")
+    return value
+
+
 def mesh_arrays(mesh, where, uv_name, Usd):
     """(Mesh, write-back part, info, warnings) of one UsdGeom.Mesh; None for an empty one
     (points, faceVertexCounts and faceVertexIndices all unauthored or empty)."""
@@ -97,8 +108,8 @@ def mesh_arrays(mesh, where, uv_name, Usd):
         t = points_attr.GetTimeSamples()[0]
         P = points_attr.Get(t)
         warnings.append(f"points are time-sampled with no default: unwrapped at time {t:g}")
-    counts = mesh.GetFaceVertexCountsAttr().Get()
-    indices = mesh.GetFaceVertexIndicesAttr().Get()
+    counts = _sole_sample(mesh.GetFaceVertexCountsAttr(), warnings)
+    indices = _sole_sample(mesh.GetFaceVertexIndicesAttr(), warnings)
     if (_nothing(points_attr, P) and _nothing(mesh.GetFaceVertexCountsAttr(), counts)
             and _nothing(mesh.GetFaceVertexIndicesAttr(), indices)):
         return None

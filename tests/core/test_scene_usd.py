@@ -57,17 +57,19 @@ def _check_everything_kept(stage_in, stage_out):
     return n
 
 
-def _check_st(stage, path, bound, name="st"):
-    """Certify the stored primvar from the file, with this test's own fan triangulation."""
+def _check_st(stage, path, bound, name="st", time=None):
+    """Certify the stored primvar from the file, with this test's own fan triangulation (the
+    mesh's points and topology at ``time``, default: their default values)."""
+    time = Usd.TimeCode.Default() if time is None else time
     mesh = UsdGeom.Mesh(stage.GetPrimAtPath(path))
     pv = UsdGeom.PrimvarsAPI(mesh.GetPrim()).GetPrimvar(name)
     assert pv.GetTypeName() == Sdf.ValueTypeNames.TexCoord2fArray
     assert pv.GetInterpolation() == UsdGeom.Tokens.faceVarying and pv.IsIndexed()
     assert pv.GetAttr().GetNumTimeSamples() == 0
     uv = np.asarray(pv.Get(), np.float64)[np.asarray(pv.GetIndices())]   # per face-vertex
-    P = np.asarray(mesh.GetPointsAttr().Get(), np.float64)
-    counts = np.asarray(mesh.GetFaceVertexCountsAttr().Get())
-    idx = np.asarray(mesh.GetFaceVertexIndicesAttr().Get())
+    P = np.asarray(mesh.GetPointsAttr().Get(time), np.float64)
+    counts = np.asarray(mesh.GetFaceVertexCountsAttr().Get(time))
+    idx = np.asarray(mesh.GetFaceVertexIndicesAttr().Get(time))
     tris, s = [], 0
     for c in counts:
         tris += [(s, s + i, s + i + 1) for i in range(1, c - 1)]
@@ -539,6 +541,25 @@ def test_an_empty_mesh_prim_is_skipped_and_the_others_unwrapped(tmp_path, capsys
     assert main(["unwrap", str(tmp_path / "bad.usda"), "-o", str(tmp_path / "q.usda")]) == 1
     assert "/Broken" in capsys.readouterr().err
     assert not (tmp_path / "q.usda").exists()
+
+
+def test_topology_at_one_time_sample_and_no_default_is_read(tmp_path):
+    """Houdini's exports and OpenUSD's animatedTop tutorial (top.geom.usd) author points,
+    faceVertexCounts and faceVertexIndices at one time code, no default. The points were read
+    at it; the topology was not, and such a mesh was refused as "a mesh without points,
+    faceVertexCounts or faceVertexIndices"."""
+    src, out = str(tmp_path / "in.usda"), str(tmp_path / "o.usda")
+    _grid_stage(src, [])
+    stage = Usd.Stage.Open(src)
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/World/Grid"))
+    for attr in (mesh.GetPointsAttr(), mesh.GetFaceVertexCountsAttr(),
+                 mesh.GetFaceVertexIndicesAttr()):
+        value = attr.Get()
+        attr.Clear()
+        attr.Set(value, 48)
+    stage.GetRootLayer().Save()
+    assert main(["unwrap", src, "-o", out, "-q"]) == 0
+    _check_st(Usd.Stage.Open(out), "/World/Grid", 5.0, time=48)
 
 
 def test_topology_only_time_sampled_is_named_as_changing(tmp_path, capsys):
