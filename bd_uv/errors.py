@@ -111,3 +111,22 @@ class SceneFileError(BDError):
 
 class MissingExtraError(BDError):
     """A format needs an optional package that is not installed; the message names the extra."""
+
+
+LFS_POINTER = b"version https://git-lfs.github.com/spec/"
+
+
+def refuse_lfs_pointer(path, error=InvalidMeshError):
+    """Raise ``error`` naming a Git LFS pointer: a small text file a repository cloned without
+    its LFS objects holds in the asset's place (NVIDIA warp's example .usd files), which every
+    reader would otherwise refuse in its own words ("not a USD stage USD can open (Error in
+    'pxrInternal_...::UsdStage::Open' ...)", "the file holds no faces"). Unreadable: left to
+    the reader, which says why."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(len(LFS_POINTER))
+    except OSError:
+        return
+    if head == LFS_POINTER:
+        raise error(f"{path}: a Git LFS pointer, not the file itself (the repository was cloned "
+                    f"without its LFS objects): fetch them (git lfs pull) and run again")

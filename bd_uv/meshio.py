@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import InvalidMeshError
+from .errors import InvalidMeshError, refuse_lfs_pointer
 from .mesh.weld import welded_in_place
 
 _COMMENT = re.compile(r"\s#.*")   # an OBJ comment after a record (a '#' inside a name stays)
@@ -80,6 +80,7 @@ def load_mesh(path):
     """
     ext = os.path.splitext(path)[1].lower()
     name = os.path.splitext(os.path.basename(path))[0]
+    refuse_lfs_pointer(path)
     try:
         labels, file_F = None, None
         if ext == ".obj":
@@ -157,7 +158,7 @@ def _read_obj(path):
     index naming no vertex is an ``InvalidMeshError`` giving the file's line."""
     vs, vts, faces, tfaces, mats, objs, numbers = [], [], [], [], [], [], []
     mat, obj = None, None
-    for number, line in enumerate(_obj_text(path).splitlines(), 1):
+    for number, line in _obj_records(_obj_text(path)):
         line = _COMMENT.sub("", line)   # "f 1 2 3 # note": a comment ends a record
         tokens = line.split()
         key = tokens[0] if tokens else ""
@@ -166,9 +167,9 @@ def _read_obj(path):
         elif key == "o":
             obj = line.split(None, 1)[1].strip() if len(tokens) > 1 else ""
         elif key == "v":
-            vs.append(tokens[1:4])
+            vs.append((number, tokens[1:4]))
         elif key == "vt":
-            vts.append(tokens[1:3])
+            vts.append((number, tokens[1:3]))
         elif key == "f" and len(tokens) > 3:
             items = [it.split("/") for it in tokens[1:]]
             vi = [_obj_index(path, number, it[0], len(vs), "v") for it in items]
@@ -180,17 +181,55 @@ def _read_obj(path):
                 mats.append(mat)
                 objs.append(obj)
                 numbers.append(number)
-    V = np.asarray(vs, dtype=np.float64).reshape(-1, 3)
+    V = _numbers(path, vs, "v", 3)
     F = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
     T = np.asarray(tfaces, dtype=np.int64).reshape(-1, 3)   # 1-based; 0: no vt
     _check_forward(path, F, len(V), "v", numbers)
     cuv = None
     if len(vts) and len(T) and np.all(T != 0):
-        VT = np.asarray(vts, dtype=np.float64).reshape(-1, 2)
+        VT = _numbers(path, vts, "vt", 2)
         _check_forward(path, T - 1, len(VT), "vt", numbers)
         cuv = VT[T - 1]
     labels = {"material": _first_use(mats), "object": _first_use(objs)}
     return V, F, cuv, labels
+
+
+def _numbers(path, rows, record, width):
+    """(len(rows), width) float64 of the (line number, tokens) ``rows`` of ``record``s; a value
+    that is not a number, or a record too short, is an ``InvalidMeshError`` giving its line."""
+    try:
+        return np.asarray([t for _, t in rows], dtype=np.float64).reshape(-1, width)
+    except ValueError:
+        pass
+    for number, tokens in rows:
+        if len(tokens) < width:
+            raise InvalidMeshError(f"{path} line {number}: a {record} record needs {width} "
+                                   f"numbers, this one has {len(tokens)}")
+        for t in tokens:
+            try:
+                float(t)
+            except ValueError:
+                raise InvalidMeshError(f"{path} line {number}: {t!r} in a {record} record is "
+                                       f"not a number") from None
+    raise InvalidMeshError(f"{path}: the {record} records cannot be read as numbers")
+
+
+def _obj_records(text):
+    """(line number, record) of each record of an OBJ's text: a line ending in a backslash goes
+    on on the next line (the OBJ format's continuation, as Rhino writes long faces); the number
+    is the record's first line."""
+    pending, start = None, 0
+    for number, line in enumerate(text.splitlines(), 1):
+        if pending is not None:
+            line, number = pending + " " + line, start
+        body = line.rstrip()
+        if body.endswith("\\"):
+            pending, start = body[:-1], number
+            continue
+        pending = None
+        yield number, line
+    if pending is not None:
+        yield start, pending
 
 
 def _obj_text(path):
@@ -210,6 +249,10 @@ def _obj_index(path, number, text, count, record):
         i = int(text)
     except ValueError:
         raise InvalidMeshError(f"{path} line {number}: {text!r} is not a {record} index") from None
+    if i < -count and not count:
+        raise InvalidMeshError(f"{path} line {number}: face uses {record} {i}, but no {record} "
+                               f"record comes before it (a negative index counts back from "
+                               f"the {record} records before the face)")
     if i == 0 or i < -count:
         raise InvalidMeshError(
             f"{path} line {number}: face uses {record} {i}, but {count} {record} record(s) come "

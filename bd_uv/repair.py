@@ -13,7 +13,11 @@ manifold, consistently oriented surface:
 - every vertex is split into one vertex per fan of corners, where corners are joined only across
   an edge of exactly two faces that orient it oppositely. This splits a bow-tie vertex per fan,
   and cuts an edge of three or more faces and an edge between two faces oriented alike (each
-  differently oriented part becomes a part of its own) like a seam.
+  differently oriented part becomes a part of its own) like a seam;
+- a face on the three vertices of an earlier face in the reverse order (the back of a surface
+  modelled double-sided, as game and CAD exports often are) is glued only to other such faces:
+  the backs make a surface of their own, unwrapped beside the front (otherwise every edge of a
+  double-sided mesh has four faces and each face became an island of its own).
 
 A clean mesh comes back unchanged (same vertex ids, same faces).
 """
@@ -47,6 +51,8 @@ class Repair:
     nonmanifold_edges : (e1,2) int64, input vertex pairs of edges of three or more faces (cut)
     orientation_edges : (e2,2) int64, input vertex pairs of edges whose two faces are oriented
         alike (cut: each differently oriented part is unwrapped on its own)
+    back_faces : (b,) int64, input faces on an earlier solved face's vertices in reverse order
+        (a double-sided surface's back: glued only to each other)
     """
 
     V: np.ndarray
@@ -59,13 +65,15 @@ class Repair:
     split_vertices: np.ndarray
     nonmanifold_edges: np.ndarray
     orientation_edges: np.ndarray
+    back_faces: np.ndarray
 
     @property
     def changed(self):
         """Whether anything was split, cut or left out."""
         return bool(len(self.zero_area) or len(self.non_finite) or (self.twin >= 0).any()
                     or len(self.split_vertices)
-                    or len(self.nonmanifold_edges) or len(self.orientation_edges))
+                    or len(self.nonmanifold_edges) or len(self.orientation_edges)
+                    or len(self.back_faces))
 
     def seams(self, pairs):
         """The (s,2) input vertex pairs ``pairs`` as edges of ``F`` (every copy of a split one).
@@ -108,6 +116,10 @@ class Repair:
             out.append(f"{len(self.orientation_edges)} edge(s) between faces oriented against "
                        f"each other cut as seams: each oriented part is its own chart"
                        + which("edges", _pairs(self.orientation_edges)))
+        if len(self.back_faces):
+            out.append(f"{count(self.back_faces)} face(s) on an earlier face's vertices in reverse "
+                       f"order (a double-sided surface's back) unwrapped as a surface of their own"
+                       + which("faces", _some(self.back_faces)))
         if len(dup):
             out.append(f"{count(dup)} duplicate face(s) left out of the solve, given their twin's "
                        f"UVs" + which("faces", _some(dup)))
@@ -234,10 +246,13 @@ def repair_mesh(V, F, precision=None):
     faces = np.flatnonzero(~zero & ~bad & (twin < 0))
     Fk = F[faces]
     k = len(Fk)
-    # Half-edge h = 3 f + c runs from Fk[f, c] to Fk[f, c + 1].
+    back = _reversed_repeats(Fk)
+    # Half-edge h = 3 f + c runs from Fk[f, c] to Fk[f, c + 1]; its key names the edge and the
+    # side (front 0, back 1) of its face, so that only faces of one side are glued.
     src = Fk.ravel()
     dst = np.roll(Fk, -1, axis=1).ravel()
-    key = np.minimum(src, dst) * n + np.maximum(src, dst)
+    side = np.repeat(back, 3).astype(np.int64)
+    key = (np.minimum(src, dst) * n + np.maximum(src, dst)) * 2 + side
     uniq, inv, count = np.unique(key, return_inverse=True, return_counts=True)
     inv = inv.ravel()
     order = np.argsort(inv, kind="stable")
@@ -252,19 +267,37 @@ def repair_mesh(V, F, precision=None):
     cols = np.concatenate([nxt(g2), g2])
     adj = sp.coo_array((np.ones(len(rows)), (rows, cols)), shape=(3 * k, 3 * k))
     _, fan = connected_components(adj, directed=False)
-    # One vertex per (input vertex, fan): the first fan of a vertex keeps its id.
-    pairs, pinv = np.unique(np.stack([src, fan], axis=1), axis=0, return_inverse=True)
+    # One vertex per (input vertex, fan): the first fan of a vertex keeps its id. A vertex is
+    # named split when one side holds two fans of it (front and back apart are no defect).
+    pairs, pinv = np.unique(np.stack([src, side, fan], axis=1), axis=0, return_inverse=True)
     pinv = pinv.ravel()
     again = np.r_[False, pairs[1:, 0] == pairs[:-1, 0]]
+    split = np.flatnonzero(np.r_[False, (pairs[1:, :2] == pairs[:-1, :2]).all(axis=1)])
     extra = np.flatnonzero(again)
     new_id = pairs[:, 0].copy()
     new_id[extra] = n + np.arange(len(extra))
     vertex_source = np.concatenate([np.arange(n), pairs[extra, 0]])
     F2 = new_id[pinv].reshape(k, 3) if k else np.zeros((0, 3), dtype=np.int64)
     V2 = V[vertex_source]
-    ends = np.stack([uniq // n, uniq % n], axis=1) if len(uniq) else np.zeros((0, 2), np.int64)
+    e = uniq // 2
+    ends = np.stack([e // n, e % n], axis=1) if len(uniq) else np.zeros((0, 2), np.int64)
     return Repair(V2, F2.astype(np.int64), faces.astype(np.int64), vertex_source.astype(np.int64),
                   twin, np.flatnonzero(zero).astype(np.int64),
                   np.flatnonzero(bad).astype(np.int64),
-                  np.unique(pairs[extra, 0]).astype(np.int64), ends[count >= 3],
-                  ends[two[~opposite]])
+                  np.unique(pairs[split, 0]).astype(np.int64), _rows(ends[count >= 3]),
+                  _rows(ends[two[~opposite]]), faces[back].astype(np.int64))
+
+
+def _reversed_repeats(Fk):
+    """(k,) bool: faces on the same three vertices as an earlier face of ``Fk`` (k,3) (with no
+    two in the same cyclic order, ``duplicate_twins``, so in the reverse order)."""
+    if not len(Fk):
+        return np.zeros(0, dtype=bool)
+    _, first, inv = np.unique(np.sort(Fk, axis=1), axis=0, return_index=True,
+                              return_inverse=True)
+    return first[inv.ravel()] != np.arange(len(Fk))
+
+
+def _rows(pairs):
+    """The distinct rows of (e,2) ``pairs`` (an edge cut on both sides is named once)."""
+    return np.unique(pairs, axis=0) if len(pairs) else pairs.reshape(0, 2)

@@ -107,8 +107,12 @@ def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=Non
                            "max_distortion": t["max_distortion"], "flipped": int(t["flipped"]),
                            "overlap_free": t["overlapping"] == 0}
         if t["certified"] < t["islands"]:
-            entry.update(status="failed", error="SceneFileError",
-                         message="; ".join(c.reason for c in certs if not c.certified))
+            bad = [c for c in certs if not c.certified]
+            entry.update(status="failed", error="SceneFileError", message=(
+                f"{len(bad)} of {len(certs)} island(s) fail as stored (float32, one UV per "
+                f"face-vertex), so the mesh keeps the UVs it had: "
+                + "; ".join(f"island {c.island}: {c.reason}" for c in bad[:3])
+                + ("; ..." if len(bad) > 3 else "")))
         else:
             entry["output"] = os.path.abspath(output)
     return entries

@@ -8,7 +8,7 @@ as stored certify. ``bd_uv.batch.scene_files`` drives them.
 """
 import os
 
-from ..errors import BDError, MissingExtraError
+from ..errors import BDError, MissingExtraError, SceneFileError, refuse_lfs_pointer
 from .model import Charts, SceneMesh  # noqa: F401  (the scene's meshes and what is written)
 
 GLTF_SUFFIXES = (".gltf", ".glb")
@@ -36,6 +36,8 @@ def read_scene(path, uv_set=0, uv_name=None):
     BDError for a format that only Blender reads (the message gives the command).
     """
     ext = os.path.splitext(path)[1].lower()
+    if ext in SCENE_SUFFIXES:
+        refuse_lfs_pointer(path, SceneFileError)
     if ext in GLTF_SUFFIXES:
         from .gltf import GltfScene
         return GltfScene.read(path, uv_set=uv_set)

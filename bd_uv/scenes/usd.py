@@ -118,7 +118,8 @@ class UsdScene:
                 return nothing.result
             with atomic_path(path) as ztmp:
                 if not UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(layer_path), ztmp):
-                    raise SceneFileError(f"{path}: the .usdz package could not be written")
+                    raise SceneFileError(f"{path}: the .usdz package could not be written"
+                                         + _unresolved(UsdUtils, Sdf, layer_path))
         return result
 
     def _write_layer(self, layer_path, charts, package_local=False):
@@ -163,6 +164,9 @@ class UsdScene:
             prim = seen = stage.GetPrimAtPath(sm.name)
         else:   # on the prototype's class, which every instance inherits (usd_instances)
             prim, seen = target_prim(stage, instanced)
+        if not prim or not seen:   # the copied layer composes no such prim (a reference lost)
+            return _refused(certs, f"{sm.name} is not in the stage as written (a reference of "
+                                   "the copied root layer does not resolve there)")
         api = UsdGeom.PrimvarsAPI(prim)
         warnings = []
         name = part["uv_name"]
@@ -212,13 +216,18 @@ class _NothingCertified(Exception):
 
 
 def _unpack(package, folder, layer_name):
-    """Extract a .usdz's files but its root layer into ``folder`` at their paths inside it (none
-    leaving ``folder``, none named ``layer_name``). Returns True."""
+    """Extract a .usdz's files but its root layer into ``folder`` at their paths inside it from
+    the root layer's folder, where the root layer's relative asset paths find them (a root
+    layer in a subfolder, ``pkg.usdz_FILES/pkg.usdc``, as OpenUSD's own test packages have it);
+    none leaving ``folder``, none named ``layer_name``. Returns True."""
+    import posixpath
     import zipfile
     with zipfile.ZipFile(package) as z:
         names = z.namelist()
+        base = posixpath.dirname(names[0]) if names else ""
         for name in names[1:]:   # the first file of a package is its root layer
-            target = os.path.normpath(os.path.join(folder, name))
+            inside = posixpath.relpath(name, base) if base and not name.endswith("/") else name
+            target = os.path.normpath(os.path.join(folder, inside))
             if (os.path.isabs(name) or not target.startswith(os.path.join(folder, ""))
                     or name.endswith("/") or os.path.basename(target) == layer_name):
                 continue
@@ -226,6 +235,21 @@ def _unpack(package, folder, layer_name):
             with z.open(name) as fin, open(target, "wb") as fout:
                 fout.write(fin.read())
     return True
+
+
+def _unresolved(UsdUtils, Sdf, layer_path):
+    """Why a package could not be made, when USD names it: the assets the layer references that
+    resolve to no file (a package holds only files that exist)."""
+    try:
+        missing = [str(p) for p in UsdUtils.ComputeAllDependencies(Sdf.AssetPath(layer_path))[2]]
+    except Exception:   # noqa: BLE001 (only words for a message)
+        return ""
+    if not missing:
+        return ""
+    names = ", ".join(os.path.basename(p) for p in missing[:4])
+    return (f": {len(missing)} asset(s) the scene references resolve to no file ({names}"
+            + (", ..." if len(missing) > 4 else "") + "); write a .usd/.usda/.usdc instead, "
+            "or restore them")
 
 
 def _reanchor(src, asset, out_dir, package_local=False):

@@ -86,6 +86,17 @@ def _nothing(attr, value):
     return hasattr(value, "__len__") and len(value) == 0
 
 
+def _sole_sample(attr, warnings):
+    """The attribute's default value; with none, its one time sample (Houdini's exports and
+    OpenUSD's animatedTop tutorial author the whole topology at one time code, no default)."""
+    value = attr.Get()
+    if value is None and attr.GetNumTimeSamples() == 1:
+        t = attr.GetTimeSamples()[0]
+        value = attr.Get(t)
+        warnings.append(f"{attr.GetName()} is time-sampled with no default: read at time {t:g}")
+    return value
+
+
 def mesh_arrays(mesh, where, uv_name, Usd):
     """(Mesh, write-back part, info, warnings) of one UsdGeom.Mesh; None for an empty one
     (points, faceVertexCounts and faceVertexIndices all unauthored or empty)."""
@@ -97,8 +108,8 @@ def mesh_arrays(mesh, where, uv_name, Usd):
         t = points_attr.GetTimeSamples()[0]
         P = points_attr.Get(t)
         warnings.append(f"points are time-sampled with no default: unwrapped at time {t:g}")
-    counts = mesh.GetFaceVertexCountsAttr().Get()
-    indices = mesh.GetFaceVertexIndicesAttr().Get()
+    counts = _sole_sample(mesh.GetFaceVertexCountsAttr(), warnings)
+    indices = _sole_sample(mesh.GetFaceVertexIndicesAttr(), warnings)
     if (_nothing(points_attr, P) and _nothing(mesh.GetFaceVertexCountsAttr(), counts)
             and _nothing(mesh.GetFaceVertexIndicesAttr(), indices)):
         return None
@@ -106,12 +117,13 @@ def mesh_arrays(mesh, where, uv_name, Usd):
         uv_name, note = uv_primvar(mesh.GetPrim())
         if note:
             warnings.append(note)
+    for attr in (mesh.GetFaceVertexCountsAttr(), mesh.GetFaceVertexIndicesAttr()):
+        if attr.GetNumTimeSamples() > 1:   # before the default's absence is named below
+            raise SceneFileError(f"{where}: {attr.GetName()} is time-sampled (changing "
+                                 "topology); bd-uv unwraps one topology")
     if P is None or counts is None or indices is None:
         raise SceneFileError(f"{where}: a mesh without points, faceVertexCounts or "
                              "faceVertexIndices")
-    if mesh.GetFaceVertexCountsAttr().GetNumTimeSamples() > 1:
-        raise SceneFileError(f"{where}: faceVertexCounts is time-sampled (changing topology); "
-                             "bd-uv unwraps one topology")
     V = _numbers(P, np.float64, f"{where}: points", width=3)
     counts = _numbers(counts, np.int64, f"{where}: faceVertexCounts")
     indices = _numbers(indices, np.int64, f"{where}: faceVertexIndices")

@@ -4,6 +4,7 @@ PLY's body, a comment after an OBJ record, and glTF triangle strips and fans. Ea
 clean file it stands for; a file no reader can parse is an ``InvalidMeshError`` naming the file,
 never a traceback."""
 import json
+import re
 
 import numpy as np
 import pytest
@@ -65,6 +66,57 @@ def test_obj_comment_after_a_record(tmp_path):
     assert np.array_equal(a.F, b.F) and np.array_equal(a.corner_uv, b.corner_uv)
     assert a.F.tolist() == [[0, 1, 2], [0, 2, 3], [0, 2, 3]]
     assert b.labels["material"].tolist() == [0, 0, 1]    # "Green#2": a '#' inside a name stays
+
+
+def test_obj_record_continued_on_the_next_line(tmp_path):
+    """A line ending in a backslash goes on on the next line (the OBJ format; Rhino writes long
+    faces so: trimesh's wallhole.obj, CRLF line ends). Main refused that file ("wallhole.obj line
+    282: '\\' is not a v index") and this one. An index naming no vertex after a continuation
+    names the record's first line."""
+    lines = ["v 0 0 0", "v 1 0 0", "v 1 1 \\", "  0", "v 0 1 0", "vt 0 0", "vt 1 0", "vt 1 1",
+             "vt 0 1", "f 1/1 2/2 \\", "3/3 4/4", "f 1/1 3/3 4/4"]
+    (tmp_path / "a.obj").write_bytes(("\r\n".join(lines) + "\r\n").encode())
+    a = load_mesh(str(tmp_path / "a.obj"))
+    assert a.V.tolist() == [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]
+    assert a.F.tolist() == [[0, 1, 2], [0, 2, 3], [0, 2, 3]]
+    assert a.corner_uv[1].tolist() == [[0, 0], [1, 1], [0, 1]]
+    (tmp_path / "b.obj").write_text("\n".join(lines[:-1] + ["f 1 2 \\", "9"]) + "\n")
+    with pytest.raises(InvalidMeshError, match=r"b\.obj line 12: face uses v 9"):
+        load_mesh(str(tmp_path / "b.obj"))
+
+
+@pytest.mark.parametrize("record, words", [
+    ("v 1.#IND -1.#IND 1.#IND", "line 2: '1.#IND' in a v record is not a number"),  # MSVC NaN
+    ("v 3.1+e2 0 0", "line 2: '3.1+e2' in a v record is not a number"),   # assimp's own test
+    ("v 1 0", "line 2: a v record needs 3 numbers, this one has 2"),
+    ("vt 0.5 zero", "line 2: 'zero' in a vt record is not a number"),
+])
+def test_obj_value_that_is_no_number_is_refused_with_its_line(tmp_path, record, words):
+    """tinyobjloader's test-nan.obj (MSVC's ``1.#IND``) and assimp's number_formats.obj were
+    refused without a line ("could not convert string to float: '1.#IND'"); a short ``v`` gave
+    numpy's "setting an array element with a sequence"."""
+    p = tmp_path / "m.obj"
+    uv = record.startswith("vt")
+    p.write_text("\n".join(["v 0 0 0", record, "v 0 1 0", "v 1 1 0", "v 1 0 0"]
+                           + (["vt 0 0"] if uv else [])
+                           + ["f 1/1 3/2 4/2" if uv else "f 1 3 4"]) + "\n")
+    with pytest.raises(InvalidMeshError, match=re.escape(f"m.obj {words}")):
+        load_mesh(str(p))
+
+
+@pytest.mark.parametrize("suffix", [".obj", ".ply", ".gltf", ".glb", ".usd", ".usdz"])
+def test_a_git_lfs_pointer_is_named_as_one(tmp_path, capsys, suffix):
+    """A repository cloned without its LFS objects holds pointers in the assets' place (NVIDIA
+    warp's examples/assets/*.usd). Each reader refused them in its own words: "not a USD stage
+    USD can open (Error in 'pxrInternal_..." for USD, "the file holds no faces" for OBJ."""
+    p = tmp_path / ("asset" + suffix)
+    p.write_text("version https://git-lfs.github.com/spec/v1\noid sha256:"
+                 "bf8557a5481f3885e65b75d6005f0f2a6e1a40d8e3c9c3c4f2e4b5a6c7d8e9f0\nsize 3105\n")
+    out = tmp_path / ("out" + (suffix if suffix not in (".obj", ".ply") else ".obj"))
+    assert main(["unwrap", str(p), "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert f"{p}: a Git LFS pointer, not the file itself" in err and "git lfs pull" in err
+    assert "Traceback" not in err and not out.exists()
 
 
 def _strip_and_fan():

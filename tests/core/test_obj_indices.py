@@ -71,6 +71,18 @@ def test_an_index_naming_no_vertex_is_refused_with_its_line(tmp_path, capsys, fa
     assert not out.exists() and "Traceback" not in capsys.readouterr().err
 
 
+def test_a_negative_index_before_any_vertex_says_so(tmp_path):
+    """tinyobjloader's invalid-relative-vertex-index.obj (a face first): the message read
+    "but 0 v record(s) come before it (v indices run 1..0, or -1..-0 counting back)"."""
+    p = tmp_path / "first.obj"
+    p.write_text("f -4 -3 -2\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n")
+    with pytest.raises(InvalidMeshError, match=r"first.obj line 1: face uses v -4, but no v "
+                                                r"record comes before it \(a negative index "
+                                                r"counts back from the v records before the "
+                                                r"face\)"):
+        load_mesh(str(p))
+
+
 def test_a_later_vertex_may_be_named_before_it_is_read(tmp_path):
     # positive indices are resolved against the whole file, as bd-uv read them before
     p = tmp_path / "fwd.obj"

@@ -79,8 +79,25 @@ def non_finite_vertex():
     return V, np.vstack([F, [[0, len(V) - 1, 4]]]), {z}, "NaN or infinite"
 
 
+def double_sided():
+    """Every face repeated on its vertices in reverse order (a surface modelled double-sided, as
+    trimesh's chair_model.obj, a Blender 2.71 export, is: 6,374 faces twice)."""
+    V, F = _grid()
+    return V, np.vstack([F, F[:, ::-1]]), set(), "double-sided"
+
+
+def lone_double_sided_triangle():
+    """A triangle on its own, written twice in opposite orders (trimesh's bunny.ply holds such
+    pairs): on main the pair was one closed island of two faces, refused ("2 faces repeat the
+    same three vertices ... merge or delete the duplicates")."""
+    V, F = _grid()
+    n = len(V)
+    V = np.vstack([V, [[6.0, 0.0, 0.0], [7.0, 0.0, 0.2], [6.0, 1.0, 0.1]]])
+    return V, np.vstack([F, [[n, n + 1, n + 2], [n, n + 2, n + 1]]]), set(), "double-sided"
+
+
 DEFECTS = [bowtie, three_faces_on_an_edge, flipped_part, duplicate_face, zero_area_face,
-           non_finite_vertex]
+           non_finite_vertex, double_sided, lone_double_sided_triangle]
 
 
 def _check_certified(V, F, corner_uv, skip):
@@ -160,6 +177,42 @@ def test_closed_mesh_without_seams_unwraps_from_the_command_line(tmp_path):
     assert r.returncode == 0, r.stderr
     report = json.loads(rep.read_text())
     assert len(report["seams_added"]) > 0
+
+
+def _uv_islands(F, corner_uv):
+    """Islands of stored UVs: faces joined across an edge whose two ends carry the same UVs in
+    both faces (recomputed from the corner UVs alone)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    seen, I, J = {}, [], []
+    for f, (tri, uv) in enumerate(zip(F.tolist(), corner_uv.tolist())):
+        for c in range(3):
+            (a, ua), (b, ub) = sorted([(tri[c], uv[c]), (tri[(c + 1) % 3], uv[(c + 1) % 3])])
+            key = (a, b, *ua, *ub)
+            if key in seen:
+                I.append(seen[key])
+                J.append(f)
+            seen.setdefault(key, f)
+    A = coo_matrix((np.ones(len(I)), (I, J)), shape=(len(F), len(F)))
+    return connected_components(A, directed=False)
+
+
+def test_double_sided_surface_unwraps_front_and_back_as_two_islands():
+    """Each face twice, the second reversed: every inner edge has four faces. The backs are one
+    surface of their own, so the grid's front and back come out as one island each (before, every
+    edge of four faces was cut: 36 islands for this grid's 48 faces, 38 as stored)."""
+    V, F, _, _ = double_sided()
+    front = len(F) // 2
+    rep = repair_mesh(V, F)
+    assert sorted(rep.back_faces.tolist()) == list(range(front, len(F)))
+    assert not len(rep.split_vertices) and not len(rep.nonmanifold_edges)
+    assert not len(rep.orientation_edges)
+    res = unwrap_needed(V, F)
+    layout = stored_layout(V, F, res, dtype=np.float32)
+    _check_certified(V, F, layout.corner_uv, set())
+    n, lab = _uv_islands(F, layout.corner_uv)
+    assert n == 2
+    assert len(set(lab[:front])) == 1 and len(set(lab[front:])) == 1
 
 
 def test_marked_seams_that_make_disks_get_no_new_seam():

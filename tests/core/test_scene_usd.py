@@ -57,17 +57,19 @@ def _check_everything_kept(stage_in, stage_out):
     return n
 
 
-def _check_st(stage, path, bound, name="st"):
-    """Certify the stored primvar from the file, with this test's own fan triangulation."""
+def _check_st(stage, path, bound, name="st", time=None):
+    """Certify the stored primvar from the file, with this test's own fan triangulation (the
+    mesh's points and topology at ``time``, default: their default values)."""
+    time = Usd.TimeCode.Default() if time is None else time
     mesh = UsdGeom.Mesh(stage.GetPrimAtPath(path))
     pv = UsdGeom.PrimvarsAPI(mesh.GetPrim()).GetPrimvar(name)
     assert pv.GetTypeName() == Sdf.ValueTypeNames.TexCoord2fArray
     assert pv.GetInterpolation() == UsdGeom.Tokens.faceVarying and pv.IsIndexed()
     assert pv.GetAttr().GetNumTimeSamples() == 0
     uv = np.asarray(pv.Get(), np.float64)[np.asarray(pv.GetIndices())]   # per face-vertex
-    P = np.asarray(mesh.GetPointsAttr().Get(), np.float64)
-    counts = np.asarray(mesh.GetFaceVertexCountsAttr().Get())
-    idx = np.asarray(mesh.GetFaceVertexIndicesAttr().Get())
+    P = np.asarray(mesh.GetPointsAttr().Get(time), np.float64)
+    counts = np.asarray(mesh.GetFaceVertexCountsAttr().Get(time))
+    idx = np.asarray(mesh.GetFaceVertexIndicesAttr().Get(time))
     tris, s = [], 0
     for c in counts:
         tris += [(s, s + i, s + i + 1) for i in range(1, c - 1)]
@@ -539,6 +541,115 @@ def test_an_empty_mesh_prim_is_skipped_and_the_others_unwrapped(tmp_path, capsys
     assert main(["unwrap", str(tmp_path / "bad.usda"), "-o", str(tmp_path / "q.usda")]) == 1
     assert "/Broken" in capsys.readouterr().err
     assert not (tmp_path / "q.usda").exists()
+
+
+def test_topology_at_one_time_sample_and_no_default_is_read(tmp_path):
+    """Houdini's exports and OpenUSD's animatedTop tutorial (top.geom.usd) author points,
+    faceVertexCounts and faceVertexIndices at one time code, no default. The points were read
+    at it; the topology was not, and such a mesh was refused as "a mesh without points,
+    faceVertexCounts or faceVertexIndices"."""
+    src, out = str(tmp_path / "in.usda"), str(tmp_path / "o.usda")
+    _grid_stage(src, [])
+    stage = Usd.Stage.Open(src)
+    mesh = UsdGeom.Mesh(stage.GetPrimAtPath("/World/Grid"))
+    for attr in (mesh.GetPointsAttr(), mesh.GetFaceVertexCountsAttr(),
+                 mesh.GetFaceVertexIndicesAttr()):
+        value = attr.Get()
+        attr.Clear()
+        attr.Set(value, 48)
+    stage.GetRootLayer().Save()
+    assert main(["unwrap", src, "-o", out, "-q"]) == 0
+    _check_st(Usd.Stage.Open(out), "/World/Grid", 5.0, time=48)
+
+
+def test_topology_only_time_sampled_is_named_as_changing(tmp_path, capsys):
+    """OpenUSD's meshVaryingTopologyWithSharing.usda: faceVertexCounts and faceVertexIndices
+    only as time samples, no default. It was refused as "a mesh without points,
+    faceVertexCounts or faceVertexIndices", which it has; now its changing topology is named,
+    and the stage's other mesh is unwrapped."""
+    src, out = str(tmp_path / "in.usda"), str(tmp_path / "o.usda")
+    _grid_stage(src, ["st"])
+    stage = Usd.Stage.Open(src)
+    m = UsdGeom.Mesh.Define(stage, "/World/Morphing")
+    m.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)])
+    for t, (counts, idx) in {1: ([3], [0, 1, 2]), 2: ([3, 3], [0, 1, 2, 0, 2, 3])}.items():
+        m.CreateFaceVertexCountsAttr().Set(counts, t)
+        m.CreateFaceVertexIndicesAttr().Set(idx, t)
+    stage.GetRootLayer().Save()
+    assert main(["unwrap", src, "-o", out]) == 1
+    err = capsys.readouterr().err
+    assert "/World/Morphing: faceVertexCounts is time-sampled (changing topology)" in err
+    assert "without points" not in err
+    _check_st(Usd.Stage.Open(out), "/World/Grid", 5.0)
+
+
+def _package(path, files):
+    """A .usdz of ``files`` {path inside: file}, the first its root layer, as USD writes one."""
+    z = Sdf.ZipFileWriter.CreateNew(str(path))
+    for inside, f in files.items():
+        z.AddFile(str(f), inside)
+    z.Save()
+
+
+def test_a_package_whose_root_layer_is_in_a_folder_keeps_its_texture(tmp_path):
+    """OpenUSD's nestedUsdz/simpleMaterial.usdz holds simpleMaterial.usdz_FILES/simpleMaterial.usdc
+    and simpleMaterial.usdz_FILES/0/USDLogoLrg.png, which the layer names "0/USDLogoLrg.png".
+    The texture was unpacked at its path from the package's top, where the new layer did not
+    find it: "the .usdz package could not be written", nothing written."""
+    (tmp_path / "FILES" / "0").mkdir(parents=True)
+    layer, tex = tmp_path / "FILES" / "pkg.usdc", tmp_path / "FILES" / "0" / "tex.png"
+    tex.write_bytes(b"\x89PNG not really")
+    _grid_stage(str(layer), ["st"])
+    stage = Usd.Stage.Open(str(layer))
+    stage.GetPrimAtPath("/World/Grid").CreateAttribute(
+        "info:texture", Sdf.ValueTypeNames.Asset).Set(Sdf.AssetPath("0/tex.png"))
+    stage.GetRootLayer().Save()
+    src, out = tmp_path / "pkg.usdz", tmp_path / "o" / "out.usdz"
+    _package(src, {"pkg.usdz_FILES/pkg.usdc": layer, "pkg.usdz_FILES/0/tex.png": tex})
+    assert main(["unwrap", str(src), "-o", str(out), "-q"]) == 0
+    import zipfile
+    with zipfile.ZipFile(out) as z:
+        assert z.read("0/tex.png") == tex.read_bytes()
+    _check_st(Usd.Stage.Open(str(out)), "/World/Grid", 5.0)
+
+
+def test_a_package_of_packages_in_a_folder_is_written(tmp_path):
+    """OpenUSD's nestedUsdz/combined.usdz: combined.usdz_FILES/combined.usda references
+    simpleMesh.usdz beside it in the package. Main ended in a traceback, "RuntimeError:
+    Accessed schema on invalid prim" (the copied layer's reference found nothing)."""
+    inner = tmp_path / "mesh.usdc"
+    _grid_stage(str(inner), ["st"])
+    grid = Usd.Stage.Open(str(inner))
+    grid.SetDefaultPrim(grid.GetPrimAtPath("/World"))
+    grid.GetRootLayer().Save()
+    _package(tmp_path / "mesh.usdz", {"mesh.usdc": inner})
+    root = tmp_path / "root.usda"
+    stage = Usd.Stage.CreateNew(str(root))
+    stage.DefinePrim("/Asset").GetReferences().AddReference("mesh.usdz")
+    stage.GetRootLayer().Save()
+    src, out = tmp_path / "pkg.usdz", tmp_path / "o" / "out.usdz"
+    _package(src, {"pkg.usdz_FILES/root.usda": root,
+                   "pkg.usdz_FILES/mesh.usdz": tmp_path / "mesh.usdz"})
+    assert main(["unwrap", str(src), "-o", str(out), "-q"]) == 0
+    _check_st(Usd.Stage.Open(str(out)), "/Asset/Grid", 5.0)
+
+
+def test_a_package_naming_a_missing_asset_says_which(tmp_path, capsys):
+    """OpenUSD's usdUdims.usdz names texture_<UDIM>.jpg, which it does not hold: no package can
+    be written, and the message now names the asset instead of only "could not be written"."""
+    layer = tmp_path / "pkg.usdc"
+    _grid_stage(str(layer), ["st"])
+    stage = Usd.Stage.Open(str(layer))
+    stage.GetPrimAtPath("/World/Grid").CreateAttribute(
+        "info:texture", Sdf.ValueTypeNames.Asset).Set(Sdf.AssetPath("./gone.png"))
+    stage.GetRootLayer().Save()
+    src, out = tmp_path / "pkg.usdz", tmp_path / "o" / "out.usdz"
+    _package(src, {"pkg.usdc": layer})
+    assert main(["unwrap", str(src), "-o", str(out), "-q"]) == 2
+    err = capsys.readouterr().err
+    assert "could not be written: 1 asset(s) the scene references resolve to no file (gone.png)" \
+        in err
+    assert not out.exists()
 
 
 def test_a_fan_diagonal_along_another_polygons_side_is_turned_away(tmp_path):
