@@ -20,6 +20,7 @@ import numpy as np
 
 from .errors import InvalidMeshError, refuse_lfs_pointer
 from .mesh.weld import welded_in_place
+from .ply import read_binary_ply
 
 _COMMENT = re.compile(r"\s#.*")   # an OBJ comment after a record (a '#' inside a name stays)
 
@@ -133,6 +134,12 @@ def _read_trimesh(path, ext):
         with open(path, "rb") as fh:
             data = fh.read()
         head, sep, body = data.partition(b"end_header")
+        if sep and b"\n" not in head and body[:1] == b"\r":
+            # a header whose lines end in a lone CR (classic Mac; draco's Rhino Box.ply): LF,
+            # byte for byte, so the body (binary or not) stays where the header says
+            head, body = head.replace(b"\r", b"\n"), b"\n" + body[1:]
+            data = head + sep + body
+            file_obj, file_type = io.BytesIO(data), "ply"
         if sep and b"format ascii" in head:
             eol = body.find(b"\n")
             lines = body[eol + 1:].splitlines() if eol >= 0 else []
@@ -140,7 +147,15 @@ def _read_trimesh(path, ext):
             if len(keep) != len(lines):
                 file_obj = io.BytesIO(head + sep + body[:eol + 1] + b"\n".join(keep) + b"\n")
                 file_type = "ply"
-    m = trimesh.load(file_obj, file_type=file_type, process=False, force="mesh")
+    try:
+        m = trimesh.load(file_obj, file_type=file_type, process=False, force="mesh")
+    except Exception as exc:
+        if ext != ".ply" or b"format binary" not in head:
+            raise
+        try:   # faces of different lengths (triangles and quads: Rhino), which trimesh misreads
+            return read_binary_ply(data)
+        except ValueError:
+            raise exc from None
     V = np.asarray(m.vertices, dtype=np.float64)
     uv = getattr(m.visual, "uv", None)
     uv = None if uv is None or len(uv) != len(V) else np.asarray(uv, dtype=np.float64)[:, :2]

@@ -309,3 +309,35 @@ def test_usd_uvs_whose_indices_are_only_time_sampled(tmp_path):
     D, flipped = reference_distortion(V, F, uv)
     assert not flipped.any() and D.max() <= e["bound_certified"] * (1 + 1e-9)
     assert len(overlapping_triangle_pairs(uv)) == 0
+
+
+def _binary_ply(V, faces, eol=b"\n", extra=b""):
+    """A binary little-endian PLY with faces of any lengths (Rhino writes triangles and quads in
+    one list) and, after them, another element (Rhino's material)."""
+    import struct
+    head = [b"ply", b"format binary_little_endian 1.0", b"comment made by a test",
+            b"element vertex %d" % len(V), b"property float x", b"property float y",
+            b"property float z", b"element face %d" % len(faces),
+            b"property list uchar uint vertex_index", b"element material 1",
+            b"property uchar red", b"property double shine", b"end_header"]
+    body = b"".join(struct.pack("<3f", *v) for v in V)
+    body += b"".join(struct.pack("<B%dI" % len(f), len(f), *f) for f in faces)
+    body += struct.pack("<Bd", 7, 0.5) + extra
+    return eol.join(head) + eol + body
+
+
+@pytest.mark.parametrize("eol", [b"\n", b"\r", b"\r\n"])
+def test_binary_ply_with_triangles_and_quads(tmp_path, eol):
+    # draco's testdata/Box.ply (Rhino 6): triangles and quads in one binary face list, a
+    # material element after them, header lines ending in a lone CR; trimesh refused it
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0.5, 0.3]], np.float32)
+    faces = [[0, 1, 2, 3], [1, 4, 2]]
+    p = tmp_path / "rhino.ply"
+    p.write_bytes(_binary_ply(V, faces, eol))
+    m = load_mesh(str(p))
+    assert np.array_equal(m.V, V.astype(np.float64))
+    assert sorted(map(tuple, m.F.tolist())) == [(0, 1, 2), (0, 2, 3), (1, 4, 2)]
+    # cut short: named, never a traceback
+    p.write_bytes(_binary_ply(V, faces, eol)[:-20])
+    with pytest.raises(InvalidMeshError, match="rhino.ply: cannot read the mesh as PLY"):
+        load_mesh(str(p))
