@@ -183,7 +183,8 @@ def test_small_charts_grown_into_a_band_send_more_charts_to_the_nesting(S, secon
     """Six 1 x 1.5 boxes laid out (by a stand-in for the first nesting) in a square of side S,
     and thirty 0.2 x 0.2 squares. At S = 3.4 the boxes fill it but for bands 0.1 and 0.2 wide:
     the squares fit only in a band grown around them, which leaves the square looser (the
-    charts' area over its area) than the boxes left theirs, so the largest charts holding
+    charts' area over its area) than the boxes left theirs by more than ``LOOSE`` of it (0.78 ->
+    0.70 at the least growth), so the largest charts holding
     ``WIDE_SHARE`` of the area (their count recomputed here from the corners) are nested
     again, by the real nesting, and the rest rastered around them. At S = 4.2 the squares fit
     in the free strip: one nesting. Either way the layout keeps every chart inside with half
