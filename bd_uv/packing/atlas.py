@@ -28,7 +28,7 @@ from .around import place_around
 from .groups import chart_groups, grouped_layout
 from .few import few_square
 from .square import square_layout
-from .tiny import tiny_square
+from .tiny import TINY_SHARE, tiny_square
 
 
 @dataclass(frozen=True)
@@ -102,7 +102,8 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
                             "without grouping")
         return _around_pinned(V, F, uv, lab, options, np.asarray(pinned, dtype=bool), t0)
     charts, tol = chart_outlines(V, F, uv, lab, k, options)
-    seconds = options.search_seconds(k, int((lab >= 0).sum()))
+    tiny = int((charts.area < TINY_SHARE * charts.area.sum()).sum())
+    seconds = options.search_seconds(k, int((lab >= 0).sum()), tiny=tiny)
     if group is not None and group.max() > 0:
         f = 1.0 if options.texel_density is None else options.texel_density / options.resolution
         pl, side, tile, solves = grouped_layout([xy * f for xy in charts.outlines], group,
@@ -117,7 +118,7 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
         f = 1.0
         # (a chart holding much of the area: less time, options.DOMINANT_SHARE)
         largest = float(charts.area.max() / charts.area.sum())
-        seconds = options.search_seconds(k, int((lab >= 0).sum()), largest)
+        seconds = options.search_seconds(k, int((lab >= 0).sum()), largest, tiny)
         # mostly tiny charts: the others packed alone, the tiny ones dropped into the space
         # left (.tiny); else (or when a tiny chart finds no room) 2-5 charts laid out without
         # spyrrow (.few), more (or when it finds none) nested, and nested too when a search

@@ -21,7 +21,13 @@ compaction (:mod:`.compact`) closes what the raster left.
    large charts' shifts grow with it, which keeps them inside and, checked exactly, apart);
    where that took ``TURN_STEPS`` growths or more, the large charts' layout turned by quarter
    turns is tried too at the smaller sides (``QUARTERS``);
-3. every chart is compacted from there for the rest of the time (less the turned tries').
+   where the small charts went into a band the growth opened rather than into the large
+   charts' pockets (the square holds less of its area than the large charts held of theirs,
+   :func:`_loose`), the largest holding ``WIDE_SHARE`` are nested again instead, for
+   ``WIDE_TIME`` of their time (taken from the compaction), the rest rastered around them, and
+   the smaller square of the two kept (the quarter turns then tried on the second only);
+3. every chart is compacted from there for the rest of the time (less the turned tries, or
+   the second nesting with its raster and turns: at most half of it).
 """
 import time
 from dataclasses import replace
@@ -60,6 +66,26 @@ TURN_STEPS = 4
 # ChineseDragon, the shader ball) none has a small chart longer than 0.23 of that side
 LONG = 0.3
 DENSITY = 0.68
+# where the small charts left the square looser than the large ones left theirs (more than LOOSE
+# of it), the largest holding WIDE_SHARE are nested again. Measured on real low-poly assets of
+# many charts (issue18-many24-2026-11-28.md, load 8-15, seeds 0-3, every set at 0.95 at once):
+# the Spider's 63 charts (legs: five small charts 0.2-0.3 of the side long) 0.598 -> 0.681 for
+# less CPU (its fill grew the square 15 %), Wuson's 83 0.646 -> 0.669, max3ds's 93 0.633 ->
+# 0.658; but cow's 45 lost 0.733 -> 0.668 at 0.95 (its small charts fill the pockets of its 6
+# large ones: the square grew 4 %, the fill left it denser than the large charts alone), hence
+# the test on the fill rather than one share for all. LOOSE: with any loss at all (0) the
+# Chinese dragon's 116 charts went there too (its fill 1.7 % looser) and lost 0.622 -> 0.599
+# (seeds 0-1) for 25 % more CPU; max3ds (2.3 % looser) gained nothing over seeds 0-4 (0.615 ->
+# 0.614); the Spider's and Wuson's fills are 5-15 % looser
+WIDE_SHARE = 0.95
+LOOSE = 0.035
+# ... for WIDE_TIME of the time, all of it (the nesting, its raster and turns) taken from the
+# compaction (at most half of it): Wuson seeds 0-5 0.674 at 2.56 s CPU (main 0.627 at 2.68 s,
+# seeds 0-3), the Spider 0.635 at 1.6 s (main 0.589 at 2.06 s); with the first nesting's time
+# and only the excess taken, 0.684 and 0.652 for 20-25 % more CPU than main (load 9-15). At
+# load ~3 the nesting gets its whole clock time: Wuson 0.642 -> 0.671 for 19 % more time, the
+# Spider 0.641 -> 0.706 for 1.4 -> 2.1 s (with its larger budget, options.MANY_CHARTS)
+WIDE_TIME = 0.6
 
 
 def large_first(outlines, exact, options, tol, seconds, nested):
@@ -83,8 +109,48 @@ def large_first(outlines, exact, options, tol, seconds, nested):
     area = np.array([_area(o) for o in outlines])
     order = np.argsort(-area, kind="stable")
     cum = np.cumsum(area[order]) / area.sum()
-    n_large = max(int(np.searchsorted(cum, LARGE_SHARE)) + 1, LARGE_LEAST)
     long = _diameters(outlines) >= LONG * np.sqrt(area.sum() / DENSITY)
+    turns = _candidates(outlines, options)
+    got = _split(outlines, exact, options, tol, seconds, nested, order, cum, long, turns,
+                 LARGE_SHARE)
+    if got is None:
+        return None
+    spent, solves = 0.0, got[-1]
+    if WIDE_SHARE > LARGE_SHARE and _loose(got, area):   # the small ones went to a band
+        t0 = time.process_time()
+        wide = _split(outlines, exact, options, tol, WIDE_TIME * seconds, nested, order, cum,
+                      long, turns, WIDE_SHARE)
+        if wide is not None:
+            solves += wide[-1]
+            wide, spent = _turned_fill(wide, outlines, turns, options, tol)
+            if wide[0] <= got[0]:
+                got = wide
+        spent = time.process_time() - t0
+    else:
+        got, spent = _turned_fill(got, outlines, turns, options, tol)
+    side, large, small, turned, placed = got[:5]
+    angle, shift = np.zeros(k), np.zeros((k, 2))
+    angle[large], shift[large] = turned.angle, turned.shift
+    angle[small], shift[small] = placed[0], placed[1] * side
+    # the rest of the time (CPU seconds of this process, as the compaction counts it)
+    left = REST_TIME * seconds - min(max(spent, 0.0), 0.5 * REST_TIME * seconds)
+    widest = int(np.argmax(least_squares(outlines, options)[0]))
+    fine = float(least_squares([outlines[widest]], options, step=0.05)[0][0])
+    outl, start, tol2 = on_exact(outlines, exact, Placement(angle, shift, side), side, options,
+                                 tol)
+    pl, side, _ = compact_square(outl, *start, options, tol2, left,
+                                 least_side=(fine + 2 * tol) / (1 - options.padding))
+    return pl, side, solves
+
+
+def _split(outlines, exact, options, tol, seconds, nested, order, cum, long, turns, share):
+    """The largest charts holding ``share`` of the area (at least ``LARGE_LEAST``, and the long
+    ones) nested alone, the others rastered around them at the least growth (no turn of the
+    large charts' layout yet): (side, large, small, the large charts' Placement, the small
+    ones' (angle, shift), the nested square S, growths, the large charts' Placement in S,
+    solves), or None (no small chart, or no room found)."""
+    n_large = max(int(np.searchsorted(cum, share)) + 1, LARGE_LEAST)
+    long = long.copy()
     long[order[:n_large]] = True
     large, small = order[long[order]], order[~long[order]]
     if not len(small):
@@ -94,23 +160,39 @@ def large_first(outlines, exact, options, tol, seconds, nested):
                            None if exact is None else [exact[i] for i in large])
     own = [outlines[i] for i in large]
     part = [outlines[i] for i in small]
-    turns = _candidates(part, options)
-    found, spent = _fill(own, part, pl, S, turns, options, tol)
-    if found is None:
-        return None
-    side, turned, got = found
-    angle, shift = np.zeros(k), np.zeros((k, 2))
-    angle[large], shift[large] = turned.angle, turned.shift
-    angle[small], shift[small] = got[0], got[1] * side
-    # the rest of the time (CPU seconds of this process, as the compaction counts it)
-    left = REST_TIME * seconds - min(spent, 0.5 * REST_TIME * seconds)
-    widest = int(np.argmax(least_squares(outlines, options)[0]))
-    fine = float(least_squares([outlines[widest]], options, step=0.05)[0][0])
-    outl, start, tol2 = on_exact(outlines, exact, Placement(angle, shift, side), side, options,
-                                 tol)
-    pl, side, _ = compact_square(outl, *start, options, tol2, left,
-                                 least_side=(fine + 2 * tol) / (1 - options.padding))
-    return pl, side, solves
+    for j in range(GROW_TRIES):  # per side tried, the layout as it is
+        got = _try(own, part, pl, S, S * GROW ** j, [turns[i] for i in small], options, tol,
+                   (0,))
+        if got is not None:
+            return (got[0], large, small, got[1], got[2], S, j, pl, solves)
+    return None
+
+
+def _loose(got, area):
+    """Whether the small charts of ``_split``'s layout ``got`` left the square looser than the
+    large charts alone left theirs (their area over the square's: grown into a band rather than
+    held in the large charts' pockets), by more than ``LOOSE`` of it."""
+    side, large, S = got[0], got[1], got[5]
+    return area.sum() / side ** 2 < (1 - LOOSE) * area[large].sum() / S ** 2
+
+
+def _turned_fill(got, outlines, turns, options, tol):
+    """``_split``'s layout, and where it took ``TURN_STEPS`` growths or more, the large charts'
+    layout turned by one to three quarter turns about its square's centre at the smaller sides,
+    the least side first (the first that holds the small charts): (the layout, CPU seconds)."""
+    side, large, small, _, _, S, steps, pl, solves = got
+    if steps < TURN_STEPS:
+        return got, 0.0
+    t0 = time.process_time()
+    own = [outlines[i] for i in large]
+    part = [outlines[i] for i in small]
+    for j in range(steps):  # per smaller side: the other turns
+        found = _try(own, part, pl, S, S * GROW ** j, [turns[i] for i in small], options, tol,
+                     range(1, QUARTERS))
+        if found is not None:
+            return ((found[0], large, small, found[1], found[2], S, j, pl, solves),
+                    time.process_time() - t0)
+    return got, time.process_time() - t0
 
 
 def _diameters(outlines):
@@ -129,28 +211,6 @@ def _turned(angle, shift, side, quarter):
     c = np.array([0.5 * side, 0.5 * side])
     R = rotations([90.0 * quarter])[0]
     return Placement((angle + 90.0 * quarter) % 360.0, (shift - c) @ R.T + c, side)
-
-
-def _fill(own, part, pl, S, turns, options, tol):
-    """The small charts ``part`` rastered around the large ones ``own`` laid out by ``pl`` in
-    [0, S]^2, the square grown by ``GROW`` until they fit; where that took ``TURN_STEPS``
-    steps or more, the layout turned by one to three quarter turns about the square's centre
-    at the smaller sides, the least side first: (side, the large charts' Placement, the small
-    ones' (angle, shift in the unit square)), or None."""
-    first = None
-    for j in range(GROW_TRIES):  # per side tried, the layout as it is
-        got = _try(own, part, pl, S, S * GROW ** j, turns, options, tol, (0,))
-        if got is not None:
-            first = (j, got)
-            break
-    if first is None or first[0] < TURN_STEPS:
-        return (None if first is None else first[1]), 0.0
-    t0 = time.process_time()
-    for j in range(first[0]):  # per smaller side: the other turns
-        got = _try(own, part, pl, S, S * GROW ** j, turns, options, tol, range(1, QUARTERS))
-        if got is not None:
-            return got, time.process_time() - t0
-    return first[1], time.process_time() - t0
 
 
 def _try(own, part, pl, S, side, turns, options, tol, quarters):

@@ -52,6 +52,16 @@ DOMINANT_MAX_CHARTS = 30
 # reaches GUESS_MAX on them: igl-elephant 0.720 -> 0.740 (1.00 -> 1.27 s), cheburashka 0.723 ->
 # 0.743, fancyteapot 0.698 -> 0.721, homer the same; 5x as 4x
 REACH = 4.0
+# From MANY_CHARTS charts that are not tiny (``tiny``: under packing.tiny's TINY_SHARE of the
+# area each), the time is at least MANY_SECONDS_PER_CHART a chart that is not tiny. Blender's exact-shape
+# time follows the count of charts it must trace and scan for (its rasters: O(n^3) by its own
+# note), not their faces: on low-poly assets of many charts the root above gives little (the
+# Spider's 63 charts of 1,368 faces: 1.17 s, Blender 42-130 s at load 6-14). Measured
+# (issue18-many24-2026-11-28.md, seeds 0-3, load ~9, with large_first's second nesting): the
+# Spider (54 not tiny) at 2.2 s 0.652 -> 0.688 (4/4). Wuson's 83 charts (56 tiny: Blender 25-32 s
+# at load 5-10, its time ratio the one failing) keep the root
+MANY_CHARTS = 40
+MANY_SECONDS_PER_CHART = 0.04
 
 
 @dataclass(frozen=True)
@@ -119,14 +129,15 @@ class PackOptions:
         if not (isinstance(self.solves, int) and self.solves >= 1):
             raise PackError(f"solves must be a whole number >= 1, not {self.solves!r}")
 
-    def search_seconds(self, charts, faces=0, largest=0.0):
+    def search_seconds(self, charts, faces=0, largest=0.0, tiny=0):
         """Seconds of nesting for ``charts`` charts of ``faces`` faces: ``solve_seconds``, or
         adaptive: ``AUTO_SECONDS_PER_ROOT`` sqrt(charts x faces), at most
         ``AUTO_SECONDS_PER_CHART`` a chart and ``AUTO_SECONDS_MAX``, at least
         ``AUTO_SECONDS_MIN`` or ``AUTO_SECONDS_MIN_PER_CHART`` a chart, the less (0 for one
         chart); up to ``DOMINANT_MAX_CHARTS`` charts, times ``DOMINANT_SHARE`` / ``largest``
         where the largest chart's share of the charts' area, ``largest``, is above
-        ``DOMINANT_SHARE``."""
+        ``DOMINANT_SHARE``; from ``MANY_CHARTS`` charts that are not among the ``tiny`` ones,
+        at least ``MANY_SECONDS_PER_CHART`` each (at most ``AUTO_SECONDS_MAX``)."""
         if self.solve_seconds is not None:
             return float(self.solve_seconds)
         if charts < 2:
@@ -136,6 +147,9 @@ class PackOptions:
                       min(AUTO_SECONDS_MIN, AUTO_SECONDS_MIN_PER_CHART * charts))
         if charts <= DOMINANT_MAX_CHARTS and largest > DOMINANT_SHARE:
             seconds *= DOMINANT_SHARE / largest
+        if charts - tiny >= MANY_CHARTS:
+            seconds = max(seconds, min(MANY_SECONDS_PER_CHART * (charts - tiny),
+                                       AUTO_SECONDS_MAX))
         return seconds
 
     def reach(self, charts, faces=0, largest=0.0):

@@ -3,6 +3,7 @@ rastered into the room left, all compacted; checked by code that shares nothing 
 (brute-force segment distances, an even-odd point-in-polygon test, the placed outlines
 recomputed from the angles and shifts; through pack_islands, the whole layout check)."""
 import numpy as np
+import pytest
 
 import bd_uv.packing.large_first as lf
 import bd_uv.packing.square as sq
@@ -77,6 +78,7 @@ def test_the_square_grows_until_the_small_charts_fit(monkeypatch):
         assert len(outl) == 6 and opt.padding_px == options.padding_px * lf.LARGE_HEADROOM
         return Placement(np.zeros(6), centres.copy(), S), S, 1
 
+    monkeypatch.setattr(lf, "WIDE_SHARE", lf.LARGE_SHARE)   # (no second nesting: see below)
     starts = _spy_compaction(monkeypatch)
     pl, side, solves = lf.large_first(outlines, None, options, tol, 0.5, nested)
     assert solves == 1 and len(starts) == 1
@@ -91,7 +93,7 @@ def test_the_square_grows_until_the_small_charts_fit(monkeypatch):
         assert _least_gap(rings) >= options.padding * s * (1 - 1e-9)
 
 
-def test_a_long_chart_is_nested_with_the_large_ones():
+def test_a_long_chart_is_nested_with_the_large_ones(monkeypatch):
     """Six 1 x 1.5 boxes (88 % of the area), a 2.0 x 0.05 strip (1 %) and thirty 0.2 x 0.2
     squares: the strip, longer than ``LONG`` of the side the area would fill at ``DENSITY``
     (recomputed here from the corners), goes to the nesting with the boxes, the squares do not;
@@ -112,6 +114,7 @@ def test_a_long_chart_is_nested_with_the_large_ones():
         given.append(outl)
         return sq.square_layout(outl, opt, tol, seconds, exact, split=False)
 
+    monkeypatch.setattr(lf, "WIDE_SHARE", lf.LARGE_SHARE)
     pl, s, _ = lf.large_first(outlines, None, options, tol, 0.3, nested)
     assert len(given) == 1 and len(given[0]) == 7
     assert sum(o is strip for o in given[0]) == 1
@@ -142,6 +145,7 @@ def test_the_large_layout_is_turned_where_the_small_charts_needed_much_growth(mo
         return Placement(np.zeros(6), centres.copy(), S), S, 1
 
     monkeypatch.setattr(lf, "LARGE_SHARE", 0.7)
+    monkeypatch.setattr(lf, "WIDE_SHARE", 0.7)
     monkeypatch.setattr(lf, "LONG", 9.0)
     starts = _spy_compaction(monkeypatch)
     pl, side, solves = lf.large_first(outlines, None, options, tol, 0.3, nested)
@@ -159,3 +163,54 @@ def test_the_large_layout_is_turned_where_the_small_charts_needed_much_growth(mo
         assert min(r.min() for r in rings) >= edge * (1 - 1e-9)
         assert max(r.max() for r in rings) <= s - edge * (1 - 1e-9)
         assert _least_gap(rings) >= options.padding * s * (1 - 1e-9)
+
+
+def _share_count(outlines, share):
+    """The least n such that the n largest outlines (shoelace areas) hold ``share`` of the
+    area, at least ``LARGE_LEAST``."""
+    area = sorted((0.5 * abs(float(np.sum(o[:, 0] * np.roll(o[:, 1], -1)
+                                         - np.roll(o[:, 0], -1) * o[:, 1]))) for o in outlines),
+                  reverse=True)
+    total, n, held = sum(area), 0, 0.0
+    while held < share * total:
+        held += area[n]
+        n += 1
+    return max(n, lf.LARGE_LEAST)
+
+
+@pytest.mark.parametrize("S, second", [(3.4, True), (4.2, False)])
+def test_small_charts_grown_into_a_band_send_more_charts_to_the_nesting(S, second):
+    """Six 1 x 1.5 boxes laid out (by a stand-in for the first nesting) in a square of side S,
+    and thirty 0.2 x 0.2 squares. At S = 3.4 the boxes fill it but for bands 0.1 and 0.2 wide:
+    the squares fit only in a band grown around them, which leaves the square looser (the
+    charts' area over its area) than the boxes left theirs by more than ``LOOSE`` of it (0.78 ->
+    0.70 at the least growth), so the largest charts holding
+    ``WIDE_SHARE`` of the area (their count recomputed here from the corners) are nested
+    again, by the real nesting, and the rest rastered around them. At S = 4.2 the squares fit
+    in the free strip: one nesting. Either way the layout keeps every chart inside with half
+    the padding and every two the padding apart (brute force)."""
+    unit = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
+    boxes = [unit * [1.0, 1.5] for _ in range(6)]
+    outlines = boxes + [0.2 * unit for _ in range(30)]
+    options = PackOptions(resolution=64, padding_px=1.0)
+    tol = 1e-6
+    centres = np.array([[0.6 + 1.1 * (i % 3), 0.85 + 1.6 * (i // 3)] for i in range(6)])
+    given = []
+
+    def nested(outl, opt, seconds, exact):
+        given.append(outl)
+        if len(given) == 1:
+            return Placement(np.zeros(6), centres.copy(), S), S, 1
+        return sq.square_layout(outl, opt, tol, seconds, exact, split=False)
+
+    pl, s, _ = lf.large_first(outlines, None, options, tol, 0.3, nested)
+    assert [len(g) for g in given] == ([6, _share_count(outlines, lf.WIDE_SHARE)] if second
+                                       else [6])
+    assert _share_count(outlines, lf.LARGE_SHARE) == 6
+    if second:
+        assert sum(any(o is b for b in boxes) for o in given[1]) == 6
+    rings = placed(outlines, pl.angle, pl.shift)
+    edge = 0.5 * options.padding * s
+    assert min(r.min() for r in rings) >= edge * (1 - 1e-9)
+    assert max(r.max() for r in rings) <= s - edge * (1 - 1e-9)
+    assert _least_gap(rings) >= options.padding * s * (1 - 1e-9)
