@@ -54,8 +54,8 @@ DOMINANT_MAX_CHARTS = 30
 REACH = 4.0
 # From MANY_CHARTS charts that are not tiny (``tiny``: under packing.tiny's TINY_SHARE of the
 # area each), the time is at least MANY_SECONDS_PER_CHART a chart that is not tiny. Blender's
-# exact-shape time follows the count of charts it must trace and scan for (its rasters: O(n^3) by its own
-# note), not their faces: on low-poly assets of many charts the root above gives little (the
+# exact-shape time follows the count of charts it must trace and scan for (its rasters: O(n^3) by
+# its own note), not their faces: on low-poly assets of many charts the root above gives little (the
 # Spider's 63 charts of 1,368 faces: 1.17 s, Blender 42-130 s at load 6-14). Measured
 # (issue18-many24-2026-11-28.md, seeds 0-3, load ~9, with large_first's second nesting): the
 # Spider (54 not tiny) at 2.2 s 0.652 -> 0.688 (4/4). Wuson's 83 charts (56 tiny: Blender 25-32 s
