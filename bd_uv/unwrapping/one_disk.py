@@ -75,6 +75,8 @@ class Disk:
         the disk certificate share them
     ranks : (nv,) int64 or None, the vertices' elimination order, made on first use (the
         conformal map's and the bound search's factorisations share it)
+    factors : dict, the conformal system's factorisation in qdldl's own order, kept for the
+        disk's next conformal solves (``forget_factors`` drops it)
     """
     island: Island
     twins: np.ndarray
@@ -91,6 +93,19 @@ class Disk:
     @_kept
     def G(self):
         return gradient_operators(self.Z)
+
+    @_kept
+    def factors(self):
+        """Factorisations of the disk's conformal system kept for its next solve with other
+        shapes (``disk_conformal.conformal`` in qdldl's own order: the pattern is the disk's
+        whatever the shapes, so a later solve refills it, ``capped`` and ``angle_start``),
+        made on first use; dropped by ``forget_factors``."""
+        return {}
+
+    def forget_factors(self):
+        """Drop the kept factorisations (their memory), once the disk's conformal solves are
+        made."""
+        self.__dict__.pop("factors", None)
 
     @_kept
     def ranks(self):
