@@ -76,7 +76,8 @@ class Disk:
     ranks : (nv,) int64 or None, the vertices' elimination order, made on first use (the
         conformal map's and the bound search's factorisations share it)
     factors : dict, the conformal system's factorisation in qdldl's own order, kept for the
-        disk's next conformal solves (``forget_factors`` drops it)
+        disk's later conformal solves of other shapes (``capped``, ``angle_start``: the same
+        pattern, refilled), made on first use; ``forget_factors`` drops it
     """
     island: Island
     twins: np.ndarray
@@ -96,16 +97,10 @@ class Disk:
 
     @_kept
     def factors(self):
-        """Factorisations of the disk's conformal system kept for its next solve with other
-        shapes (``disk_conformal.conformal`` in qdldl's own order: the pattern is the disk's
-        whatever the shapes, so a later solve refills it, ``capped`` and ``angle_start``),
-        made on first use; dropped by ``forget_factors``."""
-        return {}
+        return {}       # (``disk_conformal._qdldl_solve`` keeps and refills it)
 
     def forget_factors(self):
-        """Drop the kept factorisations (their memory), once the disk's conformal solves are
-        made."""
-        self.__dict__.pop("factors", None)
+        self.__dict__.pop("factors", None)      # their memory, once the disk's solves are made
 
     @_kept
     def ranks(self):
