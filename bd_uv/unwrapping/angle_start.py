@@ -30,9 +30,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..geometry import corner_angles, gradient_operators
-from ..solvers.lscm import _lscm_system, face_geometry_of, spd_solver
+from ..solvers.lscm import spd_solver
 from .capped import from_angles
-from .disk_conformal import _far_pair, conformal, qdldl
+from .disk_conformal import conformal
 from .disk_certificate import measure_disk, turning
 
 __all__ = ["angle_start", "better_start", "linear_abf", "max_distortion"]
@@ -161,10 +161,12 @@ def angle_start(V, disk):
     if angles is None:
         return None
     scale = np.ones(nv)
-    solve = _Conformal(V, disk)
     for _ in range(ATTEMPTS):
         Z = from_angles(_scaled(angles, scale, tris), disk.area)
-        u = solve(Z, gradient_operators(Z))
+        # (in qdldl's own order, over ``ordered_ldl.RANKED_VERTICES``, the disk's conformal
+        # factorisation is refilled: ``Disk.factors``; homer's 3,521-face patch: ~7 ms a
+        # solve anew, most of it the order)
+        u = conformal(V, disk, Z, gradient_operators(Z), disk.ranks)
         a = corner_angles(u.take(tris))
         if not (np.isfinite(u).all() and (a > 0.0).all()):
             return None
@@ -182,41 +184,6 @@ def angle_start(V, disk):
         v = loop[over]
         scale[v] *= np.minimum(CAP * full / theta[over], CAP)
     return None
-
-
-class _Conformal:
-    """``disk_conformal.conformal`` of the disk's faces given other shapes, again and again:
-    where qdldl orders the system itself (no vertex ranks: over
-    ``ordered_ldl.RANKED_VERTICES``), its factorisation is kept and refilled (``update``: the
-    system's pattern is the disk's, whatever the shapes) instead of ordered anew (homer's
-    3,521-face patch: ~7 ms a solve, most of it the order)."""
-
-    def __init__(self, V, disk):
-        self.V, self.disk, self.solver = V, disk, None
-
-    def __call__(self, Z, G):
-        disk = self.disk
-        if disk.ranks is not None or qdldl is None:
-            return conformal(self.V, disk, Z, G, disk.ranks)
-        isl = disk.island
-        geom = face_geometry_of(Z, G, disk.area)
-        idx = _far_pair(self.V.take(isl.vertices, axis=0), isl.loops[0])
-        A, rhs, u, free = _lscm_system(geom.cbw(), geom.cb, isl.tris, len(isl.vertices), idx,
-                                       np.array([0.0, 1.0], complex),
-                                       (disk.twins[0], disk.twins[1], disk.loop), triplets=True)
-        M = A.csc_arrays()
-        try:
-            if self.solver is None:
-                self.solver = qdldl.Solver(M, upper=True)
-            else:
-                self.solver.update(M, upper=True)
-        except (ValueError, TypeError, AttributeError):
-            self.solver = None
-            return conformal(self.V, disk, Z, G, None)
-        x = self.solver.solve(rhs)
-        nf = len(free)
-        u[free] = x[:nf] + 1j * x[nf:]
-        return u
 
 
 def _scaled(angles, scale, tris):

@@ -88,7 +88,7 @@ def failed_result(island, error, t0, bound, frames_name="", flags=(), timings=No
                         timings=timings or {})
 
 
-def unfolder(isl, V, pins, options, cancel, start=None, again=True):
+def unfolder(isl, V, pins, options, cancel, start=None, again=True, disk=None):
     """For ``overlap_certificate``: for an island whose map within the numeric bound asked lies
     over itself, the search for the smallest C within it (``strategies.minimise``, as
     ``bound="auto"`` with ``bound_limit`` that C) up to its first map that does not (a map of
@@ -114,7 +114,9 @@ def unfolder(isl, V, pins, options, cancel, start=None, again=True):
             res = None
             if start is not None and start[0] == index:
                 res = solve_island(by_index[index], V, pins, dataclasses.replace(o, bound="auto"),
-                                   None, quiet(cancel), cancel, start[1], one_to_one=True)
+                                   None, quiet(cancel), cancel, start[1],
+                                   None if disk is None else (disk.G, disk.area),
+                                   None if disk is None else disk.ranks, one_to_one=True)
                 if res.status != "certified" or not res.bound_certified <= C:
                     res = None
             if res is None and not again:
@@ -150,7 +152,8 @@ def unfold_first(V, F, disk, u, angle, pins, options, cancel, t0):
         # three_peaks.off, turning twice, bent in 7 projection iterations, its unfold 4x that)
         return None, False
     index = disk.island.index
-    unfold = unfolder([disk.island], V, pins, options, cancel, (index, angle), again=False)
+    unfold = unfolder([disk.island], V, pins, options, cancel, (index, angle), again=False,
+                      disk=disk)
     res = unfold(index) if unfold is not None else None
     if res is None:
         return None, unfold is not None

@@ -75,6 +75,9 @@ class Disk:
         the disk certificate share them
     ranks : (nv,) int64 or None, the vertices' elimination order, made on first use (the
         conformal map's and the bound search's factorisations share it)
+    factors : dict, the conformal system's factorisation in qdldl's own order, kept for the
+        disk's later conformal solves of other shapes (``capped``, ``angle_start``: the same
+        pattern, refilled), made on first use; ``forget_factors`` drops it
     """
     island: Island
     twins: np.ndarray
@@ -91,6 +94,13 @@ class Disk:
     @_kept
     def G(self):
         return gradient_operators(self.Z)
+
+    @_kept
+    def factors(self):
+        return {}       # (``disk_conformal._qdldl_solve`` keeps and refills it)
+
+    def forget_factors(self):
+        self.__dict__.pop("factors", None)      # their memory, once the disk's solves are made
 
     @_kept
     def ranks(self):

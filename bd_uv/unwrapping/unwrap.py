@@ -139,6 +139,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
                 # at once where the conformal map lies over itself (its bent map would too)
                 done, none = unfold_first(V, F, disk, u, found, pins, opts, cancel, t0)
                 angle = False if none else angle
+        disk.forget_factors()       # the conformal solves' factorisation, not needed now
         if done is not None:
             return done
         conformal_u = u
@@ -152,6 +153,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
                 u, one_to_one = v, True
             elif bad:       # the angle start found (or none), tried before a cut as it is
                 angle = False if found is None else found
+            disk.forget_factors()
         conformal = {0: u}
     res = unwrap_islands(V, F, [disk.island] if disk is not None else
                          split_islands(V, F, seams, precision), pins, opts, initial_uv=initial_uv,
