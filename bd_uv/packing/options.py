@@ -50,8 +50,14 @@ DOMINANT_MAX_CHARTS = 30
 # -0.006, knight -0.005) at 19 % more CPU, igl-elephant 0.690 -> 0.725 (0.80 -> 1.04 s), igl-arm
 # 0.668 -> 0.717 (0.82 -> 1.27 s: its time, 0.2x Blender's, fails either way); at 4x the guess
 # reaches GUESS_MAX on them: igl-elephant 0.720 -> 0.740 (1.00 -> 1.27 s), cheburashka 0.723 ->
-# 0.743, fancyteapot 0.698 -> 0.721, homer the same; 5x as 4x
-REACH = 4.0
+# 0.743, fancyteapot 0.698 -> 0.721, homer the same; 5x as 4x. But idle (lead, 19:05, seeds 0-2,
+# pack.seconds by the clock) 4x ran igl-arm's searches to their end, 2.98-3.20 s (Blender 3.08 s:
+# 0.92x in bench_pack, against 0.30x), where 3x took 0.89-1.81 s (main 0.96-1.14) at 0.710-0.724
+# (main 0.674-0.689) and igl-elephant 0.711-0.741 in 0.86-1.11 s (4x: 0.731-0.744 in 1.19-1.75 s;
+# main 0.675-0.700); 2x: arm 0.679-0.696, elephant 0.683-0.719 (short of its 0.719). At 3x
+# cheburashka 0.701-0.723 in 0.73-0.86 s (main 0.690-0.700, 0.78-1.26 s), fancyteapot 0.706-0.717
+# in 1.35-1.47 s (main 0.653-0.700, 0.65-0.99 s), homer as main
+REACH = 3.0
 # From MANY_CHARTS charts that are not tiny (``tiny``: under packing.tiny's TINY_SHARE of the
 # area each), the time is at least MANY_SECONDS_PER_CHART a chart that is not tiny. Blender's
 # exact-shape time follows the count of charts it must trace and scan for (its rasters: O(n^3) by
