@@ -98,3 +98,15 @@ def same_certificate(a, b):
     return type(a) is type(b) and all(
         x == y or (isinstance(x, float) and isinstance(y, float) and x != x and y != y)
         for x, y in zip(fa, fb))
+
+
+def relpath_across_drives(name):
+    """``os.path.relpath`` as on Windows when a path naming ``name`` is on another drive than
+    the start: it raises ValueError there."""
+    relpath = os.path.relpath
+
+    def across(path, start=os.curdir):
+        if name in str(path):
+            raise ValueError("path is on mount 'C:', start on mount 'D:'")
+        return relpath(path, start)
+    return across

@@ -28,6 +28,16 @@ def _least_gap(rings):
     return best
 
 
+def _inside_and_apart(outlines, pl, s, options):
+    """The placed outlines inside the square of side ``s`` by half the padding, and the padding
+    apart (exact distances)."""
+    rings = placed(outlines, pl.angle, pl.shift)
+    edge = 0.5 * options.padding * s
+    assert min(r.min() for r in rings) >= edge * (1 - 1e-9)
+    assert max(r.max() for r in rings) <= s - edge * (1 - 1e-9)
+    assert _least_gap(rings) >= options.padding * s * (1 - 1e-9)
+
+
 
 def _spy_compaction(monkeypatch):
     """The (placement, side) each ``compact_square`` call of ``large_first`` starts from, listed
@@ -119,11 +129,7 @@ def test_a_long_chart_is_nested_with_the_large_ones(monkeypatch):
     assert len(given) == 1 and len(given[0]) == 7
     assert sum(o is strip for o in given[0]) == 1
     assert sum(any(o is b for b in boxes) for o in given[0]) == 6
-    rings = placed(outlines, pl.angle, pl.shift)
-    edge = 0.5 * options.padding * s
-    assert min(r.min() for r in rings) >= edge * (1 - 1e-9)
-    assert max(r.max() for r in rings) <= s - edge * (1 - 1e-9)
-    assert _least_gap(rings) >= options.padding * s * (1 - 1e-9)
+    _inside_and_apart(outlines, pl, s, options)
 
 
 def test_the_large_layout_is_turned_where_the_small_charts_needed_much_growth(monkeypatch):
@@ -209,8 +215,4 @@ def test_small_charts_grown_into_a_band_send_more_charts_to_the_nesting(S, secon
     assert _share_count(outlines, lf.LARGE_SHARE) == 6
     if second:
         assert sum(any(o is b for b in boxes) for o in given[1]) == 6
-    rings = placed(outlines, pl.angle, pl.shift)
-    edge = 0.5 * options.padding * s
-    assert min(r.min() for r in rings) >= edge * (1 - 1e-9)
-    assert max(r.max() for r in rings) <= s - edge * (1 - 1e-9)
-    assert _least_gap(rings) >= options.padding * s * (1 - 1e-9)
+    _inside_and_apart(outlines, pl, s, options)

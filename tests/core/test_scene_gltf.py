@@ -12,7 +12,7 @@ from bd_uv.cli import main
 from bd_uv.errors import SceneFileError
 from bd_uv.scenes import read_scene
 from gltf_build import Builder, Reader, seamed_grid, skinned_scene
-from helpers import reference_distortion
+from helpers import reference_distortion, relpath_across_drives
 from overlap_shapes import overlapping_triangle_pairs
 
 UNTOUCHED = ("asset", "scene", "scenes", "nodes", "skins", "materials", "textures", "samplers",
@@ -420,13 +420,7 @@ def test_a_file_on_another_drive_is_named_and_nothing_written(scene, tmp_path, m
     # Windows: os.path.relpath raises ValueError across drives (C: to D:), and a glTF can only
     # refer to its image by a relative URI: a clear error, no traceback, no output written
     src, b, arrays = scene
-    relpath = os.path.relpath
-
-    def across_drives(path, start=os.curdir):
-        if "tex ture.png" in str(path):
-            raise ValueError("path is on mount 'C:', start on mount 'D:'")
-        return relpath(path, start)
-    monkeypatch.setattr(os.path, "relpath", across_drives)
+    monkeypatch.setattr(os.path, "relpath", relpath_across_drives("tex ture.png"))
     out = tmp_path / "other" / "o.gltf"
     rc = main(["unwrap", str(src / "scene.gltf"), "-o", str(out)])
     err = capsys.readouterr().err

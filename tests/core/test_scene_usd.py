@@ -14,7 +14,7 @@ from pxr import Sdf, Usd, UsdGeom, UsdShade, Vt  # usd-core: requirements-dev.tx
 from bd_uv.cli import main
 from bd_uv.errors import SceneFileError
 from bd_uv.scenes import read_scene
-from helpers import float32_flat, reference_distortion
+from helpers import float32_flat, reference_distortion, relpath_across_drives
 from overlap_shapes import overlapping_triangle_pairs
 from usd_build import build_stage, quad_grid
 
@@ -583,6 +583,15 @@ def test_topology_only_time_sampled_is_named_as_changing(tmp_path, capsys):
     _check_st(Usd.Stage.Open(out), "/World/Grid", 5.0)
 
 
+def _textured_grid(layer, asset):
+    """A grid stage at ``layer`` whose mesh names ``asset`` (an asset path attribute)."""
+    _grid_stage(str(layer), ["st"])
+    stage = Usd.Stage.Open(str(layer))
+    stage.GetPrimAtPath("/World/Grid").CreateAttribute(
+        "info:texture", Sdf.ValueTypeNames.Asset).Set(Sdf.AssetPath(asset))
+    stage.GetRootLayer().Save()
+
+
 def _package(path, files):
     """A .usdz of ``files`` {path inside: file}, the first its root layer, as USD writes one."""
     z = Sdf.ZipFileWriter.CreateNew(str(path))
@@ -599,11 +608,7 @@ def test_a_package_whose_root_layer_is_in_a_folder_keeps_its_texture(tmp_path):
     (tmp_path / "FILES" / "0").mkdir(parents=True)
     layer, tex = tmp_path / "FILES" / "pkg.usdc", tmp_path / "FILES" / "0" / "tex.png"
     tex.write_bytes(b"\x89PNG not really")
-    _grid_stage(str(layer), ["st"])
-    stage = Usd.Stage.Open(str(layer))
-    stage.GetPrimAtPath("/World/Grid").CreateAttribute(
-        "info:texture", Sdf.ValueTypeNames.Asset).Set(Sdf.AssetPath("0/tex.png"))
-    stage.GetRootLayer().Save()
+    _textured_grid(layer, "0/tex.png")
     src, out = tmp_path / "pkg.usdz", tmp_path / "o" / "out.usdz"
     _package(src, {"pkg.usdz_FILES/pkg.usdc": layer, "pkg.usdz_FILES/0/tex.png": tex})
     assert main(["unwrap", str(src), "-o", str(out), "-q"]) == 0
@@ -638,11 +643,7 @@ def test_a_package_naming_a_missing_asset_says_which(tmp_path, capsys):
     """OpenUSD's usdUdims.usdz names texture_<UDIM>.jpg, which it does not hold: no package can
     be written, and the message now names the asset instead of only "could not be written"."""
     layer = tmp_path / "pkg.usdc"
-    _grid_stage(str(layer), ["st"])
-    stage = Usd.Stage.Open(str(layer))
-    stage.GetPrimAtPath("/World/Grid").CreateAttribute(
-        "info:texture", Sdf.ValueTypeNames.Asset).Set(Sdf.AssetPath("./gone.png"))
-    stage.GetRootLayer().Save()
+    _textured_grid(layer, "./gone.png")
     src, out = tmp_path / "pkg.usdz", tmp_path / "o" / "out.usdz"
     _package(src, {"pkg.usdc": layer})
     assert main(["unwrap", str(src), "-o", str(out), "-q"]) == 2
@@ -785,13 +786,7 @@ def test_an_asset_on_another_drive_is_kept_by_its_absolute_path(tmp_path, monkey
     # paths, so the texture is re-anchored by its absolute path and still resolves
     src = tmp_path / "in"
     shot, asset = build_stage(str(src))
-    relpath = os.path.relpath
-
-    def across_drives(path, start=os.curdir):
-        if "wood.png" in str(path):
-            raise ValueError("path is on mount 'C:', start on mount 'D:'")
-        return relpath(path, start)
-    monkeypatch.setattr(os.path, "relpath", across_drives)
+    monkeypatch.setattr(os.path, "relpath", relpath_across_drives("wood.png"))
     out = tmp_path / "elsewhere" / "shot_uv.usda"
     assert main(["unwrap", shot, "-o", str(out), "--bound", "3"]) == 0
     stage = Usd.Stage.Open(str(out))
