@@ -1,0 +1,144 @@
+"""Reading an OBJ file's text: ``v``, ``vt`` and ``f`` records, ``usemtl`` and ``o`` names.
+
+OBJ is read by position index (``v`` records) so vertex order is the file's own; loaders that
+split vertices at UV seams would change the topology. Polygons are fan-triangulated; negative
+indices count back from the records read before the face; a line ending in a backslash goes on
+on the next; UTF-8 (with or without a byte order mark) or UTF-16 after its mark.
+"""
+import re
+
+import numpy as np
+
+from .errors import InvalidMeshError
+
+_COMMENT = re.compile(r"\s#.*")   # an OBJ comment after a record (a '#' inside a name stays)
+
+
+def read_obj(path):
+    """V, F, corner UVs or None, and each face's material (``usemtl``) and object (``o``), each
+    numbered in order of first use by a face (faces before any ``usemtl`` or ``o`` make a
+    material or object of their own).
+
+    A negative index counts back from the last ``v`` (``vt``) read before its face, as the OBJ
+    format defines it (files written object by object use ``f -4 -3 -2 -1``). Records may be
+    separated by tabs; a file starting with a UTF-16 byte order mark is read as UTF-16. An
+    index naming no vertex is an ``InvalidMeshError`` giving the file's line."""
+    vs, vts, faces, tfaces, mats, objs, numbers = [], [], [], [], [], [], []
+    mat, obj = None, None
+    for number, line in _obj_records(_obj_text(path)):
+        line = _COMMENT.sub("", line)   # "f 1 2 3 # note": a comment ends a record
+        tokens = line.split()
+        key = tokens[0] if tokens else ""
+        if key == "usemtl":
+            mat = line.split(None, 1)[1].strip() if len(tokens) > 1 else ""
+        elif key == "o":
+            obj = line.split(None, 1)[1].strip() if len(tokens) > 1 else ""
+        elif key == "v":
+            vs.append((number, tokens[1:4]))
+        elif key == "vt":
+            vts.append((number, tokens[1:3]))
+        elif key == "f" and len(tokens) > 3:
+            items = [it.split("/") for it in tokens[1:]]
+            vi = [_obj_index(path, number, it[0], len(vs), "v") for it in items]
+            ti = [_obj_index(path, number, it[1], len(vts), "vt") + 1
+                  if len(it) > 1 and it[1] else 0 for it in items]
+            for j in range(1, len(vi) - 1):  # fan-triangulate polygons
+                faces.append((vi[0], vi[j], vi[j + 1]))
+                tfaces.append((ti[0], ti[j], ti[j + 1]))
+                mats.append(mat)
+                objs.append(obj)
+                numbers.append(number)
+    V = _numbers(path, vs, "v", 3)
+    F = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    T = np.asarray(tfaces, dtype=np.int64).reshape(-1, 3)   # 1-based; 0: no vt
+    _check_forward(path, F, len(V), "v", numbers)
+    cuv = None
+    if len(vts) and len(T) and np.all(T != 0):
+        VT = _numbers(path, vts, "vt", 2)
+        _check_forward(path, T - 1, len(VT), "vt", numbers)
+        cuv = VT[T - 1]
+    labels = {"material": _first_use(mats), "object": _first_use(objs)}
+    return V, F, cuv, labels
+
+
+def _numbers(path, rows, record, width):
+    """(len(rows), width) float64 of the (line number, tokens) ``rows`` of ``record``s; a value
+    that is not a number, or a record too short, is an ``InvalidMeshError`` giving its line."""
+    try:
+        return np.asarray([t for _, t in rows], dtype=np.float64).reshape(-1, width)
+    except ValueError:
+        pass
+    for number, tokens in rows:
+        if len(tokens) < width:
+            raise InvalidMeshError(f"{path} line {number}: a {record} record needs {width} "
+                                   f"numbers, this one has {len(tokens)}")
+        for t in tokens:
+            try:
+                float(t)
+            except ValueError:
+                raise InvalidMeshError(f"{path} line {number}: {t!r} in a {record} record is "
+                                       f"not a number") from None
+    raise InvalidMeshError(f"{path}: the {record} records cannot be read as numbers")
+
+
+def _obj_records(text):
+    """(line number, record) of each record of an OBJ's text: a line ending in a backslash goes
+    on on the next line (the OBJ format's continuation, as Rhino writes long faces); the number
+    is the record's first line."""
+    pending, start = None, 0
+    for number, line in enumerate(text.splitlines(), 1):
+        if pending is not None:
+            line, number = pending + " " + line, start
+        body = line.rstrip()
+        if body.endswith("\\"):
+            pending, start = body[:-1], number
+            continue
+        pending = None
+        yield number, line
+    if pending is not None:
+        yield start, pending
+
+
+def _obj_text(path):
+    """The OBJ file's text: UTF-8 (bytes that are not are replaced), or UTF-16 after its BOM."""
+    with open(path, "rb") as fh:
+        raw = fh.read()
+    if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
+        return raw.decode("utf-16", errors="replace")
+    return raw.decode("utf-8-sig", errors="replace")
+
+
+def _obj_index(path, number, text, count, record):
+    """The 0-based index of ``text`` (1-based, or negative from the last of the ``count``
+    ``record``s read so far); a positive index past ``count`` is kept (a later record may
+    define it: ``_check_forward``)."""
+    try:
+        i = int(text)
+    except ValueError:
+        raise InvalidMeshError(f"{path} line {number}: {text!r} is not a {record} index") from None
+    if i < -count and not count:
+        raise InvalidMeshError(f"{path} line {number}: face uses {record} {i}, but no {record} "
+                               f"record comes before it (a negative index counts back from "
+                               f"the {record} records before the face)")
+    if i == 0 or i < -count:
+        raise InvalidMeshError(
+            f"{path} line {number}: face uses {record} {i}, but {count} {record} record(s) come "
+            f"before it ({record} indices run 1..{count}, or -1..-{count} counting back)")
+    return i + count if i < 0 else i - 1
+
+
+def _check_forward(path, F, count, record, numbers):
+    """Refuse positive indices that no ``record`` of the whole file defines (``numbers``: each
+    face's line)."""
+    bad = np.flatnonzero(np.any(F >= count, axis=1))
+    if len(bad):
+        f = bad[0]
+        raise InvalidMeshError(f"{path} line {numbers[f]}: face uses {record} "
+                               f"{int(F[f].max()) + 1}, but the file has {count} {record} "
+                               f"record(s)")
+
+
+def _first_use(names):
+    """(m,) int64: each name's number in order of first appearance."""
+    numbers = {}
+    return np.asarray([numbers.setdefault(n, len(numbers)) for n in names], dtype=np.int64)
