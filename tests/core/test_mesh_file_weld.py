@@ -34,7 +34,8 @@ def ply_text(V, F, uv=None):
 
 
 def off_text(V, F):
-    return (f"OFF\n{len(V)} {len(F)} 0\n" + "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in V)
+    rows = V.tolist()        # Python floats: numpy 2's scalars repr as np.float64(...)
+    return (f"OFF\n{len(V)} {len(F)} 0\n" + "".join(f"{x!r} {y!r} {z!r}\n" for x, y, z in rows)
             + "".join(f"3 {a} {b} {c}\n" for a, b, c in F))
 
 
