@@ -43,6 +43,22 @@ PATCH = small_patch()
 PATCH32 = (PATCH[0].astype(np.float32).astype(np.float64), PATCH[1])   # as the PLY stores it
 # the patch as a PLY or OFF written face by face (a triangle soup): every vertex split
 SOUP = (PATCH32[0][PATCH[1]].reshape(-1, 3), np.arange(3 * len(PATCH[1])).reshape(-1, 3))
+
+
+def _quad_first(F):
+    """The patch with its first face and a neighbour across an edge written as one quad (a, b,
+    d, c): the faces a binary PLY with triangles and quads gives (Rhino), fan-triangulated."""
+    a, b, c = F[0]
+    g = next(i for i in range(1, len(F)) for j in range(3)
+             if (F[i][j], F[i][(j + 1) % 3]) == (c, b))
+    d = next(v for v in F[g] if v not in (b, c))
+    rest = [f for i, f in enumerate(F.tolist()) if i not in (0, g)]
+    return [[a, b, d, c]] + rest
+
+
+QUADS = _quad_first(PATCH[1])       # as the binary PLY holds the faces
+_q = QUADS[0]
+MIXED = (PATCH32[0], np.array([[_q[0], _q[1], _q[2]], [_q[0], _q[2], _q[3]]] + QUADS[1:]))
 NAN_PATCH = (np.concatenate([[[np.nan, *PATCH[0][0, :2]]], PATCH[0][1:]]), PATCH[1])  # "v nan x y z"
 TETRA = (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float),
          np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]]))
@@ -89,6 +105,16 @@ def stl_text(V, F):
     return "\n".join(rows + ["endsolid fuzz"]) + "\n"
 
 
+def binary_ply(V, faces):
+    """A binary little-endian PLY, its face list of any lengths."""
+    import struct
+    head = ("ply\nformat binary_little_endian 1.0\nelement vertex %d\nproperty float x\n"
+            "property float y\nproperty float z\nelement face %d\n"
+            "property list uchar int vertex_indices\nend_header\n" % (len(V), len(faces)))
+    return head.encode() + b"".join(struct.pack("<3f", *v) for v in _floats(V)) + b"".join(
+        struct.pack("<B%di" % len(f), len(f), *f) for f in faces)
+
+
 INPUTS = {   # name -> (file name, bytes or None for "no such file", or "dir")
     "patch.obj": ("in.obj", obj_text(*PATCH).encode()),
     "patch.obj with vt": ("in.obj", obj_text(*PATCH, with_uv=True).encode()),
@@ -105,6 +131,7 @@ INPUTS = {   # name -> (file name, bytes or None for "no such file", or "dir")
     "empty.obj": ("in.obj", b""),
     "no faces.off": ("in.off", b"OFF\n3 0 0\n0 0 0\n1 0 0\n0 1 0\n"),
     "soup.stl": ("in.stl", stl_text(*SOUP).encode()),
+    "quads binary.ply": ("in.ply", binary_ply(PATCH32[0], QUADS)),
     "empty.stl": ("in.stl", b"solid x\nendsolid x\n"),
     "unknown suffix": ("in.xyz", b"solid x\nendsolid x\n"),
     "missing file": ("missing.obj", None),
@@ -136,7 +163,7 @@ def command_lines(draw):
     # the input first: "--seams uv" is a valid value only for an input with UVs (for the others
     # it is a refusal, drawn as a bad value)
     valid = ["patch.obj", "patch.obj with vt", "patch.off", "patch.ply", "closed tetra.obj",
-             "soup.ply", "soup.off", "soup.stl"]
+             "soup.ply", "soup.off", "soup.stl", "quads binary.ply"]
     source = draw(st.sampled_from(valid) if clean else
                   st.sampled_from(valid) | st.sampled_from(sorted(INPUTS)))
     has_uv = source == "patch.obj with vt"
@@ -249,7 +276,7 @@ def check_written(inp_mesh, out, report, stdout, packed):
     V, VT, F, FT = read_obj(out)
     V0, F0 = inp_mesh
     assert np.array_equal(F, F0)
-    stored32 = inp_mesh is PATCH32 or inp_mesh is SOUP          # PLY and OFF hold float32
+    stored32 = any(inp_mesh is m for m in (PATCH32, SOUP, MIXED))   # PLY and OFF hold float32
     assert np.allclose(V, V0, rtol=1e-6 if stored32 else 1e-12, equal_nan=True)
     has = (FT >= 0).all(axis=1)
     assert has.any(), "an OBJ was written with no certified island"
@@ -286,7 +313,7 @@ def mesh_of(sc):
     """The (V, F) the input holds when it is a valid mesh, else None."""
     return {"patch.obj": PATCH, "patch.obj with vt": PATCH, "patch.off": PATCH,
             "patch.ply": PATCH32, "closed tetra.obj": TETRA, "soup.ply": SOUP, "soup.off": SOUP,
-            "soup.stl": SOUP,
+            "soup.stl": SOUP, "quads binary.ply": MIXED,
             "nan vertex.obj": NAN_PATCH}.get(sc["input"])
 
 
