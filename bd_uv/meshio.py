@@ -13,6 +13,7 @@ file's vertices, the vertex list unchanged), the file's UVs still mark its seams
 faces are written as they were.
 """
 import os
+from functools import cached_property
 from dataclasses import dataclass
 
 import numpy as np
@@ -52,7 +53,7 @@ class Mesh:
         """The faces as the file had them (its own vertex ids), for the OBJ written."""
         return self.F if self.file_F is None else self.file_F
 
-    @property
+    @cached_property
     def welded(self):
         """How many of the file's vertices were welded onto another at the same position."""
         if self.file_F is None:

@@ -79,13 +79,13 @@ def _rows(data, offset, count, props, order, name):
     out = {p: np.empty(count, t) for p, t in scalars}
     corners = []
     try:
-        for _ in range(count):
+        for row in range(count):
             for p, t, item in props:
                 if item is None:
-                    (out[p][_],) = struct.unpack_from(order + t_code(t), data, offset)
+                    (out[p][row],) = struct.unpack_from(order + _code(t), data, offset)
                     offset += np.dtype(t).itemsize
                 else:
-                    (n,) = struct.unpack_from(order + t_code(t), data, offset)
+                    (n,) = struct.unpack_from(order + _code(t), data, offset)
                     offset += np.dtype(t).itemsize
                     size = np.dtype(item).itemsize * n
                     if offset + size > len(data):
@@ -104,7 +104,7 @@ def _names(element):
     return element.keys() if isinstance(element, dict) else element.dtype.names
 
 
-def t_code(t):
+def _code(t):
     """The struct code of a numpy type string ("u1" -> "B")."""
     return np.dtype(t).char
 
