@@ -22,9 +22,9 @@ def add_batch_parser(subparsers):
     """Add ``batch`` to ``python -m bd_uv``'s subcommands."""
     p = subparsers.add_parser(
         "batch", help="unwrap every mesh and scene file of folders, in parallel",
-        description="Unwrap many files: one output per input (OBJ with UVs for OBJ/OFF/PLY; "
+        description="Unwrap many files: one output per input (OBJ with UVs for OBJ/OFF/PLY/STL; "
                     "glTF and USD scenes written whole; .blend, FBX, Alembic and Collada "
-                    "through Blender with the UV maps written, STL to .blend), a JSON report, "
+                    "through Blender with the UV maps written), a JSON report, "
                     "optional PNGs. Exit 0 only if every mesh was "
                     "certified; a file that fails never stops the others.")
     p.add_argument("inputs", nargs="+", metavar="INPUT",

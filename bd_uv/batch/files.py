@@ -28,6 +28,9 @@ from .scene_files import unwrap_scene_file
 
 MESH_SUFFIXES = (".obj", ".off", ".ply")
 BLEND_SUFFIX = ".blend"
+# Of the formats Blender reads, the core reads STL itself (welded: STL splits every vertex) and
+# writes it as an OBJ, as `bd-uv unwrap part.stl -o part.obj` does: no Blender needed.
+CORE_READS = (".stl",)
 # The Blender script of the extension: next to bd_uv/ in a clone or an installed extension; a pip
 # install of bd-uv has only the core, so .blend files there need BD_UV_BLENDER_SCRIPT.
 SCRIPT = os.environ.get("BD_UV_BLENDER_SCRIPT") or os.path.join(
@@ -49,7 +52,7 @@ def _unwrap_file(task, options, seams_mode):
     base = {"input": os.path.abspath(task.path), "object": None, "output": None}
     try:
         ext = os.path.splitext(task.path)[1].lower()
-        if ext in BLENDER_SUFFIXES:   # FBX, Alembic, Collada, STL too: Blender reads them
+        if ext in BLENDER_SUFFIXES and ext not in CORE_READS:   # FBX, Alembic, Collada
             return _unwrap_blend(task, options, base, seams_mode)
         if ext in SCENE_SUFFIXES:     # glTF and USD: read and written whole by bd_uv.scenes
             return unwrap_scene_file(task.path, task.output, options, seams_mode, png=task.png,
@@ -80,7 +83,7 @@ def _unwrap_file(task, options, seams_mode):
 
 
 def _unwrap_blend(task, options, base, seams_mode=None):
-    """A .blend (or FBX, Alembic, Collada, STL) goes through the Blender script in a child
+    """A .blend (or FBX, Alembic, Collada) goes through the Blender script in a child
     process (it needs ``bpy``); ``seams_mode`` is the batch's ``--seams`` (None: not given)."""
     if importlib.util.find_spec("bpy") is None:
         raise BDError(f"{task.path}: reading {os.path.splitext(task.path)[1]} files needs the bpy "
@@ -135,7 +138,7 @@ def _script_options(options, seams_mode=None):
 
 def input_files(paths):
     """Expand folders (not recursively) into their mesh and scene files (OBJ, OFF, PLY, glTF,
-    USD, and through Blender .blend, FBX, Alembic, Collada, STL), sorted by name.
+    STL, USD, and through Blender .blend, FBX, Alembic, Collada), sorted by name.
 
     Files named explicitly are kept whatever their suffix (they fail in the report if unreadable);
     hidden files (such as an unfinished output's temporary name) are not taken from folders.
@@ -157,9 +160,9 @@ def plan(files, out_dir, png_dir=None):
     tasks, used = [], set()
     for path in files:
         stem, ext = os.path.splitext(os.path.basename(path))
-        low = ext.lower()   # a scene is written in its own format; an STL (no UVs) as a .blend
-        out_ext = (BLEND_SUFFIX if low == ".stl" else low) if low in SCENE_SUFFIXES + \
-            BLENDER_SUFFIXES else ".obj"
+        low = ext.lower()   # a scene is written in its own format; a mesh file (STL too) as OBJ
+        out_ext = low if low in SCENE_SUFFIXES + BLENDER_SUFFIXES and low not in CORE_READS \
+            else ".obj"
         name, k = stem, 1
         while name.lower() in used:
             name = f"{stem}_{ext.lstrip('.').lower()}" if k == 1 else f"{stem}-{k}"

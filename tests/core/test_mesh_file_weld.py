@@ -5,6 +5,7 @@ their vertices at equal positions are welded for the unwrap (never where faces o
 point), the file's own UVs still mark its seams, and the OBJ written keeps the file's vertices
 and faces."""
 import json
+import os
 import subprocess
 import sys
 
@@ -163,6 +164,35 @@ def test_an_stl_written_as_obj_is_read_without_blender(tmp_path):
                         str(tmp_path / "part.blend")], capture_output=True, text=True, cwd=REPO)
     assert r.returncode == 2 and "blender -b --python" in r.stderr
     assert "give -o an .obj path" in r.stderr and not (tmp_path / "part.blend").exists()
+
+
+def test_a_batch_writes_its_stl_files_as_obj_without_blender(tmp_path):
+    V0, F0 = grid(6, 5, z=lambda x, y: 0.2 * y * y)
+    folder = tmp_path / "in"
+    folder.mkdir()
+    (folder / "part.stl").write_text(stl_text(V0, F0))
+    before = (folder / "part.stl").read_bytes()
+    out = tmp_path / "out"
+    # no bpy, no Blender on the PATH: the batch must not need them for an STL
+    env = {k: v for k, v in os.environ.items() if k != "BD_UV_BLENDER"}
+    env["PATH"] = os.path.dirname(sys.executable)
+    r = subprocess.run([sys.executable, "-m", "bd_uv", "batch", str(folder), "-o", str(out),
+                        "--jobs", "1"], capture_output=True, text=True, cwd=REPO, env=env)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert (folder / "part.stl").read_bytes() == before
+    assert sorted(p.name for p in out.iterdir()) == ["part.obj", "report.json"]
+    [entry] = json.loads((out / "report.json").read_text())["items"]
+    assert entry["status"] == "certified" and entry["welded_vertices"] == 3 * len(F0) - len(V0)
+    written = out / "part.obj"
+    lines = written.read_text().splitlines()
+    Vw = np.array([[float(t) for t in ln.split()[1:4]] for ln in lines if ln.startswith("v ")])
+    Fw = np.array([[int(t.split("/")[0]) - 1 for t in ln.split()[1:]]
+                   for ln in lines if ln.startswith("f ")])
+    assert np.allclose(Vw[Fw], V0[F0], atol=1e-6)
+    cuv = written_corner_uv(written)
+    D, flipped = reference_distortion(Vw, Fw, cuv)
+    assert not flipped.any() and D.max() <= entry["bound_certified"] * (1 + 1e-6)
+    assert len(overlapping_triangle_pairs(cuv)) == 0
 
 
 def test_an_obj_soup_is_welded_within_each_object_only(tmp_path):
