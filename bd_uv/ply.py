@@ -5,11 +5,13 @@ file mixing triangles and quads (Rhino writes them so: draco's testdata/Box.ply)
 is unexpected length". Here the elements are walked in order: one without lists as a block of
 numpy records, one with lists row by row. Only what the unwrap needs is kept: the vertices'
 ``x y z`` (and ``s t``, ``u v`` or ``texture_u texture_v``) and each face's corners, polygons
-fan-triangulated as the OBJ reader does.
+triangulated (``polygons``: fans, concave polygons ear-clipped).
 """
 import struct
 
 import numpy as np
+
+from .polygons import fan_triangles, triangulate
 
 TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2",
          "int16": "i2", "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4",
@@ -62,7 +64,7 @@ def read_binary_ply(data):
     V = np.stack([np.asarray(vert[c], np.float64) for c in "xyz"], axis=1)
     uv = next((np.stack([np.asarray(vert[a], np.float64), np.asarray(vert[b], np.float64)], 1)
                for a, b in UV_NAMES if a in _names(vert) and b in _names(vert)), None)
-    return V, _fans(found["face"]), uv
+    return V, _triangles(V, found["face"]), uv
 
 
 def _type(name):
@@ -109,9 +111,15 @@ def _code(t):
     return np.dtype(t).char
 
 
-def _fans(faces):
-    """(m,3) int64: each polygon fan-triangulated from its first corner."""
+def _triangles(V, faces):
+    """(m,3) int64: each polygon's triangles (``polygons.triangulate``: its fan, or its ears
+    where it is concave)."""
     corners = faces["corners"] if isinstance(faces, dict) else []
-    tris = [np.stack([c[0].repeat(len(c) - 2), c[1:-1], c[2:]], axis=1)
-            for c in corners if len(c) >= 3]
-    return np.concatenate(tris).astype(np.int64) if tris else np.zeros((0, 3), np.int64)
+    corners = [c for c in corners if len(c) >= 3]
+    if not corners:
+        return np.zeros((0, 3), np.int64)
+    flat = np.concatenate(corners).astype(np.int64)
+    if len(flat) and (flat.min() < 0 or flat.max() >= len(V)):
+        return flat[fan_triangles([len(c) for c in corners])[0]]   # named by the caller's check
+    T = triangulate(V, [len(c) for c in corners], flat)[0]
+    return flat[T]

@@ -1,50 +1,31 @@
-"""One USD mesh prim as arrays: points, fan triangles (polygons kept as face groups, a fan turned
-where a diagonal would lie on another polygon's side), holes left out, the UV primvar's values per
-triangle corner, each face's material; every value read checked to be numbers of the right shape
-(a damaged file is a ``SceneFileError`` naming the prim, not a numpy error). Shared by the stage's
+"""One USD mesh prim as arrays: points, triangles (polygons kept as face groups, fans where sound,
+concave polygons ear-clipped, a fan turned where a diagonal would lie on another polygon's
+side), holes left out, the UV primvar's values per triangle corner, each face's material; every
+value read checked to be numbers of the right shape (a damaged file is a ``SceneFileError``
+naming the prim, not a numpy error). Shared by the stage's
 own meshes and the instanced ones (``usd``, ``usd_instances``).
 """
 import numpy as np
 
 from ..errors import SceneFileError
 from ..meshio import Mesh
+from ..polygons import triangulate
 from .model import SceneMesh
 from .usd_uv_name import uv_primvar
 
 
-def fan_triangles(counts):
-    """Fan triangulation of polygons, in face-vertex ids.
-
-    Parameters
-    ----------
-    counts : (p,) int array, vertices of each polygon (>= 3)
-
-    Returns
-    -------
-    T : (m,3) int64 face-vertex ids (into faceVertexIndices), polygon j's triangles
-        (s, s+i, s+i+1) for i = 1 .. counts[j]-2, s its first face-vertex
-    poly : (m,) int64 polygon of each triangle
-    """
-    counts = np.asarray(counts, dtype=np.int64)
-    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    ntri = counts - 2
-    poly = np.repeat(np.arange(len(counts)), ntri)
-    i = np.arange(len(poly)) - np.repeat(np.cumsum(ntri) - ntri, ntri) + 1
-    s = start[poly]
-    return np.stack([s, s + i, s + i + 1], 1), poly
-
-
-def polygon_triangles(counts, indices):
-    """``fan_triangles``, with the fan of a polygon turned to start at another corner where one
-    of its diagonals would run along an edge of the mesh (a non-planar pentagon whose fan
-    diagonal lies on its neighbour's side, usd-wg's ``5_face.usda``): such a diagonal makes an
-    edge of three triangles, which splits the polygon across islands.
+def polygon_triangles(V, counts, indices):
+    """``polygons.triangulate`` (fans, concave polygons ear-clipped), with the fan of a
+    polygon turned to start at another corner where one of its diagonals would run along an edge
+    of the mesh (a non-planar pentagon whose fan diagonal lies on its neighbour's side, usd-wg's
+    ``5_face.usda``): such a diagonal makes an edge of three triangles, which splits the polygon
+    across islands.
 
     Returns
     -------
     T : (m,3) int64 face-vertex ids, poly : (m,) int64 polygon of each triangle
     """
-    T, poly = fan_triangles(counts)
+    T, poly, clipped = triangulate(V, counts, indices)
     counts = np.asarray(counts, dtype=np.int64)
     big = np.flatnonzero(counts >= 4)
     if not len(big) or not len(indices):
@@ -60,7 +41,7 @@ def polygon_triangles(counts, indices):
     d = T[:, [0, 2]]
     inner = np.r_[poly[1:] == poly[:-1], False]          # a triangle followed by its polygon's
     key = np.minimum(idx[d[:, 0]], idx[d[:, 1]]) * n + np.maximum(idx[d[:, 0]], idx[d[:, 1]])
-    bad = np.unique(poly[inner & np.isin(key, sides)])
+    bad = np.setdiff1d(poly[inner & np.isin(key, sides)], clipped)   # fans only
     if not len(bad):
         return T, poly
     for p in bad:   # rare: each such polygon's fan tried from its other corners
@@ -135,7 +116,7 @@ def mesh_arrays(mesh, where, uv_name, Usd):
         raise SceneFileError(f"{where}: face {bad} has {int(counts[bad])} vertices (< 3)")
     if len(indices) and (indices.min() < 0 or indices.max() >= len(V)):
         raise SceneFileError(f"{where}: a faceVertexIndex is out of range ({len(V)} points)")
-    T, poly = polygon_triangles(counts, indices)
+    T, poly = polygon_triangles(V, counts, indices)
     holes = _numbers(mesh.GetHoleIndicesAttr().Get() or [], np.int64, f"{where}: holeIndices")
     keep = ~np.isin(poly, holes)
     T, poly = T[keep], poly[keep]

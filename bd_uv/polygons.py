@@ -1,0 +1,146 @@
+"""Polygons triangulated for the solve, in face-vertex ids.
+
+A polygon keeps its fan from its first corner where every fan triangle turns the polygon's way
+with an area (every convex polygon, every planar quad that is not concave: the triangles solved
+so far). Where one does not (a concave polygon: Houdini's glyphs, an L-shaped n-gon; corners in
+a line: Rhino's ``wallhole.obj``), the polygon is ear-clipped in its plane instead, so no triangle
+lies outside its polygon or has no area where a triangulation without that exists: a fan
+triangle outside a concave polygon overlaps its neighbour in the UV map, one with no area has no
+distortion to certify.
+"""
+import numpy as np
+
+# A fan triangle "has an area" above this share of its polygon's (twice the Newell normal's
+# length squared is the polygon's doubled area squared): corners in a line leave ~1e-16.
+FLAT = 1e-9
+# Ear clipping looks at every remaining corner for each ear: polygons of more corners keep
+# their fan (none such has been met; a cap keeps a damaged file's huge polygon from taking
+# minutes).
+MAX_CLIPPED = 4096
+
+
+def fan_triangles(counts):
+    """Fan triangulation of polygons, in face-vertex ids.
+
+    Parameters
+    ----------
+    counts : (p,) int array, vertices of each polygon (>= 3)
+
+    Returns
+    -------
+    T : (m,3) int64 face-vertex ids (into the polygons' corner list), polygon j's triangles
+        (s, s+i, s+i+1) for i = 1 .. counts[j]-2, s its first face-vertex
+    poly : (m,) int64 polygon of each triangle
+    """
+    counts = np.asarray(counts, dtype=np.int64)
+    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    ntri = counts - 2
+    poly = np.repeat(np.arange(len(counts)), ntri)
+    i = np.arange(len(poly)) - np.repeat(np.cumsum(ntri) - ntri, ntri) + 1
+    s = start[poly]
+    return np.stack([s, s + i, s + i + 1], 1), poly
+
+
+def triangulate(V, counts, corners):
+    """Each polygon's triangles: its fan where that is sound, else its ears.
+
+    Parameters
+    ----------
+    V : (n,3) float array, the points
+    counts : (p,) int array, corners of each polygon (>= 3)
+    corners : (sum(counts),) int array, each polygon's corners in order (ids into ``V``)
+
+    Returns
+    -------
+    T : (m,3) int64 face-vertex ids (into ``corners``), each polygon's ``count - 2`` triangles
+        in its rows of :func:`fan_triangles`, wound as the polygon is
+    poly : (m,) int64 polygon of each triangle
+    clipped : (k,) int64 the polygons ear-clipped (their fan was not sound)
+    """
+    counts = np.asarray(counts, dtype=np.int64)
+    T, poly = fan_triangles(counts)
+    clipped = np.zeros(0, np.int64)
+    if not len(counts) or counts.max() < 4:
+        return T, poly, clipped
+    P = np.asarray(V, dtype=np.float64)[np.asarray(corners, dtype=np.int64)]
+    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    owner = np.repeat(np.arange(len(counts)), counts)
+    nxt = np.arange(len(P)) + 1
+    nxt[start + counts - 1] = start
+    normal = np.zeros((len(counts), 3))
+    np.add.at(normal, owner, np.cross(P, P[nxt]))      # Newell: twice the area, along the normal
+    a = P[T[:, 0]]
+    turn = np.einsum("ij,ij->i", np.cross(P[T[:, 1]] - a, P[T[:, 2]] - a), normal[poly])
+    size = np.einsum("ij,ij->i", normal, normal)
+    unsound = (turn <= FLAT * size[poly]) & (counts[poly] >= 4) & (size[poly] > 0)
+    # every triangle turning the right way, but the fan going round its first corner more than
+    # once (a spiral about it): the fan's angles at that corner add up to over a full turn
+    u, w = P[T[:, 1]] - a, P[T[:, 2]] - a
+    angle = np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w))
+    sweep = np.bincount(poly, angle, len(counts))
+    unsound |= (sweep[poly] >= 2 * np.pi - 1e-9) & (counts[poly] >= 4)
+    clipped = np.unique(poly[unsound])
+    clipped = clipped[counts[clipped] <= MAX_CLIPPED]
+    for p in clipped.tolist():
+        s, c = int(start[p]), int(counts[p])
+        ears = _ears(_in_plane(P[s:s + c], normal[p]))
+        rows = slice(*np.searchsorted(poly, [p, p + 1]))   # poly is sorted
+        T[rows] = s + ears
+    return T, poly, clipped
+
+
+def _in_plane(Q, n):
+    """(c,2) the points ``Q`` in the plane normal to ``n``, turning counter-clockwise about it."""
+    n = n / np.linalg.norm(n)
+    u = np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0])
+    u /= np.linalg.norm(u)
+    return np.column_stack([Q @ u, Q @ np.cross(n, u)])
+
+
+def _ears(q):
+    """(c-2,3) corner ids of the counter-clockwise polygon ``q`` (c,2) cut ear by ear.
+
+    An ear is three consecutive remaining corners turning left with an area and holding no
+    other remaining corner (closed, so a corner on its side counts; corners at one of its own
+    points do not). Where none is left (a polygon crossing itself), the rest is fanned."""
+    c = len(q)
+    scale = np.abs(q - q.mean(0)).max() or 1.0
+    q = (q - q.mean(0)) / scale
+    eps = 1e-12
+    ring = list(range(c))
+    out = []
+    k = 0
+    misses = 0
+    while len(ring) > 3 and misses < len(ring):
+        m = len(ring)
+        i0, i1, i2 = ring[(k - 1) % m], ring[k % m], ring[(k + 1) % m]
+        a, b, d = q[i0], q[i1], q[i2]
+        area = (b[0] - a[0]) * (d[1] - a[1]) - (b[1] - a[1]) * (d[0] - a[0])
+        if area > eps and not _holds_any(q, [j for j in ring if j not in (i0, i1, i2)], a, b, d):
+            out.append((i0, i1, i2))
+            ring.pop(k % m)
+            k = (k - 1) % (m - 1)       # the corner before the ear may be one now
+            misses = 0
+        else:
+            k = (k + 1) % m
+            misses += 1
+    if len(ring) > 3:                   # no ear: fan the rest as it was
+        out += [(ring[0], ring[j], ring[j + 1]) for j in range(1, len(ring) - 1)]
+    else:
+        out.append(tuple(ring))
+    return np.asarray(out, dtype=np.int64)
+
+
+def _holds_any(q, others, a, b, d):
+    """True when the closed triangle (a, b, d) holds a point of ``q[others]`` other than its own
+    three points."""
+    if not others:
+        return False
+    p = q[others]
+    at_corner = ((p == a).all(1) | (p == b).all(1) | (p == d).all(1))
+    tol = -1e-12
+
+    def side(u, v):
+        return (v[0] - u[0]) * (p[:, 1] - u[1]) - (v[1] - u[1]) * (p[:, 0] - u[0])
+    inside = (side(a, b) >= tol) & (side(b, d) >= tol) & (side(d, a) >= tol)
+    return bool((inside & ~at_corner).any())

@@ -1,0 +1,132 @@
+"""Polygons triangulated for the solve (bd_uv/polygons.py): a sound fan kept as it was, concave
+polygons and corners in a line ear-clipped; checked with shapely's areas and, end to end, with
+a USD stage of concave polygons whose written UVs are measured on this test's own constrained
+triangulation (the `triangle` package)."""
+import json
+
+import numpy as np
+import pytest
+import triangle as tr
+from shapely.geometry import Polygon
+from shapely.ops import unary_union
+
+from bd_uv.polygons import fan_triangles, triangulate
+from helpers import reference_distortion
+from overlap_shapes import overlapping_triangle_pairs
+
+COMB = [(0, 0), (7, 0), (7, 3), (6, 3), (6, 1), (5, 1), (5, 3), (4, 3), (4, 1), (3, 1), (3, 3),
+        (2, 3), (2, 1), (1, 1), (1, 3), (0, 3)]
+L_SHAPE = [(2, 1), (1, 1), (1, 2), (0, 2), (0, 0), (2, 0)]      # its fan leaves the polygon
+IN_A_LINE = [(0, 0), (1, 0), (2, 0), (2, 1), (0, 1)]           # its fan has a flat triangle
+
+
+def star(n=9, inner=0.35):
+    t = np.linspace(0, 2 * np.pi, 2 * n, endpoint=False)
+    r = np.where(np.arange(2 * n) % 2 == 0, 1.0, inner)
+    return np.column_stack([r * np.cos(t), r * np.sin(t)])
+
+
+def _tiles(poly2d, tilt=(0.3, -0.2, 0.5)):
+    """The polygon in a tilted plane of space: (V (c,3), its triangles as (t,3,2) in the plane)."""
+    q = np.asarray(poly2d, dtype=np.float64)
+    a, b = np.array([1.0, 0.0, tilt[0]]), np.array([tilt[1], 1.0, tilt[2]])
+    return q[:, :1] * a + q[:, 1:] * b
+
+
+def _check_tiles(q, T):
+    """The triangles tile the polygon: every one turns its way with an area, their areas add up
+    to the polygon's, and their union is the polygon."""
+    P = q[T]
+    area = 0.5 * ((P[:, 1, 0] - P[:, 0, 0]) * (P[:, 2, 1] - P[:, 0, 1])
+                  - (P[:, 1, 1] - P[:, 0, 1]) * (P[:, 2, 0] - P[:, 0, 0]))
+    shape = Polygon(q)
+    assert (area > 1e-6 * shape.area).all()
+    assert abs(area.sum() - shape.area) < 1e-9 * shape.area
+    assert abs(unary_union([Polygon(t) for t in P]).area - shape.area) < 1e-9 * shape.area
+
+
+@pytest.mark.parametrize("shape", [COMB, L_SHAPE, IN_A_LINE, star(), star(5, 0.1)],
+                         ids=["comb", "L", "in a line", "star", "thin star"])
+@pytest.mark.parametrize("first", [0, 3])
+def test_unsound_fans_are_ear_clipped_into_tiles(shape, first):
+    q = np.roll(np.asarray(shape, dtype=np.float64), -first, axis=0)
+    V = _tiles(q)
+    T, poly, clipped = triangulate(V, [len(q)], np.arange(len(q)))
+    assert len(T) == len(q) - 2 and (poly == 0).all()
+    _check_tiles(q, T)
+
+
+def test_sound_fans_are_kept_and_rows_stay_per_polygon():
+    # a convex hexagon, a square, a triangle, the L (unsound), a square again: only the L changes
+    hexagon = [(np.cos(t), np.sin(t)) for t in np.linspace(0, 2 * np.pi, 6, endpoint=False)]
+    shapes = [hexagon, [(0, 0), (1, 0), (1, 1), (0, 1)], [(0, 0), (1, 0), (0, 1)], L_SHAPE,
+              [(0, 0), (2, 0), (2, 2), (0, 2)]]
+    q = np.concatenate([np.asarray(s, dtype=np.float64) for s in shapes])
+    counts = np.array([len(s) for s in shapes])
+    corners = np.arange(len(q))[::-1].copy()               # corners need not be in order
+    V = np.empty((len(q), 3))
+    V[corners] = _tiles(q)
+    T, poly, clipped = triangulate(V, counts, corners)
+    fan, fan_poly = fan_triangles(counts)
+    assert clipped.tolist() == [3] and np.array_equal(poly, fan_poly)
+    keep = poly != 3
+    assert np.array_equal(T[keep], fan[keep])
+    _check_tiles(q[13:19], T[poly == 3] - 13)
+
+
+def test_a_polygon_crossing_itself_keeps_a_triangle_per_corner():
+    bowtie = np.array([(0, 0), (2, 2), (2, 0), (0, 2)], dtype=np.float64)
+    T, poly, _ = triangulate(_tiles(bowtie), [4], np.arange(4))
+    assert len(T) == 2 and set(T.ravel()) <= {0, 1, 2, 3}
+
+
+def _glyph_stage(path):
+    """A flat sheet of a comb (17 corners, one in the middle of its right side), an L and a
+    rectangle with a corner in the middle of a side, sharing edges, in a tilted plane: no fan of
+    the comb or the L stays inside it, the rectangle's has a flat triangle."""
+    from pxr import Usd, UsdGeom, Vt
+    pts = {}
+
+    def ids(poly):
+        return [pts.setdefault(p, len(pts)) for p in poly]
+    comb = ids(COMB[:2] + [(7, 2)] + COMB[2:])           # y 0..3, x 0..7
+    ell = ids([(7, 0), (9, 0), (9, 4), (8, 4), (8, 2), (7, 2)])
+    low = ids([(7, 2), (8, 2), (8, 4), (7, 4), (7, 3)])   # (7, 3) lies on its side
+    polys = [comb, ell, low]
+    q = np.array(sorted(pts, key=pts.get), dtype=np.float64)
+    V = _tiles(q, (0.2, 0.1, 0.3))
+    stage = Usd.Stage.CreateNew(str(path))
+    mesh = UsdGeom.Mesh.Define(stage, "/Glyph")
+    mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(V.astype(np.float32)))
+    mesh.CreateFaceVertexCountsAttr([len(p) for p in polys])
+    mesh.CreateFaceVertexIndicesAttr([v for p in polys for v in p])
+    stage.GetRootLayer().Save()
+    return V.astype(np.float32).astype(np.float64), q, polys
+
+
+def test_a_stage_of_concave_polygons_is_certified_on_its_own_triangles(tmp_path):
+    pytest.importorskip("pxr")
+    from pxr import Usd, UsdGeom
+    from bd_uv.cli import main
+    src, out, rep = tmp_path / "glyph.usda", tmp_path / "o.usda", tmp_path / "r.json"
+    V, q, polys = _glyph_stage(src)
+    assert main(["unwrap", str(src), "-o", str(out), "--report", str(rep)]) == 0
+    (entry,) = json.loads(rep.read_text())["meshes"]
+    assert entry["status"] == "certified"
+    written = Usd.Stage.Open(str(out))       # kept: a prim of a collected stage is invalid
+    pv = UsdGeom.PrimvarsAPI(written.GetPrimAtPath("/Glyph")).GetPrimvar("st")
+    uv = np.asarray(pv.Get(), np.float64)[np.asarray(pv.GetIndices())]      # per face-vertex
+    # this test's triangles: each polygon's constrained Delaunay triangulation in the plane
+    tris, start = [], 0
+    for p in polys:
+        c = len(p)
+        seg = np.stack([np.arange(c), (np.arange(c) + 1) % c], 1)
+        t = tr.triangulate({"vertices": q[p], "segments": seg}, "p")
+        assert len(t["vertices"]) == c                    # no point added
+        tris.append(start + t["triangles"])
+        start += c
+    T = np.concatenate(tris)
+    idx = np.concatenate(polys)
+    D, flipped = reference_distortion(V, idx[T], uv[T])
+    assert not flipped.any() and D.max() <= entry["bound_certified"] * (1 + 1e-6)
+    assert len(overlapping_triangle_pairs(uv[T])) == 0
