@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .geometry import cycle_labels
-from .segments import cross, touching_pairs
+from .segments import cross, group_pairs_touching, touching_pairs
 from .uv_boundary import Boundary, exact_bits, row_ids, uv_boundary
 
 __all__ = ["Boundary", "uv_boundary", "crossing_pairs", "IslandOverlap", "island_overlaps",
@@ -212,9 +212,7 @@ def layout_overlaps(corner_uv, face_island, F=None):
     bd = uv_boundary(F, uv, face_island)
     if not len(bd.p):
         return np.zeros((0, 2), dtype=np.int64)
-    pairs = touching_pairs(bd.p, bd.q)
-    ia, ib = bd.island[pairs[:, 0]], bd.island[pairs[:, 1]]
-    out = [np.stack([np.minimum(ia, ib), np.maximum(ia, ib)], axis=1)[ia != ib]]
+    out = [group_pairs_touching(bd.p, bd.q, bd.island)]
     # Containment: one boundary point of each island, tested against the other islands' boundary.
     n_isl = int(bd.island.max()) + 1
     first = np.full(n_isl, -1, dtype=np.int64)

@@ -11,6 +11,8 @@ import numpy as np
 # Up to this many boundary segments every pair is tested (2016 pairs at 64) rather than the
 # candidates of an STRtree, whose set-up costs more than the pairs below it.
 ALL_PAIRS = 64
+# Candidate pairs group_pairs_touching asks the tree for at a time (~100 MB of them).
+CANDIDATES = 2_000_000
 
 
 def cross(u, v):
@@ -85,6 +87,50 @@ def touching_pairs(p, q, group=None):
     i, j = i[keep].astype(np.int64), j[keep].astype(np.int64)
     meets = segments_meet(p, q, i, j, geoms)
     return np.stack([i[meets], j[meets]], axis=1)
+
+
+def group_pairs_touching(p, q, group, chunk=CANDIDATES):
+    """Pairs of groups (islands) with a segment of one meeting a segment of the other, each pair
+    once (a < b), sorted: ``touching_pairs`` read off as groups, in bounded memory.
+
+    The tree is asked for a few segments at a time (about ``chunk`` candidates), and a candidate of a pair of groups already
+    found to meet is not decided again: islands left stacked where their unwraps put them
+    (``--no-pack``) make nearly every pair of segments a candidate (trimesh's quadknot.obj, 1,438
+    islands: 1.6 GB for the segment pairs at once).
+
+    Returns
+    -------
+    (k,2) int64
+    """
+    import shapely
+    p = np.asarray(p, dtype=np.float64)
+    q = np.asarray(q, dtype=np.float64)
+    group = np.asarray(group, dtype=np.int64)
+    if len(p) <= ALL_PAIRS:
+        pairs = touching_pairs(p, q)
+        ga, gb = group[pairs[:, 0]], group[pairs[:, 1]]
+        out = np.stack([np.minimum(ga, gb), np.maximum(ga, gb)], axis=1)[ga != gb]
+        return np.unique(out, axis=0) if len(out) else out.reshape(0, 2).astype(np.int64)
+    n = int(group.max()) + 1
+    geoms = shapely.linestrings(np.stack([p, q], axis=1))
+    tree = shapely.STRtree(geoms)
+    found = np.zeros(0, dtype=np.int64)
+    lo, step = 0, 256
+    while lo < len(p):
+        rows = np.arange(lo, min(lo + step, len(p)))
+        lo = rows[-1] + 1
+        r, j = tree.query(geoms[rows])
+        i = rows[r]
+        # the next rows as many as keep about ``chunk`` candidates each (2M: ~100 MB)
+        step = int(np.clip(chunk / max(len(r) / len(rows), 1.0), 64, 1 << 16))
+        ga, gb = group[i], group[j]
+        keep = (i < j) & (ga != gb)
+        i, j = i[keep].astype(np.int64), j[keep].astype(np.int64)
+        key = np.minimum(ga[keep], gb[keep]) * n + np.maximum(ga[keep], gb[keep])
+        new = ~np.isin(key, found)
+        meets = segments_meet(p, q, i[new], j[new], geoms)
+        found = np.union1d(found, key[new][meets])
+    return np.stack([found // n, found % n], axis=1).astype(np.int64)
 
 
 def segments_meet(p, q, i, j, geoms=None):

@@ -172,3 +172,26 @@ def test_uvs_stored_with_v_down_keep_1_minus_v_exact_in_float32():
     assert np.array_equal(as_stored(uv, np.float32), plain)
     assert not np.array_equal(1.0 - (1.0 - plain[..., 1]).astype(np.float32), plain[..., 1])
     assert np.array_equal(as_stored(uv, np.float64, v_down=True), uv)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_island_pairs_meeting_are_found_in_bounded_chunks(seed):
+    # segments of 25 groups, short and long, some sharing ends or lying along each other, asked
+    # of the tree a few at a time (chunk 50 candidates): the same pairs of groups as every
+    # pair of segments tested by GEOS
+    import shapely
+    from bd_uv.segments import group_pairs_touching
+    rng = np.random.default_rng(seed)
+    p = rng.random((400, 2)) * 4
+    q = p + rng.normal(scale=rng.choice([0.05, 0.4], 400)[:, None], size=(400, 2))
+    q[:40] = p[40:80]                            # shared ends
+    p[80:100], q[80:100] = p[100:120], p[100:120] + 0.5 * (q[100:120] - p[100:120])
+    group = rng.integers(0, 25, 400)
+    lines = shapely.linestrings(np.stack([p, q], axis=1))
+    i, j = np.triu_indices(400, 1)
+    meet = shapely.intersects(lines[i], lines[j]) & (group[i] != group[j])
+    a, b = group[i[meet]], group[j[meet]]
+    want = np.unique(np.stack([np.minimum(a, b), np.maximum(a, b)], 1), axis=0)
+    for chunk in (50, 10 ** 6):
+        got = group_pairs_touching(p, q, group, chunk=chunk)
+        assert np.array_equal(got, want)
