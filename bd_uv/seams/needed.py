@@ -10,7 +10,8 @@ marked seams kept, and seams added only to the islands that cannot be certified 
 3. only the islands that fail (closed, higher genus, no certified map within C, overlapping
    themselves, or certified with a texel density varying over 4096 times across the island,
    which no texture serves and float32 UVs seldom hold (``unwrapping.storage.beyond_headroom``),
-   when no stretch limit of ``STRETCH_LADDER`` certifies it) go to the seam search
+   when it has over HEADROOM_SOLVE_FACES faces or no stretch limit of ``STRETCH_LADDER``
+   certifies it) go to the seam search
    (``unwrap_auto``) at ``min(C, AUTO_BOUND)`` and stretch S, keeping the marked seams. A mesh whose marked seams already make certifiable disks gets no
    new seam.
 
@@ -46,6 +47,12 @@ AUTO_BOUND = 2.0
 # seams, as it would at the default C (Online3DViewer's cow.ply, repaired into a disk of 5,800
 # faces: certified at C = 72 as it is; 47 charts at C <= 2 from the seam search, each minimised).
 AUTO_LIMIT = 5.0
+# An island certified with a texel density too uneven to store (``beyond_headroom``) is re-solved
+# under a stretch limit up to this many faces (the teapot's finger of tests/core, 2,856 faces, is
+# kept whole so); a larger one goes to the seam search at once: its re-solve ends in conic solves
+# of the whole island (the 69,451-face Stanford bunny: over 90 s of CPU in them, where the seam
+# search cuts it into charts at S = 2 in seconds).
+HEADROOM_SOLVE_FACES = 5000
 # Island errors that seams can fix.
 NEEDS_SEAMS = (ClosedIslandError, TopologyError, InfeasibleError, SolverError, OverlapError)
 
@@ -121,9 +128,12 @@ def unwrap_needed(V, F, seams=None, polygons=None, options=None, marked_stretch=
         # re-solved under a stretch limit where one certifies, given seams where none does (the
         # milder cases float32 may still break are re-solved after, ``with_predicted_headroom``)
         flagged = beyond_headroom(V2, F2, res)
-        if flagged:
-            res, done = with_storage_headroom(V2, F2, res, flagged)
-            bad += [res.islands[i] for i in flagged if i not in done]
+        small = [i for i in flagged if len(res.islands[i].faces) <= HEADROOM_SOLVE_FACES]
+        if small:
+            res, done = with_storage_headroom(V2, F2, res, small)
+        else:
+            done = {}
+        bad += [res.islands[i] for i in flagged if i not in done]
         if bad:
             sub, voc, Fl = island_submesh(F2, bad)
             least = opts.bound == "auto"

@@ -152,6 +152,38 @@ def test_seams_needed_re_solves_or_cuts_what_float32_would_not_hold(monkeypatch)
         assert all(c.certified for c in layout.certificates)
 
 
+def test_an_island_too_large_for_a_stretch_re_solve_gets_seams_at_once(monkeypatch):
+    """An island too uneven to store with more than ``HEADROOM_SOLVE_FACES`` faces goes to the
+    seam search without a stretch re-solve (the Stanford bunny, 69k faces: minutes of conic
+    solves before). Here the limit is set below the finger's 2,856 faces: the finger is never
+    re-solved, it gets seams, and its charts are within S = 2 and store certified."""
+    import bd_uv.seams.needed as needed
+    import bd_uv.unwrapping.storage as storage
+    V, F = teapot_and_finger()
+    finger_faces = np.arange(len(triangulated(6)[1]), len(F))
+    sizes = []
+    real = storage.solve_with_stretch
+
+    def counted(V, F, island, *args, **kwargs):
+        sizes.append(len(island.faces))
+        return real(V, F, island, *args, **kwargs)
+    monkeypatch.setattr(storage, "solve_with_stretch", counted)
+    monkeypatch.setattr(needed, "HEADROOM_SOLVE_FACES", 1000)
+    cut = bd_uv.unwrap(V, F, seams_mode="needed")
+    assert len(finger_faces) not in sizes
+    assert len(cut.seams_added) and np.isin(cut.seams_added, F[finger_faces]).all()
+    on_finger = [r for r in cut.islands if np.isin(r.faces, finger_faces).all()]
+    assert sum(len(r.faces) for r in on_finger) == len(finger_faces)
+    P = V[F]
+    a3 = 0.5 * np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+    for r in on_finger:
+        s = np.sqrt(np.abs(_signed_areas(cut.corner_uv[r.faces])) / (2 * a3[r.faces]))
+        assert s.max() / s.min() <= 4.0 * (1 + 1e-6)
+    assert all(r.status == "certified" for r in cut.islands)
+    layout = stored_layout(V, F, cut, dtype=np.float32, pack_options=PACK)
+    assert all(c.certified for c in layout.certificates)
+
+
 def _c_shape(gap, n=40, r0=1.0, r1=1.3):
     """A flat ring cut open: a "C" of 2n triangles whose two ends are ``gap`` apart (z = 0)."""
     th = np.linspace(0.0, 2 * np.pi, n + 1)
