@@ -1,0 +1,172 @@
+"""An OBJ unwrapped to an OBJ is its own text with only its UVs replaced (``bd_uv.obj.patch``):
+every record but ``vt`` and ``f`` kept byte for byte in order, every face's vertex and normal
+indices as written, polygons kept as polygons (a polygon kept in one island: each corner one
+UV), and the new UVs certified as the file stores them, recomputed here from the file by a
+reader that shares no code with bd_uv (``artist_obj``)."""
+import json
+
+import numpy as np
+import pytest
+
+from artist_obj import artist_obj, fan_uvs, read_faces, records
+from bd_uv.cli import main
+from bd_uv.errors import InvalidMeshError
+from bd_uv.obj import patched_obj, polygon_corner_vt
+from overlap_shapes import overlapping_triangle_pairs
+from unwrap_contract import DATA, distortion_and_flips, read_off
+
+
+def three_peaks_disk(n_faces=200):
+    """The first ``n_faces`` faces of three_peaks, vertices renumbered: one disk."""
+    V, F = read_off(DATA / "three_peaks.off")
+    used, inv = np.unique(F[:n_faces], return_inverse=True)
+    return V[used], inv.reshape(-1, 3)
+
+
+def unwrap_figures(report):
+    """(certified bound, max distortion as stored) of an ``unwrap`` report, every island
+    certified."""
+    rep = json.loads(report.read_text())
+    assert all(e["status"] == "certified" for e in rep["islands"])
+    return (max(e["bound_certified"] for e in rep["islands"]),
+            max(s["max_distortion"] for e in rep["islands"] for s in e["stored"]))
+
+
+def assert_uvs_replaced_only(src, out, written, figures, split=0):
+    """The OBJ at ``out`` is ``src`` with only its UVs replaced, its UVs certified as stored
+    (``figures``: the run's certified bound and max distortion as stored)."""
+    a, b = src.read_bytes(), out.read_bytes()
+    keep_a = [r for k, r in records(a) if k not in ("vt", "f")]
+    keep_b = [r for k, r in records(b) if k not in ("vt", "f")]
+    assert keep_a == keep_b, "a record other than vt and f changed, moved or went missing"
+    # the faces in their places among the other records: one vt block, where the first vt was
+    keys_a = [k for k, _ in records(a) if k != "vt"]
+    keys_b = [k for k, _ in records(b) if k != "vt"]
+    first_vt = [k for k, _ in records(b)].index("vt")
+    assert [k for k, _ in records(b)][first_vt:].count("vt") == len(
+        [k for k, _ in records(b) if k == "vt"])
+    V, VT, faces = read_faces(b)
+    if split == 0:
+        assert keys_a == keys_b
+        assert len(faces) == len(written)
+        for (corners, text), w in zip(faces, written):
+            assert text == w["tokens"], "a face's vertex or normal index text changed"
+            assert [c[0] for c in corners] == w["v"]
+            assert [c[2] for c in corners] == (w["vn"] or [None] * len(corners))
+            assert all(c[1] is not None for c in corners), "a corner without its UV"
+    # the UVs as the file stores them, recomputed from it: no flip, distortion within the
+    # certified bound, the stored figures the report gives, no two UV triangles overlapping
+    tris, uv, _ = fan_uvs(V, VT, faces)
+    D, flipped = distortion_and_flips(V, tris, uv)
+    bound, stored = figures
+    assert not flipped.any()
+    assert D.max() <= bound * (1 + 2e-6)
+    assert D.max() == pytest.approx(stored, rel=1e-9)
+    assert len(overlapping_triangle_pairs(uv)) == 0
+    return faces
+
+
+@pytest.mark.parametrize("crlf, bom", [(True, False), (False, True)])
+def test_an_artist_obj_keeps_its_records_polygons_and_indices(tmp_path, capsys, crlf, bom):
+    V, F = three_peaks_disk()
+    data, written = artist_obj(V, F, crlf=crlf)
+    src, out, rep = tmp_path / "model.obj", tmp_path / "out.obj", tmp_path / "r.json"
+    src.write_bytes((b"\xef\xbb\xbf" if bom else b"") + data)
+    before = src.read_bytes()
+    assert main(["unwrap", str(src), "-o", str(out), "--report", str(rep), "-q"]) == 0
+    said = capsys.readouterr().out
+    assert src.read_bytes() == before
+    assert "written as their triangles" not in said
+    assert "of the file's vertices lie where another does" in said     # the split vertex
+    assert out.read_bytes().startswith(b"\xef\xbb\xbf") == bom
+    assert (b"\r\n" in out.read_bytes()) == crlf
+    assert sorted({len(w["v"]) for w in written}) == [3, 4, 5]     # triangles, quads, a pentagon
+    assert_uvs_replaced_only(src, out, written, unwrap_figures(rep))
+
+
+def test_the_batch_writes_the_same_patched_obj(tmp_path):
+    V, F = three_peaks_disk()
+    data, written = artist_obj(V, F)
+    (tmp_path / "in").mkdir()
+    src = tmp_path / "in" / "model.obj"
+    src.write_bytes(data)
+    rep = tmp_path / "batch.json"
+    assert main(["batch", str(tmp_path / "in"), "-o", str(tmp_path / "out"), "--report",
+                 str(rep)]) == 0
+    item = json.loads(rep.read_text())["items"][0]
+    assert item["status"] == "certified" and "polygons_as_triangles" not in item
+    assert_uvs_replaced_only(src, tmp_path / "out" / "model.obj", written,
+                             (item["bound_certified"], item["max_distortion"]))
+
+
+def spiral_obj(turns_deg=900, corners=16):
+    """One polygon whose fan from its first corner turns ``turns_deg`` degrees round it (a
+    helix): no flat map of it lies over itself nowhere, so its island is cut through it."""
+    t = np.radians(np.arange(corners) * turns_deg / (corners - 1))
+    P = np.column_stack([np.cos(t), np.sin(t), 0.1 * np.arange(corners)])
+    lines = ["# a spiral", "o spiral", "v 0 0 0"] + [f"v {x!r} {y!r} {z!r}" for x, y, z in
+                                                     P.tolist()]
+    lines += ["vn 0 0 1", "usemtl m", "f " + " ".join(f"{i}//1" for i in range(1, corners + 2)),
+              "# end"]
+    return ("\n".join(lines) + "\n").encode()
+
+
+def test_a_polygon_cut_through_is_written_as_its_triangles_and_said(tmp_path, capsys):
+    src, out, rep = tmp_path / "spiral.obj", tmp_path / "out.obj", tmp_path / "r.json"
+    src.write_bytes(spiral_obj())
+    assert main(["unwrap", str(src), "-o", str(out), "--report", str(rep), "-q",
+                 "--bound", "1.5"]) == 0
+    assert "1 polygon(s) written as their triangles" in capsys.readouterr().out
+    assert json.loads(rep.read_text())["polygons_as_triangles"] == 1
+    faces = assert_uvs_replaced_only(src, out, None, unwrap_figures(rep), split=1)
+    # its 15 fan triangles, in order, each with its normal index as written
+    assert [[c[0] for c in corners] for corners, _ in faces] == [
+        [0, j, j + 1] for j in range(1, 16)]
+    assert all(text == [(str(c[0] + 1), "1") for c in corners] for corners, text in faces)
+
+
+def test_polygon_corner_vt_one_uv_per_corner_or_the_polygon_is_not_whole():
+    # a quad (triangles 0-1: corners 0,1,2 and 0,2,3), a triangle, a pentagon (3 triangles)
+    poly = np.array([0, 0, 1, 2, 2, 2])
+    F_vt = np.array([[0, 1, 2], [0, 2, 3],              # quad: agrees
+                     [-1, -1, -1],                       # triangle: no UVs
+                     [4, 5, 6], [4, 6, 7], [9, 7, 8]])   # pentagon: corner 0 is 4 and 9
+    corner_vt, starts, whole = polygon_corner_vt(poly, F_vt)
+    assert starts.tolist() == [0, 4, 7, 12]
+    assert whole.tolist() == [True, True, False]
+    assert corner_vt.tolist() == [0, 1, 2, 3, -1, -1, -1] + [-1] * 5
+    # only some triangles of a polygon with UVs: not whole either
+    assert not polygon_corner_vt([0, 0], [[0, 1, 2], [-1, -1, -1]])[2][0]
+
+
+def test_patched_obj_writes_a_split_polygon_as_triangles_and_keeps_the_rest(tmp_path):
+    src = tmp_path / "in.obj"
+    src.write_bytes(b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 9 9\nvn 0 0 1\n"
+                    b"f 1/1/1 2/1/1 3/1/1 4/1/1 # quad\nl 1/1 3/1\nf 1 2 3\nf -4//1 -2//1 -1//1\n")
+    F = np.array([[0, 1, 2], [0, 2, 3], [0, 1, 2], [0, 2, 3]])
+    poly = np.array([0, 0, 1, 2])
+    uv = np.array([[0.0, 0.0], [0.5, 0.0], [0.5, 0.5], [0.0, 0.5], [0.25, 0.25]])
+    F_vt = np.array([[0, 1, 2], [4, 2, 3], [-1, -1, -1], [0, 2, 3]])   # the quad disagrees
+    assert patched_obj(str(src), str(tmp_path / "out.obj"), F, poly, F_vt, uv) == 1
+    assert (tmp_path / "out.obj").read_text() == (
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+        "vt 0.0 0.0\nvt 0.5 0.0\nvt 0.5 0.5\nvt 0.0 0.5\nvt 0.25 0.25\n"
+        "vn 0 0 1\n"
+        "f 1/1/1 2/2/1 3/3/1\nf 1/5/1 3/3/1 4/4/1 # quad\n"
+        "l 1 3\nf 1 2 3\nf -4/1/1 -2/3/1 -1/4/1\n")
+
+
+def test_an_input_changed_since_it_was_read_is_refused_and_nothing_written(tmp_path):
+    src = tmp_path / "in.obj"
+    src.write_bytes(b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n")
+    uv = np.zeros((4, 2))
+    for F, poly in ((np.array([[0, 1, 2], [0, 2, 3]]), np.array([0, 0])),
+                    (np.array([[0, 1, 3], [0, 2, 3]]), np.array([0, 0])),    # other vertices
+                    (np.array([[0, 1, 2]]), np.array([0])),                  # fewer corners
+                    (np.array([[0, 1, 2], [0, 2, 3], [0, 1, 2]]), np.array([0, 0, 1]))):
+        F_vt = np.tile([0, 1, 2], (len(F), 1))
+        if len(F) == 2 and F[0, 2] == 2:
+            continue        # the file's own faces: written
+        with pytest.raises(InvalidMeshError, match="changed since it was read"):
+            patched_obj(str(src), str(tmp_path / "out.obj"), F, poly, F_vt, uv)
+        assert not (tmp_path / "out.obj").exists()
