@@ -37,9 +37,7 @@ def polygon_corner_vt(polygons, F_vt):
     P = int(poly[-1]) + 1 if len(poly) else 0
     tris = np.bincount(poly, minlength=P)
     starts = np.concatenate([[0], np.cumsum(tris + 2)])
-    first = np.concatenate([[0], np.cumsum(tris)])[:-1]        # first triangle of each polygon
-    j = np.arange(len(poly)) - first[poly]
-    corner = starts[poly][:, None] + np.stack([np.zeros_like(j), j + 1, j + 2], axis=1)
+    corner = _fan_corners(poly, starts)
     lo = np.full(starts[-1], np.iinfo(np.int64).max)
     hi = np.full(starts[-1], -2, dtype=np.int64)
     np.minimum.at(lo, corner.ravel(), F_vt.ravel())
@@ -81,15 +79,12 @@ def patched_obj(source, path, F, polygons, F_vt, uv):
     with open(source, "rb") as fh:
         text, encoding = obj_text(fh.read(), errors="surrogateescape")
     lines = text.splitlines(keepends=True)
-    eol = lines[0][len(lines[0].splitlines()[0]):] if lines else ""
-    eol = eol or "\n"
+    eol = (lines[0][len(lines[0].splitlines()[0]):] if lines else "") or "\n"
     block = "".join(f"vt {u!r} {v!r}{eol}" for u, v in np.asarray(uv, np.float64).tolist())
-    out, placed, nv, p = [], False, 0, 0
-
-    def changed(number):
-        return InvalidMeshError(f"{source} line {number}: the file changed since it was read; "
-                                f"nothing was written to {path}")
-
+    # Python lists: read an element at a time below
+    corner_list, start_list, whole_list = corner_vt.tolist(), starts.tolist(), whole.tolist()
+    P = len(whole_list)
+    out, placed, nv, p, seen = [], False, 0, 0, []   # seen: each polygon corner's v as read
     for number, record, raw in obj_records(text):
         body = COMMENT.sub("", record)
         tokens = body.split()
@@ -110,32 +105,45 @@ def patched_obj(source, path, F, polygons, F_vt, uv):
         if key == "l" or len(items) < 3:    # no polygon: its old vt indices dropped
             out.append(" ".join([key] + [_corner(it, -1) for it in items]) + tail)
             continue
-        if p >= len(whole):
-            raise changed(number)
-        t0 = starts[p] - 2 * p          # its first triangle
-        try:
-            vi = [int(it[0]) for it in items]
-        except ValueError:
-            raise changed(number) from None
-        vi = np.asarray([i + nv if i < 0 else i - 1 for i in vi], dtype=np.int64)
         n = len(items)
-        if starts[p + 1] - starts[p] != n or not np.array_equal(
-                F[t0:t0 + n - 2], np.stack([np.full(n - 2, vi[0]), vi[1:-1], vi[2:]], axis=1)):
-            raise changed(number)
-        if whole[p]:
-            vts = corner_vt[starts[p]:starts[p + 1]]
+        if p >= P or start_list[p + 1] - start_list[p] != n:
+            raise _changed(source, path, number)
+        try:
+            seen += [i + nv if i < 0 else i - 1 for i in map(int, (it[0] for it in items))]
+        except ValueError:
+            raise _changed(source, path, number) from None
+        if whole_list[p]:
+            vts = corner_list[start_list[p]:start_list[p + 1]]
             out.append(" ".join(["f"] + [_corner(it, t) for it, t in zip(items, vts)]) + tail)
         else:   # its fan's triangles, each with its own UVs
-            fan = [" ".join(["f"] + [_corner(items[c], F_vt[t0 + j, k])
-                                     for k, c in enumerate((0, j + 1, j + 2))])
+            t0 = start_list[p] - 2 * p          # its first triangle
+            fan = [" ".join(["f"] + [_corner(items[c], vt) for c, vt in
+                                     zip((0, j + 1, j + 2), F_vt[t0 + j].tolist())])
                    for j in range(n - 2)]
             out.append(eol.join(fan) + tail)
         p += 1
-    if p != len(whole):
-        raise changed(len(lines))
+    # the faces read then are the faces the file holds now (their fans from the first corners)
+    corner = _fan_corners(polygons, starts)
+    if p != P or not np.array_equal(np.asarray(seen, dtype=np.int64)[corner], F):
+        raise _changed(source, path, None)
     with open(path, "wb") as fh:
         fh.write(obj_bytes("".join(out), encoding))
-    return int((~whole).sum())
+    return P - sum(whole_list)
+
+
+def _changed(source, path, number):
+    where = f"{source} line {number}" if number is not None else source
+    return InvalidMeshError(f"{where}: the file changed since it was read; nothing was written "
+                            f"to {path}")
+
+
+def _fan_corners(polygons, starts):
+    """(m,3) int64: the polygon corners (``starts``' numbering) of each fan triangle."""
+    poly = np.asarray(polygons, dtype=np.int64).reshape(-1)
+    tris = np.diff(starts) - 2
+    first = np.concatenate([[0], np.cumsum(tris)])[:-1]        # first triangle of each polygon
+    j = np.arange(len(poly)) - first[poly]
+    return starts[poly][:, None] + np.stack([np.zeros_like(j), j + 1, j + 2], axis=1)
 
 
 def _corner(item, vt):
