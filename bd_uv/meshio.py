@@ -42,6 +42,8 @@ class Mesh:
         vertices the file split (OFF, PLY); what is written back
     polygons : (m,) int64 or None, an OBJ's polygon (``f`` record) of each face, its fan's
         triangles consecutive (``obj.read_obj``); None for other formats
+    polygon_corners : (m,3) int64 or None, with ``polygons``: each face corner's place in its
+        polygon (the fan from its first corner, or another where that has a face of no area)
     """
     V: np.ndarray
     F: np.ndarray
@@ -50,6 +52,7 @@ class Mesh:
     labels: dict = None
     file_F: np.ndarray = None
     polygons: np.ndarray = None
+    polygon_corners: np.ndarray = None
 
     @property
     def faces_to_write(self):
@@ -93,9 +96,9 @@ def load_mesh(path):
     name = os.path.splitext(os.path.basename(path))[0]
     refuse_lfs_pointer(path)
     try:
-        labels, file_F, polygons = None, None, None
+        labels, file_F, polygons, corners = None, None, None, None
         if ext == ".obj":
-            V, F, cuv, labels, polygons = read_obj(path)
+            V, F, cuv, labels, polygons, corners = read_obj(path)
             file_F, F = _welded(V, F, labels["object"])
         elif ext in (".off", ".ply", ".stl"):
             V, F, vuv = _read_trimesh(path, ext)
@@ -111,7 +114,7 @@ def load_mesh(path):
                                f"({type(exc).__name__}: {exc})") from exc
     if len(F) == 0:
         raise InvalidMeshError(f"{path}: the file holds no faces")
-    return Mesh(V, F.reshape(-1, 3), cuv, name, labels, file_F, polygons)
+    return Mesh(V, F.reshape(-1, 3), cuv, name, labels, file_F, polygons, corners)
 
 
 def welded_entry(mesh):
@@ -206,7 +209,7 @@ def polygons_as_triangles(mesh, F_uv):
     for other formats."""
     if mesh.face_groups is None:
         return 0
-    return int((~polygon_corner_vt(mesh.polygons, F_uv)[2]).sum())
+    return int((~polygon_corner_vt(mesh.polygons, F_uv, mesh.polygon_corners)[2]).sum())
 
 
 def write_unwrapped(path, source, mesh, uv, F_uv):
@@ -218,7 +221,8 @@ def write_unwrapped(path, source, mesh, uv, F_uv):
     if mesh.polygons is None:
         write_obj(path, mesh.V, mesh.faces_to_write, uv, F_uv)
         return 0
-    return patched_obj(source, path, mesh.faces_to_write, mesh.polygons, F_uv, uv)
+    return patched_obj(source, path, mesh.faces_to_write, mesh.polygons, F_uv, uv,
+                       mesh.polygon_corners)
 
 
 def write_obj(path, V, F, uv=None, F_uv=None):

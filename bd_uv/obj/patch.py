@@ -6,8 +6,8 @@ its input's text with every record kept in order (``v``, ``vn``, ``mtllib``, ``u
 the new ones (in one block where the first ``vt`` or ``f`` record was), and the ``f`` records,
 rewritten with the same vertex and normal indices (as written: a negative index stays) and the
 new ``vt`` of each corner. A polygon stays one polygon when its triangles (``read.read_obj``'s
-fan) give each of its corners one ``vt``; else it is written as those triangles, each with its
-own UVs, so the UVs per corner are the ones certified either way.
+fan, ``fans.fan_corners``) give each of its corners one ``vt``; else it is written as those
+triangles, each with its own UVs, so the UVs per corner are the ones certified either way.
 """
 import numpy as np
 
@@ -15,14 +15,16 @@ from ..errors import InvalidMeshError
 from .text import COMMENT, obj_bytes, obj_records, obj_text
 
 
-def polygon_corner_vt(polygons, F_vt):
+def polygon_corner_vt(polygons, F_vt, corners=None):
     """The ``vt`` of each polygon corner, from its fan triangles' corners.
 
     Parameters
     ----------
     polygons : (m,) int array, the polygon of each triangle (``read_obj``'s: polygon p's
-        n - 2 triangles consecutive, triangle j of them its corners 0, j + 1, j + 2)
+        n - 2 triangles consecutive)
     F_vt : (m,3) int array, the ``vt`` of each triangle corner; -1 on triangles without UVs
+    corners : (m,3) int array, optional, each triangle corner's place in its polygon
+        (``read_obj``'s); default the fan from the first corner (triangle j: 0, j + 1, j + 2)
 
     Returns
     -------
@@ -37,7 +39,7 @@ def polygon_corner_vt(polygons, F_vt):
     P = int(poly[-1]) + 1 if len(poly) else 0
     tris = np.bincount(poly, minlength=P)
     starts = np.concatenate([[0], np.cumsum(tris + 2)])
-    corner = _fan_corners(poly, starts)
+    corner = starts[poly][:, None] + _places(poly, starts, corners)
     lo = np.full(starts[-1], np.iinfo(np.int64).max)
     hi = np.full(starts[-1], -2, dtype=np.int64)
     np.minimum.at(lo, corner.ravel(), F_vt.ravel())
@@ -50,7 +52,7 @@ def polygon_corner_vt(polygons, F_vt):
     return corner_vt, starts, whole
 
 
-def patched_obj(source, path, F, polygons, F_vt, uv):
+def patched_obj(source, path, F, polygons, F_vt, uv, corners=None):
     """Write ``source``'s OBJ text to ``path`` with its UVs replaced by ``uv``.
 
     Parameters
@@ -62,6 +64,8 @@ def patched_obj(source, path, F, polygons, F_vt, uv):
     F_vt : (m,3) int array, the row of ``uv`` at each face corner; -1 on faces written without
         UVs
     uv : (k,2) float array, the new ``vt`` records, written in order (float64, exactly)
+    corners : (m,3) int array, optional, each face corner's place in its polygon
+        (``read_obj``'s); default the fan from the first corner
 
     Returns
     -------
@@ -75,7 +79,8 @@ def patched_obj(source, path, F, polygons, F_vt, uv):
     """
     F = np.asarray(F, dtype=np.int64).reshape(-1, 3)
     F_vt = np.asarray(F_vt, dtype=np.int64).reshape(-1, 3)
-    corner_vt, starts, whole = polygon_corner_vt(polygons, F_vt)
+    corner_vt, starts, whole = polygon_corner_vt(polygons, F_vt, corners)
+    local = _places(polygons, starts, corners)
     with open(source, "rb") as fh:
         text, encoding = obj_text(fh.read(), errors="surrogateescape")
     lines = text.splitlines(keepends=True)
@@ -118,12 +123,12 @@ def patched_obj(source, path, F, polygons, F_vt, uv):
         else:   # its fan's triangles, each with its own UVs
             t0 = start_list[p] - 2 * p          # its first triangle
             fan = [" ".join(["f"] + [_corner(items[c], vt) for c, vt in
-                                     zip((0, j + 1, j + 2), F_vt[t0 + j].tolist())])
+                                     zip(local[t0 + j].tolist(), F_vt[t0 + j].tolist())])
                    for j in range(n - 2)]
             out.append(eol.join(fan) + tail)
         p += 1
-    # the faces read then are the faces the file holds now (their fans from the first corners)
-    corner = _fan_corners(polygons, starts)
+    # the faces read then are the faces the file holds now
+    corner = starts[np.asarray(polygons, dtype=np.int64)][:, None] + local
     if p != P or not np.array_equal(np.asarray(seen, dtype=np.int64)[corner], F):
         raise _changed(source, path, None)
     with open(path, "wb") as fh:
@@ -137,13 +142,16 @@ def _changed(source, path, number):
                             f"to {path}")
 
 
-def _fan_corners(polygons, starts):
-    """(m,3) int64: the polygon corners (``starts``' numbering) of each fan triangle."""
+def _places(polygons, starts, corners=None):
+    """(m,3) int64: each triangle's corners' places in its polygon: ``corners``, or (None) the
+    fans from the first corners."""
+    if corners is not None:
+        return np.asarray(corners, dtype=np.int64).reshape(-1, 3)
     poly = np.asarray(polygons, dtype=np.int64).reshape(-1)
     tris = np.diff(starts) - 2
     first = np.concatenate([[0], np.cumsum(tris)])[:-1]        # first triangle of each polygon
     j = np.arange(len(poly)) - first[poly]
-    return starts[poly][:, None] + np.stack([np.zeros_like(j), j + 1, j + 2], axis=1)
+    return np.stack([np.zeros_like(j), j + 1, j + 2], axis=1)
 
 
 def _corner(item, vt):

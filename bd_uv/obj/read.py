@@ -8,21 +8,24 @@ on the next; UTF-8 (with or without a byte order mark) or UTF-16 after its mark.
 import numpy as np
 
 from ..errors import InvalidMeshError
+from .fans import fan_corners
 from .text import COMMENT, obj_records, obj_text
 
 
 def read_obj(path):
     """V, F, corner UVs or None, each face's material (``usemtl``) and object (``o``), each
     numbered in order of first use by a face (faces before any ``usemtl`` or ``o`` make a
-    material or object of their own), and each face's polygon: (m,) int64, the ``f`` record
-    (with three corners or more) it is a triangle of, numbered in file order; a polygon of n
-    corners gives n - 2 consecutive faces, its fan from its first corner.
+    material or object of their own), each face's polygon, (m,) int64: the ``f`` record (with
+    three corners or more) it is a triangle of, numbered in file order, and each face's corners'
+    places in its polygon, (m,3) int64: a polygon of n corners gives n - 2 consecutive faces,
+    the fan from its first corner (``fans.fan_corners``: from another where that fan has a
+    triangle with no area).
 
     A negative index counts back from the last ``v`` (``vt``) read before its face, as the OBJ
     format defines it (files written object by object use ``f -4 -3 -2 -1``). Records may be
     separated by tabs; a file starting with a UTF-16 byte order mark is read as UTF-16. An
     index naming no vertex is an ``InvalidMeshError`` giving the file's line."""
-    vs, vts, faces, tfaces, mats, objs, numbers, polygons = [], [], [], [], [], [], [], []
+    vs, vts, corner_v, corner_t, sizes, mats, objs, numbers = [], [], [], [], [], [], [], []
     mat, obj = None, None
     with open(path, "rb") as fh:
         text, _ = obj_text(fh.read())
@@ -40,28 +43,32 @@ def read_obj(path):
             vts.append((number, tokens[1:3]))
         elif key == "f" and len(tokens) > 3:
             items = [it.split("/") for it in tokens[1:]]
-            vi = [_obj_index(path, number, it[0], len(vs), "v") for it in items]
-            ti = [_obj_index(path, number, it[1], len(vts), "vt") + 1
-                  if len(it) > 1 and it[1] else 0 for it in items]
-            polygon = polygons[-1] + 1 if polygons else 0
-            for j in range(1, len(vi) - 1):  # fan-triangulate polygons
-                faces.append((vi[0], vi[j], vi[j + 1]))
-                tfaces.append((ti[0], ti[j], ti[j + 1]))
-                mats.append(mat)
-                objs.append(obj)
-                numbers.append(number)
-                polygons.append(polygon)
+            corner_v += [_obj_index(path, number, it[0], len(vs), "v") for it in items]
+            corner_t += [_obj_index(path, number, it[1], len(vts), "vt") + 1
+                         if len(it) > 1 and it[1] else 0 for it in items]
+            sizes.append(len(items))
+            mats.append(mat)
+            objs.append(obj)
+            numbers.append(number)
     V = _numbers(path, vs, "v", 3)
-    F = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    T = np.asarray(tfaces, dtype=np.int64).reshape(-1, 3)   # 1-based; 0: no vt
-    _check_forward(path, F, len(V), "v", numbers)
+    corner_v = np.asarray(corner_v, dtype=np.int64)
+    corner_t = np.asarray(corner_t, dtype=np.int64)            # 1-based; 0: no vt
+    starts = np.concatenate([[0], np.cumsum(sizes, dtype=np.int64)])
+    lines = np.asarray(numbers, dtype=np.int64)                # each polygon's line
+    if len(sizes):   # the largest index of each polygon: one the file defines
+        _check_forward(path, np.maximum.reduceat(corner_v, starts[:-1])[:, None], len(V), "v",
+                       lines)
+    polygon, corners = fan_corners(V, corner_v, starts)       # the polygons fan-triangulated
+    at = starts[polygon][:, None] + corners
+    F, T = corner_v[at].reshape(-1, 3), corner_t[at].reshape(-1, 3)
+    numbers = lines[polygon]                                   # each face's line
     cuv = None
     if len(vts) and len(T) and np.all(T != 0):
         VT = _numbers(path, vts, "vt", 2)
         _check_forward(path, T - 1, len(VT), "vt", numbers)
         cuv = VT[T - 1]
-    labels = {"material": _first_use(mats), "object": _first_use(objs)}
-    return V, F, cuv, labels, np.asarray(polygons, dtype=np.int64)
+    labels = {"material": _first_use(mats)[polygon], "object": _first_use(objs)[polygon]}
+    return V, F, cuv, labels, polygon, corners
 
 
 def _numbers(path, rows, record, width):

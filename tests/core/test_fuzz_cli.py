@@ -181,7 +181,8 @@ def command_lines(draw):
     maybe("--frames", ["auto", "harmonic", "conformal", "input-uv", "constant"], ["uv"])
     # the input first: "--seams uv" is a valid value only for an input with UVs (for the others
     # it is a refusal, drawn as a bad value)
-    valid = ["patch.obj", "patch.obj with vt", "artist.obj", "patch.off", "patch.ply", "closed tetra.obj",
+    valid = ["patch.obj", "patch.obj with vt", "artist.obj", "patch.off", "patch.ply",
+             "closed tetra.obj",
              "soup.ply", "soup.off", "soup.stl", "quads binary.ply"]
     source = draw(st.sampled_from(valid) if clean else
                   st.sampled_from(valid) | st.sampled_from(sorted(INPUTS)))

@@ -170,3 +170,60 @@ def test_an_input_changed_since_it_was_read_is_refused_and_nothing_written(tmp_p
         with pytest.raises(InvalidMeshError, match="changed since it was read"):
             patched_obj(str(src), str(tmp_path / "out.obj"), F, poly, F_vt, uv)
         assert not (tmp_path / "out.obj").exists()
+
+
+def test_a_fan_with_a_triangle_of_no_area_is_turned_to_another_corner():
+    from bd_uv.mesh.arrays import DEGENERATE_RATIO
+    from bd_uv.obj.fans import FLAT, fan_corners
+    assert FLAT == DEGENERATE_RATIO       # the unwrap's own test of a face with no area
+    # a pentagon 0..4 whose corners 0, 1, 2 lie on a line (from 0: triangle 0 1 2 has no area)
+    # and a square (its fan from 0 kept)
+    V = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [2, 1, 0], [0, 1, 0], [3, 0, 0], [3, 1, 0]],
+                 float)
+    polygon, corners = fan_corners(V, [0, 1, 2, 3, 4, 2, 5, 6, 3], [0, 5, 9])
+    assert polygon.tolist() == [0, 0, 0, 1, 1]
+    assert corners.tolist() == [[1, 2, 3], [1, 3, 4], [1, 4, 0], [0, 1, 2], [0, 2, 3]]
+    # a fan from the corner off the line, however near it (1e-7 of its length)
+    W = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0], [1.5, 3e-7, 0]])
+    assert fan_corners(W, [0, 1, 2, 3, 4], [0, 5])[1].tolist() == [[4, 0, 1], [4, 1, 2],
+                                                                   [4, 2, 3]]
+    # no corner gives a fan without such a triangle (all on a line): from the first, as before
+    assert fan_corners(W[:4], [0, 1, 2, 3], [0, 4])[1].tolist() == [[0, 1, 2], [0, 2, 3]]
+
+
+def test_an_ngon_with_three_corners_on_a_line_stays_one_polygon(tmp_path, capsys):
+    """An n-gon whose straight side holds three corners (dissolved edges): fanned from its
+    first corner its first triangle had no area, which the unwrap refused (exit 1) and the
+    n-gon was written as its triangles; fanned from the second corner it is certified whole."""
+    src, out, rep = tmp_path / "ngon.obj", tmp_path / "out.obj", tmp_path / "r.json"
+    src.write_bytes(b"v 0 0 0\nv 1 0 0\nv 2 0 0\nv 2 1 0.2\nv 0 1 0\nv 0 2 0\nv 2 2 0\n"
+                    b"vn 0 0 1\nf 1//1 2//1 3//1 4//1 5//1\nf 5//1 4//1 7//1 6//1\n")
+    assert main(["unwrap", str(src), "-o", str(out), "--report", str(rep), "-q"]) == 0
+    assert "written as their triangles" not in capsys.readouterr().out
+    written = [dict(v=[0, 1, 2, 3, 4], vn=[0] * 5, tokens=[(str(i), "1") for i in range(1, 6)]),
+               dict(v=[4, 3, 6, 5], vn=[0] * 4, tokens=[(str(i), "1") for i in (5, 4, 7, 6)])]
+    faces = read_faces(out.read_bytes())[2]
+    assert [len(c) for c, _ in faces] == [5, 4]
+    # the certified triangles are the pentagon's fan from its second corner (a reader fanning
+    # from the first gets one triangle of no area and two covering the same pentagon)
+    V, VT, _ = read_faces(out.read_bytes())
+    turned = [(corners[1:] + corners[:1], text) for corners, text in faces[:1]] + faces[1:]
+    tris, uv, _ = fan_uvs(V, VT, turned)
+    D, flipped = distortion_and_flips(V, tris, uv)
+    bound, stored = unwrap_figures(rep)
+    assert not flipped.any() and D.max() <= bound * (1 + 2e-6)
+    assert D.max() == pytest.approx(stored, rel=1e-9)
+    assert [text for _, text in faces] == [w["tokens"] for w in written]
+
+
+def test_a_split_polygon_is_written_as_the_fan_it_was_unwrapped_as(tmp_path):
+    src = tmp_path / "in.obj"
+    src.write_bytes(b"v 0 0 0\nv 1 0 0\nv 2 0 0\nv 2 1 0\nv 0 1 0\nf 1 2 3 4 5\n")
+    F = np.array([[1, 2, 3], [1, 3, 4], [1, 4, 0]])
+    corners = np.array([[1, 2, 3], [1, 3, 4], [1, 4, 0]])
+    uv = np.arange(14, dtype=float).reshape(7, 2)
+    F_vt = np.array([[0, 1, 2], [0, 2, 3], [5, 3, 4]])       # corner 1 (vertex 2): 0 and 5
+    assert patched_obj(str(src), str(tmp_path / "out.obj"), F, [0, 0, 0], F_vt, uv,
+                       corners) == 1
+    assert (tmp_path / "out.obj").read_text().splitlines()[-3:] == [
+        "f 2/1 3/2 4/3", "f 2/1 4/3 5/4", "f 2/6 5/4 1/5"]
