@@ -10,7 +10,8 @@ PLY and OBJ converters) splits every vertex, so the unwrap would see one island 
 at equal positions are therefore welded for the unwrap (``mesh.weld.welded_in_place``: never
 where faces only touch at a point nor across an OBJ's objects; each named by the least of the
 file's vertices, the vertex list unchanged), the file's UVs still mark its seams, and the file's
-faces are written as they were.
+faces are written as they were. An OBJ is written back as its own text with only its UVs
+replaced (``write_unwrapped``, ``obj.patched_obj``), its polygons kept.
 """
 import os
 from functools import cached_property
