@@ -227,3 +227,20 @@ def test_a_split_polygon_is_written_as_the_fan_it_was_unwrapped_as(tmp_path):
                        corners) == 1
     assert (tmp_path / "out.obj").read_text().splitlines()[-3:] == [
         "f 2/1 3/2 4/3", "f 2/1 4/3 5/4", "f 2/6 5/4 1/5"]
+
+
+@pytest.mark.parametrize("encoding, mark", [("utf-16-le", b"\xff\xfe"),
+                                            ("utf-16-be", b"\xfe\xff")])
+def test_a_utf16_obj_is_written_back_in_its_own_encoding(tmp_path, encoding, mark):
+    text = ("# \u00e9t\u00e9\r\no quad\r\nv 0 0 0\r\nv 1 0 0\r\nv 1 1 0.1\r\nv 0 1 0\r\n"
+            "vn 0 0 1\r\ns 1\r\nf\t1//1 2//1 3//1 4//1\r\n")
+    src, out = tmp_path / "in.obj", tmp_path / "out.obj"
+    src.write_bytes(mark + text.encode(encoding))
+    assert main(["unwrap", str(src), "-o", str(out), "-q"]) == 0
+    data = out.read_bytes()
+    assert data[:2] == mark
+    got = data[2:].decode(encoding).splitlines()
+    assert [ln for ln in got if not ln.startswith(("vt", "f"))] == \
+        [ln for ln in text.splitlines() if not ln.startswith("f")]
+    assert [ln for ln in got if ln.startswith("f")] == ["f 1/1/1 2/2/1 3/3/1 4/4/1"]
+    assert sum(ln.startswith("vt ") for ln in got) == 4
