@@ -22,7 +22,8 @@ from .batch.report import item_line
 from .batch.scene_files import unwrap_scene_file
 from .errors import BDError, OptionError
 from .unwrapping.storage import stored_layout_with_headroom
-from .meshio import load_mesh, welded_entry, write_obj
+from .meshio import (AS_TRIANGLES, load_mesh, polygons_as_triangles, welded_entry,
+                     write_unwrapped)
 from .planar_cli import add_planar_parsers
 from .progress import TerminalProgress
 from .scenes import BLENDER_SUFFIXES, GLTF_SUFFIXES, SCENE_SUFFIXES, USD_SUFFIXES, read_scene
@@ -97,15 +98,20 @@ def run_unwrap(args):
             res = auto_seams(mesh, seams, options, progress)
         else:
             res = unwrap(mesh.V, mesh.F, seams=seams, initial_uv=initial_uv, progress=progress,
-                         options=options)
+                         face_groups=mesh.face_groups, options=options)
         progress.stage("storing: cut, pack and certify the UVs as stored")
         layout, res, _ = stored_layout_with_headroom(mesh.V, mesh.F, res,
                                                      stretch=options.stretch,
-                                                     face_labels=mesh.labels, **layout_options)
+                                                     face_labels=mesh.labels,
+                                                     face_groups=mesh.face_groups,
+                                                     **layout_options)
     if options.seams_mode == "needed":
         _print_needed(res, options, args.output)
     islands = layout.island_entries(res)
-    report = {"input": os.path.abspath(args.input), **welded_entry(mesh), **res.report(),
+    uv, F_uv = layout.vertex_uv(mesh.F)
+    split = polygons_as_triangles(mesh, F_uv)
+    report = {"input": os.path.abspath(args.input), **welded_entry(mesh),
+              **({"polygons_as_triangles": split} if split else {}), **res.report(),
               "islands": islands,
               "summary": layout.totals(), "layout_overlaps": layout.overlaps.tolist(),
               "pack": layout.pack}
@@ -129,10 +135,11 @@ def run_unwrap(args):
                       encoding="utf-8") as fh:
                 json.dump(report, fh, indent=2)
         if any_certified:
-            uv, F_uv = layout.vertex_uv(mesh.F)
-            write_obj(stack.enter_context(atomic_path(args.output)), mesh.V, mesh.faces_to_write,
-                      uv, F_uv)
+            write_unwrapped(stack.enter_context(atomic_path(args.output)), args.input, mesh, uv,
+                            F_uv)
     _print_report(mesh.name, islands, layout, res.seconds, args, sys.stdout)
+    if split and any_certified:
+        print(f"  {split} polygon(s) written as their triangles: {AS_TRIANGLES}")
     failed = [e for e in islands if e["status"] != "certified"]
     for e in failed:
         print(f"error: {e['message']}", file=sys.stderr)
@@ -208,7 +215,7 @@ def auto_seams(mesh, seams, options, progress=None):
     res, added, info, rep = unwrap_auto_repaired(
         mesh.V, mesh.F, seams=seams, bound=options.bound, stretch=options.seams_stretch,
         method=options.method, frames=options.frames, cone=options.cone, progress=progress,
-        atlas_cuts=options.atlas_cuts)
+        atlas_cuts=options.atlas_cuts, polygons=mesh.face_groups)
     res = dataclasses.replace(res, seams_added=added, atlas_cuts=atlas_cuts_of(info))
     for note in res.repair:
         print(f"repaired: {note}")

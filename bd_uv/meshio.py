@@ -10,7 +10,8 @@ PLY and OBJ converters) splits every vertex, so the unwrap would see one island 
 at equal positions are therefore welded for the unwrap (``mesh.weld.welded_in_place``: never
 where faces only touch at a point nor across an OBJ's objects; each named by the least of the
 file's vertices, the vertex list unchanged), the file's UVs still mark its seams, and the file's
-faces are written as they were.
+faces are written as they were. An OBJ is written back as its own text with only its UVs
+replaced (``write_unwrapped``, ``obj.patched_obj``), its polygons kept.
 """
 import os
 from functools import cached_property
@@ -20,7 +21,7 @@ import numpy as np
 
 from .errors import InvalidMeshError, refuse_lfs_pointer
 from .mesh.weld import welded_in_place
-from .obj import read_obj
+from .obj import patched_obj, polygon_corner_vt, read_obj
 from .ply import read_binary_ply
 
 
@@ -40,6 +41,10 @@ class Mesh:
         "object" (m,) int64 (OBJ ``o``); None when the format says nothing of it (OFF, PLY)
     file_F : (m,3) int64 or None, the faces as the file names their vertices, when ``F`` welds
         vertices the file split (OFF, PLY); what is written back
+    polygons : (m,) int64 or None, an OBJ's polygon (``f`` record) of each face, its fan's
+        triangles consecutive (``obj.read_obj``); None for other formats
+    polygon_corners : (m,3) int64 or None, with ``polygons``: each face corner's place in its
+        polygon (the fan from its first corner, or another where that has a face of no area)
     """
     V: np.ndarray
     F: np.ndarray
@@ -47,11 +52,21 @@ class Mesh:
     name: str = ""
     labels: dict = None
     file_F: np.ndarray = None
+    polygons: np.ndarray = None
+    polygon_corners: np.ndarray = None
 
     @property
     def faces_to_write(self):
         """The faces as the file had them (its own vertex ids), for the OBJ written."""
         return self.F if self.file_F is None else self.file_F
+
+    @property
+    def face_groups(self):
+        """The polygon of each face, for ``bd_uv.unwrap``'s ``face_groups`` (no seam or cut
+        through a polygon, so each corner keeps one UV): None when every polygon is a triangle
+        (or the format has none)."""
+        p = self.polygons
+        return None if p is None or len(p) == 0 or p[-1] + 1 == len(p) else p
 
     @cached_property
     def welded(self):
@@ -82,9 +97,9 @@ def load_mesh(path):
     name = os.path.splitext(os.path.basename(path))[0]
     refuse_lfs_pointer(path)
     try:
-        labels, file_F = None, None
+        labels, file_F, polygons, corners = None, None, None, None
         if ext == ".obj":
-            V, F, cuv, labels = read_obj(path)
+            V, F, cuv, labels, polygons, corners = read_obj(path)
             file_F, F = _welded(V, F, labels["object"])
         elif ext in (".off", ".ply", ".stl"):
             V, F, vuv = _read_trimesh(path, ext)
@@ -100,7 +115,7 @@ def load_mesh(path):
                                f"({type(exc).__name__}: {exc})") from exc
     if len(F) == 0:
         raise InvalidMeshError(f"{path}: the file holds no faces")
-    return Mesh(V, F.reshape(-1, 3), cuv, name, labels, file_F)
+    return Mesh(V, F.reshape(-1, 3), cuv, name, labels, file_F, polygons, corners)
 
 
 def welded_entry(mesh):
@@ -180,6 +195,35 @@ def uv_seams(F, corner_uv):
     u2b = np.where(same[:, None], ub[h2], ua[h2])
     cut = np.any(ua[h1] != u2a, axis=1) | np.any(ub[h1] != u2b, axis=1)
     return np.stack([a[h1[cut]], b[h1[cut]]], axis=1)
+
+
+#: why a polygon of an OBJ is written as its triangles, for the command line and the batch
+AS_TRIANGLES = ("the UVs of their triangles differ at a corner (a cut ran through the polygon, "
+                "or only some of its triangles were certified), which one UV per polygon corner "
+                "cannot hold; each triangle keeps the UVs certified")
+
+
+def polygons_as_triangles(mesh, F_uv):
+    """How many of an OBJ's polygons (more than three corners) the file written from ``F_uv``
+    (the ``vt`` of each face corner, -1 on faces not written) holds as their triangles: their
+    triangles' UVs differ at a corner (a cut through the polygon), or only some are written. 0
+    for other formats."""
+    if mesh.face_groups is None:
+        return 0
+    return int((~polygon_corner_vt(mesh.polygons, F_uv, mesh.polygon_corners)[2]).sum())
+
+
+def write_unwrapped(path, source, mesh, uv, F_uv):
+    """Write the unwrapped ``mesh`` read from ``source`` as an OBJ at ``path``: an OBJ input's
+    own text with its UVs replaced (``obj.patched_obj``: every other record kept, polygons
+    kept where each corner has one UV), any other format's vertices and triangles
+    (``write_obj``). ``uv``, ``F_uv``: ``Layout.vertex_uv``'s. Returns the polygons written as
+    their triangles."""
+    if mesh.polygons is None:
+        write_obj(path, mesh.V, mesh.faces_to_write, uv, F_uv)
+        return 0
+    return patched_obj(source, path, mesh.faces_to_write, mesh.polygons, F_uv, uv,
+                       mesh.polygon_corners)
 
 
 def write_obj(path, V, F, uv=None, F_uv=None):

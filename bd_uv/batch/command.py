@@ -170,7 +170,9 @@ def run_batch(args):
         last[:] = [time.perf_counter()]
         results[i] = entries
         ledger.record(os.path.abspath(tasks[i].path), entries)
-        progress.advance("\n".join(item_line(e) for e in entries),
+        progress.advance("\n".join(item_line(e) + "".join(f"\n  warning: {w}" for w in
+                                                           e.get("warnings", []))
+                                    for e in entries),
                          [e["status"] for e in entries], _size(tasks[i].path))
 
     ready, last = [], []

@@ -17,7 +17,8 @@ from dataclasses import dataclass
 
 from ..arguments import pack_flags
 from ..errors import BDError
-from ..meshio import load_mesh, welded_entry, write_obj
+from ..meshio import AS_TRIANGLES, load_mesh, polygons_as_triangles, welded_entry, \
+    write_unwrapped
 from ..scenes import BLENDER_SUFFIXES, SCENE_SUFFIXES, blender_command
 from ..scheduling import run_pool
 from ..scheduling.atomic import atomic_path
@@ -64,13 +65,18 @@ def _unwrap_file(task, options, seams_mode):
                 raise BDError(f"{task.path} has no UVs, so --seams uv has nothing to cut along")
             seams = mesh.uv_seams()
         job = Job(mesh.name, mesh.V, mesh.F, seams=seams, corner_uv=mesh.corner_uv,
-                  face_labels=mesh.labels)
+                  face_labels=mesh.labels, face_groups=mesh.face_groups)
         result = unwrap_job(job, options, png=task.png)
         entry = {**base, **welded_entry(mesh), **result.entry}
         if entry["status"] != "failed":
             uv, F_uv = result.layout.vertex_uv(mesh.F)
+            split = polygons_as_triangles(mesh, F_uv)
+            if split:
+                entry["polygons_as_triangles"] = split
+                entry.setdefault("warnings", []).append(
+                    f"{split} polygon(s) written as their triangles: {AS_TRIANGLES}")
             with atomic_path(task.output) as tmp:
-                write_obj(tmp, mesh.V, mesh.faces_to_write, uv, F_uv)
+                write_unwrapped(tmp, task.path, mesh, uv, F_uv)
             entry["output"] = os.path.abspath(task.output)
         return [entry]
     except Exception as exc:  # one bad file never stops the rest: everything goes in its entry

@@ -25,6 +25,7 @@ import numpy as np
 from hypothesis import HealthCheck, event, example, given, settings
 from hypothesis import strategies as st
 
+from artist_obj import artist_obj, read_faces, records
 from bd_uv.cli import main
 from overlap_shapes import overlapping_triangle_pairs
 from unwrap_contract import DATA, distortion_and_flips, read_off, strict_json
@@ -115,9 +116,27 @@ def binary_ply(V, faces):
         struct.pack("<B%di" % len(f), len(f), *f) for f in faces)
 
 
+def spiral_part(first):
+    """An object of one polygon, its fan from its first corner turning 900 degrees round it (a
+    helix): cut through at a low bound, so the OBJ written holds it as its triangles. Its
+    vertices are numbered from ``first`` (1-based)."""
+    t = np.radians(np.arange(16) * 60.0)
+    P = [[0.0, 0.0, 0.0]] + np.column_stack([np.cos(t), np.sin(t), 0.1 * np.arange(16)]).tolist()
+    return ("o spiral\r\n" + "".join(f"v {x!r} {y!r} {z!r}\r\n" for x, y, z in P)
+            + "f " + " ".join(str(first + i) for i in range(17)) + " # spiral\r\n").encode()
+
+
+# An artist's OBJ (tests/core/artist_obj.py: quads, a pentagon, materials, objects, groups,
+# smoothing, normals, comments, negative indices, a continued face, a split vertex, old vt, CRLF)
+# with a spiral polygon after it: written back as its own text with only its UVs replaced
+ARTIST, _ = artist_obj(*PATCH)
+ARTIST += spiral_part(len(PATCH[0]) + 2)     # its vertices after the patch's and the copy
+
+
 INPUTS = {   # name -> (file name, bytes or None for "no such file", or "dir")
     "patch.obj": ("in.obj", obj_text(*PATCH).encode()),
     "patch.obj with vt": ("in.obj", obj_text(*PATCH, with_uv=True).encode()),
+    "artist.obj": ("in.obj", ARTIST),
     "patch.off": ("in.off", off_text(*PATCH).encode()),
     "patch.ply": ("in.ply", ply_text(*PATCH).encode()),
     "closed tetra.obj": ("in.obj", obj_text(*TETRA).encode()),
@@ -162,7 +181,8 @@ def command_lines(draw):
     maybe("--frames", ["auto", "harmonic", "conformal", "input-uv", "constant"], ["uv"])
     # the input first: "--seams uv" is a valid value only for an input with UVs (for the others
     # it is a refusal, drawn as a bad value)
-    valid = ["patch.obj", "patch.obj with vt", "patch.off", "patch.ply", "closed tetra.obj",
+    valid = ["patch.obj", "patch.obj with vt", "artist.obj", "patch.off", "patch.ply",
+             "closed tetra.obj",
              "soup.ply", "soup.off", "soup.stl", "quads binary.ply"]
     source = draw(st.sampled_from(valid) if clean else
                   st.sampled_from(valid) | st.sampled_from(sorted(INPUTS)))
@@ -218,17 +238,37 @@ def tree(root):
 
 
 def read_obj(path):
-    V, VT, F, FT = [], [], [], []
-    for line in pathlib.Path(path).read_text().splitlines():
-        p = line.split()
-        if p and p[0] == "v":
-            V.append([float(t) for t in p[1:4]])
-        elif p and p[0] == "vt":
-            VT.append([float(t) for t in p[1:3]])
-        elif p and p[0] == "f":
-            F.append([int(t.split("/")[0]) - 1 for t in p[1:]])
-            FT.append([int(t.split("/")[1]) - 1 if "/" in t else -1 for t in p[1:]])
-    return np.array(V).reshape(-1, 3), np.array(VT).reshape(-1, 2), np.array(F), np.array(FT)
+    """V, VT, and the faces' fans from their first corners: vertex and vt ids (-1: none)."""
+    V, VT, faces = read_faces(pathlib.Path(path).read_bytes())
+    F, FT = [], []
+    for corners, _ in faces:
+        for j in range(1, len(corners) - 1):
+            c = (corners[0], corners[j], corners[j + 1])
+            F.append([x[0] for x in c])
+            FT.append([-1 if x[1] is None else x[1] for x in c])
+    return V, VT, np.array(F).reshape(-1, 3), np.array(FT).reshape(-1, 3)
+
+
+def check_patched(inp, out, stdout):
+    """The OBJ written from an OBJ is its text with only the UVs replaced: every record but vt
+    and f as it was, in order; each face with its vertex and normal indices as written, as one
+    polygon or (as many as the command line says) as its fan's triangles."""
+    a, b = inp.read_bytes(), out.read_bytes()
+    assert [r for k, r in records(a) if k not in ("vt", "f")] == \
+        [r for k, r in records(b) if k not in ("vt", "f")]
+    said = re.search(r"(\d+) polygon\(s\) written as their triangles", stdout)
+    split, rest = 0, read_faces(b)[2]
+    for corners, text in read_faces(a)[2]:
+        got, rest = rest[0], rest[1:]
+        if got[1] == text:
+            continue
+        split += 1
+        fan = [[text[0], text[j], text[j + 1]] for j in range(1, len(text) - 1)]
+        got = [got] + rest[:len(fan) - 1]
+        rest = rest[len(fan) - 1:]
+        assert [g[1] for g in got] == fan, "a face's vertex or normal indices changed"
+    assert not rest
+    assert split == (int(said.group(1)) if said else 0), stdout
 
 
 def run(sc, root):
@@ -271,7 +311,7 @@ def certified_bounds(stdout):
     return [float(x) for x in re.findall(r"certified C = ([0-9.eE+-]+),", stdout)]
 
 
-def check_written(inp_mesh, out, report, stdout, packed):
+def check_written(inp_mesh, out, report, stdout, packed, inp=None):
     """The OBJ's certified faces re-verified from the stored UVs (independent code)."""
     V, VT, F, FT = read_obj(out)
     V0, F0 = inp_mesh
@@ -295,6 +335,8 @@ def check_written(inp_mesh, out, report, stdout, packed):
         isl = uv_islands(FT[has])
         pairs = pairs[isl[pairs[:, 0]] == isl[pairs[:, 1]]]
     assert len(pairs) == 0, pairs[:5]
+    if inp_mesh is ARTIST_MESH:
+        check_patched(inp, out, stdout)
     if inp_mesh is SOUP:     # welded for the unwrap (its islands the patch's: test_mesh_file_weld)
         assert "of the file's vertices lie where another does" in stdout, stdout
 
@@ -309,9 +351,20 @@ def uv_islands(FT):
     return connected_components(g, directed=False)[1][:k]
 
 
+def _fan_mesh(data):
+    """(V, fan triangles) of OBJ bytes, by the independent reader."""
+    V, _, faces = read_faces(data)
+    return V, np.array([[c[0][0], c[j][0], c[j + 1][0]] for c, _ in faces
+                        for j in range(1, len(c) - 1)])
+
+
+ARTIST_MESH = _fan_mesh(ARTIST)
+
+
 def mesh_of(sc):
     """The (V, F) the input holds when it is a valid mesh, else None."""
-    return {"patch.obj": PATCH, "patch.obj with vt": PATCH, "patch.off": PATCH,
+    return {"patch.obj": PATCH, "patch.obj with vt": PATCH, "artist.obj": ARTIST_MESH,
+            "patch.off": PATCH,
             "patch.ply": PATCH32, "closed tetra.obj": TETRA, "soup.ply": SOUP, "soup.off": SOUP,
             "soup.stl": SOUP, "quads binary.ply": MIXED,
             "nan vertex.obj": NAN_PATCH}.get(sc["input"])
@@ -354,6 +407,11 @@ FOUND = [
     dict(input="patch.obj", output="new", report=None, png=None, opts=["--bound", "1.0001"]),
     dict(input="patch.obj", output="new", report=None, png=None,
          opts=["--bound", "1.0001", "--stretch", "1.5"]),
+    # an artist's OBJ (polygons, materials, normals, comments, ...): it lost everything but
+    # v, vt and triangles; written back whole now, its spiral polygon as triangles at C = 1.5
+    dict(input="artist.obj", output="new", report="report.json", png=None, opts=["--bound", "1.5"]),
+    dict(input="artist.obj", output="existing file", report=None, png=None,
+         opts=["--seams", "auto"]),
 ]
 
 
@@ -402,6 +460,6 @@ def check(sc, root):
     if after.get(orel) != before.get(orel):      # written: a certified result, re-verified
         assert rc in (0, 1) and after.get(orel) != "dir", (rc, argv)
         report = next((p for p in named if p.suffix == ".json"), None)
-        check_written(mesh_of(sc), out, report, stdout, "--no-pack" not in sc["opts"])
+        check_written(mesh_of(sc), out, report, stdout, "--no-pack" not in sc["opts"], inp)
     else:
         assert rc != 0, (argv, "exit 0 but nothing written at -o")

@@ -5,28 +5,32 @@ split vertices at UV seams would change the topology. Polygons are fan-triangula
 indices count back from the records read before the face; a line ending in a backslash goes on
 on the next; UTF-8 (with or without a byte order mark) or UTF-16 after its mark.
 """
-import re
-
 import numpy as np
 
-from .errors import InvalidMeshError
-
-_COMMENT = re.compile(r"\s#.*")   # an OBJ comment after a record (a '#' inside a name stays)
+from ..errors import InvalidMeshError
+from .fans import fan_corners
+from .text import COMMENT, obj_records, obj_text
 
 
 def read_obj(path):
-    """V, F, corner UVs or None, and each face's material (``usemtl``) and object (``o``), each
+    """V, F, corner UVs or None, each face's material (``usemtl``) and object (``o``), each
     numbered in order of first use by a face (faces before any ``usemtl`` or ``o`` make a
-    material or object of their own).
+    material or object of their own), each face's polygon, (m,) int64: the ``f`` record (with
+    three corners or more) it is a triangle of, numbered in file order, and each face's corners'
+    places in its polygon, (m,3) int64: a polygon of n corners gives n - 2 consecutive faces,
+    the fan from its first corner (``fans.fan_corners``: from another where that fan has a
+    triangle with no area).
 
     A negative index counts back from the last ``v`` (``vt``) read before its face, as the OBJ
     format defines it (files written object by object use ``f -4 -3 -2 -1``). Records may be
     separated by tabs; a file starting with a UTF-16 byte order mark is read as UTF-16. An
     index naming no vertex is an ``InvalidMeshError`` giving the file's line."""
-    vs, vts, faces, tfaces, mats, objs, numbers = [], [], [], [], [], [], []
+    vs, vts, corner_v, corner_t, sizes, mats, objs, numbers = [], [], [], [], [], [], [], []
     mat, obj = None, None
-    for number, line in _obj_records(_obj_text(path)):
-        line = _COMMENT.sub("", line)   # "f 1 2 3 # note": a comment ends a record
+    with open(path, "rb") as fh:
+        text, _ = obj_text(fh.read())
+    for number, line, _ in obj_records(text):
+        line = COMMENT.sub("", line)   # "f 1 2 3 # note": a comment ends a record
         tokens = line.split()
         key = tokens[0] if tokens else ""
         if key == "usemtl":
@@ -39,26 +43,32 @@ def read_obj(path):
             vts.append((number, tokens[1:3]))
         elif key == "f" and len(tokens) > 3:
             items = [it.split("/") for it in tokens[1:]]
-            vi = [_obj_index(path, number, it[0], len(vs), "v") for it in items]
-            ti = [_obj_index(path, number, it[1], len(vts), "vt") + 1
-                  if len(it) > 1 and it[1] else 0 for it in items]
-            for j in range(1, len(vi) - 1):  # fan-triangulate polygons
-                faces.append((vi[0], vi[j], vi[j + 1]))
-                tfaces.append((ti[0], ti[j], ti[j + 1]))
-                mats.append(mat)
-                objs.append(obj)
-                numbers.append(number)
+            corner_v += [_obj_index(path, number, it[0], len(vs), "v") for it in items]
+            corner_t += [_obj_index(path, number, it[1], len(vts), "vt") + 1
+                         if len(it) > 1 and it[1] else 0 for it in items]
+            sizes.append(len(items))
+            mats.append(mat)
+            objs.append(obj)
+            numbers.append(number)
     V = _numbers(path, vs, "v", 3)
-    F = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
-    T = np.asarray(tfaces, dtype=np.int64).reshape(-1, 3)   # 1-based; 0: no vt
-    _check_forward(path, F, len(V), "v", numbers)
+    corner_v = np.asarray(corner_v, dtype=np.int64)
+    corner_t = np.asarray(corner_t, dtype=np.int64)            # 1-based; 0: no vt
+    starts = np.concatenate([[0], np.cumsum(sizes, dtype=np.int64)])
+    lines = np.asarray(numbers, dtype=np.int64)                # each polygon's line
+    if len(sizes):   # the largest index of each polygon: one the file defines
+        _check_forward(path, np.maximum.reduceat(corner_v, starts[:-1])[:, None], len(V), "v",
+                       lines)
+    polygon, corners = fan_corners(V, corner_v, starts)       # the polygons fan-triangulated
+    at = starts[polygon][:, None] + corners
+    F, T = corner_v[at].reshape(-1, 3), corner_t[at].reshape(-1, 3)
+    numbers = lines[polygon]                                   # each face's line
     cuv = None
     if len(vts) and len(T) and np.all(T != 0):
         VT = _numbers(path, vts, "vt", 2)
         _check_forward(path, T - 1, len(VT), "vt", numbers)
         cuv = VT[T - 1]
-    labels = {"material": _first_use(mats), "object": _first_use(objs)}
-    return V, F, cuv, labels
+    labels = {"material": _first_use(mats)[polygon], "object": _first_use(objs)[polygon]}
+    return V, F, cuv, labels, polygon, corners
 
 
 def _numbers(path, rows, record, width):
@@ -79,33 +89,6 @@ def _numbers(path, rows, record, width):
                 raise InvalidMeshError(f"{path} line {number}: {t!r} in a {record} record is "
                                        f"not a number") from None
     raise InvalidMeshError(f"{path}: the {record} records cannot be read as numbers")
-
-
-def _obj_records(text):
-    """(line number, record) of each record of an OBJ's text: a line ending in a backslash goes
-    on on the next line (the OBJ format's continuation, as Rhino writes long faces); the number
-    is the record's first line."""
-    pending, start = None, 0
-    for number, line in enumerate(text.splitlines(), 1):
-        if pending is not None:
-            line, number = pending + " " + line, start
-        body = line.rstrip()
-        if body.endswith("\\"):
-            pending, start = body[:-1], number
-            continue
-        pending = None
-        yield number, line
-    if pending is not None:
-        yield start, pending
-
-
-def _obj_text(path):
-    """The OBJ file's text: UTF-8 (bytes that are not are replaced), or UTF-16 after its BOM."""
-    with open(path, "rb") as fh:
-        raw = fh.read()
-    if raw[:2] in (b"\xff\xfe", b"\xfe\xff"):
-        return raw.decode("utf-16", errors="replace")
-    return raw.decode("utf-8-sig", errors="replace")
 
 
 def _obj_index(path, number, text, count, record):
