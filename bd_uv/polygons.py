@@ -1,18 +1,29 @@
 """Polygons triangulated for the solve, in face-vertex ids.
 
-A polygon keeps its fan from its first corner where every fan triangle turns the polygon's way
-with an area (every convex polygon, every planar quad that is not concave: the triangles solved
-so far). Where one does not (a concave polygon: Houdini's glyphs, an L-shaped n-gon; corners in
-a line: Rhino's ``wallhole.obj``), the polygon is ear-clipped in its plane instead, so no triangle
+A polygon keeps its fan from its first corner where no fan triangle turns against the polygon
+or has no area (every convex polygon, every planar quad that is not concave: the triangles solved
+so far). Where one does not, the fan from the first other corner whose fan does (an n-gon whose
+straight side holds three corners, as dissolving edges leaves: Rhino's ``wallhole.obj``), else
+the polygon is ear-clipped in its plane (a concave polygon: Houdini's glyphs), so no triangle
 lies outside its polygon or has no area where a triangulation without that exists: a fan
 triangle outside a concave polygon overlaps its neighbour in the UV map, one with no area has no
 distortion to certify.
 """
 import numpy as np
 
-# A fan triangle "has an area" above this share of its polygon's (twice the Newell normal's
-# length squared is the polygon's doubled area squared): corners in a line leave ~1e-16.
-FLAT = 1e-9
+# A fan triangle lies outside its polygon (a concave corner) when its area about the Newell
+# normal is below -FLAT of the polygon's. A fan triangle outside is flattened folded open across
+# its diagonal, its corner mirrored, and the polygons beside it bend to meet it: negligible at
+# the 1e-6 a bent quad of a curved grid turns a corner against its plane, whole units of
+# distortion on Houdini's glyphs. Corners on a line are left to ``_no_area``'s 3D test.
+FLAT = 1e-3
+# ``mesh.arrays.DEGENERATE_RATIO``, the unwrap's own test of a face with no area (a layer above,
+# so not imported; tests/core/test_polygons.py holds them equal).
+DEGENERATE_RATIO = 1e-12
+# A polygon whose corners lie farther than PLANAR times the square root of its area from its
+# plane is bent, not concave: a fan triangle turning against its normal is a fold of the surface
+# the fan from its first corner makes (as other readers make it), kept.
+PLANAR = 0.01
 # Ear clipping looks at every remaining corner for each ear: polygons of more corners keep
 # their fan (none such has been met; a cap keeps a damaged file's huge polygon from taking
 # minutes).
@@ -55,7 +66,8 @@ def triangulate(V, counts, corners):
     T : (m,3) int64 face-vertex ids (into ``corners``), each polygon's ``count - 2`` triangles
         in its rows of :func:`fan_triangles`, wound as the polygon is
     poly : (m,) int64 polygon of each triangle
-    clipped : (k,) int64 the polygons ear-clipped (their fan was not sound)
+    clipped : (k,) int64 the polygons not fanned from their first corner (that fan was not
+        sound): fanned from another, or ear-clipped
     """
     counts = np.asarray(counts, dtype=np.int64)
     T, poly = fan_triangles(counts)
@@ -72,21 +84,56 @@ def triangulate(V, counts, corners):
     a = P[T[:, 0]]
     turn = np.einsum("ij,ij->i", np.cross(P[T[:, 1]] - a, P[T[:, 2]] - a), normal[poly])
     size = np.einsum("ij,ij->i", normal, normal)
-    unsound = (turn <= FLAT * size[poly]) & (counts[poly] >= 4) & (size[poly] > 0)
+    # concave, and flat enough that this is a corner inside-out, not a polygon bent in space
+    # (a quad of a curved grid: its fan is what other readers take, and as sound a surface)
+    with np.errstate(all="ignore"):
+        unit = normal / np.sqrt(size)[:, None]
+        height = np.abs(np.einsum("ij,ij->i", P - P[start[owner]], unit[owner]))
+        bent = np.maximum.reduceat(height, start) > PLANAR * np.sqrt(np.sqrt(size) / 2)
+    unsound = (turn < -FLAT * size[poly]) & (counts[poly] >= 4) & ~bent[poly]
     # every triangle turning the right way, but the fan going round its first corner more than
     # once (a spiral about it): the fan's angles at that corner add up to over a full turn
     u, w = P[T[:, 1]] - a, P[T[:, 2]] - a
     angle = np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w))
     sweep = np.bincount(poly, angle, len(counts))
-    unsound |= (sweep[poly] >= 2 * np.pi - 1e-9) & (counts[poly] >= 4)
+    unsound |= (sweep[poly] >= 2 * np.pi - 1e-9) & (counts[poly] >= 4) & ~bent[poly]
+    unsound |= _no_area(P[T]) & (counts[poly] >= 4)
+    unsound &= size[poly] > 0          # corners all on a line (or not finite): the fan as it is
     clipped = np.unique(poly[unsound])
     clipped = clipped[counts[clipped] <= MAX_CLIPPED]
     for p in clipped.tolist():
         s, c = int(start[p]), int(counts[p])
-        ears = _ears(_in_plane(P[s:s + c], normal[p]))
         rows = slice(*np.searchsorted(poly, [p, p + 1]))   # poly is sorted
-        T[rows] = s + ears
+        T[rows] = s + _turned_fan_or_ears(P[s:s + c], normal[p])
     return T, poly, clipped
+
+
+def _turned_fan_or_ears(Q, n):
+    """(c-2,3) corner ids of the polygon ``Q`` (c,3), Newell normal ``n``, whose fan from its
+    first corner is not sound: the fan from the first other corner whose fan is (an n-gon whose
+    first three corners lie on a line: from its second), else its ears."""
+    c = len(Q)
+    j = np.arange(1, c - 1)
+    size = float(n @ n)
+    for r in range(1, c):
+        fan = np.stack([np.full(c - 2, r), (r + j) % c, (r + j + 1) % c], 1)
+        a = Q[fan[:, 0]]
+        u, w = Q[fan[:, 1]] - a, Q[fan[:, 2]] - a
+        turn = np.cross(u, w) @ n
+        sweep = np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w))
+        if (turn >= -FLAT * size).all() and sweep.sum() < 2 * np.pi - 1e-9 \
+                and not _no_area(Q[fan]).any():
+            return fan
+    return _ears(_in_plane(Q, n))
+
+
+def _no_area(P):
+    """(m,) bool: triangles ``P`` (m,3,3) of finite corners with no area by the unwrap's own
+    test (twice the area at most ``DEGENERATE_RATIO`` times the longest edge squared)."""
+    with np.errstate(all="ignore"):
+        twice = np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
+        longest = np.max(np.sum((P - np.roll(P, -1, axis=1)) ** 2, axis=2), axis=1)
+        return ~(twice > DEGENERATE_RATIO * longest) & np.isfinite(P).all(axis=(1, 2))
 
 
 def _in_plane(Q, n):

@@ -5,8 +5,8 @@ its input's text with every record kept in order (``v``, ``vn``, ``mtllib``, ``u
 ``g``, ``s``, comments, anything else, byte for byte) except the old ``vt`` records, replaced by
 the new ones (in one block where the first ``vt`` or ``f`` record was), and the ``f`` records,
 rewritten with the same vertex and normal indices (as written: a negative index stays) and the
-new ``vt`` of each corner. A polygon stays one polygon when its triangles (``read.read_obj``'s
-fan, ``fans.fan_corners``) give each of its corners one ``vt``; else it is written as those
+new ``vt`` of each corner. A polygon stays one polygon when its triangles (``read.read_obj``'s,
+``polygons.triangulate``) give each of its corners one ``vt``; else it is written as those
 triangles, each with its own UVs, so the UVs per corner are the ones certified either way.
 """
 import numpy as np

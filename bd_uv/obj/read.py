@@ -1,14 +1,15 @@
 """Reading an OBJ file's text: ``v``, ``vt`` and ``f`` records, ``usemtl`` and ``o`` names.
 
 OBJ is read by position index (``v`` records) so vertex order is the file's own; loaders that
-split vertices at UV seams would change the topology. Polygons are fan-triangulated; negative
+split vertices at UV seams would change the topology. Polygons are triangulated
+(``polygons.triangulate``: fans where sound, else turned fans or ears); negative
 indices count back from the records read before the face; a line ending in a backslash goes on
 on the next; UTF-8 (with or without a byte order mark) or UTF-16 after its mark.
 """
 import numpy as np
 
 from ..errors import InvalidMeshError
-from .fans import fan_corners
+from ..polygons import triangulate
 from .text import COMMENT, obj_records, obj_text
 
 
@@ -18,8 +19,8 @@ def read_obj(path):
     material or object of their own), each face's polygon, (m,) int64: the ``f`` record (with
     three corners or more) it is a triangle of, numbered in file order, and each face's corners'
     places in its polygon, (m,3) int64: a polygon of n corners gives n - 2 consecutive faces,
-    the fan from its first corner (``fans.fan_corners``: from another where that fan has a
-    triangle with no area).
+    the fan from its first corner, or where that fan has a triangle with no area or outside the
+    polygon, from another corner or its ears (``polygons.triangulate``).
 
     A negative index counts back from the last ``v`` (``vt``) read before its face, as the OBJ
     format defines it (files written object by object use ``f -4 -3 -2 -1``). Records may be
@@ -58,7 +59,8 @@ def read_obj(path):
     if len(sizes):   # the largest index of each polygon: one the file defines
         _check_forward(path, np.maximum.reduceat(corner_v, starts[:-1])[:, None], len(V), "v",
                        lines)
-    polygon, corners = fan_corners(V, corner_v, starts)       # the polygons fan-triangulated
+    T, polygon, _ = triangulate(V, np.diff(starts), corner_v)  # fans, else turned fans or ears
+    corners = T - starts[polygon][:, None]                     # places in each polygon
     at = starts[polygon][:, None] + corners
     F, T = corner_v[at].reshape(-1, 3), corner_t[at].reshape(-1, 3)
     numbers = lines[polygon]                                   # each face's line

@@ -174,8 +174,12 @@ def test_an_input_changed_since_it_was_read_is_refused_and_nothing_written(tmp_p
 
 def test_a_fan_with_a_triangle_of_no_area_is_turned_to_another_corner():
     from bd_uv.mesh.arrays import DEGENERATE_RATIO
-    from bd_uv.obj.fans import FLAT, fan_corners
+    from bd_uv.polygons import DEGENERATE_RATIO as FLAT, triangulate
     assert FLAT == DEGENERATE_RATIO       # the unwrap's own test of a face with no area
+
+    def fan_corners(V, corner_v, starts):
+        T, polygon, _ = triangulate(V, np.diff(starts), corner_v)
+        return polygon, T - np.asarray(starts)[polygon][:, None]
     # a pentagon 0..4 whose corners 0, 1, 2 lie on a line (from 0: triangle 0 1 2 has no area)
     # and a square (its fan from 0 kept)
     V = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [2, 1, 0], [0, 1, 0], [3, 0, 0], [3, 1, 0]],
