@@ -80,11 +80,11 @@ def test_a_polygon_crossing_itself_keeps_a_triangle_per_corner():
     assert len(T) == 2 and set(T.ravel()) <= {0, 1, 2, 3}
 
 
-def _glyph_stage(path):
+def _glyph():
     """A flat sheet of a comb (17 corners, one in the middle of its right side), an L and a
     rectangle with a corner in the middle of a side, sharing edges, in a tilted plane: no fan of
-    the comb or the L stays inside it, the rectangle's has a flat triangle."""
-    from pxr import Usd, UsdGeom, Vt
+    the comb or the L stays inside it, the rectangle's has a flat triangle. (points in the
+    plane (n,2), in space (n,3), the polygons' corners)"""
     pts = {}
 
     def ids(poly):
@@ -92,9 +92,14 @@ def _glyph_stage(path):
     comb = ids(COMB[:2] + [(7, 2)] + COMB[2:])           # y 0..3, x 0..7
     ell = ids([(7, 0), (9, 0), (9, 4), (8, 4), (8, 2), (7, 2)])
     low = ids([(7, 2), (8, 2), (8, 4), (7, 4), (7, 3)])   # (7, 3) lies on its side
-    polys = [comb, ell, low]
     q = np.array(sorted(pts, key=pts.get), dtype=np.float64)
-    V = _tiles(q, (0.2, 0.1, 0.3))
+    return q, _tiles(q, (0.2, 0.1, 0.3)), [comb, ell, low]
+
+
+def _glyph_stage(path):
+    """``_glyph`` as a USD stage (float32 points)."""
+    from pxr import Usd, UsdGeom, Vt
+    q, V, polys = _glyph()
     stage = Usd.Stage.CreateNew(str(path))
     mesh = UsdGeom.Mesh.Define(stage, "/Glyph")
     mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(V.astype(np.float32)))
@@ -102,6 +107,20 @@ def _glyph_stage(path):
     mesh.CreateFaceVertexIndicesAttr([v for p in polys for v in p])
     stage.GetRootLayer().Save()
     return V.astype(np.float32).astype(np.float64), q, polys
+
+
+def _own_triangles(q, polygons):
+    """This test's triangles of each polygon (corner lists of ids into ``q``): its constrained
+    Delaunay triangulation in the plane, no point added; (t,3) places in ``polygons`` joined."""
+    tris, start = [], 0
+    for p in polygons:
+        c = len(p)
+        seg = np.stack([np.arange(c), (np.arange(c) + 1) % c], 1)
+        t = tr.triangulate({"vertices": q[p], "segments": seg}, "p")
+        assert len(t["vertices"]) == c
+        tris.append(start + t["triangles"])
+        start += c
+    return np.concatenate(tris)
 
 
 def test_a_stage_of_concave_polygons_is_certified_on_its_own_triangles(tmp_path):
@@ -116,17 +135,32 @@ def test_a_stage_of_concave_polygons_is_certified_on_its_own_triangles(tmp_path)
     written = Usd.Stage.Open(str(out))       # kept: a prim of a collected stage is invalid
     pv = UsdGeom.PrimvarsAPI(written.GetPrimAtPath("/Glyph")).GetPrimvar("st")
     uv = np.asarray(pv.Get(), np.float64)[np.asarray(pv.GetIndices())]      # per face-vertex
-    # this test's triangles: each polygon's constrained Delaunay triangulation in the plane
-    tris, start = [], 0
-    for p in polys:
-        c = len(p)
-        seg = np.stack([np.arange(c), (np.arange(c) + 1) % c], 1)
-        t = tr.triangulate({"vertices": q[p], "segments": seg}, "p")
-        assert len(t["vertices"]) == c                    # no point added
-        tris.append(start + t["triangles"])
-        start += c
-    T = np.concatenate(tris)
+    T = _own_triangles(q, polys)
     idx = np.concatenate(polys)
     D, flipped = reference_distortion(V, idx[T], uv[T])
     assert not flipped.any() and D.max() <= entry["bound_certified"] * (1 + 1e-6)
     assert len(overlapping_triangle_pairs(uv[T])) == 0
+
+
+def test_an_obj_of_concave_polygons_is_written_whole_and_certified(tmp_path):
+    # the same sheet as an OBJ: written back with its polygons whole (OBJ to OBJ keeps them),
+    # the UVs per corner measured on this test's own constrained triangulation
+    from bd_uv.cli import main
+    q, V, polys = _glyph()
+    src, out, rep = tmp_path / "glyph.obj", tmp_path / "o.obj", tmp_path / "r.json"
+    src.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V.tolist())
+                   + "".join("f " + " ".join(str(i + 1) for i in p) + "\n" for p in polys))
+    assert main(["unwrap", str(src), "-o", str(out), "--report", str(rep), "-q"]) == 0
+    report = json.loads(rep.read_text())
+    assert [e["status"] for e in report["islands"]] == ["certified"]
+    lines = out.read_text().splitlines()
+    vt = np.array([[float(t) for t in ln.split()[1:3]] for ln in lines if ln.startswith("vt ")])
+    faces = [[tuple(int(x) - 1 for x in c.split("/")[:2]) for c in ln.split()[1:]]
+             for ln in lines if ln.startswith("f ")]
+    assert [[v for v, _ in f] for f in faces] == polys           # polygons whole, as written
+    T = _own_triangles(q, polys)
+    corner = np.concatenate([[(v, t) for v, t in f] for f in faces])     # (v, vt) per corner
+    tris, uv = corner[T][..., 0], vt[corner[T][..., 1]]
+    D, flipped = reference_distortion(V, tris, uv)
+    assert not flipped.any() and D.max() <= report["islands"][0]["bound_certified"] * (1 + 1e-6)
+    assert len(overlapping_triangle_pairs(uv)) == 0
