@@ -1,7 +1,8 @@
 """Command line: ``python -m bd_uv unwrap INPUT -o OUTPUT.obj [options]``.
 
-A stable contract for scripts: exit 0 only if every island was certified, otherwise non-zero with
-one line per problem on stderr. The JSON report has the shape documented in README.md.
+A stable contract for scripts: exit 0 only if every island was certified (or every face with an
+area: zero-area faces, which have no shape to map, take their neighbours' UVs and are counted),
+otherwise non-zero with one line per problem on stderr. The JSON report has the shape documented in README.md.
 """
 import argparse
 import contextlib
@@ -18,6 +19,7 @@ from .arguments import (add_layout_options, add_scene_options, add_solver_option
                         unwrap_options_of)
 from .batch import add_batch_parser
 from .batch.job import JobOptions
+from .batch.jobs import ZERO_AREA_NOTE, zero_area_only
 from .batch.report import item_line
 from .batch.scene_files import unwrap_scene_file
 from .errors import BDError, OptionError
@@ -108,10 +110,12 @@ def run_unwrap(args):
     if options.seams_mode == "needed":
         _print_needed(res, options, args.output)
     islands = layout.island_entries(res)
-    uv, F_uv = layout.vertex_uv(mesh.F)
+    zero = zero_area_only(res, layout, len(mesh.F))
+    uv, F_uv = layout.vertex_uv(mesh.F, fill=zero)
     split = polygons_as_triangles(mesh, F_uv)
     report = {"input": os.path.abspath(args.input), **welded_entry(mesh),
-              **({"polygons_as_triangles": split} if split else {}), **res.report(),
+              **({"polygons_as_triangles": split} if split else {}),
+              **({"zero_area_faces": int(zero.sum())} if zero is not None else {}), **res.report(),
               "islands": islands,
               "summary": layout.totals(), "layout_overlaps": layout.overlaps.tolist(),
               "pack": layout.pack}
@@ -140,7 +144,9 @@ def run_unwrap(args):
     _print_report(mesh.name, islands, layout, res.seconds, args, sys.stdout)
     if split and any_certified:
         print(f"  {split} polygon(s) written as their triangles: {AS_TRIANGLES}")
-    failed = [e for e in islands if e["status"] != "certified"]
+    if zero is not None:
+        print(f"  {ZERO_AREA_NOTE.format(int(zero.sum()))}")
+    failed = [e for e in islands if e["status"] != "certified"] if zero is None else []
     for e in failed:
         print(f"error: {e['message']}", file=sys.stderr)
     if not any_certified:

@@ -51,8 +51,13 @@ class Layout:
     packed: bool
     pack: dict = None
 
-    def vertex_uv(self, F):
+    def vertex_uv(self, F, fill=None):
         """One ``vt`` per (island, vertex, UV) of the written faces, for :func:`write_obj`.
+
+        ``fill`` (m,) bool, optional: faces not written (zero-area faces: no shape to map or
+        certify) whose corners take the ``vt`` of the same vertex in some written face, so they
+        add no seam and stay (near) degenerate in UV; a corner whose vertex no written face has
+        at (0, 0), as a scene writes it.
 
         Returns
         -------
@@ -70,6 +75,15 @@ class Layout:
         table = np.zeros((int(ids.max()) + 1, 2))
         table[ids] = uv
         F_uv[written] = ids.reshape(-1, 3)
+        if fill is not None and (fill & ~written).any():
+            of_vertex = np.full(int(F.max()) + 1, -1, dtype=np.int64)
+            of_vertex[F[written].ravel()] = ids
+            fill = np.flatnonzero(np.asarray(fill, bool) & ~written)
+            got = of_vertex[F[fill]]
+            if (got < 0).any():           # a vertex of zero-area faces only: at (0, 0)
+                got[got < 0] = len(table)
+                table = np.vstack([table, [0.0, 0.0]])
+            F_uv[fill] = got
         return table, F_uv
 
     def totals(self):

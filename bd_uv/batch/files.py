@@ -24,7 +24,7 @@ from ..scheduling import run_pool
 from ..scheduling.atomic import atomic_path
 from ..scheduling.cluster import run_dask
 from .job import Job, JobOptions
-from .jobs import failed_entry, unwrap_job
+from .jobs import ZERO_AREA_NOTE, failed_entry, unwrap_job, zero_area_only
 from .scene_files import unwrap_scene_file
 
 MESH_SUFFIXES = (".obj", ".off", ".ply")
@@ -68,8 +68,13 @@ def _unwrap_file(task, options, seams_mode):
                   face_labels=mesh.labels, face_groups=mesh.face_groups)
         result = unwrap_job(job, options, png=task.png)
         entry = {**base, **welded_entry(mesh), **result.entry}
+        zero = zero_area_only(result.result, result.layout, len(mesh.F))
+        if zero is not None:   # every face with an area certified: the mesh is (as a scene's)
+            entry.update(status="certified", error=None, message="",
+                         zero_area_faces=int(zero.sum()))
+            entry.setdefault("warnings", []).append(ZERO_AREA_NOTE.format(int(zero.sum())))
         if entry["status"] != "failed":
-            uv, F_uv = result.layout.vertex_uv(mesh.F)
+            uv, F_uv = result.layout.vertex_uv(mesh.F, fill=zero)
             split = polygons_as_triangles(mesh, F_uv)
             if split:
                 entry["polygons_as_triangles"] = split

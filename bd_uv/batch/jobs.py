@@ -97,6 +97,24 @@ def zero_area_left_out(res, m):
     return zero
 
 
+ZERO_AREA_NOTE = ("{} face(s) of zero area have no shape to map or certify: their corners take "
+                  "the UVs of the same vertices in neighbouring faces")
+
+
+def zero_area_only(res, layout, m):
+    """(m,) bool, the zero-area faces left out (``zero_area_left_out``), when they are the only
+    faces of a layout not written and some face is: every face with an area is certified, so
+    the mesh is, its zero-area faces given their neighbours' UVs (``Layout.vertex_uv``'s
+    ``fill``), as a scene writes them. None otherwise (also when there are none)."""
+    if layout is None:
+        return None
+    zero = zero_area_left_out(res, m)
+    written = layout.face_island >= 0
+    if not zero.any() or not written.any() or not (written | zero).all():
+        return None
+    return zero & ~written
+
+
 def _unwrap_job(job, options, png, precision):
     t0 = time.perf_counter()
     m = int(len(job.F))

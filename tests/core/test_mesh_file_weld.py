@@ -226,3 +226,52 @@ def test_an_obj_without_split_vertices_is_read_as_it_is(tmp_path):
                  + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F0))
     m = load_mesh(str(p))
     assert m.file_F is None and m.welded == 0 and np.array_equal(m.F, F0)
+
+
+def _grid_with_a_flat_face():
+    """A bent grid and one more face on three corners of its bottom row (0, 1, 2 on a line):
+    zero area, sharing the grid's two bottom edges, wound with it."""
+    V, F = grid(6, 5, z=lambda x, y: 0.3 * x * y)
+    return V, np.vstack([F, [[1, 0, 2]]])
+
+
+def _check_filled(V, F, path, bound):
+    """Every face written with vt; the flat face's corners the vt of their vertices in the
+    grid's faces (no seam); the grid's faces certified, recomputed from the file."""
+    lines = path.read_text().splitlines()
+    ft = [[int(t.split("/")[1]) for t in ln.split()[1:]] for ln in lines if ln.startswith("f ")]
+    assert len(ft) == len(F) and all(len(f) == 3 for f in ft)
+    ft = np.array(ft)
+    for k in range(3):
+        assert ft[-1, k] in ft[:-1][F[:-1] == F[-1, k]]
+    cuv = written_corner_uv(path)
+    D, flipped = reference_distortion(V, F[:-1], cuv[:-1])
+    assert not flipped.any() and D.max() <= bound * (1 + 1e-6)
+    assert len(overlapping_triangle_pairs(cuv[:-1])) == 0
+
+
+def test_zero_area_faces_alone_do_not_fail_a_mesh_file(tmp_path):
+    # as a scene writes them: every face with an area certified, the flat one given its
+    # neighbours' UVs and counted; exit 0 from the command line, "certified" in a batch
+    V, F = _grid_with_a_flat_face()
+    src = tmp_path / "in" / "part.obj"
+    src.parent.mkdir()
+    src.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V.tolist())
+                   + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F.tolist()))
+    out, rep = tmp_path / "out.obj", tmp_path / "r.json"
+    r = subprocess.run([sys.executable, "-m", "bd_uv", "unwrap", str(src), "-o", str(out),
+                        "--report", str(rep)], capture_output=True, text=True, cwd=REPO)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "1 face(s) of zero area" in r.stdout and "error" not in r.stderr
+    report = json.loads(rep.read_text())
+    assert report["zero_area_faces"] == 1
+    bound = max(e["bound_certified"] for e in report["islands"] if e["status"] == "certified")
+    _check_filled(V, F, out, bound)
+    r = subprocess.run([sys.executable, "-m", "bd_uv", "batch", str(src.parent), "-o",
+                        str(tmp_path / "b"), "--jobs", "1"], capture_output=True, text=True,
+                       cwd=REPO)
+    assert r.returncode == 0, r.stdout + r.stderr
+    [entry] = json.loads((tmp_path / "b" / "report.json").read_text())["items"]
+    assert entry["status"] == "certified" and entry["zero_area_faces"] == 1
+    assert any("zero area" in w for w in entry["warnings"])
+    _check_filled(V, F, tmp_path / "b" / "part.obj", entry["bound_certified"])
