@@ -170,6 +170,9 @@ def _read_trimesh(path, ext):
             return read_binary_ply(data)
         except ValueError:
             raise exc from None
+    if ext == ".ply" and not len(m.faces) and b"format binary" in head \
+            and b"element tristrips" in head:
+        return read_binary_ply(data)   # triangle strips (Cyberware's igea.ply): no faces to trimesh
     V = np.asarray(m.vertices, dtype=np.float64)
     uv = getattr(m.visual, "uv", None)
     uv = None if uv is None or len(uv) != len(V) else np.asarray(uv, dtype=np.float64)[:, :2]

@@ -4,7 +4,8 @@ trimesh reads a binary PLY's face list as if every face had as many corners as t
 file mixing triangles and quads (Rhino writes them so: draco's testdata/Box.ply) fails with "PLY
 is unexpected length". Here the elements are walked in order: one without lists as a block of
 numpy records, one with lists row by row. Only what the unwrap needs is kept: the vertices'
-``x y z`` (and ``s t``, ``u v`` or ``texture_u texture_v``) and each face's corners, polygons
+``x y z`` (and ``s t``, ``u v`` or ``texture_u texture_v``) and each face's corners (or a
+``tristrips`` element's strips, as their triangles: trimesh reads such a file as no faces), polygons
 triangulated (``polygons``: fans, concave polygons ear-clipped).
 """
 import struct
@@ -56,6 +57,8 @@ def read_binary_ply(data):
             offset += dtype.itemsize * count
         else:
             found[name], offset = _rows(data, offset, count, props, order, name)
+    if "face" not in found and "tristrips" in found:     # Cyberware's igea.ply: one long strip
+        found["face"] = {"corners": _strip_triangles(found["tristrips"])}
     if "vertex" not in found or "face" not in found:
         raise ValueError("no vertex or no face element")
     vert = found["vertex"]
@@ -123,3 +126,24 @@ def _triangles(V, faces):
         return flat[fan_triangles([len(c) for c in corners])[0]]   # named by the caller's check
     T = triangulate(V, [len(c) for c in corners], flat)[0]
     return flat[T]
+
+
+def _strip_triangles(strips):
+    """A ``tristrips`` element's strips (each list of vertex ids, -1 ending a strip) as the list
+    of triangles they draw, each wound as the strip's first (every second one turned back), the
+    triangles on a repeated vertex (the strips' joins) left out."""
+    rows = strips["corners"] if isinstance(strips, dict) else []
+    tris = []
+    for ids in rows:
+        ends = np.flatnonzero(ids < 0)
+        for s in np.split(ids, ends):
+            s = s[s >= 0]
+            if len(s) < 3:
+                continue
+            i = np.arange(len(s) - 2)
+            t = np.stack([s[i], s[i + 1], s[i + 2]], 1)
+            odd = i % 2 == 1
+            t[odd, 0], t[odd, 1] = s[i[odd] + 1], s[i[odd]]
+            keep = (t[:, 0] != t[:, 1]) & (t[:, 1] != t[:, 2]) & (t[:, 0] != t[:, 2])
+            tris.append(t[keep])
+    return list(np.concatenate(tris)) if tris else []

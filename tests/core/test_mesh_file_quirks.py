@@ -5,6 +5,7 @@ clean file it stands for; a file no reader can parse is an ``InvalidMeshError`` 
 never a traceback."""
 import json
 import re
+import struct
 
 import numpy as np
 import pytest
@@ -341,3 +342,38 @@ def test_binary_ply_with_triangles_and_quads(tmp_path, eol):
     p.write_bytes(_binary_ply(V, faces, eol)[:-20])
     with pytest.raises(InvalidMeshError, match="rhino.ply: cannot read the mesh as PLY"):
         load_mesh(str(p))
+
+
+def test_binary_ply_of_triangle_strips(tmp_path, capsys):
+    # Cyberware's igea.ply (alecjacobson's common-3d-test-models): one "tristrips" element, its
+    # strips ended by -1; trimesh reads it as no faces ("the file holds no faces" before). A
+    # bent grid written as one strip per row, the rows ended by -1, the first with its last
+    # vertex twice (a degenerate join): the grid's own triangles, wound alike, unwrapped and
+    # certified
+    nx, ny = 6, 5
+    V, _ = grid(nx, ny, z=lambda x, y: 0.3 * x * y)
+    strips = []
+    for r in range(ny - 1):
+        row = [v for c in range(nx) for v in ((r + 1) * nx + c, r * nx + c)]
+        strips += row + (row[-1:] if r == 0 else []) + [-1]
+    head = [b"ply", b"format binary_little_endian 1.0", b"element vertex %d" % len(V),
+            b"property float x", b"property float y", b"property float z",
+            b"element tristrips 1", b"property list int int vertex_indices", b"end_header"]
+    body = b"".join(struct.pack("<3f", *v) for v in V.astype(np.float32).tolist())
+    body += struct.pack("<i%di" % len(strips), len(strips), *strips)
+    p = tmp_path / "strips.ply"
+    p.write_bytes(b"\n".join(head) + b"\n" + body)
+    m = load_mesh(str(p))
+    assert len(m.F) == 2 * (nx - 1) * (ny - 1)
+    quads = {frozenset(map(int, f)) for f in m.F}
+    i = np.arange(nx * ny).reshape(ny, nx)
+    cells = [{i[r, c], i[r, c + 1], i[r + 1, c], i[r + 1, c + 1]}
+             for r in range(ny - 1) for c in range(nx - 1)]
+    assert all(sum(t <= cell for t in quads) == 2 for cell in cells)   # two per grid cell
+    P = m.V[m.F]
+    normal_z = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])[:, 2]
+    assert (normal_z > 0).all() or (normal_z < 0).all()                # wound alike
+    out, rep = tmp_path / "o.obj", tmp_path / "r.json"
+    assert main(["unwrap", str(p), "-o", str(out), "--report", str(rep), "-q"]) == 0
+    report = json.loads(rep.read_text())
+    assert [e["status"] for e in report["islands"]] == ["certified"]
