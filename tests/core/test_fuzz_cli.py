@@ -60,6 +60,7 @@ def _quad_first(F):
 QUADS = _quad_first(PATCH[1])       # as the binary PLY holds the faces
 _q = QUADS[0]
 MIXED = (PATCH32[0], np.array([[_q[0], _q[1], _q[2]], [_q[0], _q[2], _q[3]]] + QUADS[1:]))
+STRIPS = (PATCH32[0], PATCH32[1].copy())   # the patch as strips of one triangle each
 NAN_PATCH = (np.concatenate([[[np.nan, *PATCH[0][0, :2]]], PATCH[0][1:]]), PATCH[1])  # "v nan x y z"
 TETRA = (np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float),
          np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]]))
@@ -116,6 +117,18 @@ def binary_ply(V, faces):
         struct.pack("<B%di" % len(f), len(f), *f) for f in faces)
 
 
+def strips_ply(V, F):
+    """A binary PLY of triangle strips (a ``tristrips`` element, Cyberware's igea.ply): each
+    face a strip of its own, ended by -1, so the triangles read are ``F`` as they are."""
+    import struct
+    ids = np.column_stack([F, np.full(len(F), -1)]).ravel().tolist()
+    head = ("ply\nformat binary_little_endian 1.0\nelement vertex %d\nproperty float x\n"
+            "property float y\nproperty float z\nelement tristrips 1\n"
+            "property list int int vertex_indices\nend_header\n" % len(V))
+    return head.encode() + b"".join(struct.pack("<3f", *v) for v in _floats(V)) + \
+        struct.pack("<i%di" % len(ids), len(ids), *ids)
+
+
 def spiral_part(first):
     """An object of one polygon, its fan from its first corner turning 900 degrees round it (a
     helix): cut through at a low bound, so the OBJ written holds it as its triangles. Its
@@ -141,6 +154,7 @@ INPUTS = {   # name -> (file name, bytes or None for "no such file", or "dir")
     "patch.ply": ("in.ply", ply_text(*PATCH).encode()),
     "closed tetra.obj": ("in.obj", obj_text(*TETRA).encode()),
     "soup.ply": ("in.ply", ply_text(*SOUP).encode()),
+    "strips binary.ply": ("in.ply", strips_ply(*PATCH32)),
     "soup.off": ("in.off", off_text(*SOUP).encode()),
     "nan vertex.obj": ("in.obj", obj_text(*PATCH).replace("v ", "v nan ", 1).encode()),
     "index out of range.obj": ("in.obj", (obj_text(*PATCH) + "f 1 2 9999\n").encode()),
@@ -183,7 +197,7 @@ def command_lines(draw):
     # it is a refusal, drawn as a bad value)
     valid = ["patch.obj", "patch.obj with vt", "artist.obj", "patch.off", "patch.ply",
              "closed tetra.obj",
-             "soup.ply", "soup.off", "soup.stl", "quads binary.ply"]
+             "soup.ply", "soup.off", "soup.stl", "quads binary.ply", "strips binary.ply"]
     source = draw(st.sampled_from(valid) if clean else
                   st.sampled_from(valid) | st.sampled_from(sorted(INPUTS)))
     has_uv = source == "patch.obj with vt"
@@ -316,7 +330,7 @@ def check_written(inp_mesh, out, report, stdout, packed, inp=None):
     V, VT, F, FT = read_obj(out)
     V0, F0 = inp_mesh
     assert np.array_equal(F, F0)
-    stored32 = any(inp_mesh is m for m in (PATCH32, SOUP, MIXED))   # PLY and OFF hold float32
+    stored32 = any(inp_mesh is m for m in (PATCH32, SOUP, MIXED, STRIPS))   # PLY, OFF: float32
     assert np.allclose(V, V0, rtol=1e-6 if stored32 else 1e-12, equal_nan=True)
     has = (FT >= 0).all(axis=1)
     assert has.any(), "an OBJ was written with no certified island"
@@ -366,7 +380,7 @@ def mesh_of(sc):
     return {"patch.obj": PATCH, "patch.obj with vt": PATCH, "artist.obj": ARTIST_MESH,
             "patch.off": PATCH,
             "patch.ply": PATCH32, "closed tetra.obj": TETRA, "soup.ply": SOUP, "soup.off": SOUP,
-            "soup.stl": SOUP, "quads binary.ply": MIXED,
+            "soup.stl": SOUP, "quads binary.ply": MIXED, "strips binary.ply": STRIPS,
             "nan vertex.obj": NAN_PATCH}.get(sc["input"])
 
 
@@ -412,6 +426,8 @@ FOUND = [
     dict(input="artist.obj", output="new", report="report.json", png=None, opts=["--bound", "1.5"]),
     dict(input="artist.obj", output="existing file", report=None, png=None,
          opts=["--seams", "auto"]),
+    # a PLY of triangle strips (Cyberware's igea.ply): "the file holds no faces" (exit 2)
+    dict(input="strips binary.ply", output="new", report="report.json", png=None, opts=[]),
 ]
 
 
