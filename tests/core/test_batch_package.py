@@ -61,8 +61,11 @@ def test_installed_wheel_gives_bd_uv_and_its_command(wheel, tmp_path):
     # this environment's packages (numpy, scipy, ...) without this checkout: install --no-deps
     outer = {*site.getsitepackages(), sysconfig.get_paths()["purelib"]}
     (purelib / "outer.pth").write_text("\n".join(sorted(outer)) + "\n")
+    # --ignore-installed: after the README's first command bd-uv is installed in the outer
+    # environment too, which pip saw through outer.pth as already satisfied (nothing installed)
     proc = subprocess.run([sys.executable, "-m", "pip", "--python", str(py), "install",
-                           "--no-deps", "--no-index", str(wheel)], capture_output=True, text=True)
+                           "--no-deps", "--no-index", "--ignore-installed", str(wheel)],
+                          capture_output=True, text=True)
     assert proc.returncode == 0, proc.stdout + proc.stderr
 
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
