@@ -11,7 +11,9 @@ solve runs on the main thread and Python's own SIGINT handler is installed (a Py
 A trip the search did not see (it ended by its own clock in between) raises the
 ``KeyboardInterrupt`` just after ``solve`` returns, before its value is stored: it is caught here
 and the last feasible report (spyrrow queues its final layout too) is the result. A user's
-Ctrl-C during a solve ends the search early, as it did before (spyrrow drops it).
+Ctrl-C during such a solve (one not tripped by the watcher, told apart by a SIGINT handler of
+its own for the solve's time) ends the search and is raised after it, not dropped as spyrrow
+drops it.
 """
 import _thread
 import signal
@@ -51,6 +53,14 @@ def solve_until(inst, cfg, queue, feasible, narrow):
 
     thread = threading.Thread(target=watcher, daemon=True)
     sol = None
+    user = [False]      # a Ctrl-C of the user's, which spyrrow would end its search on and drop
+
+    def on_sigint(signum, frame):
+        if not tripped[0]:
+            user[0] = True
+        raise KeyboardInterrupt
+    if watch:
+        signal.signal(signal.SIGINT, on_sigint)
     try:
         try:
             thread.start()
@@ -60,13 +70,17 @@ def solve_until(inst, cfg, queue, feasible, narrow):
                 done.set()
             _settled()   # a trip the search did not see is raised here at the latest
     except KeyboardInterrupt:
-        if not tripped[0]:
+        if not tripped[0] or user[0]:
             raise
     finally:
         done.set()
+        if watch:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
         if thread.ident is not None:
             thread.join()
         drained.extend(queue.drain())
+    if user[0]:
+        raise KeyboardInterrupt   # the user's, not the watcher's: passed on, not dropped
     if sol is None:
         sol = [s for kind, s in drained if int(kind) in feasible][-1]
     return sol, drained, tripped[0]

@@ -137,6 +137,30 @@ def test_a_trip_the_search_did_not_see_gives_the_last_feasible_report():
     time.sleep(0.01)
 
 
+def test_a_users_ctrl_c_during_the_search_is_raised_not_dropped():
+    """A SIGINT that the watcher did not trip (the user's Ctrl-C: simulated from a timer, with
+    no report narrow enough to trip one) ends the solve and reaches the caller as a
+    KeyboardInterrupt; spyrrow itself drops it. Python's own handler is back afterwards."""
+    import _thread
+    import signal
+    reports = [(FEASIBLE[0], _Sol(3.0))]
+
+    class Slow:   # as spyrrow: the signal ends its search, the error is dropped
+        def solve(self, cfg, queue):
+            try:
+                for _ in range(20000):   # until the interrupt lands (at most 20 s)
+                    time.sleep(0.001)
+            except KeyboardInterrupt:
+                pass
+            return _Sol(9.0)
+    timer = threading.Timer(0.05, _thread.interrupt_main)
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        early_stop.solve_until(Slow(), None, _Queue(reports), FEASIBLE, 0.0)
+    timer.join()
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+
+
 def test_where_it_applies_the_pack_nests_longer_ending_each_search_at_its_square(monkeypatch):
     """10 wavy discs of 240 faces (the cut, 0.6 s, below the root's 0.62 s; no chart over 0.3
     of the area, recomputed): pack_islands asks square_layout for REACH, each solve is asked to
