@@ -33,11 +33,11 @@ TINY_SHARE = 1e-3       # a chart under this share of the charts' area is tiny
 # ... and the tiny ones are dropped when at least this share of the charts (the shader ball: 95 %;
 # Wuson.off's 56 of 83, 67 %, and wuson.stl's 58 of 91, 64 %, went from large_first's nesting of
 # all 83 to 27 charts nested and the rest dropped: 0.665 -> 0.698 and 0.652 -> 0.688 at half the
-# CPU, 3.2 -> 1.6 s, seeds 0-3 at load 3, 7 wins and a tie; about even at load 8, where the short
-# nesting of the 27 starves; issue18-pack25-2026-11-28.md). Not lower: the cow's 14 of 45 (31 %)
-# lost 0.755/0.717 -> 0.698/0.685 (large_first's nesting gone), the dino's 11 of 36 gained; an
-# older ChineseDragon set (61 % tiny) lost 0.581 -> 0.556, seeds 0-2, the large ones' shorter
-# time losing more than it saved (issue18-tinypack12-2026-11-28.md)
+# CPU, 3.2 -> 1.6 s, seeds 0-3 at load 3, 7 wins and a tie; at load 8-9, seeds 4-9, +0.010 and
+# +0.025, the 27's short nesting starving; issue18-pack25-2026-11-28.md). Not lower: the cow's 14
+# of 45 (31 %) lost 0.755/0.717 -> 0.698/0.685 (large_first's nesting gone), the dino's 11 of 36
+# gained; an older ChineseDragon set (61 % tiny) lost 0.581 -> 0.556, seeds 0-2, the large ones'
+# shorter time losing more than it saved (issue18-tinypack12-2026-11-28.md)
 TINY_COUNT_SHARE = 0.6
 TINY_AREA_SHARE = 0.05  # ... holding less than this share of the area together
 CELLS = 512             # raster cells along the square's side (2 texels at 1024 px)
