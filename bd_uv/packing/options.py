@@ -65,7 +65,8 @@ REACH = 3.0
 # Spider's 63 charts of 1,368 faces: 1.17 s, Blender 42-130 s at load 6-14). Measured
 # (issue18-many24-2026-11-28.md, seeds 0-3, load ~9, with large_first's second nesting): the
 # Spider (54 not tiny) at 2.2 s 0.652 -> 0.688 (4/4). Wuson's 83 charts (56 tiny: Blender 25-32 s
-# at load 5-10, its time ratio the one failing) keep the root
+# at load 5-10, 8.2-8.7 s at load 3-5) keep the root; since pack25 they go to .tiny (67 % tiny),
+# which nests the 27 others for their own count's time
 MANY_CHARTS = 40
 MANY_SECONDS_PER_CHART = 0.04
 

@@ -8,7 +8,8 @@ barely change the square. So when most charts are tiny (each under ``TINY_SHARE`
 area, at least ``TINY_COUNT_SHARE`` of the charts, together under ``TINY_AREA_SHARE``):
 
 1. the other charts are packed as any set of charts is (:func:`.few.few_square` for 2-5,
-   else :func:`.square.square_layout`), with the time of their own count and faces;
+   else :func:`.square.square_layout`), with the time of their own count and faces (cut where
+   one of them dominates, as ``PackOptions.search_seconds`` does for any set);
 2. the tiny charts, largest first, are dropped into the free space of that square on a raster
    made conservative as in :mod:`.around` (a chart occupies every cell whose centre lies within
    ``separation / 2 + h sqrt(2) / 2`` of its outline, so two charts whose cells do not meet are
@@ -30,9 +31,14 @@ from .square import square_layout
 
 TINY_SHARE = 1e-3       # a chart under this share of the charts' area is tiny
 # ... and the tiny ones are dropped when at least this share of the charts (the shader ball: 95 %;
-# ChineseDragon's 8 largest charts and its 38 under 0.1 % of its area, 61 % tiny: 0.556 against
-# 0.581 with every chart together, seeds 0-2, the large ones' shorter time lost more than it saved)
-TINY_COUNT_SHARE = 0.8
+# Wuson.off's 56 of 83, 67 %, and wuson.stl's 58 of 91, 64 %, went from large_first's nesting of
+# all 83 to 27 charts nested and the rest dropped: 0.665 -> 0.698 and 0.652 -> 0.688 at half the
+# CPU, 3.2 -> 1.6 s, seeds 0-3 at load 3, 7 wins and a tie; at load 8-9, seeds 4-9, +0.010 and
+# +0.025, the 27's short nesting starving; issue18-pack25-2026-11-28.md). Not lower: the cow's 14
+# of 45 (31 %) lost 0.755/0.717 -> 0.698/0.685 (large_first's nesting gone), the dino's 11 of 36
+# gained; an older ChineseDragon set (61 % tiny) lost 0.581 -> 0.556, seeds 0-2, the large ones'
+# shorter time losing more than it saved (issue18-tinypack12-2026-11-28.md)
+TINY_COUNT_SHARE = 0.6
 TINY_AREA_SHARE = 0.05  # ... holding less than this share of the area together
 CELLS = 512             # raster cells along the square's side (2 texels at 1024 px)
 
@@ -68,7 +74,9 @@ def tiny_square(charts, options, tol, faces):
     exact = [charts.exact[i] for i in big]
     found = few_square(outlines, options, tol, exact)
     if found is None:
-        seconds = options.search_seconds(len(big), int(np.sum(np.asarray(faces)[big])))
+        area = charts.area[big]
+        seconds = options.search_seconds(len(big), int(np.sum(np.asarray(faces)[big])),
+                                         float(area.max() / area.sum()))
         found = square_layout(outlines, options, tol, seconds, exact)
     pl, side, solves = found
     angle, shift = np.zeros(k), np.zeros((k, 2))

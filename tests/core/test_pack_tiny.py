@@ -29,11 +29,15 @@ def _charts(sizes, holes=(), seed=0):
 
 
 def test_the_gate():
-    """Tiny charts dropped when most charts (80 %) are tiny, hold little area and leave two
+    """Tiny charts dropped when most charts (60 %) are tiny, hold little area and leave two
     others or more; else nothing."""
     many = np.r_[np.ones(4), np.full(40, 1e-4)]
     assert np.array_equal(tiny_charts(many), np.arange(4, 44))
-    assert tiny_charts(np.r_[np.ones(15), np.full(45, 1e-4)]) is None   # 75 % tiny
+    assert np.array_equal(tiny_charts(np.r_[np.ones(15), np.full(45, 1e-4)]),
+                          np.arange(15, 60))                              # 75 % tiny
+    assert np.array_equal(tiny_charts(np.r_[np.ones(27), np.full(56, 1e-4)]),
+                          np.arange(27, 83))                              # 67 %: Wuson.off's
+    assert tiny_charts(np.r_[np.ones(30), np.full(40, 1e-4)]) is None   # 57 % tiny
     assert tiny_charts(np.r_[np.ones(1), np.full(40, 1e-4)]) is None    # one left to pack
     assert tiny_charts(np.r_[np.ones(2), np.full(100, 2e-3)]) is None   # 9 % of the area
 
@@ -55,6 +59,30 @@ def test_many_tiny_charts_are_dropped_into_the_free_space():
     # the same large charts' layout (few.py is deterministic), the tiny ones in its free space
     # (the outlines' simplification tolerance follows the total area: a hair apart)
     assert np.isclose(packed.texel_density, alone.texel_density, rtol=1e-5)
+
+
+def test_the_others_nest_for_their_own_time_with_a_dominant_one_cut(monkeypatch):
+    """Seven large charts, one of them holding 0.6 of their area, and 14 tiny ones (67 %): the
+    seven are nested for the time of their own count and faces, cut as a dominant chart cuts
+    it (``search_seconds`` with its share, recomputed from the sizes), the layout certified."""
+    import bd_uv.packing.tiny as tiny
+    seen = []
+    real = tiny.square_layout
+
+    def spy(outlines, options, tol, seconds, *rest, **kw):
+        seen.append((len(outlines), seconds))
+        return real(outlines, options, tol, seconds, *rest, **kw)
+
+    monkeypatch.setattr(tiny, "square_layout", spy)
+    sizes = np.r_[[[3.0, 3.0]], np.full((6, 2), 1.0), np.full((14, 2), 0.03)]
+    V, F, uv, lab = _charts(sizes, seed=2)
+    options = PackOptions(seed=0)
+    packed = pack_islands(V, F, uv, lab, options)
+    check_layout(V, F, uv, lab, packed, options)
+    share = 9.0 / (9.0 + 6.0)     # the large chart's share of the seven's area
+    assert len(seen) == 1 and seen[0][0] == 7
+    assert np.isclose(seen[0][1], options.search_seconds(7, 7 * 2, share))
+    assert seen[0][1] < options.search_seconds(7, 7 * 2)
 
 
 def test_drop_keeps_the_separation_and_gives_up_without_room():
