@@ -7,7 +7,11 @@ same call with the same inputs writes the same file (a re-run reuses it):
   times: face.obj 51,712 -> 206,848 -> 827,392 faces; mannequin-devil 25,888 -> 103,552 -> 414,208.
 - ``patch(path, faces)``: the smallest ball of whole face rings (breadth-first over shared edges)
   around the face nearest the vertex centroid holding at least ``faces`` faces: smaller meshes of
-  the same surface.
+  the same surface (grown on until the rings close into a disk).
+- ``ball(path, faces, at)``: the same rings round the face nearest the centre of one side of the
+  bounding box (``at``: ``"top"`` = ``"y+"``, ``"x+"``, ``"z-"``, ...).
+- ``strip(path, faces, axis)``: the same rings round a shortest face path between the faces
+  nearest the centres of the two sides normal to ``axis``: a long thin disk.
 - ``many_islands(n, seed)``: ``n`` separate small bumpy grid patches (8 faces each for most, up to
   288), about half of those with at least 4x4 cells with a hole; each a separate connected
   component, so Blender's unwrap and ``bd_uv.islands`` both see ``n`` islands without seams.
@@ -99,6 +103,36 @@ def is_disk(F: np.ndarray) -> bool:
     return len(np.unique(pieces)) == 1 and len(used) - len(edges) + len(F) == 1
 
 
+def _face_graph(F):
+    """Faces as a graph: a CSR matrix with an entry for each pair of faces sharing an edge."""
+    import scipy.sparse as sp
+
+    adj = _face_adjacency(F)
+    m = len(F)
+    return sp.coo_array((np.ones(2 * len(adj)), (np.r_[adj[:, 0], adj[:, 1]],
+                                                 np.r_[adj[:, 1], adj[:, 0]])),
+                        shape=(m, m)).tocsr()
+
+
+def _rings_to_disk(V, F, ring, faces, out, what):
+    """Keep the faces of whole rings (``ring``: each face's ring number, inf where unreached) up
+    to the ring holding the ``faces``-th face, then more whole rings until they form a disk;
+    write them as ``out`` (unreferenced vertices dropped, the file's face order)."""
+    ring = np.where(np.isfinite(ring), ring, np.inf)
+    levels = np.sort(ring[np.isfinite(ring)])
+    r = levels[min(faces, len(levels)) - 1]
+    keep = np.flatnonzero(ring <= r)
+    for nxt in np.unique(levels[levels > r]):
+        if is_disk(F[keep]):
+            break
+        keep = np.flatnonzero(ring <= nxt)
+    if not is_disk(F[keep]):
+        raise ValueError(f"{what}: no whole ring closes into a disk")
+    sub = F[keep]
+    used, inv = np.unique(sub, return_inverse=True)
+    return write_obj(out, V[used], inv.reshape(-1, 3))
+
+
 def patch(path: str, faces: int, out_dir: str = DEFAULT_DIR) -> str:
     """Whole breadth-first face rings around the most central face, until >= ``faces`` faces.
 
@@ -111,32 +145,97 @@ def patch(path: str, faces: int, out_dir: str = DEFAULT_DIR) -> str:
     out = os.path.join(out_dir, f"{_stem(path)}-patch{faces}.obj")
     if os.path.exists(out):
         return out
-    import scipy.sparse as sp
     from scipy.sparse.csgraph import shortest_path
 
     from measure import load_mesh_by_index
 
     V, F = load_mesh_by_index(path)
-    adj = _face_adjacency(F)
-    m = len(F)
-    A = sp.coo_array((np.ones(2 * len(adj)), (np.r_[adj[:, 0], adj[:, 1]],
-                                               np.r_[adj[:, 1], adj[:, 0]])), shape=(m, m)).tocsr()
     cen = V[F].mean(axis=1)
     seed = int(np.argmin(np.linalg.norm(cen - V.mean(axis=0), axis=1)))
-    ring = shortest_path(A, unweighted=True, indices=seed)
-    ring = np.where(np.isfinite(ring), ring, np.inf)
-    levels = np.sort(ring[np.isfinite(ring)])
-    r = levels[min(faces, len(levels)) - 1]
-    keep = np.flatnonzero(ring <= r)
-    for nxt in np.unique(levels[levels > r]):
-        if is_disk(F[keep]):
-            break
-        keep = np.flatnonzero(ring <= nxt)
-    if not is_disk(F[keep]):
-        raise ValueError(f"{path}: no whole ring around its central face closes into a disk")
-    sub = F[keep]
-    used, inv = np.unique(sub, return_inverse=True)
-    return write_obj(out, V[used], inv.reshape(-1, 3))
+    ring = shortest_path(_face_graph(F), unweighted=True, indices=seed)
+    return _rings_to_disk(V, F, ring, faces,
+                          out, f"{path}: around its central face")
+
+
+BOX_POINTS = {"top": (1, +1), "bottom": (1, -1), "x+": (0, +1), "x-": (0, -1),
+              "y+": (1, +1), "y-": (1, -1), "z+": (2, +1), "z-": (2, -1)}
+
+
+def _box_point(V, axis, side):
+    """The centre of the side ``side`` (+1: max, -1: min) of the vertices' bounding box normal
+    to ``axis``."""
+    lo, hi = V.min(axis=0), V.max(axis=0)
+    p = (lo + hi) / 2
+    p[axis] = hi[axis] if side > 0 else lo[axis]
+    return p
+
+
+def _nearest_face(V, F, p):
+    return int(np.argmin(np.linalg.norm(V[F].mean(axis=1) - p, axis=1)))
+
+
+def ball(path: str, faces: int, at: str = "top", out_dir: str = DEFAULT_DIR) -> str:
+    """Like :func:`patch`, but the rings grow round the face nearest a point of the bounding box.
+
+    ``at`` names the point (``BOX_POINTS``): the centre of one side of the vertices' axis-aligned
+    bounding box, ``"x+"`` the side at the largest x, ``"top"`` (= ``"y+"``) the largest y, and
+    so on; the seed is the face whose centroid is nearest that point. Whole rings over shared
+    edges, at least ``faces`` faces, grown on until a disk (ValueError if none is). Written as
+    ``<stem>-ball<faces><at>.obj``; e.g. knight-ball3000top (3,028 faces), camel-ball300top (316),
+    cow-ball150x+ (169) of issue21-unseen16-2026-11-28.md come out face for face.
+    """
+    out = os.path.join(out_dir, f"{_stem(path)}-ball{faces}{at}.obj")
+    if os.path.exists(out):
+        return out
+    from scipy.sparse.csgraph import shortest_path
+
+    from measure import load_mesh_by_index
+
+    axis, side = BOX_POINTS[at]
+    V, F = load_mesh_by_index(path)
+    seed = _nearest_face(V, F, _box_point(V, axis, side))
+    ring = shortest_path(_face_graph(F), unweighted=True, indices=seed)
+    return _rings_to_disk(V, F, ring, faces, out, f"{path}: round its face at {at}")
+
+
+def strip(path: str, faces: int, axis: str = "x", out_dir: str = DEFAULT_DIR) -> str:
+    """A long thin disk: whole face rings round a face path across the mesh along ``axis``.
+
+    The path's ends are the faces whose centroids are nearest the centres of the two sides of the
+    vertices' bounding box normal to ``axis`` (``"x"``, ``"y"`` or ``"z"``); the path is the
+    unweighted shortest path over shared edges from the end at the least coordinate, as
+    ``scipy.sparse.csgraph.shortest_path``'s predecessors give it (ties broken its way). Ring n
+    holds the faces n steps from the nearest face of the path; whole rings, at least ``faces``
+    faces, grown on until a disk (ValueError if none is). Written as
+    ``<stem>-strip<faces><axis>.obj``.
+    """
+    out = os.path.join(out_dir, f"{_stem(path)}-strip{faces}{axis}.obj")
+    if os.path.exists(out):
+        return out
+    from scipy.sparse.csgraph import dijkstra
+
+    from measure import load_mesh_by_index
+
+    V, F = load_mesh_by_index(path)
+    route = strip_route(V, F, axis, path)
+    ring = dijkstra(_face_graph(F), unweighted=True, indices=route, min_only=True)
+    return _rings_to_disk(V, F, ring, faces, out, f"{path}: round its path along {axis}")
+
+
+def strip_route(V: np.ndarray, F: np.ndarray, axis: str, what: str = "the mesh") -> list[int]:
+    """:func:`strip`'s face path: face indices from the end at the least ``axis`` coordinate to
+    the end at the largest, each sharing an edge with the next."""
+    from scipy.sparse.csgraph import shortest_path
+
+    k = "xyz".index(axis)
+    a, b = (_nearest_face(V, F, _box_point(V, k, side)) for side in (-1, +1))
+    pred = shortest_path(_face_graph(F), unweighted=True, indices=a, return_predecessors=True)[1]
+    if pred[b] < 0 and a != b:
+        raise ValueError(f"{what}: its faces at the two ends of {axis} are not connected")
+    route = [b]
+    while route[-1] != a:
+        route.append(int(pred[route[-1]]))
+    return route[::-1]
 
 
 def _grid(n, m):

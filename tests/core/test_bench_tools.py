@@ -284,3 +284,73 @@ def test_patch_of_a_surface_with_no_disk_ring_is_refused(tmp_path):
         assets.patch(src, 190, out_dir=str(tmp_path))
     V, F = load_mesh_by_index(assets.patch(src, 20, out_dir=str(tmp_path)))
     assert assets.is_disk(F) and len(F) >= 20
+
+
+def _source_faces(V0, F0, path):
+    """Indices into F0 of the faces written to ``path`` (matched by their corners' positions)."""
+    key = {tuple(sorted(map(tuple, V0[f]))): i for i, f in enumerate(F0)}
+    V, F = load_mesh_by_index(path)
+    return np.array(sorted(key[tuple(sorted(map(tuple, V[f])))] for f in F))
+
+
+def _rings(F, seeds):
+    """Each face's number of steps over shared edges from the nearest seed face (plain BFS)."""
+    by_edge = {}
+    for i, f in enumerate(F):
+        for a, b in ((f[0], f[1]), (f[1], f[2]), (f[2], f[0])):
+            by_edge.setdefault((min(a, b), max(a, b)), []).append(i)
+    nbr = [[] for _ in F]
+    for fs in by_edge.values():
+        for i in fs:
+            nbr[i] += [j for j in fs if j != i]
+    dist = np.full(len(F), -1)
+    dist[list(seeds)] = 0
+    todo = list(seeds)
+    while todo:
+        nxt = []
+        for i in todo:
+            for j in nbr[i]:
+                if dist[j] < 0:
+                    dist[j] = dist[i] + 1
+                    nxt.append(j)
+        todo = nxt
+    return dist
+
+
+def _whole_rings_and_least(F0, dist, got, faces):
+    """``got`` is every face within its largest ring, at least ``faces`` faces, a disk, and no
+    fewer whole rings holding at least ``faces`` faces make a disk."""
+    r = dist[got].max()
+    assert np.array_equal(got, np.flatnonzero(dist <= r))
+    assert len(got) >= faces and assets.is_disk(F0[got])
+    for q in range(r):
+        fewer = np.flatnonzero(dist <= q)
+        assert len(fewer) < faces or not assets.is_disk(F0[fewer])
+
+
+def test_ball_and_strip_are_whole_rings_round_a_box_point_and_a_path(tmp_path):
+    """assets.ball grows rings round the face nearest the centre of a side of the bounding box,
+    assets.strip round a shortest face path between the faces nearest two opposite sides; both
+    checked against a plain breadth-first search on cow.off (ball 150 at x+ has 169 faces, as
+    issue21-unseen16-2026-11-28.md's cow-ball150x+ did)."""
+    src = os.path.join(DATA, "cow.off")
+    V0, F0 = load_mesh_by_index(src)
+    cen = V0[F0].mean(axis=1)
+    lo, hi = V0.min(axis=0), V0.max(axis=0)
+    near = [int(np.argmin(((cen - p) ** 2).sum(axis=1))) for p in
+            ([hi[0], (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2],
+             [(lo[0] + hi[0]) / 2, lo[1], (lo[2] + hi[2]) / 2],
+             [(lo[0] + hi[0]) / 2, hi[1], (lo[2] + hi[2]) / 2])]
+    got = _source_faces(V0, F0, assets.ball(src, 150, "x+", out_dir=str(tmp_path)))
+    assert len(got) == 169
+    _whole_rings_and_least(F0, _rings(F0, [near[0]]), got, 150)
+    p = assets.strip(src, 600, "y", out_dir=str(tmp_path))
+    assert os.path.basename(p) == "cow-strip600y.obj"
+    # the route: from the face at the least y to the one at the largest, each face sharing an
+    # edge with the next, as many steps as a breadth-first search from the first end takes
+    route = assets.strip_route(V0, F0, "y")
+    d0 = _rings(F0, [near[1]])
+    assert route[0] == near[1] and route[-1] == near[2] and len(route) == d0[near[2]] + 1
+    assert all(len(set(F0[a]) & set(F0[b])) == 2 for a, b in zip(route[:-1], route[1:]))
+    got = _source_faces(V0, F0, p)
+    _whole_rings_and_least(F0, _rings(F0, route), got, 600)
