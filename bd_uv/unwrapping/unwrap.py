@@ -15,6 +15,7 @@ batched conformal maps and the one-disk pass run, and the islands are gathered a
 disk ``bound="auto"`` left cut is tried again to keep it one island (``_kept_whole``).
 """
 import dataclasses
+import functools
 import time
 
 import numpy as np
@@ -126,7 +127,13 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             done = disk_auto.minimise_disk(
                 V, disk, u, opts.bound_limit if opts.bound == "auto" else float(opts.bound), t0,
                 progress, cancel, opts.bound)
-        if done is None and opts.bound != "auto" and opts.time_budget is None:
+        if (done is None and opts.bound != "auto" and opts.time_budget is None
+                and angle_start.bent_first(disk, u, float(opts.bound))):
+            # a number C and a conformal start flipping faces whose angle start is seldom
+            # within C: bent into C first; its angle start made for the unfold only where the
+            # bent map lies over itself (``angle_start.FLIPS_BENT``)
+            angle = functools.partial(_angle_within, V, disk)
+        elif done is None and opts.bound != "auto" and opts.time_budget is None:
             # a number C: the angle start of a disk whose conformal start is bad, certified
             # at C when within it and one simple boundary (else the general path, as before)
             v, found, _ = angle_start.better_start(V, disk, u, float(opts.bound))
@@ -177,6 +184,15 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     if opts.bound == "auto" and disk is not None and whole and _pieces(res) > (0, 1):
         res = _kept_whole(V, F, disk, opts, res, least, t0, progress, cancel)
     return res
+
+
+def _angle_within(V, disk):
+    """The disk's angle start (``angle_start.angle_start``) where there is one within
+    ``angle_start.ANGLE_LIMIT``, else None (a number C's unfold then starts from the
+    conformal map, as where ``better_start`` found none)."""
+    u = angle_start.angle_start(V, disk)
+    return u if u is not None and angle_start.max_distortion(disk, u) <= angle_start.ANGLE_LIMIT \
+        else None
 
 
 # ``_kept_whole``'s numbers C, as multiples of the least C whose map was predicted to fail
@@ -261,7 +277,8 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
         tried so (``angle_unfolder``) before the island is cut
     angle : (nv,) complex128, the disk's angle start where ``angle_start.better_start`` found
         it and did not take it (False: it found none), for ``angle_unfolder`` (``unfolder`` at a
-        number C); None: made there when needed (at a number C: not tried)
+        number C); None: made there when needed (at a number C: not tried); at a number C a
+        callable making it (or None) where the unfold asks for it (``angle_start.bent_first``)
 
     Returns
     -------
