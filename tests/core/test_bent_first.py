@@ -98,3 +98,30 @@ def test_a_start_flipping_one_face_and_turning_twice_still_takes_its_angle_start
     assert _premise(V, F, disk) == (1, 2)
     r = _certified(V, F, bd_uv.unwrap(V, F, bound=5.0), disk, 5.0)
     assert r.flags == ("angle_start",) and r.max_distortion < 2.0
+
+
+def test_a_disk_map_measured_over_c_is_not_measured_again_by_the_batched_path(monkeypatch):
+    """The general path starts from the disk's conformal map, which ``one_disk`` measured over
+    C (it flips): the batched path's measure of it (``conformal_islands``) is not made, and
+    the map is the one made with that measure, bit for bit."""
+    import sys
+    unwrap_module = sys.modules["bd_uv.unwrapping.unwrap"]
+    V, F = rings(*load_off("three_peaks.off"), 3275, 2000)
+    disk = one_disk.find(V, F)
+    measured = []
+    batched = unwrap_module._batched
+
+    def counted(*args, **kwargs):
+        measured.append(1)
+        return batched(*args, **kwargs)
+    monkeypatch.setattr(unwrap_module, "_batched", counted)
+    res = bd_uv.unwrap(V, F, bound=5.0)
+    _certified(V, F, res, disk, 5.0)
+    assert not measured
+    islands = unwrap_module.unwrap_islands
+
+    def measuring(*args, **kwargs):
+        return islands(*args, **dict(kwargs, over=False))
+    monkeypatch.setattr(unwrap_module, "unwrap_islands", measuring)
+    again = bd_uv.unwrap(V, F, bound=5.0)
+    assert len(measured) == 1 and np.array_equal(again.corner_uv, res.corner_uv)
