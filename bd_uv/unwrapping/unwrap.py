@@ -23,7 +23,7 @@ import numpy as np
 from ..errors import CancelledError, InvalidMeshError, OptionError
 from ..mesh import as_indices, as_reals, check_arrays, checked_islands as split_islands
 from ..options import unwrap_options
-from ..trim import release_memory
+from ..trim import keep_freed_heap, release_memory
 from . import angle_start, capped, disk_auto, one_disk
 from .batched import conformal_islands
 from .island_solve import (angle_unfolder, batched_options, solve_island, unfold_first,
@@ -92,6 +92,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     t0 = time.perf_counter()
     V, F = check_arrays(V, F)
     m = len(F)
+    keep_freed_heap(m)      # (once per process, below trim.TRIM_FACES faces)
     if opts.frames == "input-uv":
         if initial_uv is None:
             raise OptionError("frames", "frames='input-uv' needs initial_uv (m,3,2)")
