@@ -35,8 +35,10 @@ __all__ = ["from_harmonic", "lowest_energy"]
 # iterate nearer the cone's boundary, the segment's best further back); at 0.1, 20 2.277, 40
 # 2.154; at 1, 20-60 2.178-2.179. The conic solve reached 2.171 in 80 iterations (0.11 s).
 ITERATIONS = 25
-RAISE_STEP = 1.5
 TAU = 0.3
+# The steps of a bound raised where C is out of reach (``bounded.RAISE_FACTOR``'s, which the
+# conic raise takes; that module imports this one)
+RAISE_STEP = 1.5
 
 
 def _lowered(prob, us, target):
