@@ -45,6 +45,7 @@ _trim = None                # libc's malloc_trim, False where there is none
 _mallopt = None             # libc's mallopt, False where there is none
 _lock = threading.Lock()
 _depth = 0                  # searches running inside ``large_blocks_mapped``
+_kept = False               # ``keep_freed_heap`` has set the thresholds in this process
 
 
 def release_memory(faces):
@@ -62,6 +63,28 @@ def release_memory(faces):
                 _trim = False
     if _trim:
         _trim(0)
+
+
+def keep_freed_heap(faces):
+    """Below ``TRIM_FACES`` faces, once per process: glibc's mmap and trim thresholds set where
+    its own rule leaves them after a large run (32 MB, 64 MB; ``large_blocks_mapped`` restores
+    the same), so a small unwrap's arrays of more than 128 kB are served from the heap and what
+    it frees stays there for its next arrays, instead of being mapped and unmapped (or the heap
+    trimmed) many times a call, each page faulted in again: 300-3,000 page faults a C = 5 call
+    on 1-4k-face disks (~1.5 us each here), none after the first call with the thresholds set
+    (benchmarks/results/issue21-c5x25-2026-11-28.md). Nothing is done where glibc's mallopt is
+    missing, or while a large search holds its own thresholds. Which memory serves a block never
+    changes a value computed in it."""
+    global _kept
+    if _kept or faces >= TRIM_FACES:
+        return
+    mallopt = _libc_mallopt()
+    with _lock:
+        if _depth == 0 and not _kept:
+            _kept = True
+            if mallopt:
+                mallopt(_M_MMAP_THRESHOLD, _MMAP_MAX)
+                mallopt(_M_TRIM_THRESHOLD, 2 * _MMAP_MAX)
 
 
 def _libc_mallopt():

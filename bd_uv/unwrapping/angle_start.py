@@ -35,7 +35,7 @@ from .capped import from_angles
 from .disk_conformal import conformal
 from .disk_certificate import measure_disk, turning
 
-__all__ = ["angle_start", "better_start", "linear_abf", "max_distortion"]
+__all__ = ["angle_start", "bent_first", "better_start", "linear_abf", "max_distortion"]
 
 CAP = 0.97          # a boundary vertex whose angles reach CAP x 2 pi is held at CAP x 2 pi
 ATTEMPTS = 4        # conformal solves at most (the angles scaled further where the map still wraps)
@@ -66,6 +66,18 @@ FIRST_FACES = 1000
 # same or a lower C in 58-82 % of the CPU (issue21-unseen16-2026-11-28.md, section 3). No
 # angle start over 1e4 turned up in a scan of 600 patches.
 ANGLE_LIMIT = 1e5
+# At a number C up to BENT_UP_TO, a conformal start flipping at least FLIPS_BENT faces, or
+# flipping and turning once, is bent into C (the general path) without its angle start made
+# first (``bent_first``): on 21 disks whose conformal start flips
+# (benchmarks/results/issue21-c5x25-2026-11-28.md), every angle start taken at C = 5 came from
+# a start flipping one face and turning more than once (max 1.28-1.86); those of starts
+# flipping two or more faces (2-60: three_peaks.off 30) or turning once had max 5.3 or more:
+# made and left unused (three_peaks.off: ~18 ms of ~90 of CPU), or used only by the unfold of
+# a bent map lying over itself, which now makes it there (``island_solve.unfolder``). Above
+# BENT_UP_TO such an angle start may fit (5.3-7.5 on those disks) and is then the faster map
+# (three_peaks.off at C = 8: 41 ms against 111 bent), so it is made first as before.
+FLIPS_BENT = 2
+BENT_UP_TO = 5.0
 
 
 def linear_abf(disk, caps):
@@ -245,6 +257,20 @@ def better_start(V, disk, u, C=None):
     else:
         ok = D < D0 or (over and D <= ANGLE_LIMIT)
     return (v if ok else None), v, True
+
+
+def bent_first(disk, u, C):
+    """Whether, at a number C (up to BENT_UP_TO), the disk's conformal map u (nv,) complex is
+    bent into C without its angle start made first: it flips FLIPS_BENT faces or more, or
+    flips and its boundary turns once. Its angle start is made only where the unfold of a bent
+    map lying over itself asks for it."""
+    if not C <= BENT_UP_TO:
+        return False
+    uc = u.take(disk.island.tris)
+    corner_uv = np.empty(uc.shape + (2,))
+    corner_uv[..., 0], corner_uv[..., 1] = uc.real, uc.imag
+    flips = int(np.count_nonzero(~np.isfinite(measure_disk(corner_uv, disk.G)[0])))
+    return flips >= FLIPS_BENT or (flips > 0 and turning(u.take(disk.island.loops[0])) == 1)
 
 
 def _near_crossings(z):

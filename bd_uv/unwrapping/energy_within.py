@@ -36,6 +36,19 @@ __all__ = ["from_harmonic", "lowest_energy"]
 # 2.154; at 1, 20-60 2.178-2.179. The conic solve reached 2.171 in 80 iterations (0.11 s).
 ITERATIONS = 25
 TAU = 0.3
+# The steps of a bound raised where C is out of reach (``bounded.RAISE_FACTOR``'s, which the
+# conic raise takes; that module imports this one)
+RAISE_STEP = 1.5
+
+
+def _lowered(prob, us, target):
+    """The map of least mean distortion within ``target`` between the searched map us (within
+    it) and ``lowest_energy``'s iterate from it."""
+    t = time.perf_counter()
+    ul = lowest_energy(prob, us, target)
+    um = least_mean_within(prob, us, ul, target, MEAN_SEARCH)
+    prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
+    return um
 
 
 def lowest_energy(prob, us, C, iterations=ITERATIONS, tau=TAU):
@@ -103,9 +116,10 @@ def from_harmonic(prob, C, report):
     docstring) that lays the island out without overlapping itself, or None where the search
     from it does not reach C or its maps overlap (a 288-face teapot piece with a hole: the
     projection of its harmonic map and a conic solve then, as before). Returns (u, its start)
-    or None, and whether the search ended far above C (``searched.FAR``, as ``over_bound``
+    or None, and where the search ended far above C (``searched.FAR``, as ``over_bound``
     judges C out of reach: the projection of the harmonic map into C is not tried then;
-    decimated-knight's strip at C = 3, its search ending at 4.305: 114 iterations for nothing).
+    decimated-knight's strip at C = 3, its search ending at 4.305: 114 iterations for nothing)
+    its map and max distortion (u, D) and start, for the bound raised to it (else False).
     """
     harmonic = start_map(prob, "harmonic", None, report)
     if not np.isfinite(harmonic.D):
@@ -114,11 +128,23 @@ def from_harmonic(prob, C, report):
     us, D = search(prob, harmonic.u, report, None, [], time.perf_counter(),
                    enough=lambda x: prob.distortion(x) <= target)
     if not D <= target:
-        return None, D - 1.0 > FAR * (C - 1.0)
-    t = time.perf_counter()
-    ul = lowest_energy(prob, us, target)
-    um = least_mean_within(prob, us, ul, target, MEAN_SEARCH)
-    prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
+        D = prob.distortion(us)
+        if not D - 1.0 > FAR * (C - 1.0):
+            return None, False
+        # out of reach: the bound raised as the conic raise steps it (C x RAISE_STEP^k, the
+        # first at or above D) and the energy lowered within it as below, else within D, else
+        # the searched map, the first that lays the island out
+        raised = C
+        while raised < D:
+            raised *= RAISE_STEP
+        u = us
+        for bound in (solve_bound(raised), D):
+            um = _lowered(prob, us, bound)
+            if prob.lays_out(um):
+                u = um
+                break
+        return None, ((u, prob.distortion(u)), harmonic)
+    um = _lowered(prob, us, target)
     for u in (um, us):
         if prob.check(u, C)[0] and prob.lays_out(u):
             return (u, harmonic), False

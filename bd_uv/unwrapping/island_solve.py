@@ -97,7 +97,8 @@ def unfolder(isl, V, pins, options, cancel, start=None, again=True, disk=None):
     (conic steps), a method or frames other than the default's.
 
     ``start``: (index, u) the angle start (``angle_start``) of that island's disk, over C, where
-    its conformal start was bad: first ``bound="auto"``'s search from it, ending at its least
+    its conformal start was bad (or a callable making it, or None, when first asked:
+    ``angle_start.bent_first``): first ``bound="auto"``'s search from it, ending at its least
     map that does not lie over itself (``strategies.least_one_to_one``), taken when within C
     (flags "angle_start", "unfolded"); else as above, unless ``again`` is False (that search
     from the conformal start was made: ``disk_auto``)."""
@@ -111,10 +112,12 @@ def unfolder(isl, V, pins, options, cancel, start=None, again=True, disk=None):
 
     def unfold(index):
         try:
-            res = None
+            res, u = None, None
             if start is not None and start[0] == index:
+                u = start[1]() if callable(start[1]) else start[1]
+            if u is not None:
                 res = solve_island(by_index[index], V, pins, dataclasses.replace(o, bound="auto"),
-                                   None, quiet(cancel), cancel, start[1],
+                                   None, quiet(cancel), cancel, u,
                                    None if disk is None else (disk.G, disk.area),
                                    None if disk is None else disk.ranks, one_to_one=True)
                 if res.status != "certified" or not res.bound_certified <= C:

@@ -15,6 +15,7 @@ batched conformal maps and the one-disk pass run, and the islands are gathered a
 disk ``bound="auto"`` left cut is tried again to keep it one island (``_kept_whole``).
 """
 import dataclasses
+import functools
 import time
 
 import numpy as np
@@ -22,7 +23,7 @@ import numpy as np
 from ..errors import CancelledError, InvalidMeshError, OptionError
 from ..mesh import as_indices, as_reals, check_arrays, checked_islands as split_islands
 from ..options import unwrap_options
-from ..trim import release_memory
+from ..trim import keep_freed_heap, release_memory
 from . import angle_start, capped, disk_auto, one_disk
 from .batched import conformal_islands
 from .island_solve import (angle_unfolder, batched_options, solve_island, unfold_first,
@@ -91,6 +92,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     t0 = time.perf_counter()
     V, F = check_arrays(V, F)
     m = len(F)
+    keep_freed_heap(m)      # (once per process, below trim.TRIM_FACES faces)
     if opts.frames == "input-uv":
         if initial_uv is None:
             raise OptionError("frames", "frames='input-uv' needs initial_uv (m,3,2)")
@@ -126,7 +128,13 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             done = disk_auto.minimise_disk(
                 V, disk, u, opts.bound_limit if opts.bound == "auto" else float(opts.bound), t0,
                 progress, cancel, opts.bound)
-        if done is None and opts.bound != "auto" and opts.time_budget is None:
+        if (done is None and opts.bound != "auto" and opts.time_budget is None
+                and angle_start.bent_first(disk, u, float(opts.bound))):
+            # a number C and a conformal start flipping faces whose angle start is seldom
+            # within C: bent into C first; its angle start made for the unfold only where the
+            # bent map lies over itself (``angle_start.FLIPS_BENT``)
+            angle = functools.partial(_angle_within, V, disk)
+        elif done is None and opts.bound != "auto" and opts.time_budget is None:
             # a number C: the angle start of a disk whose conformal start is bad, certified
             # at C when within it and one simple boundary (else the general path, as before)
             v, found, _ = angle_start.better_start(V, disk, u, float(opts.bound))
@@ -159,7 +167,8 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
                          split_islands(V, F, seams, precision), pins, opts, initial_uv=initial_uv,
                          face_groups=face_groups, progress=progress, cancel=cancel,
                          conformal=conformal, t0=t0, disk=disk, unfold=unfold,
-                         one_to_one=one_to_one, angle=angle)
+                         one_to_one=one_to_one, angle=angle,
+                         over=disk is not None and opts.bound != "auto" and not overlaps)
     if (opts.bound == "auto" and disk is not None and angle is not False
             and any("angle_start" in r.flags for r in res.islands)
             and predicted_to_fail(V, F, res)):
@@ -177,6 +186,15 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
     if opts.bound == "auto" and disk is not None and whole and _pieces(res) > (0, 1):
         res = _kept_whole(V, F, disk, opts, res, least, t0, progress, cancel)
     return res
+
+
+def _angle_within(V, disk):
+    """The disk's angle start (``angle_start.angle_start``) where there is one within
+    ``angle_start.ANGLE_LIMIT``, else None (a number C's unfold then starts from the
+    conformal map, as where ``better_start`` found none)."""
+    u = angle_start.angle_start(V, disk)
+    return u if u is not None and angle_start.max_distortion(disk, u) <= angle_start.ANGLE_LIMIT \
+        else None
 
 
 # ``_kept_whole``'s numbers C, as multiples of the least C whose map was predicted to fail
@@ -235,7 +253,7 @@ def _kept_whole(V, F, disk, opts, res, least, t0, progress, cancel):
 
 def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, progress=None,
                    cancel=None, conformal=None, t0=None, disk=None, unfold=True,
-                   one_to_one=False, angle=None):
+                   one_to_one=False, angle=None, over=False):
     """``unwrap`` on islands already found (``mesh.islands``, or charts of a validated mesh).
 
     Parameters
@@ -261,7 +279,11 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
         tried so (``angle_unfolder``) before the island is cut
     angle : (nv,) complex128, the disk's angle start where ``angle_start.better_start`` found
         it and did not take it (False: it found none), for ``angle_unfolder`` (``unfolder`` at a
-        number C); None: made there when needed (at a number C: not tried)
+        number C); None: made there when needed (at a number C: not tried); at a number C a
+        callable making it (or None) where the unfold asks for it (``angle_start.bent_first``)
+    over : bool, ``conformal`` holds the disk's conformal map, which ``one_disk.unwrap_disk``
+        measured over the numeric C asked (it flips, or its max distortion is over C): not
+        measured again by the batched path (three_peaks.off: 1.5 ms of CPU), its start
 
     Returns
     -------
@@ -278,8 +300,13 @@ def unwrap_islands(V, F, isl, pins, options, initial_uv=None, face_groups=None, 
     for island in isl:
         face_island[island.faces] = island.index
     o = options
-    batch, starts = ({}, {}) if o.boundary != "free" or o.stretch is not None else \
-        _batched(V, isl, pins, face_island, o, progress, cancel, conformal)
+    if o.boundary != "free" or o.stretch is not None:
+        batch, starts = {}, {}
+    elif over:
+        batch, starts = {}, {i: np.asarray(u, dtype=np.complex128) / 1.0
+                             for i, u in conformal.items()}
+    else:
+        batch, starts = _batched(V, isl, pins, face_island, o, progress, cancel, conformal)
     for island in isl:
         share = len(island.faces) / total
 

@@ -77,9 +77,22 @@ def test_from_harmonic_is_within_c_one_to_one_and_no_worse_than_the_search(C):
 def test_from_harmonic_gives_none_below_the_least_bound():
     # the least certified C of this disk is about 2.52 (``test_over_bound``): far above 2, not
     # far above 2.4
-    prob = _problem()[2]
-    assert from_harmonic(prob, 2.0, _quiet) == (None, True)
+    Vi, isl, prob = _problem()
+    assert from_harmonic(prob, 2.0, _quiet)[0] is None
     assert from_harmonic(prob, 2.4, _quiet) == (None, False)
+
+
+def test_far_below_the_least_bound_from_harmonic_hands_back_a_map_for_the_raised_bound():
+    """C = 2, out of reach (far: D - 1 > FAR (C - 1)): the searched map, its energy lowered
+    within the first of C x 1.5^k at or above its max (3), flip-free, its max recomputed by SVD
+    the one handed back, for ``bounded`` to raise the bound to."""
+    Vi, isl, prob = _problem()
+    found, far = from_harmonic(prob, 2.0, _quiet)
+    (u, D), start = far
+    assert found is None and start.name == "harmonic"
+    Dr, flipped = reference_distortion(Vi, isl.tris, _corners(u, isl.tris))
+    assert not flipped.any() and abs(Dr.max() - D) <= 1e-9 * D
+    assert 1.0 + 1.25 * (2.0 - 1.0) < D < 3.0
 
 
 def test_lowest_energy_holds_the_two_anchors_and_lowers_the_conformal_energy():
