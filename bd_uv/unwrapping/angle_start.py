@@ -272,20 +272,28 @@ def better_start(V, disk, u, C=None):
 
 def _near_crossings(z):
     """(b,) bool, the vertices of the closed polygon z (b,) complex that lie between two of its
-    sides at most NEAR sides apart that cross (a tooth of a UV boundary folded over)."""
+    sides at most NEAR sides apart that cross (a tooth of a UV boundary folded over). Every
+    pair of sides k = 2..NEAR apart is tested at once (a (NEAR - 1, b) array: 0.32 -> 0.09 ms
+    on a 400-side loop against a roll a pair and a roll a marked vertex); the few that cross
+    mark their vertices one by one."""
     b = len(z)
-    p, q = z, np.roll(z, -1)
     marked = np.zeros(b, dtype=bool)
+    ks = np.arange(2, min(NEAR, b - 2) + 1)
+    if not len(ks):
+        return marked
+    i = np.arange(b)
+    j = i + ks[:, None]                     # side i runs from vertex i to i + 1
+    j %= b
+    p, q = z, z.take((i + 1) % b)
+    p2, q2 = z.take(j), z.take((j + 1) % b)
 
     def side(a, c, d):
         w = (c - a).conj() * (d - a)
         return w.imag
-    for k in range(2, min(NEAR, b - 2) + 1):
-        p2, q2 = np.roll(p, -k), np.roll(q, -k)
-        cross = ((side(p, q, p2) * side(p, q, q2) < 0.0)
-                 & (side(p2, q2, p) * side(p2, q2, q) < 0.0))
-        for j in range(1, k + 1):           # side i runs from vertex i to i + 1
-            marked |= np.roll(cross, j)
+    cross = ((side(p, q, p2) * side(p, q, q2) < 0.0)
+             & (side(p2, q2, p) * side(p2, q2, q) < 0.0))
+    for row, s in zip(*cross.nonzero()):    # the vertices i + 1 .. i + k
+        marked[(s + 1 + np.arange(ks[row])) % b] = True
     return marked
 
 
