@@ -80,6 +80,16 @@ AFTER_SHORT = True
 # 741-face piece 102 -> 39, 1.7875 -> 1.8946, 3.206; no other of 54 disks changes C. Not over
 # it: cow's 1,240-face disk ends at 2.03, where its cut reached 2.045)
 LATE_BUDGETED = True
+# A search given a ``check`` (``strategies.least_one_to_one``: does the map lay the island out?)
+# also asks it of the best map of a target that fell short of its aim, and of the first new best
+# of the target after it: True (the map lies over itself) ends the search there, as at a
+# checked new best within a target. The targets after a map lying over itself start from it,
+# and their maps lay the island out no more (homer's 3,521-face patch: its first target's best,
+# 1.3711, is the least one-to-one map; from the third target's first best on, 46 iterations of
+# 63, every best lies over itself: now 17). Most of a search's maps are not asked (those of
+# targets that reach their aim); the least one-to-one map is asked for after the search
+# anyway, and a short target's best is most often the least map (its answer is kept)
+SHORT_CHECKED = True
 MARGIN = 0.98       # the cones are aimed at 1 + MARGIN (C - 1)
 # A map this close to an isometry is not searched further: the bound ``auto`` reports keeps
 # STORE_HEADROOM (2e-4) above its max and rounds C - 1 up to 4 significant digits (1.0002001), so
@@ -136,9 +146,11 @@ class BoundSearch(SearchLift):
         # ``limit_effort``'s: bounded as auto's least C, its iteration budget, the first
         # target's STALL
         self.least, self.budget, self.first_stall = False, None, target_watch.STALL
-        # asked of every CHECK_EVERY-th new best iterate of a target (``target_watch.Watch``);
-        # True ends the search there (``strategies.least_one_to_one``: the map lies over itself)
+        # asked of every CHECK_EVERY-th new best iterate of a target (``target_watch.Watch``)
+        # and, where SHORT_CHECKED, of the best of a target that fell short of its aim; True
+        # ends the search there (``strategies.least_one_to_one``: the map lies over itself)
         self.check = None
+        self._after_short = False   # the target run follows one that fell short (``search``)
 
     def run(self, U, w, C, D_best, cancel=None, enough=None, ready=None, deep=False):
         """ADMM towards F_C with frames w (unit complex, (k,)), from U (2, nv): rows u and v;
@@ -237,7 +249,8 @@ class BoundSearch(SearchLift):
         check = self.check
         return Watch(D_best, None if ask is None else lambda kept: ask(to_u(kept)), limit,
                      self.first_stall if self.iterations == 0 else target_watch.STALL,
-                     None if check is None else lambda kept: check(to_u(kept)))
+                     None if check is None else lambda kept: check(to_u(kept)),
+                     SHORT_CHECKED and self._after_short)
 
     def _count(self, n):
         self.iterations += n
@@ -288,6 +301,7 @@ class BoundSearch(SearchLift):
                 report(D, C)
             w = (frames_from_map(self._alpha2(U)) if frames_of is None
                  else frames_of(U[0] + 1j * U[1]))
+            self._after_short = short
             Ub, Db, reached = self.run(U, w, C, D, cancel, enough, ready, deep)
             if cancel is not None and cancel.is_set():
                 break
@@ -301,6 +315,9 @@ class BoundSearch(SearchLift):
                 step = min(MAX_STEP, 1.5 * step)
                 small, short = 0, False
                 continue
+            if (SHORT_CHECKED and Ub is not None and self.check is not None
+                    and self.check(U[0] + 1j * U[1])):
+                break
             # within an effort budget a fruitless target counts as a small one (ZERO_SMALL),
             # and in a search the budget was spared from its start once its map is within
             # EFFORT_START (LATE_BUDGETED)
