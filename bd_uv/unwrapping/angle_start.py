@@ -119,10 +119,17 @@ def linear_abf(disk, caps):
     dinv = 1.0 / w3.sum(axis=1)
     Rw = Rl @ w3[:, :, None]                    # (m, 6, 1): R W^-1 T^T per triangle
     RB = Rl * w3[:, None, :] - (Rw * dinv[:, None, None]) * w3[:, None, :]
-    Ml = RB @ Rl.transpose(0, 2, 1)             # (m, 6, 6)
-    ri = np.broadcast_to(rid[:, :, None], Ml.shape)
-    ci = np.broadcast_to(rid[:, None, :], Ml.shape)
-    keep = (ri >= 0) & (ri <= ci)
+    Ml = (RB @ Rl.transpose(0, 2, 1)).reshape(m, 36)       # (m, 6, 6), row by row
+    # each pair of a triangle's rows once (its six rows are distinct), the entry of the upper
+    # triangle of R B R^T: the pairs kept where both rows are (21 entries a triangle selected
+    # instead of 36 tested: ~0.1 of linear_abf's ~3 ms on 1.1-1.3k faces; the same triplets,
+    # those of one place in the same order: the same sums)
+    ri, ci = rid.take(_PAIR_I, axis=1), rid.take(_PAIR_J, axis=1)
+    low = ri > ci
+    vals = np.where(low, Ml.take(_PAIR_J * 6 + _PAIR_I, axis=1), Ml.take(_PAIR_I * 6 + _PAIR_J,
+                                                                         axis=1))
+    ri, ci = np.where(low, ci, ri), np.where(low, ri, ci)
+    keep = ri >= 0
     n = 2 * ni + nh
     bsum = np.bincount(flat, beta.ravel(), nv)
     r_t = np.pi - beta.sum(axis=1)
@@ -130,7 +137,7 @@ def linear_abf(disk, caps):
     shift = np.bincount(rid.ravel()[at], (Rw[:, :, 0] * (dinv * r_t)[:, None]).ravel()[at], n)
     rhs = (np.concatenate([2.0 * np.pi - bsum.take(iv), -wheel.take(iv),
                            caps.take(held) - bsum.take(held)]) - shift)
-    lam_r = _solved(disk.ranks, ri[keep], ci[keep], Ml[keep], n,
+    lam_r = _solved(disk.ranks, ri[keep], ci[keep], vals[keep], n,
                     np.concatenate([iv, iv, held]), ni, rhs)
     if lam_r is None:
         return None
@@ -143,6 +150,9 @@ def linear_abf(disk, caps):
         return None
     angles = np.maximum(angles, LEAST_ANGLE)
     return angles * (np.pi / angles.sum(axis=1))[:, None]
+
+
+_PAIR_I, _PAIR_J = np.triu_indices(6)      # the pairs (i <= j) of a triangle's six rows
 
 
 def _solved(ranks, rows, cols, vals, n, vertex, ni, rhs):
