@@ -165,10 +165,9 @@ def least_one_to_one(prob, start, report, budget, flags, t0, least):
     overlap costs one test. Within a target, every ``target_watch.CHECK_EVERY``-th new best is
     tested (``lays_out``, ``check``) where OVERLAP_ENDS, and so is the first of a target after
     one that found nothing (``bound_search.CHECK_AFTER_FRUITLESS``): kept where it lays the
-    island out, and the search ended at the first that does not (its later maps
-    are lower still and lie over themselves too, as the folded ones, FOLDED_ENDS). The
-    search's own map where none passes (the overlap repair cuts it then). Returns (u, its max
-    distortion)."""
+    island out, and the search ended at the first that does not (its later maps are lower
+    still and lie over themselves too, as the folded ones, FOLDED_ENDS). The search's own map
+    where none passes (the overlap repair cuts it then). Returns (u, its max distortion)."""
     kept = [(start.u, start.D, None)]       # (map, its max distortion, lays out: None unknown)
 
     def record(v):                  # ends the search at a map whose boundary folded
