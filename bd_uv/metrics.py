@@ -62,15 +62,16 @@ def flipped_faces(V, F, corner_uv):
     return ~(A > 0)
 
 
-def conformal_distortion(V, F, corner_uv):
-    """Conformal distortion ``D = (|alpha|+|beta|) / (|alpha|-|beta|)`` of each face (eq. 4.9).
+def conformal_distortion(V, F, corner_uv, G=None):
+    """Conformal distortion ``D = (|alpha|+|beta|) / (|alpha|-|beta|)`` of each face (eq. 4.9)
+    (G: ``face_jacobians``').
 
     Returns
     -------
     D : (m,) float64
         ``inf`` for flipped, collapsed or degenerate faces.
     """
-    alpha, beta = face_jacobians(V, F, corner_uv)
+    alpha, beta = face_jacobians(V, F, corner_uv, G)
     return _distortion(np.abs(alpha), np.abs(beta), flipped_faces(V, F, corner_uv))
 
 

@@ -254,13 +254,14 @@ def _bare_solve():
 
 class Factor:
     """LDL^T of ``P A P^T`` for a symmetric A given by its upper triangle (rows, cols, vals:
-    triplets with no duplicates) and an order ``perm`` (the unknown eliminated k-th is
-    ``perm[k]``). ``lnz``: the factor's entries, known before the numeric factorisation
-    (``factor`` may then be skipped). Call ``factor()`` (False on a zero pivot), then
-    ``solve(b)``. The matrix in elimination order is written here (rows sorted in each column,
-    the diagonal last, as ``QDLDL_etree`` requires)."""
+    triplets with no duplicates, or with ``repeats`` triplets that may share a place, summed
+    here) and an order ``perm`` (the unknown eliminated k-th is ``perm[k]``). ``lnz``: the
+    factor's entries, known before the numeric factorisation (``factor`` may then be skipped).
+    Call ``factor()`` (False on a zero pivot), then ``solve(b)``. The matrix in elimination
+    order is written here (rows sorted in each column, the diagonal last, as ``QDLDL_etree``
+    requires)."""
 
-    def __init__(self, rows, cols, vals, n, perm):
+    def __init__(self, rows, cols, vals, n, perm, repeats=False):
         self.n, self.perm = n, perm
         pinv = np.empty(n, np.int64)
         pinv[perm] = np.arange(n)
@@ -278,6 +279,9 @@ class Factor:
                                                     ints[2 * n + 1:3 * n + 1], ints[3 * n + 1:])
         self.Ai, self.Ax = np.empty(nnz, np.int64), np.empty(nnz)
         _st.csr_tocsc(n, n, Rp, Rj, Rx, self.Ap, self.Ai, self.Ax)
+        if repeats:     # each column's rows sorted: a place's triplets side by side, summed
+            _st.csr_sum_duplicates(n, n, self.Ap, self.Ai, self.Ax)
+            self.Ai, self.Ax = self.Ai[:self.Ap[n]], self.Ax[:self.Ap[n]]
         at = _p(ints)
         self._at = (at, at + 8 * (n + 1), at + 8 * (2 * n + 1), at + 8 * (3 * n + 1))
         self._ai, self._ax = _p(self.Ai), _p(self.Ax)

@@ -71,20 +71,21 @@ class Watch:
     to stop. Out of reach: no progress for STALL iterations, or FLIPPING flipping iterates in a
     row from the start (three_peaks: a target that flips stays flipped)."""
 
-    def __init__(self, best, ask=None, limit=MAX_ITER, stall=STALL, check=None):
+    def __init__(self, best, ask=None, limit=MAX_ITER, stall=STALL, check=None, first=False):
         self.best, self.since, self.mark = best, 0, best
         self.limit, self.stall = limit, stall
         self.ask, self.ended, self.refused, self.pending = ask, False, False, False
-        self.check, self.bests = check, 0
+        self.check, self.bests, self.first = check, 0, first
 
     def accepts(self, kept):
         """Is the new best iterate ``kept`` enough (the search ends there)? ``ask(kept)`` (the
         search's ``ready``, then its ``enough``): True, False (then not asked again in this
         target: the search asks the target's best at its end, ``pending``), or None (``ready``
-        refused it). Every CHECK_EVERY-th new best is first given to ``check`` (where there is
-        one, with ``ask``): True ends the search there."""
+        refused it). Every CHECK_EVERY-th new best (and the first, with ``first``) is first
+        given to ``check`` (where there is one, with ``ask``): True ends the search there."""
         self.bests += 1
-        if self.check is not None and not self.bests % CHECK_EVERY and self.check(kept):
+        if self.check is not None and (not self.bests % CHECK_EVERY or (
+                self.first and self.bests == 1)) and self.check(kept):
             self.pending, self.ended = False, True
             return True
         if self.ask is None or self.refused:

@@ -30,6 +30,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..geometry import corner_angles, gradient_operators
+from ..solvers import ordered_ldl
 from ..solvers.lscm import spd_solver
 from .capped import from_angles
 from .disk_conformal import conformal
@@ -130,22 +131,27 @@ def linear_abf(disk, caps):
     dinv = 1.0 / w3.sum(axis=1)
     Rw = Rl @ w3[:, :, None]                    # (m, 6, 1): R W^-1 T^T per triangle
     RB = Rl * w3[:, None, :] - (Rw * dinv[:, None, None]) * w3[:, None, :]
-    Ml = RB @ Rl.transpose(0, 2, 1)             # (m, 6, 6)
-    ri = np.broadcast_to(rid[:, :, None], Ml.shape)
-    ci = np.broadcast_to(rid[:, None, :], Ml.shape)
-    keep = (ri >= 0) & (ri <= ci)
+    Ml = (RB @ Rl.transpose(0, 2, 1)).reshape(m, 36)       # (m, 6, 6), row by row
+    # each pair of a triangle's rows once (its six rows are distinct), the entry of the upper
+    # triangle of R B R^T: the pairs kept where both rows are (21 entries a triangle selected
+    # instead of 36 tested: ~0.1 of linear_abf's ~3 ms on 1.1-1.3k faces; the same triplets,
+    # those of one place in the same order: the same sums)
+    ri, ci = rid.take(_PAIR_I, axis=1), rid.take(_PAIR_J, axis=1)
+    low = ri > ci
+    vals = np.where(low, Ml.take(_PAIR_J * 6 + _PAIR_I, axis=1), Ml.take(_PAIR_I * 6 + _PAIR_J,
+                                                                         axis=1))
+    ri, ci = np.where(low, ci, ri), np.where(low, ri, ci)
+    keep = ri >= 0
     n = 2 * ni + nh
-    M = sp.csc_array((Ml[keep], (ri[keep], ci[keep])), shape=(n, n))
-    M.sum_duplicates()
     bsum = np.bincount(flat, beta.ravel(), nv)
     r_t = np.pi - beta.sum(axis=1)
     at = (~none).ravel()
     shift = np.bincount(rid.ravel()[at], (Rw[:, :, 0] * (dinv * r_t)[:, None]).ravel()[at], n)
     rhs = (np.concatenate([2.0 * np.pi - bsum.take(iv), -wheel.take(iv),
                            caps.take(held) - bsum.take(held)]) - shift)
-    try:
-        lam_r = spd_solver(M, upper=True)(rhs)
-    except (ValueError, RuntimeError, np.linalg.LinAlgError):
+    lam_r = _solved(disk.ranks, ri[keep], ci[keep], vals[keep], n,
+                    np.concatenate([iv, iv, held]), ni, rhs)
+    if lam_r is None:
         return None
     # (no row at all: a strip with no interior vertex, no boundary vertex held)
     lam = np.where(none, 0.0, lam_r.take(np.maximum(rid, 0))) if n else np.zeros((m, 6))
@@ -156,6 +162,33 @@ def linear_abf(disk, caps):
         return None
     angles = np.maximum(angles, LEAST_ANGLE)
     return angles * (np.pi / angles.sum(axis=1))[:, None]
+
+
+_PAIR_I, _PAIR_J = np.triu_indices(6)      # the pairs (i <= j) of a triangle's six rows
+
+
+def _solved(ranks, rows, cols, vals, n, vertex, ni, rhs):
+    """``linear_abf``'s system (n, n), its upper triangle's triplets (rows, cols, vals; a place
+    may repeat: summed), solved for ``rhs``: each row is a vertex's (``vertex`` (n,): the
+    interior vertices' angle sums, their wheels from row ``ni``, then the held boundary
+    vertices'), eliminated in the vertices' order ``ranks`` (a vertex's sum, then its wheel) where
+    the disk has one (``Disk.ranks``: the graph of these rows is its vertices' with two rows a
+    vertex, as the conformal map's system, whose order serves here too; no AMD of the rows, no
+    scipy matrix: camel's 1,324-face patch 3.3 -> 1.3 ms of CPU, the answer to 4e-15), else in
+    qdldl's AMD order. None where the solve fails."""
+    if n and ranks is not None and ordered_ldl.available():
+        second = np.zeros(n, dtype=np.int64)
+        second[ni:2 * ni] = 1
+        f = ordered_ldl.Factor(rows, cols, vals, n, np.argsort(2 * ranks.take(vertex) + second,
+                                                               kind="stable"), repeats=True)
+        if f.lnz >= 0 and f.factor():
+            return f.solve(rhs)
+    M = sp.csc_array((vals, (rows, cols)), shape=(n, n))
+    M.sum_duplicates()
+    try:
+        return spd_solver(M, upper=True)(rhs)
+    except (ValueError, RuntimeError, np.linalg.LinAlgError):
+        return None
 
 
 def angle_start(V, disk):
@@ -275,20 +308,28 @@ def bent_first(disk, u, C):
 
 def _near_crossings(z):
     """(b,) bool, the vertices of the closed polygon z (b,) complex that lie between two of its
-    sides at most NEAR sides apart that cross (a tooth of a UV boundary folded over)."""
+    sides at most NEAR sides apart that cross (a tooth of a UV boundary folded over). Every
+    pair of sides k = 2..NEAR apart is tested at once (a (NEAR - 1, b) array: 0.32 -> 0.09 ms
+    on a 400-side loop against a roll a pair and a roll a marked vertex); the few that cross
+    mark their vertices one by one."""
     b = len(z)
-    p, q = z, np.roll(z, -1)
     marked = np.zeros(b, dtype=bool)
+    ks = np.arange(2, min(NEAR, b - 2) + 1)
+    if not len(ks):
+        return marked
+    i = np.arange(b)
+    j = i + ks[:, None]                     # side i runs from vertex i to i + 1
+    j %= b
+    p, q = z, z.take((i + 1) % b)
+    p2, q2 = z.take(j), z.take((j + 1) % b)
 
     def side(a, c, d):
         w = (c - a).conj() * (d - a)
         return w.imag
-    for k in range(2, min(NEAR, b - 2) + 1):
-        p2, q2 = np.roll(p, -k), np.roll(q, -k)
-        cross = ((side(p, q, p2) * side(p, q, q2) < 0.0)
-                 & (side(p2, q2, p) * side(p2, q2, q) < 0.0))
-        for j in range(1, k + 1):           # side i runs from vertex i to i + 1
-            marked |= np.roll(cross, j)
+    cross = ((side(p, q, p2) * side(p, q, q2) < 0.0)
+             & (side(p2, q2, p) * side(p2, q2, q) < 0.0))
+    for row, s in zip(*cross.nonzero()):    # the vertices i + 1 .. i + k
+        marked[(s + 1 + np.arange(ks[row])) % b] = True
     return marked
 
 

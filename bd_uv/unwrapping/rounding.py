@@ -6,8 +6,8 @@ itself can ask (``unwrap.unwrap``'s angle start) and ``storage`` re-solves what 
 """
 import numpy as np
 
-from ..geometry import face_areas
-from ..metrics import conformal_distortion, signed_uv_areas, singular_values
+from ..geometry import face_areas, gradient_operators, local_coordinates
+from ..metrics import conformal_distortion, face_jacobians, signed_uv_areas, singular_values
 
 
 def float_step(dtype, magnitude=1.0):
@@ -16,7 +16,7 @@ def float_step(dtype, magnitude=1.0):
     return float(np.spacing(np.asarray(magnitude, dtype=dtype))) / 2.0
 
 
-def rounding_distortion(V, F, corner_uv, h):
+def rounding_distortion(V, F, corner_uv, h, G=None):
     """Per-face upper bound on the conformal distortion after each UV coordinate moves by <= h.
 
     The Jacobian is J = U X^-1 (U: the UV edge vectors, X: the face's own 2D edge vectors). Each
@@ -26,6 +26,8 @@ def rounding_distortion(V, F, corner_uv, h):
     Parameters
     ----------
     V : (n,3) float, F : (m,3) int, corner_uv : (m,3,2) float, h : float
+    G : (m,2,3) float64, optional, the faces' ``gradient_operators(local_coordinates(V, F))``
+        when known (the same bits)
 
     Returns
     -------
@@ -33,7 +35,12 @@ def rounding_distortion(V, F, corner_uv, h):
     """
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
-    smax, smin = singular_values(V, F, corner_uv, normalize=False)
+    if G is None:
+        smax, smin = singular_values(V, F, corner_uv, normalize=False)
+    else:       # ``singular_values``' unnormalised answer, the same arithmetic
+        alpha, beta = face_jacobians(V, F, corner_uv, G)
+        a, b = np.abs(alpha), np.abs(beta)
+        smax, smin = a + b, a - b
     P = V[F]
     e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
     # s_min of the 2x2 edge matrix X from its Gram matrix (no face loop)
@@ -69,22 +76,26 @@ def predicted_to_fail(V, F, res, dtype=np.float32, coverage=0.25):
     uv = np.asarray(res.corner_uv, dtype=np.float64)
     ok = [i for i, r in enumerate(res.islands) if r.status == "certified"]
     faces = np.concatenate([res.islands[i].faces for i in ok]) if ok else np.zeros(0, np.int64)
-    total = float(face_areas(V, F[faces]).sum()) if len(faces) else 0.0
+    # each face's area once (face by face: the same bits as the islands' own calls made)
+    A = face_areas(V, F[faces]) if len(faces) else np.zeros(0)
+    total = float(A.sum()) if len(faces) else 0.0
     if total <= 0:
         return []
     h = float_step(dtype, 1.0)
-    out = []
+    out, at = [], 0
     for i in ok:   # per island (its own UV scale), vectorised over its faces
         r = res.islands[i]
         f, u = F[r.faces], uv[r.faces]
+        Af, at = A[at:at + len(f)], at + len(f)
         uv_area = float(np.abs(signed_uv_areas(u)).sum())
         if not uv_area > 0:
             continue
-        u = u * (np.sqrt(face_areas(V, f).sum() / uv_area) * np.sqrt(coverage / total))
+        u = u * (np.sqrt(Af.sum() / uv_area) * np.sqrt(coverage / total))
         lo, hi = u.min(axis=(0, 1)), u.max(axis=(0, 1))
         u = u - lo + np.maximum(0.5 * (1.0 - (hi - lo)), 0.0)
         stored = u.astype(dtype).astype(np.float64)
-        if (conformal_distortion(V, f, stored).max() > r.bound_certified
-                or not np.isfinite(rounding_distortion(V, f, u, h)).all()):
+        G = gradient_operators(local_coordinates(V, f))     # the faces' frames, once for both
+        if (conformal_distortion(V, f, stored, G).max() > r.bound_certified
+                or not np.isfinite(rounding_distortion(V, f, u, h, G)).all()):
             out.append(i)
     return out

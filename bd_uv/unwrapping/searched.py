@@ -21,6 +21,12 @@ from .margins import certified_bound, solve_bound
 # optimum's 1.993, lion-head 1.59 against 1.5703), so FAR leaves room for a C it did not reach.
 FAR = 1.25
 MEAN_SEARCH = 12   # distortion evaluations between the start and the searched map (``along``)
+# ``bound="auto"``'s least-C search (``least``) on an island of up to this many faces iterates on
+# the free unknowns (``BoundSearch(free=True)``), as ``disk_auto`` does up to its AUTO_FACES (the
+# angle starts' disks of 1,000-2,000 faces: the same iterations and C, the maps to rounding, the
+# search 3-17 % less CPU on 9 of 9 disks, issue21-auto25-2026-11-28.md); the whole map's
+# products above (``bound_search.ONE_PRODUCT_FACES``)
+FREE_FACES = 2000
 # A search already run on an island by ``disk_auto`` whose map its certificate did not clear
 # (the map lies over itself): handed to the general path's search of the same island from the
 # same start, which would run the same iterations again (``hand_over``)
@@ -71,7 +77,8 @@ def search(prob, u, report, budget, flags, t0, enough=None, least=False, ready=N
     # one elimination order of the island's vertices (the conformal map's, where the one-disk
     # path solved it: no second AMD)
     ranks = prob.ranks if prob.ranks is not None else vertex_ranks(prob.island.tris, prob.nv)
-    bs = BoundSearch(prob.ops, prob.nv, prob.island.tris, fixed, connected=True, ranks=ranks)
+    bs = BoundSearch(prob.ops, prob.nv, prob.island.tris, fixed, connected=True, ranks=ranks,
+                     free=True if least and len(prob.island.tris) <= FREE_FACES else None)
     if least:
         bs.limit_effort()
     bs.check = check

@@ -163,14 +163,16 @@ def least_one_to_one(prob, start, report, budget, flags, t0, least):
     accepting); after the search they are asked from the least up (a map whose boundary does
     not turn once refused at once, ``may_be_one_to_one``), so a search whose own map does not
     overlap costs one test. Within a target, every ``target_watch.CHECK_EVERY``-th new best is
-    tested (``lays_out``, ``check``) where OVERLAP_ENDS: kept where it lays the island out, and
-    the search ended at the first that does not (its later maps are lower still and lie over
-    themselves too, as the folded ones, FOLDED_ENDS). The search's own map where none passes
-    (the overlap repair cuts it then). Returns (u, its max distortion)."""
+    tested (``lays_out``, ``check``) where OVERLAP_ENDS, and so is the first of a target after
+    one that found nothing (``bound_search.CHECK_AFTER_FRUITLESS``): kept where it lays the
+    island out, and the search ended at the first that does not (its later maps are lower
+    still and lie over themselves too, as the folded ones, FOLDED_ENDS). The search's own map
+    where none passes (the overlap repair cuts it then). Returns (u, its max distortion)."""
     kept = [(start.u, start.D, None)]       # (map, its max distortion, lays out: None unknown)
 
     def record(v):                  # ends the search at a map whose boundary folded
-        kept.append((v, prob.distortion(v), None))
+        if not np.array_equal(kept[-1][0], v):      # (``check`` kept it just before)
+            kept.append((v, prob.distortion(v), None))
         return FOLDED_ENDS and not prob.may_be_one_to_one(v)
 
     def check(v):                   # ends the search at a map that lies over itself

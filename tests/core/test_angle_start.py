@@ -109,6 +109,36 @@ def test_linear_abf_angles_close_the_triangles_and_the_interior_vertices():
     assert np.allclose(sums[loop[:3]], 0.9 * np.pi, atol=1e-9)
 
 
+def test_linear_abf_in_the_disks_vertex_order_solves_the_same_angles(monkeypatch):
+    """The angle system factorised in the disk's vertex order (``Disk.ranks``: a vertex's angle
+    sum, then its wheel; ``ordered_ldl.Factor`` from its triplets, the repeated places summed)
+    and in qdldl's AMD order of a scipy matrix (the disk without an order) solve the same
+    angles, to rounding; both close the constraints."""
+    V, F = rings(*load_off("cow.off"), *COW[1])
+    disk = one_disk.find(V, F)
+    isl = disk.island
+    nv = len(isl.vertices)
+    loop = isl.loops[0]
+    caps = np.full(nv, np.nan)
+    caps[loop[:3]] = 0.9 * np.pi
+    assert disk.ranks is not None
+    made = []
+    real_factor = angle_start.ordered_ldl.Factor
+    monkeypatch.setattr(angle_start.ordered_ldl, "Factor",
+                        lambda *a, **k: made.append(1) or real_factor(*a, **k))
+    ordered = angle_start.linear_abf(disk, caps)
+    assert made == [1]
+    disk.__dict__["ranks"] = None               # (``Disk.ranks`` is kept in its __dict__)
+    amd = angle_start.linear_abf(disk, caps)
+    assert made == [1]
+    assert np.abs(ordered - amd).max() < 1e-12
+    inner = np.ones(nv, dtype=bool)
+    inner[loop] = False
+    for A in (ordered, amd):
+        sums = np.bincount(isl.tris.ravel(), A.ravel(), nv)
+        assert np.allclose(sums[inner], 2 * np.pi, atol=1e-9)
+
+
 
 # (seed, faces) of cow.off: the conformal start lies over itself and the angle start's max is
 # over ``bound_limit`` (1,000; about 3,700 here): gated by that limit, auto cut this disk into 24

@@ -287,3 +287,43 @@ def test_two_fruitless_targets_end_the_search(monkeypatch):
         assert D.max() <= isl.bound_certified
     assert res[True].iterations < res[False].iterations
     assert res[True].bound_certified <= 1.005 * res[False].bound_certified
+
+
+def test_the_first_best_after_a_fruitless_target_is_checked(monkeypatch):
+    """``bound_search.CHECK_AFTER_FRUITLESS``: a search given a ``check`` asks it of the first new
+    best of a target after one that found nothing (on this grid targets 2 and 3 find nothing,
+    target 4 a lower map); True ends the search there, with that map. Every other best is left
+    unasked here (``target_watch.CHECK_EVERY`` out of reach)."""
+    from bd_uv.solvers import bound_search, target_watch
+    monkeypatch.setattr(target_watch, "CHECK_EVERY", 10 ** 9)
+    V, F = grid(25, 25, z=lambda x, y: 0.3 * np.sin(4 * x) * np.cos(3 * y))
+    isl = islands(V, F)[0]
+    prob = IslandProblem(isl, V, NO_PINS, "lscm", "soc", None)
+    u0 = prob.fallback_map()
+
+    def searched(answer, on=True):
+        monkeypatch.setattr(bound_search, "CHECK_AFTER_FRUITLESS", on)
+        bs = BoundSearch(prob.ops, prob.nv, isl.tris, isl.loops[0][:1])
+        runs, asked = [], []
+        run = bs.run
+
+        def counted(*a, **k):
+            out = run(*a, **k)
+            runs.append((out[0] is not None, out[1]))
+            return out
+        bs.run = counted
+        bs.check = lambda v: asked.append((v, bs.iterations, len(runs))) or answer
+        u, D, _ = bs.search(u0, lambda v: frames_from_map(prob.alpha(v)))
+        return u, D, bs.iterations, runs, asked
+
+    u, D, its, runs, asked = searched(False)
+    assert [found for found, _ in runs[:4]] == [True, False, False, True]
+    assert len(asked) == 1 and asked[0][2] == 3      # asked within the 4th target
+    Da, flipped = _map_distortion(V, isl, asked[0][0])
+    assert not flipped.any() and runs[3][1] <= Da.max() < runs[0][1]     # a new best
+    uc, Dc, itc, _, askedc = searched(True)          # ... which ends the search
+    assert len(askedc) == 1 and np.array_equal(uc, askedc[0][0]) and itc == askedc[0][1] < its
+    Dr, flipped = _map_distortion(V, isl, uc)
+    assert not flipped.any() and Dr.max() == pytest.approx(Dc, rel=1e-9) and D < Dc
+    off = searched(True, on=False)
+    assert off[4] == [] and off[2] == its and np.array_equal(off[0], u)

@@ -412,11 +412,12 @@ def test_the_free_unknowns_iterations_reach_the_whole_maps_bound(monkeypatch):
     the iterations on the whole map (the path of islands over ONE_PRODUCT_FACES faces) reach the
     same bound, to rounding."""
     import bd_uv.solvers.bound_search as bs
-    from bd_uv.unwrapping import disk_auto
+    from bd_uv.unwrapping import disk_auto, searched
     V, F = load_off("nefertiti.off")
     small = bd_uv.unwrap(V, F, bound="auto")
     monkeypatch.setattr(bs, "ONE_PRODUCT_FACES", 0)
     monkeypatch.setattr(disk_auto, "AUTO_FACES", 0)     # the general path: the whole map
+    monkeypatch.setattr(searched, "FREE_FACES", 0)      # (its least C's free gate too)
     whole = bd_uv.unwrap(V, F, bound="auto")
     a, b = small.islands[0], whole.islands[0]
     assert a.iterations == b.iterations

@@ -98,3 +98,35 @@ def test_the_paired_solve_on_shared_buffers_is_two_solves():
         both = np.concatenate([ref(b[0]), ref(b[1])])
         assert paired.buffer.tobytes() == both.tobytes()
         assert solve(b[0]).tobytes() == both[:nf].tobytes()
+
+
+def test_triplets_sharing_a_place_are_summed_with_repeats():
+    """``Factor(repeats=True)``: an upper triangle given with places repeated (each entry split
+    in two or three triplets, shuffled) is summed before the factorisation: the solve of the
+    summed matrix (numpy's dense solve, recomputed), and that of the same matrix given once
+    per place to rounding (its duplicates summed in another order)."""
+    rng = np.random.default_rng(7)
+    n = 40
+    M = sp.random(n, n, density=0.15, random_state=3)
+    M = (M + M.T + n * sp.eye(n)).tocoo()
+    up = M.row <= M.col
+    r, c, v = M.row[up].astype(np.int64), M.col[up].astype(np.int64), M.data[up]
+    split = rng.integers(1, 4, len(v))
+    rows, cols = r.repeat(split), c.repeat(split)
+    parts = rng.random(len(rows)) + 0.5
+    parts /= np.bincount(np.arange(len(v)).repeat(split), parts)[np.arange(len(v)).repeat(split)]
+    vals = v.repeat(split) * parts
+    order = rng.permutation(len(rows))
+    rows, cols, vals = rows[order], cols[order], vals[order]
+    perm = rng.permutation(n).astype(np.int64)
+    f = ordered_ldl.Factor(rows, cols, vals, n, perm, repeats=True)
+    assert not f.repeated() and f.lnz >= 0 and f.factor()
+    b = rng.standard_normal(n)
+    dense = M.toarray()
+    x = f.solve(b)
+    assert np.abs(x - np.linalg.solve(dense, b)).max() < 1e-10
+    summed = sp.coo_array((vals, (rows, cols)), shape=(n, n)).tocsr().tocoo()
+    g = ordered_ldl.Factor(summed.row.astype(np.int64), summed.col.astype(np.int64),
+                           summed.data, n, perm)
+    assert g.factor()
+    assert np.abs(g.solve(b) - x).max() < 1e-12
