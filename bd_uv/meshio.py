@@ -161,8 +161,12 @@ def _read_trimesh(path, ext):
             if len(keep) != len(lines):
                 file_obj = io.BytesIO(head + sep + body[:eol + 1] + b"\n".join(keep) + b"\n")
                 file_type = "ply"
+    # skip_materials: a PLY's texture image (``comment TextureFile``) is not read: an unwrap
+    # has no use for it, and one missing (a PLY copied alone: trimesh's fuze.ply) had trimesh
+    # log a whole traceback to stderr on a run that succeeds. The file's UVs are read all the same.
     try:
-        m = trimesh.load(file_obj, file_type=file_type, process=False, force="mesh")
+        m = trimesh.load(file_obj, file_type=file_type, process=False, force="mesh",
+                         skip_materials=True)
     except Exception as exc:
         if ext != ".ply" or b"format binary" not in head:
             raise

@@ -4,12 +4,16 @@ PLY's body, a comment after an OBJ record, and glTF triangle strips and fans. Ea
 clean file it stands for; a file no reader can parse is an ``InvalidMeshError`` naming the file,
 never a traceback."""
 import json
+import os
 import re
 import struct
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 
+import bd_uv
 import bd_uv.meshio
 from bd_uv.cli import main
 from bd_uv.errors import InvalidMeshError
@@ -377,3 +381,27 @@ def test_binary_ply_of_triangle_strips(tmp_path, capsys):
     assert main(["unwrap", str(p), "-o", str(out), "--report", str(rep), "-q"]) == 0
     report = json.loads(rep.read_text())
     assert [e["status"] for e in report["islands"]] == ["certified"]
+
+
+def test_ply_naming_a_texture_it_lacks_reads_its_uvs_without_a_traceback(tmp_path):
+    """trimesh's fuze.ply names ``comment TextureFile fuze uv.jpg``; without that image beside
+    it (a PLY copied alone), trimesh's reader logged "unable to load image!" and a whole
+    traceback to stderr on a run that exits 0. The texture plays no part in an unwrap: the
+    file's own s t are read as before, and nothing is said."""
+    head = ("ply\nformat ascii 1.0\ncomment TextureFile no such image.jpg\nelement vertex 4\n"
+            "property float x\nproperty float y\nproperty float z\nproperty float s\n"
+            "property float t\nelement face 2\nproperty list uchar int vertex_index\n"
+            "end_header\n")
+    body = ["0 0 0 0 0", "1 0 0 0.5 0", "1 1 0 0.5 0.5", "0 1 0 0 0.5", "3 0 1 2", "3 0 2 3"]
+    p = tmp_path / "m.ply"
+    p.write_text(head + "\n".join(body) + "\n")
+    m = load_mesh(str(p))
+    st = np.array([[float(x) for x in v.split()[3:]] for v in body[:4]])
+    assert np.array_equal(m.corner_uv, st[m.F])
+    out = tmp_path / "m.obj"      # a process of its own: pytest's logging would take the log
+    run = subprocess.run([sys.executable, "-m", "bd_uv", "unwrap", str(p), "-o", str(out),
+                          "--quiet"], capture_output=True, text=True,
+                         cwd=os.path.dirname(os.path.dirname(bd_uv.__file__)))
+    assert run.returncode == 0, run.stderr
+    assert "Traceback" not in run.stderr and "unable to load image" not in run.stderr
+    assert out.exists()
