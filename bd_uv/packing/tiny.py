@@ -40,14 +40,25 @@ TINY_SHARE = 1e-3       # a chart under this share of the charts' area is tiny
 # shorter time losing more than it saved (issue18-tinypack12-2026-11-28.md)
 TINY_COUNT_SHARE = 0.6
 TINY_AREA_SHARE = 0.05  # ... holding less than this share of the area together
+# ... and each shorter than this over the square root of all the charts' area: a long thin strip
+# of little area (assimp's regr01.obj: 157 of its 246 charts under TINY_SHARE, 97 of them
+# reaching 0.05, up to a sixth of the square across) finds no free box to drop into, and the
+# failed drop, repeated by every re-pack, took 21.7 s of CPU where nesting all took 5.0 s
+# (unseen25). Compact tiny charts are within it: all of Wuson.off's 50, wuson.stl's 54 and
+# the shader ball's 108.
+TINY_EXTENT = 0.05
 CELLS = 512             # raster cells along the square's side (2 texels at 1024 px)
 
 
-def tiny_charts(area):
+def tiny_charts(area, extent=None):
     """Indices of the tiny charts to drop (int64), or None when the charts are not mostly
-    tiny ones (or fewer than two would be left to pack)."""
+    tiny ones (or fewer than two would be left to pack). ``extent`` (k,), optional: each
+    chart's longest side over the square root of all the charts' area; a chart reaching
+    ``TINY_EXTENT`` is not tiny, whatever its area."""
     area = np.asarray(area, dtype=np.float64)
     tiny = area < TINY_SHARE * area.sum()
+    if extent is not None:
+        tiny &= np.asarray(extent, dtype=np.float64) < TINY_EXTENT
     if (tiny.sum() < TINY_COUNT_SHARE * len(area) or (~tiny).sum() < 2
             or area[tiny].sum() >= TINY_AREA_SHARE * area.sum()):
         return None
@@ -65,7 +76,8 @@ def tiny_square(charts, options, tol, faces):
     tol : float, outline simplification tolerance
     faces : (k,) int, faces of each chart (the time follows the charts packed)
     """
-    tiny = tiny_charts(charts.area)
+    extent = np.array([np.ptp(o, axis=0).max() if len(o) else 0.0 for o in charts.outlines])
+    tiny = tiny_charts(charts.area, extent / np.sqrt(max(float(np.sum(charts.area)), 1e-300)))
     if tiny is None:
         return None
     k = len(charts.outlines)
