@@ -2,7 +2,8 @@
 
 A stable contract for scripts: exit 0 only if every island was certified (or every face with an
 area: zero-area faces, which have no shape to map, take their neighbours' UVs and are counted),
-otherwise non-zero with one line per problem on stderr. The JSON report has the shape documented in README.md.
+otherwise non-zero with one line per problem on stderr. The JSON report has the shape documented
+in README.md.
 """
 import argparse
 import contextlib

@@ -93,10 +93,10 @@ def group_pairs_touching(p, q, group, chunk=CANDIDATES):
     """Pairs of groups (islands) with a segment of one meeting a segment of the other, each pair
     once (a < b), sorted: ``touching_pairs`` read off as groups, in bounded memory.
 
-    The tree is asked for a few segments at a time (about ``chunk`` candidates), and a candidate of a pair of groups already
-    found to meet is not decided again: islands left stacked where their unwraps put them
-    (``--no-pack``) make nearly every pair of segments a candidate (trimesh's quadknot.obj, 1,438
-    islands: 1.6 GB for the segment pairs at once).
+    The tree is asked for a few segments at a time (about ``chunk`` candidates), and a candidate
+    of a pair of groups already found to meet is not decided again: islands left stacked where
+    their unwraps put them (``--no-pack``) make nearly every pair of segments a candidate
+    (trimesh's quadknot.obj, 1,438 islands: 1.6 GB for the segment pairs at once).
 
     Returns
     -------

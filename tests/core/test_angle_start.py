@@ -89,10 +89,9 @@ def test_the_angle_start_is_flip_free_turns_once_and_nearer_conformal_than_lscm(
     assert D.max() < D0.max()
 
 
-def test_linear_abf_angles_close_the_triangles_and_the_interior_vertices():
-    """Linear ABF's angles: each triangle's add up to pi, each interior vertex's to 2 pi (the
-    constraints are linear in the angles: met to rounding), every held boundary vertex's to
-    its cap."""
+def _cow_disk_capped():
+    """cow's rings as a disk, its island, vertex count, boundary loop and the caps holding the
+    loop's first three vertices at 0.9 pi (the rest free)."""
     V, F = rings(*load_off("cow.off"), *COW[1])
     disk = one_disk.find(V, F)
     isl = disk.island
@@ -100,6 +99,14 @@ def test_linear_abf_angles_close_the_triangles_and_the_interior_vertices():
     loop = isl.loops[0]
     caps = np.full(nv, np.nan)
     caps[loop[:3]] = 0.9 * np.pi
+    return disk, isl, nv, loop, caps
+
+
+def test_linear_abf_angles_close_the_triangles_and_the_interior_vertices():
+    """Linear ABF's angles: each triangle's add up to pi, each interior vertex's to 2 pi (the
+    constraints are linear in the angles: met to rounding), every held boundary vertex's to
+    its cap."""
+    disk, isl, nv, loop, caps = _cow_disk_capped()
     A = angle_start.linear_abf(disk, caps)
     assert (A > 0).all() and np.allclose(A.sum(axis=1), np.pi, atol=1e-12)
     sums = np.bincount(isl.tris.ravel(), A.ravel(), nv)
@@ -114,13 +121,7 @@ def test_linear_abf_in_the_disks_vertex_order_solves_the_same_angles(monkeypatch
     sum, then its wheel; ``ordered_ldl.Factor`` from its triplets, the repeated places summed)
     and in qdldl's AMD order of a scipy matrix (the disk without an order) solve the same
     angles, to rounding; both close the constraints."""
-    V, F = rings(*load_off("cow.off"), *COW[1])
-    disk = one_disk.find(V, F)
-    isl = disk.island
-    nv = len(isl.vertices)
-    loop = isl.loops[0]
-    caps = np.full(nv, np.nan)
-    caps[loop[:3]] = 0.9 * np.pi
+    disk, isl, nv, loop, caps = _cow_disk_capped()
     assert disk.ranks is not None
     made = []
     real_factor = angle_start.ordered_ldl.Factor
