@@ -27,7 +27,7 @@ from .initial import start_map
 from .margins import solve_bound
 from .searched import FAR, MEAN_SEARCH, search
 
-__all__ = ["from_harmonic", "lowest_energy"]
+__all__ = ["from_harmonic", "lowered", "lowest_energy"]
 
 # ADMM iterations of ``lowest_energy`` and the energy's weight next to the splitting's penalty
 # (the optimum does not depend on it, the iterations' path does). decimated-knight's strip at
@@ -41,7 +41,7 @@ TAU = 0.3
 RAISE_STEP = 1.5
 
 
-def _lowered(prob, us, target):
+def lowered(prob, us, target):
     """The map of least mean distortion within ``target`` between the searched map us (within
     it) and ``lowest_energy``'s iterate from it."""
     t = time.perf_counter()
@@ -139,12 +139,12 @@ def from_harmonic(prob, C, report):
             raised *= RAISE_STEP
         u = us
         for bound in (solve_bound(raised), D):
-            um = _lowered(prob, us, bound)
+            um = lowered(prob, us, bound)
             if prob.lays_out(um):
                 u = um
                 break
         return None, ((u, prob.distortion(u)), harmonic)
-    um = _lowered(prob, us, target)
+    um = lowered(prob, us, target)
     for u in (um, us):
         if prob.check(u, C)[0] and prob.lays_out(u):
             return (u, harmonic), False

@@ -14,6 +14,7 @@ from ..frames import frames_from_map
 from . import mean_relax
 from .along import golden
 from .bounded import bend, formulate, guaranteed_bound, start_for_solve
+from .energy_within import lowered
 from .searched import search
 from .initial import Start
 from .margins import solve_bound
@@ -71,7 +72,8 @@ def minimise(prob, start, limit, budget, flags, report, t0, one_to_one=False):
     from even where the start is over ``limit``.
     Returns (u, smallest certified C, name of the start).
     """
-    if not np.isfinite(start.D):  # a flip-free start bounds C* from above
+    flipped = not np.isfinite(start.D)
+    if flipped:  # a flip-free start bounds C* from above
         # (a limit at 1 leaves no room to bend into: the projection needs C > 1, as ``bounded``)
         bent = (bend(prob, start, min(5.0, limit), report, polish=False)
                 if start.u is not None and solve_bound(min(5.0, limit)) > 1.0 else None)
@@ -98,6 +100,15 @@ def minimise(prob, start, limit, budget, flags, report, t0, one_to_one=False):
                 if relaxed is not None:
                     best = projected = relaxed
                     flags.append("mean_relaxed")
+                elif flipped and not steps and prob.enough is None:
+                    # a start that flipped, bent and searched to its least max: the search
+                    # left the mean where the bend put it (data25's cow strip: C 9.187, mean
+                    # 3.17, where a solve at 9.187 gives 1.49): the energy lowered within its
+                    # max by ADMM (``energy_within``, as the C = 5 path's raised bound)
+                    low = _mean_lowered(prob, best)
+                    if low is not None:
+                        best = projected = low
+                        flags.append("mean_lowered")
                 # a mean still far over the conformal start's: C given back for it
                 capped = (mean_relax.capped_island(prob, start.u, best[0], start.D)
                           if not steps and prob.enough is None and not one_to_one
@@ -154,6 +165,22 @@ def minimise(prob, start, limit, budget, flags, report, t0, one_to_one=False):
     elif projected is not None and best[0] is projected[0]:
         flags.append("projected")    # no conic solve bettered the search
     return best + (start.name,)
+
+
+def _mean_lowered(prob, best):
+    """``energy_within.lowered``'s map from the searched map ``best`` = (u, D), within D: (map,
+    its max measured anew) where it certifies at D or lower with a lower mean and lays the
+    island out where u does, else None."""
+    u, D = best
+    y = lowered(prob, u, D)
+    if y is None or not np.all(np.isfinite(y)):
+        return None
+    ok, Dy = prob.check(y, D)
+    if not (ok and Dy <= D) or prob.mean_distortion(y) >= prob.mean_distortion(u):
+        return None
+    if not lays_out(prob, y) and lays_out(prob, u):
+        return None           # it would be cut where the searched map was one piece
+    return y, Dy
 
 
 def least_one_to_one(prob, start, report, budget, flags, t0, least):
