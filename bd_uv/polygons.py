@@ -82,7 +82,9 @@ def triangulate(V, counts, corners):
     normal = np.zeros((len(counts), 3))
     np.add.at(normal, owner, np.cross(P, P[nxt]))      # Newell: twice the area, along the normal
     a = P[T[:, 0]]
-    turn = np.einsum("ij,ij->i", np.cross(P[T[:, 1]] - a, P[T[:, 2]] - a), normal[poly])
+    u, w = P[T[:, 1]] - a, P[T[:, 2]] - a
+    cr = np.cross(u, w)                                 # each fan triangle's, once
+    turn = np.einsum("ij,ij->i", cr, normal[poly])
     size = np.einsum("ij,ij->i", normal, normal)
     # concave, and flat enough that this is a corner inside-out, not a polygon bent in space
     # (a quad of a curved grid: its fan is what other readers take, and as sound a surface)
@@ -93,8 +95,7 @@ def triangulate(V, counts, corners):
     unsound = (turn < -FLAT * size[poly]) & (counts[poly] >= 4) & ~bent[poly]
     # every triangle turning the right way, but the fan going round its first corner more than
     # once (a spiral about it): the fan's angles at that corner add up to over a full turn
-    u, w = P[T[:, 1]] - a, P[T[:, 2]] - a
-    angle = np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w))
+    angle = np.arctan2(np.linalg.norm(cr, axis=1), np.einsum("ij,ij->i", u, w))
     sweep = np.bincount(poly, angle, len(counts))
     unsound |= (sweep[poly] >= 2 * np.pi - 1e-9) & (counts[poly] >= 4) & ~bent[poly]
     unsound |= _no_area(P[T]) & (counts[poly] >= 4)
