@@ -134,8 +134,8 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
                 # would run all of it, so there the time is as it was
                 nested = square_layout(charts.outlines, options, tol, seconds, charts.exact,
                                        coarse=True,
-                                       reach=options.reach(k, int((lab >= 0).sum()), largest)
-                                       if can_stop() else 1.0)
+                                       reach=_reach(options, k, int((lab >= 0).sum()),
+                                                    largest) if can_stop() else 1.0)
                 if found is None or nested[1] < found[1]:
                     found = nested
                 else:
@@ -152,6 +152,13 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
     density = options.resolution * f / side
     return Packed(out, lab.copy(), 1001 + tile, pl.angle, float(density),
                   time.perf_counter() - t0, solves, options)
+
+
+def _reach(options, charts, faces, largest):
+    """How much longer the nesting may search, each search ended at its square: the options'
+    reach where no chart dominates, else their dominant reach (one of the two is 1)."""
+    return max(options.reach(charts, faces, largest),
+               options.dominant_reach(charts, faces, largest))
 
 
 def _around_pinned(V, F, uv, lab, options, pinned, t0):

@@ -58,6 +58,15 @@ DOMINANT_MAX_CHARTS = 30
 # cheburashka 0.701-0.723 in 0.73-0.86 s (main 0.690-0.700, 0.78-1.26 s), fancyteapot 0.706-0.717
 # in 1.35-1.47 s (main 0.653-0.700, 0.65-0.99 s), homer as main
 REACH = 3.0
+# ... and DOMINANT_REACH times it where one chart holds more than DOMINANT_SHARE (its time cut by
+# that share too; the density guessed for the longer search, each search ended at its square).
+# Measured (issue18-pack26-2026-11-28.md, interleaved per seed): rocker-arm's 10 charts (0.43),
+# seeds 0-5 at load 1.5-1.9, 0.626 -> 0.673 (6/6, min 0.595 -> 0.657; pack.seconds 0.66 -> 0.86
+# s against Blender's 5.5 s idle); seeds 6-9 at load 3.5-3.7, where the clock-bounded search
+# is starved, 2 wins, 2 losses; spot's 12 charts (0.32) 0.713 -> 0.707 and igl-screwdriver's
+# 10 (0.34) 0.699 -> 0.702 (seeds 0-3, load 3.4: 2 and 1 losses, the rest wins or ties);
+# 2 instead of 3: rocker-arm 0.633 (the guess barely moves)
+DOMINANT_REACH = 3.0
 # From MANY_CHARTS charts that are not tiny (``tiny``: under packing.tiny's TINY_SHARE of the
 # area each), the time is at least MANY_SECONDS_PER_CHART a chart that is not tiny. Blender's
 # exact-shape time follows the count of charts it must trace and scan for (its rasters: O(n^3) by
@@ -66,9 +75,12 @@ REACH = 3.0
 # (issue18-many24-2026-11-28.md, seeds 0-3, load ~9, with large_first's second nesting): the
 # Spider (54 not tiny) at 2.2 s 0.652 -> 0.688 (4/4). Wuson's 83 charts (56 tiny: Blender 25-32 s
 # at load 5-10, 8.2-8.7 s at load 3-5) keep the root; since pack25 they go to .tiny (67 % tiny),
-# which nests the 27 others for their own count's time
+# which nests the 27 others for their own count's time. 0.04 -> 0.064 (issue18-pack26-2026-11-28.md,
+# seeds 0-3, interleaved, load 2.5-4.8): the Spider 0.674 -> 0.698 (4/4; CPU 2.36 -> 3.24 s against
+# Blender's 29 s idle), max3ds's 93 charts (68 not tiny) 0.653 -> 0.668 (3/4; 3.10 -> 4.51 s,
+# Blender 55 s); Blender's time per chart that is not tiny was 0.35-0.6 s on every such set measured
 MANY_CHARTS = 40
-MANY_SECONDS_PER_CHART = 0.04
+MANY_SECONDS_PER_CHART = 0.064
 
 
 @dataclass(frozen=True)
@@ -163,13 +175,27 @@ class PackOptions:
         """``REACH`` where the adaptive time of :meth:`search_seconds` is cut by
         ``AUTO_SECONDS_PER_CHART`` and no chart holds more than ``DOMINANT_SHARE`` of the area,
         with one solve (only a single solve can be ended early: :mod:`.early_stop`); else 1."""
-        if self.solve_seconds is not None or self.solves > 1 or charts < 2 or (
-                charts <= DOMINANT_MAX_CHARTS and largest > DOMINANT_SHARE):
+        if charts <= DOMINANT_MAX_CHARTS and largest > DOMINANT_SHARE:
             return 1.0
+        return REACH if self._cut_sets_time(charts, faces) else 1.0
+
+    def dominant_reach(self, charts, faces=0, largest=0.0):
+        """``DOMINANT_REACH`` where the time is cut as for :meth:`reach` but one chart holds
+        more than ``DOMINANT_SHARE`` of the area (up to ``DOMINANT_MAX_CHARTS`` charts: the
+        time already cut by that share); else 1."""
+        if not (charts <= DOMINANT_MAX_CHARTS and largest > DOMINANT_SHARE):
+            return 1.0
+        return DOMINANT_REACH if self._cut_sets_time(charts, faces) else 1.0
+
+    def _cut_sets_time(self, charts, faces):
+        """Whether the adaptive time is cut by ``AUTO_SECONDS_PER_CHART`` (above the floor),
+        with one solve and no time given."""
+        if self.solve_seconds is not None or self.solves > 1 or charts < 2:
+            return False
         root = AUTO_SECONDS_PER_ROOT * float(np.sqrt(charts * max(faces, charts)))
         cut = AUTO_SECONDS_PER_CHART * charts
-        return REACH if cut < min(root, AUTO_SECONDS_MAX) and cut > min(
-            AUTO_SECONDS_MIN, AUTO_SECONDS_MIN_PER_CHART * charts) else 1.0
+        return cut < min(root, AUTO_SECONDS_MAX) and cut > min(
+            AUTO_SECONDS_MIN, AUTO_SECONDS_MIN_PER_CHART * charts)
 
     @property
     def padding(self):
