@@ -60,12 +60,12 @@ DOMINANT_MAX_CHARTS = 30
 REACH = 3.0
 # ... and DOMINANT_REACH times it where one chart holds more than DOMINANT_SHARE (its time cut by
 # that share too; the density guessed for the longer search, each search ended at its square).
-# Measured (issue18-pack26-2026-11-28.md, interleaved per seed): rocker-arm's 10 charts (0.43),
-# seeds 0-5 at load 1.5-1.9, 0.626 -> 0.673 (6/6, min 0.595 -> 0.657; pack.seconds 0.66 -> 0.86
-# s against Blender's 5.5 s idle); seeds 6-9 at load 3.5-3.7, where the clock-bounded search
-# is starved, 2 wins, 2 losses; spot's 12 charts (0.32) 0.713 -> 0.707 and igl-screwdriver's
-# 10 (0.34) 0.699 -> 0.702 (seeds 0-3, load 3.4: 2 and 1 losses, the rest wins or ties);
-# 2 instead of 3: rocker-arm 0.633 (the guess barely moves)
+# Measured (issue18-pack26-2026-11-28.md, interleaved per seed): rocker-arm's 10 charts (0.43)
+# at load 1.5-1.9, seeds 0-5: 0.626 -> 0.673 (6/6, min 0.595 -> 0.657; pack.seconds 0.66 -> 0.86
+# s against Blender's 5.5 s idle); under load, where the clock-bounded search is starved, even:
+# load 3.5 -0.012 (1/3, 4 seeds), load 4-10 +0.001 (5/4, 10 seeds); spot's 12 charts (0.32)
+# +0.004 (10 seeds, load 4-10) and -0.006 (4, load 3.4), igl-screwdriver's 10 +0.000 and +0.003,
+# lion-head's 9 +0.003 (10); 2 instead of 3: rocker-arm 0.633 (its density guess barely moves)
 DOMINANT_REACH = 3.0
 # From MANY_CHARTS charts that are not tiny (``tiny``: under packing.tiny's TINY_SHARE of the
 # area each), the time is at least MANY_SECONDS_PER_CHART a chart that is not tiny. Blender's
