@@ -8,8 +8,9 @@ barely change the square. So when most charts are tiny (each under ``TINY_SHARE`
 area, at least ``TINY_COUNT_SHARE`` of the charts, together under ``TINY_AREA_SHARE``):
 
 1. the other charts are packed as any set of charts is (:func:`.few.few_square` for 2-5,
-   else :func:`.square.square_layout`), with the time of their own count and faces (cut where
-   one of them dominates, as ``PackOptions.search_seconds`` does for any set);
+   else :func:`.square.square_layout`), with ``OTHERS_TIME`` times the time of their own count
+   and faces (cut where one of them dominates, as ``PackOptions.search_seconds`` does for any
+   set);
 2. the tiny charts, largest first, are dropped into the free space of that square on a raster
    made conservative as in :mod:`.around` (a chart occupies every cell whose centre lies within
    ``separation / 2 + h sqrt(2) / 2`` of its outline, so two charts whose cells do not meet are
@@ -47,6 +48,11 @@ TINY_AREA_SHARE = 0.05  # ... holding less than this share of the area together
 # (unseen25). Compact tiny charts are within it: all of Wuson.off's 50, wuson.stl's 54 and
 # the shader ball's 108.
 TINY_EXTENT = 0.05
+# The others are nested for OTHERS_TIME times their own count's time: their square is the
+# atlas's, and the tiny charts' share of Blender's time (it traces and scans for every chart) is
+# left to them. x2 (issue18-pack26-2026-11-28.md, interleaved per seed): Wuson.off 0.651 -> 0.659
+# (3/1), CPU 1.23 -> 1.88 s (Blender 13.1 s idle); wuson.stl 0.643 -> 0.670 (4/0), 1.58 -> 2.44 s
+OTHERS_TIME = 2.0
 CELLS = 512             # raster cells along the square's side (2 texels at 1024 px)
 
 
@@ -87,8 +93,8 @@ def tiny_square(charts, options, tol, faces):
     found = few_square(outlines, options, tol, exact)
     if found is None:
         area = charts.area[big]
-        seconds = options.search_seconds(len(big), int(np.sum(np.asarray(faces)[big])),
-                                         float(area.max() / area.sum()))
+        seconds = OTHERS_TIME * options.search_seconds(
+            len(big), int(np.sum(np.asarray(faces)[big])), float(area.max() / area.sum()))
         found = square_layout(outlines, options, tol, seconds, exact)
     pl, side, solves = found
     angle, shift = np.zeros(k), np.zeros((k, 2))

@@ -69,8 +69,9 @@ def test_many_tiny_charts_are_dropped_into_the_free_space():
 
 def test_the_others_nest_for_their_own_time_with_a_dominant_one_cut(monkeypatch):
     """Seven large charts, one of them holding 0.6 of their area, and 14 tiny ones (67 %): the
-    seven are nested for the time of their own count and faces, cut as a dominant chart cuts
-    it (``search_seconds`` with its share, recomputed from the sizes), the layout certified."""
+    seven are nested for ``OTHERS_TIME`` times the time of their own count and faces, cut as a
+    dominant chart cuts it (``search_seconds`` with its share, recomputed from the sizes), the
+    layout certified."""
     import bd_uv.packing.tiny as tiny
     seen = []
     real = tiny.square_layout
@@ -87,8 +88,9 @@ def test_the_others_nest_for_their_own_time_with_a_dominant_one_cut(monkeypatch)
     check_layout(V, F, uv, lab, packed, options)
     share = 9.0 / (9.0 + 6.0)     # the large chart's share of the seven's area
     assert len(seen) == 1 and seen[0][0] == 7
-    assert np.isclose(seen[0][1], options.search_seconds(7, 7 * 2, share))
-    assert seen[0][1] < options.search_seconds(7, 7 * 2)
+    assert tiny.OTHERS_TIME == 2.0
+    assert np.isclose(seen[0][1], 2.0 * options.search_seconds(7, 7 * 2, share))
+    assert options.search_seconds(7, 7 * 2, share) < options.search_seconds(7, 7 * 2)
 
 
 def test_drop_keeps_the_separation_and_gives_up_without_room():
