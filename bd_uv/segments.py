@@ -15,6 +15,9 @@ ALL_PAIRS = 64
 # Candidate pairs ``touching_pairs`` forms by its sweep along x, at most, per segment (beyond,
 # an STRtree finds them).
 SWEEP_PAIRS = 32
+# ... and at most this many in all (~10 arrays of them at once, 20 MB): a large mesh's boundary
+# goes to the tree, whose memory was measured on the 500k-face meshes.
+SWEEP_MAX = 1 << 18
 # Candidate pairs group_pairs_touching asks the tree for at a time (~100 MB of them).
 CANDIDATES = 2_000_000
 
@@ -37,7 +40,7 @@ def touching_pairs(p, q, group=None):
 
     Bounding-box candidates come from a sweep along x (``_box_pairs``; every pair up to
     ``ALL_PAIRS`` segments, ``shapely.STRtree`` where the sweep would form more than
-    ``SWEEP_PAIRS`` pairs a segment); each candidate is decided by the four
+    ``SWEEP_PAIRS`` pairs a segment or ``SWEEP_MAX`` in all); each candidate is decided by the four
     orientation signs in float64 when all four are clear of their rounding error bound, and by
     GEOS's robust predicate otherwise (touching, collinear and near-degenerate pairs). Segments
     with an identical end touch.
@@ -77,7 +80,7 @@ def touching_pairs(p, q, group=None):
         meets = segments_meet(p, q, i, j)
         return np.stack([i[meets], j[meets]], axis=1).astype(np.int64)
     lo, hi = np.minimum(p, q), np.maximum(p, q)
-    pairs = _box_pairs(lo, hi, group, SWEEP_PAIRS * len(p) + 4096)
+    pairs = _box_pairs(lo, hi, group, min(SWEEP_PAIRS * len(p) + 4096, SWEEP_MAX))
     if pairs is not None:
         i, j = pairs
         meets = segments_meet(p, q, i, j)
