@@ -116,7 +116,10 @@ def _box_pairs(lo, hi, group, limit):
     _, rank = np.unique(np.concatenate([lo[:, 0], hi[:, 0]]), return_inverse=True)
     rank = rank.ravel()
     width = int(rank.max()) + 1
-    g = g - g.min(initial=0)
+    if len(g) and int(g.max()) - int(g.min()) >= b:    # any ids: numbered 0.. (no overflow)
+        g = np.unique(g, return_inverse=True)[1].ravel()
+    else:
+        g = g - g.min(initial=0)
     k0 = g * width + rank[:b]
     k1 = g * width + rank[b:]
     order = k0.argsort(kind="stable")
