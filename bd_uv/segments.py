@@ -2,8 +2,9 @@
 
 Orientation signs in float64 where each is clear of its rounding error bound (Shewchuk's
 ``ccwerrboundA``), GEOS's robust predicate (``shapely.intersects``) where one is not; candidate
-pairs from a bounding-box table (few segments) or ``shapely.STRtree``. Used by the UV boundary's
-overlap certificate (``overlap.py``), the one-disk certificate and the live certificate.
+pairs from a bounding-box table (few segments), a sweep along x, or ``shapely.STRtree``. Used by
+the UV boundary's overlap certificate (``overlap.py``), the one-disk certificate and the live
+certificate.
 """
 import numpy as np
 
@@ -11,6 +12,12 @@ import numpy as np
 # Up to this many boundary segments every pair is tested (2016 pairs at 64) rather than the
 # candidates of an STRtree, whose set-up costs more than the pairs below it.
 ALL_PAIRS = 64
+# Candidate pairs ``touching_pairs`` forms by its sweep along x, at most, per segment (beyond,
+# an STRtree finds them).
+SWEEP_PAIRS = 32
+# ... and at most this many in all (~10 arrays of them at once, 20 MB): a large mesh's boundary
+# goes to the tree, whose memory was measured on the 500k-face meshes.
+SWEEP_MAX = 1 << 18
 # Candidate pairs group_pairs_touching asks the tree for at a time (~100 MB of them).
 CANDIDATES = 2_000_000
 
@@ -31,8 +38,9 @@ def _orient(a, b, c):
 def touching_pairs(p, q, group=None):
     """Pairs of segments that intersect or touch, each pair once (i < j).
 
-    Bounding-box candidates come from ``shapely.STRtree`` (every pair, up to ``ALL_PAIRS``
-    segments); each candidate is decided by the four
+    Bounding-box candidates come from a sweep along x (``_box_pairs``; every pair up to
+    ``ALL_PAIRS`` segments, ``shapely.STRtree`` where the sweep would form more than
+    ``SWEEP_PAIRS`` pairs a segment or ``SWEEP_MAX`` in all); each candidate is decided by the four
     orientation signs in float64 when all four are clear of their rounding error bound, and by
     GEOS's robust predicate otherwise (touching, collinear and near-degenerate pairs). Segments
     with an identical end touch.
@@ -71,12 +79,17 @@ def touching_pairs(p, q, group=None):
         i, j = np.nonzero(np.triu(keep, 1))
         meets = segments_meet(p, q, i, j)
         return np.stack([i[meets], j[meets]], axis=1).astype(np.int64)
+    lo, hi = np.minimum(p, q), np.maximum(p, q)
+    pairs = _box_pairs(lo, hi, group, min(SWEEP_PAIRS * len(p) + 4096, SWEEP_MAX))
+    if pairs is not None:
+        i, j = pairs
+        meets = segments_meet(p, q, i, j)
+        return np.stack([i[meets], j[meets]], axis=1)
     import shapely
     geoms = shapely.linestrings(np.stack([p, q], axis=1))
     if group is None:
         boxes = geoms
     else:  # boxes moved apart island by island: candidates only within one island
-        lo, hi = np.minimum(p, q), np.maximum(p, q)
         span = float(np.max(hi) - np.min(lo)) + 1.0
         pad = 1e-9 * span                      # far above the rounding of the moved boxes
         off = np.asarray(group, dtype=np.float64) * (4.0 * span)
@@ -87,6 +100,42 @@ def touching_pairs(p, q, group=None):
     i, j = i[keep].astype(np.int64), j[keep].astype(np.int64)
     meets = segments_meet(p, q, i, j, geoms)
     return np.stack([i[meets], j[meets]], axis=1)
+
+
+def _box_pairs(lo, hi, group, limit):
+    """The pairs (i < j, by i then j) of segments whose bounding boxes ``lo``-``hi`` meet
+    (touching included; within one ``group`` where given), by a sweep along x: the segments by
+    group and least x, each against those starting from its own least x up to its largest (a
+    search on the x ranks), then the y ranges compared. Only comparisons of the ends'
+    coordinates, no arithmetic: every pair of segments that meet is among them, as among an
+    STRtree's candidates. None where more than ``limit`` x-overlapping pairs would be formed
+    (a boundary running back and forth along x): the tree takes those."""
+    b = len(lo)
+    g = np.zeros(b, dtype=np.int64) if group is None else np.asarray(group, dtype=np.int64)
+    # Exact ranks of every least and largest x (ties equal), so the sweep's keys are integers.
+    _, rank = np.unique(np.concatenate([lo[:, 0], hi[:, 0]]), return_inverse=True)
+    rank = rank.ravel()
+    width = int(rank.max()) + 1
+    if len(g) and int(g.max()) - int(g.min()) >= b:    # any ids: numbered 0.. (no overflow)
+        g = np.unique(g, return_inverse=True)[1].ravel()
+    else:
+        g = g - g.min(initial=0)
+    k0 = g * width + rank[:b]
+    k1 = g * width + rank[b:]
+    order = k0.argsort(kind="stable")
+    s0 = k0[order]
+    end = s0.searchsorted(k1[order], side="right")
+    count = end - np.arange(b) - 1          # the later segments starting within its x range
+    total = int(count.sum())
+    if total > limit:
+        return None
+    first = np.repeat(np.arange(b), count)
+    second = np.arange(total) - np.repeat(np.cumsum(count) - count, count) + first + 1
+    a, c = order[first], order[second]
+    keep = (lo[c, 1] <= hi[a, 1]) & (lo[a, 1] <= hi[c, 1])
+    i, j = np.minimum(a[keep], c[keep]), np.maximum(a[keep], c[keep])
+    by = np.lexsort((j, i))
+    return i[by].astype(np.int64), j[by].astype(np.int64)
 
 
 def group_pairs_touching(p, q, group, chunk=CANDIDATES):

@@ -63,6 +63,16 @@ def square_fill(uv, tris, loop=None):
     return area / side ** 2 if side > 0 else 1.0
 
 
+def _fill_floor(uv, tris):
+    """A lower bound of ``square_fill(uv, tris)``: the map's area over the square of its
+    bounding box's diagonal (no square around the map, at any rotation, is wider than that
+    diagonal), a millionth under it for the rounding of either."""
+    e1, e2 = uv[tris[:, 1]] - uv[tris[:, 0]], uv[tris[:, 2]] - uv[tris[:, 0]]
+    area = 0.5 * abs(float(np.sum((e1.conjugate() * e2).imag)))
+    d2 = float(np.ptp(uv.real)) ** 2 + float(np.ptp(uv.imag)) ** 2
+    return (1.0 - 1e-6) * area / d2 if d2 > 0 else 0.0
+
+
 def _passes(cm, S, cap):
     """Which charts of ``cm`` (ChartMaps) pass the search's test."""
     return (np.isfinite(cm.max_distortion) & (cm.max_stretch <= S * MARGIN)
@@ -111,6 +121,11 @@ def split_for_packing(V, F, E, cut, original, A, cen, S, cap, poly=None, geom=No
 
     live = []                               # (bound, chart, may it be split)
     for j, c in enumerate(chs):
+        # A chart whose bound is surely at least TARGET is never split and never stops the
+        # pass before a chart below TARGET would (the pass takes the lowest bound first and
+        # stops at TARGET): left out, without its hull and rotations (``square_fill``).
+        if _fill_floor(maps[j], c.tris) / (float(A[c.faces].sum()) / total) >= TARGET:
+            continue
         fe = np.unique(E.face_edges[c.faces].ravel())
         fe = fe[inner[fe]]
         # Only a chart bounded by a seam the search added: the user's islands stay as they are.

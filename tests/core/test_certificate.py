@@ -320,10 +320,15 @@ def test_a_cut_never_splits_a_polygon():
     assert np.all(res.face_island[:h] == res.face_island[h:])
 
 
-def test_touching_pairs_is_exact_on_degenerate_integer_segments():
+@pytest.mark.parametrize("candidates", ["sweep", "tree"])
+def test_touching_pairs_is_exact_on_degenerate_integer_segments(candidates, monkeypatch):
     """Integer grid segments (many collinear, touching and shared-end pairs) against an exact
-    integer brute force."""
+    integer brute force, the candidates from the sweep along x and from the STRtree (where the
+    sweep would form too many)."""
+    from bd_uv import segments
     from bd_uv.overlap import touching_pairs
+    if candidates == "tree":
+        monkeypatch.setattr(segments, "_box_pairs", lambda lo, hi, group, limit: None)
     rng = np.random.default_rng(3)
     P = rng.integers(0, 6, (150, 2, 2))
     P = P[np.any(P[:, 0] != P[:, 1], axis=1)]
@@ -358,6 +363,11 @@ def test_touching_pairs_is_exact_on_degenerate_integer_segments():
     alone[1] = 0
     assert {tuple(x) for x in touching_pairs(P[:, 0] * 1.0, P[:, 1] * 1.0, alone).tolist()} \
         == want & {(0, 1)}
+    # random groups: the pairs within one group, each once, i < j
+    g = rng.integers(0, 5, len(P))
+    got = touching_pairs(P[:, 0] * 1.0, P[:, 1] * 1.0, g)
+    assert len({tuple(x) for x in got.tolist()}) == len(got)
+    assert {tuple(x) for x in got.tolist()} == {(i, j) for i, j in want if g[i] == g[j]}
 
 
 def test_an_island_with_non_finite_uvs_is_not_overlap_free():

@@ -166,3 +166,37 @@ def test_an_island_the_user_marked_is_never_split():
     check_charts(V, F, res)
     assert len(res.islands) == 1 and len(added) == 0
     assert bounds(V, F, res).min() < 0.45
+
+
+def test_the_fill_floor_is_under_every_fill_and_leaves_the_same_cuts(monkeypatch):
+    # ``_fill_floor`` lets the pass skip a chart's hull and rotations where its bound is surely
+    # at least TARGET: it must never exceed the chart's fill at the pass's own rotations,
+    # recomputed here from every vertex (random star-shaped fans, long thin ones included).
+    rng = np.random.default_rng(5)
+    for trial in range(300):
+        k = int(rng.integers(3, 40))
+        t = np.sort(rng.random(k)) * 2 * np.pi
+        r = rng.random(k) + 0.05
+        stretch = 10.0 ** rng.uniform(-2, 2)
+        ring = r * np.cos(t) * stretch + 1j * r * np.sin(t) + complex(*rng.normal(size=2))
+        uv = np.concatenate([[ring.mean()], ring])
+        tris = np.stack([np.zeros(k, np.int64), 1 + np.arange(k), 1 + (np.arange(k) + 1) % k], 1)
+        area = 0.5 * abs(sum((uv[b] - uv[a]).real * (uv[c] - uv[a]).imag
+                             - (uv[b] - uv[a]).imag * (uv[c] - uv[a]).real for a, b, c in tris))
+        ang = np.linspace(0.0, np.pi / 2, pack_shape.ANGLES, endpoint=False)
+        x = np.cos(ang)[:, None] * uv.real + np.sin(ang)[:, None] * uv.imag
+        y = -np.sin(ang)[:, None] * uv.real + np.cos(ang)[:, None] * uv.imag
+        side = np.maximum(np.ptp(x, axis=1), np.ptp(y, axis=1)).min()
+        floor = pack_shape._fill_floor(uv, tris)
+        assert 0 < floor <= area / side ** 2 * (1 - 1e-7)
+        assert floor <= pack_shape.square_fill(uv, tris) * (1 - 1e-7)
+    # The same charts, seams and atlas cuts as the pass computing every chart's bound.
+    V, F = long_box()
+    res, added, info = unwrap_auto(V, F, bound=C, stretch=S)
+    with monkeypatch.context() as mp:
+        mp.setattr(pack_shape, "_fill_floor", lambda uv, tris: 0.0)
+        every, every_added, every_info = unwrap_auto(V, F, bound=C, stretch=S)
+    assert info["atlas_cuts"] >= 1
+    assert _charts(res) == _charts(every)
+    assert _keys(added) == _keys(every_added)
+    assert info["atlas_cuts"] == every_info["atlas_cuts"]

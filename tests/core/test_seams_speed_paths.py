@@ -494,3 +494,48 @@ def test_fiedler_vectors_in_bounded_runs_are_each_charts_own(monkeypatch):
         # runs: 54+20 | 64 | 36+42 | 25 nodes, none above 80
         assert sorted(blocks) == [25, 64, 74, 78]
         np.testing.assert_allclose(x, np.concatenate(alone), rtol=0, atol=1e-9)
+
+
+def test_edge_table_edges_and_fans_equal_numpys_sorts():
+    # ``edge_table`` finds the edges (np.unique of the vertex pair keys), each edge's faces (a
+    # stable argsort of the corners by edge) and the fans' order (a lexsort by fan start and
+    # rank) by radix passes: recomputed here with numpy's own on a torus, a UV sphere and an
+    # open cap, array for array.
+    Vt, Ft, _, _ = torus(nu=24, nv=10)
+    Vs, Fs, _ = uv_sphere(14, 7)
+    Vo, Fo = Vs, Fs[Vs[Fs].mean(axis=1)[:, 2] < 0.5]
+    for V, F in ((Vt, Ft), (Vs, Fs), (Vo, Fo)):
+        E = edge_table(V, F)
+        n = len(V)
+        a, b = F.ravel(), np.roll(F, -1, axis=1).ravel()
+        uniq, inv = np.unique(np.minimum(a, b) * n + np.maximum(a, b), return_inverse=True)
+        inv = inv.ravel()
+        assert np.array_equal(E.ends, np.stack([uniq // n, uniq % n], 1))
+        assert np.array_equal(E.face_edges.ravel(), inv)
+        order = inv.argsort(kind="stable")
+        first = inv[order].searchsorted(np.arange(len(uniq)))
+        assert np.array_equal(E.faces[:, 0], order[first] // 3)
+        two = np.bincount(inv) == 2
+        assert np.array_equal(E.faces[two, 1], order[first[two] + 1] // 3)
+        assert (E.faces[~two, 1] == -1).all()
+        # Each fan listed from its start, in turn: corner order[i + 1] is where order[i] turns
+        # (``next``), the fans by their start corner, as a lexsort by (start, rank) lists them.
+        fans = E.fans
+        assert fans is not None
+        o, start = fans.order, fans.starts
+        for s, e in zip(start[:-1].tolist(), start[1:].tolist()):
+            fan = o[s:e]
+            assert (fans.next[fan[:-1]] == fan[1:]).all()
+            assert (F.ravel()[fan] == F.ravel()[fan[0]]).all()
+        firsts = o[start[:-1]]
+        ring = fans.ring[start[:-1]]
+        # a closed fan starts at its least corner; an open one where the boundary does (no
+        # corner turns to it)
+        prev = np.full(3 * len(F), -1)
+        on = fans.next >= 0
+        prev[fans.next[on]] = np.flatnonzero(on)
+        for c, closed, s, e in zip(firsts.tolist(), ring.tolist(), start[:-1].tolist(),
+                                   start[1:].tolist()):
+            assert c == (o[s:e].min() if closed else c) and (closed or prev[c] < 0)
+        assert np.array_equal(np.sort(o), np.arange(3 * len(F)))
+        assert (np.diff(firsts) > 0).all()      # the fans by their start corner
