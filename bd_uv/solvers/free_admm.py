@@ -14,7 +14,11 @@ calls:
   iteration);
 - the max distortion ``|beta|^2 / |alpha|^2`` (rotation-invariant) from one square of the lift;
 - the compiled sparse products straight (``bound_search._matvec``'s), buffers preallocated, the
-  loop inlined (the search's watch decides each stop, as for the large islands).
+  loop inlined (the search's watch decides each stop, as for the large islands);
+- the right-hand side's product with the lift's transpose in compressed rows of its own (each
+  free unknown's entries gathered, not each face's row scattered: ~25-30 % less of that product
+  on 223-1,112 faces), its entries in increasing order of the lift's rows within each, so each
+  unknown's sum is added in the same order as the scattering product's: the same bits.
 """
 import functools
 import itertools
@@ -25,7 +29,7 @@ import scipy.sparse as sp
 
 from ..array_calls import quiet
 
-__all__ = ["FreeLift", "run_free", "sparse_product"]
+__all__ = ["FreeLift", "run_free", "sparse_product", "transposed"]
 
 
 def sparse_product(fmt, shape, indptr, indices):
@@ -40,6 +44,24 @@ def sparse_product(fmt, shape, indptr, indices):
         return lambda data, x, out: out.__iadd__(make((data, indices, indptr), shape=shape) @ x)
     product = csc_matvec if fmt == "csc" else csr_matvec
     return functools.partial(product, shape[0], shape[1], indptr, indices)
+
+
+def transposed(shape, indptr, indices):
+    """The compressed rows (indptr, indices) of the transpose of the (nr, nc) csr pattern
+    given, each row's entries in increasing order of the given rows, and ``perm``: the
+    transpose's data is ``data.take(perm)`` for the given data (scipy's compiled conversion,
+    a stable bucket sort, of the entries' own places)."""
+    nr, nc = shape
+    nnz = len(indices)
+    tptr, tind, where = np.empty(nc + 1, np.int64), np.empty(nnz, np.int64), np.empty(nnz)
+    try:
+        from scipy.sparse._sparsetools import csr_tocsc
+        csr_tocsc(nr, nc, indptr, indices, np.arange(nnz, dtype=np.float64), tptr, tind, where)
+    except ImportError:     # a scipy that moved it: the public conversion (the same order)
+        T = sp.csr_array((np.arange(nnz, dtype=np.float64), indices, indptr),
+                         shape=shape).tocsc()
+        tptr[...], tind[...], where[...] = T.indptr, T.indices, T.data
+    return tptr, tind, where.astype(np.int64)
 
 
 class FreeLift:
@@ -67,8 +89,10 @@ class FreeLift:
         self.n1 = int(indptr[k])            # entries of the Re 2alpha rows (as many as Im's)
         self.rows = np.arange(k).repeat(indptr[1:k + 1] - indptr[:k])   # their faces
         self.lift = sparse_product("csr", (4 * k, 2 * nf), indptr, indices)
-        self.rhs = sparse_product("csc", (2 * nf, 4 * k), indptr, indices)
-        self._framed = (data.copy(), wdata.copy(), self.lift_fixed.copy())
+        # the right-hand side operator (2nf, 4k): the lift's transpose in rows of its own
+        tptr, tind, self._tperm = transposed((4 * k, 2 * nf), indptr, indices)
+        self.rhs = sparse_product("csr", (2 * nf, 4 * k), tptr, tind)
+        self._framed = (data.copy(), wdata.copy(), self.lift_fixed.copy(), np.empty(len(wdata)))
 
     def lift_map(self, x, out=None):
         """(4, k) doubled alpha and beta of the map of free unknowns x (2nf,)."""
@@ -79,13 +103,13 @@ class FreeLift:
         return out
 
     def framed(self, w):
-        """(lift data, right-hand side data, fixed share of the lift) turned into the frames w
-        (k,) unit complex: the alpha rows ``a0 = Re 2alpha``, ``a1 = Im 2alpha`` become ``c a0 - s
-        a1`` and ``s a0 + c a1`` (``c + i s = w``), the beta rows stay. In buffers of this
-        lift's, overwritten by the next call."""
+        """(lift data, right-hand side data (``rhs``'s: in the transpose's order), fixed share
+        of the lift) turned into the frames w (k,) unit complex: the alpha rows ``a0 = Re
+        2alpha``, ``a1 = Im 2alpha`` become ``c a0 - s a1`` and ``s a0 + c a1`` (``c + i s =
+        w``), the beta rows stay. In buffers of this lift's, overwritten by the next call."""
         n1, k = self.n1, self.k
         c, s = w.real.take(self.rows), w.imag.take(self.rows)
-        d, wd, lf = self._framed
+        d, wd, lf, wdt = self._framed
         for src, dst, cc, ss in ((self.data, d, c, s), (self.wdata, wd, c, s),
                                  (self.lift_fixed, lf, w.real, w.imag)):
             m = n1 if dst is not lf else k
@@ -94,7 +118,8 @@ class FreeLift:
             dst[:m] -= ss * a1
             np.multiply(ss, a0, out=dst[m:2 * m])
             dst[m:2 * m] += cc * a1
-        return d, wd, lf
+        wd.take(self._tperm, out=wdt)
+        return d, wdt, lf
 
 
 def run_free(lift, solve, x0, w, kappa, C, watch, alpha, cancel, count):

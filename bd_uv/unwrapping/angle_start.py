@@ -81,14 +81,16 @@ FLIPS_BENT = 2
 BENT_UP_TO = 5.0
 
 
-def linear_abf(disk, caps):
+def linear_abf(disk, caps, beta=None):
     """Each face's corner angles (m,3), Linear ABF's solve of the disk's angles (see the
     module's docstring) with the angle sums ``caps`` (nv,) float64 (NaN: free) asked at
-    boundary vertices; each row adds up to pi. None where the solve fails."""
+    boundary vertices; each row adds up to pi. None where the solve fails. ``beta``: the
+    disk's 3D corner angles ``abs(corner_angles(disk.Z))`` where the caller has them."""
     isl = disk.island
     tris, nv = isl.tris, len(isl.vertices)
     m = len(tris)
-    beta = np.abs(corner_angles(disk.Z))
+    if beta is None:
+        beta = np.abs(corner_angles(disk.Z))
     onb = np.zeros(nv, dtype=bool)
     onb[isl.loops[0]] = True
     flat = tris.ravel()
@@ -199,10 +201,11 @@ def angle_start(V, disk):
     tris, loop, nv = isl.tris, isl.loops[0], len(isl.vertices)
     flat = tris.ravel()
     full = 2.0 * np.pi
-    theta3 = np.bincount(flat, np.abs(corner_angles(disk.Z)).ravel(), nv)
+    beta = np.abs(corner_angles(disk.Z))     # the 3D angles, once for the caps and the solve
+    theta3 = np.bincount(flat, beta.ravel(), nv)
     caps = np.full(nv, np.nan)
     caps[loop] = np.where(theta3.take(loop) >= CAP * full, CAP * full, np.nan)
-    angles = linear_abf(disk, caps)
+    angles = linear_abf(disk, caps, beta)
     if angles is None:
         return None
     scale = np.ones(nv)

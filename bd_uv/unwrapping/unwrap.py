@@ -171,7 +171,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
                          over=disk is not None and opts.bound != "auto" and not overlaps)
     if (opts.bound == "auto" and disk is not None and angle is not False
             and any("angle_start" in r.flags for r in res.islands)
-            and predicted_to_fail(V, F, res)):
+            and predicted_to_fail(V, F, res, disk=disk)):
         # the least C from the angle start holds in float64, but a cone-like tip (a cow's horn)
         # is shrunk below float32's step once packed, and no stretch limit keeps it one island
         # at that C (``storage.with_storage_headroom``): the conformal start's way instead, cut
@@ -243,7 +243,7 @@ def _kept_whole(V, F, disk, opts, res, least, t0, progress, cancel):
         one = unwrap(V, F, progress=progress, cancel=cancel, disk=disk,
                      options=dataclasses.replace(opts, bound=C, time_budget=None))
         if (len(one.islands) == 1 and one.islands[0].status == "certified"
-                and not predicted_to_fail(V, F, one)):
+                and not predicted_to_fail(V, F, one, disk=disk)):
             (r,) = one.islands
             res = dataclasses.replace(one, islands=[dataclasses.replace(
                 r, bound_requested="auto", flags=tuple(r.flags) + ("kept_whole",))])

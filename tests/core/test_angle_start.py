@@ -176,7 +176,7 @@ def test_an_angle_start_map_that_float32_would_break_gives_way_to_the_conformal_
     assert all(r.status == "certified" for r in res.islands)
     # the premise: the one island its angle start gives fails as packed and stored
     with monkeypatch.context() as m:
-        m.setattr(unwrap_module, "predicted_to_fail", lambda V, F, res: [])
+        m.setattr(unwrap_module, "predicted_to_fail", lambda V, F, res, disk=None: [])
         one = bd_uv.unwrap(V, F, bound="auto")
     (r,) = one.islands
     assert "angle_start" in r.flags and r.status == "certified"
@@ -278,3 +278,34 @@ def test_the_angle_starts_search_ends_at_a_tested_map_that_lies_over_itself(
         assert r.max_distortion < q.max_distortion - 0.05
     else:
         assert np.array_equal(res.corner_uv, ref.corner_uv)
+
+
+
+@pytest.mark.parametrize("seed,flags", [(HORN_TIP, [0]), (COW[0], [])])
+def test_float32_prediction_from_the_disks_geometry_is_the_meshs(seed, flags, monkeypatch):
+    """``rounding.predicted_to_fail`` given the mesh's ``Disk`` (its frames, areas and edges
+    read, not made again) flags what it flags without it, and its per-face bound is the same
+    bits: on the horn tip's map from its angle start (flagged: float32 breaks it, recomputed by
+    SVD as in the test above) and on a cow disk's (not flagged)."""
+    import importlib
+    from bd_uv.mesh import check_arrays
+    from bd_uv.unwrapping import rounding
+    unwrap_module = importlib.import_module("bd_uv.unwrapping.unwrap")   # the module
+    V, F = check_arrays(*rings(*load_off("cow.off"), *seed))
+    disk = one_disk.find(V, F)
+    with monkeypatch.context() as m:    # the angle start's map kept, whatever it predicts
+        m.setattr(unwrap_module, "predicted_to_fail", lambda V, F, res, disk=None: [])
+        one = bd_uv.unwrap(V, F, bound="auto")
+    (r,) = one.islands
+    assert "angle_start" in r.flags and r.status == "certified"
+    assert rounding.predicted_to_fail(V, F, one) == flags
+    assert rounding.predicted_to_fail(V, F, one, disk=disk) == flags
+    h = rounding.float_step(np.float32, 1.0)
+    bound = rounding.rounding_distortion(V, F, one.corner_uv, h)
+    assert np.array_equal(bound, rounding.rounding_distortion(
+        V, F, one.corner_uv, h, disk.G, (disk.e01, disk.e02)))
+    if flags:           # the premise, from the stored UVs: scaled into the unit square, rounded
+        u = one.corner_uv - one.corner_uv.min(axis=(0, 1))
+        u = (u / u.max()).astype(np.float32).astype(np.float64)
+        D, flipped = distortion_and_flips(V, F, u)
+        assert flipped.any() or D.max() > r.bound_certified

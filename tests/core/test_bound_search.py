@@ -133,6 +133,55 @@ def test_the_paired_solve_gives_the_searchs_iterates_to_the_bit():
     assert not flipped.any() and Dr.max() == pytest.approx(D1, rel=1e-9)
 
 
+def test_the_right_hand_sides_gathered_product_is_the_scattered_one_to_the_bit(monkeypatch):
+    """The free iterations' right-hand side is a product with the lift's transpose in rows of
+    its own (``free_admm.transposed``): to the bit the product scattering the lift's rows (each
+    unknown's terms added in the same order), and the transpose's product recomputed densely;
+    the search's maps and iterations as with the scattering product."""
+    from scipy.sparse._sparsetools import csc_matvec
+    from bd_uv.solvers import free_admm
+    V, F = load_off("nefertiti.off")
+    isl = islands(V, F)[0]
+    prob = IslandProblem(isl, V, NO_PINS, "lscm", "soc", None)
+    u0 = prob.fallback_map()
+    bs = BoundSearch(prob.ops, prob.nv, isl.tris, isl.loops[0][:1], connected=True)
+    assert bs.on_free
+    u1, D1, _ = bs.search(u0)
+    lift = bs._free_lift()
+    k, nf = lift.k, lift.nf
+    rng = np.random.default_rng(3)
+    w = np.exp(1j * rng.uniform(0.0, 2.0 * np.pi, k))
+    _, wdt, _ = lift.framed(w)
+    wd = lift._framed[1]                    # the same data in the lift's rows' order
+    dense = np.zeros((4 * k, 2 * nf))
+    rows = np.arange(4 * k).repeat(np.diff(lift.indptr))
+    np.add.at(dense, (rows, lift.indices), wd)
+    for _ in range(3):
+        T = rng.normal(size=4 * k)
+        start = rng.normal(size=2 * nf)
+        scattered, gathered = start.copy(), start.copy()
+        csc_matvec(2 * nf, 4 * k, lift.indptr, lift.indices, wd, T, scattered)
+        lift.rhs(wdt, T, gathered)
+        assert np.array_equal(scattered, gathered)
+        assert np.allclose(gathered, start + dense.T @ T, rtol=1e-12, atol=1e-12)
+
+    # the search with the scattering product: the same maps and iterations
+    class Scattering(free_admm.FreeLift):
+        def __init__(self, *a):
+            super().__init__(*a)
+            self.rhs = free_admm.sparse_product("csc", (2 * self.nf, 4 * self.k),
+                                                self.indptr, self.indices)
+
+        def framed(self, w):
+            d, _, lf = super().framed(w)
+            return d, self._framed[1], lf
+    import bd_uv.solvers.search_lift as search_lift
+    monkeypatch.setattr(search_lift, "FreeLift", Scattering)
+    other = BoundSearch(prob.ops, prob.nv, isl.tris, isl.loops[0][:1], connected=True)
+    u2, D2, _ = other.search(u0)
+    assert np.array_equal(u1, u2) and D1 == D2 and bs.iterations == other.iterations > 0
+
+
 @pytest.mark.parametrize("n", [20, 36])
 def test_auto_on_a_flat_disk_does_not_search_round_off(n):
     """A flat disk's conformal map is an isometry up to round-off: ``auto`` certifies it without
