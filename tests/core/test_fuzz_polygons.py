@@ -317,6 +317,23 @@ def assert_polygon_triangles(faces, polys):
     g = csr_array((np.ones(len(rows)), (rows, cols)), shape=(len(faces), len(slots)))
     match = maximum_bipartite_matching(g, perm_type="column")
     assert (match >= 0).all(), "a triangle of no polygon of the file"
+    return np.searchsorted(first, match, side="right") - 1      # each triangle's polygon
+
+
+def assert_tiles_in_space(V, faces, owner, polys, flat):
+    """Each flat simple polygon's triangles (``owner``: each face's polygon) tile it: none
+    turning against it by more than FLAT of its area, their areas its area."""
+    faces = np.asarray(faces).reshape(-1, 3)
+    for p, q in enumerate(polys):
+        if not flat[p] or len(q) < 4:
+            continue
+        Q = V[q]
+        normal = np.cross(Q, np.roll(Q, -1, axis=0)).sum(axis=0)
+        P = V[faces[owner == p]]
+        twice = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]) @ normal
+        nn = normal @ normal
+        assert (twice > -FLAT * nn).all(), (q, twice / nn)
+        assert abs(twice.sum() - nn) <= 1e-6 * nn, (q, twice / nn)
 
 
 def check_obj_kept(src, out, m, split):
@@ -390,8 +407,9 @@ def check(sc, root):
             elif sc["fmt"][:3] == "stl":
                 P = np.asarray(m.V, np.float32).astype(np.float64)[np.array(m.polys)]
                 assert np.allclose(V[np.array(faces)], P, atol=1e-6)
-            else:
-                assert_polygon_triangles(faces, m.polys)
+            else:   # a PLY's polygons: triangles of each, tiling it
+                owner = assert_polygon_triangles(faces, m.polys)
+                assert_tiles_in_space(V, faces, owner, m.polys, m.flat)
     flat_simple = None
     if clean and len(polys) == len(m.polys) and all(len(p) == len(q) for p, q in
                                                     zip(polys, m.polys)):
