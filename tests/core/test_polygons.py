@@ -164,3 +164,31 @@ def test_an_obj_of_concave_polygons_is_written_whole_and_certified(tmp_path):
     D, flipped = reference_distortion(V, tris, uv)
     assert not flipped.any() and D.max() <= report["islands"][0]["bound_certified"] * (1 + 1e-6)
     assert len(overlapping_triangle_pairs(uv)) == 0
+
+
+@pytest.mark.parametrize("binary", [False, True], ids=["ascii", "binary"])
+@pytest.mark.parametrize("shape", [L_SHAPE, IN_A_LINE, COMB], ids=["L", "in a line", "comb"])
+def test_a_ply_of_polygons_of_one_length_is_triangulated_as_other_polygons(tmp_path, shape,
+                                                                          binary):
+    # found by the polygon fuzz contract (test_fuzz_polygons.py): an ASCII PLY, or a binary one
+    # whose faces all have one length, is read by trimesh, which fanned its polygons from their
+    # first corner (a triangle outside the L, one of no area in a line); now each polygon is
+    # triangulated as an OBJ's or a mixed binary PLY's are, its triangles tiling it
+    import struct
+    from bd_uv.meshio import load_mesh
+    q = np.asarray(shape, dtype=np.float64)
+    V = _tiles(q).astype(np.float32)
+    c = len(q)
+    head = (f"ply\nformat {'binary_little_endian' if binary else 'ascii'} 1.0\n"
+            f"element vertex {c}\nproperty float x\nproperty float y\nproperty float z\n"
+            f"element face 1\nproperty list uchar int vertex_indices\nend_header\n").encode()
+    if binary:
+        body = V.astype("<f4").tobytes() + struct.pack(f"<B{c}i", c, *range(c))
+    else:
+        body = ("".join(" ".join(repr(float(x)) for x in v) + "\n" for v in V.tolist())
+                + f"{c} " + " ".join(map(str, range(c))) + "\n").encode()
+    path = tmp_path / "poly.ply"
+    path.write_bytes(head + body)
+    m = load_mesh(str(path))
+    assert len(m.F) == c - 2
+    _check_tiles(q, m.F)
