@@ -25,7 +25,9 @@ def polygon_triangles(V, counts, indices):
     -------
     T : (m,3) int64 face-vertex ids, poly : (m,) int64 polygon of each triangle
     """
-    T, poly, clipped = triangulate(V, counts, indices)
+    # float32: the precision a scene's faces are measured at (``batch.scene_files``), so no
+    # fan triangle is kept that it cannot tell from a line
+    T, poly, clipped = triangulate(V, counts, indices, precision=np.float32)
     counts = np.asarray(counts, dtype=np.int64)
     big = np.flatnonzero(counts >= 4)
     if not len(big) or not len(indices):

@@ -192,3 +192,32 @@ def test_a_ply_of_polygons_of_one_length_is_triangulated_as_other_polygons(tmp_p
     m = load_mesh(str(path))
     assert len(m.F) == c - 2
     _check_tiles(q, m.F)
+
+
+def test_a_usd_polygon_has_no_triangle_float32_cannot_tell_from_a_line(tmp_path):
+    # found by the polygon fuzz contract: two cells of a gently curved sheet as one hexagon,
+    # three corners in a line on each long side; float32 moved the middle ones off their lines
+    # by ~1e-9, so the fan from the first corner kept a triangle over three of them, which the
+    # scene unwrap (measuring faces at float32) refused as of no area: with --seams none the
+    # island failed and the stage was not written
+    pytest.importorskip("pxr")
+    from pxr import Usd, UsdGeom
+    from bd_uv.cli import main
+    from bd_uv.repair import zero_area_faces
+    xy = np.array([(0, 0), (1, 0), (0, 1), (1, 1), (0, 2), (1, 2)], dtype=np.float64)
+    V = np.column_stack([xy, 0.03 * (xy[:, 0] - 0.5) ** 2 + 0.02 * xy[:, 1]])
+    V = V.astype(np.float32).astype(np.float64)
+    hexagon = [0, 1, 3, 5, 4, 2]
+    T, _, _ = triangulate(V, [6], np.array(hexagon), precision=np.float32)
+    F = np.array(hexagon)[T]
+    assert not zero_area_faces(V, F, np.float32).any()
+    assert zero_area_faces(V, np.array(hexagon)[fan_triangles([6])[0]], np.float32).any()
+    src, out = tmp_path / "sheet.usda", tmp_path / "o.usda"
+    stage = Usd.Stage.CreateNew(str(src))
+    mesh = UsdGeom.Mesh.Define(stage, "/Sheet")
+    mesh.CreatePointsAttr([tuple(p) for p in V.tolist()])
+    mesh.CreateFaceVertexCountsAttr([6])
+    mesh.CreateFaceVertexIndicesAttr(hexagon)
+    stage.GetRootLayer().Save()
+    assert main(["unwrap", str(src), "-o", str(out), "--seams", "none", "-q"]) == 0
+    assert out.exists()
