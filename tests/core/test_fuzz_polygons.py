@@ -380,7 +380,9 @@ def check(sc, root):
         assert rc != 0, (argv, "exit 0 and nothing written")
         if sc["runner"] == "batch" and rep.exists():
             entry = strict_json(rep.read_text())["items"][0]
-            assert entry["status"] == "failed" and (entry["error"] or entry["message"]), entry
+            # failed, or partial with the mesh kept as it was: says why
+            assert entry["status"] != "certified" and not entry["output"], entry
+            assert entry["error"] or entry["message"], entry
         return
     assert rc in (0, 1), (rc, stderr)
     bound, zero, split = report_of(sc, rep)
@@ -432,6 +434,11 @@ FOUND = [
     # an ASCII PLY's concave polygon (an L of three cells) fanned by trimesh from its first
     # corner: a triangle outside the polygon (meshio now triangulates a PLY's polygons itself)
     scenario(fmt="ply ascii", seed=1, sheet=(2, 2, 4)),
+    # a USD hexagon of two cells of a curved sheet, corners in a line that float32 moved off it:
+    # its fan kept a triangle float32 cannot tell from a line, refused by the scene unwrap
+    # (--seams none: the island failed, nothing written; polygons.triangulate's precision)
+    scenario(fmt="usda", seed=7258, sheet=(1, 2, 1), shape="curved", extras=["star"],
+             runner="batch", seams="none"),
 ]
 
 
