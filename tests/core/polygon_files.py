@@ -216,7 +216,8 @@ def _num(x):
 
 def obj_bytes(m, rng, style):
     """OBJ bytes of ``m``, written in ``style`` (a dict of booleans: crlf, negative, continued,
-    tabs, bom, old_vt, normals, records, comments) and the polygons as written (vertex ids)."""
+    tabs, bom, old_vt, vt_corner (the old vt one a polygon corner, each polygon its own UV
+    island: seams in the file's UVs), normals, records, comments)."""
     eol = "\r\n" if style["crlf"] else "\n"
     sep = "\t" if style["tabs"] else " "
     n = len(m.V)
@@ -224,8 +225,14 @@ def obj_bytes(m, rng, style):
     if style["records"]:
         lines += ["# made by the polygon fuzz \u00e9", "mtllib fuzz.mtl", ""]
     lines += [sep.join(["v"] + [_num(c) for c in p]) for p in m.V.tolist()]
-    if style["old_vt"]:
+    per_corner = style["old_vt"] and style.get("vt_corner")
+    base = np.concatenate([[0], np.cumsum([len(p) for p in m.polys])])
+    if per_corner:        # each polygon's corners projected, the polygons side by side
+        lines += [f"vt {_num(m.V[v, 0] + 3.0 * k)} {_num(m.V[v, 1])}"
+                  for k, p in enumerate(m.polys) for v in p]
+    elif style["old_vt"]:
         lines += [f"vt {_num(x)} {_num(y)}" for x, y, _ in m.V.tolist()]
+    nt = int(base[-1]) if per_corner else n
     if style["normals"]:
         lines += [f"vn 0 0 {1 if i % 2 else -1}" for i in range(n)]
     if style["records"]:
@@ -237,9 +244,12 @@ def obj_bytes(m, rng, style):
                       "l 1 2", "p 1"]
         neg = style["negative"] and k % 2 == 1
         corners = []
-        for v in p:
+        for c, v in enumerate(p):
             i = str(v - n if neg else v + 1)          # counted back from the last v (all read)
             t = i if style["old_vt"] else ""
+            if per_corner:
+                j = int(base[k]) + c
+                t = str(j - nt if neg else j + 1)
             corners.append(f"{i}/{t}/{i}" if style["normals"] else f"{i}/{t}" if t else i)
         if style["continued"] and len(corners) > 3 and k % 3 == 0:
             rec = f"f{sep}" + sep.join(corners[:2]) + " \\" + eol + "  " + sep.join(corners[2:])

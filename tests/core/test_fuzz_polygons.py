@@ -55,9 +55,12 @@ EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "12"))
 FORMATS = ("obj", "obj", "usda", "ply", "ply ascii", "strips", "stl", "stl binary")
 SUFFIX = {"obj": ".obj", "usda": ".usda", "ply": ".ply", "ply ascii": ".ply", "strips": ".ply",
           "stl": ".stl", "stl binary": ".stl"}
-STYLE = ("crlf", "negative", "continued", "tabs", "bom", "old_vt", "normals", "records",
-         "comments")
-DAMAGES = ("truncated", "flipped byte", "index out of range", "nan")
+STYLE = ("crlf", "negative", "continued", "tabs", "bom", "old_vt", "vt_corner", "normals",
+         "records", "comments")
+DAMAGES = ("truncated", "flipped byte", "index out of range", "nan", "bad face")
+BAD_FACES = (b"f 1 2", b"f 0 1 2", b"f 1 2 -99999", b"f 1/9999 2/9999 3/9999", b"f a b c",
+             b"f 1 1 1", b"f 1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16 17 18 19 20 2 1", b"f",
+             b"f 1//1 2//1 3//1", b"f 1/1 2 3")
 
 
 @st.composite
@@ -136,6 +139,8 @@ def damage(sc, data):
                                 else b"\x7f\x01\x00\x00")
         if sc["fmt"] == "ply ascii":
             return data.rstrip(b"\n") + b"0\n"          # the last corner id x 10 (+ 0)
+    if kind == "bad face" and sc["fmt"] == "obj":   # a record the exporter got wrong
+        return data + b"\n" + BAD_FACES[int(at * len(BAD_FACES))] + b"\n"
     if kind == "nan":
         if sc["fmt"] in ("obj", "ply ascii", "stl"):
             i = data.find(b"0.0")
@@ -233,17 +238,18 @@ def usd_polygons(path):
     return V, uv, polys
 
 
-def check_certified(V, UV, polys, bound, zero, packed=True, flat_simple=None):
+def check_certified(V, UV, polys, bound, zero, packed=True, flat_simple=None, precision=None):
     """The polygons (lists of (vertex, uv row or None)) with UVs certified as written: see the
     module's docstring. ``flat_simple``: per polygon, whether it is flat and simple in space (its
-    triangles must tile it there); None: unknown. Returns whether every face has UVs."""
+    triangles must tile it there); None: unknown. ``precision``: the points' (a stage's
+    float32), which the product triangulates at. Returns whether every face has UVs."""
     polys = [p for p in polys if len(p) >= 3]
     counts = np.array([len(p) for p in polys], np.int64)
     vids = np.array([v for p in polys for v, _ in p], np.int64)
     uvid = np.array([-1 if t is None else t for p in polys for _, t in p], np.int64)
     if not len(polys):
         return True
-    T, poly, _ = triangulate(V, counts, vids)
+    T, poly, _ = triangulate(V, counts, vids, precision=precision)
     start = np.concatenate([[0], np.cumsum(counts)[:-1]])
     tv, tt = vids[T], uvid[T]
     has = (tt >= 0).all(axis=1)
@@ -413,7 +419,8 @@ def check(sc, root):
     if clean and len(polys) == len(m.polys) and all(len(p) == len(q) for p, q in
                                                     zip(polys, m.polys)):
         flat_simple = m.flat
-    every = check_certified(V, UV, polys, bound, zero, flat_simple=flat_simple)
+    every = check_certified(V, UV, polys, bound, zero, flat_simple=flat_simple,
+                            precision=np.float32 if sc["fmt"] == "usda" else None)
     if rc == 0:
         assert every, "exit 0 but faces written without UVs"
 
