@@ -181,7 +181,10 @@ def _read_trimesh(path, ext):
     uv = getattr(m.visual, "uv", None)
     uv = None if uv is None or len(uv) != len(V) else np.asarray(uv, dtype=np.float64)[:, :2]
     F = np.asarray(m.faces, dtype=np.int64)
-    corners = raw_polygons(m) if ext == ".ply" else None
+    try:
+        corners = raw_polygons(m) if ext == ".ply" else None
+    except ValueError:        # mixed face lengths trimesh read as one: walked here instead
+        return read_binary_ply(data)
     if corners is not None:   # polygons: trimesh's fans replaced by polygons.triangulate's
         F = polygon_triangles(V, corners)
     return V, F, uv

@@ -120,7 +120,13 @@ def raw_polygons(mesh):
     binary file's as (count, list) records), when a face has more than three: trimesh fans
     those from their first corner, a triangle outside a concave polygon or of no area where
     three corners lie in a line. None when every face is a triangle or the element is not
-    there."""
+    there.
+
+    Raises ValueError when a binary file's records hold a count other than their list's
+    length: trimesh read every face as long as the first, which goes unnoticed when the
+    lengths add up to as many bytes (three quads, a hexagon, a triangle with ten... : found by
+    the polygon fuzz contract, garbage vertex ids), so the file is to be walked by
+    ``read_binary_ply``."""
     try:
         data = mesh.metadata["_ply_raw"]["face"]["data"]
     except (AttributeError, KeyError, TypeError):
@@ -130,7 +136,9 @@ def raw_polygons(mesh):
         return None
     lists = data[name]
     if getattr(lists, "dtype", None) is not None and lists.dtype.names:   # binary: (count, list)
-        lists = lists[lists.dtype.names[1]]
+        count, lists = lists[lists.dtype.names[0]], lists[lists.dtype.names[1]]
+        if lists.ndim != 2 or (np.asarray(count) != lists.shape[1]).any():
+            raise ValueError("face lists of different lengths read as one length")
     corners = [np.asarray(c, dtype=np.int64).reshape(-1) for c in lists]
     return corners if any(len(c) > 3 for c in corners) else None
 
