@@ -446,6 +446,11 @@ FOUND = [
     # (--seams none: the island failed, nothing written; polygons.triangulate's precision)
     scenario(fmt="usda", seed=7258, sheet=(1, 2, 1), shape="curved", extras=["star"],
              runner="batch", seams="none"),
+    # a binary PLY of three quads, a hexagon and two triangles: as many bytes as six quads, so
+    # trimesh read six quads of garbage ids without an error; refused as "vertex indices
+    # outside 0..14" (meshio: a count other than its list's length goes to read_binary_ply)
+    scenario(fmt="ply", seed=786366461, sheet=(5, 1, 1), shape="curved",
+             extras=["zero-area point", "zero-area hanging"]),
 ]
 
 
