@@ -221,3 +221,42 @@ def test_a_usd_polygon_has_no_triangle_float32_cannot_tell_from_a_line(tmp_path)
     stage.GetRootLayer().Save()
     assert main(["unwrap", str(src), "-o", str(out), "--seams", "none", "-q"]) == 0
     assert out.exists()
+
+
+@pytest.mark.parametrize("at", [0, 4, 17])
+def test_a_usd_polygon_with_two_corners_at_one_place_is_one_island(tmp_path, at):
+    # found by the polygon fuzz contract: a star whose corners ``at`` and ``at + 1`` are two
+    # points at one place; the triangle between them has no area and is left out, and the
+    # star's other triangles met only at a point: two islands, whose UVs at that face-vertex
+    # one UV per face-vertex cannot hold ("fail as stored", the stage not written). The two
+    # points are one vertex for the unwrap now (as an OBJ's are welded)
+    pytest.importorskip("pxr")
+    from pxr import Usd, UsdGeom
+    from bd_uv.cli import main
+    q = star(9, 0.35)
+    q = np.insert(q, at + 1, q[at], axis=0)
+    V = _tiles(q).astype(np.float32)
+    src, out, rep = tmp_path / "star.usda", tmp_path / "o.usda", tmp_path / "r.json"
+    stage = Usd.Stage.CreateNew(str(src))
+    mesh = UsdGeom.Mesh.Define(stage, "/Star")
+    mesh.CreatePointsAttr([tuple(p) for p in V.tolist()])
+    mesh.CreateFaceVertexCountsAttr([len(q)])
+    mesh.CreateFaceVertexIndicesAttr(list(range(len(q))))
+    stage.GetRootLayer().Save()
+    assert main(["unwrap", str(src), "-o", str(out), "--report", str(rep), "-q"]) == 0
+    (entry,) = json.loads(rep.read_text())["meshes"]
+    assert entry["status"] == "certified" and entry["zero_area_faces"] == 1
+    written = Usd.Stage.Open(str(out))       # kept: a prim of a collected stage is invalid
+    pv = UsdGeom.PrimvarsAPI(written.GetPrimAtPath("/Star")).GetPrimvar("st")
+    uv = np.asarray(pv.Get(), np.float64)
+    if pv.IsIndexed():
+        uv = uv[np.asarray(pv.GetIndices())]
+    assert np.array_equal(uv[at], uv[at + 1])          # one place, one UV
+    T, _, _ = triangulate(V.astype(np.float64), [len(q)], np.arange(len(q)),
+                          precision=np.float32)
+    P = V.astype(np.float64)
+    area = np.linalg.norm(np.cross(P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]]), axis=1)
+    keep = area > 1e-9
+    D, flipped = reference_distortion(P, T[keep], uv[T[keep]])
+    assert not flipped.any() and D.max() <= entry["bound_certified"] * (1 + 1e-6)
+    assert len(overlapping_triangle_pairs(uv[T[keep]])) == 0
