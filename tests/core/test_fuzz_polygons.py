@@ -455,6 +455,10 @@ FOUND = [
     # outside 0..14" (meshio: a count other than its list's length goes to read_binary_ply)
     scenario(fmt="ply", seed=786366461, sheet=(5, 1, 1), shape="curved",
              extras=["zero-area point", "zero-area hanging"]),
+    # a USD star with two corners at one place: the zero-area triangle between them left out,
+    # the star fell into two islands meeting at a point, two UVs at one face-vertex: "fail as
+    # stored", exit 1 (usd_mesh: such corners are one vertex for the unwrap)
+    scenario(fmt="usda", seed=5, sheet=(1, 1, 0), extras=["same position"]),
 ]
 
 
