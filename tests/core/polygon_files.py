@@ -68,9 +68,10 @@ def _loop(region, ids, r):
 
 def star_polygon(rng, n):
     """(n,2) a random star-shaped simple polygon about the origin, counter-clockwise (concave
-    where a radius dips)."""
-    t = np.sort(rng.uniform(0, 2 * np.pi, n))
-    t += np.arange(n) * 1e-3                     # distinct angles
+    where a radius dips): each corner's angle within its own n-th of the turn, so no gap
+    between two reaches half a turn (angles drawn anywhere left the origin outside, and the
+    closing side could cross the others: found by this contract's first deep run)."""
+    t = 2 * np.pi * (np.arange(n) + rng.uniform(0.1, 0.9, n)) / n
     r = rng.uniform(0.2, 1.0, n)
     return np.column_stack([r * np.cos(t), r * np.sin(t)])
 
