@@ -459,7 +459,10 @@ FOUND = [
     scenario(fmt="ply ascii", seed=1, sheet=(2, 2, 4)),
     # a USD hexagon of two cells of a curved sheet, corners in a line that float32 moved off it:
     # its fan kept a triangle float32 cannot tell from a line, refused by the scene unwrap
-    # (--seams none: the island failed, nothing written; polygons.triangulate's precision)
+    # (--seams none: the island failed, nothing written; polygons.triangulate's precision).
+    # The contract lets --seams none fail an island with a face of no area, so this example
+    # passed before the fix too: test_polygons' test_a_usd_polygon_has_no_triangle_float32_...
+    # is its regression test
     scenario(fmt="usda", seed=7258, sheet=(1, 2, 1), shape="curved", extras=["star"],
              runner="batch", seams="none"),
     # a binary PLY of three quads, a hexagon and two triangles: as many bytes as six quads, so
