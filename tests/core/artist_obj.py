@@ -113,10 +113,10 @@ def records(data):
         if line.rstrip().endswith(b"\\"):
             continue
         words = pending.split()
-        out.append((words[0].decode() if words else "", pending))
+        out.append((words[0].decode("utf-8", "replace") if words else "", pending))
         pending = b""
     if pending:
-        out.append((pending.split()[0].decode(), pending))
+        out.append((pending.split()[0].decode("utf-8", "replace"), pending))
     return out
 
 
