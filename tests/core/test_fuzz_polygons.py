@@ -283,11 +283,14 @@ def check_certified(V, UV, polys, bound, zero, packed=True, flat_simple=None, pr
     bad = flipped | ~(D <= bound * (1 + 1e-9))
     assert not (bad & ~flat).any(), (D[~flat].max(), flipped[~flat].sum(), bound)
     assert bad[flat].sum() <= zero, (bad[flat].sum(), zero)
-    # a face on the same three vertices as an earlier one (a damaged file's indices can make
-    # one) is a duplicate: it takes its twin's UVs (the repair's rule), lying on it
+    # a face on the same three vertices in the same turn as an earlier one (a damaged file's
+    # indices can make one) is a duplicate: it takes its twin's UVs (the repair's rule), lying
+    # on it. The same three the other way round is no duplicate (two bent polygons' fans can
+    # both hold the sliver of their shared side): both are measured
     tri = tv[has]
-    _, first, inv = np.unique(np.sort(tri, axis=1), axis=0, return_index=True,
-                              return_inverse=True)
+    r = np.argmin(tri, axis=1)
+    turned = np.take_along_axis(tri, (r[:, None] + np.arange(3)) % 3, axis=1)
+    _, first, inv = np.unique(turned, axis=0, return_index=True, return_inverse=True)
     twin = first[inv.ravel()]
     dup = twin != np.arange(len(tri))
     for f, g in zip(np.flatnonzero(dup).tolist(), twin[dup].tolist()):
@@ -499,6 +502,9 @@ FOUND = [
     # overlap test counted as an overlap
     scenario(sheet=(3, 1, 0), extras=["star"], damage="flipped byte",
              style=dict({k: False for k in STYLE}, negative=True)),
+    # (the test's own) two bent polygons' fans both holding the sliver of their shared side:
+    # the same three vertices the other way round, no duplicate
+    scenario(seed=3, sheet=(3, 3, 5), shape="curved"),
 ]
 
 
