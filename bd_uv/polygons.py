@@ -103,8 +103,10 @@ def triangulate(V, counts, corners, precision=None):
     angle = np.arctan2(np.linalg.norm(cr, axis=1), np.einsum("ij,ij->i", u, w))
     sweep = np.bincount(poly, angle, len(counts))
     unsound |= (sweep[poly] >= 2 * np.pi - 1e-9) & (counts[poly] >= 4) & ~bent[poly]
-    with np.errstate(all="ignore"):
-        total = 0.5 * float(np.nansum(np.linalg.norm(cr, axis=1)))    # the fans' area
+    total = 0.0
+    if precision is not None:           # the fans' area, for the UV step's test
+        with np.errstate(all="ignore"):
+            total = 0.5 * float(np.nansum(np.linalg.norm(cr, axis=1)))
     no_area = functools.partial(_no_area, precision=precision, total=total)
     unsound |= no_area(P[T]) & (counts[poly] >= 4)
     unsound &= size[poly] > 0          # corners all on a line (or not finite): the fan as it is
