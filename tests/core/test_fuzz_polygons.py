@@ -505,6 +505,11 @@ FOUND = [
     # (the test's own) two bent polygons' fans both holding the sliver of their shared side:
     # the same three vertices the other way round, no duplicate
     scenario(seed=3, sheet=(3, 3, 5), shape="curved"),
+    # (the test's own) an OBJ cut short inside a face's last normal index ("-11/-2/-"), which
+    # bd-uv keeps as written (it reads no normals): artist_obj.read_faces read it as a number
+    scenario(sheet=(2, 3, 2), damage="truncated", at=0.98828125,
+             style=dict({k: False for k in STYLE}, negative=True, old_vt=True, vt_corner=True,
+                        normals=True)),
 ]
 
 
