@@ -22,7 +22,7 @@ import numpy as np
 from .errors import InvalidMeshError, refuse_lfs_pointer
 from .mesh.weld import welded_in_place
 from .obj import patched_obj, polygon_corner_vt, read_obj
-from .ply import read_binary_ply
+from .ply import polygon_triangles, raw_polygons, read_binary_ply
 
 
 @dataclass(frozen=True)
@@ -180,7 +180,14 @@ def _read_trimesh(path, ext):
     V = np.asarray(m.vertices, dtype=np.float64)
     uv = getattr(m.visual, "uv", None)
     uv = None if uv is None or len(uv) != len(V) else np.asarray(uv, dtype=np.float64)[:, :2]
-    return V, np.asarray(m.faces, dtype=np.int64), uv
+    F = np.asarray(m.faces, dtype=np.int64)
+    try:
+        corners = raw_polygons(m) if ext == ".ply" else None
+    except ValueError:        # mixed face lengths trimesh read as one: walked here instead
+        return read_binary_ply(data)
+    if corners is not None:   # polygons: trimesh's fans replaced by polygons.triangulate's
+        F = polygon_triangles(V, corners)
+    return V, F, uv
 
 
 def uv_seams(F, corner_uv):

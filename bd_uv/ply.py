@@ -114,6 +114,41 @@ def _code(t):
     return np.dtype(t).char
 
 
+def raw_polygons(mesh):
+    """Each face's corners (a list of int64 arrays) of a PLY trimesh loaded, from the face
+    element it keeps (``metadata["_ply_raw"]``: an ASCII file's lists as rows or arrays, a
+    binary file's as (count, list) records), when a face has more than three: trimesh fans
+    those from their first corner, a triangle outside a concave polygon or of no area where
+    three corners lie in a line. None when every face is a triangle or the element is not
+    there.
+
+    Raises ValueError when a binary file's records hold a count other than their list's
+    length: trimesh read every face as long as the first, which goes unnoticed when the
+    lengths add up to as many bytes (three quads, a hexagon, a triangle with ten... : found by
+    the polygon fuzz contract, garbage vertex ids), so the file is to be walked by
+    ``read_binary_ply``."""
+    try:
+        data = mesh.metadata["_ply_raw"]["face"]["data"]
+    except (AttributeError, KeyError, TypeError):
+        return None
+    name = next((n for n in ("vertex_indices", "vertex_index") if n in _names(data)), None)
+    if name is None:
+        return None
+    lists = data[name]
+    if getattr(lists, "dtype", None) is not None and lists.dtype.names:   # binary: (count, list)
+        count, lists = lists[lists.dtype.names[0]], lists[lists.dtype.names[1]]
+        if lists.ndim != 2 or (np.asarray(count) != lists.shape[1]).any():
+            raise ValueError("face lists of different lengths read as one length")
+    corners = [np.asarray(c, dtype=np.int64).reshape(-1) for c in lists]
+    return corners if any(len(c) > 3 for c in corners) else None
+
+
+def polygon_triangles(V, corners):
+    """(m,3) int64: the triangles of polygons given as their corners' vertex ids (a list of
+    arrays): each polygon's ``polygons.triangulate``'s (its fan, or its ears where concave)."""
+    return _triangles(V, {"corners": corners})
+
+
 def _triangles(V, faces):
     """(m,3) int64: each polygon's triangles (``polygons.triangulate``: its fan, or its ears
     where it is concave)."""

@@ -9,6 +9,8 @@ lies outside its polygon or has no area where a triangulation without that exist
 triangle outside a concave polygon overlaps its neighbour in the UV map, one with no area has no
 distortion to certify.
 """
+import functools
+
 import numpy as np
 
 # A fan triangle lies outside its polygon (a concave corner) when its area about the Newell
@@ -52,7 +54,7 @@ def fan_triangles(counts):
     return np.stack([s, s + i, s + i + 1], 1), poly
 
 
-def triangulate(V, counts, corners):
+def triangulate(V, counts, corners, precision=None):
     """Each polygon's triangles: its fan where that is sound, else its ears.
 
     Parameters
@@ -60,6 +62,9 @@ def triangulate(V, counts, corners):
     V : (n,3) float array, the points
     counts : (p,) int array, corners of each polygon (>= 3)
     corners : (sum(counts),) int array, each polygon's corners in order (ids into ``V``)
+    precision : float type the points were stored in, optional (``np.float32``: a USD stage's,
+        which the scene unwrap measures faces at): a triangle that precision cannot tell from
+        a line has no area too, as ``repair.zero_area_faces`` finds it
 
     Returns
     -------
@@ -98,21 +103,27 @@ def triangulate(V, counts, corners):
     angle = np.arctan2(np.linalg.norm(cr, axis=1), np.einsum("ij,ij->i", u, w))
     sweep = np.bincount(poly, angle, len(counts))
     unsound |= (sweep[poly] >= 2 * np.pi - 1e-9) & (counts[poly] >= 4) & ~bent[poly]
-    unsound |= _no_area(P[T]) & (counts[poly] >= 4)
+    total = 0.0
+    if precision is not None:           # the fans' area, for the UV step's test
+        with np.errstate(all="ignore"):
+            total = 0.5 * float(np.nansum(np.linalg.norm(cr, axis=1)))
+    no_area = functools.partial(_no_area, precision=precision, total=total)
+    unsound |= no_area(P[T]) & (counts[poly] >= 4)
     unsound &= size[poly] > 0          # corners all on a line (or not finite): the fan as it is
     clipped = np.unique(poly[unsound])
     clipped = clipped[counts[clipped] <= MAX_CLIPPED]
     for p in clipped.tolist():
         s, c = int(start[p]), int(counts[p])
         rows = slice(*np.searchsorted(poly, [p, p + 1]))   # poly is sorted
-        T[rows] = s + _turned_fan_or_ears(P[s:s + c], normal[p])
+        T[rows] = s + _turned_fan_or_ears(P[s:s + c], normal[p], no_area)
     return T, poly, clipped
 
 
-def _turned_fan_or_ears(Q, n):
+def _turned_fan_or_ears(Q, n, no_area):
     """(c-2,3) corner ids of the polygon ``Q`` (c,3), Newell normal ``n``, whose fan from its
     first corner is not sound: the fan from the first other corner whose fan is (an n-gon whose
-    first three corners lie on a line: from its second), else its ears."""
+    first three corners lie on a line: from its second; ``no_area``: ``_no_area`` at the
+    points' precision), else its ears."""
     c = len(Q)
     j = np.arange(1, c - 1)
     size = float(n @ n)
@@ -123,18 +134,29 @@ def _turned_fan_or_ears(Q, n):
         turn = np.cross(u, w) @ n
         sweep = np.arctan2(np.linalg.norm(np.cross(u, w), axis=1), np.einsum("ij,ij->i", u, w))
         if (turn >= -FLAT * size).all() and sweep.sum() < 2 * np.pi - 1e-9 \
-                and not _no_area(Q[fan]).any():
+                and not no_area(Q[fan]).any():
             return fan
     return _ears(_in_plane(Q, n))
 
 
-def _no_area(P):
+def _no_area(P, precision=None, total=0.0):
     """(m,) bool: triangles ``P`` (m,3,3) of finite corners with no area by the unwrap's own
-    test (twice the area at most ``DEGENERATE_RATIO`` times the longest edge squared)."""
+    test (twice the area at most ``DEGENERATE_RATIO`` times the longest edge squared); with a
+    ``precision`` other than float64, also those whose height (twice the area over the longest
+    edge) is below one step of it at their largest coordinate, or one UV step of it (in the unit
+    square's upper half) times the square root of the area ``total`` (``mesh.arrays``'
+    ``thinner_than_precision``, a layer above: found by the polygon fuzz contract, a USD
+    polygon's fan triangle over three corners in a line that float32 moved off it was kept,
+    then refused by the unwrap as of no area)."""
     with np.errstate(all="ignore"):
         twice = np.linalg.norm(np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]), axis=1)
         longest = np.max(np.sum((P - np.roll(P, -1, axis=1)) ** 2, axis=2), axis=1)
-        return ~(twice > DEGENERATE_RATIO * longest) & np.isfinite(P).all(axis=(1, 2))
+        zero = ~(twice > DEGENERATE_RATIO * longest)
+        if precision is not None and np.dtype(precision) != np.float64:
+            step = np.spacing(np.abs(P).max(axis=(1, 2)).astype(precision)).astype(np.float64)
+            uv_step = float(np.spacing(np.asarray(0.5, dtype=precision))) * np.sqrt(total)
+            zero |= ~(twice > np.maximum(step, uv_step) * np.sqrt(longest))
+        return zero & np.isfinite(P).all(axis=(1, 2))
 
 
 def _in_plane(Q, n):

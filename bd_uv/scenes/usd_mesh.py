@@ -25,7 +25,9 @@ def polygon_triangles(V, counts, indices):
     -------
     T : (m,3) int64 face-vertex ids, poly : (m,) int64 polygon of each triangle
     """
-    T, poly, clipped = triangulate(V, counts, indices)
+    # float32: the precision a scene's faces are measured at (``batch.scene_files``), so no
+    # fan triangle is kept that it cannot tell from a line
+    T, poly, clipped = triangulate(V, counts, indices, precision=np.float32)
     counts = np.asarray(counts, dtype=np.int64)
     big = np.flatnonzero(counts >= 4)
     if not len(big) or not len(indices):
@@ -122,7 +124,7 @@ def mesh_arrays(mesh, where, uv_name, Usd):
     T, poly = T[keep], poly[keep]
     if mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.leftHanded:
         T = T[:, ::-1].copy()                    # the front face winds clockwise
-    F = indices[T]
+    F = _one_vertex_a_place(V, counts, indices)[T]
     corner_uv = _existing_uv(mesh, uv_name, T, indices, len(V), where, warnings)
     info = {"prim": str(mesh.GetPath()), "uv_name": uv_name, "polygons": int(len(counts)),
             "holes": int(len(holes)),
@@ -133,6 +135,42 @@ def mesh_arrays(mesh, where, uv_name, Usd):
     labels = {"object": np.zeros(len(F), np.int64),
               "material": _subset_materials(mesh, len(counts))[poly]}
     return Mesh(V, F, corner_uv, str(mesh.GetPath()), labels), part, info, warnings
+
+
+def _one_vertex_a_place(V, counts, indices):
+    """The face-vertex indices the unwrap solves on: a polygon corner at exactly the place of
+    the corner before it, though another point, takes that corner's point (as an OBJ's or a
+    PLY's vertices at one place are welded). Every triangulation of such a polygon has a
+    triangle of no area on the side between them, which the unwrap leaves out; unless the two
+    corners are one vertex, the polygon's other triangles then meet only at a point, fall into
+    two islands, and its face-vertices at that point get two UVs, which one UV per face-vertex
+    cannot store (found by the polygon fuzz contract: such stars failed as stored, "max
+    distortion 17.2 > bound 5"). A polygon of no area keeps its points (all its triangles are
+    left out, their corners take the UVs of the same points in the faces beside them). The
+    file's indices are not changed."""
+    at = V[indices]
+    counts = np.asarray(counts, dtype=np.int64)
+    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
+    prev = np.arange(len(indices)) - 1
+    prev[start] = start + counts - 1
+    same = (at == at[prev]).all(axis=1) & (indices != indices[prev])
+    if not same.any():
+        return indices
+    out = indices.copy()
+    owner = np.repeat(np.arange(len(counts)), counts)
+    for p in np.unique(owner[same]).tolist():
+        s, c = int(start[p]), int(counts[p])
+        moved = ~same[s:s + c]
+        Q = at[s:s + c]
+        twice = np.linalg.norm(np.cross(Q, np.roll(Q, -1, axis=0)).sum(axis=0))
+        if not twice > 1e-12 * np.ptp(Q, axis=0).max() ** 2:
+            continue                   # a polygon of no area: its corners keep their points
+        first = int(np.argmax(moved))  # a corner away from the one before it
+        for k in range(1, c):          # each corner of a run at one place: the run's first
+            j = s + (first + k) % c
+            if same[j]:
+                out[j] = out[prev[j]]
+    return out
 
 
 def _subset_materials(mesh, n_faces):

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import (DegenerateFacesError, DuplicateFacesError, NonFiniteError,
                       NonManifoldError, OrientationError)
-from ..repair import repair_mesh, stored_precision
+from ..repair import flat_at_precision, repair_mesh
 from .auto import unwrap_auto
 from .needed import result_on_input
 
@@ -38,10 +38,15 @@ def unwrap_auto_repaired(V, F, seams=None, polygons=None, method="lscm", precisi
     ``precision``: the float type V was stored in (``bd_uv.unwrap``'s): the repair then leaves
     out, as zero-area, the faces it cannot tell from a line, as ``seams.needed`` does (a glTF or
     USD mesh; a flipped byte in a crate file's points made 19 such faces certified in float64
-    and flat as written). Two such faces side by side (``repair.stored_precision``) make the
-    repair run first: no store in that float type keeps them apart, so the search's chart
-    holding them fails as stored at any stretch (a grid split by a strip one float32 step high,
-    as a GLB: "0/1 mesh(es) certified: nothing written", where the default seams wrote it).
+    and flat as written). Such faces make the repair run first: no store in that float type
+    keeps two side by side apart, so the search's chart holding them fails as stored at any
+    stretch (a grid split by a strip one float32 step high, as a GLB: "0/1 mesh(es) certified:
+    nothing written", where the default seams wrote it); and one alone, certified in float64,
+    may be cut off by the overlap cut as a piece of its own that no store certifies (found by
+    the polygon fuzz contract: a USD sheet with a face hanging on its side, whose third corner
+    float32 moved off the side's line, failed whole with --seams auto). ``batch.unwrap_job``
+    passes ``precision`` only for side-by-side faces, or to run again after such a face failed;
+    ``seams.needed`` leaves every such face out alike.
 
     Returns
     -------
@@ -51,7 +56,7 @@ def unwrap_auto_repaired(V, F, seams=None, polygons=None, method="lscm", precisi
     """
     def as_it_is():
         return unwrap_auto(V, F, seams=seams, polygons=polygons, method=method, **search)
-    flat = precision is not None and stored_precision(V, F, precision) is not None
+    flat = precision is not None and flat_at_precision(V, F, precision) is not None
     if not flat:
         res, added, info = as_it_is()
         if not needs_repair(res):

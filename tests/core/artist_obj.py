@@ -113,10 +113,10 @@ def records(data):
         if line.rstrip().endswith(b"\\"):
             continue
         words = pending.split()
-        out.append((words[0].decode() if words else "", pending))
+        out.append((words[0].decode("utf-8", "replace") if words else "", pending))
         pending = b""
     if pending:
-        out.append((pending.split()[0].decode(), pending))
+        out.append((pending.split()[0].decode("utf-8", "replace"), pending))
     return out
 
 
@@ -138,7 +138,8 @@ def read_faces(data):
             parts = t.split("/") + ["", ""]
             ids = []
             for part, kind in zip(parts[:3], ("v", "vt", "vn")):
-                i = int(part) if part else None
+                # a normal index is kept as written, not read (a file cut short: "3/2/-")
+                i = int(part) if part and (kind != "vn" or part.lstrip("-").isdigit()) else None
                 ids.append(None if i is None else i + counts[kind] if i < 0 else i - 1)
             corners.append(tuple(ids))
             text.append((parts[0], parts[2] or None))

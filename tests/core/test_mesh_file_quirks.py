@@ -331,6 +331,28 @@ def _binary_ply(V, faces, eol=b"\n", extra=b""):
     return eol.join(head) + eol + body
 
 
+@pytest.mark.parametrize("faces", [
+    [[0, 1, 7, 6], [1, 2, 8, 7], [2, 3, 9, 8], [3, 4, 5, 11, 10, 9], [0, 12, 13], [1, 0, 12]],
+    [[0, 1, 7], [1, 2, 8, 7], [2, 3, 9, 8], [3, 4, 5, 11, 10, 9], [0, 12, 13]]],
+    ids=["quad first", "triangle first"])
+def test_binary_ply_whose_mixed_face_lengths_add_up_as_if_all_were_the_first(tmp_path, faces):
+    # found by the polygon fuzz contract: three quads, a hexagon and two triangles take as many
+    # bytes as six quads (a triangle first: as many as triangles alone), so trimesh read every
+    # face as long as the first without an error, garbage vertex ids: a valid file refused as
+    # "face(s) use vertex indices outside 0..13" (or, ids in range, a wrong mesh unwrapped)
+    V = np.array([[x, y, 0.1 * x * y] for y in (0, 1) for x in range(6)]
+                 + [[0, -1, 0], [1, -1, 0]], np.float32)
+    p = tmp_path / "mixed.ply"
+    p.write_bytes(_binary_ply(V, faces))
+    m = load_mesh(str(p))
+    assert len(m.F) == sum(len(f) - 2 for f in faces)
+    k = 0
+    for f in faces:                  # each polygon's n - 2 triangles in turn, of its corners
+        for _ in range(len(f) - 2):
+            assert set(m.F[k].tolist()) <= set(f)
+            k += 1
+
+
 @pytest.mark.parametrize("eol", [b"\n", b"\r", b"\r\n"])
 def test_binary_ply_with_triangles_and_quads(tmp_path, eol):
     # draco's testdata/Box.ply (Rhino 6): triangles and quads in one binary face list, a

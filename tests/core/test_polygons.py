@@ -164,3 +164,99 @@ def test_an_obj_of_concave_polygons_is_written_whole_and_certified(tmp_path):
     D, flipped = reference_distortion(V, tris, uv)
     assert not flipped.any() and D.max() <= report["islands"][0]["bound_certified"] * (1 + 1e-6)
     assert len(overlapping_triangle_pairs(uv)) == 0
+
+
+@pytest.mark.parametrize("binary", [False, True], ids=["ascii", "binary"])
+@pytest.mark.parametrize("shape", [L_SHAPE, IN_A_LINE, COMB], ids=["L", "in a line", "comb"])
+def test_a_ply_of_polygons_of_one_length_is_triangulated_as_other_polygons(tmp_path, shape,
+                                                                          binary):
+    # found by the polygon fuzz contract (test_fuzz_polygons.py): an ASCII PLY, or a binary one
+    # whose faces all have one length, is read by trimesh, which fanned its polygons from their
+    # first corner (a triangle outside the L, one of no area in a line); now each polygon is
+    # triangulated as an OBJ's or a mixed binary PLY's are, its triangles tiling it
+    import struct
+    from bd_uv.meshio import load_mesh
+    q = np.asarray(shape, dtype=np.float64)
+    V = _tiles(q).astype(np.float32)
+    c = len(q)
+    head = (f"ply\nformat {'binary_little_endian' if binary else 'ascii'} 1.0\n"
+            f"element vertex {c}\nproperty float x\nproperty float y\nproperty float z\n"
+            f"element face 1\nproperty list uchar int vertex_indices\nend_header\n").encode()
+    if binary:
+        body = V.astype("<f4").tobytes() + struct.pack(f"<B{c}i", c, *range(c))
+    else:
+        body = ("".join(" ".join(repr(float(x)) for x in v) + "\n" for v in V.tolist())
+                + f"{c} " + " ".join(map(str, range(c))) + "\n").encode()
+    path = tmp_path / "poly.ply"
+    path.write_bytes(head + body)
+    m = load_mesh(str(path))
+    assert len(m.F) == c - 2
+    _check_tiles(q, m.F)
+
+
+def test_a_usd_polygon_has_no_triangle_float32_cannot_tell_from_a_line(tmp_path):
+    # found by the polygon fuzz contract: two cells of a gently curved sheet as one hexagon,
+    # three corners in a line on each long side; float32 moved the middle ones off their lines
+    # by ~1e-9, so the fan from the first corner kept a triangle over three of them, which the
+    # scene unwrap (measuring faces at float32) refused as of no area: with --seams none the
+    # island failed and the stage was not written
+    pytest.importorskip("pxr")
+    from pxr import Usd, UsdGeom
+    from bd_uv.cli import main
+    from bd_uv.repair import zero_area_faces
+    xy = np.array([(0, 0), (1, 0), (0, 1), (1, 1), (0, 2), (1, 2)], dtype=np.float64)
+    V = np.column_stack([xy, 0.03 * (xy[:, 0] - 0.5) ** 2 + 0.02 * xy[:, 1]])
+    V = V.astype(np.float32).astype(np.float64)
+    hexagon = [0, 1, 3, 5, 4, 2]
+    T, _, _ = triangulate(V, [6], np.array(hexagon), precision=np.float32)
+    F = np.array(hexagon)[T]
+    assert not zero_area_faces(V, F, np.float32).any()
+    assert zero_area_faces(V, np.array(hexagon)[fan_triangles([6])[0]], np.float32).any()
+    src, out = tmp_path / "sheet.usda", tmp_path / "o.usda"
+    stage = Usd.Stage.CreateNew(str(src))
+    mesh = UsdGeom.Mesh.Define(stage, "/Sheet")
+    mesh.CreatePointsAttr([tuple(p) for p in V.tolist()])
+    mesh.CreateFaceVertexCountsAttr([6])
+    mesh.CreateFaceVertexIndicesAttr(hexagon)
+    stage.GetRootLayer().Save()
+    assert main(["unwrap", str(src), "-o", str(out), "--seams", "none", "-q"]) == 0
+    assert out.exists()
+
+
+@pytest.mark.parametrize("at", [0, 4, 17])
+def test_a_usd_polygon_with_two_corners_at_one_place_is_one_island(tmp_path, at):
+    # found by the polygon fuzz contract: a star whose corners ``at`` and ``at + 1`` are two
+    # points at one place; the triangle between them has no area and is left out, and the
+    # star's other triangles met only at a point: two islands, whose UVs at that face-vertex
+    # one UV per face-vertex cannot hold ("fail as stored", the stage not written). The two
+    # points are one vertex for the unwrap now (as an OBJ's are welded)
+    pytest.importorskip("pxr")
+    from pxr import Usd, UsdGeom
+    from bd_uv.cli import main
+    q = star(9, 0.35)
+    q = np.insert(q, at + 1, q[at], axis=0)
+    V = _tiles(q).astype(np.float32)
+    src, out, rep = tmp_path / "star.usda", tmp_path / "o.usda", tmp_path / "r.json"
+    stage = Usd.Stage.CreateNew(str(src))
+    mesh = UsdGeom.Mesh.Define(stage, "/Star")
+    mesh.CreatePointsAttr([tuple(p) for p in V.tolist()])
+    mesh.CreateFaceVertexCountsAttr([len(q)])
+    mesh.CreateFaceVertexIndicesAttr(list(range(len(q))))
+    stage.GetRootLayer().Save()
+    assert main(["unwrap", str(src), "-o", str(out), "--report", str(rep), "-q"]) == 0
+    (entry,) = json.loads(rep.read_text())["meshes"]
+    assert entry["status"] == "certified" and entry["zero_area_faces"] == 1
+    written = Usd.Stage.Open(str(out))       # kept: a prim of a collected stage is invalid
+    pv = UsdGeom.PrimvarsAPI(written.GetPrimAtPath("/Star")).GetPrimvar("st")
+    uv = np.asarray(pv.Get(), np.float64)
+    if pv.IsIndexed():
+        uv = uv[np.asarray(pv.GetIndices())]
+    assert np.array_equal(uv[at], uv[at + 1])          # one place, one UV
+    T, _, _ = triangulate(V.astype(np.float64), [len(q)], np.arange(len(q)),
+                          precision=np.float32)
+    P = V.astype(np.float64)
+    area = np.linalg.norm(np.cross(P[T[:, 1]] - P[T[:, 0]], P[T[:, 2]] - P[T[:, 0]]), axis=1)
+    keep = area > 1e-9
+    D, flipped = reference_distortion(P, T[keep], uv[T[keep]])
+    assert not flipped.any() and D.max() <= entry["bound_certified"] * (1 + 1e-6)
+    assert len(overlapping_triangle_pairs(uv[T[keep]])) == 0

@@ -61,3 +61,22 @@ def test_float32_flat_faces_side_by_side_are_left_out_before_the_search():
     _check_certified(V, F, layout.corner_uv, np.flatnonzero(flat))
     # without the stored precision float64 tells the strip from a line: searched as it is
     assert bd_uv.unwrap(V, F, seams="auto").repair == ()
+
+
+def test_a_lone_face_float32_cannot_tell_from_a_line_is_left_out_with_seams_auto(tmp_path):
+    # found by the polygon fuzz contract: a USD sheet (a jittered curved grid of polygons) with
+    # a triangle hanging on its side, its third corner on the side's line in float64 but moved
+    # off it by float32. --seams auto certified it in float64, the overlap cut made it a piece
+    # of its own, and that piece failed as stored: the whole mesh was refused (exit 1). The job
+    # ran again at float32, but the auto repair left out only such faces side by side; now any
+    # such face is left out, as --seams needed does
+    pytest.importorskip("pxr")
+    from bd_uv.cli import main
+    from polygon_files import build, usda_write
+    m = build(np.random.default_rng(243337882), (5, 3, 5), "curved", ["zero-area hanging"], 0.2)
+    src, out, rep = tmp_path / "sheet.usda", tmp_path / "o.usda", tmp_path / "r.json"
+    usda_write(src, m)
+    assert main(["unwrap", str(src), "-o", str(out), "--report", str(rep), "--seams", "auto",
+                 "-q"]) == 0
+    (entry,) = json.loads(rep.read_text())["meshes"]
+    assert entry["status"] == "certified" and entry["zero_area_faces"] == 1
