@@ -119,3 +119,44 @@ def inside(p, ring):
     cross = (a[:, 1] > p[1]) != (b[:, 1] > p[1])
     x = a[:, 0] + (p[1] - a[:, 1]) * (b[:, 0] - a[:, 0]) / np.where(cross, b[:, 1] - a[:, 1], 1)
     return bool(np.sum(cross & (x > p[0])) % 2)
+
+
+def check_reach_asked(monkeypatch, V, F, uv, lab, reach):
+    """pack_islands asks square_layout for ``reach`` with the adaptive time (each solve asked
+    to end at its square) and for 1 with a time given (no solve asked to end); the layouts
+    certified."""
+    import bd_uv.packing.atlas as atlas
+    import bd_uv.packing.square as square
+    from bd_uv.packing import PackOptions, pack_islands
+    seen, ends = [], []
+    real, solve_all = atlas.square_layout, square._solve_all
+    monkeypatch.setattr(atlas, "square_layout",
+                        lambda *a, **kw: seen.append(kw.get("reach")) or real(*a, **kw))
+    monkeypatch.setattr(square, "_solve_all",
+                        lambda *a, **kw: ends.append(kw.get("square")) or solve_all(*a, **kw))
+    for solve in (None, 0.3):
+        options = PackOptions(seed=0, solve_seconds=solve)
+        seen.clear()
+        ends.clear()
+        check_layout(V, F, uv, lab, pack_islands(V, F, uv, lab, options), options)
+        assert seen == [reach if solve is None else 1.0]
+        assert ends and ends[0] is (True if solve is None else None)
+
+
+def check_no_reach_on_a_thread(monkeypatch, V, F, uv, lab):
+    """Packed on a worker thread (Blender's operator, a Dask worker), where a search cannot be
+    ended early: pack_islands asks for no reach; the layout certified."""
+    import threading
+
+    import bd_uv.packing.atlas as atlas
+    from bd_uv.packing import PackOptions, pack_islands
+    seen = []
+    real = atlas.square_layout
+    monkeypatch.setattr(atlas, "square_layout",
+                        lambda *a, **kw: seen.append(kw.get("reach")) or real(*a, **kw))
+    options, out = PackOptions(seed=0), []
+    t = threading.Thread(target=lambda: out.append(pack_islands(V, F, uv, lab, options)))
+    t.start()
+    t.join()
+    assert seen == [1.0]
+    check_layout(V, F, uv, lab, out[0], options)

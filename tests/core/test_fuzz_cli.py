@@ -18,17 +18,16 @@ import io
 import os
 import pathlib
 import re
-import shutil
-import tempfile
 
 import numpy as np
-from hypothesis import HealthCheck, event, example, given, settings
+from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from artist_obj import artist_obj, read_faces, records
 from bd_uv.cli import main
 from overlap_shapes import overlapping_triangle_pairs
-from unwrap_contract import DATA, distortion_and_flips, read_off, strict_json
+from unwrap_contract import (DATA, distortion_and_flips, in_fresh_dir, read_off, strict_json,
+                             with_examples)
 
 EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "25"))
 V3, F3 = read_off(DATA / "three_peaks.off")
@@ -431,22 +430,12 @@ FOUND = [
 ]
 
 
-def with_examples(test):
-    for sc in reversed(FOUND):
-        test = example(sc=sc)(test)
-    return test
-
-
 @settings(max_examples=EXAMPLES, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(sc=command_lines())
-@with_examples
+@with_examples(FOUND)
 def test_command_line_contract(sc):
-    root = pathlib.Path(tempfile.mkdtemp(prefix="bd-uv-cli-fuzz-"))
-    try:
-        check(sc, root)
-    finally:
-        shutil.rmtree(root, ignore_errors=True)
+    in_fresh_dir(check, sc, "bd-uv-cli-fuzz-")
 
 
 def check(sc, root):

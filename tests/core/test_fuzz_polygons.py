@@ -33,11 +33,9 @@ import contextlib
 import io
 import os
 import pathlib
-import shutil
-import tempfile
 
 import numpy as np
-from hypothesis import HealthCheck, event, example, given, settings
+from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from artist_obj import read_faces, records
@@ -48,7 +46,7 @@ from overlap_shapes import overlapping_triangle_pairs
 from polygon_files import (EXTRAS, TRIANGLE_EXTRAS, build, obj_bytes, ply_ascii_faces,
                            ply_binary_faces, ply_strips, read_strips, stl_bytes, strips_of,
                            usda_write)
-from unwrap_contract import strict_json
+from unwrap_contract import in_fresh_dir, strict_json, with_examples
 
 FLAT = 1e-3
 EXAMPLES = int(os.environ.get("BD_UV_FUZZ_EXAMPLES", "12"))
@@ -513,19 +511,9 @@ FOUND = [
 ]
 
 
-def with_examples(test):
-    for sc in reversed(FOUND):
-        test = example(sc=sc)(test)
-    return test
-
-
 @settings(max_examples=EXAMPLES, deadline=None,
           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 @given(sc=scenarios())
-@with_examples
+@with_examples(FOUND)
 def test_polygon_files_never_crash_or_write_an_uncertified_result(sc):
-    root = pathlib.Path(tempfile.mkdtemp(prefix="bd-uv-poly-fuzz-"))
-    try:
-        check(sc, root)
-    finally:
-        shutil.rmtree(root, ignore_errors=True)
+    in_fresh_dir(check, sc, "bd-uv-poly-fuzz-")

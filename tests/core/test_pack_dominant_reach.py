@@ -3,16 +3,13 @@ the time (issue 18, benchmarks/results/issue18-pack26-2026-11-28.md): ``dominant
 recomputed here from the budget's rules, ``reach`` and it never both apply, pack_islands asks
 square_layout for it where the search can end early (not on a worker thread), and the layouts
 are certified by ``packing_checks.check_layout``. No test checks a time taken."""
-import threading
 
 import numpy as np
 import pytest
 
-import bd_uv.packing.atlas as atlas
-import bd_uv.packing.square as square
-from bd_uv.packing import PackOptions, pack_islands
+from bd_uv.packing import PackOptions
 from bd_uv.packing.options import DOMINANT_REACH
-from packing_checks import check_layout
+from packing_checks import check_no_reach_on_a_thread, check_reach_asked
 from test_pack_coarse import _shares, _wavy_discs
 
 
@@ -51,31 +48,8 @@ def _dominated():
 
 def test_where_a_chart_dominates_the_pack_nests_longer_ending_each_search_at_its_square(
         monkeypatch):
-    seen, ends = [], []
-    real, solve_all = atlas.square_layout, square._solve_all
-    monkeypatch.setattr(atlas, "square_layout",
-                        lambda *a, **kw: seen.append(kw.get("reach")) or real(*a, **kw))
-    monkeypatch.setattr(square, "_solve_all",
-                        lambda *a, **kw: ends.append(kw.get("square")) or solve_all(*a, **kw))
-    V, F, uv, lab = _dominated()
-    for solve in (None, 0.3):
-        options = PackOptions(seed=0, solve_seconds=solve)
-        seen.clear()
-        ends.clear()
-        check_layout(V, F, uv, lab, pack_islands(V, F, uv, lab, options), options)
-        assert seen == [DOMINANT_REACH if solve is None else 1.0]
-        assert ends and ends[0] is (True if solve is None else None)
+    check_reach_asked(monkeypatch, *_dominated(), DOMINANT_REACH)
 
 
 def test_on_a_worker_thread_a_dominated_pack_keeps_its_time(monkeypatch):
-    seen = []
-    real = atlas.square_layout
-    monkeypatch.setattr(atlas, "square_layout",
-                        lambda *a, **kw: seen.append(kw.get("reach")) or real(*a, **kw))
-    V, F, uv, lab = _dominated()
-    options, out = PackOptions(seed=0), []
-    t = threading.Thread(target=lambda: out.append(pack_islands(V, F, uv, lab, options)))
-    t.start()
-    t.join()
-    assert seen == [1.0]
-    check_layout(V, F, uv, lab, out[0], options)
+    check_no_reach_on_a_thread(monkeypatch, *_dominated())

@@ -11,13 +11,11 @@ import numpy as np
 import pytest
 import shapely
 
-import bd_uv.packing.atlas as atlas
-import bd_uv.packing.square as square
-from bd_uv.packing import PackOptions, pack_islands
+from bd_uv.packing import PackOptions
 from bd_uv.packing import early_stop
 from bd_uv.packing.nest import FEASIBLE
 from bd_uv.packing.options import REACH
-from packing_checks import check_layout
+from packing_checks import check_no_reach_on_a_thread, check_reach_asked
 from test_pack_coarse import _shares, _wavy_discs
 
 
@@ -165,38 +163,17 @@ def test_where_it_applies_the_pack_nests_longer_ending_each_search_at_its_square
     """10 wavy discs of 240 faces (the cut, 0.6 s, below the root's 0.62 s; no chart over 0.3
     of the area, recomputed): pack_islands asks square_layout for REACH, each solve is asked to
     end at its square, and the layout is certified; with a time given, neither."""
-    seen, ends = [], []
-    real, solve_all = atlas.square_layout, square._solve_all
-    monkeypatch.setattr(atlas, "square_layout",
-                        lambda *a, **kw: seen.append(kw.get("reach")) or real(*a, **kw))
-    monkeypatch.setattr(square, "_solve_all",
-                        lambda *a, **kw: ends.append(kw.get("square")) or solve_all(*a, **kw))
     k = 10
     V, F, uv, lab = _wavy_discs(k, 8)
     share = float(_shares(V, F, lab).max())
     assert _reach(k, len(F), share) == REACH
-    for solve in (None, 0.3):
-        options = PackOptions(seed=0, solve_seconds=solve)
-        seen.clear()
-        ends.clear()
-        check_layout(V, F, uv, lab, pack_islands(V, F, uv, lab, options), options)
-        assert seen == [REACH if solve is None else 1.0]
-        assert ends and ends[0] is (True if solve is None else None)
+    check_reach_asked(monkeypatch, V, F, uv, lab, REACH)
 
 
 def test_on_a_worker_thread_the_pack_keeps_its_time(monkeypatch):
     """The same discs packed on a thread (Blender's operator, a Dask worker): the search could
     not be ended there, so pack_islands asks for no reach (it would run all of it)."""
-    seen = []
-    real = atlas.square_layout
-    monkeypatch.setattr(atlas, "square_layout",
-                        lambda *a, **kw: seen.append(kw.get("reach")) or real(*a, **kw))
     k = 10
     V, F, uv, lab = _wavy_discs(k, 8)
     assert _reach(k, len(F), float(_shares(V, F, lab).max())) == REACH
-    options, out = PackOptions(seed=0), []
-    t = threading.Thread(target=lambda: out.append(pack_islands(V, F, uv, lab, options)))
-    t.start()
-    t.join()
-    assert seen == [1.0]
-    check_layout(V, F, uv, lab, out[0], options)
+    check_no_reach_on_a_thread(monkeypatch, V, F, uv, lab)

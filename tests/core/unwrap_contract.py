@@ -6,8 +6,11 @@ by code that shares no line with the certifier it checks.
 """
 import json
 import pathlib
+import shutil
+import tempfile
 
 import numpy as np
+from hypothesis import example
 
 import bd_uv
 from overlap_shapes import overlapping_triangle_pairs
@@ -258,3 +261,22 @@ def unwrap_checked(V, F, **kw):
         assert_unchanged(before, *args)
     assert_contract(res, V, F, kw.get("pin_corners"), kw.get("pin_uv"))
     return res
+
+
+def with_examples(found):
+    """A fuzz contract's kept examples (its ``FOUND`` scenarios) run first, in their order, then
+    hypothesis's own."""
+    def wrap(test):
+        for sc in reversed(found):
+            test = example(sc=sc)(test)
+        return test
+    return wrap
+
+
+def in_fresh_dir(check, sc, prefix):
+    """``check(sc, root)`` in a new temporary directory, removed after whatever happens."""
+    root = pathlib.Path(tempfile.mkdtemp(prefix=prefix))
+    try:
+        check(sc, root)
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
