@@ -32,6 +32,7 @@ from ..scheduling.atomic import atomic_path
 from .usd_instances import (add_inherits, prototype_meshes, proxy_uvs, target_prim,
                             undo_instanced)
 from .usd_mesh import scene_mesh
+from .usd_probe import probe
 
 
 def _pxr():
@@ -53,6 +54,7 @@ class UsdScene:
         Sdf, Usd, UsdGeom, _, _ = _pxr()
         if not os.path.isfile(path):
             raise SceneFileError(f"{path}: no such file")
+        probe(path)   # a file usd-core would end this process on is refused here
         try:
             stage = Usd.Stage.Open(path)
         except Exception as exc:  # pxr raises Tf.ErrorException for unreadable layers
@@ -127,15 +129,21 @@ class UsdScene:
         (``package_local``: the input package's files are unpacked beside it), and the new
         primvars authored in it."""
         Sdf, Usd, UsdGeom, UsdUtils, Vt = _pxr()
-        src = Sdf.Layer.FindOrOpen(self.path)
-        if src is None:
-            raise SceneFileError(f"{self.path}: the root layer cannot be opened")
-        layer = Sdf.Layer.CreateNew(layer_path)
-        layer.TransferContent(src)
-        folder = os.path.dirname(os.path.abspath(layer_path))
-        UsdUtils.ModifyAssetPaths(layer, lambda p: _reanchor(src, p, folder, package_local))
-        stage = Usd.Stage.Open(layer)
-        result = {k: self._author(stage, k, ch, UsdGeom, Sdf, Vt) for k, ch in charts.items()}
+        from pxr import Tf
+        try:   # a crate file is read lazily: damage its stage did not show can show here
+            src = Sdf.Layer.FindOrOpen(self.path)
+            if src is None:
+                raise SceneFileError(f"{self.path}: the root layer cannot be opened")
+            layer = Sdf.Layer.CreateNew(layer_path)
+            layer.TransferContent(src)
+            folder = os.path.dirname(os.path.abspath(layer_path))
+            UsdUtils.ModifyAssetPaths(layer, lambda p: _reanchor(src, p, folder, package_local))
+            stage = Usd.Stage.Open(layer)
+            result = {k: self._author(stage, k, ch, UsdGeom, Sdf, Vt) for k, ch in charts.items()}
+        except Tf.ErrorException as exc:
+            raise SceneFileError(f"{self.path}: USD could not copy its root layer to write the "
+                                 f"UVs, the file is damaged ({_pxr_message(exc)}); nothing was "
+                                 "written") from None
         if not any(all(c.certified for c in certs) for certs, _ in result.values()):
             raise _NothingCertified(result)   # no file at the output that looks like a result
         layer.Save()
@@ -298,4 +306,9 @@ def _pxr_message(exc):
             except UnicodeError:
                 parts.append("a corrupted byte the parser could not quote")
         text = "; ".join(parts) or type(exc).__name__
-    return " ".join(text.split())
+    # a damaged crate file's error lists every spec it skipped (400 MB of text seen: its split
+    # raised MemoryError): the first words say what went wrong
+    return " ".join(text[:MESSAGE_CHARS].split()) + (" ..." if len(text) > MESSAGE_CHARS else "")
+
+
+MESSAGE_CHARS = 2000   # of a pxr error quoted in a message
