@@ -13,7 +13,7 @@ map fails the charts' test (``charts.chart_maps``) are split, all in one batch
 import numpy as np
 
 from .charts import MARGIN, chart_maps, mean_cap
-from .cut_graph import cut_graph
+from .cut_graph import cut_graphs
 from .merge import chart_key
 from .bisect import edge_weight, split_deep
 from .topology import charts
@@ -61,10 +61,15 @@ def refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None
     changed = False
     todo = []                               # (faces, the map's sigma per face or None)
     opened = []                             # the faces of charts whose handles were cut
+    # The cut graphs of the round's open charts (handles, or several boundary loops) together.
+    ochs = [c for c in chs if c.kind == "open"]
+    if ochs:
+        allv = np.concatenate([c.vertices for c in ochs])
+        graphs = iter(cut_graphs([(c.tris, len(c.vertices)) for c in ochs],
+                                 lambda pairs: edge_weight(E, allv[pairs], n, diag)))
     for c in chs:
-        if c.kind == "open":                # handles, or several boundary loops
-            w = lambda pairs, _v=c.vertices: edge_weight(E, _v[pairs], n, diag)
-            g = cut_graph(c.tris, len(c.vertices), w)
+        if c.kind == "open":
+            g = next(graphs)
             k = E.keys(c.vertices[g], n) if len(g) else np.zeros(0, np.int64)
             k = k[k >= 0]
             if diag is not None:            # never inside a polygon (the split below instead)
