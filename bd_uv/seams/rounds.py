@@ -1,14 +1,14 @@
 """One top-down round of the seam search (``auto.unwrap_auto``): each chart not yet accepted is
 cut or accepted.
 
-A chart that is not a disk has its handles cut (``cut_graph``), and the disks that opens are
-mapped in the same round (in a round of fewer than ``trim.TRIM_FACES`` faces); closed spheres,
-open charts no cut graph changes, disks of more than ``MAP_VERTICES`` vertices (or of more than
-``MAP_SHARE_VERTICES`` holding less than ``MAP_SHARE`` of the mesh's) and disks whose conformal
-map fails the charts' test (``charts.chart_maps``) are split, all in one batch
-(``bisect.split_deep``; the pieces of a chart without a map again while they hold more than
-``2 MAP_VERTICES`` faces); a disk that passes, and a chart no split divides, is accepted
-(frozen).
+A chart that is not a disk has its handles cut (``cut_graph``; all of a round's together,
+``cut_graphs``), and the disks that opens are mapped in the same round (in a round of fewer than
+``trim.TRIM_FACES`` faces); closed spheres, open charts no cut graph changes, disks of more than
+``MAP_VERTICES`` vertices (or of more than ``MAP_SHARE_VERTICES`` holding less than ``MAP_SHARE``
+of the mesh's) and disks whose conformal map fails the charts' test (``charts.chart_maps``) are
+split, all in one batch (``bisect.split_deep``; the pieces of a chart without a map again while
+they hold more than ``2 MAP_VERTICES`` faces); a disk that passes, and a chart no split divides, is
+accepted (frozen).
 """
 import numpy as np
 
