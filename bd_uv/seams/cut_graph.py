@@ -23,9 +23,10 @@ QUANTUM = 2.0 ** -10
 # distance, a loop system's length) can differ by a few quanta: within this share they tie.
 TIE = 1e-3
 # ``cut_graphs``: charts of at most this many triangles share one batched shortest-path tree
-# (genus 0 with a boundary), in runs of at most BATCH_TRIS triangles; larger ones go alone.
+# (genus 0 with a boundary), in runs of at most BATCH_TRIS triangles (~20 arrays of a run's
+# corners and edges at once: ~10 MB at 20,000); larger ones go alone.
 SMALL_TRIS = 5_000
-BATCH_TRIS = 50_000
+BATCH_TRIS = 20_000
 
 
 def cut_graph(tris, nv, weight):

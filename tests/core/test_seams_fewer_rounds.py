@@ -175,7 +175,7 @@ def _holed_torus():
     return V[used], remap[Fh]
 
 
-@pytest.mark.parametrize("small,batch", [(5_000, 50_000), (5_000, 300), (150, 50_000)],
+@pytest.mark.parametrize("small,batch", [(5_000, 20_000), (5_000, 300), (150, 20_000)],
                          ids=["one-run", "short-runs", "large-ones-alone"])
 def test_cut_graphs_of_a_round_are_cut_graph_chart_by_chart(monkeypatch, small, batch):
     """``cut_graphs`` (a round's open charts at once: the genus-0 ones share one shortest-path
@@ -212,5 +212,5 @@ def test_cut_graphs_of_a_round_are_cut_graph_chart_by_chart(monkeypatch, small, 
     assert all(len(w) for w in want)        # every chart here needs a cut (the tori too)
     sizes = [len(t) for t, _ in charts]
     assert sum(calls) == sum(s <= small for s in sizes)     # each small chart in one run
-    assert len(calls) == (1 if batch == 50_000 else len(calls)) and (batch > 300 or
+    assert len(calls) == (1 if batch == 20_000 else len(calls)) and (batch > 300 or
                                                                       len(calls) > 2)
