@@ -256,8 +256,8 @@ def quantised_weights(w, real):
     Returns
     -------
     (e,) float64, ``max(1, round(w / q))`` with ``q`` a power of two near ``QUANTUM`` times the
-    10th percentile of the finite weights; inf stays inf. A weight too large to count in quanta exactly (above 2^40
-    quanta) is capped there: never cut unless nothing else will do.
+    10th percentile of the finite weights; inf stays inf. A weight too large to count in quanta
+    exactly (above 2^40 quanta) is capped there: never cut unless nothing else will do.
     """
     fin = real & np.isfinite(w)
     low = _percentile10(w[fin]) if fin.any() else 1.0
