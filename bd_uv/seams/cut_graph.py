@@ -22,6 +22,11 @@ QUANTUM = 2.0 ** -10
 # Quanta still straddle a rounding boundary here and there, so sums over many edges (a root's
 # distance, a loop system's length) can differ by a few quanta: within this share they tie.
 TIE = 1e-3
+# ``cut_graphs``: charts of at most this many triangles share one batched shortest-path tree
+# (genus 0 with a boundary), in runs of at most BATCH_TRIS triangles (~20 arrays of a run's
+# corners and edges at once: ~10 MB at 20,000); larger ones go alone.
+SMALL_TRIS = 5_000
+BATCH_TRIS = 20_000
 
 
 def cut_graph(tris, nv, weight):
@@ -105,6 +110,135 @@ def cut_graph(tris, nv, weight):
     return best[0]
 
 
+def cut_graphs(charts, weight):
+    """``cut_graph`` of each of several charts, the same cuts: a chart that is genus 0 with a
+    boundary (an annulus, a disk with holes: nearly every chart a round's cut graphs open)
+    takes the tree paths from its caps, and those of small charts are found together (one edge
+    graph, one multi-root shortest-path tree: the fixed cost of ~1 ms a cut graph paid once a
+    batch); the others go through ``cut_graph`` one by one.
+
+    Parameters
+    ----------
+    charts : list of (tris (k,3) int64, nv int), as ``cut_graph`` takes them
+    weight : callable((e,2) int64 vertex pairs numbered across the charts: chart i's vertex v
+        is ``sum(nv of charts before i) + v``) -> (e,) float64 > 0
+
+    Returns
+    -------
+    list of (c,2) int64 chart vertex pairs, ``cut_graph``'s for each chart
+    """
+    off = np.concatenate([[0], np.cumsum([nv for _, nv in charts], dtype=np.int64)])
+    out = [None] * len(charts)
+    small = [i for i, (tris, _) in enumerate(charts) if len(tris) <= SMALL_TRIS]
+    runs, size = [], BATCH_TRIS
+    for i in small:                          # runs of at most BATCH_TRIS triangles
+        if size + len(charts[i][0]) > BATCH_TRIS:
+            runs.append([])
+            size = 0
+        runs[-1].append(i)
+        size += len(charts[i][0])
+    for run in runs:
+        for j, c in zip(run, _genus0_cuts([charts[j] for j in run], weight, off[run])):
+            out[j] = c
+    for i, (tris, nv) in enumerate(charts):
+        if out[i] is None:
+            out[i] = cut_graph(tris, nv, lambda pairs, _o=off[i]: weight(pairs + _o))
+    return out
+
+
+def _genus0_cuts(charts, weight, base):
+    """``cut_graph``'s genus-0 branch for every chart of ``charts`` that is genus 0 with a
+    boundary, all at once; None for the others. ``base``: each chart's first vertex in
+    ``weight``'s numbering.
+
+    Each chart's vertices and caps form a block of one vertex range (chart i's vertex v at
+    ``O_i + v``, its caps after them), so every step chart by chart sees its own graph in the
+    same order: the boundary (reverse half-edges within the block), the loops (components
+    numbered by least vertex), the edges (sorted pair keys, each chart's a run), the weights
+    (quantised over each chart's own), the exact distances from each chart's first cap (one
+    multi-source ``dijkstra``; the charts are not joined) and ``canonical_predecessors``."""
+    k = len(charts)
+    nvs = np.array([nv for _, nv in charts], dtype=np.int64)
+    nfs = np.array([len(t) for t, _ in charts], dtype=np.int64)
+    voff = np.concatenate([[0], nvs.cumsum()])
+    NV = int(voff[-1])
+    T = np.concatenate([t for t, _ in charts]).astype(np.int64)
+    T += np.repeat(voff[:-1], nfs)[:, None]
+    a = T.ravel()
+    b = np.roll(T, -1, axis=1).ravel()
+    del T
+    fwd = a * NV + b
+    rev = np.sort(b * NV + a)
+    boundary = (rev[np.minimum(rev.searchsorted(fwd), len(rev) - 1)] != fwd if len(rev)
+                else np.zeros(0, dtype=bool))
+    del rev, fwd
+    ba, bb = a[boundary], b[boundary]
+    vchart = np.repeat(np.arange(k), nvs)
+    _, comp = components(NV, ba, bb)
+    labels, loop_of = np.unique(comp[ba], return_inverse=True)
+    loop_of = loop_of.ravel()
+    lchart = vchart[ba[np.unique(loop_of, return_index=True)[1]]] if len(labels) else \
+        np.zeros(0, np.int64)
+    ncaps = np.bincount(lchart, minlength=k)
+    coff = np.concatenate([[0], ncaps.cumsum()])
+    # The blocks: chart i's vertex v at O_i + v, its cap j at O_i + nv_i + j.
+    O = voff[:-1] + coff[:-1]
+    N = NV + int(coff[-1])
+    gid = np.arange(NV) + np.repeat(coff[:-1], nvs)
+    caps = O[lchart[loop_of]] + nvs[lchart[loop_of]] + (loop_of - coff[lchart[loop_of]])
+    ea = np.concatenate([gid[a], gid[bb], gid[ba], caps])
+    eb = np.concatenate([gid[b], gid[ba], caps, gid[bb]])
+    del a, b, comp
+    key = np.minimum(ea, eb) * N + np.maximum(ea, eb)
+    del ea, eb
+    uniq, _, _ = radix.unique(key, N * N)
+    del key
+    ends = np.stack([uniq // N, uniq % N], axis=1)
+    block = np.repeat(np.arange(k), nvs + ncaps)
+    echart = block[ends[:, 0]]
+    ne = np.bincount(echart, minlength=k)
+    nf = nfs + np.bincount(vchart[ba], minlength=k)
+    ok = (ncaps > 0) & (nvs + ncaps - ne + nf == 2)         # ``_genus0`` of each chart
+    res = [None] * k
+    if not ok.any():
+        return res
+    isreal = np.ones(N, dtype=bool)
+    isreal[O[lchart] + nvs[lchart] + (np.arange(len(lchart)) - coff[lchart])] = False
+    real = isreal[ends[:, 1]]
+    w = np.zeros(len(uniq))
+    # The weights in ``weight``'s numbering: the block's vertex v -> base_i + v.
+    shift = (base - O)[block]
+    er = ends[real]
+    w[real] = weight(er + shift[er[:, 0]][:, None])
+    del er
+    eoff = np.concatenate([[0], ne.cumsum()])
+    for i in ok.ravel().nonzero()[0]:
+        s, e = eoff[i], eoff[i + 1]
+        w[s:e] = quantised_weights(w[s:e], real[s:e])
+    sel = ok[echart]
+    G = _csr(w[sel], ends[sel, 0], ends[sel, 1], N)
+    roots = O[ok] + nvs[ok]                                  # each chart's first cap
+    dist = dijkstra(G, directed=False, indices=roots, min_only=True)
+    del G
+    pred = canonical_predecessors(dist, ends[sel], w[sel], roots)
+    capv = ~isreal & ok[block]
+    marked = np.zeros(N, dtype=bool)
+    front = capv.ravel().nonzero()[0]
+    while len(front):
+        front = front[~marked[front]]
+        marked[front] = True
+        front = pred[front]
+        front = front[front >= 0]
+    v = (marked & (pred >= 0)).ravel().nonzero()[0]
+    cut = np.stack([v, pred[v]], axis=1)
+    cut = cut[np.all(isreal[cut], axis=1)].astype(np.int64)
+    cc = block[cut[:, 0]]
+    bounds = cc.searchsorted(np.arange(k + 1))
+    for i in ok.ravel().nonzero()[0]:
+        res[i] = cut[bounds[i]:bounds[i + 1]] - O[i]
+    return res
+
+
 def _genus0(nv, ne, nf):
     """Whether a closed connected surface of ``nv`` vertices, ``ne`` edges and ``nf`` faces is
     a sphere (Euler characteristic 2)."""
@@ -122,8 +256,8 @@ def quantised_weights(w, real):
     Returns
     -------
     (e,) float64, ``max(1, round(w / q))`` with ``q`` a power of two near ``QUANTUM`` times the
-    10th percentile of the finite weights; inf stays inf. A weight too large to count in quanta exactly (above 2^40
-    quanta) is capped there: never cut unless nothing else will do.
+    10th percentile of the finite weights; inf stays inf. A weight too large to count in quanta
+    exactly (above 2^40 quanta) is capped there: never cut unless nothing else will do.
     """
     fin = real & np.isfinite(w)
     low = _percentile10(w[fin]) if fin.any() else 1.0

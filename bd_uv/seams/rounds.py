@@ -1,19 +1,19 @@
 """One top-down round of the seam search (``auto.unwrap_auto``): each chart not yet accepted is
 cut or accepted.
 
-A chart that is not a disk has its handles cut (``cut_graph``), and the disks that opens are
-mapped in the same round (in a round of fewer than ``trim.TRIM_FACES`` faces); closed spheres,
-open charts no cut graph changes, disks of more than ``MAP_VERTICES`` vertices (or of more than
-``MAP_SHARE_VERTICES`` holding less than ``MAP_SHARE`` of the mesh's) and disks whose conformal
-map fails the charts' test (``charts.chart_maps``) are split, all in one batch
-(``bisect.split_deep``; the pieces of a chart without a map again while they hold more than
-``2 MAP_VERTICES`` faces); a disk that passes, and a chart no split divides, is accepted
-(frozen).
+A chart that is not a disk has its handles cut (``cut_graph``; all of a round's together,
+``cut_graphs``), and the disks that opens are mapped in the same round (in a round of fewer than
+``trim.TRIM_FACES`` faces); closed spheres, open charts no cut graph changes, disks of more than
+``MAP_VERTICES`` vertices (or of more than ``MAP_SHARE_VERTICES`` holding less than ``MAP_SHARE``
+of the mesh's) and disks whose conformal map fails the charts' test (``charts.chart_maps``) are
+split, all in one batch (``bisect.split_deep``; the pieces of a chart without a map again while
+they hold more than ``2 MAP_VERTICES`` faces); a disk that passes, and a chart no split divides, is
+accepted (frozen).
 """
 import numpy as np
 
 from .charts import MARGIN, chart_maps, mean_cap
-from .cut_graph import cut_graph
+from .cut_graph import cut_graphs
 from .merge import chart_key
 from .bisect import edge_weight, split_deep
 from .topology import charts
@@ -61,10 +61,15 @@ def refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None
     changed = False
     todo = []                               # (faces, the map's sigma per face or None)
     opened = []                             # the faces of charts whose handles were cut
+    # The cut graphs of the round's open charts (handles, or several boundary loops) together.
+    ochs = [c for c in chs if c.kind == "open"]
+    if ochs:
+        allv = np.concatenate([c.vertices for c in ochs])
+        graphs = iter(cut_graphs([(c.tris, len(c.vertices)) for c in ochs],
+                                 lambda pairs: edge_weight(E, allv[pairs], n, diag)))
     for c in chs:
-        if c.kind == "open":                # handles, or several boundary loops
-            w = lambda pairs, _v=c.vertices: edge_weight(E, _v[pairs], n, diag)
-            g = cut_graph(c.tris, len(c.vertices), w)
+        if c.kind == "open":
+            g = next(graphs)
             k = E.keys(c.vertices[g], n) if len(g) else np.zeros(0, np.int64)
             k = k[k >= 0]
             if diag is not None:            # never inside a polygon (the split below instead)

@@ -25,7 +25,8 @@ def canonical_predecessors(dist, ends, w, root):
     ----------
     dist : (N,) float64, exact distances from ``root`` (inf where unreached)
     ends : (e,2) int, the undirected edges; w : (e,) float64 > 0, their weights
-    root : int
+    root : int, or (r,) int: the roots of a forest (``dist`` from the nearest, each tree
+        apart from the others)
 
     Returns
     -------
@@ -34,7 +35,13 @@ def canonical_predecessors(dist, ends, w, root):
     a = np.concatenate([ends[:, 0], ends[:, 1]])
     b = np.concatenate([ends[:, 1], ends[:, 0]])
     da = dist[a]
-    tight = (da + np.concatenate([w, w]) == dist[b]) & np.isfinite(da) & (b != root)
+    if np.ndim(root) == 0:
+        notroot = b != root
+    else:
+        isroot = np.zeros(len(dist), dtype=bool)
+        isroot[root] = True
+        notroot = ~isroot[b]
+    tight = (da + np.concatenate([w, w]) == dist[b]) & np.isfinite(da) & notroot
     a, b, da = a[tight], b[tight], da[tight]
     # Per child b: least dist[a], then highest a (two scatter-reductions: 2.5x faster than a
     # lexsort).

@@ -162,3 +162,55 @@ def test_a_chart_its_cut_graph_opens_is_mapped_in_the_same_round(monkeypatch):
     assert runs[False][2][0] == [len(F)] and len(runs[False][2]) == len(maps)
     assert runs[False][0] == seams
     assert rounds == runs[False][1] - 1
+
+
+def _holed_torus():
+    V, F, _, _ = torus(nu=24, nv=8)
+    keep = np.ones(len(F), dtype=bool)
+    keep[:4] = False                        # genus 1, one loop: cut_graph alone
+    Fh = F[keep]
+    used = np.unique(Fh)
+    remap = np.full(len(V), -1)
+    remap[used] = np.arange(len(used))
+    return V[used], remap[Fh]
+
+
+@pytest.mark.parametrize("small,batch", [(5_000, 20_000), (5_000, 300), (150, 20_000)],
+                         ids=["one-run", "short-runs", "large-ones-alone"])
+def test_cut_graphs_of_a_round_are_cut_graph_chart_by_chart(monkeypatch, small, batch):
+    """``cut_graphs`` (a round's open charts at once: the genus-0 ones share one shortest-path
+    tree) gives each chart ``cut_graph``'s own cut, array for array, whatever the charts around
+    it: annuli and disks with holes (jittered and with tied lengths), a holed torus and a
+    closed torus (which go alone), vertices shuffled, in runs of any length."""
+    monkeypatch.setattr(cg_mod, "SMALL_TRIS", small)
+    monkeypatch.setattr(cg_mod, "BATCH_TRIS", batch)
+    rng = np.random.default_rng(3)
+    meshes = [holed_grid(holes=h, jitter=j, seed=s, n=n)
+              for h, j, s, n in [(((3, 3),), 0.3, 0, 12), (((3, 3),), 0.0, 1, 12),
+                                 (((2, 2), (2, 7), (7, 4)), 0.3, 2, 12),
+                                 (((2, 2), (2, 7), (7, 4)), 0.0, 3, 12),
+                                 (((1, 1),), 0.2, 4, 5), (((4, 9), (9, 2)), 0.1, 5, 14)]]
+    meshes.insert(2, _holed_torus())
+    V, F, _, _ = torus(nu=12, nv=6)
+    meshes.insert(5, (V, F))
+    charts, verts = [], []
+    for V, F in meshes:
+        perm = rng.permutation(len(V))      # shuffled vertex ids
+        inv = np.argsort(perm)
+        charts.append((inv[F], len(V)))
+        verts.append(V[perm])
+    allV = np.concatenate(verts)
+    calls = []
+    real = cg_mod._genus0_cuts
+    monkeypatch.setattr(cg_mod, "_genus0_cuts",
+                        lambda ch, *a: calls.append(len(ch)) or real(ch, *a))
+    got = cg_mod.cut_graphs(charts, length_weight(allV))
+    want = [cut_graph(t, nv, length_weight(Vc)) for (t, nv), Vc in zip(charts, verts)]
+    assert len(got) == len(want) == 8
+    for g, w in zip(got, want):
+        assert g.dtype == w.dtype == np.int64 and g.shape == w.shape and np.array_equal(g, w)
+    assert all(len(w) for w in want)        # every chart here needs a cut (the tori too)
+    sizes = [len(t) for t, _ in charts]
+    assert sum(calls) == sum(s <= small for s in sizes)     # each small chart in one run
+    assert len(calls) == (1 if batch == 20_000 else len(calls)) and (batch > 300 or
+                                                                      len(calls) > 2)
