@@ -13,7 +13,8 @@ map is solved again, until none does. The faces whose three corners are held kee
 (same corners, same bits), every other face is measured: the map is within the search's max, its
 certified C the same (the caller certifies it as ever, and keeps the search's map where it does
 not certify at a C as low). Each round is one LSCM solve (``lscm_held.HeldLSCM``: the energy
-assembled once, the conformal map's elimination order); three_peaks' centre takes 3 rounds:
+assembled once, the conformal map's elimination order; a round holding a few vertices more than
+the last factorised one is solved with its factor, bordered); three_peaks' centre takes 3 rounds:
 mean 1.0324 (1.0099x ABF's, from 1.0509x), C 1.1255 unchanged, ~1.5 ms of CPU.
 
 Only where it can pay: the search raised the mean over the conformal map's by more than MEAN_RISE

@@ -122,6 +122,49 @@ def test_held_lscm_is_lscm_pinned():
         assert np.array_equal(got[idx], u[idx])
 
 
+def test_a_few_more_held_vertices_are_solved_with_the_last_factor(monkeypatch):
+    """``HeldLSCM.solve`` of a set grown by at most BORDER unknowns (the same map u) borders the
+    last factorisation instead of making one: the same minimiser as ``lscm_pinned``'s new
+    system (to 1e-9 of the map's extent), the held vertices where u has them to the bit, and
+    no factorisation made; a set that drops a vertex, grows by more or holds another map's
+    vertices is factorised anew."""
+    from bd_uv.solvers import lscm_held
+    V, F = _three_peaks()
+    disk = one_disk.find(V, F)
+    isl = disk.island
+    nv = len(isl.vertices)
+    geom = face_geometry_of(disk.Z, disk.G, disk.area)
+    sides = (disk.twins[0], disk.twins[1], disk.loop)
+    rng = np.random.default_rng(5)
+    u = rng.normal(size=nv) + 1j * rng.normal(size=nv)
+    made = []
+    real_solver = lscm_held._solver
+    monkeypatch.setattr(lscm_held, "_solver", lambda *a: made.append(1) or real_solver(*a))
+    order = rng.permutation(nv)
+    for ranks in (disk.ranks, None):
+        held = np.zeros(nv, bool)
+        held[order[:5]] = True
+        h = HeldLSCM(geom.cbw(), geom.cb, isl.tris, nv, sides, ranks)
+        made.clear()
+        k = lscm_held.BORDER // 2          # vertices: two unknowns each
+        steps = [(order[:5], 1), (order[:5], 0), (order[:7], 0), (order[:5 + k], 0),
+                 (order[:6 + k], 1), (order[1:6 + k], 1), (order[1:6 + k], 0)]
+        for at, factorised in steps:
+            held = np.zeros(nv, bool)
+            held[at] = True
+            before = len(made)
+            got = h.solve(u, held)
+            assert len(made) - before == factorised
+            idx = np.flatnonzero(held)
+            want = lscm_pinned(geom.cbw(), geom.cb, isl.tris, nv, idx, u[idx], sides, ranks)
+            assert np.abs(got - want).max() <= 1e-9 * np.abs(want).max()
+            assert np.array_equal(got[idx], u[idx])
+        # another map (a copy of u is another object): factorised anew
+        before = len(made)
+        h.solve(u.copy(), held)
+        assert len(made) - before == 1
+
+
 def test_a_mean_within_the_rise_is_refused_without_measuring_the_conformal_map(monkeypatch):
     """``relaxed`` refuses a search's map whose mean is within (1 + MEAN_RISE) of 1 without
     measuring the conformal map (whose mean is at least 1, recomputed here by numpy's SVD), and
