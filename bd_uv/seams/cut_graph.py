@@ -222,14 +222,7 @@ def _genus0_cuts(charts, weight, base):
     del G
     pred = canonical_predecessors(dist, ends[sel], w[sel], roots)
     capv = ~isreal & ok[block]
-    marked = np.zeros(N, dtype=bool)
-    front = capv.ravel().nonzero()[0]
-    while len(front):
-        front = front[~marked[front]]
-        marked[front] = True
-        front = pred[front]
-        front = front[front >= 0]
-    v = (marked & (pred >= 0)).ravel().nonzero()[0]
+    v = _tree_walk(capv.ravel().nonzero()[0], pred, N)
     cut = np.stack([v, pred[v]], axis=1)
     cut = cut[np.all(isreal[cut], axis=1)].astype(np.int64)
     cc = block[cut[:, 0]]
@@ -316,18 +309,25 @@ def _shortest_tree(G, root, ends, w):
     return dist, canonical_predecessors(dist, ends, w, root)
 
 
-def _tree_paths(left, pred, uniq, ends, w, N, nv, n_caps):
-    """The cut of ``_loops_from``: the leftover edges ``left`` and the tree paths (``pred``)
-    from their ends and from every cap back to the root; (cut, its total weight)."""
-    # Mark the tree paths from the leftover edges' ends and from every cap back to the root.
+def _tree_walk(front, pred, N):
+    """The vertices (of N) on the paths of the predecessor tree ``pred`` (-1 at a root) from
+    the vertices ``front`` back to their roots, each walked once, that have a predecessor: the
+    edge (v, pred[v]) of each is on the cut."""
     marked = np.zeros(N, dtype=bool)
-    front = np.unique(np.concatenate([ends[left].ravel(), nv + np.arange(n_caps)]))
     while len(front):
         front = front[~marked[front]]
         marked[front] = True
         front = pred[front]
         front = front[front >= 0]
-    v = (marked & (pred >= 0)).ravel().nonzero()[0]
+    return (marked & (pred >= 0)).ravel().nonzero()[0]
+
+
+def _tree_paths(left, pred, uniq, ends, w, N, nv, n_caps):
+    """The cut of ``_loops_from``: the leftover edges ``left`` and the tree paths (``pred``)
+    from their ends and from every cap back to the root; (cut, its total weight)."""
+    # The tree paths from the leftover edges' ends and from every cap back to the root.
+    v = _tree_walk(np.unique(np.concatenate([ends[left].ravel(), nv + np.arange(n_caps)])),
+                   pred, N)
     cut = np.concatenate([np.stack([v, pred[v]], axis=1), ends[left]])
     cut = cut[np.all(cut < nv, axis=1)].astype(np.int64)
     return cut, float(np.sum(w[uniq.searchsorted(np.minimum(cut[:, 0], cut[:, 1]) * N
