@@ -61,14 +61,7 @@ def solve_lp(cost, A, rhs, lb, ub, seconds, dual=False):
     A = A.tocsc()
     A.sort_indices()
     n, m = len(cost), len(rhs)
-    highs = h._Highs()
-    opt = h.HighsOptions()
-    opt.presolve = "off"
-    opt.solver = "simplex"
-    opt.simplex_strategy = int(h.simplex_constants.SimplexStrategy.kSimplexStrategyDual)
-    opt.time_limit = float(seconds)
-    opt.output_flag = False
-    opt.log_to_console = False
+    highs, opt = h._Highs(), _options(h, seconds)
     # the model as arrays: a HighsLp's attributes take lists, converted element by element
     # (3-4 ms a program of a few thousand rows, measured on dino's: half of HiGHS' own time);
     # every column continuous
@@ -98,21 +91,26 @@ def solve_lp(cost, A, rhs, lb, ub, seconds, dual=False):
     return x, 0
 
 
+def _options(h, seconds):
+    """HiGHS' options of every program here: dual simplex, no presolve, the time limit, quiet."""
+    opt = h.HighsOptions()
+    opt.presolve = "off"
+    opt.solver = "simplex"
+    opt.simplex_strategy = int(h.simplex_constants.SimplexStrategy.kSimplexStrategyDual)
+    opt.time_limit = float(seconds)
+    opt.output_flag = False
+    opt.log_to_console = False
+    return opt
+
+
 def _solve_dual(h, cost, A, rhs, lb, ub, seconds):
     """:func:`solve_lp` of the program's dual (:func:`_dual`) by dual simplex with no presolve
     and no scaling, x read from its row duals and checked against the program."""
     dcost, start, index, value = _dual(cost, A, rhs, lb, ub)
     n, m = len(cost), len(dcost)
     row = -np.ascontiguousarray(cost, dtype=np.float64)
-    highs = h._Highs()
-    opt = h.HighsOptions()
-    opt.presolve = "off"
-    opt.solver = "simplex"
-    opt.simplex_strategy = int(h.simplex_constants.SimplexStrategy.kSimplexStrategyDual)
+    highs, opt = h._Highs(), _options(h, seconds)
     opt.simplex_scale_strategy = 0
-    opt.time_limit = float(seconds)
-    opt.output_flag = False
-    opt.log_to_console = False
     if (highs.passOptions(opt) == h.HighsStatus.kError
             or highs.passModel(m, n, len(value), int(h.MatrixFormat.kColwise),
                                int(h.ObjSense.kMinimize), 0.0, dcost, np.zeros(m),
