@@ -51,6 +51,16 @@ STALL_GAIN = 5e-4
 # 0.5 but camel lower
 RELOCATE_AT = 0.5
 MOVE_ROUNDS = 4   # at most this many rounds of moves
+# The budget is where a compaction is expected to have converged, not where every one has: one
+# still shrinking at its end (by STALL_GAIN or more over the last STALL_SHARE of the budget, the
+# stall rule's own measure) goes on while it does, up to EXTEND times the budget; one converged
+# or stalled before it ends as before. Measured on pack27's 23 dumped compactions of 8 meshes
+# (issue18-pack28-2026-11-29.md, CPU, 3 runs each): at 2x, dino +0.9-1.5 % of area, max3ds
+# +1.8-1.9 %, Wuson.off +1.1 %, cow +0.45 %, igl-elephant +0.4 % on one of 3, igl-arm, homer
+# and rocker-arm unchanged (stopped gaining by half their budgets), geometric mean +0.46 %; 1.5x
+# gives about two thirds of that for half the added CPU (dino +0.4-0.6 s, Wuson.off +0.4 s: its
+# 2.15 s pack, 0.14x Blender's time, stays under 0.2x where 2x would come to ~0.19x)
+EXTEND = 1.5
 
 
 def _rings(outlines):
@@ -71,9 +81,11 @@ def _placed(outlines, angle, shift):
 
 def compact_square(outlines, placement, side, options, tol, seconds, max_programs=None,
                    least_side=0.0):
-    """Shrink a square layout by compaction steps for at most ``seconds`` (or until the step
-    falls below ``LEAST_STEP`` of the side: no program gains, or no move passes the check; or
-    until the side is within ``NEAR_LEAST`` of ``least_side``). In a run bounded by time, at
+    """Shrink a square layout by compaction steps for ``seconds``, or past them while the side
+    still shrinks by ``STALL_GAIN`` over the last ``STALL_SHARE`` of them, up to ``EXTEND``
+    times (or until the step falls below ``LEAST_STEP`` of the side: no program gains, or no
+    move passes the check; or until the side is within ``NEAR_LEAST`` of ``least_side``; or
+    until it stalls). In a run bounded by time, at
     ``RELOCATE_AT`` of it (or at a stall or convergence before, and at later ones) the small
     charts against the square's edges are moved into the free space deepest inside it
     (:func:`.relocate.relocate`, checked exactly) and the steps go on from there.
@@ -85,8 +97,9 @@ def compact_square(outlines, placement, side, options, tol, seconds, max_program
     side : float
     options : PackOptions (padding; rotate "any": small turns too)
     tol : float, outline simplification tolerance
-    seconds : float, CPU time of this process to take: on a loaded machine the compaction
-        takes longer but reaches as far (a program's solve is cut at the time left, by its own
+    seconds : float, CPU time of this process to take (up to ``EXTEND`` times as much while
+        the side still shrinks): on a loaded machine the compaction takes longer but reaches
+        as far (a program's solve is cut at the time left, by its own
         clock; its exact checks are finished)
     max_programs : int, optional: at most this many linear programs (deterministic runs)
     least_side : float, a side no layout reaches (the largest chart's least square with the
@@ -118,11 +131,13 @@ def compact_square(outlines, placement, side, options, tol, seconds, max_program
         S, angle, shift, step, programs, steps = _programs(
             outlines, owner, nxt, radius, turn, pm, tol, options, angle, shift, S, step,
             programs, steps, history, t0, until, STALL_SHARE * seconds, max_programs,
-            least_side, side, hold)
+            least_side, side, hold, seconds)
         # converged, stalled or at RELOCATE_AT of the time (not in a run bounded by programs):
         # the small charts against the square's edges into the free space deepest inside it,
         # and on
-        if (max_programs is not None or time.process_time() - t0 >= seconds
+        if (max_programs is not None
+                or _over(history, time.process_time() - t0, S, seconds, seconds,
+                         STALL_SHARE * seconds)
                 or S <= least_side * (1 + NEAR_LEAST) or moves >= MOVE_ROUNDS):
             break
         moved_angle, moved_shift, moved = relocate(outlines, angle, shift, S, pm * S + 2 * tol,
@@ -137,13 +152,17 @@ def compact_square(outlines, placement, side, options, tol, seconds, max_program
 
 def _programs(outlines, owner, nxt, radius, turn, pm, tol, options, angle, shift, S, step,
               programs, steps, history, t0, seconds, window, max_programs, least_side, side,
-              hold):
-    """Compaction steps until ``seconds`` of CPU since ``t0`` or ``max_programs`` are spent,
+              hold, budget):
+    """Compaction steps until ``seconds`` of CPU since ``t0`` are spent (the run's whole
+    ``budget``: past it while the side still shrinks, :func:`_over`) or ``max_programs`` are,
     the step falls below ``LEAST_STEP`` of the side, the side nears ``least_side`` or the side
     stalls over ``window`` seconds: the side, turns, shifts, step, programs and steps
     reached. ``hold``: [bool], whether the programs hold the turns of tight pairs (``HOLD``),
     set here at the first infeasible one."""
-    while (time.process_time() - t0 < seconds and step > LEAST_STEP * side
+    if max_programs is not None:
+        budget = np.inf   # (a run bounded by programs: never past ``seconds``)
+    while (not _over(history, time.process_time() - t0, S, seconds, budget, window)
+           and step > LEAST_STEP * side
            and S > least_side * (1 + NEAR_LEAST)
            and (max_programs is None or programs < max_programs)
            and not (max_programs is None and _stalled(history, time.process_time() - t0, S,
@@ -154,14 +173,14 @@ def _programs(outlines, owner, nxt, radius, turn, pm, tol, options, angle, shift
         extra = None
         for again in (False, True):  # the program, then once more with the pairs it missed
             got, infeasible = step_lp(Q, owner, nxt, shift, radius, S, options.padding, pm, tol,
-                                       step, turn, seconds - (time.process_time() - t0), extra,
+                                       step, turn, _left(seconds, budget, t0), extra,
                                        hold[0])
             if infeasible and turn and not hold[0]:
                 # the turns' error terms exceed some gaps no move can widen: from now on the
                 # small charts of those pairs do not turn (HOLD)
                 hold[0] = True
                 got, _ = step_lp(Q, owner, nxt, shift, radius, S, options.padding, pm, tol,
-                                  step, turn, seconds - (time.process_time() - t0), extra, True)
+                                  step, turn, _left(seconds, budget, t0), extra, True)
             if got is None or got[2] > S * (1 - REL_GAIN):
                 break   # (the turns' error bound can block a long step)
             move, phi, S_new = got
@@ -190,6 +209,30 @@ def _programs(outlines, owner, nxt, radius, turn, pm, tol, options, angle, shift
                 break
         step = min(2 * step, STEP * side) if part == 1 else step * 0.5
     return S, angle, shift, step, programs, steps
+
+
+def _over(history, now, side, until, budget, window):
+    """Whether a run to ``until`` CPU seconds is over ``now``: at ``until``; but where
+    ``until`` is the whole ``budget``, a side that shrank by ``STALL_GAIN`` or more (relative)
+    over the last ``window`` seconds of the ``history`` [(seconds, side before that program),
+    ...] goes on, up to ``EXTEND`` times the budget."""
+    if now < until:
+        return False
+    if until < budget or now >= EXTEND * budget:
+        return True
+    before = [s for t, s in history if t <= now - window]
+    return not (before and before[-1] >= side * (1 + STALL_GAIN))
+
+
+def _left(until, budget, t0):
+    """CPU seconds left to a program's solve: to ``until``; once past the whole ``budget``
+    (where ``until`` is it: the run goes on while the side shrinks, :func:`_over`), to
+    ``EXTEND`` times the budget. (A program is cut at the budget as before: with the longer
+    limit from the start ChineseDragon's compaction of 116 charts spent its time on long
+    programs of large steps, 1.5 % less area.)"""
+    now = time.process_time() - t0
+    end = EXTEND * budget if budget <= until <= now else until
+    return end - now
 
 
 def _stalled(history, now, side, window):

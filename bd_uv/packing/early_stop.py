@@ -6,7 +6,11 @@ the search and returns the best layout found (the error is dropped). So a watche
 the solve's progress queue and, at the first feasible layout no wider than ``narrow``, trips the
 main thread's SIGINT flag (``_thread.interrupt_main``: no OS signal). That is done only when the
 solve runs on the main thread and Python's own SIGINT handler is installed (a Python process,
-``import bpy`` keeps it); elsewhere the solve runs its time, as before.
+``import bpy`` keeps it) or SIGINT is ignored (a process started in the background by a shell
+script, ``cmd &``, inherits SIGINT ignored and Python then installs no handler: the pack went
+without its longer search there, igl-arm 0.724 -> 0.679 coverage, issue18-pack28-2026-11-29.md;
+a SIGINT from outside stays ignored during the solve); elsewhere the solve runs its time, as
+before.
 
 A trip the search did not see (it ended by its own clock in between) raises the
 ``KeyboardInterrupt`` just after ``solve`` returns, before its value is stored: it is caught here
@@ -25,7 +29,7 @@ POLL = 0.005  # seconds between two drains of the progress queue
 def can_stop():
     """True where a solve on this thread can be ended early (see the module's docstring)."""
     return (threading.current_thread() is threading.main_thread()
-            and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+            and signal.getsignal(signal.SIGINT) in (signal.default_int_handler, signal.SIG_IGN))
 
 
 def solve_until(inst, cfg, queue, feasible, narrow):
@@ -54,9 +58,12 @@ def solve_until(inst, cfg, queue, feasible, narrow):
     thread = threading.Thread(target=watcher, daemon=True)
     sol = None
     user = [False]      # a Ctrl-C of the user's, which spyrrow would end its search on and drop
+    before = signal.getsignal(signal.SIGINT) if watch else None
 
     def on_sigint(signum, frame):
         if not tripped[0]:
+            if before is signal.SIG_IGN:
+                return   # (SIGINT ignored by the process: a signal from outside stays so)
             user[0] = True
         raise KeyboardInterrupt
     if watch:
@@ -75,7 +82,7 @@ def solve_until(inst, cfg, queue, feasible, narrow):
     finally:
         done.set()
         if watch:
-            signal.signal(signal.SIGINT, signal.default_int_handler)
+            signal.signal(signal.SIGINT, before)
         if thread.ident is not None:
             thread.join()
         drained.extend(queue.drain())

@@ -159,6 +159,54 @@ def test_a_users_ctrl_c_during_the_search_is_raised_not_dropped():
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
 
 
+def test_with_sigint_ignored_the_search_is_ended_and_a_sigint_from_outside_stays_ignored():
+    """A process started in the background by a shell script (``cmd &``) has SIGINT ignored and
+    Python installs no handler: the search is still ended at its first layout narrow enough;
+    an OS SIGINT sent during a solve nothing trips is ignored, as the process asked (no
+    KeyboardInterrupt, the solve runs to its end); SIGINT is ignored again afterwards."""
+    import os
+    import signal
+    prior = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        assert early_stop.can_stop()
+        items = _items(12, 1)
+        sol, drained, ended = _solve(items, 4.0, 20.0, np.inf)
+        assert ended and _disjoint(sol, items)
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        got = []
+
+        class Slow:
+            def solve(self, cfg, queue):
+                for _ in range(300):   # 0.3 s at least: the signal lands at 0.05 s
+                    time.sleep(0.001)
+                got.append(True)
+                return _Sol(9.0)
+        timer = threading.Timer(0.05, os.kill, (os.getpid(), signal.SIGINT))
+        timer.start()
+        sol, drained, ended = early_stop.solve_until(
+            Slow(), None, _Queue([(FEASIBLE[0], _Sol(3.0))]), FEASIBLE, 0.0)
+        timer.join()
+        assert got and not ended and sol.width == 9.0
+        assert signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        time.sleep(0.01)
+    finally:
+        signal.signal(signal.SIGINT, prior)
+
+
+def test_with_sigint_ignored_the_pack_still_nests_longer(monkeypatch):
+    """The wavy discs below packed with SIGINT ignored (a background job): pack_islands asks
+    square_layout for REACH as with Python's handler, the layout certified."""
+    import signal
+    k = 10
+    V, F, uv, lab = _wavy_discs(k, 8)
+    assert _reach(k, len(F), float(_shares(V, F, lab).max())) == REACH
+    prior = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        check_reach_asked(monkeypatch, V, F, uv, lab, REACH)
+    finally:
+        signal.signal(signal.SIGINT, prior)
+
+
 def test_where_it_applies_the_pack_nests_longer_ending_each_search_at_its_square(monkeypatch):
     """10 wavy discs of 240 faces (the cut, 0.6 s, below the root's 0.62 s; no chart over 0.3
     of the area, recomputed): pack_islands asks square_layout for REACH, each solve is asked to
