@@ -156,8 +156,9 @@ def refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None
     chs = disks = cm = None
     if todo:
         release_memory(len(sub))
+        curved = None if defect is None else (defect[1], PIECE_CURVED, PIECE_FACES)
         split = split_deep(todo, E, cut, A, cen, S, poly, orders, big=2 * MAP_VERTICES,
-                           curved=None if defect is None else (defect[1], PIECE_CURVED, PIECE_FACES))
+                           curved=curved)
         for (faces, _), done in zip(todo, split):
             if not done:
                 frozen[faces] = True
