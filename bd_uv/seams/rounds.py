@@ -8,7 +8,7 @@ A chart that is not a disk has its handles cut (``cut_graph``; all of a round's 
 of the mesh's, or of ``CURVED_FACES`` faces or more curved beyond ``CURVED``: ``angle_defects``)
 and disks whose conformal map fails the charts' test (``charts.chart_maps``) are split, all in one
 batch (``bisect.split_deep``; the pieces of a chart without a map again while they hold more than
-``2 MAP_VERTICES`` faces, or ``PIECE_FACES`` faces or more curved beyond ``PIECE_CURVED``); a disk
+``2 MAP_VERTICES`` faces, or ``CURVED_FACES`` faces or more curved beyond ``PIECE_CURVED``); a disk
 that passes, and a chart no split divides, is accepted (frozen).
 """
 import numpy as np
@@ -42,19 +42,20 @@ MAP_SHARE = 0.2
 # conformal map: no chart of the search so curved passed on 8 meshes (their maps' stretch
 # 2-74x), while they held 21-36 % of the faces the search mapped (fandisk's first two maps of
 # ~6.5k faces each). A chart split wrongly this way is whole again where merging's union of its
-# pieces passes (merging maps every union, whatever its curvature). Not below CURVED_FACES
-# faces: there a map is cheap, and the depth its failure guides (``split_deep``) saves rounds.
+# pieces passes (merging maps every union, whatever its curvature).
 CURVED = 2 * np.pi
-CURVED_FACES = 4000
 # ... and the pieces of a chart split without a map (a closed part, an open chart no cut graph
 # changes, a chart skipped above) are split again in the same round while they hold at least
-# PIECE_FACES faces curved more than PIECE_CURVED (the faces' shares of their corners' defects,
+# CURVED_FACES faces curved more than PIECE_CURVED (the faces' shares of their corners' defects,
 # ``angle_defects``): a closed part's first split went one level a round, each piece mapped and
-# failing before the next (fandisk: 43k faces mapped by the search -> 16k, 9 rounds -> 8).
-# Not below PIECE_FACES faces: a small box's band, found whole and cut by the atlas pass, was
-# instead split into five pieces (tests/core/test_seams_pack_shape.py).
+# failing before the next (fandisk: 43k faces mapped by the search -> 28k, 9 rounds -> 8).
 PIECE_CURVED = 2.0
-PIECE_FACES = 1000
+# Only charts and pieces this large: below it a map is cheap, and the depth its failure guides
+# (``split_deep``) saves rounds; at 1,000 faces elephant, cow and dino ran 2-5 % more maps or
+# rounds and a small box's band, found whole and cut by the atlas pass, was split into five
+# (tests/core/test_seams_pack_shape.py); at 4,000 meshes under 8,000 faces are searched as
+# before.
+CURVED_FACES = 4000
 
 
 def refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None, known=None,
@@ -72,7 +73,7 @@ def refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None
     ``defect``: each vertex's angle defect and each face's share (``angle_defects``), optional:
     a disk of ``CURVED_FACES`` faces or more whose interior vertices' defects sum to more than
     ``CURVED`` is split without its map, and the pieces of charts split without a map again
-    while they hold ``PIECE_FACES`` faces or more whose shares sum to more than
+    while they hold ``CURVED_FACES`` faces or more whose shares sum to more than
     ``PIECE_CURVED`` (``split_deep``'s ``curved``).
     """
     sub = (~frozen).ravel().nonzero()[0]
@@ -156,7 +157,7 @@ def refine(V, F, E, cut, frozen, A, cen, C, S, n, poly=None, diag=None, cap=None
     chs = disks = cm = None
     if todo:
         release_memory(len(sub))
-        curved = None if defect is None else (defect[1], PIECE_CURVED, PIECE_FACES)
+        curved = None if defect is None else (defect[1], PIECE_CURVED, CURVED_FACES)
         split = split_deep(todo, E, cut, A, cen, S, poly, orders, big=2 * MAP_VERTICES,
                            curved=curved)
         for (faces, _), done in zip(todo, split):

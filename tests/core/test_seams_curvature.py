@@ -82,7 +82,7 @@ def test_a_large_sphere_maps_no_chart_curved_beyond_the_limits(monkeypatch):
     exact = _defects(V, F)
     assert batches
     for c in batches[0]:
-        if len(c.faces) >= rounds.PIECE_FACES:
+        if len(c.faces) >= rounds.CURVED_FACES:
             assert _share(V, F, exact)[c.faces].sum() <= rounds.PIECE_CURVED + 1e-9
     for c in (c for b in batches for c in b):
         if len(c.faces) >= rounds.CURVED_FACES:
