@@ -155,7 +155,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     known = {}                              # conformal maps of charts that passed, by faces
     orders = Orders.of(n, m)                # the LSCM and Fiedler systems' orders
     failed = {}                             # max stretch of disks whose map failed, by chart
-    defect = angle_defects(V, F, E)         # charts curved beyond ``rounds.CURVED``: no map
+    defect = angle_defects(V, F, E, A)      # charts curved beyond ``rounds.CURVED``: no map
     release_memory(m)                       # the set-up's temporaries
     rounds = 0
     for rounds in range(1, MAX_ROUNDS + 1):

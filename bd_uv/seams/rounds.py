@@ -174,41 +174,47 @@ def curvature(chart, defect):
     return float(defect[v].sum() - defect[v[chart.loops[0]]].sum())
 
 
-def angle_defects(V, F, E):
+def angle_defects(V, F, E, A):
     """Each vertex's angle defect, ``2 pi`` minus its corners' angles (0 on the mesh's boundary
     and at vertices of no face), and each face's share of its corners' defects (a vertex's
     defect shared among its corners by their angles: a face set's total is its curvature,
-    counting its boundary vertices in part), ``CHUNK`` faces at a time.
+    counting its boundary vertices in part), ``CHUNK`` faces at a time; ``A`` the face areas.
+    None on a mesh of fewer than ``CURVED_FACES`` faces, where no chart is large enough to use
+    them.
 
     Returns
     -------
-    (n,) float64, (m,) float64
+    (n,) float64, (m,) float64, or None
     """
+    if len(F) < CURVED_FACES:
+        return None
     total = np.zeros(len(V))
-    for f, ang in _corner_angles(V, F):
-        for k in range(3):
-            total += np.bincount(f[:, k], ang[:, k], minlength=len(V))
+    for f, ang in _corner_angles(V, F, A):
+        total += np.bincount(f.ravel(), ang.ravel(), minlength=len(V))
     defect = 2 * np.pi - total
     defect[total == 0] = 0.0
     defect[E.ends[E.faces[:, 1] < 0].ravel()] = 0.0
     defect[~np.isfinite(defect)] = 0.0
     with quiet("invalid", "divide"):
         per_angle = np.where(total > 0, defect / total, 0.0)
-    share = np.concatenate([(ang * per_angle[f]).sum(axis=1) for f, ang in _corner_angles(V, F)]
-                           or [np.zeros(0)])
+    share = np.concatenate([einsum("ij,ij->i", ang, per_angle[f])
+                            for f, ang in _corner_angles(V, F, A)])
     share[~np.isfinite(share)] = 0.0
     return defect, share
 
 
-def _corner_angles(V, F):
-    """(faces, their (k,3) corner angles), ``CHUNK`` faces at a time."""
+def _corner_angles(V, F, A):
+    """(faces, their (k,3) corner angles), ``CHUNK`` faces at a time: ``arctan2`` of twice the
+    face's area over the corner's dot product, from the squared side lengths (law of
+    cosines)."""
     for i in range(0, len(F), CHUNK):
         f = F[i:i + CHUNK]
-        P = V[f]
-        ang = np.empty((len(f), 3))
-        for k in range(3):
-            a, b = P[:, (k + 1) % 3] - P[:, k], P[:, (k + 2) % 3] - P[:, k]
-            with quiet("invalid"):
-                ang[:, k] = np.arctan2(np.linalg.norm(np.cross(a, b), axis=1),
-                                       einsum("ij,ij->i", a, b))
+        p0, p1, p2 = V[f[:, 0]], V[f[:, 1]], V[f[:, 2]]
+        d0, d1, d2 = p2 - p1, p0 - p2, p1 - p0          # the sides opposite corners 0, 1, 2
+        s0, s1, s2 = (einsum("ij,ij->i", d, d) for d in (d0, d1, d2))
+        twice = 2 * A[i:i + CHUNK]
+        with quiet("invalid"):
+            ang = np.stack([np.arctan2(twice, 0.5 * (s1 + s2 - s0)),
+                            np.arctan2(twice, 0.5 * (s2 + s0 - s1)),
+                            np.arctan2(twice, 0.5 * (s0 + s1 - s2))], axis=1)
         yield f, ang
