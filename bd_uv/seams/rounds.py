@@ -53,8 +53,8 @@ PIECE_CURVED = 2.0
 # Only charts and pieces this large: below it a map is cheap, and the depth its failure guides
 # (``split_deep``) saves rounds; at 1,000 faces elephant, cow and dino ran 2-5 % more maps or
 # rounds and a small box's band, found whole and cut by the atlas pass, was split into five
-# (tests/core/test_seams_pack_shape.py); at 4,000 meshes under 8,000 faces are searched as
-# before.
+# (tests/core/test_seams_pack_shape.py); at 4,000 suzanne, elephant, cesiumman, cow, dino and
+# the shader ball keep their seams, and meshes under 4,000 faces are searched as before.
 CURVED_FACES = 4000
 
 
