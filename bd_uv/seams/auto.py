@@ -34,7 +34,7 @@ from .merge import merge_charts
 from .orders import Orders
 from .pack_shape import split_for_packing
 from .bisect import FaceCentroids, bisect, polygon_edges
-from .rounds import refine
+from .rounds import angle_defects, refine
 from .cut_vertices import cut_mesh
 from .topology import charts
 from .valid import valid_everywhere
@@ -155,6 +155,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     known = {}                              # conformal maps of charts that passed, by faces
     orders = Orders.of(n, m)                # the LSCM and Fiedler systems' orders
     failed = {}                             # max stretch of disks whose map failed, by chart
+    defect = angle_defects(V, F, E, A)      # charts curved beyond ``rounds.CURVED``: no map
     release_memory(m)                       # the set-up's temporaries
     rounds = 0
     for rounds in range(1, MAX_ROUNDS + 1):
@@ -168,7 +169,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         changed = refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag,
                          cap=mean_cap(C) + GIVEN_SLACK * (mean_cap(C) - 1.0)
                          if rounds == 1 else mean_cap(C), known=known, geom=geom,
-                         failed=failed, orders=orders)
+                         failed=failed, orders=orders, defect=defect)
         if not changed:
             break
     atlas = np.zeros(len(E.ends), dtype=bool)   # the seams added for the atlas
@@ -235,7 +236,7 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
         bisect([np.sort(r.faces) for r in bad], E, cut, A, cen, poly, orders)
         for _ in range(MAX_ROUNDS):
             if not refine(V, F, E, cut, frozen, A, cen, C, S, n, poly, diag, geom=geom,
-                          failed=failed, orders=orders):
+                          failed=failed, orders=orders, defect=defect):
                 break
         if merge:
             # The pieces may now merge with their neighbours (never with each other).

@@ -53,7 +53,7 @@ def _mean3(V, Ff):
     return (V[Ff[:, 0]] + V[Ff[:, 1]] + V[Ff[:, 2]]) / 3
 
 
-def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None, big=None):
+def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None, big=None, curved=None):
     """Split charts, and split their pieces again while a chart's conformal map restricted to a
     piece (``piece_stretch``: no new solve) still breaks S by the factor ``DEEPER``.
 
@@ -75,6 +75,9 @@ def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None, big=None):
         charts, with their map's singular values per face (``ChartMaps.sigma``); None: split
         once, and its pieces again while they hold more than ``big`` faces
     big : int, optional (None: pieces of charts without a map are not split again)
+    curved : ((m,) float64, float, int), optional: each face's share of the curvature, a limit
+        and a size: a piece of a chart without a map of at least that many faces whose shares
+        sum to more than the limit is split again too
 
     Returns
     -------
@@ -95,8 +98,11 @@ def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None, big=None):
             split[j] = True
             if todo[j][1] is not None:
                 pieces += [(piece, j) for piece in two]
-            elif big is not None:
-                large += [(piece, j) for piece in two if len(piece) > big]
+            else:
+                large += [(piece, j) for piece in two
+                          if (big is not None and len(piece) > big)
+                          or (curved is not None and len(piece) >= curved[2]
+                              and curved[0][piece].sum() > curved[1])]
         if not pieces:
             stack = large
             if not stack:
