@@ -11,17 +11,22 @@ except ImportError:  # pragma: no cover - exercised where qdldl is absent
 
 from ..solvers.face_operators import CscArrays, csc_arrays
 from ..solvers.lscm import _lscm_system, face_geometry_of, lscm_pinned
+from ..solvers.lscm_patch import PatchedLSCM
+
+missing = object()      # (``conformal``'s ``rebuilt`` not given)
 
 __all__ = ["conformal"]
 
 
-def conformal(V, disk, Z, G, ranks, geom=None):
+def conformal(V, disk, Z, G, ranks, geom=None, rebuilt=missing):
     """The conformal map (nv,) complex128 of a ``Disk`` whose faces have the local corners Z
     (m,3) complex and gradient operators G (m,2,3) (its own: ``batched.conformal_islands``'
     map; or other shapes: ``capped``), pinned as the batched path pins an island (``_far_pair``
     at 0 and 1), factorised in the vertices' order ``ranks``. ``geom``: their
-    ``lscm.face_geometry_of(Z, G, disk.area)`` where the caller holds it (``angle_start``
-    rebuilds a few faces a solve)."""
+    ``lscm.face_geometry_of(Z, G, disk.area)`` where the caller holds it. ``rebuilt``: in
+    qdldl's own order (``ranks`` None), the faces (int64) rebuilt since the disk's last solve
+    given ``rebuilt``, or None for a system assembled anew and kept (``angle_start``'s solves:
+    ``solvers.lscm_patch``, the same bits); not given, nothing is kept."""
     isl = disk.island
     geom = face_geometry_of(Z, G, disk.area) if geom is None else geom
     idx = _far_pair(V.take(isl.vertices, axis=0), isl.loops[0])
@@ -32,7 +37,15 @@ def conformal(V, disk, Z, G, ranks, geom=None):
     # In qdldl's own order (below FIXED_RANKED vertices at a fixed C), qdldl reads the canonical
     # arrays (``Upper.csc_arrays``) without the scipy matrix ``lscm_pinned`` makes (~50-70 us of
     # its constructor on a 115-face disk). The same bits.
-    A, rhs, u, free = _lscm_system(*args, triplets=True)
+    if rebuilt is missing:
+        A, rhs, u, free = _lscm_system(*args, triplets=True)
+    else:
+        kept = disk.factors.get("patched")
+        if rebuilt is None or kept is None or not np.array_equal(kept.idx, idx):
+            kept = disk.factors["patched"] = PatchedLSCM(geom, *args[2:])
+            A, rhs, u, free = kept.system()
+        else:
+            A, rhs, u, free = kept.rebuilt(geom, rebuilt)
     solve = _qdldl_solve(_canonical(A, disk.factors), disk.factors)
     if solve is None:                   # lscm_pinned's way where qdldl refuses the arrays
         return lscm_pinned(*args)
@@ -80,8 +93,8 @@ def _canonical(A, kept):
     if kept is None:
         return A.csc_arrays()
     last = kept.get("csc")
-    if last is None or not (last[0] == A.n and np.array_equal(last[1], A.rows)
-                            and np.array_equal(last[2], A.cols)):
+    if last is None or not (last[0] == A.n and _equal(last[1], A.rows)
+                            and _equal(last[2], A.cols)):
         kept["csc"] = (A.n, A.rows, A.cols, None)
         return A.csc_arrays()
     n, rows, cols, M = last
@@ -91,6 +104,10 @@ def _canonical(A, kept):
         M = kept["csc"] = (n, rows, cols, M._replace(data=M.data.astype(np.int64)))
         M = M[3]
     return CscArrays(A.vals.take(M.data), M.indices, M.indptr, (n, n))
+
+
+def _equal(a, b):
+    return a is b or np.array_equal(a, b)      # (a patched system's are the kept ones)
 
 
 def _same(pattern, M):
