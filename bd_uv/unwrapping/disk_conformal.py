@@ -101,8 +101,8 @@ def _canonical(A, kept):
     if M is None:
         # the conversion of the triplets' positions (exact as float64): where each value goes
         M = csc_arrays(np.arange(len(rows), dtype=np.float64), rows, cols, n, n)
-        M = kept["csc"] = (n, rows, cols, M._replace(data=M.data.astype(np.int64)))
-        M = M[3]
+        M = M._replace(data=M.data.astype(np.int64))
+        kept["csc"] = (n, rows, cols, M)
     return CscArrays(A.vals.take(M.data), M.indices, M.indptr, (n, n))
 
 
