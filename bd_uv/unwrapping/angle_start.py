@@ -27,13 +27,13 @@ patches) its max distortion is 1.21-1.53 where Blender ABF's is 1.20-1.63 (3.76 
 ChineseDragon), flip-free, in one solve of the angles and one conformal solve (7-22 ms).
 """
 import numpy as np
-import scipy.sparse as sp
 
 from ..geometry import corner_angles, gradient_operators
 from ..solvers import ordered_ldl
-from ..solvers.lscm import spd_solver
+from ..solvers.face_operators import as_csc, csc_arrays
+from ..solvers.lscm import face_geometry_of, spd_solver
 from .capped import from_angles
-from .disk_conformal import conformal
+from .disk_conformal import _qdldl_solve, conformal
 from .disk_certificate import measure_disk, turning
 
 __all__ = ["angle_start", "bent_first", "better_start", "linear_abf", "max_distortion"]
@@ -185,10 +185,13 @@ def _solved(ranks, rows, cols, vals, n, vertex, ni, rhs):
                                                                kind="stable"), repeats=True)
         if f.lnz >= 0 and f.factor():
             return f.solve(rhs)
-    M = sp.csc_array((vals, (rows, cols)), shape=(n, n))
-    M.sum_duplicates()
+    # scipy's conversion's arrays, the repeated places summed (``face_operators.csc_arrays``),
+    # read by qdldl without the scipy matrix (homer's 3,521-face patch: ~0.25 ms less); a
+    # scipy matrix only where qdldl refuses them (``lscm.spd_solver``'s SuperLU)
+    M = csc_arrays(vals, rows, cols, n, n)
+    solve = _qdldl_solve(M)
     try:
-        return spd_solver(M, upper=True)(rhs)
+        return (solve or spd_solver(as_csc(M), upper=True))(rhs)
     except (ValueError, RuntimeError, np.linalg.LinAlgError):
         return None
 
@@ -209,12 +212,13 @@ def angle_start(V, disk):
     if angles is None:
         return None
     scale = np.ones(nv)
+    shapes = None
     for _ in range(ATTEMPTS):
-        Z = from_angles(_scaled(angles, scale, tris), disk.area)
+        shapes = _rebuilt(angles, scale, tris, disk.area, shapes)
         # (in qdldl's own order, over ``ordered_ldl.RANKED_VERTICES``, the disk's conformal
         # factorisation is refilled: ``Disk.factors``; homer's 3,521-face patch: ~7 ms a
         # solve anew, most of it the order)
-        u = conformal(V, disk, Z, gradient_operators(Z), disk.ranks)
+        u = conformal(V, disk, shapes[1], shapes[2], disk.ranks, shapes[3], shapes[4])
         a = corner_angles(u.take(tris))
         if not (np.isfinite(u).all() and (a > 0.0).all()):
             return None
@@ -232,6 +236,31 @@ def angle_start(V, disk):
         v = loop[over]
         scale[v] *= np.minimum(CAP * full / theta[over], CAP)
     return None
+
+
+def _rebuilt(angles, scale, tris, area, last=None):
+    """The faces rebuilt from the corner angles (m,3) scaled by ``scale`` (nv,) (``_scaled``,
+    ``capped.from_angles`` at their areas): (the scales at their corners (m,3), their local
+    corners Z, gradient operators G, ``lscm.FaceGeometry`` and the faces rebuilt since
+    ``last``, None for all). Given the last attempt's (``last``, whose arrays are
+    overwritten), only the faces where a corner's scale changed are rebuilt: each face's
+    numbers are its own row's arithmetic, so the same bits as all faces rebuilt (homer's
+    3,521-face patch: 5 and 13 of its faces in its 2nd-4th solves, ~0.5 ms of each saved; and
+    its system patched there, ``disk_conformal.conformal(rebuilt=...)``)."""
+    s = scale.take(tris)
+    if last is None:
+        Z = from_angles(_scaled(angles, scale, tris), area)
+        G = gradient_operators(Z)
+        return s, Z, G, face_geometry_of(Z, G, area), None
+    _, Z, G, geom, _ = last
+    faces = (s != last[0]).any(axis=1).nonzero()[0]
+    if len(faces):
+        t, a = tris.take(faces, axis=0), area.take(faces)
+        Zf = from_angles(_scaled(angles.take(faces, axis=0), scale, t), a)
+        Gf = gradient_operators(Zf)
+        gf = face_geometry_of(Zf, Gf, a)
+        Z[faces], G[faces], geom.cb[faces], geom.zarea[faces] = Zf, Gf, gf.cb, gf.zarea
+    return s, Z, G, geom, faces
 
 
 def _scaled(angles, scale, tris):

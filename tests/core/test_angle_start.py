@@ -141,6 +141,76 @@ def test_linear_abf_in_the_disks_vertex_order_solves_the_same_angles(monkeypatch
 
 
 
+
+def test_faces_rebuilt_again_and_the_systems_places_kept_give_the_maps_made_anew_to_the_bit():
+    """Between the angle start's solves only the faces where a corner's scale changed are
+    rebuilt (``_rebuilt`` given the last ones) and, in qdldl's own order, the conformal
+    system's values are patched at the places they touch (``lscm_patch``) and put in the places
+    the disk's first system's were converted to (``disk_conformal._canonical``, kept in
+    ``Disk.factors``, its factorisation refilled): through three solves of growing scales the
+    faces and the maps are those made anew (every face rebuilt, a new disk: its system
+    assembled and converted, a new factorisation), bit for bit."""
+    from bd_uv.unwrapping.disk_conformal import conformal
+    V, F = rings(*load_off("cow.off"), *COW[1])
+    disk = one_disk.find(V, F)
+    isl = disk.island
+    tris, loop, nv = isl.tris, isl.loops[0], len(isl.vertices)
+    angles = angle_start.linear_abf(disk, np.full(nv, np.nan))
+    scale = np.ones(nv)
+    last, steps = None, [(), (loop[5:6], 0.9), (loop[[5, 20, 21, 22]], 0.95)]
+    for i, step in enumerate(steps):
+        if step:
+            scale[step[0]] *= step[1]
+        before = None if last is None else last[0].copy()
+        last = angle_start._rebuilt(angles, scale, tris, disk.area, last)
+        s, Z, G, geom, rebuilt = last
+        full = angle_start._rebuilt(angles, scale, tris, disk.area)
+        assert np.array_equal(s, full[0]) and np.array_equal(Z, full[1])
+        assert np.array_equal(G, full[2]) and np.array_equal(geom.cb, full[3].cb)
+        assert np.array_equal(geom.zarea, full[3].zarea)
+        if before is not None:      # a few faces rebuilt, not all
+            assert 0 < (s != before).any(axis=1).sum() < len(tris) // 20
+        u = conformal(V, disk, Z, G, None, geom, rebuilt)
+        anew = conformal(V, one_disk.find(V, F), full[1], full[2], None)
+        assert np.isfinite(u).all() and np.array_equal(u, anew)
+        assert (disk.factors["csc"][3] is not None) == (i > 0)     # the places taken, kept
+    assert not np.array_equal(u, conformal(V, disk, disk.Z, disk.G, None))   # other shapes
+
+
+def test_a_patched_lscm_system_is_the_one_assembled_anew_to_the_bit():
+    """``lscm_patch.PatchedLSCM``: after faces are rebuilt (interior and boundary ones, then
+    one with a pinned corner, then none) its triplets and right-hand side are
+    ``_lscm_system``'s of the new faces, bit for bit, in the same order."""
+    from bd_uv.solvers.lscm import _lscm_system, face_geometry_of
+    from bd_uv.solvers.lscm_patch import PatchedLSCM
+    from bd_uv.unwrapping.disk_conformal import _far_pair
+    V, F = rings(*load_off("cow.off"), *COW[1])
+    disk = one_disk.find(V, F)
+    isl = disk.island
+    tris, loop, nv = isl.tris, isl.loops[0], len(isl.vertices)
+    idx = _far_pair(V.take(isl.vertices, axis=0), loop)
+    val, sides = np.array([0.0, 1.0], complex), (disk.twins[0], disk.twins[1], disk.loop)
+    Z, G = disk.Z.copy(), disk.G.copy()
+    geom = face_geometry_of(Z, G, disk.area)
+    kept = PatchedLSCM(geom, tris, nv, idx, val, sides)
+    rng = np.random.default_rng(3)
+    edge = np.isin(tris, loop).any(axis=1).nonzero()[0]
+    pin = np.isin(tris, idx).any(axis=1).nonzero()[0]
+    for faces in (np.concatenate([edge[:4], [7, 300]]), edge[10:30], pin[:1], edge[:0]):
+        A3 = np.abs(angle_start.corner_angles(Z[faces])) * rng.uniform(0.8, 1.2, (len(faces), 3))
+        Z[faces] = angle_start.from_angles(A3 * (np.pi / A3.sum(axis=1))[:, None],
+                                           disk.area[faces])
+        G[faces] = angle_start.gradient_operators(Z[faces])
+        fresh = face_geometry_of(Z, G, disk.area)
+        geom.cb[faces], geom.zarea[faces] = fresh.cb[faces], fresh.zarea[faces]
+        A, rhs, u, free = kept.rebuilt(geom, faces.astype(np.int64))
+        B, rhs_b, u_b, free_b = _lscm_system(fresh.cbw(), fresh.cb, tris, nv, idx, val, sides,
+                                             triplets=True)
+        assert np.array_equal(A.rows, B.rows) and np.array_equal(A.cols, B.cols)
+        assert np.array_equal(A.vals, B.vals) and np.array_equal(rhs, rhs_b)
+        assert np.array_equal(u, u_b) and np.array_equal(free, free_b)
+
+
 # (seed, faces) of cow.off: the conformal start lies over itself and the angle start's max is
 # over ``bound_limit`` (1,000; about 3,700 here): gated by that limit, auto cut this disk into 24
 # pieces at C 2.045 (main 19a8c44); searched from, it is one island
