@@ -122,6 +122,10 @@ def test_isolated_run_reports_the_same_distortion_and_a_peak():
     assert r["flips"] == st.flips == 0
     assert r["max_d"] == pytest.approx(st.max_distortion, rel=1e-12)
     assert r["rss_peak_mb"] >= r["rss_base_mb"] > 0
+    # a call under REPEAT_BELOW is timed again (at least once more: its first call is within
+    # REPEAT_SECONDS), one above it once
+    from isolate import REPEAT_BELOW, REPEAT_MAX
+    assert (r["calls"] > 1) == (r["seconds"] < REPEAT_BELOW) and r["calls"] <= REPEAT_MAX
 
 
 def _row(mesh, key, seconds, max_d, mean_d, flips=0, c=None):
