@@ -188,8 +188,9 @@ def angle_defects(V, F, E, A):
     """
     if len(F) < CURVED_FACES:
         return None
+    chunks = list(_corner_angles(V, F, A))    # (views of F, (k,3) angles: 24 bytes a face)
     total = np.zeros(len(V))
-    for f, ang in _corner_angles(V, F, A):
+    for f, ang in chunks:
         total += np.bincount(f.ravel(), ang.ravel(), minlength=len(V))
     defect = 2 * np.pi - total
     defect[total == 0] = 0.0
@@ -198,7 +199,7 @@ def angle_defects(V, F, E, A):
     with quiet("invalid", "divide"):
         per_angle = np.where(total > 0, defect / total, 0.0)
     share = np.concatenate([einsum("ij,ij->i", ang, per_angle[f])
-                            for f, ang in _corner_angles(V, F, A)])
+                            for f, ang in chunks])
     share[~np.isfinite(share)] = 0.0
     return defect, share
 
