@@ -32,6 +32,11 @@ class PatchedLSCM:
 
     def __init__(self, geom, tris, n, idx, val, sides):
         self.tris, self.n, self.idx, self.val, self.sides = tris, n, idx, val, sides
+        self._build(geom)
+
+    def _build(self, geom):
+        """The system assembled afresh from ``geom`` (every face's geometry now)."""
+        tris, n, idx, val, sides = self.tris, self.n, self.idx, self.val, self.sides
         self._system = _lscm_system(geom.cbw(), geom.cb, tris, n, idx, val, sides,
                                     triplets=True)
         self._u = self._system[2].copy()        # (the caller writes its map into the copy)
@@ -49,7 +54,7 @@ class PatchedLSCM:
         if len(faces) and self._places is None:
             self._places = self._made(geom)
         if len(faces) and self._places["pin_faces"].take(faces).any():
-            self.__init__(geom, self.tris, self.n, self.idx, self.val, self.sides)
+            self._build(geom)
         elif len(faces):
             self._patch(geom, faces)
         return self.system()

@@ -327,7 +327,8 @@ def test_a_disk_auto_cut_is_kept_whole_at_a_number_a_little_above(budget):
         assert not flipped.any() and D.max() <= r.bound_certified
     assert_one_simple_disk(V, F, res.corner_uv, r, disk.island)
 
-@pytest.mark.parametrize("seed, faces, fewer, lower", [(2222, 800, 20, False), (5243, 400, 0, True)])
+@pytest.mark.parametrize("seed, faces, fewer, lower",
+                         [(2222, 800, 20, False), (5243, 400, 0, True)])
 def test_the_angle_starts_search_ends_at_a_tested_map_that_lies_over_itself(
         monkeypatch, seed, faces, fewer, lower):
     """``strategies.OVERLAP_ENDS``: every ``target_watch.CHECK_EVERY``-th new best of a target is
