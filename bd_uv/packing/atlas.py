@@ -142,7 +142,8 @@ def pack_islands(V, F, corner_uv, face_island, options=None, pinned=None, face_l
                 nested = square_layout(charts.outlines, options, tol, seconds, charts.exact,
                                        coarse=True,
                                        reach=_reach(options, k, int((lab >= 0).sum()),
-                                                    largest) if can_stop() else 1.0)
+                                                    largest) if can_stop() else 1.0,
+                                       gain=options.root_gain(k, int((lab >= 0).sum())))
                 if found is None or nested[1] < found[1]:
                     found = nested
                 else:
