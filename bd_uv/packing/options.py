@@ -80,6 +80,20 @@ DOMINANT_REACH = 3.0
 # 2.4 -> 3.2 s against Blender's 29.4 s idle; max3ds (68 not tiny) 0.653 -> 0.668 (3/1)
 MANY_CHARTS = 40
 MANY_SECONDS_PER_CHART = 0.064
+# Where the root sets the time (above the floor, under the per-chart cut: fewer than
+# (AUTO_SECONDS_PER_CHART / AUTO_SECONDS_PER_ROOT)^2 = 225 faces a chart) on up to
+# ROOT_GAIN_MAX_CHARTS charts, the packing takes ROOT_GAIN times it. Blender's exact-shape time
+# on such sets went as 0.032-0.037 s a root (the lead's idle benches, 2026-11-29: suzanne 27
+# charts 5.1-5.5 s, dino 36 charts 19.2-20.6 s, cow 45 charts 18.8-21.2 s), so the root gave them
+# 0.10-0.13x of it, where sets of few charts of many faces (cut per chart) took 0.15-0.22x
+# (rocker-arm, igl-arm), and their coverage was the one at the 1.05x line. Measured
+# (issue18-pack29-2026-11-29.md, interleaved per seed, load 4-7): 1.3x: dino 0.667 -> 0.681
+# (9 wins, 2 losses, 12 seeds; CPU 2.27 -> 2.91 s), suzanne 0.591 -> 0.604 (10/2; 0.82 -> 0.88
+# s), cow 0.702 -> 0.708 (4/1, 6 seeds; 1.95 -> 2.15 s); 1.5x about as much for more time, its
+# nesting (dino +0.025) or its compaction (suzanne +0.013) alone too. Not above 50 charts:
+# ChineseDragon's 116 (Blender 0.021 s a root) already take about 0.2x
+ROOT_GAIN = 1.3
+ROOT_GAIN_MAX_CHARTS = 50
 
 
 @dataclass(frozen=True)
@@ -185,6 +199,19 @@ class PackOptions:
         if not (charts <= DOMINANT_MAX_CHARTS and largest > DOMINANT_SHARE):
             return 1.0
         return DOMINANT_REACH if self._cut_sets_time(charts, faces) else 1.0
+
+    def root_gain(self, charts, faces=0):
+        """``ROOT_GAIN`` where the root ``AUTO_SECONDS_PER_ROOT`` sqrt(charts x faces) sets the
+        adaptive time (above its floor, at most ``AUTO_SECONDS_PER_CHART`` a chart, under
+        ``AUTO_SECONDS_MAX``) on up to ``ROOT_GAIN_MAX_CHARTS`` charts, with one solve and no
+        time given; else 1. The packing takes that many times :meth:`search_seconds`."""
+        if (self.solve_seconds is not None or self.solves > 1
+                or not 2 <= charts <= ROOT_GAIN_MAX_CHARTS):
+            return 1.0
+        root = AUTO_SECONDS_PER_ROOT * float(np.sqrt(charts * max(faces, charts)))
+        floor = min(AUTO_SECONDS_MIN, AUTO_SECONDS_MIN_PER_CHART * charts)
+        return ROOT_GAIN if floor < root <= AUTO_SECONDS_PER_CHART * charts and \
+            root < AUTO_SECONDS_MAX else 1.0
 
     def _cut_sets_time(self, charts, faces):
         """Whether the adaptive time is cut by ``AUTO_SECONDS_PER_CHART`` (above the floor),

@@ -158,7 +158,7 @@ def _solve_all(outlines, sides, options, tol, seconds, headroom=HEADROOM, spare=
 
 
 def square_layout(outlines, options, tol, seconds, exact=None, split=True, coarse=False,
-                  reach=1.0):
+                  reach=1.0, gain=1.0):
     """The smallest square found that holds every outline with the padding.
 
     The padding scales with the square (it is in texels). A solve packs a strip of height H for
@@ -190,6 +190,8 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True, coars
         at most ``COARSE_KEEP`` of the points, the compaction the exact ones
     reach : float, above 1: the nesting may take ``reach`` times its share (the density guessed
         for that search), each search ending once its layout is square (:func:`_solve_all`)
+    gain : float, the time taken is ``gain`` times ``seconds`` (nesting and compaction alike,
+        the large charts' first too: ``PackOptions.root_gain``)
 
     Returns
     -------
@@ -198,6 +200,7 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True, coars
     k = len(outlines)
     if k == 1:
         return (*single_layout(outlines[0], options, tol), 0)
+    seconds *= gain
     if (split and LARGE_FIRST_CHARTS <= k <= COMPACT_MAX_CHARTS and seconds > 0
             and options.solves == 1):
         found = large_first(outlines, exact, options, tol, seconds,

@@ -5,13 +5,14 @@ hold 98.6 % of the area, 154 bolt charts a few texels across the other 1.4 %). N
 compacting them all makes the time follow the chart count (the budget is 4 ms sqrt(charts x
 faces), every compaction program has rows for every tiny chart's outline) while the tiny charts
 barely change the square. So when most charts are tiny (each under ``TINY_SHARE`` of the charts'
-area, at least ``TINY_COUNT_SHARE`` of the charts, together under ``TINY_AREA_SHARE``):
+area, at least ``TINY_COUNT_SHARE`` of the charts, together under ``TINY_AREA_SHARE``; the small
+ones, under ``SMALL_SHARE``, join them, smallest first, while all hold under that share):
 
 1. the other charts are packed as any set of charts is (:func:`.few.few_square` for 2-5,
-   else :func:`.square.square_layout`), with ``OTHERS_TIME`` times the time of their own count
-   and faces (cut where one of them dominates, as ``PackOptions.search_seconds`` does for any
-   set);
-2. the tiny charts, largest first, are dropped into the free space of that square on a raster
+   else :func:`.square.square_layout`), with ``OTHERS_TIME`` times the time of the count and
+   faces of every chart that is not tiny, the small ones dropped included (cut where one of the
+   others dominates, as ``PackOptions.search_seconds`` does for any set);
+2. the dropped charts, largest first, are dropped into the free space of that square on a raster
    made conservative as in :mod:`.around` (a chart occupies every cell whose centre lies within
    ``separation / 2 + h sqrt(2) / 2`` of its outline, so two charts whose cells do not meet are
    at least the separation apart, and a chart whose cells stay in the grid is half of it from
@@ -53,21 +54,40 @@ TINY_EXTENT = 0.05
 # left to them. x2 (issue18-pack26-2026-11-28.md, interleaved per seed): Wuson.off 0.651 -> 0.659
 # (3/1), CPU 1.23 -> 1.88 s (Blender 13.1 s idle); wuson.stl 0.643 -> 0.670 (4/0), 1.58 -> 2.44 s
 OTHERS_TIME = 2.0
+# Once most charts are tiny, the small ones (under SMALL_SHARE of the area each) are dropped
+# too, smallest first while the dropped ones hold under TINY_AREA_SHARE: the square is the
+# others', and a small chart nested with them costs their search and compaction more than it
+# moves the square; the others nest for the time the charts that are not tiny had (so not
+# less than before). Measured (issue18-pack29-2026-11-29.md, interleaved per seed, load 4-8):
+# Wuson.off's 83 charts (55 tiny, 11 small: 17 nested instead of 28) 0.687 -> 0.698 (12/6, 18
+# seeds), CPU 1.97 -> 1.67 s; wuson.stl's 91 (55, 14: 22 instead of 36) 0.683 -> 0.691 (11/7),
+# 2.36 -> 2.00 s. For the time of their own count (less): Wuson.off +0.011 (16/4) at load 4-7
+# but -0.029 (1/4) at load 7-8, where that shorter nesting starved, and below this rule in the
+# same runs (-0.002, 4/10; wuson.stl -0.008, 3/8); at 2e-3 (fewer small ones): Wuson.off +0.018
+# (3/2), wuson.stl -0.003 (3/2), 5 seeds
+SMALL_SHARE = 3e-3
+SMALL_EXTENT = 0.13     # ... and within this extent (a square of 0.5 % of the area is 0.07 across)
 CELLS = 512             # raster cells along the square's side (2 texels at 1024 px)
 
 
 def tiny_charts(area, extent=None):
-    """Indices of the tiny charts to drop (int64), or None when the charts are not mostly
-    tiny ones (or fewer than two would be left to pack). ``extent`` (k,), optional: each
-    chart's longest side over the square root of all the charts' area; a chart reaching
-    ``TINY_EXTENT`` is not tiny, whatever its area."""
+    """Indices of the charts to drop (int64), or None when the charts are not mostly tiny
+    ones (or fewer than two would be left to pack). ``extent`` (k,), optional: each chart's
+    longest side over the square root of all the charts' area; a chart reaching
+    ``TINY_EXTENT`` is not tiny, whatever its area. Where they are mostly tiny, the small
+    charts (under ``SMALL_SHARE`` of the area, within ``SMALL_EXTENT``) are dropped too,
+    smallest first while all the dropped ones hold under ``TINY_AREA_SHARE`` of the area."""
     area = np.asarray(area, dtype=np.float64)
-    tiny = area < TINY_SHARE * area.sum()
-    if extent is not None:
-        tiny &= np.asarray(extent, dtype=np.float64) < TINY_EXTENT
+    extent = np.zeros(len(area)) if extent is None else np.asarray(extent, dtype=np.float64)
+    tiny = (area < TINY_SHARE * area.sum()) & (extent < TINY_EXTENT)
     if (tiny.sum() < TINY_COUNT_SHARE * len(area) or (~tiny).sum() < 2
             or area[tiny].sum() >= TINY_AREA_SHARE * area.sum()):
         return None
+    small = np.flatnonzero((area < SMALL_SHARE * area.sum()) & (extent < SMALL_EXTENT) & ~tiny)
+    small = small[np.argsort(area[small], kind="stable")]
+    room = TINY_AREA_SHARE * area.sum() - area[tiny].sum()
+    small = small[np.cumsum(area[small]) < room][:max(int((~tiny).sum()) - 2, 0)]
+    tiny[small] = True
     return np.flatnonzero(tiny)
 
 
@@ -83,7 +103,8 @@ def tiny_square(charts, options, tol, faces):
     faces : (k,) int, faces of each chart (the time follows the charts packed)
     """
     extent = np.array([np.ptp(o, axis=0).max() if len(o) else 0.0 for o in charts.outlines])
-    tiny = tiny_charts(charts.area, extent / np.sqrt(max(float(np.sum(charts.area)), 1e-300)))
+    scaled = extent / np.sqrt(max(float(np.sum(charts.area)), 1e-300))
+    tiny = tiny_charts(charts.area, scaled)
     if tiny is None:
         return None
     k = len(charts.outlines)
@@ -92,9 +113,13 @@ def tiny_square(charts, options, tol, faces):
     exact = [charts.exact[i] for i in big]
     found = few_square(outlines, options, tol, exact)
     if found is None:
-        area = charts.area[big]
+        # the time of every chart that is not tiny (the small ones dropped too: their share is
+        # left to the others), cut where one of the others dominates them
+        timed = np.flatnonzero((charts.area >= TINY_SHARE * charts.area.sum())
+                               | (scaled >= TINY_EXTENT))
         seconds = OTHERS_TIME * options.search_seconds(
-            len(big), int(np.sum(np.asarray(faces)[big])), float(area.max() / area.sum()))
+            len(timed), int(np.sum(np.asarray(faces)[timed])),
+            float(charts.area[big].max() / charts.area[timed].sum()))
         found = square_layout(outlines, options, tol, seconds, exact)
     pl, side, solves = found
     angle, shift = np.zeros(k), np.zeros((k, 2))
