@@ -261,8 +261,9 @@ class Factor:
     order is written here (rows sorted in each column, the diagonal last, as ``QDLDL_etree``
     requires)."""
 
-    def __init__(self, rows, cols, vals, n, perm, repeats=False):
+    def __init__(self, rows, cols, vals, n, perm, repeats=False, keep=False):
         self.n, self.perm = n, perm
+        self._kept = None
         pinv = np.empty(n, np.int64)
         pinv[perm] = np.arange(n)
         r, c = pinv[rows], pinv[cols]
@@ -282,11 +283,36 @@ class Factor:
         if repeats:     # each column's rows sorted: a place's triplets side by side, summed
             _st.csr_sum_duplicates(n, n, self.Ap, self.Ai, self.Ax)
             self.Ai, self.Ax = self.Ai[:self.Ap[n]], self.Ax[:self.Ap[n]]
+        if keep and not repeats:
+            # where each triplet's value goes (the same two conversions of their positions,
+            # exact as float64): ``refill`` puts another system's values of the same places
+            # there, without the conversions and the elimination tree
+            where = np.empty(nnz)
+            _st.coo_tocsr(n, n, nnz, r, c, np.arange(nnz, dtype=np.float64), Rp, Rj, where)
+            at_ = np.empty(nnz)
+            _st.csr_tocsc(n, n, Rp, Rj, where, self.Ap, np.empty(nnz, np.int64), at_)
+            self._kept = (self.Ai, at_.astype(np.int64))
         at = _p(ints)
         self._at = (at, at + 8 * (n + 1), at + 8 * (2 * n + 1), at + 8 * (3 * n + 1))
         self._ai, self._ax = _p(self.Ai), _p(self.Ax)
         Ap, work, Lnz, etree = self._at
         self.lnz = int(_lib().QDLDL_etree(n, Ap, self._ai, work, Lnz, etree))
+
+    def refill(self, vals):
+        """A Factor (not yet factorised) of the triplets given to this one (made with
+        ``keep``) with the values ``vals`` instead, in the same order: the same matrix in the
+        same elimination order as a new Factor of them, so the same factor bit for bit, without
+        the conversions and the elimination tree (the pattern's, shared: the numeric factor
+        only reads them). None where this one was not made with ``keep``."""
+        if self._kept is None:
+            return None
+        Ai, where = self._kept
+        f = object.__new__(Factor)
+        f.n, f.perm, f.lnz, f._kept = self.n, self.perm, self.lnz, self._kept
+        f.Ap, f.work, f.Lnz, f.etree, f._at = self.Ap, None, self.Lnz, self.etree, self._at
+        f.Ai, f.Ax = Ai, np.ascontiguousarray(vals, np.float64).take(where)
+        f._ai, f._ax = _p(f.Ai), _p(f.Ax)
+        return f
 
     def repeated(self):
         """Whether two of the triplets given share a place (before ``factor``, which needs them
