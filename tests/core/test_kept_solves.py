@@ -22,7 +22,7 @@ from bd_uv.solvers.lscm import lscm_pinned, face_geometry_of
 from bd_uv.unwrapping import disk_conformal, energy_within, one_disk
 from bd_uv.unwrapping.capped import from_angles
 from bd_uv.unwrapping.problem import IslandProblem
-from helpers import grid, load_off, rings
+from helpers import load_off, rings
 from test_over_bound import _sphere_with_a_hole
 
 pytestmark = pytest.mark.skipif(not ordered_ldl.available(), reason="no ordered factorisation")
