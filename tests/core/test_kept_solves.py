@@ -17,6 +17,7 @@ from bd_uv.frames import _edge_length_lookup, _far_pair, _loop_lengths, frames_f
 from bd_uv.geometry import corner_angles, gradient_operators
 from bd_uv.mesh import check_arrays, checked_islands
 from bd_uv.solvers import ordered_ldl
+from bd_uv.solvers.face_operators import gradient_rows
 from bd_uv.solvers.global_step import GlobalStep
 from bd_uv.solvers.lscm import lscm_pinned, face_geometry_of
 from bd_uv.unwrapping import disk_conformal, energy_within, one_disk
@@ -168,16 +169,26 @@ def _lowest_energy_scipy(prob, us, C, iterations, tau):
 
 def test_lowest_energys_iterate_is_the_scipy_products_one_to_the_bit():
     """From the harmonic map of a sphere with a hole (flip-free), at two bounds: the iterate
-    equals the scipy-matrix iteration's bit for bit, its lift's rows are ``GlobalStep.G``'s, and
-    it lowers the conformal energy (recomputed from beta)."""
+    equals the scipy-matrix iteration's bit for bit, its lift's rows (``gradient_rows``, and
+    ``GlobalStep``'s G, Gx, Gy made from them) are the operators' sums' (scipy's), and it lowers
+    the conformal energy (recomputed from beta)."""
     from bd_uv.unwrapping.initial import start_map
     prob = _problem()
     h = start_map(prob, "harmonic", None, lambda *_: None)
     assert np.isfinite(h.D)
-    gs = GlobalStep(prob.ops, prob.nv, [0], prob.island.tris, connected=True)
-    ptr, ind, dat = energy_within._gradient_rows(*gs.face_gradients(), gs.tris)
-    assert (np.array_equal(ptr, gs.G.indptr) and np.array_equal(ind, gs.G.indices)
-            and dat.tobytes() == gs.G.data.tobytes())
+    o, nv = prob.ops, prob.nv
+    G = sp.csr_array(sp.vstack([sp.csr_array((o.Are + o.Bre)[:, :nv]),
+                                sp.csr_array((o.Bim - o.Aim)[:, :nv])]))
+    gs = GlobalStep(o, nv, [0], prob.island.tris, connected=True)
+    for ptr, ind, dat in (gradient_rows(o.gx, o.gy, prob.island.tris),
+                          (gs.G.indptr, gs.G.indices, gs.G.data)):
+        assert (np.array_equal(ptr, G.indptr) and np.array_equal(ind, G.indices)
+                and dat.tobytes() == G.data.tobytes())
+    for mine, theirs in ((gs.Gx, (o.Are + o.Bre)[:, :nv]), (gs.Gy, (o.Bim - o.Aim)[:, :nv])):
+        theirs = sp.csr_array(theirs)
+        assert (np.array_equal(mine.indptr, theirs.indptr)
+                and np.array_equal(mine.indices, theirs.indices)
+                and mine.data.tobytes() == theirs.data.tobytes())
     for C, it in ((h.D, 25), (0.5 * (1.0 + h.D), 7)):
         y = energy_within.lowest_energy(prob, h.u, C, it)
         assert y.tobytes() == _lowest_energy_scipy(prob, h.u, C, it, energy_within.TAU).tobytes()
