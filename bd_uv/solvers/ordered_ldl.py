@@ -122,13 +122,20 @@ RANKED_VERTICES = 1000
 # three_peaks:250 (158) 0.65-0.67 -> 0.68-0.69, lion-head:300 0.58-0.59 -> 0.59,
 # mushroom:500 0.38-0.39 -> 0.37-0.38
 FIXED_RANKED = 200
+# ``bound="auto"`` on one disk factorises several systems of its vertices (the conformal map, the
+# angle start's, the bound search's Laplacian, the mean relax's): one order of the vertices
+# serves them all, and the search's back-solves pair u and v (``_paired``), so it pays up to this
+# many vertices (``one_disk.find``'s ``most``; instructions per warm call, RANKED_VERTICES ->
+# this: homer's 1,982-face strip 282.1 -> 258.2 M; the same C, mean and iterations)
+AUTO_RANKED_VERTICES = 4000
 
 
-def edge_ranks(a, b, n):
+def edge_ranks(a, b, n, most=None):
     """``vertex_ranks`` of the graph of n vertices whose edges are (a[i], b[i]) (int64 arrays),
     each edge once (a mesh piece whose edges are known: ``unwrapping.one_disk``): no sort and
-    no duplicate to sum (the same order as ``vertex_ranks`` of its triangles)."""
-    if not 0 < n <= RANKED_VERTICES or not available():
+    no duplicate to sum (the same order as ``vertex_ranks`` of its triangles). ``most``: the
+    most vertices ordered (RANKED_VERTICES by default)."""
+    if not 0 < n <= (RANKED_VERTICES if most is None else most) or not available():
         return None
     return _graph_ranks(a, b, n, twice=False)
 
