@@ -290,15 +290,8 @@ class Factor:
         if repeats:     # each column's rows sorted: a place's triplets side by side, summed
             _st.csr_sum_duplicates(n, n, self.Ap, self.Ai, self.Ax)
             self.Ai, self.Ax = self.Ai[:self.Ap[n]], self.Ax[:self.Ap[n]]
-        if keep and not repeats:
-            # where each triplet's value goes (the same two conversions of their positions,
-            # exact as float64): ``refill`` puts another system's values of the same places
-            # there, without the conversions and the elimination tree
-            where = np.empty(nnz)
-            _st.coo_tocsr(n, n, nnz, r, c, np.arange(nnz, dtype=np.float64), Rp, Rj, where)
-            at_ = np.empty(nnz)
-            _st.csr_tocsc(n, n, Rp, Rj, where, self.Ap, np.empty(nnz, np.int64), at_)
-            self._kept = (self.Ai, at_.astype(np.int64))
+        if keep and not repeats:    # for ``refill``: the places (where they go, when asked)
+            self._kept = [self.Ai, r, c, None]
         at = _p(ints)
         self._at = (at, at + 8 * (n + 1), at + 8 * (2 * n + 1), at + 8 * (3 * n + 1))
         self._ai, self._ax = _p(self.Ai), _p(self.Ax)
@@ -313,7 +306,16 @@ class Factor:
         only reads them). None where this one was not made with ``keep``."""
         if self._kept is None:
             return None
-        Ai, where = self._kept
+        Ai, r, c, where = kept = self._kept
+        if where is None:
+            # where each triplet's value goes: the two conversions of their positions (exact
+            # as float64), made at the first refill (a disk solved once pays nothing)
+            n, nnz = self.n, len(r)
+            Rp, Rj, Rx = np.empty(n + 1, np.int64), np.empty(nnz, np.int64), np.empty(nnz)
+            _st.coo_tocsr(n, n, nnz, r, c, np.arange(nnz, dtype=np.float64), Rp, Rj, Rx)
+            Cp, Ci, Cx = np.empty(n + 1, np.int64), np.empty(nnz, np.int64), np.empty(nnz)
+            _st.csr_tocsc(n, n, Rp, Rj, Rx, Cp, Ci, Cx)
+            where = kept[3] = Cx.astype(np.int64)
         f = object.__new__(Factor)
         f.n, f.perm, f.lnz, f._kept = self.n, self.perm, self.lnz, self._kept
         f.Ap, f.work, f.Lnz, f.etree, f._at = self.Ap, None, self.Lnz, self.etree, self._at
