@@ -81,11 +81,23 @@ def _edge_length_lookup(Z, tris, nv):
 
 
 def _loop_lengths(Z, tris, nv, loop):
-    """Length of each boundary edge loop[i] -> loop[i+1]."""
-    E = _edge_length_lookup(Z, tris, nv)
-    E = E + E.T  # either direction; boundary edges appear once
+    """Length of each boundary edge loop[i] -> loop[i+1]: the face's edge either way round
+    (a boundary edge is one face's), looked up among the faces' edges sorted by their ends
+    (the sum ``E[a, b] + E[b, a]`` that the symmetric lookup ``_edge_length_lookup`` gives,
+    without its sparse matrices: ~0.4 ms of a 1k-face island)."""
+    tris = np.asarray(tris, dtype=np.int64)
+    loop = np.asarray(loop, dtype=np.int64)
+    key = (tris * nv + np.roll(tris, -1, axis=1)).ravel()
+    order = np.argsort(key)         # (distinct keys: a stable sort is ~5x slower here)
+    key = key.take(order)
+    lens = np.abs(np.roll(Z, -1, axis=1) - Z).ravel().take(order)
     nxt = np.roll(loop, -1)
-    return np.asarray(E[loop, nxt]).ravel()
+
+    def lookup(a, b):
+        want = a * nv + b
+        at = np.minimum(np.searchsorted(key, want), len(key) - 1)
+        return np.where(key.take(at) == want, lens.take(at), 0.0)
+    return lookup(loop, nxt) + lookup(nxt, loop)
 
 
 def hole_fans(Z, tris, nv, holes):

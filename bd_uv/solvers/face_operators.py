@@ -12,7 +12,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse import _sparsetools as _st
 
-__all__ = ["face_gradients", "laplacian_blocks", "laplacian_block_arrays", "alpha_beta_lift",
+__all__ = ["face_gradients", "gradient_rows", "laplacian_blocks", "laplacian_block_arrays",
+           "alpha_beta_lift",
            "free_lift_arrays", "CscArrays", "as_csc", "csc_arrays"]
 
 
@@ -34,6 +35,23 @@ def face_gradients(Gx, Gy, tris):
         np.add.at(g, (rows, corner), G.data)
         out.append(g)
     return out[0], out[1]
+
+
+def gradient_rows(gx, gy, tris):
+    """The compressed rows (indptr, indices, data) of ``global_step.GlobalStep.G`` (2k, nv):
+    face j's d/dx coefficients ``gx[j]`` on its corners ``tris[j]`` in row j, its d/dy ``gy[j]``
+    in row k + j, each row's columns increasing and its exact zeros left out, as the sums of
+    the operators it is made of (``energies.jacobian_operators``' halves) leave them."""
+    k = len(tris)
+    order = np.argsort(tris, axis=1, kind="stable")
+    cols = np.take_along_axis(tris, order, axis=1)
+    data = np.concatenate([np.take_along_axis(gx, order, axis=1),
+                           np.take_along_axis(gy, order, axis=1)]).ravel()
+    cols = np.concatenate([cols, cols]).ravel()
+    keep = data != 0.0
+    indptr = np.zeros(2 * k + 1, np.int64)
+    np.cumsum(keep.reshape(2 * k, 3).sum(axis=1), out=indptr[1:])
+    return indptr, cols[keep], data[keep]
 
 
 def laplacian_blocks(gx, gy, area, tris, free, fixed, nv):

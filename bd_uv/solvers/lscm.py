@@ -154,16 +154,31 @@ def lscm_pinned(cbw, cb, tris, n, idx, val, sides=None, ranks=None):
     return u
 
 
-def ranked_triplet_solver(rows, cols, vals, keys):
+def ranked_triplet_solver(rows, cols, vals, keys, kept=None):
     """The solve of the system given as upper-triangle triplets (unknowns ``[u; v]`` of the free
     vertices) eliminated in the order of the free vertices' ``keys``, u and v of a vertex side
-    by side; None where the factorisation fails (``lscm_pinned``, ``lscm_held``)."""
-    nf = len(keys)
-    p = np.argsort(keys, kind="stable")
-    perm = np.empty(2 * nf, np.int64)        # u and v of a vertex side by side
-    perm[0::2], perm[1::2] = p, p + nf
-    f = ordered_ldl.Factor(rows, cols, vals, 2 * nf, perm)
+    by side; None where the factorisation fails (``lscm_pinned``, ``lscm_held``).
+
+    kept : dict, optional (``one_disk.Disk.factors``): a factor of an earlier system of the
+        same triplets' places (the same ``rows`` and ``cols``) and keys is refilled with these
+        values (``ordered_ldl.Factor.refill``: the same factor bit for bit, without the
+        conversions and the elimination tree), and this one kept there for the next."""
+    last = None if kept is None else kept.get("ranked")
+    if last is not None and _same_arrays(last[1:], (rows, cols, keys)):
+        f = last[0].refill(vals)
+    else:
+        nf = len(keys)
+        p = np.argsort(keys, kind="stable")
+        perm = np.empty(2 * nf, np.int64)        # u and v of a vertex side by side
+        perm[0::2], perm[1::2] = p, p + nf
+        f = ordered_ldl.Factor(rows, cols, vals, 2 * nf, perm, keep=kept is not None)
+        if kept is not None:
+            kept["ranked"] = (f, rows, cols, keys)
     return f.solve if f.lnz >= 0 and f.factor() else None
+
+
+def _same_arrays(a, b):
+    return all(x is y or (len(x) == len(y) and np.array_equal(x, y)) for x, y in zip(a, b))
 
 
 def _lscm_system(cbw, cb, tris, n, idx, val, sides=None, triplets=False):

@@ -122,13 +122,20 @@ RANKED_VERTICES = 1000
 # three_peaks:250 (158) 0.65-0.67 -> 0.68-0.69, lion-head:300 0.58-0.59 -> 0.59,
 # mushroom:500 0.38-0.39 -> 0.37-0.38
 FIXED_RANKED = 200
+# ``bound="auto"`` on one disk factorises several systems of its vertices (the conformal map, the
+# angle start's, the bound search's Laplacian, the mean relax's): one order of the vertices
+# serves them all, and the search's back-solves pair u and v (``_paired``), so it pays up to this
+# many vertices (``one_disk.find``'s ``most``; instructions per warm call, RANKED_VERTICES ->
+# this: homer's 1,982-face strip 282.1 -> 258.2 M; the same C, mean and iterations)
+AUTO_RANKED_VERTICES = 4000
 
 
-def edge_ranks(a, b, n):
+def edge_ranks(a, b, n, most=None):
     """``vertex_ranks`` of the graph of n vertices whose edges are (a[i], b[i]) (int64 arrays),
     each edge once (a mesh piece whose edges are known: ``unwrapping.one_disk``): no sort and
-    no duplicate to sum (the same order as ``vertex_ranks`` of its triangles)."""
-    if not 0 < n <= RANKED_VERTICES or not available():
+    no duplicate to sum (the same order as ``vertex_ranks`` of its triangles). ``most``: the
+    most vertices ordered (RANKED_VERTICES by default)."""
+    if not 0 < n <= (RANKED_VERTICES if most is None else most) or not available():
         return None
     return _graph_ranks(a, b, n, twice=False)
 
@@ -261,8 +268,9 @@ class Factor:
     order is written here (rows sorted in each column, the diagonal last, as ``QDLDL_etree``
     requires)."""
 
-    def __init__(self, rows, cols, vals, n, perm, repeats=False):
+    def __init__(self, rows, cols, vals, n, perm, repeats=False, keep=False):
         self.n, self.perm = n, perm
+        self._kept = None
         pinv = np.empty(n, np.int64)
         pinv[perm] = np.arange(n)
         r, c = pinv[rows], pinv[cols]
@@ -282,11 +290,38 @@ class Factor:
         if repeats:     # each column's rows sorted: a place's triplets side by side, summed
             _st.csr_sum_duplicates(n, n, self.Ap, self.Ai, self.Ax)
             self.Ai, self.Ax = self.Ai[:self.Ap[n]], self.Ax[:self.Ap[n]]
+        if keep and not repeats:    # for ``refill``: the places (where they go, when asked)
+            self._kept = [self.Ai, r, c, None]
         at = _p(ints)
         self._at = (at, at + 8 * (n + 1), at + 8 * (2 * n + 1), at + 8 * (3 * n + 1))
         self._ai, self._ax = _p(self.Ai), _p(self.Ax)
         Ap, work, Lnz, etree = self._at
         self.lnz = int(_lib().QDLDL_etree(n, Ap, self._ai, work, Lnz, etree))
+
+    def refill(self, vals):
+        """A Factor (not yet factorised) of the triplets given to this one (made with
+        ``keep``) with the values ``vals`` instead, in the same order: the same matrix in the
+        same elimination order as a new Factor of them, so the same factor bit for bit, without
+        the conversions and the elimination tree (the pattern's, shared: the numeric factor
+        only reads them). None where this one was not made with ``keep``."""
+        if self._kept is None:
+            return None
+        Ai, r, c, where = kept = self._kept
+        if where is None:
+            # where each triplet's value goes: the two conversions of their positions (exact
+            # as float64), made at the first refill (a disk solved once pays nothing)
+            n, nnz = self.n, len(r)
+            Rp, Rj, Rx = np.empty(n + 1, np.int64), np.empty(nnz, np.int64), np.empty(nnz)
+            _st.coo_tocsr(n, n, nnz, r, c, np.arange(nnz, dtype=np.float64), Rp, Rj, Rx)
+            Cp, Ci, Cx = np.empty(n + 1, np.int64), np.empty(nnz, np.int64), np.empty(nnz)
+            _st.csr_tocsc(n, n, Rp, Rj, Rx, Cp, Ci, Cx)
+            where = kept[3] = Cx.astype(np.int64)
+        f = object.__new__(Factor)
+        f.n, f.perm, f.lnz, f._kept = self.n, self.perm, self.lnz, self._kept
+        f.Ap, f.work, f.Lnz, f.etree, f._at = self.Ap, None, self.Lnz, self.etree, self._at
+        f.Ai, f.Ax = Ai, np.ascontiguousarray(vals, np.float64).take(where)
+        f._ai, f._ax = _p(f.Ai), _p(f.Ax)
+        return f
 
     def repeated(self):
         """Whether two of the triplets given share a place (before ``factor``, which needs them

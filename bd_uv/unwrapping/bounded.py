@@ -206,7 +206,7 @@ def bend(prob, start, C, report, flags=None, polish=True, harmonic=None):
     # instead of projecting it
     u, info = flip_free_map(prob.Z, prob.island.tris, prob.nv, prob.island.loops, start.u,
                             solve_bound(C), pins=pins, cancel=prob.cancel,
-                            harmonic=polish if harmonic is None else harmonic)
+                            harmonic=polish if harmonic is None else harmonic, ops=prob.ops)
     prob.timings["project"] = prob.timings.get("project", 0.0) + time.perf_counter() - t
     prob.iterations += info["iterations"]
     if u is None or not prob.check(u, C)[0]:

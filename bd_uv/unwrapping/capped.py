@@ -71,6 +71,7 @@ def unfold(V, F, disk, u, C, t0, progress=None, cancel=None):
     onb[loop] = True
     theta = np.bincount(tris.ravel(), corner_angles(u.take(tris)).ravel(), nv)
     before = None           # the UV angles and the scales before the last solve
+    last = None             # the scales at the faces' corners of the last solve
     for _ in range(ATTEMPTS):
         # capped where some vertex is wrapped round (else the map lies over itself elsewhere)
         wraps = onb & (theta >= CAP * 2.0 * np.pi)
@@ -89,8 +90,9 @@ def unfold(V, F, disk, u, C, t0, progress=None, cancel=None):
                              1.0 / np.clip(took, RESPONSE, 1.0), 1.0)
         before = (theta, scale.copy())
         scale[wraps] *= (CAP * 2.0 * np.pi / theta[wraps]) ** power[wraps]
-        faces = np.flatnonzero((scale.take(tris) < 1.0).any(axis=1))
-        s = scale.take(tris[faces])
+        at = scale.take(tris)
+        faces = np.flatnonzero((at < 1.0).any(axis=1))
+        s = at.take(faces, axis=0)
         A = A3[faces] * s
         rest = np.where(s < 1.0, 0.0, A)            # the corners not capped take the rest
         share = rest.sum(axis=1)
@@ -100,7 +102,11 @@ def unfold(V, F, disk, u, C, t0, progress=None, cancel=None):
         Z, G = disk.Z.copy(), disk.G.copy()
         Z[faces] = from_angles(A, disk.area[faces])
         G[faces] = gradient_operators(Z[faces])
-        u = conformal(V, disk, Z, G, disk.ranks)
+        # the system of the last solve patched and its factor refilled where a face's scales
+        # changed (each face's numbers are its own row's: the same bits as anew)
+        u = conformal(V, disk, Z, G, disk.ranks, rebuilt=None if last is None else
+                      (at != last).any(axis=1).nonzero()[0])
+        last = at
         theta = np.bincount(tris.ravel(), corner_angles(u.take(tris)).ravel(), nv)
         if (onb & (theta >= 2.0 * np.pi)).any():    # still round a vertex: not one-to-one
             continue

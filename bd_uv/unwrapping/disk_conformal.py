@@ -10,7 +10,8 @@ except ImportError:  # pragma: no cover - exercised where qdldl is absent
     qdldl = None
 
 from ..solvers.face_operators import CscArrays, csc_arrays
-from ..solvers.lscm import _lscm_system, face_geometry_of, lscm_pinned
+from ..solvers.lscm import (_lscm_system, face_geometry_of, lscm_pinned,
+                             ranked_triplet_solver, spd_solver)
 from ..solvers.lscm_patch import PatchedLSCM
 
 missing = object()      # (``conformal``'s ``rebuilt`` not given)
@@ -26,14 +27,16 @@ def conformal(V, disk, Z, G, ranks, geom=None, rebuilt=missing):
     ``lscm.face_geometry_of(Z, G, disk.area)`` where the caller holds it. ``rebuilt``: in
     qdldl's own order (``ranks`` None), the faces (int64) rebuilt since the disk's last solve
     given ``rebuilt``, or None for a system assembled anew and kept (``angle_start``'s solves:
-    ``solvers.lscm_patch``, the same bits); not given, nothing is kept."""
+    ``solvers.lscm_patch``, the same bits); in the vertices' order ``ranks`` likewise, and the
+    factor refilled (``lscm.ranked_triplet_solver``'s ``kept``: ``capped``'s solves, and
+    ``angle_start``'s there); not given, nothing is kept."""
     isl = disk.island
     geom = face_geometry_of(Z, G, disk.area) if geom is None else geom
     idx = _far_pair(V.take(isl.vertices, axis=0), isl.loops[0])
     args = (geom.cbw(), geom.cb, isl.tris, len(isl.vertices), idx, np.array([0.0, 1.0], complex),
             (disk.twins[0], disk.twins[1], disk.loop))
-    if ranks is not None:               # its triplets straight to the ordered factorisation
-        return lscm_pinned(*args, ranks)
+    if ranks is not None and rebuilt is missing:
+        return lscm_pinned(*args, ranks)    # its triplets straight to the ordered factorisation
     # In qdldl's own order (below FIXED_RANKED vertices at a fixed C), qdldl reads the canonical
     # arrays (``Upper.csc_arrays``) without the scipy matrix ``lscm_pinned`` makes (~50-70 us of
     # its constructor on a 115-face disk). The same bits.
@@ -46,6 +49,15 @@ def conformal(V, disk, Z, G, ranks, geom=None, rebuilt=missing):
             A, rhs, u, free = kept.system()
         else:
             A, rhs, u, free = kept.rebuilt(geom, rebuilt)
+    if ranks is not None:
+        # in the disk's vertex order (``lscm_pinned``'s), the factor of its last system of the
+        # same places refilled (``capped``'s and ``angle_start``'s solves after the first: the
+        # same triplets' places, the same bits)
+        solve = ranked_triplet_solver(A.rows, A.cols, A.vals, ranks.take(free), disk.factors)
+        x = (spd_solver(A.csc(), upper=True) if solve is None else solve)(rhs)
+        nf = len(free)
+        u[free] = x[:nf] + 1j * x[nf:]
+        return u
     solve = _qdldl_solve(_canonical(A, disk.factors), disk.factors)
     if solve is None:                   # lscm_pinned's way where qdldl refuses the arrays
         return lscm_pinned(*args)

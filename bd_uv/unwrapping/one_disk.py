@@ -74,7 +74,8 @@ class Disk:
         as of V and F), made on first use and kept: the conformal map, ``finish``'s measure and
         the disk certificate share them
     ranks : (nv,) int64 or None, the vertices' elimination order, made on first use (the
-        conformal map's and the bound search's factorisations share it)
+        conformal map's and the bound search's factorisations share it), up to ``most``
+        vertices (``ordered_ldl.RANKED_VERTICES`` where None)
     factors : dict, the conformal system's factorisation in qdldl's own order, kept for the
         disk's later conformal solves of other shapes (``capped``, ``angle_start``: the same
         pattern, refilled), made on first use; ``forget_factors`` drops it
@@ -86,6 +87,7 @@ class Disk:
     e01: np.ndarray
     e02: np.ndarray
     area: np.ndarray
+    most: int = None        # the most vertices ``ranks`` orders (``find``'s)
 
     @_kept
     def Z(self):
@@ -113,7 +115,7 @@ class Disk:
         flat = self.island.tris.ravel()
         edges = np.concatenate([self.twins[0], self.loop])
         return edge_ranks(flat.take(edges), flat.take(edges - edges % 3 + _NEXT.take(edges % 3)),
-                          len(self.island.vertices))
+                          len(self.island.vertices), self.most)
 
 
 _NEXT = np.array([1, 2, 0])
@@ -123,9 +125,11 @@ _NEXT = np.array([1, 2, 0])
 _CLEAR = 1.0 + 1e-9
 
 
-def find(V, F):
+def find(V, F, most=None):
     """The ``Disk`` of checked arrays (V float64, F int64 in range), or None when the mesh is not
-    one clean disk (``mesh.checked_islands`` decides then)."""
+    one clean disk (``mesh.checked_islands`` decides then). ``most``: the most vertices its
+    ``ranks`` orders (``ordered_ldl.AUTO_RANKED_VERTICES`` for ``bound="auto"``; by default
+    ``RANKED_VERTICES``)."""
     n, m = len(V), len(F)
     src = F.ravel()
     dst = F.take(_NEXT, axis=1).ravel()
@@ -195,7 +199,7 @@ def find(V, F):
     tris = local.take(F)
     loop = bnd.take(seq)
     island = Island(0, np.arange(m, dtype=np.int64), verts, tris, (local.take(bsrc.take(seq)),))
-    return Disk(island, np.array([h1, h2]), loop, first_corner, e01, e02, area)
+    return Disk(island, np.array([h1, h2]), loop, first_corner, e01, e02, area, most)
 
 
 def _cross_norm(a, b):

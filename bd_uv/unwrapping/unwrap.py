@@ -23,6 +23,7 @@ import numpy as np
 from ..errors import CancelledError, InvalidMeshError, OptionError
 from ..mesh import as_indices, as_reals, check_arrays, checked_islands as split_islands
 from ..options import unwrap_options
+from ..solvers.ordered_ldl import AUTO_RANKED_VERTICES
 from ..trim import keep_freed_heap, release_memory
 from . import angle_start, capped, disk_auto, one_disk
 from .batched import conformal_islands
@@ -103,7 +104,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             and opts.boundary == "free" and opts.stretch is None \
             and (precision is None or np.dtype(precision) == np.float64):
         if disk is None:   # one clean disk: found, solved, certified in one pass
-            disk = one_disk.find(V, F)
+            disk = one_disk.find(V, F, AUTO_RANKED_VERTICES if opts.bound == "auto" else None)
     else:
         disk = None
     if disk is not None:
