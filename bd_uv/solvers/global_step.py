@@ -119,7 +119,7 @@ class GlobalStep:
     def G(self):
         """(2k, nv) csr: rows d/dx of every face, then d/dy (made on first use)."""
         if self._G is None:
-            self.Gx
+            self.Gx     # (makes G too where the faces' gradient coefficients are at hand)
         if self._G is None:
             self._G = sp.csr_array(sp.vstack([self.Gx, self.Gy]))
         return self._G

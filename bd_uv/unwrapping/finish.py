@@ -50,13 +50,13 @@ def finish(prob, u, C, bound, frames_name, flags, t0, stretch=None):
     ok, D, n_flipped, smax, smin = certify_measured(prob.V, isl.tris, uv[isl.tris], target,
                                                     normalize=npins < 2, faces=prob.faces_3d)
     lo_s, hi_s = float(np.min(smin)), float(np.max(smax))
-    if stretch is not None:  # section 6.3: 1/S <= gamma <= Gamma <= S, certified from the UVs
-        ok = ok and lo_s >= (1.0 - 1e-6) / stretch and hi_s <= stretch * (1.0 + 1e-6)
+    # section 6.3: 1/S <= gamma <= Gamma <= S, certified from the UVs
+    within_stretch = stretch is None or (lo_s >= (1.0 - 1e-6) / stretch
+                                         and hi_s <= stretch * (1.0 + 1e-6))
+    ok = ok and within_stretch
     prob.timings["certify"] += time.perf_counter() - t
     maxD = float(np.max(D))
-    if (not ok and bound == "auto" and n_flipped == 0 and np.isfinite(maxD)
-            and (stretch is None or (lo_s >= (1.0 - 1e-6) / stretch
-                                     and hi_s <= stretch * (1.0 + 1e-6)))):
+    if not ok and bound == "auto" and n_flipped == 0 and np.isfinite(maxD) and within_stretch:
         # the map measured from its UVs over the problem's own max: faces shrunk to the float64
         # step of the map's extent (a long strip's conformal map: cow-strip1500z's faces of
         # 1e-15 of it, 9.263 in the problem, 12.44 stored) are measured in rounding. ``auto``

@@ -118,10 +118,10 @@ class IslandProblem(ConicSolves):
         same bits without its dispatch (~10 us a product; a distortion takes four)."""
         prods = self.__dict__.get("_prods")
         if prods is None:
-            prods = self._prods = {n: (M.data, sparse_product("csr", M.shape, M.indptr,
-                                                              M.indices))
-                                   for n in ("Are", "Aim", "Bre", "Bim")
-                                   for M in (getattr(self.ops, n),)}
+            prods = self._prods = {}
+            for n in ("Are", "Aim", "Bre", "Bim"):
+                M = getattr(self.ops, n)
+                prods[n] = (M.data, sparse_product("csr", M.shape, M.indptr, M.indices))
         k = len(self.ops.area)
         out = []
         for n in which:

@@ -8,7 +8,7 @@ import numpy as np
 from bd_uv.packing import PackOptions, pack_islands
 from bd_uv.packing.tiny import SMALL_EXTENT, SMALL_SHARE, TINY_AREA_SHARE, tiny_charts
 from packing_checks import check_layout
-from test_pack_tiny import _charts
+from test_pack_tiny import _charts, _nestings
 
 
 def test_small_charts_join_the_tiny_ones_only_past_the_gate():
@@ -43,15 +43,7 @@ def test_the_others_nest_for_the_time_of_every_chart_that_is_not_tiny(monkeypatc
     tiny 0.03x0.03: the six nest alone for OTHERS_TIME times the time of the ten that are not
     tiny (two faces each), cut by the 3x3's share of the ten's area (recomputed from the
     sizes); the layout certified with every chart in it."""
-    import bd_uv.packing.tiny as tiny
-    seen = []
-    real = tiny.square_layout
-
-    def spy(outlines, options, tol, seconds, *rest, **kw):
-        seen.append((len(outlines), seconds))
-        return real(outlines, options, tol, seconds, *rest, **kw)
-
-    monkeypatch.setattr(tiny, "square_layout", spy)
+    seen = _nestings(monkeypatch)
     sizes = np.r_[[[3.0, 3.0]], np.full((5, 2), 1.0), np.full((4, 2), 0.15),
                   np.full((20, 2), 0.03)]
     V, F, uv, lab = _charts(sizes, seed=4)

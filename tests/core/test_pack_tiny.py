@@ -67,11 +67,9 @@ def test_many_tiny_charts_are_dropped_into_the_free_space():
     assert np.isclose(packed.texel_density, alone.texel_density, rtol=1e-5)
 
 
-def test_the_others_nest_for_their_own_time_with_a_dominant_one_cut(monkeypatch):
-    """Seven large charts, one of them holding 0.6 of their area, and 14 tiny ones (67 %): the
-    seven are nested for ``OTHERS_TIME`` times the time of their own count and faces, cut as a
-    dominant chart cuts it (``search_seconds`` with its share, recomputed from the sizes), the
-    layout certified."""
+def _nestings(monkeypatch):
+    """The (count of outlines, seconds) of every ``square_layout`` call ``tiny`` makes from
+    now on, recorded as they run."""
     import bd_uv.packing.tiny as tiny
     seen = []
     real = tiny.square_layout
@@ -81,6 +79,16 @@ def test_the_others_nest_for_their_own_time_with_a_dominant_one_cut(monkeypatch)
         return real(outlines, options, tol, seconds, *rest, **kw)
 
     monkeypatch.setattr(tiny, "square_layout", spy)
+    return seen
+
+
+def test_the_others_nest_for_their_own_time_with_a_dominant_one_cut(monkeypatch):
+    """Seven large charts, one of them holding 0.6 of their area, and 14 tiny ones (67 %): the
+    seven are nested for ``OTHERS_TIME`` times the time of their own count and faces, cut as a
+    dominant chart cuts it (``search_seconds`` with its share, recomputed from the sizes), the
+    layout certified."""
+    import bd_uv.packing.tiny as tiny
+    seen = _nestings(monkeypatch)
     sizes = np.r_[[[3.0, 3.0]], np.full((6, 2), 1.0), np.full((14, 2), 0.03)]
     V, F, uv, lab = _charts(sizes, seed=2)
     options = PackOptions(seed=0)
