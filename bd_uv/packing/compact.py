@@ -80,7 +80,7 @@ def _placed(outlines, angle, shift):
 
 
 def compact_square(outlines, placement, side, options, tol, seconds, max_programs=None,
-                   least_side=0.0):
+                   least_side=0.0, clock=time.process_time, cancel=None):
     """Shrink a square layout by compaction steps for ``seconds``, or past them while the side
     still shrinks by ``STALL_GAIN`` over the last ``STALL_SHARE`` of them, up to ``EXTEND``
     times (or until the step falls below ``LEAST_STEP`` of the side: no program gains, or no
@@ -104,6 +104,10 @@ def compact_square(outlines, placement, side, options, tol, seconds, max_program
     max_programs : int, optional: at most this many linear programs (deterministic runs)
     least_side : float, a side no layout reaches (the largest chart's least square with the
         padding): nothing is left to gain near it (fandisk's 3 charts start there)
+    clock : the CPU clock of ``seconds`` (``time.thread_time`` for a compaction on a thread of
+        its own beside the nesting: :mod:`.ahead`)
+    cancel : threading.Event, optional: once set, the compaction ends at its next program (its
+        layout is then of no use to the caller)
 
     Returns
     -------
@@ -113,7 +117,7 @@ def compact_square(outlines, placement, side, options, tol, seconds, max_program
     # of its CPU budget (0.48 s on suzanne, the first mesh of benchmarks/bench_pack.py); at
     # bd_uv's import it would add ~0.1 s to every process that never packs
     import scipy.optimize  # noqa: F401
-    t0 = time.process_time()
+    t0 = clock()
     k = len(outlines)
     owner, nxt = _rings(outlines)
     radius = np.array([np.sqrt((o ** 2).sum(axis=1).max()) for o in outlines])
@@ -131,13 +135,14 @@ def compact_square(outlines, placement, side, options, tol, seconds, max_program
         S, angle, shift, step, programs, steps = _programs(
             outlines, owner, nxt, radius, turn, pm, tol, options, angle, shift, S, step,
             programs, steps, history, t0, until, STALL_SHARE * seconds, max_programs,
-            least_side, side, hold, seconds)
+            least_side, side, hold, seconds, clock, cancel)
         # converged, stalled or at RELOCATE_AT of the time (not in a run bounded by programs):
         # the small charts against the square's edges into the free space deepest inside it,
         # and on
         if (max_programs is not None
-                or _over(history, time.process_time() - t0, S, seconds, seconds,
+                or _over(history, clock() - t0, S, seconds, seconds,
                          STALL_SHARE * seconds)
+                or (cancel is not None and cancel.is_set())
                 or S <= least_side * (1 + NEAR_LEAST) or moves >= MOVE_ROUNDS):
             break
         moved_angle, moved_shift, moved = relocate(outlines, angle, shift, S, pm * S + 2 * tol,
@@ -145,42 +150,43 @@ def compact_square(outlines, placement, side, options, tol, seconds, max_program
         moves = moves + 1 if moved else MOVE_ROUNDS   # (nothing moved: compaction to the end)
         if moved and fits(outlines, moved_angle, moved_shift, S, options.padding, pm, tol):
             angle, shift, step = moved_angle, moved_shift, STEP * side
-            history[:] = [(time.process_time() - t0, S)]   # a stall is judged afresh
+            history[:] = [(clock() - t0, S)]   # a stall is judged afresh
     shift, S = anchored(outlines, angle, shift, S, options.padding, pm, tol)
     return Placement(angle, shift, S), S, steps
 
 
 def _programs(outlines, owner, nxt, radius, turn, pm, tol, options, angle, shift, S, step,
               programs, steps, history, t0, seconds, window, max_programs, least_side, side,
-              hold, budget):
+              hold, budget, clock=time.process_time, cancel=None):
     """Compaction steps until ``seconds`` of CPU since ``t0`` are spent (the run's whole
     ``budget``: past it while the side still shrinks, :func:`_over`) or ``max_programs`` are,
     the step falls below ``LEAST_STEP`` of the side, the side nears ``least_side`` or the side
     stalls over ``window`` seconds: the side, turns, shifts, step, programs and steps
     reached. ``hold``: [bool], whether the programs hold the turns of tight pairs (``HOLD``),
-    set here at the first infeasible one."""
+    set here at the first infeasible one. ``clock``: the CPU clock; ``cancel``: an Event that
+    ends the steps once set."""
     if max_programs is not None:
         budget = np.inf   # (a run bounded by programs: never past ``seconds``)
-    while (not _over(history, time.process_time() - t0, S, seconds, budget, window)
+    while (not _over(history, clock() - t0, S, seconds, budget, window)
+           and not (cancel is not None and cancel.is_set())
            and step > LEAST_STEP * side
            and S > least_side * (1 + NEAR_LEAST)
            and (max_programs is None or programs < max_programs)
-           and not (max_programs is None and _stalled(history, time.process_time() - t0, S,
-                                                      window))):
-        history.append((time.process_time() - t0, S))
+           and not (max_programs is None and _stalled(history, clock() - t0, S, window))):
+        history.append((clock() - t0, S))
         programs += 1
         Q = _placed(outlines, angle, shift)
         extra = None
         for again in (False, True):  # the program, then once more with the pairs it missed
             got, infeasible = step_lp(Q, owner, nxt, shift, radius, S, options.padding, pm, tol,
-                                       step, turn, _left(seconds, budget, t0), extra,
+                                       step, turn, _left(seconds, budget, t0, clock), extra,
                                        hold[0])
             if infeasible and turn and not hold[0]:
                 # the turns' error terms exceed some gaps no move can widen: from now on the
                 # small charts of those pairs do not turn (HOLD)
                 hold[0] = True
                 got, _ = step_lp(Q, owner, nxt, shift, radius, S, options.padding, pm, tol,
-                                  step, turn, _left(seconds, budget, t0), extra, True)
+                                  step, turn, _left(seconds, budget, t0, clock), extra, True)
             if got is None or got[2] > S * (1 - REL_GAIN):
                 break   # (the turns' error bound can block a long step)
             move, phi, S_new = got
@@ -224,13 +230,13 @@ def _over(history, now, side, until, budget, window):
     return not (before and before[-1] >= side * (1 + STALL_GAIN))
 
 
-def _left(until, budget, t0):
+def _left(until, budget, t0, clock=time.process_time):
     """CPU seconds left to a program's solve: to ``until``; once past the whole ``budget``
     (where ``until`` is it: the run goes on while the side shrinks, :func:`_over`), to
     ``EXTEND`` times the budget. (A program is cut at the budget as before: with the longer
     limit from the start ChineseDragon's compaction of 116 charts spent its time on long
     programs of large steps, 1.5 % less area.)"""
-    now = time.process_time() - t0
+    now = clock() - t0
     end = EXTEND * budget if budget <= until <= now else until
     return end - now
 

@@ -32,9 +32,11 @@ def can_stop():
             and signal.getsignal(signal.SIGINT) in (signal.default_int_handler, signal.SIG_IGN))
 
 
-def solve_until(inst, cfg, queue, feasible, narrow):
+def solve_until(inst, cfg, queue, feasible, narrow, on_report=None):
     """``inst.solve(cfg, queue)``, ended at the first feasible report (kind in ``feasible``) of
-    width at most ``narrow`` when :func:`can_stop`.
+    width at most ``narrow`` when :func:`can_stop`; ``on_report``, optional: called on the
+    watcher's thread with each feasible report's solution as it is drained (its errors are
+    raised here once the solve is over).
 
     Returns
     -------
@@ -43,11 +45,17 @@ def solve_until(inst, cfg, queue, feasible, narrow):
     drained, done, lock = [], threading.Event(), threading.Lock()
     tripped = [False]
     watch = can_stop()
+    failed = []
 
     def watcher():
         while not done.is_set():
             for kind, sol in queue.drain():   # per report
                 drained.append((kind, sol))
+                if on_report is not None and not failed and int(kind) in feasible:
+                    try:
+                        on_report(sol)
+                    except Exception as exc:   # raised on the solve's thread, after it
+                        failed.append(exc)
                 if watch and not tripped[0] and int(kind) in feasible and sol.width <= narrow:
                     with lock:
                         if not done.is_set():
@@ -88,6 +96,8 @@ def solve_until(inst, cfg, queue, feasible, narrow):
         drained.extend(queue.drain())
     if user[0]:
         raise KeyboardInterrupt   # the user's, not the watcher's: passed on, not dropped
+    if failed:
+        raise failed[0]
     if sol is None:
         sol = [s for kind, s in drained if int(kind) in feasible][-1]
     return sol, drained, tripped[0]

@@ -35,6 +35,7 @@ THIN = 1e-3
 # sets of 7-20 charts +0.0057 coverage (se 0.0014; 64 wins, 40 losses, the same CPU), 10 sets of
 # 24-116 charts +0.0006 (se 0.0020; 13/13); 5 gave 0.003 less than 4 (seed 0, 16 sets)
 QUADTREE_DEPTH = 3
+EXPLORE = 0.8   # of a search's time, spyrrow's exploration (the rest its compression, as it does)
 
 
 @dataclass(frozen=True)
@@ -60,7 +61,7 @@ def rotations(angle):
 
 
 def nest(outlines, height, separation, options, seconds=0.0, reports=None, workers=None,
-         retry=True, narrow=None):
+         retry=True, narrow=None, compress=True, progress=None):
     """One spyrrow solve: every outline in a strip of ``height``, ``separation`` apart.
 
     Parameters
@@ -70,7 +71,8 @@ def nest(outlines, height, separation, options, seconds=0.0, reports=None, worke
     separation : float, least distance between two outlines
     options : PackOptions (orientations, seed)
     seconds : float, time for the search after the first placement (0: that placement only),
-        split 4:1 between exploration and compression as spyrrow does
+        split 4:1 between exploration and compression as spyrrow does (``compress`` False: the
+        exploration's share only, no compression: :data:`.square.SQUARE_COMPRESS`)
     reports : list, optional: every feasible layout the search passes through is appended to it
         as a Placement (a narrower strip is a better one; the last is the result)
     workers : int, optional: threads of spyrrow's search (default: one per core)
@@ -78,6 +80,9 @@ def nest(outlines, height, separation, options, seconds=0.0, reports=None, worke
         (:func:`_nest_grown`), and after a panic grown by a hair; False: as given
     narrow : float, optional (with ``reports``): the search ends at the first feasible layout
         this narrow where it can (:mod:`.early_stop`)
+    compress : bool, spyrrow's compression phase after its exploration (False: none)
+    progress : callable, optional (with ``narrow``): called with each feasible layout (a
+        Placement, as in ``reports``) as the search reaches it, on another thread
 
     Returns
     -------
@@ -95,7 +100,7 @@ def nest(outlines, height, separation, options, seconds=0.0, reports=None, worke
             grow = max(separation, EMPTY_RETRY * height)
         if grow > 0:
             return _nest_grown(outlines, height, grow, options, seconds, reports, workers,
-                               narrow)
+                               narrow, compress, progress)
     items = [spyrrow.Item(str(i), [tuple(p) for p in xy], demand=1,
                           allowed_orientations=options.orientations())
              for i, xy in enumerate(outlines)]
@@ -105,13 +110,15 @@ def nest(outlines, height, separation, options, seconds=0.0, reports=None, worke
         else None, seed=options.seed, total_computation_time=None, exploration_time=0,
         compression_time=0, num_workers=workers, quadtree_depth=QUADTREE_DEPTH)
     # spyrrow's constructor takes whole seconds; its attributes take any duration
-    cfg.exploration_time = timedelta(seconds=0.8 * seconds)
-    cfg.compression_time = timedelta(seconds=0.2 * seconds)
+    cfg.exploration_time = timedelta(seconds=EXPLORE * seconds)
+    cfg.compression_time = timedelta(seconds=(1 - EXPLORE) * seconds if compress else 0.0)
     queue = spyrrow.ProgressQueue() if reports is not None else None
     drained = None
     try:
         if queue is not None and narrow is not None:
-            sol, drained, _ = solve_until(inst, cfg, queue, FEASIBLE, narrow)
+            sol, drained, _ = solve_until(
+                inst, cfg, queue, FEASIBLE, narrow,
+                None if progress is None else lambda s: progress(_placement(s, len(outlines))))
         else:
             sol = inst.solve(cfg, queue) if queue is not None else inst.solve(cfg)
     except BaseException as exc:  # a Rust panic arrives as pyo3's PanicException (BaseException)
@@ -122,7 +129,7 @@ def nest(outlines, height, separation, options, seconds=0.0, reports=None, worke
             # (a chart's outline too thin for its pole of inaccessibility, "no pole found": a
             # bishop of OpenChessSet; outlines are nested grown by a hair of the height)
             return _nest_grown(outlines, height, EMPTY_RETRY * height, options, seconds,
-                               reports, workers, narrow)
+                               reports, workers, narrow, compress, progress)
         raise PackError(f"the nesting failed on these charts: {first}") from None
     if queue is not None:
         reports.extend(_placement(s, len(outlines)) for kind, s in
@@ -159,7 +166,7 @@ def _area(xy):
 
 
 def _nest_grown(outlines, height, separation, options, seconds=0.0, reports=None,
-                workers=None, narrow=None):
+                workers=None, narrow=None, compress=True, progress=None):
     """:func:`nest` of outlines ``separation`` apart, each outline grown by half of it.
 
     The grown outlines (mitred: the grown outline holds every point within that distance, and
@@ -179,7 +186,9 @@ def _nest_grown(outlines, height, separation, options, seconds=0.0, reports=None
                         .exterior))))[:-1]) for xy in outlines]
     more = [] if reports is not None else None
     pl = nest(grown, height - separation, 0.0, options, seconds, more, workers, retry=False,
-              narrow=None if narrow is None else narrow - separation)
+              narrow=None if narrow is None else narrow - separation, compress=compress,
+              progress=None if progress is None else lambda r: progress(
+                  Placement(r.angle, r.shift + half, r.width + separation)))
     if reports is not None:
         reports.extend(Placement(r.angle, r.shift + half, r.width + separation) for r in more)
     return Placement(pl.angle, pl.shift + half, pl.width + separation)

@@ -27,10 +27,11 @@ import time
 import numpy as np
 
 from ..errors import PackError
+from .ahead import Ahead
 from .compact import compact_square
 from .few import FEW_MAX
 from .large_first import LARGE_FIRST_CHARTS, large_first
-from .nest import (FIT, Placement, _area, _strip, least_squares, nest, rotations,
+from .nest import (EXPLORE, FIT, Placement, _area, _strip, least_squares, nest, rotations,
                    single_layout)
 from .refit import EXACT_TOL, ROUNDING, on_exact, refitted
 
@@ -104,6 +105,20 @@ COARSE_KEEP = 0.7
 GUESS_SEARCH = 0.03
 GUESS_GAIN = 0.09
 GUESS_MAX = 0.70 / 0.63
+# A search ended at its square (``reach``) that has not reached it by the end of its exploration
+# runs no compression phase (spyrrow's 1/5 of the search time, shrinking the strip by 0.05 % a
+# success): the compaction that follows (.compact) gains 2-4 % of the side in a tenth of a
+# second. Searches that reach their square end in the exploration and do not change. Measured
+# (issue18-pack31-2026-11-29.md; 12 sets of 8-32 charts, 216 pairs interleaved, load 2-4):
+# coverage -0.0029 (se 0.0011; 85 wins, 90 losses), nothing lost on the sets nearest the 1.05x
+# line (igl-elephant +0.004, camel +0.001, cheburashka -0.000, homer +0.001, igl-arm +0.001,
+# knight +0.002, rocker-arm -0.002), where the search does not reach its square CPU -7 to -18 %
+# for about 1 % of coverage: igl-bunny 1.22 -> 1.10 s (-0.005), igl-decimated-max 1.81 -> 1.50 s
+# (-0.009), igl-fertility 2.06 -> 1.73 s (-0.009), fancyteapot 2.20 -> 1.80 s (-0.010)
+SQUARE_COMPRESS = False
+# ... and on the coarse path, where a core is spare, its best layout is compacted on a thread
+# once its time is over, while spyrrow overruns it (.ahead)
+AHEAD = True
 
 
 def _squares(points, owner, placements, tol, padding):
@@ -121,13 +136,15 @@ def _squares(points, owner, placements, tol, padding):
 
 
 def _solve_all(outlines, sides, options, tol, seconds, headroom=HEADROOM, spare=0,
-               square=False):
+               square=False, progress=None):
     """One solve per square side, all at once (threads): per side, every feasible layout reached
     (reports, then the result), or None where spyrrow gave up (it panics when it cannot place a
     chart in the strip); the last such refusal (PackError) or None. Each solve searches on
     ``(os.cpu_count() - spare) // len(sides)`` threads (at least one), one up to
     ``FEW_CHARTS`` charts. ``square``: each search ends once its layout is no wider than the
-    strip is high (then on this thread for a single side, so that it can: :mod:`.early_stop`)."""
+    strip is high (then on this thread for a single side, so that it can: :mod:`.early_stop`),
+    without spyrrow's compression phase (``SQUARE_COMPRESS``); ``progress`` (a single side in
+    that mode): called with each feasible layout as it is found."""
     out, errors, refused = [None] * len(sides), [], []
     workers = 1 if len(outlines) <= FEW_CHARTS else max(
         1, ((os.cpu_count() or 1) - spare) // len(sides))
@@ -137,7 +154,8 @@ def _solve_all(outlines, sides, options, tol, seconds, headroom=HEADROOM, spare=
             height, sep, _ = _strip(sides[i], options, tol, headroom)
             reports = []
             final = nest(outlines, height, sep, options, seconds, reports, workers,
-                         narrow=height if square else None)
+                         narrow=height if square else None,
+                         compress=SQUARE_COMPRESS or not square, progress=progress)
             out[i] = reports + [final]
         except PackError as exc:
             refused.append(exc)
@@ -228,7 +246,7 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True, coars
     rounds = 1 if options.solves == 1 else 2
     at_once = [(options.solves + 1) // 2, options.solves // 2]
     dens = DENSITY_GUESS * np.sqrt(1 - 1 / k)
-    best, solves, start = None, 0, START_PER_CHART * k
+    start = START_PER_CHART * k
     headroom = HEADROOM
     short = False
     if seconds > 0 and (nesting - start * rounds) / rounds < start:
@@ -240,8 +258,57 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True, coars
     # the strip must hold the widest chart with the separation to both its edges: its height is
     # S (1 + p headroom) + 2 tol, the chart's extent at most S (1 - p headroom) - 2 tol
     least = (widest + 2 * tol) / (1 - options.padding * headroom) * FIT[options.rotate]
+
+    def compact(best, clock=time.process_time, cancel=None):
+        """The best layout compacted for its share of the time (CPU seconds of ``clock``):
+        (Placement, side)."""
+        # (no layout is smaller than the widest chart's least square with the padding; sampled
+        # every 0.05 degrees, a hair above it)
+        big = int(np.argmax(boxes))
+        if not coarse:
+            fine = float(least_squares([outlines[big]], options, step=0.05)[0][0])
+            outl, begin, tl = on_exact(outlines, exact, *best, options, tol)
+        else:   # the exact outlines, with the margin on_exact gives them (else the coarse ones)
+            margin = max(EXACT_TOL * given, ROUNDING * best[1])
+            begin = refitted(exact, best[0], options, margin)
+            outl, begin, tl = (exact, begin, margin) if begin is not None else \
+                (outlines, best, tol)
+            fine = float(least_squares([outl[big]], options, step=0.05)[0][0])
+        pl, side, _ = compact_square(outl, *begin, options, tl,
+                                     share * (SHORT_COMPACT if short else 1.0) * seconds,
+                                     least_side=(fine + 2 * tl) / (1 - options.padding),
+                                     clock=clock, cancel=cancel)
+        return pl, side
+
+    ahead = None
+    if (AHEAD and share and coarse and reach > 1 and rounds == 1 and seconds > 0
+            and (os.cpu_count() or 1) > SPARE_CORES):
+        ahead = Ahead(compact)
+    try:
+        best, solves = _rounds(outlines, options, tol, points, owner, area, least, rounds,
+                               at_once, nesting, start, headroom, dens, coarse, reach, seconds,
+                               ahead)
+    except BaseException:
+        if ahead is not None:
+            ahead.cancel()
+        raise
+    if not share:
+        return best[0], best[1], solves
+    # its share of the time, in CPU seconds: compaction of the best layout (done on a thread
+    # while the search went on, or now)
+    done = ahead.finish(best) if ahead is not None else None
+    pl, side = done if done is not None else compact(best)
+    return pl, side, solves
+
+
+def _rounds(outlines, options, tol, points, owner, area, least, rounds, at_once, nesting,
+            start, headroom, dens, coarse, reach, seconds, ahead=None):
+    """The rounds of solves of :func:`square_layout` (then larger squares, placing only, until
+    one is found): the best square layout (Placement offset to the square's corner, side) and
+    the solves run. ``ahead``: an :class:`.ahead.Ahead` offered each better square layout of a
+    single square-ending search as it is found."""
     t0 = time.perf_counter()
-    sides = [least]
+    best, solves, sides = None, 0, [least]
     for r in range(rounds + 8):  # per round; then larger squares, placing only
         if r >= rounds and best is not None:
             break
@@ -259,10 +326,13 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True, coars
         fresh = (np.sqrt(area / dens) - 2 * tol) / (1 + options.padding * headroom)
         sides = [max(float(s), least, 1.05 * max(sides) if grow else 0.0) for s in fresh]
         t1 = time.perf_counter()
+        square = reach > 1 and r < rounds
+        offer = _offer(points, owner, tol, options, sides[0], headroom, ahead, search) if (
+            square and ahead is not None and len(sides) == 1) else None
         runs, refused = _solve_all(outlines, sides, options, tol, search,
                                    **({} if headroom == HEADROOM else {"headroom": headroom}),
                                    **({"spare": SPARE_CORES} if coarse else {}),
-                                   **({"square": True} if reach > 1 and r < rounds else {}))
+                                   **({"square": True, "progress": offer} if square else {}))
         start = max(time.perf_counter() - t1 - search, 0.0)
         solves += len(sides)
         # all refused: larger sides (by 1.1, and 1.05 more for the larger squares after the
@@ -286,25 +356,27 @@ def square_layout(outlines, options, tol, seconds, exact=None, split=True, coars
                 best = (Placement(pl.angle, pl.shift - low[j] + edge, pl.width), squares[j])
     if best is None:
         raise refused or PackError("the nesting found no square layout for these charts")
-    if not share:
-        return best[0], best[1], solves
-    # its share of the time, in CPU seconds: compaction of the best layout
-    # (no layout is smaller than the widest chart's least square with the padding; sampled
-    # every 0.05 degrees, a hair above it)
-    big = int(np.argmax(boxes))
-    if not coarse:
-        fine = float(least_squares([outlines[big]], options, step=0.05)[0][0])
-        outlines, start, tol = on_exact(outlines, exact, *best, options, tol)
-    else:   # the exact outlines, with the margin on_exact gives them (else the coarse ones)
-        margin = max(EXACT_TOL * given, ROUNDING * best[1])
-        start = refitted(exact, best[0], options, margin)
-        outlines, start, tol = (exact, start, margin) if start is not None else \
-            (outlines, best, tol)
-        fine = float(least_squares([outlines[big]], options, step=0.05)[0][0])
-    pl, side, _ = compact_square(outlines, *start, options, tol,
-                                 share * (SHORT_COMPACT if short else 1.0) * seconds,
-                                 least_side=(fine + 2 * tol) / (1 - options.padding))
-    return pl, side, solves
+    return best, solves
+
+
+def _offer(points, owner, tol, options, side, headroom, ahead, search):
+    """A search's progress callback: each feasible layout that makes a better square (as
+    :func:`_rounds` picks them from its reports) offered to ``ahead``, which starts none before
+    the search's time is over (its first report, the first placement's, plus the exploration's
+    share of ``search``: no compression phase follows, ``SQUARE_COMPRESS``)."""
+    least, first = [np.inf], [True]
+
+    def progress(pl):
+        if first[0]:
+            first[0] = False
+            ahead.start_after(time.perf_counter()
+                              + (1.0 if SQUARE_COMPRESS else EXPLORE) * search)
+        squares, low = _squares(points, owner, [pl], tol, options.padding)
+        if squares[0] <= headroom * side and squares[0] < least[0]:
+            least[0] = squares[0]
+            edge = 0.5 * options.padding * squares[0] + tol
+            ahead.offer((Placement(pl.angle, pl.shift - low[0] + edge, pl.width), squares[0]))
+    return progress
 
 
 def searched_density(per_chart):
