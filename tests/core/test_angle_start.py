@@ -380,3 +380,35 @@ def test_float32_prediction_from_the_disks_geometry_is_the_meshs(seed, flags, mo
         u = (u / u.max()).astype(np.float32).astype(np.float64)
         D, flipped = distortion_and_flips(V, F, u)
         assert flipped.any() or D.max() > r.bound_certified
+
+
+def test_the_conformal_factor_kept_for_auto_is_refilled_by_the_angle_starts_first_solve(
+        monkeypatch):
+    """With ``bound="auto"`` the disk's conformal map keeps its factorisation in its vertices'
+    order (``one_disk.unwrap_disk``: ``Disk.factors``), and the angle start's first solve, of
+    the same places with other shapes, refills it rather than factorising anew: the map is the
+    one a disk with nothing kept solves, bit for bit, and a numeric C keeps nothing."""
+    from bd_uv.solvers import ordered_ldl
+    from bd_uv.unwrapping.disk_conformal import conformal
+    V, F = rings(*load_off("cow.off"), *COW[1])
+    disk = one_disk.find(V, F, ordered_ldl.AUTO_RANKED_VERTICES)
+    one_disk.unwrap_disk(V, F, disk, None, 0.0)
+    kept = disk.factors["ranked"][0]
+    nv = len(disk.island.vertices)
+    angles = angle_start.linear_abf(disk, np.full(nv, np.nan))
+    shapes = angle_start._rebuilt(angles, np.ones(nv), disk.island.tris, disk.area)
+    made, refilled = [], []
+    init, refill = ordered_ldl.Factor.__init__, ordered_ldl.Factor.refill
+    with monkeypatch.context() as m:
+        m.setattr(ordered_ldl.Factor, "__init__", lambda f, *a, **k: made.append(
+            init(f, *a, **k)))
+        m.setattr(ordered_ldl.Factor, "refill", lambda f, vals: refilled.append(f) or refill(
+            f, vals))
+        u = conformal(V, disk, shapes[1], shapes[2], disk.ranks, shapes[3], shapes[4])
+    assert made == [] and refilled == [kept]
+    fresh = one_disk.find(V, F, ordered_ldl.AUTO_RANKED_VERTICES)
+    anew = conformal(V, fresh, shapes[1], shapes[2], fresh.ranks, shapes[3], shapes[4])
+    assert np.isfinite(u).all() and np.array_equal(u, anew)
+    numeric = one_disk.find(V, F, ordered_ldl.AUTO_RANKED_VERTICES)
+    one_disk.unwrap_disk(V, F, numeric, 5.0, 0.0)
+    assert "ranked" not in numeric.factors
