@@ -412,3 +412,34 @@ def test_the_conformal_factor_kept_for_auto_is_refilled_by_the_angle_starts_firs
     numeric = one_disk.find(V, F, ordered_ldl.AUTO_RANKED_VERTICES)
     one_disk.unwrap_disk(V, F, numeric, 5.0, 0.0)
     assert "ranked" not in numeric.factors
+
+
+@pytest.mark.parametrize("seed, faces", COW + [AT_FIVE[1][:2]])
+def test_auto_from_the_angle_start_on_the_disks_geometry_is_the_general_paths_map(
+        seed, faces, monkeypatch):
+    """``bound="auto"`` from a disk's angle start searches on the ``Disk``'s own geometry
+    (``disk_angle``), not an island problem of it: the same iterations, flags and certified C as
+    the general path (``disk_angle`` refused), the UVs equal to rounding (the general path's
+    copy is normalised to unit area), the means to 1e-12; the map certified from its stored
+    UVs here (numpy's SVD, float64 and float32; one simple boundary)."""
+    import importlib
+    from bd_uv.unwrapping import disk_angle
+    V, F = rings(*load_off("cow.off"), seed, faces)
+    calls = []
+    real = disk_angle.minimise_from_angles
+    unwrap_module = importlib.import_module("bd_uv.unwrapping.unwrap")
+    with monkeypatch.context() as m:
+        m.setattr(unwrap_module.disk_angle, "minimise_from_angles",
+                  lambda *a, **k: calls.append(1) or real(*a, **k))
+        res = bd_uv.unwrap(V, F, bound="auto")
+    with monkeypatch.context() as m:
+        m.setattr(unwrap_module.disk_angle, "minimise_from_angles", lambda *a, **k: None)
+        ref = bd_uv.unwrap(V, F, bound="auto")
+    (r,), (g,) = res.islands, ref.islands
+    assert calls == [1]
+    assert "angle_start" in r.flags and r.flags == g.flags and r.iterations == g.iterations
+    assert r.bound_certified == g.bound_certified
+    assert abs(r.mean_distortion - g.mean_distortion) <= 1e-12
+    extent = np.ptp(ref.corner_uv.reshape(-1, 2), axis=0).max()
+    assert np.abs(res.corner_uv - ref.corner_uv).max() <= 1e-9 * extent
+    _one_certified_island(V, F, res, one_disk.find(V, F), r.bound_certified)
