@@ -83,16 +83,18 @@ def minimise_from_angles(V, disk, v, limit, t0, progress=None, cancel=None):
     bs.limit_effort()
     # ``strategies.least_one_to_one``: each target's best kept at its end, a folded one ending
     # the search; every tested map kept with its test, the search ended at one lying over itself
-    kept = [(v, D0, None)]
+    # (each with its max distortion, its test where made, and whether that max is ``distortion``'s
+    # or the search's own)
+    kept = [(v, D0, None, True)]
 
     def record(u):
         if not np.array_equal(kept[-1][0], u):
-            kept.append((u, distortion(u), None))
+            kept.append((u, distortion(u), None, True))
         return strategies.FOLDED_ENDS and not turns_once(u.take(loop))
 
     def check(u):
         laid = lays_out(u)
-        kept.append((u, distortion(u), laid))
+        kept.append((u, distortion(u), laid, True))
         return not laid
     bs.check = check if strategies.OVERLAP_ENDS else None     # (the gates read at the call)
 
@@ -104,29 +106,29 @@ def minimise_from_angles(V, disk, v, limit, t0, progress=None, cancel=None):
     if cancel is not None and cancel.is_set():
         raise CancelledError("unwrap cancelled; nothing was changed")
     if np.array_equal(kept[-1][0], us):
-        kept[-1] = (us, D, kept[-1][2])
+        kept[-1] = (us, D, kept[-1][2], False)
     else:
-        kept.append((us, D, None))
-    u = None
-    for w, Dw, laid in sorted(kept, key=lambda c: c[1]):
+        kept.append((us, D, None, False))
+    u, laid_u, own = us, None, False
+    for w, Dw, laid, mine in sorted(kept, key=lambda c: c[1]):
         if np.isfinite(Dw) and (laid if laid is not None else lays_out(w)):
-            u, D = w, Dw
+            u, D, laid_u, own = w, Dw, True, mine
             break
-    if u is None:
-        u = us
-    # ``strategies.minimise``'s choice and relaxation, measured in this geometry
+    # ``strategies.minimise``'s choice and relaxation, measured in this geometry (a max that
+    # ``distortion`` measured is not measured again, nor the test of a map that passed it)
     best = (v, D0) if D0 <= limit else None
     if bs.iterations == 0 and best is not None:
-        u, D = v, D0
+        u, D, laid_u, own = v, D0, None, True
     flags = ["angle_start"]
     if (D < best[1]) if best is not None else (D <= limit):
-        Du = distortion(u)
+        Du = D if own else distortion(u)
         if Du <= D * (1 + 1e-9) or (Du <= limit and (best is None or Du < best[1])):
             best = (u, Du)
             y = relaxed(disk.Z, G, disk.area, tris, nv, v, u, ranks=disk.ranks)
             if y is not None:
                 Dy = distortion(y)
-                if Dy <= Du * (1 + 1e-9) and Dy <= Du and (lays_out(y) or not lays_out(u)):
+                if Dy <= Du * (1 + 1e-9) and Dy <= Du and (lays_out(y) or not (
+                        laid_u if laid_u is not None else lays_out(u))):
                     best = (y, Dy)
                     flags.append("mean_relaxed")
     project = time.perf_counter() - t
