@@ -116,7 +116,7 @@ def spd_solver(A, upper=False):
     return lu.solve
 
 
-def lscm_pinned(cbw, cb, tris, n, idx, val, sides=None, ranks=None):
+def lscm_pinned(cbw, cb, tris, n, idx, val, sides=None, ranks=None, kept=None):
     """LSCM (minimise ``sum_f area_f |beta_f|^2``) with vertices ``idx`` fixed to ``val``.
 
     The energy is ``u^H H u`` with ``H = sum_f h_f`` (n x n Hermitian, ``h_f = area_f cb_f^*
@@ -137,6 +137,8 @@ def lscm_pinned(cbw, cb, tris, n, idx, val, sides=None, ranks=None):
     ranks : (n,) int64, optional, the vertices' elimination order (``ordered_ldl.vertex_ranks``):
         the free vertices' unknowns are eliminated in it, u and v of a vertex side by side
         (qdldl's AMD of the 2n unknowns otherwise, or where that factorisation fails)
+    kept : dict, optional, with ``ranks``: ``ranked_triplet_solver``'s (the factor kept there
+        for a later system of the same places, refilled: ``one_disk.Disk.factors``)
 
     Returns
     -------
@@ -146,7 +148,8 @@ def lscm_pinned(cbw, cb, tris, n, idx, val, sides=None, ranks=None):
     # same compressed matrix as from ``Upper.csc``, the same bits), and the matrix is made only
     # for qdldl's own order (no ranks, or that factorisation failing).
     A, rhs, u0, free = _lscm_system(cbw, cb, tris, n, idx, val, sides, triplets=True)
-    solve = None if ranks is None else ranked_triplet_solver(A.rows, A.cols, A.vals, ranks[free])
+    solve = None if ranks is None else ranked_triplet_solver(A.rows, A.cols, A.vals, ranks[free],
+                                                             kept)
     x = (spd_solver(A.csc(), upper=True) if solve is None else solve)(rhs)
     u = u0
     nf = len(free)

@@ -19,7 +19,7 @@ missing = object()      # (``conformal``'s ``rebuilt`` not given)
 __all__ = ["conformal"]
 
 
-def conformal(V, disk, Z, G, ranks, geom=None, rebuilt=missing):
+def conformal(V, disk, Z, G, ranks, geom=None, rebuilt=missing, keep=False):
     """The conformal map (nv,) complex128 of a ``Disk`` whose faces have the local corners Z
     (m,3) complex and gradient operators G (m,2,3) (its own: ``batched.conformal_islands``'
     map; or other shapes: ``capped``), pinned as the batched path pins an island (``_far_pair``
@@ -29,14 +29,18 @@ def conformal(V, disk, Z, G, ranks, geom=None, rebuilt=missing):
     given ``rebuilt``, or None for a system assembled anew and kept (``angle_start``'s solves:
     ``solvers.lscm_patch``, the same bits); in the vertices' order ``ranks`` likewise, and the
     factor refilled (``lscm.ranked_triplet_solver``'s ``kept``: ``capped``'s solves, and
-    ``angle_start``'s there); not given, nothing is kept."""
+    ``angle_start``'s there); not given, nothing is kept but with ``keep`` (the disk's own
+    shapes in the order ``ranks``: ``one_disk.unwrap_disk`` for ``bound="auto"``), whose
+    factor is kept in ``disk.factors`` for the angle start's first solve, the same places
+    (refilled: the same bits, without its conversions and elimination tree)."""
     isl = disk.island
     geom = face_geometry_of(Z, G, disk.area) if geom is None else geom
     idx = _far_pair(V.take(isl.vertices, axis=0), isl.loops[0])
     args = (geom.cbw(), geom.cb, isl.tris, len(isl.vertices), idx, np.array([0.0, 1.0], complex),
             (disk.twins[0], disk.twins[1], disk.loop))
     if ranks is not None and rebuilt is missing:
-        return lscm_pinned(*args, ranks)    # its triplets straight to the ordered factorisation
+        # its triplets straight to the ordered factorisation
+        return lscm_pinned(*args, ranks, kept=disk.factors if keep else None)
     # In qdldl's own order (below FIXED_RANKED vertices at a fixed C), qdldl reads the canonical
     # arrays (``Upper.csc_arrays``) without the scipy matrix ``lscm_pinned`` makes (~50-70 us of
     # its constructor on a 115-face disk). The same bits.

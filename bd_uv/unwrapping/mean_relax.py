@@ -23,6 +23,7 @@ of it (three_peaks' centre: 6.0 %; every other disk of issue 21's table and its 
 """
 import numpy as np
 
+from ..array_calls import einsum
 from ..geometry import gradient_operators
 from ..metrics import _distortion
 from ..solvers.lscm import face_geometry_of
@@ -51,8 +52,8 @@ def face_distortion(cb, tris, u):
     coefficients ``cb`` (k,3) (``lscm.FaceGeometry``: alpha's are their conjugates); inf where a
     face flips or collapses."""
     uc = u.take(tris)
-    b = np.abs(np.einsum("fc,fc->f", cb, uc))
-    a = np.abs(np.einsum("fc,fc->f", cb.conj(), uc))
+    b = np.abs(einsum("fc,fc->f", cb, uc))        # (np.einsum's compiled call)
+    a = np.abs(einsum("fc,fc->f", cb.conj(), uc))
     return _distortion(a, b, False)
 
 

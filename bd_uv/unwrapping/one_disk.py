@@ -76,9 +76,10 @@ class Disk:
     ranks : (nv,) int64 or None, the vertices' elimination order, made on first use (the
         conformal map's and the bound search's factorisations share it), up to ``most``
         vertices (``ordered_ldl.RANKED_VERTICES`` where None)
-    factors : dict, the conformal system's factorisation in qdldl's own order, kept for the
-        disk's later conformal solves of other shapes (``capped``, ``angle_start``: the same
-        pattern, refilled), made on first use; ``forget_factors`` drops it
+    factors : dict, the conformal system's factorisation (in qdldl's own order, or for
+        ``bound="auto"`` in the order ``ranks``), kept for the disk's later conformal solves of
+        other shapes (``capped``, ``angle_start``: the same pattern, refilled), made on first
+        use; ``forget_factors`` drops it
     """
     island: Island
     twins: np.ndarray
@@ -236,8 +237,10 @@ def unwrap_disk(V, F, disk, C, t0, progress=None, cancel=None):
     CancelledError when ``cancel`` is set after a progress report (as ``unwrap_islands``)
     """
     report_step(progress, cancel, 0.01, "conformal maps of 1 islands")
+    # for ``bound="auto"`` its factor kept (``Disk.factors``) for the angle start's first
+    # solve, the same system's places (``angle_start``; dropped by ``forget_factors``)
     u = conformal(V, disk, disk.Z, disk.G, disk.ranks if C is None or len(disk.island.vertices)
-                  >= FIXED_RANKED else None)
+                  >= FIXED_RANKED else None, keep=C is None)
     if C is None:
         return None, u, False
     done, cert, D, corner_uv = fitted(F, disk, u, C, t0, ("initial_map",), "")

@@ -42,6 +42,13 @@ def hand_over(island, u, searched, D, iterations):
     _handed.entry = (island, u, searched, D, iterations)
 
 
+def drop_handed():
+    """Forget the search ``hand_over`` kept on this thread: a search of the island from another
+    start ran first (``disk_angle``'s, from the angle start), as ``search`` forgets it when
+    asked from another start."""
+    _handed.entry = None
+
+
 def _handed_over(prob, u, least):
     """The search ``hand_over`` kept for this island and start u, or None (then forgotten)."""
     entry = getattr(_handed, "entry", None)

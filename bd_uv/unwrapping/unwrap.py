@@ -12,7 +12,8 @@ boundary fixed on a circle, a rectangle or its pinned polygon (``fixed_boundary`
 certified the same way and checked for Theorems 5.1/5.2's premises (``bijective``).
 One island's solve is ``island_solve.solve_island``; here the mesh is checked and split, the
 batched conformal maps and the one-disk pass run, and the islands are gathered and certified. A
-disk ``bound="auto"`` left cut is tried again to keep it one island (``_kept_whole``).
+disk ``bound="auto"`` left cut is tried again to keep it one island (``_kept_whole``); one whose
+angle start is taken is searched on its own geometry first (``disk_angle``).
 """
 import dataclasses
 import functools
@@ -25,7 +26,7 @@ from ..mesh import as_indices, as_reals, check_arrays, checked_islands as split_
 from ..options import unwrap_options
 from ..solvers.ordered_ldl import AUTO_RANKED_VERTICES
 from ..trim import keep_freed_heap, release_memory
-from . import angle_start, capped, disk_auto, one_disk
+from . import angle_start, capped, disk_angle, disk_auto, one_disk
 from .batched import conformal_islands
 from .island_solve import (angle_unfolder, batched_options, solve_island, unfold_first,
                            unfolder)
@@ -99,7 +100,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             raise OptionError("frames", "frames='input-uv' needs initial_uv (m,3,2)")
         initial_uv = np.asarray(initial_uv, dtype=np.float64).reshape(m, 3, 2)
     pins = pin_arrays(pin_corners, pin_uv, m)
-    conformal, unfold, one_to_one, angle = None, True, False, None
+    conformal, unfold, one_to_one, angle, angled_res = None, True, False, None, None
     if (seams is None or not len(seams)) and not len(pins[0]) and batched_options(opts) \
             and opts.boundary == "free" and opts.stretch is None \
             and (precision is None or np.dtype(precision) == np.float64):
@@ -160,16 +161,25 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
             v, found, bad = angled if angled is not None else angle_start.better_start(V, disk, u)
             if v is not None:
                 u, one_to_one = v, True
+                if opts.time_budget is None:
+                    # its search on the disk's own geometry (``disk_angle``: the general path's
+                    # steps without its island problem), else the general path as before
+                    angled_res = disk_angle.minimise_from_angles(V, disk, v, opts.bound_limit,
+                                                                 t0, progress, cancel)
             elif bad:       # the angle start found (or none), tried before a cut as it is
                 angle = False if found is None else found
             disk.forget_factors()
+            if angled_res is not None and not predicted_to_fail(V, F, angled_res, disk=disk):
+                return angled_res
         conformal = {0: u}
-    res = unwrap_islands(V, F, [disk.island] if disk is not None else
-                         split_islands(V, F, seams, precision), pins, opts, initial_uv=initial_uv,
-                         face_groups=face_groups, progress=progress, cancel=cancel,
-                         conformal=conformal, t0=t0, disk=disk, unfold=unfold,
-                         one_to_one=one_to_one, angle=angle,
-                         over=disk is not None and opts.bound != "auto" and not overlaps)
+    # (a disk map from its angle start flagged by ``predicted_to_fail``: the general path's
+    # answer, as below)
+    res = angled_res if angled_res is not None else unwrap_islands(
+        V, F, [disk.island] if disk is not None else split_islands(V, F, seams, precision),
+        pins, opts, initial_uv=initial_uv, face_groups=face_groups, progress=progress,
+        cancel=cancel, conformal=conformal, t0=t0, disk=disk, unfold=unfold,
+        one_to_one=one_to_one, angle=angle,
+        over=disk is not None and opts.bound != "auto" and not overlaps)
     if (opts.bound == "auto" and disk is not None and angle is not False
             and any("angle_start" in r.flags for r in res.islands)
             and predicted_to_fail(V, F, res, disk=disk)):

@@ -380,3 +380,66 @@ def test_float32_prediction_from_the_disks_geometry_is_the_meshs(seed, flags, mo
         u = (u / u.max()).astype(np.float32).astype(np.float64)
         D, flipped = distortion_and_flips(V, F, u)
         assert flipped.any() or D.max() > r.bound_certified
+
+
+def test_the_conformal_factor_kept_for_auto_is_refilled_by_the_angle_starts_first_solve(
+        monkeypatch):
+    """With ``bound="auto"`` the disk's conformal map keeps its factorisation in its vertices'
+    order (``one_disk.unwrap_disk``: ``Disk.factors``), and the angle start's first solve, of
+    the same places with other shapes, refills it rather than factorising anew: the map is the
+    one a disk with nothing kept solves, bit for bit, and a numeric C keeps nothing."""
+    from bd_uv.solvers import ordered_ldl
+    from bd_uv.unwrapping.disk_conformal import conformal
+    V, F = rings(*load_off("cow.off"), *COW[1])
+    disk = one_disk.find(V, F, ordered_ldl.AUTO_RANKED_VERTICES)
+    one_disk.unwrap_disk(V, F, disk, None, 0.0)
+    kept = disk.factors["ranked"][0]
+    nv = len(disk.island.vertices)
+    angles = angle_start.linear_abf(disk, np.full(nv, np.nan))
+    shapes = angle_start._rebuilt(angles, np.ones(nv), disk.island.tris, disk.area)
+    made, refilled = [], []
+    init, refill = ordered_ldl.Factor.__init__, ordered_ldl.Factor.refill
+    with monkeypatch.context() as m:
+        m.setattr(ordered_ldl.Factor, "__init__", lambda f, *a, **k: made.append(
+            init(f, *a, **k)))
+        m.setattr(ordered_ldl.Factor, "refill", lambda f, vals: refilled.append(f) or refill(
+            f, vals))
+        u = conformal(V, disk, shapes[1], shapes[2], disk.ranks, shapes[3], shapes[4])
+    assert made == [] and refilled == [kept]
+    fresh = one_disk.find(V, F, ordered_ldl.AUTO_RANKED_VERTICES)
+    anew = conformal(V, fresh, shapes[1], shapes[2], fresh.ranks, shapes[3], shapes[4])
+    assert np.isfinite(u).all() and np.array_equal(u, anew)
+    numeric = one_disk.find(V, F, ordered_ldl.AUTO_RANKED_VERTICES)
+    one_disk.unwrap_disk(V, F, numeric, 5.0, 0.0)
+    assert "ranked" not in numeric.factors
+
+
+@pytest.mark.parametrize("seed, faces", COW + [AT_FIVE[1][:2]])
+def test_auto_from_the_angle_start_on_the_disks_geometry_is_the_general_paths_map(
+        seed, faces, monkeypatch):
+    """``bound="auto"`` from a disk's angle start searches on the ``Disk``'s own geometry
+    (``disk_angle``), not an island problem of it: the same iterations, flags and certified C as
+    the general path (``disk_angle`` refused), the UVs equal to rounding (the general path's
+    copy is normalised to unit area), the means to 1e-12; the map certified from its stored
+    UVs here (numpy's SVD, float64 and float32; one simple boundary)."""
+    import importlib
+    from bd_uv.unwrapping import disk_angle
+    V, F = rings(*load_off("cow.off"), seed, faces)
+    calls = []
+    real = disk_angle.minimise_from_angles
+    unwrap_module = importlib.import_module("bd_uv.unwrapping.unwrap")
+    with monkeypatch.context() as m:
+        m.setattr(unwrap_module.disk_angle, "minimise_from_angles",
+                  lambda *a, **k: calls.append(1) or real(*a, **k))
+        res = bd_uv.unwrap(V, F, bound="auto")
+    with monkeypatch.context() as m:
+        m.setattr(unwrap_module.disk_angle, "minimise_from_angles", lambda *a, **k: None)
+        ref = bd_uv.unwrap(V, F, bound="auto")
+    (r,), (g,) = res.islands, ref.islands
+    assert calls == [1]
+    assert "angle_start" in r.flags and r.flags == g.flags and r.iterations == g.iterations
+    assert r.bound_certified == g.bound_certified
+    assert abs(r.mean_distortion - g.mean_distortion) <= 1e-12
+    extent = np.ptp(ref.corner_uv.reshape(-1, 2), axis=0).max()
+    assert np.abs(res.corner_uv - ref.corner_uv).max() <= 1e-9 * extent
+    _one_certified_island(V, F, res, one_disk.find(V, F), r.bound_certified)

@@ -248,3 +248,30 @@ def test_a_searched_map_measured_a_little_over_the_searchs_own_max_is_kept(monke
     D = _max_distortion(prob, u)
     assert "initial_map" not in flags and "projected" in flags and name == "conformal"
     assert D == pytest.approx(C, rel=1e-9) and C < 1.0 + 0.9 * (D0 - 1.0)
+
+
+def test_a_map_measured_again_gives_the_distortion_measured_anew():
+    """``IslandProblem.face_distortion`` keeps the last maps' answers: a map equal to one of
+    them (another array) gets the same numbers as a problem that never saw it, in a new array
+    its caller may change; past ``MEASURED`` other maps it is measured again. Each face's
+    distortion also checked against numpy's SVD of its Jacobian (``reference_distortion``)."""
+    from bd_uv.unwrapping import problem
+    V, F = load_off("nefertiti.off")
+    prob, u0 = _problem(V, F)
+    isl = prob.island
+    rng = np.random.default_rng(5)
+    maps = [u0 * (1.0 + 0.01 * i) + 1e-3 * i * (rng.normal(size=prob.nv)
+                                                 + 1j * rng.normal(size=prob.nv))
+            for i in range(problem.MEASURED + 2)]
+    first = prob.face_distortion(maps[0])
+    again = prob.face_distortion(maps[0].copy())
+    assert again is not first and np.array_equal(again, first)
+    again[:] = 0.0
+    fresh, _ = _problem(V, F)
+    for u in maps + maps[::-1]:
+        assert np.array_equal(prob.face_distortion(u.copy()), fresh.face_distortion(u))
+    uv = np.stack([maps[1].real, maps[1].imag], 1)[isl.tris]
+    D = prob.face_distortion(maps[1])
+    ref, flipped = reference_distortion(V[isl.vertices], isl.tris, uv)
+    assert np.array_equal(np.isinf(D), flipped) and not flipped.all()
+    assert np.allclose(D[~flipped], ref[~flipped], rtol=1e-9)

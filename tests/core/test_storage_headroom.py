@@ -392,3 +392,53 @@ def test_bound_auto_is_raised_to_what_float32_stores(tmp_path):
     (sm,) = read_scene(str(out)).meshes
     D, flipped = reference_distortion(sm.mesh.V, sm.mesh.F, sm.mesh.corner_uv)
     assert not flipped.any() and 1.0002 < D.max() <= C
+
+
+def test_the_extent_of_corner_uvs_is_numpys_min_and_max_over_both_axes():
+    """``rounding._extent`` (each UV column's least and largest, read as strided rows): numpy's
+    ``min`` and ``max`` over the axes (0, 1), NaN included."""
+    from bd_uv.unwrapping.rounding import _extent
+    rng = np.random.default_rng(3)
+    u = rng.normal(size=(57, 3, 2)) * 1e3
+    for x in (u, np.where(rng.random(u.shape) < 0.01, np.nan, u)):
+        lo, hi = _extent(x)
+        assert np.array_equal(lo, x.min(axis=(0, 1)), equal_nan=True)
+        assert np.array_equal(hi, x.max(axis=(0, 1)), equal_nan=True)
+
+
+def test_a_rounded_map_within_its_rounding_bound_is_not_measured_and_flagged_alike(monkeypatch):
+    """``predicted_to_fail`` leaves the rounded map unmeasured where ``rounding_distortion``'s
+    bound (each coordinate in [0, 1) moved by at most one float32 rounding) is below its
+    certified C: the same flags as measuring every map (``WITHIN`` = 1: never skipped), over
+    placements from the usual coverage down to ones whose rounding breaks faces. Where skipped,
+    the rounded map's distortion (numpy's SVD of each face's Jacobian, the map placed here as
+    the docstring says) is within C."""
+    from bd_uv.unwrapping import rounding
+    from helpers import load_off, rings
+    measured = []
+    real = rounding.conformal_distortion
+    monkeypatch.setattr(rounding, "conformal_distortion",
+                        lambda *a: measured.append(1) or real(*a))
+    seen = set()
+    for seed, faces, bound in [(5243, 400, "auto"), (4848, 400, 5.0), (1522, 300, "auto")]:
+        V, F = rings(*load_off("cow.off"), seed, faces)
+        res = bd_uv.unwrap(V, F, bound=bound)
+        (r,) = res.islands
+        for coverage in (0.25, 1e-6, 1e-9, 1e-11):
+            del measured[:]
+            flags = predicted_to_fail(V, F, res, coverage=coverage)
+            way = "measured" if measured else "flagged" if flags else "skipped"
+            monkeypatch.setattr(rounding, "WITHIN", 1.0)
+            assert predicted_to_fail(V, F, res, coverage=coverage) == flags
+            monkeypatch.setattr(rounding, "WITHIN", 1e-6)
+            seen.add(way)
+            if way == "skipped":
+                u = res.corner_uv
+                e1, e2 = u[:, 1] - u[:, 0], u[:, 2] - u[:, 0]
+                uv_area = np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]).sum() / 2.0
+                u = u * np.sqrt(coverage / uv_area)
+                lo, hi = u.min(axis=(0, 1)), u.max(axis=(0, 1))
+                u = u - lo + np.maximum(0.5 * (1.0 - (hi - lo)), 0.0)
+                D, flipped = reference_distortion(V, F, u.astype(np.float32).astype(float))
+                assert not flipped.any() and D.max() <= r.bound_certified
+    assert seen == {"skipped", "measured", "flagged"}
