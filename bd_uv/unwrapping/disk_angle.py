@@ -127,7 +127,7 @@ def minimise_from_angles(V, disk, v, limit, t0, progress=None, cancel=None):
             y = relaxed(disk.Z, G, disk.area, tris, nv, v, u, ranks=disk.ranks)
             if y is not None:
                 Dy = distortion(y)
-                if Dy <= Du * (1 + 1e-9) and Dy <= Du and (lays_out(y) or not (
+                if Dy <= Du and (lays_out(y) or not (
                         laid_u if laid_u is not None else lays_out(u))):
                     best = (y, Dy)
                     flags.append("mean_relaxed")
