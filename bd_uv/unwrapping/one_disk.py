@@ -148,10 +148,10 @@ def find(V, F, most=None):
     # Degenerate or not finite (a face repeating a vertex has no area; coordinates that overflow
     # make an area or a squared edge inf or NaN).
     P = V.take(F, axis=0)
-    e01 = P[:, 1] - P[:, 0]
-    e02 = P[:, 2] - P[:, 0]
-    e12 = P[:, 2] - P[:, 1]
     with quiet("invalid", "over"):
+        e01 = P[:, 1] - P[:, 0]
+        e02 = P[:, 2] - P[:, 0]
+        e12 = P[:, 2] - P[:, 1]
         area = 0.5 * _cross_norm(e01, e02)
         lmax2 = np.maximum(np.maximum(einsum("ij,ij->i", e01, e01),
                                       einsum("ij,ij->i", e02, e02)),

@@ -9,8 +9,10 @@ import re
 import sys
 import threading
 import types
+import warnings
 
 import clarabel
+
 import numpy as np
 import pytest
 
@@ -250,6 +252,23 @@ def test_non_finite_coordinates_fail_only_their_island(value):
     uses6 = np.flatnonzero(np.any(F == 6, axis=1))
     assert np.array_equal(np.sort(bad.error.faces), uses6)
     assert_message(bad.message, "island 0", "NaN or infinite", "fix or delete")
+
+
+@pytest.mark.parametrize("value", [np.inf, -np.inf])
+def test_non_finite_one_disk_fails_without_numpy_warnings(value):
+    """A mesh that is one disk takes the one-disk path first (glTF's BoxWithInfinites.glb is one):
+    two infinite coordinates on one edge (inf - inf is NaN) are refused by name, with no numpy
+    RuntimeWarning printed on the way."""
+    V, F = grid()
+    V = V.copy()
+    V[[6, 7], 1] = value
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        res = unwrap_checked(V, F)
+    (bad,) = res.islands
+    assert type(bad.error) is bd_uv.NonFiniteError
+    uses = np.flatnonzero(np.any((F == 6) | (F == 7), axis=1))
+    assert np.array_equal(np.sort(bad.error.faces), uses)
 
 
 def test_non_finite_unreferenced_vertex_is_harmless():
