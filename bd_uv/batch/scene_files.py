@@ -43,7 +43,8 @@ def unwrap_scene_file(path, output, options, seams_mode=None, png=None, base=Non
     options = JobOptions.of(options)
     scene = read_scene(path, uv_set=options.uv_set, uv_name=options.uv_name)
     if not scene.meshes:
-        raise BDError(f"{path} holds no triangle or polygon mesh")
+        holds = getattr(scene, "holds", "")
+        raise BDError(f"{path} holds no triangle or polygon mesh" + (f": {holds}" if holds else ""))
     entries, charts, seen = [], {}, {}
     for k, sm in enumerate(scene.meshes):
         where = {**base, "object": sm.name, **sm.info}

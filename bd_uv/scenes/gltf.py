@@ -31,6 +31,20 @@ from .gltf_patch import _patch_primitive
 
 TRIANGLES = 4
 SURFACE_MODES = (TRIANGLES, 5, 6)   # triangle lists, strips and fans
+MODE_NAMES = {0: "points", 1: "lines", 2: "line loop", 3: "line strip"}
+
+
+def _holds_instead(doc):
+    """What a glTF document without a triangle primitive holds instead, for its error message
+    ("" when it has no mesh at all)."""
+    modes = [p.get("mode", TRIANGLES) for m in doc.get("meshes", [])
+             for p in m.get("primitives", [])]
+    if not modes:
+        return ""
+    said = ", ".join(f"{MODE_NAMES.get(k, f'mode {k}')}: {modes.count(k)}"
+                     for k in sorted(set(modes)))
+    return (f"its {len(modes)} primitive(s) draw points or lines, not faces ({said}); only "
+            "triangles, triangle strips and triangle fans (modes 4, 5, 6) can be unwrapped")
 
 
 def node_paths(doc):
@@ -95,7 +109,9 @@ class GltfScene:
                 continue
             meshes.append(SceneMesh(", ".join(names), m, info, None, None, warnings))
             parts.append(part)
-        return cls(gf, uv_set, meshes, parts)
+        scene = cls(gf, uv_set, meshes, parts)
+        scene.holds = "" if meshes else _holds_instead(doc)
+        return scene
 
     def write(self, path, charts):
         """Patch the document with ``charts`` ({mesh position in ``meshes``: Charts}) and write

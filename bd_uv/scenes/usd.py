@@ -84,6 +84,7 @@ class UsdScene:
             meshes.append(sm)
             parts.append(part)
         scene = cls(path, uv_name, meshes, parts)
+        scene.holds = "" if meshes else _holds_instead(stage, Usd, UsdGeom)
         scene.layers = {os.path.realpath(p) for p in (
             layer.realPath for layer in stage.GetUsedLayers()) if p}
         return scene
@@ -206,6 +207,44 @@ class UsdScene:
             warnings.append(f"instanced: the UVs are authored once on {instanced['class']}, "
                             f"which the {sm.info['instances']} instance(s) inherit")
         return certs, warnings + part["warnings"]
+
+
+def _holds_instead(stage, Usd, UsdGeom):
+    """What a stage without a mesh holds instead, for its error message ("" when nothing):
+    shapes that are not polygon meshes (a Sphere, Cube, ... has no faces to carry UVs), and Mesh
+    prims the composed stage does not show (under an ``over`` that nothing defines, inactive,
+    or in a class)."""
+    said, hidden = {}, []
+    for prim in stage.Traverse():
+        if prim.IsA(UsdGeom.Gprim):
+            kind = str(prim.GetTypeName()) or "untyped"
+            said[kind] = said.get(kind, 0) + 1
+    for prim in stage.Traverse(Usd.PrimAllPrimsPredicate):
+        if prim.IsA(UsdGeom.Mesh) and not (prim.IsDefined() and prim.IsActive()
+                                           and not prim.IsAbstract() and _shown(prim, Usd)):
+            hidden.append(str(prim.GetPath()))
+    parts = []
+    if said:
+        shapes = ", ".join(f"{n} {kind}" for kind, n in sorted(said.items()))
+        parts.append(f"it has {shapes} prim(s), which are not polygon meshes: convert them to "
+                     "Mesh prims to unwrap them")
+    if hidden:
+        more = f" and {len(hidden) - 3} more" if len(hidden) > 3 else ""
+        parts.append(f"Mesh prim(s) {', '.join(hidden[:3])}{more} are not part of the composed "
+                     "stage (under an `over` no layer defines, inactive, or in a class): open "
+                     "the layer that defines them, or this one composed over it")
+    return "; ".join(parts)
+
+
+def _shown(prim, Usd):
+    """Whether ``prim`` is on the stage's default traversal (its ancestors too)."""
+    pred = Usd.PrimDefaultPredicate
+    p = prim
+    while p and not p.IsPseudoRoot():
+        if not pred(p):
+            return False
+        p = p.GetParent()
+    return True
 
 
 def _refused(certs, why):

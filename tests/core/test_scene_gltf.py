@@ -145,6 +145,27 @@ def test_lines_pass_through_and_seams_follow_the_files_uvs(tmp_path):
     assert r.doc["meshes"][0]["primitives"][0]["indices"] != tri["indices"]
 
 
+def test_a_file_of_points_and_lines_says_what_it_holds(tmp_path, capsys):
+    # glTF-Asset-Generator's Mesh_PrimitiveMode_00-03 and 07-10: no faces to unwrap, and the
+    # error names what the primitives draw instead
+    b = Builder()
+    V, _, _ = seamed_grid()
+    pos = b.accessor(V.astype(np.float32), 5126, "VEC3", minmax=True)
+    b.doc["meshes"] = [{"primitives": [{"attributes": {"POSITION": pos}, "mode": 0},
+                                       {"attributes": {"POSITION": pos}, "mode": 3},
+                                       {"attributes": {"POSITION": pos}, "mode": 0}]}]
+    b.doc["nodes"] = [{"mesh": 0}]
+    b.write(str(tmp_path / "p.gltf"))
+    before = (tmp_path / "p.gltf").read_bytes()
+    assert main(["unwrap", str(tmp_path / "p.gltf"), "-o", str(tmp_path / "q.gltf")]) == 2
+    err = capsys.readouterr().err
+    assert "holds no triangle or polygon mesh" in err
+    assert "3 primitive(s) draw points or lines" in err
+    assert "points: 2, line strip: 1" in err
+    assert not (tmp_path / "q.gltf").exists()
+    assert (tmp_path / "p.gltf").read_bytes() == before
+
+
 def _one_mesh(tmp_path, name="bad.gltf", **prim_extra):
     b = Builder()
     V, F, _ = seamed_grid()

@@ -533,6 +533,36 @@ def test_an_empty_mesh_prim_is_skipped_and_the_others_unwrapped(tmp_path, capsys
     only.GetRootLayer().Save()
     assert main(["unwrap", str(tmp_path / "only.usda"), "-o", str(tmp_path / "p.usda")]) == 2
     assert "holds no triangle or polygon mesh" in capsys.readouterr().err
+
+
+def test_a_stage_without_a_shown_mesh_says_what_it_holds(tmp_path, capsys):
+    # usd-wg/assets: CompositionPuzzles hold a Sphere prim; StandardShaderBall's
+    # material_surface_geo/subdiv.usda defines its Mesh under an `over` only another layer defines
+    src = tmp_path / "shapes.usda"
+    stage = Usd.Stage.CreateNew(str(src))
+    UsdGeom.Sphere.Define(stage, "/World/Ball")
+    UsdGeom.Cube.Define(stage, "/World/Box")
+    UsdGeom.Cube.Define(stage, "/World/Box2")
+    over = Sdf.CreatePrimInLayer(stage.GetRootLayer(), "/Ball")   # an `over` (not defined)
+    geo = Sdf.PrimSpec(over, "geo", Sdf.SpecifierDef, "Mesh")     # its child a `def Mesh`
+    Sdf.AttributeSpec(geo, "points", Sdf.ValueTypeNames.Point3fArray).default = [
+        (0, 0, 0), (1, 0, 0), (0, 1, 0)]
+    Sdf.AttributeSpec(geo, "faceVertexCounts", Sdf.ValueTypeNames.IntArray).default = [3]
+    Sdf.AttributeSpec(geo, "faceVertexIndices", Sdf.ValueTypeNames.IntArray).default = [0, 1, 2]
+    assert over.specifier == Sdf.SpecifierOver
+    hidden = UsdGeom.Mesh.Define(stage, "/World/Hidden")
+    hidden.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+    hidden.CreateFaceVertexCountsAttr([3])
+    hidden.CreateFaceVertexIndicesAttr([0, 1, 2])
+    hidden.GetPrim().SetActive(False)
+    stage.GetRootLayer().Save()
+    before = src.read_bytes()
+    assert main(["unwrap", str(src), "-o", str(tmp_path / "o.usda")]) == 2
+    err = capsys.readouterr().err
+    assert "holds no triangle or polygon mesh" in err
+    assert "2 Cube, 1 Sphere prim(s), which are not polygon meshes" in err
+    assert "/Ball/geo" in err and "/World/Hidden" in err and "not part of the composed" in err
+    assert not (tmp_path / "o.usda").exists() and src.read_bytes() == before
     # faces without points is not empty: still refused by name
     bad = Usd.Stage.CreateNew(str(tmp_path / "bad.usda"))
     UsdGeom.Mesh.Define(bad, "/Broken").CreateFaceVertexCountsAttr([3])
