@@ -22,12 +22,13 @@ def solve_bound(C):
 STRETCH_MARGIN_SOLVE = 1.005
 
 
-def certified_bound(max_distortion):
-    """The bound ``bound="auto"`` reports for a map: its max distortion with STORE_HEADROOM,
-    with C - 1 rounded up to 4 significant digits (1.03633 for 1.036117, 3.858 for 3.8563), so the
-    UVs still pass as stored (float32, packed) and a C close to 1 keeps the precision it was
-    minimised to (the search's tolerance is relative to C - 1 too)."""
-    c = max_distortion * (1.0 + STORE_HEADROOM)
+def certified_bound(max_distortion, headroom=STORE_HEADROOM):
+    """The bound ``bound="auto"`` reports for a map: its max distortion with ``headroom``
+    (STORE_HEADROOM), with C - 1 rounded up to 4 significant digits (1.03633 for 1.036117, 3.858
+    for 3.8563), so the UVs still pass as stored (float32, packed) and a C close to 1 keeps the
+    precision it was minimised to (the search's tolerance is relative to C - 1 too).
+    ``rounding.tightened`` lowers it where the rounding's own bound is below the headroom."""
+    c = max_distortion * (1.0 + headroom)
     excess = c - 1.0
     if not excess > 0.0:
         return c

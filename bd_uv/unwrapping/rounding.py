@@ -4,10 +4,13 @@
 packing and rounding (:func:`predicted_to_fail`). Imports nothing that solves, so the unwrap
 itself can ask (``unwrap.unwrap``'s angle start) and ``storage`` re-solves what it flags.
 """
+import dataclasses
+
 import numpy as np
 
 from ..geometry import face_areas, gradient_operators, local_coordinates
 from ..metrics import conformal_distortion, face_jacobians, signed_uv_areas, singular_values
+from .margins import certified_bound
 
 
 def float_step(dtype, magnitude=1.0):
@@ -88,6 +91,24 @@ def predicted_to_fail(V, F, res, dtype=np.float32, coverage=0.25, disk=None):
     -------
     list of int, certified unwrap islands flagged
     """
+    out = []
+    for i, r, f, u, G, bound, extent in _placements(V, F, res, dtype, coverage, disk):
+        if not np.logical_and.reduce(np.isfinite(bound)):
+            out.append(i)
+        elif not (extent < 1.0 and np.maximum.reduce(bound)
+                  <= r.bound_certified * (1.0 - WITHIN)):
+            # (else the stored map's distortion is within ``bound``, below its C: its
+            # coordinates in [0, 1), each rounded by at most h; not measured)
+            stored = u.astype(dtype).astype(np.float64)
+            if conformal_distortion(V, f, stored, G).max() > r.bound_certified:
+                out.append(i)
+    return out
+
+
+def _placements(V, F, res, dtype, coverage, disk):
+    """Each certified island of ``res`` placed as :func:`predicted_to_fail` describes: yields
+    (island index, IslandResult, its faces (k,3), its placed corner UVs (k,3,2), its faces'
+    gradient operators, :func:`rounding_distortion`'s bound per face, its largest extent)."""
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
     uv = np.asarray(res.corner_uv, dtype=np.float64)
@@ -99,9 +120,9 @@ def predicted_to_fail(V, F, res, dtype=np.float32, coverage=0.25, disk=None):
     A = disk.area if whole else face_areas(V, F[faces]) if len(faces) else np.zeros(0)
     total = float(A.sum()) if len(faces) else 0.0
     if total <= 0:
-        return []
+        return
     h = float_step(dtype, 1.0)
-    out, at = [], 0
+    at = 0
     for i in ok:   # per island (its own UV scale), vectorised over its faces
         r = res.islands[i]
         f, u = F[r.faces], uv[r.faces]
@@ -115,17 +136,49 @@ def predicted_to_fail(V, F, res, dtype=np.float32, coverage=0.25, disk=None):
         # the faces' frames, once for both (the disk's where the island is all of it)
         G, edges = ((disk.G, (disk.e01, disk.e02)) if whole else
                     (gradient_operators(local_coordinates(V, f)), None))
-        bound = rounding_distortion(V, f, u, h, G, edges)
-        if not np.logical_and.reduce(np.isfinite(bound)):
-            out.append(i)
-        elif not (np.maximum.reduce(hi - lo) < 1.0 and np.maximum.reduce(bound)
-                  <= r.bound_certified * (1.0 - WITHIN)):
-            # (else the stored map's distortion is within ``bound``, below its C: its
-            # coordinates in [0, 1), each rounded by at most h; not measured)
-            stored = u.astype(dtype).astype(np.float64)
-            if conformal_distortion(V, f, stored, G).max() > r.bound_certified:
-                out.append(i)
-    return out
+        yield i, r, f, u, G, rounding_distortion(V, f, u, h, G, edges), np.maximum.reduce(hi - lo)
+
+
+# What a tightened ``auto`` bound keeps above the larger of its map's max and the bound on its
+# distortion once placed and rounded (that bound's own arithmetic is ~1e-15 of it)
+TIGHT_HEADROOM = 1e-6
+
+
+def tightened(V, F, res, dtype=np.float32, coverage=0.25, disk=None):
+    """``res`` with the C of each certified ``bound="auto"`` island lowered, where that is
+    lower, to ``certified_bound`` of the larger of its max distortion and the most float32
+    rounding can make it at :func:`predicted_to_fail`'s placement (``rounding_distortion``),
+    with TIGHT_HEADROOM instead of STORE_HEADROOM: the least C its UVs as stored are expected to
+    pass. STORE_HEADROOM (2e-4 of C) covers the smallest faces of large atlases; on a small,
+    near-isometric disk it was more than the whole gap to the peers' maps (a 600-face patch of
+    a knight: max 1.003116, C 1.003318, ABF's and LSCM's max 1.00324). Where the UVs as really
+    stored measure more (a smaller packed scale), the layout raises C to what they measure
+    (``storage._auto_bounds_as_stored``, the operator's ``stored.STORAGE_RTOL``). Islands placed
+    wider than the unit square (rounded by more than one step), or whose bound is not finite,
+    keep their C."""
+    lower = {}
+    for i, r, _, _, _, bound, extent in _placements(V, F, res, dtype, coverage, disk):
+        if r.bound_requested != "auto" or not extent < 1.0:
+            continue
+        worst = float(np.maximum.reduce(bound))
+        if not np.isfinite(worst):
+            continue
+        C = certified_bound(max(worst, float(r.max_distortion)), TIGHT_HEADROOM)
+        if C < r.bound_certified:
+            lower[i] = C
+    if not lower:
+        return res
+    islands, certs = list(res.islands), res.certificates
+    certs = None if certs is None else list(certs)
+    for i, C in lower.items():
+        r = islands[i]
+        old = f"<= {r.bound_certified:.4g}"
+        msg = r.message.replace(old, f"<= {C:.4g}", 1) if old in (r.message or "") else r.message
+        islands[i] = dataclasses.replace(r, bound_certified=C, message=msg)
+        if certs is not None and i < len(certs) and certs[i] is not None:
+            certs[i] = dataclasses.replace(certs[i], bound=C)
+    return dataclasses.replace(res, islands=islands,
+                               certificates=None if certs is None else type(res.certificates)(certs))
 
 
 def _extent(corner_uv):

@@ -31,7 +31,7 @@ from .batched import conformal_islands
 from .island_solve import (angle_unfolder, batched_options, solve_island, unfold_first,
                            unfolder)
 from .overlap_certificate import overlap_certificate
-from .rounding import predicted_to_fail
+from .rounding import predicted_to_fail, tightened
 from .conic_solves import Cancelled
 from .results import UnwrapResult
 
@@ -151,7 +151,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
                 angle = False if none else angle
         disk.forget_factors()       # the conformal solves' factorisation, not needed now
         if done is not None:
-            return done
+            return _tightened(V, F, done, opts, disk, whole)
         conformal_u = u
         if opts.bound == "auto":
             # a conformal start that flips, lies over itself or is far from conformal: the
@@ -170,7 +170,7 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
                 angle = False if found is None else found
             disk.forget_factors()
             if angled_res is not None and not predicted_to_fail(V, F, angled_res, disk=disk):
-                return angled_res
+                return _tightened(V, F, angled_res, opts, disk, whole)
         conformal = {0: u}
     # (a disk map from its angle start flagged by ``predicted_to_fail``: the general path's
     # answer, as below)
@@ -196,7 +196,16 @@ def unwrap(V, F, seams=None, pin_corners=None, pin_uv=None, *, initial_uv=None,
         least = None
     if opts.bound == "auto" and disk is not None and whole and _pieces(res) > (0, 1):
         res = _kept_whole(V, F, disk, opts, res, least, t0, progress, cancel)
-    return res
+    return _tightened(V, F, res, opts, disk, whole)
+
+
+def _tightened(V, F, res, opts, disk, whole):
+    """``bound="auto"``'s result with each island's C as low as float32 storage allows
+    (``rounding.tightened``); once, on the outermost call (``whole``), so the tries inside
+    compare the Cs they always did."""
+    if opts.bound != "auto" or not whole:
+        return res
+    return tightened(V, F, res, disk=disk)
 
 
 def _angle_within(V, disk):

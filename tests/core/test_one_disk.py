@@ -13,6 +13,7 @@ from bd_uv.options import unwrap_options
 from bd_uv.overlap import island_overlaps
 from bd_uv.unwrapping import disk_certificate, disk_conformal, one_disk
 from bd_uv.unwrapping.unwrap import pin_arrays, unwrap_islands
+from bd_uv.unwrapping.rounding import tightened
 from helpers import grid, load_off, rings
 from unwrap_contract import distortion_and_flips
 
@@ -48,9 +49,11 @@ DISKS = {"grid": curved_grid, "nefertiti": lambda: load_off("nefertiti.off"), "j
 
 def general(V, F, **kw):
     """The general path on the same arrays: checked_islands, the batched conformal map, the
-    overlap certificate."""
-    return unwrap_islands(V, F, checked_islands(V, F), pin_arrays(None, None, len(F)),
-                          unwrap_options(None, **kw))
+    overlap certificate (and for "auto" the C kept only as far above the max as float32 needs,
+    which ``unwrap`` does last on either path: ``rounding.tightened``)."""
+    res = unwrap_islands(V, F, checked_islands(V, F), pin_arrays(None, None, len(F)),
+                         unwrap_options(None, **kw))
+    return tightened(V, F, res) if kw.get("bound") == "auto" else res
 
 
 @pytest.mark.parametrize("name", sorted(DISKS))
