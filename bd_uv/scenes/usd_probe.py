@@ -27,6 +27,15 @@ from ..errors import SceneFileError
 # runs: its writing would raise the same). A crash is anything else but 1 (a Python error in the
 # probe itself: the probe is skipped).
 OK, READ_RAISED, COPY_RAISED = 0, 10, 11
+# A layer of the stage whose timeCodesPerSecond is 0: usd-core's time scaling between layers
+# divides by it, and reading a time-sampled value then never returns (usd-wg/assets'
+# stage_configuration/timeCodesPerSecond_0.usda: the unwrap waited for ever). The probe says so
+# with this code and the layer, before reading any value.
+ZERO_RATE = 12
+# The most the probe may take: a file usd-core loops on some other way is refused after it,
+# not waited on for ever (reading every value of a large production stage takes seconds to
+# a few minutes; the unwrap's own reading takes as long again)
+PROBE_SECONDS = 900.0
 
 _SOURCE = r"""
 import sys
@@ -56,6 +65,11 @@ def values(prims):
 
 def read():
     stage = Usd.Stage.Open(path)
+    for layer in stage.GetUsedLayers():
+        if layer.HasTimeCodesPerSecond() and layer.timeCodesPerSecond == 0:
+            sys.stdout.write(layer.realPath or layer.identifier)
+            sys.stdout.flush()
+            sys.exit(12)
     values(stage.Traverse(Usd.TraverseInstanceProxies()))
     for proto in stage.GetPrototypes():
         values(Usd.PrimRange(proto))
@@ -97,11 +111,21 @@ def probe(path):
     try:
         run = subprocess.run([exe, "-c", _SOURCE, where, os.path.abspath(path)],
                              stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, check=False)
+                             stderr=subprocess.PIPE, check=False, timeout=PROBE_SECONDS)
+    except subprocess.TimeoutExpired:
+        raise SceneFileError(f"{path}: usd-core did not finish reading this file in "
+                             f"{PROBE_SECONDS:g} s (it loops on some malformed stages); nothing "
+                             "was written") from None
     except OSError:
         return
     if run.returncode in (OK, READ_RAISED, 1):
         return
+    if run.returncode == ZERO_RATE:
+        layer = run.stdout.decode("utf-8", "replace").strip()
+        raise SceneFileError(f"{path}: layer {layer} sets timeCodesPerSecond = 0, which "
+                             "usd-core cannot read time samples through (it never returns); "
+                             "set a positive rate (24 is USD's default) and try again; nothing "
+                             "was written")
     if run.returncode == COPY_RAISED:
         said = " ".join(run.stdout.decode("utf-8", "replace").split())
         raise SceneFileError(f"{path}: USD could not copy its root layer to write the UVs, the "

@@ -167,3 +167,43 @@ def test_the_probes_end_decides(monkeypatch, tmp_path, source, refused):
         assert str(err.value) == (f"{path}: usd-core stops on this file ({refused}): it is "
                                   "damaged or holds something usd-core cannot read; nothing "
                                   "was written")
+
+
+def test_a_stage_at_zero_time_codes_per_second_is_refused_not_waited_on(tmp_path, capsys):
+    """usd-wg/assets' timeCodesPerSecond_0.usda: usd-core never returns from reading a
+    time-sampled value of a sublayer through a root layer at timeCodesPerSecond = 0 (the CLI
+    waited for ever). The probe names the layer and the fix; the input stays as it was."""
+    from pxr import Sdf, Usd, UsdGeom
+    from bd_uv.cli import main
+    sub = Usd.Stage.CreateNew(str(tmp_path / "anim.usda"))
+    mesh = UsdGeom.Mesh.Define(sub, "/World/Tri")
+    mesh.CreatePointsAttr([(0, 0, 0), (1, 0, 0), (0, 1, 0)])
+    mesh.CreateFaceVertexCountsAttr([3])
+    mesh.CreateFaceVertexIndicesAttr([0, 1, 2])
+    move = UsdGeom.Xformable(mesh).AddTranslateOp()
+    move.Set((0.0, 0.0, 0.0), 0.0)
+    move.Set((1.0, 0.0, 0.0), 10.0)
+    sub.GetRootLayer().Save()
+    root = Sdf.Layer.CreateNew(str(tmp_path / "shot.usda"))
+    root.subLayerPaths.append("anim.usda")
+    root.timeCodesPerSecond = 0.0
+    root.Save()
+    before = (tmp_path / "shot.usda").read_bytes()
+    assert main(["unwrap", str(tmp_path / "shot.usda"), "-o", str(tmp_path / "o.usda")]) == 2
+    err = capsys.readouterr().err
+    assert "sets timeCodesPerSecond = 0" in err and "shot.usda" in err
+    assert "nothing was written" in err and not (tmp_path / "o.usda").exists()
+    assert (tmp_path / "shot.usda").read_bytes() == before
+
+
+def test_a_probe_that_never_ends_is_refused_after_its_time(monkeypatch, tmp_path):
+    from bd_uv.errors import SceneFileError
+    from bd_uv.scenes import usd_probe
+    monkeypatch.setattr(usd_probe, "_SOURCE", "import time; time.sleep(60)")
+    monkeypatch.setattr(usd_probe, "PROBE_SECONDS", 0.5)
+    path = str(tmp_path / "a.usda")
+    open(path, "w").write("#usda 1.0\n")
+    with pytest.raises(SceneFileError) as err:
+        usd_probe.probe(path)
+    assert str(err.value) == (f"{path}: usd-core did not finish reading this file in 0.5 s (it "
+                              "loops on some malformed stages); nothing was written")
