@@ -6,7 +6,8 @@ itself or is far from conformal), the general path (``island_solve.solve_island`
 ``IslandProblem`` of the disk (its vertices centred and scaled, their local frames, the four
 sparse Jacobian operators), measured the start there, searched its least map that does not lie
 over itself (``strategies.minimise`` with ``one_to_one``: ``least_one_to_one``), relaxed its
-mean (``mean_relax``), placed and certified it (``finish``), and certified the disk's UVs again
+mean (``mean_relax``; ``energy_within.weighted_lowered`` where it stays over the angle
+start's), placed and certified it (``finish``), and certified the disk's UVs again
 (``one_disk.certify``). Every piece of that the search needs is in the ``Disk`` already: each
 face's gradient operator and area (the conformal maps were solved from them) and the vertices'
 elimination order. Here the same steps run on them: the bound search (``searched.search``'s,
@@ -25,6 +26,7 @@ import time
 
 import numpy as np
 
+from ..array_calls import einsum
 from ..certificate import RTOL
 from ..energies import JacobianOperators
 from ..errors import CancelledError
@@ -33,6 +35,8 @@ from .disk_auto import _certified
 from .disk_certificate import simple_ccw_loop, turns_once
 from .finish import certified_bound
 from .mean_relax import face_distortion, relaxed
+from . import energy_within
+from .energy_within import weighted_lowered
 from .one_disk import report_step
 from .results import IslandResult, UnwrapResult
 from .searched import FREE_FACES, drop_handed
@@ -49,8 +53,9 @@ def minimise_from_angles(V, disk, v, limit, t0, progress=None, cancel=None):
 
     Returns
     -------
-    UnwrapResult (flags "angle_start", "mean_relaxed", "projected" or "initial_map", as the
-    general path's), or None where the general path must decide (see the module's docstring)
+    UnwrapResult (flags "angle_start", "mean_relaxed", "mean_lowered", "projected" or
+    "initial_map", as the general path's), or None where the general path must decide (see
+    the module's docstring)
 
     Raises
     ------
@@ -131,6 +136,12 @@ def minimise_from_angles(V, disk, v, limit, t0, progress=None, cancel=None):
                         laid_u if laid_u is not None else lays_out(u))):
                     best = (y, Dy)
                     flags.append("mean_relaxed")
+            laid = (lays_out(best[0]) if best[0] is not u or laid_u is None else laid_u)
+            low = (_lowered(disk, ops, cb, v, best[0], best[1], lays_out)
+                   if energy_within.LOWER and laid else None)
+            if low is not None:
+                best = low
+                flags.append("mean_lowered")
     project = time.perf_counter() - t
     if best is None:
         return None
@@ -157,6 +168,30 @@ def minimise_from_angles(V, disk, v, limit, t0, progress=None, cancel=None):
         progress(1.0, "done")
     return UnwrapResult(uv.take(tris, axis=0), np.zeros(k, dtype=np.int64), [res],
                         time.perf_counter() - t0, "lscm", certificates=(cert,))
+
+
+class _DiskProblem:
+    """What ``energy_within.weighted_lowered`` reads of an ``IslandProblem``, on a ``Disk``'s
+    geometry."""
+
+    def __init__(self, disk, ops, cb):
+        isl = disk.island
+        self.ops, self.nv, self.Z, self.island, self.ranks = (ops, len(isl.vertices), disk.Z,
+                                                               isl, disk.ranks)
+        self.cb, self.tris = cb, isl.tris
+
+    def alpha(self, u):
+        return einsum("fc,fc->f", self.cb.conj(), u.take(self.tris))
+
+    def face_distortion(self, u):
+        return face_distortion(self.cb, self.tris, u)
+
+
+def _lowered(disk, ops, cb, v, u, D, lays_out):
+    """``energy_within.weighted_lowered`` of the map u (max distortion D, laying the disk out)
+    on the ``Disk``'s geometry, where its mean is over the angle start v's by more than
+    ``energy_within.LOWER_RISE``: (map, its max) or None."""
+    return weighted_lowered(_DiskProblem(disk, ops, cb), v, u, D, lays_out)
 
 
 def _always(u):

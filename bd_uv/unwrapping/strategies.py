@@ -11,7 +11,7 @@ import numpy as np
 
 from ..errors import InfeasibleError
 from ..frames import frames_from_map
-from . import mean_relax
+from . import energy_within, mean_relax
 from .along import golden
 from .bounded import bend, formulate, guaranteed_bound, start_for_solve
 from .energy_within import lowered
@@ -118,6 +118,13 @@ def minimise(prob, start, limit, budget, flags, report, t0, one_to_one=False):
                     if low is not None:
                         best = projected = low
                         flags.append("mean_lowered")
+                # an angle start's map whose mean stays over the start's: lowered within its
+                # max (``disk_angle._lowered``'s, on the island problem)
+                low = (_weighted_lowered(prob, start.u, best)
+                       if one_to_one and not steps and prob.enough is None else None)
+                if low is not None:
+                    best = projected = low
+                    flags.append("mean_lowered")
                 # a mean still far over the conformal start's: C given back for it
                 capped = (mean_relax.capped_island(prob, start.u, best[0], start.D)
                           if not steps and prob.enough is None and not one_to_one
@@ -190,6 +197,20 @@ def _mean_lowered(prob, best):
     if not lays_out(prob, y) and lays_out(prob, u):
         return None           # it would be cut where the searched map was one piece
     return y, Dy
+
+
+def _weighted_lowered(prob, v, best):
+    """``energy_within.weighted_lowered`` of the searched (or relaxed) map ``best`` = (u, D)
+    of an angle start v (where ``energy_within.LOWER``): (map, its max measured anew) where it
+    certifies at D or lower and lays the island out, else None."""
+    u, D = best
+    if not energy_within.LOWER or not lays_out(prob, u):
+        return None
+    low = energy_within.weighted_lowered(prob, v, u, D, prob.lays_out)
+    if low is None:
+        return None
+    ok, Dy = prob.check(low[0], D)
+    return (low[0], Dy) if ok and Dy <= D else None
 
 
 def least_one_to_one(prob, start, report, budget, flags, t0, least):

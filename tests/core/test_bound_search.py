@@ -338,6 +338,42 @@ def test_two_fruitless_targets_end_the_search(monkeypatch):
     assert res[True].bound_certified <= 1.005 * res[False].bound_certified
 
 
+def _three_peaks_strip():
+    """619 faces of tests/data/three_peaks.off round its path along x (listed in
+    tests/data/three-peaks-strip-faces.txt), unreferenced vertices dropped."""
+    import os
+    from helpers import DATA
+    V, F = load_off("three_peaks.off")
+    F = F[np.loadtxt(os.path.join(DATA, "three-peaks-strip-faces.txt"), dtype=np.int64)]
+    used, inv = np.unique(F, return_inverse=True)
+    return V[used], inv.reshape(-1, 3)
+
+
+def test_a_fruitless_target_aimed_at_the_widest_step_is_not_counted(monkeypatch):
+    """``bound_search.OVERSHOT``: a target aimed at MAX_STEP (reached only by widening after
+    targets reached) that finds nothing only halves the step, and is counted neither as small
+    nor as short. On this 619-face strip of three_peaks the budgeted search reaches two targets,
+    widens to MAX_STEP, and finds nothing there nor at half of it: counted, these two ended it at
+    C 1.653 (measured); not counted, the next target, a quarter of the step, is reached and the
+    search ends at 1.5704. The max distortion recomputed from each map's UVs (numpy SVD) is within
+    its certified C, and the one with OVERSHOT below 1.60 where the other is above 1.64."""
+    import bd_uv
+    from bd_uv.solvers import bound_search
+    V, F = _three_peaks_strip()
+    assert len(F) == 619
+    res = {}
+    for on in (False, True):
+        monkeypatch.setattr(bound_search, "OVERSHOT", on)
+        r = bd_uv.unwrap(V, F, bound="auto")
+        (isl,) = r.islands
+        D, flipped = reference_distortion(V, F, r.corner_uv.reshape(-1, 3, 2))
+        assert r.certified and isl.status == "certified" and not flipped.any()
+        assert D.max() <= isl.bound_certified * (1 + 1e-9)
+        res[on] = (D.max(), isl.bound_certified, isl.iterations)
+    assert res[True][0] < 1.60 < 1.64 < res[False][0]
+    assert res[True][1] < res[False][1] and res[True][2] > res[False][2]
+
+
 def test_the_first_best_after_a_fruitless_target_is_checked(monkeypatch):
     """``bound_search.CHECK_AFTER_FRUITLESS``: a search given a ``check`` asks it of the first new
     best of a target after one that found nothing (on this grid targets 2 and 3 find nothing,
