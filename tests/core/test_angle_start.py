@@ -269,14 +269,19 @@ def test_with_the_command_lines_time_budget_the_disk_stays_one_certified_island(
     Dinkelbach steps refine the searched map: from the angle start, and never into a map that
     lies over itself (b620c89 cut these disks into 3, 8 and 12 pieces: the steps' maps overlapped
     and the overlap repair cut them). The conic step's C may be lower, never higher than the
-    search's alone."""
+    search's alone by more than one unit of C's rounding (C - 1 to 4 significant digits): the
+    call without a budget lowers its mean within its max last (``energy_within``'s
+    ``weighted_lowered``), which can move that max by less (cow 5243/400: 1.442825 against the
+    budget's 1.442877, C 1.4429 against 1.443)."""
     from bd_uv.arguments import TIME_BUDGET
     V, F = rings(*load_off("cow.off"), seed, faces)
     disk = one_disk.find(V, F)
     res = bd_uv.unwrap(V, F, bound="auto", time_budget=TIME_BUDGET)
     r, D = _one_certified_island(V, F, res, disk, np.inf)
     (plain,) = bd_uv.unwrap(V, F, bound="auto").islands
-    assert r.bound_certified <= plain.bound_certified and D.max() <= r.bound_certified
+    unit = 10.0 ** (np.floor(np.log10(plain.bound_certified - 1.0)) - 3)
+    assert r.bound_certified <= plain.bound_certified + unit * (1 + 1e-9)
+    assert D.max() <= r.bound_certified
 
 
 def test_with_the_time_budget_a_disk_the_steps_cut_takes_the_call_without_one(tmp_path):
