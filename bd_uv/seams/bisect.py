@@ -27,15 +27,40 @@ class FaceCentroids:
     """Face centroids ``V[F].mean(axis=1)`` formed for the faces asked for (``cen[faces]``),
     the same bits row by row as the whole (m,3) array, which the seam
     search would otherwise hold throughout (12 MB on a 500k-face mesh) to read a few rows
-    per split."""
+    per split.
 
-    def __init__(self, V, F):
+    With ``hold`` (the search's meshes that hold their face geometry, ``auto.GEOM_FACES``)
+    the whole array is formed once and rows are read from it (the same bits: each row's own
+    mean), and so are the distances between the centroids of each edge's two faces
+    (``dual_lengths``), which every split weighs its dual graph by: a face is split ~2-8 times
+    on its way to a chart, each time forming both again."""
+
+    def __init__(self, V, F, hold=False):
         self.V, self.F = V, F
+        self.held = self.dual = None
+        if hold:
+            self.held = self[np.arange(len(F))]
+
+    def dual_lengths(self, E):
+        """(e,) float64, the distance between the centroids of each edge's two faces (0 on a
+        boundary edge), ``np.linalg.norm`` of their difference row by row, as
+        ``split.fiedler_split_many`` forms it for the pairs it is given (the same bits); None
+        where the centroids are not held."""
+        if self.held is None:
+            return None
+        if self.dual is None or len(self.dual) != len(E.faces):
+            f0, f1 = E.faces[:, 0], E.faces[:, 1]
+            d = np.linalg.norm(self.held[f0] - self.held[np.maximum(f1, 0)], axis=1)
+            d[f1 < 0] = 0.0
+            self.dual = d
+        return self.dual
 
     def __getitem__(self, faces):
         faces = np.asarray(faces)
         if faces.ndim != 1:
             return self.V[self.F[faces]].mean(axis=1)
+        if self.held is not None:
+            return self.held[faces]
         if len(faces) <= CHUNK:
             return _mean3(self.V, self.F[faces])
         # ``CHUNK`` rows at a time (each row's own mean: the same bits): the (k,3,3) corner
@@ -209,7 +234,10 @@ def bisect(pieces, E, cut, A, cen, poly=None, orders=None):
     del na, nb, across
     keys = None if orders is None or poly is not None else orders.face_keys(pieces, fa)
     before = None if keys is None else keys.copy()
-    side, split = fiedler_split_many(mass, pcen, offsets, pairs, E.length[w], E.cost[w], keys)
+    # The dual edges' lengths where held (faces are the nodes: each pair one mesh edge's)
+    dual = cen.dual_lengths(E) if node is None and isinstance(cen, FaceCentroids) else None
+    side, split = fiedler_split_many(mass, pcen, offsets, pairs, E.length[w], E.cost[w], keys,
+                                     None if dual is None else dual[w])
     if keys is not None:
         orders.faces_ordered(pieces, fa, before, keys)
     del pairs, w

@@ -132,12 +132,14 @@ def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12, keys=None
     except RuntimeError:
         return None
     rows = cols = vals = K = None
-    tot = np.maximum(total, 1e-300)[group]
+    # Each chart's mean divided out per chart, then spread over its nodes (the same quotients
+    # as dividing per node: one division a chart, not one a node, each iteration)
+    tot = np.maximum(total, 1e-300)
     for _ in range(iters):
-        x = x - np.bincount(group, mass * x, g)[group] / tot
+        x = x - (np.bincount(group, mass * x, g) / tot)[group]
         x = solve(mass * x)
         x = x / np.maximum(np.sqrt(np.bincount(group, mass * x ** 2, g)), 1e-300)[group]
-    return x - np.bincount(group, mass * x, g)[group] / tot
+    return x - (np.bincount(group, mass * x, g) / tot)[group]
 
 
 @functools.lru_cache(maxsize=512)

@@ -47,7 +47,8 @@ def fiedler_split(face_area, centroid, pairs, edge_len, edge_cost):
     return side if split[0] else None
 
 
-def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost, keys=None):
+def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost, keys=None,
+                       dist=None):
     """``fiedler_split`` of many charts at once: one block-diagonal factorisation, every step
     vectorised over the charts (the same cut for each chart as alone, up to rounding).
 
@@ -59,6 +60,8 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost,
     edge_len, edge_cost : (e,) float64
     keys : (k,) int64, optional, the nodes' elimination keys (``orders.fiedler_solver``: -1
         where a chart is to be ordered afresh; rewritten in place where it is)
+    dist : (e,) float64, optional, the distance between each pair's centroids (formed here
+        when not given, ``np.linalg.norm`` row by row: the same bits)
 
     Returns
     -------
@@ -76,7 +79,8 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost,
     pg = group[pairs[:, 0]]
     npairs = np.bincount(pg, minlength=g)
     live = (size >= 2) & (npairs > 0)
-    d = np.linalg.norm(centroid[pairs[:, 0]] - centroid[pairs[:, 1]], axis=1)
+    d = (np.linalg.norm(centroid[pairs[:, 0]] - centroid[pairs[:, 1]], axis=1) if dist is None
+         else dist)
     mean_len = np.bincount(pg, edge_len, g) / np.maximum(npairs, 1)
     w = edge_len * edge_cost / np.maximum(d, 1e-12 * mean_len[pg])
     del pg, d                               # per pair: dead before the factors
