@@ -19,7 +19,9 @@ def face_areas(V, F):
     -------
     A : (m,) float64
     """
-    P = V[F]
+    # (``take``: numpy's row gather by a fancy index is ~4x dearer; the same values, and the
+    # same IndexError out of range)
+    P = np.asarray(V).take(np.asarray(F), axis=0)
     with np.errstate(invalid="ignore", over="ignore"):  # non-finite input is reported, not warned
         return 0.5 * _cross_norm(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
 
@@ -50,7 +52,7 @@ def local_coordinates(V, F):
         Corner 0 at 0, corner 1 on the positive real axis, corner 2 in the upper half plane (for a
         non-degenerate face).
     """
-    P = np.asarray(V, dtype=np.float64)[F]
+    P = np.asarray(V, dtype=np.float64).take(np.asarray(F), axis=0)   # (rows: ``take``, ~4x)
     return local_frame(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
 
 

@@ -101,7 +101,7 @@ def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12, keys=None
     mean = np.stack([np.bincount(group, mass * centroid[:, i], g) for i in range(3)], 1)
     c = centroid - (mean / np.maximum(total, 1e-300)[:, None])[group]
     axes = _principal_axes(c, mass, offsets, group)
-    x = einsum("ij,ij->i", c, axes[group])
+    x = einsum("ij,ij->i", c, axes.take(group, axis=0))
     scale = np.zeros(g)
     np.maximum.at(scale, group, np.abs(x))
     noise = np.concatenate([_noise(int(n)) if n <= 5000 else
@@ -172,7 +172,7 @@ def _principal_axes(c, mass, offsets, group):
             cov[:, a, b] = cov[:, b, a] = np.bincount(group, mass * c[:, a] * c[:, b], g)
     w, vec = np.linalg.eigh(cov)
     axes = vec[:, :, 2].copy()
-    proj = einsum("ij,ij->i", c, axes[group])
+    proj = einsum("ij,ij->i", c, axes.take(group, axis=0))
     big = np.zeros(g)
     np.maximum.at(big, group, np.abs(proj))
     on = (np.abs(proj) > 1e-9 * big[group]).ravel().nonzero()[0]

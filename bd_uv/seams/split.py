@@ -12,7 +12,7 @@ from ..geometry import components
 from ..solvers import radix
 from .compressed import compressed
 from .fiedler import fiedler_vectors
-from ..trim import release_memory
+from ..trim import TRIM_FACES, release_memory
 
 # Neither side of a split may hold less than this share of the chart's area.
 MIN_SIDE = 0.05
@@ -76,6 +76,10 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost,
     side = np.zeros(k, dtype=bool)
     if k == 0 or len(pairs) == 0:
         return side, split
+    if pairs.dtype != np.int64 and k <= TRIM_FACES:
+        # The pairs in int64 (the same values): numpy gathers by an int32 index on its slow
+        # path (~2x), ~15 of them here; kept int32 on large charts (memory: bisect.py).
+        pairs = pairs.astype(np.int64)
     pg = group[pairs[:, 0]]
     npairs = np.bincount(pg, minlength=g)
     live = (size >= 2) & (npairs > 0)
@@ -149,7 +153,7 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost,
     # Pieces cut off from their side's bulk (a few nodes) go to the other side; a chart left
     # all on one side keeps its snapped cut.
     same = side[pairs[:, 0]] == side[pairs[:, 1]]
-    _, comp = components(k, pairs[same, 0], pairs[same, 1])
+    _, comp = components(k, pairs[:, 0][same], pairs[:, 1][same])
     csize = np.bincount(comp)
     side = side ^ (csize[comp] < np.maximum(3, 0.02 * size)[group])
     ones = np.bincount(group, side, g)
