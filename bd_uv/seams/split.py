@@ -217,8 +217,8 @@ def _snap_many(side, pairs, cost, group, g, rings=BAND_RINGS):
     p0, p1 = pairs[:, 0], pairs[:, 1]
     for _ in range(rings):              # one dual ring more on each side
         grow = band.copy()
-        grow[p1[band[p0]]] = True
-        grow[p0[band[p1]]] = True
+        grow[p1.compress(band[p0])] = True      # (``compress``: ~3x cheaper than a mask)
+        grow[p0.compress(band[p1])] = True
         band = grow
     src = ~band & side
     snk = ~band & ~side
@@ -240,7 +240,7 @@ def _snap_many(side, pairs, cost, group, g, rings=BAND_RINGS):
     node[snk & active[group]] = nb + 1
     na, nb_ = node[pairs[:, 0]], node[pairs[:, 1]]
     on = (na >= 0) & (nb_ >= 0) & (na != nb_) & ((na < nb) | (nb_ < nb))
-    pa, pb, cp = na[on], nb_[on], cap[on]
+    pa, pb, cp = na.compress(on), nb_.compress(on), cap.compress(on)
     data, indices, indptr = compressed(np.concatenate([pa, pb]), np.concatenate([pb, pa]),
                                         np.concatenate([cp, cp]), nb + 2)
     G = sp.csr_matrix((np.minimum(data, 2 ** 30).astype(np.int32), indices, indptr),

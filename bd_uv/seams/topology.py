@@ -93,7 +93,7 @@ def charts(F, E, cut, faces=None):
         inner = ~bnd.reshape(k, 3) & (f0.reshape(k, 3) == faces[:, None])
         indptr = np.zeros(k + 1, dtype=np.int64)
         inner.sum(axis=1).cumsum(out=indptr[1:])
-        other = f1[inner.ravel()]
+        other = f1.compress(inner.ravel())
         if k != len(F):                     # input face ids -> positions in ``faces``
             pos = np.empty(len(F), dtype=np.int64)
             pos[faces] = np.arange(k)

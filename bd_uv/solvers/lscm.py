@@ -205,7 +205,8 @@ def _lscm_system(cbw, cb, tris, n, idx, val, sides=None, triplets=False):
         # inf in cb or cbw shows there): u0 is 0 but at the pinned vertices, so a face without
         # one adds exact zeros, which leave bincount's sums as they are (the same bits); only
         # the faces at a pinned vertex are formed.
-        near = pinned.take(tris).any(axis=1).ravel().nonzero()[0]
+        pt = pinned.take(tris)      # (columns or-ed: numpy's reduction along a length-3 axis
+        near = (pt[:, 0] | pt[:, 1] | pt[:, 2]).ravel().nonzero()[0]      # is ~10x dearer)
         t = tris.take(near, axis=0)
         hu = (cbw.take(near, axis=0) * einsum("fb,fb->f", cb.take(near, axis=0),
                                               u0.take(t))[:, None]).ravel()
@@ -235,12 +236,13 @@ def _lscm_system(cbw, cb, tris, n, idx, val, sides=None, triplets=False):
         rim = np.zeros(len(lo), dtype=bool)
         rim[len(s1):] = True
     on = ~pinned[lo] & ~pinned[hi]
-    pl, ph, re_e = pos[lo[on]], pos[hi[on]], re_e[on]
+    # (``compress``: numpy 1.26's boolean index is ~3x dearer, the same elements)
+    pl, ph, re_e = pos[lo.compress(on)], pos[hi.compress(on)], re_e.compress(on)
     # Im H is the signed area term: the two faces of an interior edge cancel (to rounding), so
     # only boundary edges couple the real and imaginary parts. Leaving the interior zeros out
     # keeps the two Laplacian blocks apart but for the boundary: half the fill to factor.
     rim &= on
-    bl, bh, im_b = pos[lo[rim]], pos[hi[rim]], im_e[rim]
+    bl, bh, im_b = pos[lo.compress(rim)], pos[hi.compress(rim)], im_e.compress(rim)
     free = (~pinned).nonzero()[0]
     pd = pos[free]
     # No two entries share a place (one per free vertex, per edge, per boundary edge and side).

@@ -102,3 +102,17 @@ def test_lscm_right_hand_side_from_the_pinned_faces_alone():
     idx = np.array([0, n - 1])
     _, rhs, u0, free = _lscm_system(cbw, cb, F, n, idx, np.array([0.0, 1.0], np.complex128))
     assert np.isnan(rhs).any()
+
+
+def test_edges_of_is_numpys_unique():
+    """``bisect._edges_of``: the sorted distinct edge ids, by marks (many ids) or by a sort (few),
+    in the ids' own dtype, as ``np.unique`` gives them."""
+    from bd_uv.seams.bisect import _edges_of
+    rng = np.random.default_rng(7)
+    for e in (1, 50, 4000):
+        for n in (0, 1, 3, 40, 900):
+            for dt in (np.int32, np.int64):
+                fe = rng.integers(0, e, n).astype(dt)
+                got = _edges_of(fe, e)
+                want = np.unique(fe)
+                assert got.dtype == want.dtype and np.array_equal(got, want)
