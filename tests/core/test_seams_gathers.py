@@ -116,3 +116,19 @@ def test_edges_of_is_numpys_unique():
                 got = _edges_of(fe, e)
                 want = np.unique(fe)
                 assert got.dtype == want.dtype and np.array_equal(got, want)
+
+
+def test_face_geometry_by_any_integer_ids_and_out_of_range():
+    """Signed ids go through ``take``, unsigned ones (which it would refuse) through the fancy
+    index: the same areas and frames for every integer type; an id out of range is an
+    IndexError either way."""
+    import pytest
+    rng = np.random.default_rng(8)
+    V, F = _mesh(rng, n=50, m=80)
+    want_a, want_z = face_areas(V, F.astype(np.int64)), local_coordinates(V, F.astype(np.int64))
+    for dt in (np.int16, np.int32, np.uint32, np.uint64):
+        assert np.array_equal(face_areas(V, F.astype(dt)), want_a)
+        assert np.array_equal(local_coordinates(V, F.astype(dt)), want_z)
+    for dt in (np.int64, np.uint64):
+        with pytest.raises(IndexError):
+            face_areas(V, np.array([[0, 1, 50]], dtype=dt))
