@@ -112,7 +112,9 @@ def charts(F, E, cut, faces=None):
     del fe, f0, f1, inset
     hb = bnd.ravel().nonzero()[0]                # boundary half-edges, as corners of ``tri``
     del bnd
-    ba, bb = tri.ravel()[hb], np.roll(tri, -1, axis=1).ravel()[hb]
+    # (the next corner of each half-edge's face by its index: no (k,3) ``np.roll`` copy)
+    flat_tri = tri.ravel()
+    ba, bb = flat_tri[hb], flat_tri[hb - hb % 3 + (hb + 1) % 3]
     nb = np.bincount(fl[hb // 3], minlength=n_c)
     nf = np.bincount(fl, minlength=n_c)
     nvc = np.bincount(vl, minlength=n_c)

@@ -110,7 +110,9 @@ def union_charts(F, E, chs, label, xs, ys, removed, owner, trial):
     kinds = np.where(disk, "disk", np.where((nb == 0) & (chi == 2), "sphere", "open")).tolist()
     hb = bnd.ravel().nonzero()[0]
     del bnd
-    ba, bb = tri.ravel()[hb], np.roll(tri, -1, axis=1).ravel()[hb]
+    # (the next corner of each half-edge's face by its index: no (k,3) ``np.roll`` copy)
+    flat_tri = tri.ravel()
+    ba, bb = flat_tri[hb], flat_tri[hb - hb % 3 + (hb + 1) % 3]
     loops = _disk_loops(ba, bb, vu, disk, n, True)
     del ba, bb, hb, vu
     fb = np.concatenate([[0], nfu.cumsum()]).tolist()

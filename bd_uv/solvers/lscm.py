@@ -218,7 +218,9 @@ def _lscm_system(cbw, cb, tris, n, idx, val, sides=None, triplets=False):
     pos = (~pinned).cumsum() - 1            # (np.cumsum's and .sum's wrappers: ~1.5 us each)
     nf = n - int(np.count_nonzero(pinned))
     # One entry per face side (j, k), summed per edge {lo, hi}: Re H and Im H[lo, hi].
-    J, K = tris, tris[:, [1, 2, 0]]
+    J, K = tris, tris.take([1, 2, 0], axis=1)
+    # (not ``take``: the fancy index's columns are laid out strided, and numpy multiplies
+    # complex arrays laid out otherwise to other last bits: the maps would move by rounding)
     hjk = (cbw * cb[:, [1, 2, 0]]).ravel()
     lo, hi = np.minimum(J, K).ravel(), np.maximum(J, K).ravel()
     im = np.where((J < K).ravel(), hjk.imag, -hjk.imag)
