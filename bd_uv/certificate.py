@@ -77,7 +77,7 @@ def _measure_faces(V, F, uv, faces):
     flip = np.empty(len(faces), dtype=bool)
     for i in range(0, len(faces), CHUNK):
         f = faces[i:i + CHUNK]
-        uv64 = uv[f].astype(np.float64)
+        uv64 = uv.take(f, axis=0).astype(np.float64)    # (rows: ``take``, ~4x cheaper)
         finite = np.isfinite(uv64).all(axis=(1, 2))
         with np.errstate(invalid="ignore", over="ignore"):
             if finite.all():

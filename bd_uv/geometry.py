@@ -7,6 +7,15 @@ import numpy as np
 from .array_calls import einsum, quiet
 
 
+def _rows(A, idx):
+    """``A[idx]`` for an integer index array: by ``take`` where the ids are signed integers
+    (numpy 1.26 gathers rows by a fancy index ~4x slower; the same values and the same
+    IndexError out of range), by the fancy index otherwise (unsigned ids, which ``take`` would
+    refuse or wrap)."""
+    idx = np.asarray(idx)
+    return A.take(idx, axis=0) if idx.dtype.kind == "i" else A[idx]
+
+
 def face_areas(V, F):
     """Area of each triangle.
 
@@ -19,7 +28,7 @@ def face_areas(V, F):
     -------
     A : (m,) float64
     """
-    P = V[F]
+    P = _rows(np.asarray(V), F)
     with np.errstate(invalid="ignore", over="ignore"):  # non-finite input is reported, not warned
         return 0.5 * _cross_norm(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
 
@@ -50,7 +59,7 @@ def local_coordinates(V, F):
         Corner 0 at 0, corner 1 on the positive real axis, corner 2 in the upper half plane (for a
         non-degenerate face).
     """
-    P = np.asarray(V, dtype=np.float64)[F]
+    P = _rows(np.asarray(V, dtype=np.float64), F)
     return local_frame(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
 
 

@@ -189,7 +189,8 @@ def segments_meet(p, q, i, j, geoms=None):
     error bound, by GEOS's robust predicate otherwise; segments with an identical end touch.
     ``geoms`` (b,) shapely linestrings of the segments, optional (made when needed)."""
     import shapely
-    a, b, c, d = p[i], q[i], p[j], q[j]
+    # (rows by ``take``: numpy's fancy index is ~4x dearer for rows)
+    a, b, c, d = p.take(i, axis=0), q.take(i, axis=0), p.take(j, axis=0), q.take(j, axis=0)
     shared = np.zeros(len(i), dtype=bool)
     for x, y in ((a, c), (a, d), (b, c), (b, d)):
         shared |= np.all(x == y, axis=1)

@@ -133,7 +133,9 @@ def unwrap_auto(V, F, seams=None, bound=2.0, stretch=2.0, face_groups=None, merg
     geom = face_geometry(V, F) if m <= GEOM_FACES else None
     A = geom.area if geom is not None else np.concatenate(
         [face_areas(V, F[i:i + CHUNK]) for i in range(0, m, CHUNK)] or [np.zeros(0)])
-    cen = FaceCentroids(V, F)               # formed for the faces split, not held per face
+    # Face centroids formed for the faces split, held (with the dual edges' lengths) only
+    # where the face geometry is
+    cen = FaceCentroids(V, F, hold=geom is not None)
     # Islands the seams cannot fix (non-manifold, degenerate, ...) are left to ``unwrap`` to
     # report; the rest of the search works on charts of the validated mesh.
     frozen = np.zeros(m, dtype=bool)

@@ -27,15 +27,40 @@ class FaceCentroids:
     """Face centroids ``V[F].mean(axis=1)`` formed for the faces asked for (``cen[faces]``),
     the same bits row by row as the whole (m,3) array, which the seam
     search would otherwise hold throughout (12 MB on a 500k-face mesh) to read a few rows
-    per split."""
+    per split.
 
-    def __init__(self, V, F):
+    With ``hold`` (the search's meshes that hold their face geometry, ``auto.GEOM_FACES``)
+    the whole array is formed once and rows are read from it (the same bits: each row's own
+    mean), and so are the distances between the centroids of each edge's two faces
+    (``dual_lengths``), which every split weighs its dual graph by: a face is split ~2-8 times
+    on its way to a chart, each time forming both again."""
+
+    def __init__(self, V, F, hold=False):
         self.V, self.F = V, F
+        self.held = self.dual = None
+        if hold:
+            self.held = self[np.arange(len(F))]
+
+    def dual_lengths(self, E):
+        """(e,) float64, the distance between the centroids of each edge's two faces (0 on a
+        boundary edge), ``np.linalg.norm`` of their difference row by row, as
+        ``split.fiedler_split_many`` forms it for the pairs it is given (the same bits); None
+        where the centroids are not held."""
+        if self.held is None:
+            return None
+        if self.dual is None or len(self.dual) != len(E.faces):
+            f0, f1 = E.faces[:, 0], E.faces[:, 1]
+            d = np.linalg.norm(self.held[f0] - self.held[np.maximum(f1, 0)], axis=1)
+            d[f1 < 0] = 0.0
+            self.dual = d
+        return self.dual
 
     def __getitem__(self, faces):
         faces = np.asarray(faces)
         if faces.ndim != 1:
             return self.V[self.F[faces]].mean(axis=1)
+        if self.held is not None:
+            return self.held.take(faces, axis=0)
         if len(faces) <= CHUNK:
             return _mean3(self.V, self.F[faces])
         # ``CHUNK`` rows at a time (each row's own mean: the same bits): the (k,3,3) corner
@@ -50,7 +75,8 @@ def _mean3(V, Ff):
     """``V[Ff].mean(axis=1)`` to the bit: numpy's sum over that length-3 axis adds the corners
     in turn ((a + b) + c: no pairwise sum below 9 terms) and then divides by 3, as here, without
     the (k,3,3) gather and the strided reduction (half the time on a 4k-face batch)."""
-    return (V[Ff[:, 0]] + V[Ff[:, 1]] + V[Ff[:, 2]]) / 3
+    # (``take``: numpy's row gather by a fancy index is ~4x dearer; the same rows)
+    return (V.take(Ff[:, 0], axis=0) + V.take(Ff[:, 1], axis=0) + V.take(Ff[:, 2], axis=0)) / 3
 
 
 def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None, big=None, curved=None):
@@ -109,7 +135,7 @@ def split_deep(todo, E, cut, A, cen, S, poly=None, orders=None, big=None, curved
                 break
             continue
         # Every piece's restricted stretch at once.
-        sig = np.concatenate([todo[j][1][todo[j][0].searchsorted(piece)]
+        sig = np.concatenate([todo[j][1].take(todo[j][0].searchsorted(piece), axis=0)
                               for piece, j in pieces])
         fa = np.concatenate([piece for piece, _ in pieces])
         label = np.repeat(np.arange(len(pieces)), [len(piece) for piece, _ in pieces])
@@ -148,6 +174,22 @@ def polygon_edges(polygons, E, m):
     return poly, diag
 
 
+def _edges_of(fe, e):
+    """``np.unique(fe)`` of edge ids in ``[0, e)``: marked in an (e,) array and read back in
+    order where they are at least an eighth of the edges (a split of most of a small mesh: no
+    sort), numpy's sort otherwise, its duplicates dropped by ``compress`` (numpy 1.26's boolean
+    index, which ``np.unique`` uses, is ~3x dearer)."""
+    if 8 * len(fe) >= e:
+        mark = np.zeros(e, dtype=bool)
+        mark[fe] = True
+        return mark.ravel().nonzero()[0].astype(fe.dtype, copy=False)
+    s = np.sort(fe)
+    keep = np.empty(len(s), dtype=bool)
+    keep[:1] = True
+    np.not_equal(s[1:], s[:-1], out=keep[1:])
+    return s.compress(keep)
+
+
 def bisect(pieces, E, cut, A, cen, poly=None, orders=None):
     """Split charts by ``fiedler_split_many`` (all at once) and mark the new seams.
 
@@ -176,12 +218,15 @@ def bisect(pieces, E, cut, A, cen, poly=None, orders=None):
     # a 500k-face sphere held ~25 MB more of them in int64.
     local = np.full(m, -1, dtype=E.face_edges.dtype)
     local[fa] = np.arange(len(fa))
-    fe = np.unique(E.face_edges[fa].ravel())
-    fe = fe[(E.faces[fe, 1] >= 0) & ~cut[fe]]
-    la, lb = local[E.faces[fe, 0]], local[E.faces[fe, 1]]
+    fe = _edges_of(E.face_edges.take(fa, axis=0).ravel(), len(E.ends))
+    fe = fe[(E.faces[:, 1].take(fe) >= 0) & ~cut.take(fe)]
+    f01 = E.faces.take(fe, axis=0)          # (int32 ids: ``take``, not numpy's slower gather)
+    la, lb = local.take(f01[:, 0]), local.take(f01[:, 1])
+    del f01
     inside = (la >= 0) & (lb >= 0)
-    inside[inside] = owner[la[inside]] == owner[lb[inside]]
-    fe, la, lb = fe[inside], la[inside], lb[inside]
+    # (``compress``: numpy 1.26's boolean index is ~3x dearer, the same elements)
+    inside[inside] = owner[la.compress(inside)] == owner[lb.compress(inside)]
+    fe, la, lb = fe.compress(inside), la.compress(inside), lb.compress(inside)
     # Nodes: the faces, or the polygons (grouped by chart either way).
     if poly is None:
         node = None
@@ -209,7 +254,10 @@ def bisect(pieces, E, cut, A, cen, poly=None, orders=None):
     del na, nb, across
     keys = None if orders is None or poly is not None else orders.face_keys(pieces, fa)
     before = None if keys is None else keys.copy()
-    side, split = fiedler_split_many(mass, pcen, offsets, pairs, E.length[w], E.cost[w], keys)
+    # The dual edges' lengths where held (faces are the nodes: each pair one mesh edge's)
+    dual = cen.dual_lengths(E) if node is None and isinstance(cen, FaceCentroids) else None
+    side, split = fiedler_split_many(mass, pcen, offsets, pairs, E.length.take(w),
+                                     E.cost.take(w), keys, None if dual is None else dual.take(w))
     if keys is not None:
         orders.faces_ordered(pieces, fa, before, keys)
     del pairs, w

@@ -124,7 +124,7 @@ def chart_maps(V, charts, geom=None, limits=None, orders=None):
     # The batch's mesh vertices (chart after chart), formed once: held through the solves only
     # where ``orders`` reads them (a batch of at most ``orders.BATCH_VERTICES`` vertices).
     gv = np.concatenate([c.vertices for c in charts])
-    P = V[gv]
+    P = V.take(gv, axis=0)   # (rows: ``take``, ~4x cheaper than numpy's fancy index)
     idx = _far_pairs(P, charts, voff)
     del P                   # the batch's positions are not held through the factors
     if orders is None:
@@ -217,7 +217,7 @@ def _per_face(u, geom, faces, tris, nfs, nvs):
     a, b = np.empty(nf), np.empty(nf)
     for i in range(0, nf, CHUNK):
         f = slice(i, i + CHUNK)
-        cb = geom.cb[faces[f]] * root[face_c[f]][:, None]
+        cb = geom.cb.take(faces[f], axis=0) * root[face_c[f]][:, None]
         ut = us[tris[f]]
         a[f] = np.abs(einsum("fk,fk->f", cb.conj(), ut))
         b[f] = np.abs(einsum("fk,fk->f", cb, ut))
@@ -245,7 +245,7 @@ def _lscm_ordered(geom, faces, tris, n, idx, val, keys=None, budget=0.0):
     """``_lscm_pinned``, with ``keys`` (n,) the unknowns eliminated in their vertices' order
     (``orders.ordered_solver``, ``budget`` its fill limit). Returns (u, (the fill and ranks
     ``ordered_solver`` returns, the free vertices) or None without keys)."""
-    A, rhs, u, free = _lscm_system(geom.cbw(faces), geom.cb[faces], tris, n, idx, val,
+    A, rhs, u, free = _lscm_system(geom.cbw(faces), geom.cb.take(faces, axis=0), tris, n, idx, val,
                                    triplets=keys is not None)
     release_memory(len(tris))
     info = None

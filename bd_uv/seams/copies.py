@@ -165,7 +165,7 @@ def find_copies(V, F, E, cut, face_groups=None, polygons=None, invalid=None):
     groups = {}
     for p in cand.tolist():
         fc = order[start[p]:start[p + 1]]
-        corners = F[fc].ravel()
+        corners = F.take(fc, axis=0).ravel()
         uniq, first, inv = np.unique(corners, return_index=True, return_inverse=True)
         by_first = np.argsort(first, kind="stable")
         rank = np.empty(len(uniq), dtype=np.int64)

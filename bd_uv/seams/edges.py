@@ -102,31 +102,33 @@ def edge_table(V, F, face_groups=None, crease_angle=np.radians(30.0)):
     length = np.empty(e)
     for i in range(0, e, CHUNK):
         s = slice(i, i + CHUNK)
-        length[s] = np.linalg.norm(V[ends[s, 1]] - V[ends[s, 0]], axis=1)
+        # (rows by ``take``: numpy's fancy index is ~4x dearer for rows, ~2x by int32 ids)
+        length[s] = np.linalg.norm(V.take(ends[s, 1], axis=0) - V.take(ends[s, 0], axis=0), axis=1)
     N = np.empty((m, 3))
     for i in range(0, m, CHUNK):
         Fs = F[i:i + CHUNK]
         Ns = N[i:i + CHUNK]
-        Ns[:] = np.cross(V[Fs[:, 1]] - V[Fs[:, 0]], V[Fs[:, 2]] - V[Fs[:, 0]])
+        P0 = V.take(Fs[:, 0], axis=0)
+        Ns[:] = np.cross(V.take(Fs[:, 1], axis=0) - P0, V.take(Fs[:, 2], axis=0) - P0)
         Ns /= np.maximum(np.linalg.norm(Ns, axis=1, keepdims=True), 1e-300)
-    Fs = Ns = None
+    Fs = Ns = P0 = None
     cost = np.ones(e)
     f0, f1 = faces[two, 0], faces[two, 1]
     tw = two.ravel().nonzero()[0]
     c = np.empty(len(tw))
     for i in range(0, len(tw), CHUNK):
         s = slice(i, i + CHUNK)
-        N0, N1 = N[f0[s]], N[f1[s]]
+        N0, N1 = N.take(f0[s], axis=0), N.take(f1[s], axis=0)
         # atan2 rather than arccos: exact near 0, where arccos turns rounding noise into angles.
         theta = np.arctan2(np.linalg.norm(np.cross(N0, N1), axis=1),
                            np.einsum("ij,ij->i", N0, N1))
         # Concave when the opposite vertex of f1 lies above f0's plane. The discount grows with
         # the angle (full from CONCAVE_FULL on): on a flat edge (a planar quad's diagonal) the
         # side is rounding noise, which must not halve the cost of one run and not the next.
-        Ff1, es = F[f1[s]], ends[tw[s]]
+        Ff1, es = F.take(f1[s], axis=0), ends.take(tw[s], axis=0)
         off_edge = (Ff1 != es[:, :1]) & (Ff1 != es[:, 1:])
         opp = Ff1[np.arange(len(Ff1)), np.argmax(off_edge, axis=1)]
-        concave = np.einsum("ij,ij->i", V[opp] - V[es[:, 0]], N0) > 0
+        concave = np.einsum("ij,ij->i", V.take(opp, axis=0) - V.take(es[:, 0], axis=0), N0) > 0
         half = np.where(concave, 0.5 * np.minimum(theta / CONCAVE_FULL, 1.0), 0.0)
         c[s] = np.exp(-theta / crease_angle) * (1.0 - half)
     N = N0 = N1 = Ff1 = es = off_edge = opp = concave = half = theta = tw = None
@@ -181,8 +183,8 @@ def _fans(F, face_edges, faces, ends, corners):
     c = np.arange(3 * m, dtype=idx)
     edge = face_edges.ravel()
     v = F.ravel()
-    side = (faces[edge, 0] != c // 3).astype(np.int8)
-    end = (ends[edge, 0] != v).astype(np.int8)
+    side = (faces[:, 0].take(edge) != c // 3).astype(np.int8)
+    end = (ends[:, 0].take(edge) != v).astype(np.int8)
     nxt = corners[edge, 1 - side, end]
     del side
     on = nxt >= 0
@@ -199,13 +201,14 @@ def _fans(F, face_edges, faces, ends, corners):
     # Closed fans: the smallest corner of each cycle becomes its start.
     fwd = np.where(on, nxt, c)
     low, p = c.copy(), fwd
+    # (``take``: numpy's gather by an int32 index by fancy index is ~2x dearer)
     for _ in range(steps):
-        low = np.minimum(low, low[p])
-        p = p[p]
+        low = np.minimum(low, low.take(p))
+        p = p.take(p)
     fwd = None
     p = np.where(prev >= 0, prev, c)
     for _ in range(steps):
-        p = p[p]
+        p = p.take(p)
     ring = prev[p] >= 0                     # never reaches a corner without a predecessor
     start = np.where(ring, low, p)
     del low
@@ -214,8 +217,8 @@ def _fans(F, face_edges, faces, ends, corners):
     del prev
     rank = (p != c).astype(idx)
     for _ in range(steps):
-        rank = rank + rank[p]
-        p = p[p]
+        rank = rank + rank.take(p)
+        p = p.take(p)
     del p
     if 3 * m <= radix.LARGE:     # the same order by radix passes (stable: ties alike); a
         #                            large mesh's corners keep numpy's (no int64 key beside them)

@@ -101,7 +101,7 @@ def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12, keys=None
     mean = np.stack([np.bincount(group, mass * centroid[:, i], g) for i in range(3)], 1)
     c = centroid - (mean / np.maximum(total, 1e-300)[:, None])[group]
     axes = _principal_axes(c, mass, offsets, group)
-    x = einsum("ij,ij->i", c, axes[group])
+    x = einsum("ij,ij->i", c, axes.take(group, axis=0))
     scale = np.zeros(g)
     np.maximum.at(scale, group, np.abs(x))
     noise = np.concatenate([_noise(int(n)) if n <= 5000 else
@@ -132,12 +132,14 @@ def _fiedler_block(pairs, w, mass, centroid, offsets, group, iters=12, keys=None
     except RuntimeError:
         return None
     rows = cols = vals = K = None
-    tot = np.maximum(total, 1e-300)[group]
+    # Each chart's mean divided out per chart, then spread over its nodes (the same quotients
+    # as dividing per node: one division a chart, not one a node, each iteration)
+    tot = np.maximum(total, 1e-300)
     for _ in range(iters):
-        x = x - np.bincount(group, mass * x, g)[group] / tot
+        x = x - (np.bincount(group, mass * x, g) / tot)[group]
         x = solve(mass * x)
         x = x / np.maximum(np.sqrt(np.bincount(group, mass * x ** 2, g)), 1e-300)[group]
-    return x - np.bincount(group, mass * x, g)[group] / tot
+    return x - (np.bincount(group, mass * x, g) / tot)[group]
 
 
 @functools.lru_cache(maxsize=512)
@@ -170,7 +172,7 @@ def _principal_axes(c, mass, offsets, group):
             cov[:, a, b] = cov[:, b, a] = np.bincount(group, mass * c[:, a] * c[:, b], g)
     w, vec = np.linalg.eigh(cov)
     axes = vec[:, :, 2].copy()
-    proj = einsum("ij,ij->i", c, axes[group])
+    proj = einsum("ij,ij->i", c, axes.take(group, axis=0))
     big = np.zeros(g)
     np.maximum.at(big, group, np.abs(proj))
     on = (np.abs(proj) > 1e-9 * big[group]).ravel().nonzero()[0]

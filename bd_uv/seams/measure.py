@@ -27,13 +27,13 @@ def measure_charts(V, F, E, cut, result, chs=None):
     voff = np.concatenate([[0], nvs.cumsum()])
     foff = np.concatenate([[0], nfs.cumsum()])
     fc = np.repeat(np.arange(len(rs)), nfs)
-    P = V[np.concatenate([r.vertices for r in rs])]
+    P = V.take(np.concatenate([r.vertices for r in rs]), axis=0)     # (rows: ``take``, ~4x)
     uv = np.concatenate([r.uv for r in rs])
     tris = np.concatenate([r.tris for r in rs]) + voff[fc][:, None]
     a, b, sa, A3 = (np.empty(len(tris)) for _ in range(4))
     for i in range(0, len(tris), CHUNK):     # per-face numbers, a chunk's temporaries at a time
         t = tris[i:i + CHUNK]
-        corner = uv[t]
+        corner = uv.take(t, axis=0)
         alpha, beta = face_jacobians(P, t, corner)
         a[i:i + CHUNK], b[i:i + CHUNK] = np.abs(alpha), np.abs(beta)
         e1 = corner[:, 1] - corner[:, 0]
@@ -90,5 +90,5 @@ def _loop(chart, r):
     # Same faces, vertices numbered differently: map chart vertex -> result vertex by corner.
     pos = chart.faces.searchsorted(r.faces)
     ids = np.full(len(chart.vertices), -1, dtype=np.int64)
-    ids[chart.tris[pos].ravel()] = r.tris.ravel()
+    ids[chart.tris.take(pos, axis=0).ravel()] = r.tris.ravel()
     return ids[chart.loops[0]]

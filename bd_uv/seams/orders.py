@@ -172,7 +172,7 @@ class Orders:
         nvs = np.array([len(c.vertices) for c in charts])
         off = np.concatenate([[0], nvs.cumsum()])
         t = np.concatenate([c.tris + off[j] for j, c in enumerate(charts)])
-        a, b = t.ravel(), t[:, [1, 2, 0]].ravel()
+        a, b = t.ravel(), t.take([1, 2, 0], axis=1).ravel()
         n = int(off[-1])
         # The vertex graph's canonical compressed pattern (what ``sp.csc_matrix`` of these
         # pairs holds: sorted, duplicates summed), without scipy's COO conversion (~0.3 ms).
@@ -252,6 +252,12 @@ def _ranks(keys):
     return o, r, int(rs[-1]) + 1 if len(o) else 0
 
 
+def _stable_order(keys):
+    """``keys.argsort(kind="stable")`` of non-negative integer keys by ``radix.order`` (numpy
+    sorts 32-bit keys by timsort; the stable order is unique, so it is the same order)."""
+    return radix.order(keys, int(keys.max()) + 1 if len(keys) else 1)
+
+
 def fiedler_solver(rows, cols, vals, keys, upper):
     """Solve of a Fiedler system (its upper triangle as triplets ``rows``, ``cols``, ``vals``,
     one node a face; ``upper()`` the canonical csc matrix, duplicates summed, as ``compressed``
@@ -267,7 +273,7 @@ def fiedler_solver(rows, cols, vals, keys, upper):
     k = len(keys)
     if (keys >= 0).all():
         # The keys' stable order (the radix order of their dense ranks, as it was formed)
-        f = ordered_ldl.Factor(rows, cols, vals, k, keys.argsort(kind="stable"))
+        f = ordered_ldl.Factor(rows, cols, vals, k, _stable_order(keys))
         if not f.repeated():
             return f.solve if f.lnz >= 0 and f.factor() else spd_solver(upper(), upper=True)
     # ``upper()``'s arrays (``compressed``, as it forms them), without its scipy matrix
@@ -279,8 +285,7 @@ def fiedler_solver(rows, cols, vals, keys, upper):
             keys[p] = np.arange(k)
     if (keys >= 0).all():
         cols = np.repeat(np.arange(k, dtype=np.int64), np.diff(indptr))
-        f = ordered_ldl.Factor(indices.astype(np.int64), cols, data, k,
-                               keys.argsort(kind="stable"))
+        f = ordered_ldl.Factor(indices.astype(np.int64), cols, data, k, _stable_order(keys))
         if f.lnz >= 0 and f.factor():
             return f.solve
     return spd_solver(upper(), upper=True)

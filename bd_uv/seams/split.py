@@ -12,7 +12,7 @@ from ..geometry import components
 from ..solvers import radix
 from .compressed import compressed
 from .fiedler import fiedler_vectors
-from ..trim import release_memory
+from ..trim import TRIM_FACES, release_memory
 
 # Neither side of a split may hold less than this share of the chart's area.
 MIN_SIDE = 0.05
@@ -47,7 +47,8 @@ def fiedler_split(face_area, centroid, pairs, edge_len, edge_cost):
     return side if split[0] else None
 
 
-def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost, keys=None):
+def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost, keys=None,
+                       dist=None):
     """``fiedler_split`` of many charts at once: one block-diagonal factorisation, every step
     vectorised over the charts (the same cut for each chart as alone, up to rounding).
 
@@ -59,6 +60,8 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost,
     edge_len, edge_cost : (e,) float64
     keys : (k,) int64, optional, the nodes' elimination keys (``orders.fiedler_solver``: -1
         where a chart is to be ordered afresh; rewritten in place where it is)
+    dist : (e,) float64, optional, the distance between each pair's centroids (formed here
+        when not given, ``np.linalg.norm`` row by row: the same bits)
 
     Returns
     -------
@@ -73,10 +76,15 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost,
     side = np.zeros(k, dtype=bool)
     if k == 0 or len(pairs) == 0:
         return side, split
+    if pairs.dtype != np.int64 and k <= TRIM_FACES:
+        # The pairs in int64 (the same values): numpy gathers by an int32 index on its slow
+        # path (~2x), ~15 of them here; kept int32 on large charts (memory: bisect.py).
+        pairs = pairs.astype(np.int64)
     pg = group[pairs[:, 0]]
     npairs = np.bincount(pg, minlength=g)
     live = (size >= 2) & (npairs > 0)
-    d = np.linalg.norm(centroid[pairs[:, 0]] - centroid[pairs[:, 1]], axis=1)
+    d = (np.linalg.norm(centroid[pairs[:, 0]] - centroid[pairs[:, 1]], axis=1) if dist is None
+         else dist)
     mean_len = np.bincount(pg, edge_len, g) / np.maximum(npairs, 1)
     w = edge_len * edge_cost / np.maximum(d, 1e-12 * mean_len[pg])
     del pg, d                               # per pair: dead before the factors
@@ -145,7 +153,7 @@ def fiedler_split_many(face_area, centroid, offsets, pairs, edge_len, edge_cost,
     # Pieces cut off from their side's bulk (a few nodes) go to the other side; a chart left
     # all on one side keeps its snapped cut.
     same = side[pairs[:, 0]] == side[pairs[:, 1]]
-    _, comp = components(k, pairs[same, 0], pairs[same, 1])
+    _, comp = components(k, pairs[:, 0][same], pairs[:, 1][same])
     csize = np.bincount(comp)
     side = side ^ (csize[comp] < np.maximum(3, 0.02 * size)[group])
     ones = np.bincount(group, side, g)
@@ -209,8 +217,8 @@ def _snap_many(side, pairs, cost, group, g, rings=BAND_RINGS):
     p0, p1 = pairs[:, 0], pairs[:, 1]
     for _ in range(rings):              # one dual ring more on each side
         grow = band.copy()
-        grow[p1[band[p0]]] = True
-        grow[p0[band[p1]]] = True
+        grow[p1.compress(band[p0])] = True      # (``compress``: ~3x cheaper than a mask)
+        grow[p0.compress(band[p1])] = True
         band = grow
     src = ~band & side
     snk = ~band & ~side
@@ -232,7 +240,7 @@ def _snap_many(side, pairs, cost, group, g, rings=BAND_RINGS):
     node[snk & active[group]] = nb + 1
     na, nb_ = node[pairs[:, 0]], node[pairs[:, 1]]
     on = (na >= 0) & (nb_ >= 0) & (na != nb_) & ((na < nb) | (nb_ < nb))
-    pa, pb, cp = na[on], nb_[on], cap[on]
+    pa, pb, cp = na.compress(on), nb_.compress(on), cap.compress(on)
     data, indices, indptr = compressed(np.concatenate([pa, pb]), np.concatenate([pb, pa]),
                                         np.concatenate([cp, cp]), nb + 2)
     G = sp.csr_matrix((np.minimum(data, 2 ** 30).astype(np.int32), indices, indptr),

@@ -27,7 +27,7 @@ def valid_everywhere(V, F, E, A):
     # Per-face tests ``CHUNK`` faces at a time: the (m,3,3) corner positions and their
     # differences were ~110 MB at once on a 500k-face mesh, the set-up's peak.
     for i in range(0, len(F), CHUNK):
-        P = V[F[i:i + CHUNK]]
+        P = V.take(F[i:i + CHUNK], axis=0)          # (rows: ``take``, ~4x cheaper)
         if not measurable(P).all():   # NaN, inf, or beyond float64's fourth powers
             return False
         lmax2 = np.max(np.sum((P - np.roll(P, -1, axis=1)) ** 2, axis=2), axis=1)
@@ -35,7 +35,7 @@ def valid_everywhere(V, F, E, A):
             if not np.all(2 * A[i:i + CHUNK] > DEGENERATE_RATIO * lmax2):
                 return False
         # Two faces on the same vertices share all three edges: each edge leads to the other.
-        ef = E.faces[E.face_edges[i:i + CHUNK]]         # (k,3,2)
+        ef = E.faces.take(E.face_edges[i:i + CHUNK], axis=0)    # (k,3,2)
         me = np.arange(i, i + len(ef))[:, None]
         other = np.where(ef[:, :, 0] == me, ef[:, :, 1], ef[:, :, 0])
         if np.any((other[:, 0] >= 0) & (other[:, 0] == other[:, 1])

@@ -55,7 +55,10 @@ class FaceGeometry:
         ``u^H H u`` is ``h = cbw cb^T`` (the same at any scale of the chart: the coefficients
         grow as the area shrinks), kept as its two factors (a third of the memory of the 3x3
         terms)."""
-        return self.zarea[faces][:, None] * self.cb[faces].conj()
+        if isinstance(faces, slice):
+            return self.zarea[faces][:, None] * self.cb[faces].conj()
+        # (``take``: numpy's row gather by a fancy index is ~4x dearer, the same values)
+        return self.zarea.take(faces)[:, None] * self.cb.take(faces, axis=0).conj()
 
 
 def face_geometry(V, F):
@@ -196,13 +199,28 @@ def _lscm_system(cbw, cb, tris, n, idx, val, sides=None, triplets=False):
     u0 = np.zeros(n, dtype=np.complex128)
     u0[idx] = val
     flat = tris.ravel()
-    hu = (cbw * einsum("fb,fb->f", cb, u0[tris])[:, None]).ravel()      # (h u0) per corner
-    rhs_c = -(np.bincount(flat, hu.real, n) + 1j * np.bincount(flat, hu.imag, n))
+    diag = np.bincount(flat, (cbw * cb).real.ravel(), n)
+    if np.isfinite(diag).all():
+        # Every face's terms finite (diag sums area |cb|^2 >= 0 over the corners: a NaN or
+        # inf in cb or cbw shows there): u0 is 0 but at the pinned vertices, so a face without
+        # one adds exact zeros, which leave bincount's sums as they are (the same bits); only
+        # the faces at a pinned vertex are formed.
+        pt = pinned.take(tris)      # (columns or-ed: numpy's reduction along a length-3 axis
+        near = (pt[:, 0] | pt[:, 1] | pt[:, 2]).ravel().nonzero()[0]      # is ~10x dearer)
+        t = tris.take(near, axis=0)
+        hu = (cbw.take(near, axis=0) * einsum("fb,fb->f", cb.take(near, axis=0),
+                                              u0.take(t))[:, None]).ravel()
+        at = t.ravel()
+    else:
+        hu = (cbw * einsum("fb,fb->f", cb, u0[tris])[:, None]).ravel()      # (h u0) per corner
+        at = flat
+    rhs_c = -(np.bincount(at, hu.real, n) + 1j * np.bincount(at, hu.imag, n))
     pos = (~pinned).cumsum() - 1            # (np.cumsum's and .sum's wrappers: ~1.5 us each)
     nf = n - int(np.count_nonzero(pinned))
-    diag = np.bincount(flat, (cbw * cb).real.ravel(), n)
     # One entry per face side (j, k), summed per edge {lo, hi}: Re H and Im H[lo, hi].
-    J, K = tris, tris[:, [1, 2, 0]]
+    J, K = tris, tris.take([1, 2, 0], axis=1)
+    # (not ``take``: the fancy index's columns are laid out strided, and numpy multiplies
+    # complex arrays laid out otherwise to other last bits: the maps would move by rounding)
     hjk = (cbw * cb[:, [1, 2, 0]]).ravel()
     lo, hi = np.minimum(J, K).ravel(), np.maximum(J, K).ravel()
     im = np.where((J < K).ravel(), hjk.imag, -hjk.imag)
@@ -220,12 +238,13 @@ def _lscm_system(cbw, cb, tris, n, idx, val, sides=None, triplets=False):
         rim = np.zeros(len(lo), dtype=bool)
         rim[len(s1):] = True
     on = ~pinned[lo] & ~pinned[hi]
-    pl, ph, re_e = pos[lo[on]], pos[hi[on]], re_e[on]
+    # (``compress``: numpy 1.26's boolean index is ~3x dearer, the same elements)
+    pl, ph, re_e = pos[lo.compress(on)], pos[hi.compress(on)], re_e.compress(on)
     # Im H is the signed area term: the two faces of an interior edge cancel (to rounding), so
     # only boundary edges couple the real and imaginary parts. Leaving the interior zeros out
     # keeps the two Laplacian blocks apart but for the boundary: half the fill to factor.
     rim &= on
-    bl, bh, im_b = pos[lo[rim]], pos[hi[rim]], im_e[rim]
+    bl, bh, im_b = pos[lo.compress(rim)], pos[hi.compress(rim)], im_e.compress(rim)
     free = (~pinned).nonzero()[0]
     pd = pos[free]
     # No two entries share a place (one per free vertex, per edge, per boundary edge and side).

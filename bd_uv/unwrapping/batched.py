@@ -179,7 +179,7 @@ def _far_pairs(P, islands, voff):
     nxt = np.arange(len(lv)) + 1
     last = start + lens - 1
     nxt[last] = start
-    d = P[lv[nxt]] - P[lv]
+    d = P.take(lv[nxt], axis=0) - P.take(lv, axis=0)    # (rows: ``take`` ~4x cheaper)
     seg = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1] + d[:, 2] * d[:, 2])   # norm, same bits
     cum = np.cumsum(seg)
     before = cum - seg                      # arc length from the loop's first vertex
