@@ -177,8 +177,9 @@ def tightened(V, F, res, dtype=np.float32, coverage=0.25, disk=None):
         islands[i] = dataclasses.replace(r, bound_certified=C, message=msg)
         if certs is not None and i < len(certs) and certs[i] is not None:
             certs[i] = dataclasses.replace(certs[i], bound=C)
-    return dataclasses.replace(res, islands=islands,
-                               certificates=None if certs is None else type(res.certificates)(certs))
+    if certs is not None:
+        certs = type(res.certificates)(certs)
+    return dataclasses.replace(res, islands=islands, certificates=certs)
 
 
 def _extent(corner_uv):
